@@ -1,0 +1,57 @@
+"""Discrete curves: edges, tangents, parallel transport and simple test curves.
+
+All functions are plain numpy and vectorised over vertices or edges. A polygon
+is an array ``points`` of shape ``(n_nodes, 3)``; for a closed polygon the edge
+``i`` joins vertex ``i`` to vertex ``(i + 1) % n_nodes`` so there are
+``n_nodes`` edges, for an open one ``n_nodes - 1``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def edges(points: np.ndarray, closed: bool) -> np.ndarray:
+    """Edge vectors ``e_i = x_{i+1} - x_i``, shape ``(n_edges, 3)``."""
+    if closed:
+        return np.roll(points, -1, axis=0) - points
+    return np.diff(points, axis=0)
+
+
+def unit(v: np.ndarray) -> np.ndarray:
+    """Normalise the rows of ``v`` (shape ``(M, 3)``)."""
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def parallel_transport(v: np.ndarray, t_from: np.ndarray, t_to: np.ndarray) -> np.ndarray:
+    """Discrete parallel transport of ``v`` from unit tangent ``t_from`` to ``t_to``.
+
+    The rotation about ``t_from x t_to`` through the angle between them
+    (Bergou et al. 2008, sec. 4.1), written without trigonometry:
+    ``P v = c v + n x v + (n.v) n / (1 + c)`` with ``n = a x b``, ``c = a.b``.
+    Shapes ``(M, 3)``; undefined for antiparallel tangents.
+    """
+    n = np.cross(t_from, t_to)
+    c = np.sum(t_from * t_to, axis=-1, keepdims=True)
+    return c * v + np.cross(n, v) + n * np.sum(n * v, axis=-1, keepdims=True) / (1.0 + c)
+
+
+def signed_angle(a: np.ndarray, b: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Signed angle in (-pi, pi] from ``a`` to ``b`` about ``axis`` (rows, shape ``(M, 3)``)."""
+    return np.arctan2(np.sum(np.cross(a, b) * axis, axis=-1), np.sum(a * b, axis=-1))
+
+
+def perpendicular(t: np.ndarray) -> np.ndarray:
+    """A unit vector perpendicular to each unit row of ``t`` (shape ``(M, 3)``)."""
+    trial = np.where(np.abs(t[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    return unit(trial - np.sum(trial * t, axis=-1, keepdims=True) * t)
+
+
+def circle(n_nodes: int, length: float = 1.0) -> np.ndarray:
+    """Regular polygon with ``n_nodes`` vertices and perimeter ``length`` in the xy-plane.
+
+    Counter-clockwise about +z, centred at the origin; shape ``(n_nodes, 3)``.
+    """
+    angle = 2.0 * np.pi * np.arange(n_nodes) / n_nodes
+    radius = length / (2.0 * n_nodes * np.sin(np.pi / n_nodes))
+    return np.stack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(n_nodes)], axis=1)

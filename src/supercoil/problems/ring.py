@@ -1,0 +1,185 @@
+"""The closed ring (a DNA plasmid or any ring) at a given excess link.
+
+The twisted circle is an equilibrium for every excess link ``dLk`` with energy
+``E L / A = 2 pi^2 (1 + (C/A) dLk^2)``. It is stable below Michell's threshold
+``dLk = (A/C) sqrt(3)`` and loses stability to mode ``m`` at
+``dLk_m = (A/C) sqrt(m^2 - 1)`` (Michell 1889; Zajac 1962; Coleman & Swigon,
+seed 001): there a pair of eigenvalues (the ``cos`` and ``sin`` of mode
+``m``) crosses zero, so the unstable count rises by two while the determinant
+keeps its sign.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from supercoil.geometry.curves import circle
+from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
+from supercoil.solvers.problem import free_dofs
+from supercoil.stability.analysis import DEFAULT_ZERO_TOLERANCE, analyse, negative_count
+from supercoil.topology import twist_from_frames, writhe
+
+
+def circle_energy(twist_ratio: float, excess_link: float) -> float:
+    """Exact energy ``E L / A`` of the twisted circle."""
+    return 2 * np.pi**2 * (1 + twist_ratio * excess_link**2)
+
+
+def michell_excess_link(twist_ratio: float, mode: int) -> float:
+    """Exact excess link at which the circle loses stability to mode ``m >= 2``."""
+    return np.sqrt(mode**2 - 1) / twist_ratio
+
+
+@dataclass(frozen=True)
+class RingResult:
+    """A computed ring state, its topology and its stability (nondimensional)."""
+
+    twist_ratio: float
+    excess_link: float
+    n_nodes: int
+    points: np.ndarray  # (n_nodes, 3)
+    multipliers: np.ndarray  # (n_nodes,) edge tensions
+    energy: float
+    twist: float
+    writhe: float
+    link_error: float
+    writhe_error: float  # |Wr(local, used in the energy) - Wr(double sum)|
+    unstable_count: int
+    zero_modes: int
+    negative_count: int
+    determinant_sign: int
+    lowest_eigenvalues: np.ndarray
+    converged: bool
+    status: str
+    message: str
+    residual: float
+    iterations: int
+    zero_tolerance: float
+    curvature: str
+
+    def summary(self) -> dict:
+        """The JSON keys of ``supercoil ring`` (see DESIGN.md conventions)."""
+        return {
+            "twist_ratio": self.twist_ratio,
+            "excess_link": self.excess_link,
+            "twist": self.twist,
+            "writhe": self.writhe,
+            "link_error": self.link_error,
+            "energy": self.energy,
+            "energy_circle_exact": circle_energy(self.twist_ratio, self.excess_link),
+            "unstable_count": self.unstable_count,
+            "zero_modes": self.zero_modes,
+            "negative_eigenvalue_count": self.negative_count,
+            "determinant_sign": self.determinant_sign,
+            "lowest_eigenvalues": [float(v) for v in self.lowest_eigenvalues],
+            "stable": self.unstable_count == 0 and self.zero_modes == 0,
+            "converged": self.converged,
+            "status": self.status,
+            "message": self.message,
+            "residual": self.residual,
+            "newton_iterations": self.iterations,
+            "n_nodes": self.n_nodes,
+            "michell_threshold_exact": michell_excess_link(self.twist_ratio, 2),
+        }
+
+
+def twisted_circle_problem(twist_ratio: float, excess_link: float, n_nodes: int,
+                           curvature: str = "angle") -> tuple[ClosedRodEnergy, np.ndarray]:
+    rod = Rod(n_nodes=n_nodes, twist_stiffness=twist_ratio, curvature=curvature)
+    points = circle(n_nodes, rod.length)
+    problem = ClosedRodEnergy(rod, points, excess_link)
+    return problem, points.ravel()
+
+
+def solve_ring(twist_ratio: float, excess_link: float, n_nodes: int = 100,
+               curvature: str = "angle", tolerance: float = 1e-10,
+               zero_tolerance: float = DEFAULT_ZERO_TOLERANCE, n_modes: int = 6) -> RingResult:
+    """Equilibrium of the twisted ring started from the circle, with its stability.
+
+    Newton runs in ``stationary`` mode: above Michell's threshold the circle is
+    an unstable equilibrium and is reported as such (leaving it needs
+    self-contact).
+    """
+    if not np.isfinite(twist_ratio) or twist_ratio <= 0:
+        raise ValueError(f"twist_ratio (C/A) must be a positive finite number, got {twist_ratio!r}")
+    if not np.isfinite(excess_link):
+        raise ValueError(f"excess_link must be a finite number, got {excess_link!r}")
+    problem, q0 = twisted_circle_problem(twist_ratio, excess_link, n_nodes, curvature)
+    result = newton(problem, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
+    q = result.q
+    stab = analyse(problem, q, result.multipliers, n_modes=n_modes, zero_tolerance=zero_tolerance)
+    points = q.reshape(-1, 3)
+    wr = writhe(points)
+    d1 = problem.material_directors(q)
+    frame_twist = twist_from_frames(points, d1, closed=True)
+    tw = frame_twist - problem.reference_link + excess_link
+    return RingResult(
+        twist_ratio=twist_ratio, excess_link=excess_link, n_nodes=n_nodes, points=points,
+        multipliers=result.multipliers, energy=problem.energy(q), twist=tw, writhe=wr,
+        link_error=abs(tw + wr - excess_link),
+        writhe_error=abs(problem.writhe_local(q) - wr),
+        unstable_count=stab.unstable_count, zero_modes=stab.zero_modes,
+        negative_count=stab.negative_count, determinant_sign=stab.determinant_sign,
+        lowest_eigenvalues=stab.lowest_eigenvalues, converged=result.converged,
+        status=result.status.value, message=result.message, residual=result.residual,
+        iterations=result.iterations, zero_tolerance=zero_tolerance, curvature=curvature,
+    )
+
+
+class _CircleInertia:
+    """Inertia of the twisted circle as a function of the excess link (one set-up per N).
+
+    The regular polygon with uniform twist is an equilibrium of the discrete
+    model by symmetry; its multipliers come from a least-squares solve.
+    """
+
+    def __init__(self, twist_ratio: float, n_nodes: int, curvature: str):
+        self.problem, self.q = twisted_circle_problem(twist_ratio, 0.0, n_nodes, curvature)
+        self.free = free_dofs(self.problem)
+
+    def __call__(self, excess_link: float) -> int:
+        self.problem.excess_link = float(excess_link)
+        lam = least_squares_multipliers(self.problem, self.q, self.free)
+        return negative_count(self.problem, self.q, lam)
+
+
+def circle_negative_count(twist_ratio: float, excess_link: float, n_nodes: int,
+                          curvature: str = "angle") -> int:
+    """Exact number of negative eigenvalues of the twisted circle (inertia only)."""
+    return _CircleInertia(twist_ratio, n_nodes, curvature)(excess_link)
+
+
+def michell_threshold(twist_ratio: float, n_nodes: int, mode: int = 2,
+                      curvature: str = "angle", rtol: float = 1e-11) -> float:
+    """Discrete excess link where the circle's unstable count rises to ``2 (m - 1)``.
+
+    Bisection on the exact negative-eigenvalue count (seed 000 bisects on the
+    sign of the determinant, which cannot see this pair crossing).
+    """
+    if mode < 2:
+        raise ValueError(f"mode must be an integer >= 2, got {mode!r}")
+    exact = michell_excess_link(twist_ratio, mode)
+    below, above = 2 * (mode - 2), 2 * (mode - 1)
+    lo, hi = 0.9 * exact, 1.1 * exact
+    count = _CircleInertia(twist_ratio, n_nodes, curvature)
+    count_lo, count_hi = count(lo), count(hi)
+    if count_lo > below or count_hi < above:
+        raise RuntimeError(
+            f"could not bracket the mode-{mode} threshold at n_nodes={n_nodes}: "
+            f"counts {count_lo} at {lo:.4g} and {count_hi} at {hi:.4g}")
+    while hi - lo > rtol * exact:
+        mid = 0.5 * (lo + hi)
+        if count(mid) >= above:
+            hi = mid
+        else:
+            lo = mid
+    return 0.5 * (lo + hi)
+
+
+def richardson(coarse: float, fine: float, order: float = 2.0, ratio: float = 2.0) -> float:
+    """Richardson extrapolation of values at ``h`` and ``h / ratio`` with error ``O(h^order)``."""
+    factor = ratio**order
+    return (factor * fine - coarse) / (factor - 1)

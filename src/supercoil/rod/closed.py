@@ -1,0 +1,295 @@
+"""Closed discrete Kirchhoff rod at fixed excess link (isotropic, inextensible).
+
+Model (Bergou et al. 2008, 2010, with the twist reduced to one scalar):
+
+* centreline: a closed polygon of ``n_nodes`` vertices, edges of fixed rest
+  length ``h = L / n_nodes`` (inextensibility as equality constraints
+  ``c_j = (|e_j|^2 - h^2) / (2h) = 0``; their multipliers are edge tensions);
+* bending: ``sum_i A k_i^2 / (2h)`` (see :mod:`supercoil.rod.kernels`);
+* twist: for an isotropic rod the excess twist density is uniform at
+  equilibrium, so the material angles can be minimised out exactly and the
+  twist energy is ``E_t = 2 pi^2 C Tw^2 / L`` with ``Tw = dLk - Wr``
+  (Coleman & Swigon eq. 3-5). The writhe is never evaluated as a double sum
+  here: ``Wr = Lk_u - Phi / 2pi`` where ``Phi`` is the total reference twist
+  (holonomy of discrete parallel transport, a sum of local terms) and ``Lk_u``
+  the integer linking number of the reference ribbon, fixed at set-up and kept
+  by time-parallel transport of the reference directors. Hence the Hessian is
+  banded plus one rank-one term ``k g g^T`` with ``g = grad(Phi) / 2pi``.
+
+Minimising out the material angles is a Schur complement with a positive
+definite block, so the number of negative eigenvalues (stability) is the same
+as for the full model with material angles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from supercoil.geometry.curves import edges, parallel_transport, perpendicular, signed_angle, unit
+from supercoil.rod import kernels
+from supercoil.rod.assembly import StencilPattern
+from supercoil.solvers.problem import HessianParts
+
+
+@dataclass(frozen=True)
+class Rod:
+    """Material and discretisation of an isotropic Kirchhoff rod.
+
+    ``bending_stiffness`` A, ``twist_stiffness`` C, ``length`` L (A = L = 1 in
+    the nondimensional default), ``n_nodes`` vertices, ``curvature`` form.
+    """
+
+    n_nodes: int
+    twist_stiffness: float = 1.0
+    bending_stiffness: float = 1.0
+    length: float = 1.0
+    curvature: str = "angle"
+
+    def __post_init__(self) -> None:
+        for name in ("twist_stiffness", "bending_stiffness", "length"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value <= 0:
+                raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+        if int(self.n_nodes) != self.n_nodes or self.n_nodes < 8:
+            raise ValueError(f"n_nodes must be an integer >= 8, got {self.n_nodes!r}")
+        if self.curvature not in kernels.CURVATURE_FORMS:
+            raise ValueError(
+                f"curvature must be one of {kernels.CURVATURE_FORMS}, got {self.curvature!r}"
+            )
+
+    @property
+    def twist_ratio(self) -> float:
+        return self.twist_stiffness / self.bending_stiffness
+
+    @property
+    def edge_length(self) -> float:
+        return self.length / self.n_nodes
+
+
+def initial_reference_frames(points: np.ndarray) -> np.ndarray:
+    """Reference directors ``(n_edges, 3)`` of a closed polygon with equal reference twists.
+
+    Space-parallel transport from edge 0 around the polygon, then each director
+    is turned back by its share of the holonomy, so that every vertex carries
+    the same reference twist (no single vertex holds the whole mismatch).
+    """
+    t = unit(edges(points, closed=True))
+    n = len(t)
+    u = np.empty_like(t)
+    u[0] = perpendicular(t[:1])[0]
+    for i in range(1, n):
+        u[i] = parallel_transport(u[i - 1 : i], t[i - 1 : i], t[i : i + 1])[0]
+    closing = parallel_transport(u[-1:], t[-1:], t[:1])[0]
+    mismatch = float(signed_angle(closing[None], u[:1], t[:1])[0])  # total reference twist
+    # Rotate u_i by -i * mismatch / n about t_i: each vertex then twists by mismatch / n.
+    angle = -np.arange(n) * mismatch / n
+    v = np.cross(t, u)
+    return np.cos(angle)[:, None] * u + np.sin(angle)[:, None] * v
+
+
+class ClosedRodEnergy:
+    """The constrained energy problem of a closed rod at excess link ``excess_link``.
+
+    Implements :class:`supercoil.solvers.problem.ConstrainedEnergy`. Holds the
+    reference directors as mutable state, carried along by :meth:`accept`.
+    ``reference_link`` is ``Lk_u``; pass it to continue from a saved state.
+    """
+
+    def __init__(self, rod: Rod, points: np.ndarray, excess_link: float,
+                 reference_directors: np.ndarray | None = None,
+                 reference_link: int | None = None):
+        points = np.asarray(points, dtype=float)
+        if points.shape != (rod.n_nodes, 3):
+            raise ValueError(f"points must have shape ({rod.n_nodes}, 3), got {points.shape}")
+        if not np.isfinite(points).all():
+            raise ValueError("points contain non-finite coordinates")
+        if not np.isfinite(excess_link):
+            raise ValueError(f"excess_link must be finite, got {excess_link!r}")
+        self.rod = rod
+        self.excess_link = float(excess_link)
+        n = rod.n_nodes
+        self.n_dofs = 3 * n
+        self.n_constraints = n
+        idx = np.arange(n)
+        self._pattern = StencilPattern(np.stack([(idx - 1) % n, idx, (idx + 1) % n], 1), 3 * n)
+        self._prev_edge = (idx - 1) % n
+        self._bend_weight = np.full(n, rod.bending_stiffness / (2.0 * rod.edge_length))
+        self._bending = kernels.bending_kernels(rod.curvature)
+        self._twist_coefficient = 4.0 * np.pi**2 * rod.twist_stiffness / rod.length
+        self.mass = np.full(3 * n, rod.edge_length)
+        self._tangents = unit(edges(points, closed=True))
+        if reference_directors is None:
+            reference_directors = initial_reference_frames(points)
+        self._directors = np.asarray(reference_directors, dtype=float)
+        if reference_link is None:
+            from supercoil.topology import writhe  # set-up only, never inside Newton
+
+            frame_twist = self.reference_twist_total(points.ravel()) / (2 * np.pi)
+            reference_link = int(np.rint(frame_twist + writhe(points)))
+        self.reference_link = int(reference_link)
+        self.fixed = rigid_pins(points)
+
+    # ----------------------------------------------------------------- pieces
+    def _frames(self) -> np.ndarray:
+        """Per-vertex reference data ``(n, 4, 3)``: u_{i-1}, t_{i-1}, u_i, t_i."""
+        p = self._prev_edge
+        return np.stack([self._directors[p], self._tangents[p], self._directors,
+                         self._tangents], axis=1)
+
+    def reference_twist_total(self, q: np.ndarray) -> float:
+        """``Phi``: the sum of the reference twists (radians)."""
+        local = np.asarray(kernels.twist_value(self._pattern.gather(q), self._frames()))
+        return float(local.sum())
+
+    def writhe_local(self, q: np.ndarray) -> float:
+        """Writhe from the reference twist: ``Lk_u - Phi / 2pi`` (no double sum)."""
+        return self.reference_link - self.reference_twist_total(q) / (2 * np.pi)
+
+    def twist(self, q: np.ndarray) -> float:
+        """Excess twist in turns, ``dLk - Wr``."""
+        return self.excess_link - self.writhe_local(q)
+
+    def bending_energy(self, q: np.ndarray) -> float:
+        return float(np.sum(self._bending[0](self._pattern.gather(q), self._bend_weight)))
+
+    def twist_energy(self, q: np.ndarray) -> float:
+        return 0.5 * self._twist_coefficient * self.twist(q) ** 2
+
+    # -------------------------------------------------------------- protocol
+    def energy(self, q: np.ndarray) -> float:
+        return self.bending_energy(q) + self.twist_energy(q)
+
+    def _twist_gradient(self, q: np.ndarray) -> np.ndarray:
+        """``grad(Phi) / 2pi`` (shape ``(n_dofs,)``) = minus the gradient of the writhe."""
+        local = kernels.twist_gradient(self._pattern.gather(q), self._frames())
+        return self._pattern.scatter_vector(local) / (2 * np.pi)
+
+    def gradient(self, q: np.ndarray) -> np.ndarray:
+        stencils = self._pattern.gather(q)
+        g = self._pattern.scatter_vector(self._bending[1](stencils, self._bend_weight))
+        return g + self._twist_coefficient * self.twist(q) * self._twist_gradient(q)
+
+    def hessian(self, q: np.ndarray) -> HessianParts:
+        stencils = self._pattern.gather(q)
+        k = self._twist_coefficient
+        tw = self.twist(q)
+        local = np.asarray(self._bending[2](stencils, self._bend_weight))
+        local = local + (k * tw / (2 * np.pi)) * np.asarray(
+            kernels.twist_hessian(stencils, self._frames()))
+        sparse = self._pattern.scatter_matrix(local)
+        sparse = (0.5 * (sparse + sparse.T)).tocsr()
+        g = self._twist_gradient(q)
+        return HessianParts(sparse, g[None, :], np.array([k]))
+
+    def constraints(self, q: np.ndarray) -> np.ndarray:
+        e = edges(q.reshape(-1, 3), closed=True)
+        h = self.rod.edge_length
+        return (np.sum(e * e, axis=1) - h * h) / (2 * h)
+
+    def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
+        n = self.rod.n_nodes
+        e = edges(q.reshape(-1, 3), closed=True) / self.rod.edge_length
+        rows = np.repeat(np.arange(n), 6)
+        nxt = (np.arange(n) + 1) % n
+        cols = np.concatenate([3 * np.arange(n)[:, None] + np.arange(3),
+                               3 * nxt[:, None] + np.arange(3)], axis=1).ravel()
+        data = np.concatenate([-e, e], axis=1).ravel()
+        return sp.csr_matrix((data, (rows, cols)), shape=(n, 3 * n))
+
+    def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
+        n = self.rod.n_nodes
+        w = np.asarray(multipliers) / self.rod.edge_length
+        a = 3 * np.arange(n)[:, None] + np.arange(3)
+        b = 3 * ((np.arange(n) + 1) % n)[:, None] + np.arange(3)
+        rows = np.concatenate([a, b, a, b]).ravel()
+        cols = np.concatenate([a, b, b, a]).ravel()
+        ww = np.repeat(w, 3)
+        data = np.concatenate([ww, ww, -ww, -ww])
+        return sp.csr_matrix((data, (rows, cols)), shape=(3 * n, 3 * n))
+
+    def symmetry_modes(self, q: np.ndarray) -> np.ndarray:
+        """The six rigid motions at ``q`` (shape ``(6, n_dofs)``): translations, rotations.
+
+        (Off the circle a homogeneous ring has a seventh, approximate symmetry,
+        sliding the material along itself; the circle's sliding is a rotation.)
+        """
+        x = q.reshape(-1, 3)
+        r = x - x.mean(axis=0)
+        modes = []
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1.0
+            modes.append(np.tile(e, len(x)))
+            modes.append(np.cross(e, r).ravel())
+        return np.array(modes)
+
+    def accept(self, q: np.ndarray) -> None:
+        """Carry the reference directors to the new tangents (time-parallel transport)."""
+        t_new = unit(edges(q.reshape(-1, 3), closed=True))
+        u = parallel_transport(self._directors, self._tangents, t_new)
+        # Re-orthonormalise against drift.
+        u = unit(u - np.sum(u * t_new, axis=1, keepdims=True) * t_new)
+        self._directors = u
+        self._tangents = t_new
+
+    # ------------------------------------------------------------- frames out
+    def material_directors(self, q: np.ndarray) -> np.ndarray:
+        """Material directors ``d1`` (shape ``(n, 3)``) with uniform excess twist.
+
+        The material angle ``theta_i`` of edge ``i`` is chosen so that each
+        vertex carries the same total twist ``Phi / n``; ``theta`` is single
+        valued around the ring, so the material ribbon has linking number
+        ``Lk_u`` and its twist, measured from these directors by
+        :func:`supercoil.topology.twist_from_frames`, is an independent check
+        of Lk = Tw + Wr.
+        """
+        self.accept(q)  # directors adapted to the current tangents
+        stencils = self._pattern.gather(q)
+        ref = np.asarray(kernels.twist_value(stencils, self._frames()))
+        mean = ref.mean()
+        theta = np.zeros(len(ref))
+        theta[1:] = np.cumsum(mean - ref[1:])
+        t = self._tangents
+        u = self._directors
+        v = np.cross(t, u)
+        return np.cos(theta)[:, None] * u + np.sin(theta)[:, None] * v
+
+    @property
+    def reference_directors(self) -> np.ndarray:
+        return self._directors.copy()
+
+
+def rigid_pins(points: np.ndarray) -> np.ndarray:
+    """Six DOF indices whose fixing removes the rigid motions of a free body.
+
+    Node 0 is fixed (translations); three coordinates of two far nodes are
+    chosen to maximise ``|det|`` of their response to infinitesimal rotations
+    about node 0 (so rotations are removed as well as the geometry allows).
+    At an equilibrium the rigid motions are null vectors of the Hessian, so
+    fixing these DOFs restricts the Hessian to a complement of the rigid modes
+    and leaves its inertia unchanged.
+    """
+    n = len(points)
+    candidates = []
+    for node in (n // 3, (2 * n) // 3, n // 2, n // 6):
+        r = points[node] - points[0]
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1.0
+            candidates.append((3 * node + k, np.cross(r, e)))
+    best, best_det = None, -1.0
+    for a in range(len(candidates)):
+        for b in range(a + 1, len(candidates)):
+            for c in range(b + 1, len(candidates)):
+                rows = [candidates[a], candidates[b], candidates[c]]
+                if len({r[0] for r in rows}) < 3:
+                    continue
+                det = abs(np.linalg.det(np.array([r[1] for r in rows])))
+                if det > best_det:
+                    best, best_det = [r[0] for r in rows], det
+    if best is None or best_det <= 1e-12 * np.ptp(points) ** 3:
+        raise ValueError("cannot remove rigid rotations: the curve is (nearly) a straight line")
+    return np.array(sorted([0, 1, 2] + best), dtype=np.int64)

@@ -1,0 +1,198 @@
+"""Newton's method for equality-constrained energies (Newton–KKT / SQP).
+
+Each iteration solves the KKT system
+
+    [[H_L, J^T], [J, 0]] [dq; lambda+] = -[grad E; c],
+    H_L = hess E + sum_j lambda_j hess c_j,
+
+on the free unknowns (fixed DOFs removed). Two globalisations:
+
+* ``mode="minimize"``: the inertia of the KKT matrix is checked and ``H_L`` is
+  shifted by ``delta * M`` until it is positive definite on ``ker J``
+  (inertia correction, Nocedal & Wright 2006, sec. 18.3); the step is then a
+  descent direction of the exact-penalty merit ``E + mu ||c||_1`` and an
+  Armijo backtracking line search is applied to it.
+* ``mode="stationary"``: plain Newton steps with backtracking on the norm of
+  the KKT residual, which converges to saddle points as well (needed on
+  unstable branches).
+
+Near the solution (residual below ``full_step_below``) full steps are taken,
+so the local convergence is quadratic. Failures are returned as a status,
+never raised or printed.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from supercoil.solvers.kkt import KKTFactor, SingularMatrixError
+from supercoil.solvers.problem import ConstrainedEnergy, free_dofs
+
+log = logging.getLogger(__name__)
+
+
+class Status(enum.Enum):
+    CONVERGED = "converged"
+    MAX_ITERATIONS = "maximum number of iterations reached"
+    LINE_SEARCH_FAILED = "line search failed to reduce the merit function"
+    SINGULAR = "singular KKT matrix"
+    NONFINITE = "non-finite energy or gradient"
+
+    @property
+    def ok(self) -> bool:
+        return self is Status.CONVERGED
+
+
+@dataclass(frozen=True)
+class NewtonOptions:
+    """Options of :func:`newton`; validated on construction."""
+
+    tolerance: float = 1e-10
+    max_iterations: int = 60
+    mode: str = "minimize"
+    full_step_below: float = 1e-6
+    armijo: float = 1e-4
+    min_step: float = 1e-10
+    max_step_norm: float = float("inf")
+
+    def __post_init__(self) -> None:
+        if not (self.tolerance > 0):
+            raise ValueError(f"tolerance must be positive, got {self.tolerance!r}")
+        if self.max_iterations < 1:
+            raise ValueError(f"max_iterations must be >= 1, got {self.max_iterations!r}")
+        if self.mode not in ("minimize", "stationary"):
+            raise ValueError(f"mode must be 'minimize' or 'stationary', got {self.mode!r}")
+        if not (self.max_step_norm > 0):
+            raise ValueError(f"max_step_norm must be positive, got {self.max_step_norm!r}")
+
+
+@dataclass(frozen=True)
+class NewtonResult:
+    q: np.ndarray
+    multipliers: np.ndarray
+    status: Status
+    message: str
+    iterations: int
+    residual: float
+    residual_history: tuple[float, ...] = field(default_factory=tuple)
+
+    @property
+    def converged(self) -> bool:
+        return self.status.ok
+
+
+def kkt_residual(problem: ConstrainedEnergy, q: np.ndarray, lam: np.ndarray,
+                 free: np.ndarray) -> np.ndarray:
+    g = problem.gradient(q)[free]
+    if problem.n_constraints:
+        g = g + problem.constraint_jacobian(q)[:, free].T @ lam
+        return np.concatenate([g, problem.constraints(q)])
+    return g
+
+
+def least_squares_multipliers(problem: ConstrainedEnergy, q: np.ndarray,
+                              free: np.ndarray) -> np.ndarray:
+    """Multipliers minimising ``|grad E + J^T lambda|`` (``J J^T lambda = -J grad E``)."""
+    if not problem.n_constraints:
+        return np.zeros(0)
+    from scipy.sparse.linalg import spsolve
+
+    J = problem.constraint_jacobian(q)[:, free].tocsc()
+    g = problem.gradient(q)[free]
+    return np.atleast_1d(spsolve((J @ J.T).tocsc(), -(J @ g)))
+
+
+def _hessian(problem, q, lam, free):
+    parts = problem.hessian(q)
+    if problem.n_constraints:
+        parts = parts.plus_sparse(problem.constraint_hessian(q, lam))
+    return parts.restrict(free)
+
+
+def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | None = None,
+           multipliers: np.ndarray | None = None) -> NewtonResult:
+    """Find an equilibrium of ``problem`` starting from ``q0`` (full DOF vector)."""
+    opts = options or NewtonOptions()
+    q = np.array(q0, dtype=float)
+    free = free_dofs(problem)
+    n, m = free.size, problem.n_constraints
+    lam = (least_squares_multipliers(problem, q, free) if multipliers is None
+           else np.array(multipliers, dtype=float))
+    history: list[float] = []
+    mu = 1.0
+    mass = problem.mass[free]
+
+    def done(status: Status, message: str, it: int) -> NewtonResult:
+        res = history[-1] if history else float("nan")
+        return NewtonResult(q, lam, status, message, it, res, tuple(history))
+
+    for it in range(opts.max_iterations + 1):
+        r = kkt_residual(problem, q, lam, free)
+        if not np.all(np.isfinite(r)):
+            return done(Status.NONFINITE, "non-finite residual at iteration %d" % it, it)
+        res = float(np.max(np.abs(r))) if r.size else 0.0
+        history.append(res)
+        if res <= opts.tolerance:
+            return done(Status.CONVERGED, f"converged in {it} iterations, residual {res:.2e}", it)
+        if it == opts.max_iterations:
+            break
+        H = _hessian(problem, q, lam, free)
+        J = problem.constraint_jacobian(q)[:, free] if m else None
+        rhs = -np.concatenate([problem.gradient(q)[free],
+                               problem.constraints(q) if m else np.zeros(0)])
+        delta = 0.0
+        try:
+            for _ in range(40):
+                factor = KKTFactor(H, J, shift=-delta, mass=mass)
+                if opts.mode != "minimize" or factor.reduced_negative_count == 0:
+                    break
+                delta = max(2.0 * delta, 1e-4 * float(np.max(np.abs(H.sparse.diagonal()))) /
+                            float(np.mean(mass)))
+            sol = factor.solve(rhs)
+        except SingularMatrixError as exc:
+            return done(Status.SINGULAR, f"iteration {it}: {exc}", it)
+        dq_free, lam_new = sol[:n], sol[n:]
+        step_norm = float(np.linalg.norm(dq_free))
+        if step_norm > opts.max_step_norm:
+            dq_free *= opts.max_step_norm / step_norm
+        dq = np.zeros_like(q)
+        dq[free] = dq_free
+        alpha = 1.0
+        if res > opts.full_step_below:
+            if opts.mode == "minimize":
+                mu = max(mu, 2.0 * float(np.max(np.abs(lam_new))) if m else 0.0)
+                c0 = np.sum(np.abs(problem.constraints(q))) if m else 0.0
+                phi0 = problem.energy(q) + mu * c0
+                slope = float(problem.gradient(q)[free] @ dq_free) - mu * c0
+                while alpha >= opts.min_step:
+                    qt = q + alpha * dq
+                    ct = np.sum(np.abs(problem.constraints(qt))) if m else 0.0
+                    phit = problem.energy(qt) + mu * ct
+                    if np.isfinite(phit) and phit <= phi0 + opts.armijo * alpha * min(slope, 0.0):
+                        break
+                    alpha *= 0.5
+            else:
+                norm0 = float(np.linalg.norm(r))
+                while alpha >= opts.min_step:
+                    qt = q + alpha * dq
+                    lt = lam + alpha * (lam_new - lam)
+                    rt = kkt_residual(problem, qt, lt, free)
+                    if np.all(np.isfinite(rt)) and np.linalg.norm(rt) <= (1 - 1e-4 * alpha) * norm0:
+                        break
+                    alpha *= 0.5
+            if alpha < opts.min_step:
+                return done(Status.LINE_SEARCH_FAILED,
+                            f"iteration {it}: no step length reduced the merit function "
+                            f"(residual {res:.2e})", it)
+        q = q + alpha * dq
+        lam = lam + alpha * (lam_new - lam)
+        problem.accept(q)
+        log.debug("newton it=%d residual=%.3e alpha=%.3g delta=%.3g", it, res, alpha, delta)
+    return done(Status.MAX_ITERATIONS,
+                f"no convergence in {opts.max_iterations} iterations "
+                f"(residual {history[-1]:.2e} > tolerance {opts.tolerance:.1e})",
+                opts.max_iterations)

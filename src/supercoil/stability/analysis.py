@@ -1,0 +1,175 @@
+"""Stability of a constrained equilibrium: inertia, zero modes, lowest modes.
+
+An equilibrium ``(q, lambda)`` is stable when the Hessian of the Lagrangian
+``H_L`` is positive definite on the tangent space ``ker J`` of the
+constraints, after the rigid motions (fixed DOFs) are removed. We report
+
+* ``negative_count``: the exact number of negative eigenvalues of ``Z^T H_L Z``
+  from the inertia of the KKT matrix (Sylvester; see
+  :mod:`supercoil.solvers.kkt`);
+* ``lowest_eigenvalues``/``lowest_modes``: the eigenpairs of
+  ``H_L v = mu M v`` on ``ker J`` nearest zero (``M`` the lumped mass, so
+  that eigenvalues converge under refinement), by shift-invert Lanczos with
+  KKT solves;
+* ``zero_modes``: eigenvalues with ``|mu| <= zero_tolerance``, never given a
+  sign; ``unstable_count`` = ``negative_count`` minus the zero modes that are
+  slightly negative;
+* ``determinant_sign``: the sign of ``det(Z^T H_L Z)`` — Chamekh et al.'s test
+  (seed 000), which only sees the parity of ``negative_count``: when
+  eigenvalues cross zero in pairs (symmetric bifurcations) the determinant
+  keeps its sign while the count changes by two.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse.linalg as spla
+from scipy.linalg import eigh, null_space
+
+from supercoil.solvers.kkt import KKTFactor
+from supercoil.solvers.newton import _hessian
+from supercoil.solvers.problem import ConstrainedEnergy, free_dofs
+
+DEFAULT_ZERO_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class StabilityReport:
+    unstable_count: int
+    zero_modes: int
+    negative_count: int
+    determinant_sign: int
+    lowest_eigenvalues: np.ndarray  # (k,), ascending
+    lowest_modes: np.ndarray  # (k, n_dofs), full DOF vectors, M-orthonormal
+    zero_tolerance: float
+
+    @property
+    def stable(self) -> bool:
+        return self.unstable_count == 0 and self.zero_modes == 0
+
+
+def _reduced_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray):
+    free = free_dofs(problem)
+    H = _hessian(problem, q, multipliers, free)
+    J = problem.constraint_jacobian(q)[:, free] if problem.n_constraints else None
+    return free, H, J
+
+
+def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, mass: np.ndarray) -> np.ndarray:
+    """M-orthonormal basis ``(n_dofs, r)`` of the problem's continuous symmetry modes."""
+    getter = getattr(problem, "symmetry_modes", None)
+    if getter is None:
+        return np.zeros((problem.n_dofs, 0))
+    modes = np.asarray(getter(q), dtype=float).T  # (n_dofs, r)
+    if modes.size == 0:
+        return np.zeros((problem.n_dofs, 0))
+    root = np.sqrt(mass)
+    qmat, rfac = np.linalg.qr(root[:, None] * modes)
+    keep = np.abs(np.diag(rfac)) > 1e-10 * np.max(np.abs(np.diag(rfac)))
+    return qmat[:, keep] / root[:, None]
+
+
+def negative_count(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray) -> int:
+    """Exact number of negative eigenvalues of the constrained Hessian (inertia only)."""
+    free, H, J = _reduced_system(problem, q, multipliers)
+    return KKTFactor(H, J).reduced_negative_count
+
+
+def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
+            n_modes: int = 6, zero_tolerance: float = DEFAULT_ZERO_TOLERANCE) -> StabilityReport:
+    """Full stability report at an equilibrium (see module docstring)."""
+    free, H, J = _reduced_system(problem, q, multipliers)
+    n = free.size
+    m = J.shape[0] if J is not None else 0
+    factor = KKTFactor(H, J)
+    neg = factor.reduced_negative_count
+    det_sign = int(factor.determinant_sign * (-1) ** m)
+    mass_full = problem.mass
+    mass = mass_full[free]
+    # The eigenvalues are those of the quotient by the symmetry modes (M-orthogonal
+    # complement): the pinned DOFs are released and the symmetry modes projected out.
+    sym = _symmetry_basis(problem, q, mass_full)
+    if sym.shape[1]:
+        H_all = _hessian(problem, q, multipliers, np.arange(problem.n_dofs))
+        J_all = (problem.constraint_jacobian(q) if problem.n_constraints else None)
+        values, vectors_all = _lowest_pairs(H_all, J_all, mass_full, n_wanted=neg + n_modes,
+                                            n=problem.n_dofs, m=m, symmetry=sym)
+        vectors = vectors_all[free]
+    else:
+        values, vectors = _lowest_pairs(H, J, mass, n_wanted=neg + n_modes, n=n, m=m)
+    zero = int(np.sum(np.abs(values) <= zero_tolerance))
+    tiny_negative = int(np.sum((values < 0) & (values >= -zero_tolerance)))
+    modes = np.zeros((len(values), problem.n_dofs))
+    if sym.shape[1]:
+        modes = vectors_all.T
+    else:
+        modes[:, free] = vectors.T
+    return StabilityReport(
+        unstable_count=neg - tiny_negative,
+        zero_modes=zero,
+        negative_count=neg,
+        determinant_sign=det_sign,
+        lowest_eigenvalues=values,
+        lowest_modes=modes,
+        zero_tolerance=zero_tolerance,
+    )
+
+
+def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None):
+    """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
+
+    ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
+    """
+    r = 0 if symmetry is None else symmetry.shape[1]
+    dim = n - m - r
+    k = int(min(n_wanted, dim - 2))
+    if dim <= 400 or k >= dim // 4:
+        values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
+        return values[:k], vectors[:, :k]
+    sigma = -1e-3
+    factor = KKTFactor(H, J, shift=sigma, mass=mass)
+
+    def project(v):
+        if r:
+            v = v - symmetry @ (symmetry.T @ (mass * v))
+        return v
+
+    def opinv(x):
+        rhs = np.zeros(n + m)
+        rhs[:n] = project(np.ravel(x))
+        return project(factor.solve(rhs)[:n])
+
+    Op = spla.LinearOperator((n, n), matvec=opinv, dtype=float)
+    A = spla.LinearOperator((n, n), matvec=H.matvec, dtype=float)
+    Mop = spla.LinearOperator((n, n), matvec=lambda x: mass * np.ravel(x), dtype=float)
+    rng = np.random.default_rng(12345)
+    v0 = opinv(mass * rng.standard_normal(n))
+    values, vectors = spla.eigsh(A, k=k, M=Mop, sigma=sigma, OPinv=Op, v0=v0, which="LM",
+                                 tol=1e-12)
+    order = np.argsort(values)
+    return values[order], vectors[:, order]
+
+
+def dense_constrained_eigenpairs(H, J, mass, symmetry=None):
+    """Dense reference: all eigenpairs of ``Z^T H Z y = mu Z^T M Z y`` (ascending).
+
+    ``Z`` spans ``ker J`` intersected with the M-orthogonal complement of
+    ``symmetry`` (``(n, r)`` or None). Returns eigenvalues ``(d,)`` and
+    M-orthonormal vectors ``(n, d)``. O(n^3): an oracle for tests and small systems.
+    """
+    Hd = H.dense()
+    rows = []
+    if J is not None and J.shape[0]:
+        rows.append(J.toarray())
+    if symmetry is not None and symmetry.shape[1]:
+        rows.append((mass[:, None] * symmetry).T)
+    if rows:
+        Z = null_space(np.vstack(rows))
+    else:
+        Z = np.eye(Hd.shape[0])
+    A = Z.T @ Hd @ Z
+    B = Z.T @ (mass[:, None] * Z)
+    values, y = eigh(0.5 * (A + A.T), 0.5 * (B + B.T))
+    return values, Z @ y

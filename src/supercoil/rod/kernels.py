@@ -51,7 +51,7 @@ try:
 except OSError:  # read-only home: compile in memory only
     pass
 
-import jax.numpy as jnp  # noqa: E402
+import jax.numpy as jnp
 
 # Kernels run on fixed-size chunks of stencils so that XLA compiles each kernel
 # once, whatever the number of nodes (JAX recompiles on every new shape).

@@ -4,32 +4,31 @@ The saddle-point matrix of an energy ``E`` with constraints ``c`` is
 
     K = [[H, J^T], [J, 0]],   H = S + U diag(w) U^T,
 
-with ``S`` sparse (banded for a rod) and a few dense rank-one terms. We
-factor the sparse part ``K_S`` by a symmetric ``L D L^T`` (SuperLU with
-symmetric ordering and no row pivoting, so that ``diag(U) = D``) and treat
-the rank-one terms with the Woodbury identity.
+with ``S`` sparse (banded for a rod) and a few dense rank-one terms
+(treated with the Woodbury identity in both parts below).
 
-Inertia (Sylvester's law): the number of negative pivots of ``K_S`` is its
-number of negative eigenvalues. For the bordered matrix
-``B = [[K_S, U], [U^T, -diag(1/w)]]`` the two Schur complements give
-``neg(K) = neg(K_S) + neg(-W^-1 - U^T K_S^-1 U) - neg(-W^-1)``.
-For a constrained problem with ``m`` independent constraints,
-``neg(K) = neg(Z^T H Z) + m`` (Gould 1985), where ``Z`` spans ``ker J``: the
-number of unstable directions is ``neg(K) - m``.
+Solves use SuperLU with partial pivoting on ``K`` (stable for saddle points).
 
-Ordering: reverse Cuthill–McKee on the pattern of ``S + J^T J``, each
-multiplier placed right after the last unknown its constraint touches, so the
-profile stays banded and no multiplier is eliminated before its unknowns.
+Inertia. ``L D L^T`` without pivoting breaks down on saddle-point matrices
+(element growth; measured wrong counts on a ring), and an augmented Hessian
+``H + rho J^T J`` mis-signs eigenvalues of size ``O(1/rho)`` (measured: the
+count flickers near Michell's threshold). The count is exact instead: block
+elimination with look-ahead on the banded ordering and Haynsworth's inertia
+additivity (:mod:`supercoil.solvers.band`). Since
+``neg(K) = neg(Z^T H Z) + m`` (Gould 1985) for ``m`` independent constraints,
+at least ``m`` must be found (checked).
+With the rank-one terms, from the two Schur complements of
+``[[K_S, U], [U^T, -W^-1]]``:
+``neg(K_S + U W U^T) = neg(K_S) + neg(-W^-1 - U^T K_S^-1 U) - neg(-W^-1)``.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import splu
 
+from supercoil.solvers.band import bandwidth_order, symmetric_inertia
 from supercoil.solvers.problem import HessianParts
 
 
@@ -37,25 +36,93 @@ class SingularMatrixError(RuntimeError):
     """The KKT matrix is (numerically) singular."""
 
 
-def _ordering(S: sp.csr_matrix, J: sp.csr_matrix) -> np.ndarray:
-    n = S.shape[0]
-    m = J.shape[0]
-    graph = (abs(S) + abs(J.T @ J) + sp.identity(n)).tocsr()
-    x_order = np.asarray(reverse_cuthill_mckee(graph, symmetric_mode=True), dtype=np.int64)
+class InertiaError(RuntimeError):
+    """The inertia could not be certified."""
+
+
+def _permutation_parity(perm: np.ndarray) -> int:
+    """+1 for an even permutation, -1 for an odd one."""
+    perm = np.asarray(perm)
+    seen = np.zeros(perm.size, dtype=bool)
+    parity = 1
+    for start in range(perm.size):
+        if seen[start]:
+            continue
+        length = 0
+        j = start
+        while not seen[j]:
+            seen[j] = True
+            j = perm[j]
+            length += 1
+        if length % 2 == 0:
+            parity = -parity
+    return parity
+
+
+def _woodbury_negatives(solve, U: np.ndarray, w: np.ndarray):
+    """Return (H^-1 U, small, correction) for ``H + U diag(w) U^T``."""
+    HU = solve(U)
+    small = np.diag(1.0 / w) + U.T @ HU
+    correction = int(np.sum(np.linalg.eigvalsh(-small) < 0)) - int(np.sum(-1.0 / w < 0))
+    return HU, small, correction
+
+
+def kkt_negative_count(K: sp.spmatrix, n_constraints: int = 0,
+                       order: np.ndarray | None = None) -> int:
+    """Number of negative eigenvalues of a sparse symmetric (KKT) matrix.
+
+    At least ``n_constraints`` must be found when the constraints are independent.
+    """
+    neg, zero, _ = symmetric_inertia(K, order)
+    if zero or neg < n_constraints:
+        raise InertiaError(
+            f"the KKT matrix has {neg} negative and {zero} zero eigenvalues with "
+            f"{n_constraints} constraints: it is singular or the constraints are dependent")
+    return neg
+
+
+def kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
+    """Banded ordering of ``[[S, J^T], [J, 0]]`` that keeps leading blocks regular.
+
+    Reverse Cuthill–McKee on the pattern of ``S + J^T J``; each multiplier is
+    placed right after the first unknown its constraint touches. Every leading
+    principal submatrix is then the KKT matrix of a piece of the rod whose
+    boundary edges are constrained too; placing multipliers after their last
+    unknown instead leaves the boundary edges free to stretch, a near-null
+    mode of the angle-based bending energy that ruined the inertia count
+    (measured at N = 400 near Michell's mode-3 threshold).
+    """
+    n, m = S.shape[0], J.shape[0]
+    x_order = bandwidth_order(abs(S) + abs(J.T @ J))
     if m == 0:
         return x_order
     position = np.empty(n, dtype=np.int64)
     position[x_order] = np.arange(n)
-    Jc = J.tocsr()
-    last = np.full(m, -1, dtype=np.int64)
-    for j in range(m):
-        cols = Jc.indices[Jc.indptr[j] : Jc.indptr[j + 1]]
-        if cols.size:
-            last[j] = position[cols].max()
-    # Stable merge: unknown k gets key 2k, constraint j gets key 2*last_j + 1.
-    keys = np.concatenate([2 * np.arange(n), 2 * last + 1])
+    Jc = sp.csr_matrix(J)
+    row_of_entry = np.repeat(np.arange(m), np.diff(Jc.indptr))
+    first = np.full(m, n, dtype=np.int64)
+    np.minimum.at(first, row_of_entry, position[Jc.indices])
+    keys = np.concatenate([2 * np.arange(n), 2 * first + 1])
     items = np.concatenate([x_order, n + np.arange(m)])
     return items[np.argsort(keys, kind="stable")]
+
+
+class _OrderedLU:
+    """SuperLU with partial pivoting of a symmetrically reordered matrix."""
+
+    def __init__(self, K: sp.spmatrix, order: np.ndarray):
+        self.order = order
+        self.lu = splu(K[order][:, order].tocsc(), permc_spec="NATURAL")
+        self.U = self.lu.U
+        self.perm_r = self.lu.perm_r
+        self.perm_c = self.lu.perm_c
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        rhs = np.asarray(rhs, dtype=float)
+        sol = self.lu.solve(np.ascontiguousarray(rhs[self.order]))
+        out = np.empty_like(sol)
+        out[self.order] = sol
+        return out
 
 
 class KKTFactor:
@@ -63,7 +130,8 @@ class KKTFactor:
 
     ``hessian`` holds the sparse part and rank-one terms of ``H`` on the free
     unknowns, ``jacobian`` is ``(m, n)``; ``shift`` and ``mass`` (diagonal,
-    ``(n,)``) are for shift-invert eigenvalue computations.
+    ``(n,)``) are for shift-invert eigenvalue computations. The inertia is
+    computed on first use of :attr:`reduced_negative_count`.
     """
 
     def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix | None = None,
@@ -75,84 +143,55 @@ class KKTFactor:
         J = sp.csr_matrix((0, n)) if jacobian is None else sp.csr_matrix(jacobian)
         self.n = n
         self.m = J.shape[0]
-        K = sp.bmat([[S, J.T], [J, None]], format="csc")
-        perm = _ordering(S, J)
-        self._perm = perm
-        Kp = K[perm][:, perm].tocsc()
-        self._dense = None
+        self._S = S
+        self._J = J
+        K = sp.bmat([[S, J.T], [J, None]], format="csr") if self.m else S.tocsr()
+        self._K = K
+        # A banded ordering keeps the partial-pivoting LU within twice the band.
+        self._order = kkt_order(S, J)
         try:
-            lu = splu(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                      options={"SymmetricMode": True})
-            if not np.array_equal(lu.perm_r, np.arange(Kp.shape[0])):
-                raise RuntimeError("row pivoting occurred")
-            pivots = lu.U.diagonal()
-            if not np.all(np.isfinite(pivots)) or np.min(np.abs(pivots)) == 0.0:
-                raise RuntimeError("zero pivot")
-            self._lu = lu
-            self._neg = int(np.sum(pivots < 0))
-            self._logdet_sign = float(np.prod(np.sign(pivots)))
-        except RuntimeError:
-            # Fall back to a dense Bunch–Kaufman factorisation (pivoted, stable).
-            if Kp.shape[0] > 6000:
-                raise SingularMatrixError(
-                    "sparse LDL^T without pivoting broke down on a large system; "
-                    "the matrix is (nearly) singular")
-            dense = Kp.toarray()
-            eig = np.linalg.eigvalsh(dense)
-            if np.min(np.abs(eig)) == 0.0:
-                raise SingularMatrixError("KKT matrix is exactly singular") from None
-            self._lu = None
-            self._dense = sla.lu_factor(dense)
-            self._neg = int(np.sum(eig < 0))
-            self._logdet_sign = float(np.prod(np.sign(eig)))
-        # Rank-one terms (Woodbury).
+            self._lu = _OrderedLU(K, self._order)
+        except RuntimeError as exc:  # "Factor is exactly singular"
+            raise SingularMatrixError(f"KKT matrix is singular ({exc})") from None
         r = len(hessian.coefficients)
         self._U = np.zeros((n + self.m, r))
         if r:
             self._U[:n] = hessian.vectors.T
         self._w = np.asarray(hessian.coefficients, dtype=float)
-        self._neg_total = self._neg
-        self._sign_total = self._logdet_sign
         if r:
-            KU = self._solve_sparse(self._U)
-            small = np.diag(1.0 / self._w) + self._U.T @ KU
-            self._KU = KU
-            self._small = small
-            small_eig = np.linalg.eigvalsh(-small)
-            self._neg_total = (self._neg + int(np.sum(small_eig < 0))
-                               - int(np.sum(-1.0 / self._w < 0)))
-            self._sign_total = self._logdet_sign * float(
-                np.prod(np.sign(self._w)) * np.sign(np.linalg.det(small)))
-
-    def _solve_sparse(self, rhs: np.ndarray) -> np.ndarray:
-        rhs = np.asarray(rhs, dtype=float)
-        rp = rhs[self._perm]
-        if self._lu is not None:
-            sol = self._lu.solve(rp)
-        else:
-            sol = sla.lu_solve(self._dense, rp)
-        out = np.empty_like(sol)
-        out[self._perm] = sol
-        return out
+            self._KU, self._small, self._woodbury_correction = _woodbury_negatives(
+                self._lu.solve, self._U, self._w)
+        self._reduced_neg: int | None = None
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve ``K z = rhs`` for the full matrix (rank-one terms included)."""
-        z = self._solve_sparse(rhs)
+        z = self._lu.solve(np.asarray(rhs, dtype=float))
         if len(self._w):
             z = z - self._KU @ np.linalg.solve(self._small, self._U.T @ z)
         return z
 
     @property
-    def negative_count(self) -> int:
-        """Number of negative eigenvalues of the full KKT matrix."""
-        return self._neg_total
-
-    @property
     def reduced_negative_count(self) -> int:
-        """Negative eigenvalues of ``H`` restricted to ``ker J`` (``neg(K) - m``)."""
-        return self._neg_total - self.m
+        """Negative eigenvalues of ``H`` restricted to ``ker J`` (exact inertia)."""
+        if self._reduced_neg is None:
+            neg = kkt_negative_count(self._K, self.m, self._order)
+            if len(self._w):
+                neg += self._woodbury_correction
+            self._reduced_neg = neg - self.m
+        return self._reduced_neg
 
     @property
-    def determinant_sign(self) -> float:
-        """Sign of ``det K``; ``(-1)^m`` times this is the sign of ``det(Z^T H Z)``."""
-        return self._sign_total
+    def negative_count(self) -> int:
+        """Negative eigenvalues of the full KKT matrix (``reduced + m``)."""
+        return self.reduced_negative_count + self.m
+
+    @property
+    def determinant_sign(self) -> int:
+        """Sign of ``det K`` from the pivoted LU (permutation parities included)."""
+        diag = self._lu.U.diagonal()
+        sign = int(np.prod(np.sign(diag)))
+        sign *= _permutation_parity(self._lu.perm_r) * _permutation_parity(self._lu.perm_c)
+        if len(self._w):
+            sign *= int(np.prod(np.sign(self._w)) * np.sign(np.linalg.det(self._small)))
+        return sign
+

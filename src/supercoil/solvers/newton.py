@@ -106,6 +106,17 @@ def least_squares_multipliers(problem: ConstrainedEnergy, q: np.ndarray,
     return np.atleast_1d(spsolve((J @ J.T).tocsc(), -(J @ g)))
 
 
+def roundoff_floor(H, q: np.ndarray) -> float:
+    """Smallest residual that round-off lets us certify: ``8 eps ||H||_inf ||q||_inf``.
+
+    A rod's stiffness grows like ``A / h^3``, so the gradient of an exact
+    equilibrium evaluated in floating point carries an error of about
+    ``eps * ||H|| * ||q||``; asking for less would make Newton wander.
+    """
+    norm_h = float(abs(H.sparse).sum(axis=1).max()) if H.sparse.nnz else 0.0
+    return 8.0 * np.finfo(float).eps * norm_h * max(float(np.max(np.abs(q))), 1e-300)
+
+
 def _hessian(problem, q, lam, free):
     parts = problem.hessian(q)
     if problem.n_constraints:
@@ -130,17 +141,22 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
         res = history[-1] if history else float("nan")
         return NewtonResult(q, lam, status, message, it, res, tuple(history))
 
+    floor = 0.0
     for it in range(opts.max_iterations + 1):
         r = kkt_residual(problem, q, lam, free)
         if not np.all(np.isfinite(r)):
             return done(Status.NONFINITE, "non-finite residual at iteration %d" % it, it)
         res = float(np.max(np.abs(r))) if r.size else 0.0
         history.append(res)
-        if res <= opts.tolerance:
-            return done(Status.CONVERGED, f"converged in {it} iterations, residual {res:.2e}", it)
+        H = _hessian(problem, q, lam, free)
+        floor = roundoff_floor(H, q)
+        target = max(opts.tolerance, floor)
+        if res <= target:
+            return done(Status.CONVERGED,
+                        f"converged in {it} iterations, residual {res:.2e} "
+                        f"(tolerance {opts.tolerance:.1e}, round-off floor {floor:.1e})", it)
         if it == opts.max_iterations:
             break
-        H = _hessian(problem, q, lam, free)
         J = problem.constraint_jacobian(q)[:, free] if m else None
         rhs = -np.concatenate([problem.gradient(q)[free],
                                problem.constraints(q) if m else np.zeros(0)])

@@ -27,11 +27,11 @@ class HessianParts:
     vectors: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     coefficients: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
-    def restrict(self, free: np.ndarray) -> "HessianParts":
+    def restrict(self, free: np.ndarray) -> HessianParts:
         vectors = self.vectors[:, free] if self.vectors.size else np.zeros((0, free.size))
         return HessianParts(self.sparse[free][:, free].tocsr(), vectors, self.coefficients)
 
-    def plus_sparse(self, other: sp.spmatrix) -> "HessianParts":
+    def plus_sparse(self, other: sp.spmatrix) -> HessianParts:
         return HessianParts((self.sparse + other).tocsr(), self.vectors, self.coefficients)
 
     def dense(self) -> np.ndarray:

@@ -73,7 +73,7 @@ def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, mass: np.ndarray)
 
 def negative_count(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray) -> int:
     """Exact number of negative eigenvalues of the constrained Hessian (inertia only)."""
-    free, H, J = _reduced_system(problem, q, multipliers)
+    _free, H, J = _reduced_system(problem, q, multipliers)
     return KKTFactor(H, J).reduced_negative_count
 
 

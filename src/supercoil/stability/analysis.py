@@ -12,8 +12,8 @@ constraints, after the rigid motions (fixed DOFs) are removed. We report
   that eigenvalues converge under refinement), by shift-invert Lanczos with
   KKT solves;
 * ``zero_modes``: eigenvalues with ``|mu| <= zero_tolerance``, never given a
-  sign; ``unstable_count`` = ``negative_count`` minus the zero modes that are
-  slightly negative;
+  sign; ``unstable_count``: the eigenvalues below ``-zero_tolerance``
+  (``max(found below, negative_count - zero_modes)``);
 * ``determinant_sign``: the sign of ``det(Z^T H_L Z)`` — Chamekh et al.'s test
   (seed 000), which only sees the parity of ``negative_count``: when
   eigenvalues cross zero in pairs (symmetric bifurcations) the determinant
@@ -100,14 +100,18 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     else:
         values, vectors = _lowest_pairs(H, J, mass, n_wanted=neg + n_modes, n=n, m=m)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
-    tiny_negative = int(np.sum((values < 0) & (values >= -zero_tolerance)))
+    below = int(np.sum(values < -zero_tolerance))
+    # Eigenvalues within the tolerance are zero modes, whatever sign the
+    # inertia gave them; the count of clearly negative ones is at least what
+    # the eigensolver found and at least the inertia minus the zero modes.
+    unstable = max(below, neg - zero)
     modes = np.zeros((len(values), problem.n_dofs))
     if sym.shape[1]:
         modes = vectors_all.T
     else:
         modes[:, free] = vectors.T
     return StabilityReport(
-        unstable_count=neg - tiny_negative,
+        unstable_count=unstable,
         zero_modes=zero,
         negative_count=neg,
         determinant_sign=det_sign,
@@ -117,7 +121,7 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     )
 
 
-def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None):
+def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
@@ -125,7 +129,7 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None):
     r = 0 if symmetry is None else symmetry.shape[1]
     dim = n - m - r
     k = int(min(n_wanted, dim - 2))
-    if dim <= 400 or k >= dim // 4:
+    if not force_sparse and (dim <= 400 or k >= dim // 4):
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         return values[:k], vectors[:, :k]
     sigma = -1e-3

@@ -1,0 +1,17 @@
+import numpy as np
+import pytest
+
+
+def smooth_closed_curve(n_nodes: int, length: float = 1.0, wobble: float = 0.3) -> np.ndarray:
+    """A smooth non-planar closed curve sampled at n_nodes points, scaled to perimeter ~length."""
+    s = 2 * np.pi * np.arange(n_nodes) / n_nodes
+    pts = np.stack([np.cos(s) + wobble * np.cos(2 * s),
+                    np.sin(s) + 0.5 * wobble * np.sin(3 * s),
+                    wobble * np.sin(2 * s)], axis=1)
+    perimeter = np.sum(np.linalg.norm(np.roll(pts, -1, 0) - pts, axis=1))
+    return pts * (length / perimeter)
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(20261122)

@@ -1,0 +1,155 @@
+"""Linear algebra (inertia, solves) and Newton against exact answers and dense oracles."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from conftest import smooth_closed_curve
+
+from supercoil.problems.ring import twisted_circle_problem
+from supercoil.solvers.band import symmetric_inertia
+from supercoil.solvers.kkt import KKTFactor
+from supercoil.solvers.newton import NewtonOptions, Status, newton
+from supercoil.solvers.problem import HessianParts
+
+
+def random_band(rng, n, b):
+    A = np.zeros((n, n))
+    for k in range(b + 1):
+        d = rng.standard_normal(n - k)
+        A += np.diag(d, k) + (np.diag(d, -k) if k else 0)
+    return A
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_block_inertia_equals_dense_eigenvalues(seed):
+    rng = np.random.default_rng(seed)
+    n, b = int(rng.integers(20, 250)), int(rng.integers(1, 10))
+    A = random_band(rng, n, b)
+    perm = rng.permutation(n)  # hide the band: the ordering must find it again
+    Ap = A[perm][:, perm]
+    neg, zero, pos = symmetric_inertia(sp.csr_matrix(Ap))
+    ev = np.linalg.eigvalsh(A)
+    assert (neg, zero, pos) == (np.sum(ev < 0), 0, np.sum(ev > 0))
+
+
+def random_kkt(rng, n, m, rank_one):
+    H = random_band(rng, n, 3) + 2.0 * np.eye(n)
+    J = np.zeros((m, n))
+    for j in range(m):
+        cols = rng.choice(n, size=3, replace=False)
+        J[j, cols] = rng.standard_normal(3)
+    vecs = rng.standard_normal((rank_one, n))
+    coefs = rng.uniform(0.5, 3.0, rank_one) * rng.choice([-1, 1], rank_one)
+    return HessianParts(sp.csr_matrix(H), vecs, coefs), sp.csr_matrix(J)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_kkt_inertia_determinant_and_solve_match_dense(seed):
+    rng = np.random.default_rng(100 + seed)
+    n, m = int(rng.integers(20, 120)), int(rng.integers(1, 15))
+    H, J = random_kkt(rng, n, m, rank_one=int(rng.integers(0, 3)))
+    factor = KKTFactor(H, J)
+    K = np.block([[H.dense(), J.toarray().T], [J.toarray(), np.zeros((m, m))]])
+    ev = np.linalg.eigvalsh(K)
+    assert factor.negative_count == np.sum(ev < 0)
+    assert factor.reduced_negative_count == np.sum(ev < 0) - m
+    assert factor.determinant_sign == int(np.prod(np.sign(ev)))
+    rhs = rng.standard_normal(n + m)
+    assert np.allclose(K @ factor.solve(rhs), rhs, atol=1e-9 * np.abs(rhs).max() * np.linalg.cond(K))
+
+
+@pytest.mark.parametrize("excess_link", [0.0, 1.0, 3.0, 4.5])
+def test_kkt_inertia_on_the_ring_equals_dense(excess_link):
+    from supercoil.solvers.newton import _hessian, least_squares_multipliers
+    from supercoil.solvers.problem import free_dofs
+
+    p, q = twisted_circle_problem(2 / 3, excess_link, 60)
+    free = free_dofs(p)
+    lam = least_squares_multipliers(p, q, free)
+    H = _hessian(p, q, lam, free)
+    J = p.constraint_jacobian(q)[:, free]
+    K = np.block([[H.dense(), J.toarray().T], [J.toarray(), np.zeros((60, 60))]])
+    ev = np.linalg.eigvalsh(K)
+    factor = KKTFactor(H, J)
+    assert factor.negative_count == np.sum(ev < 0)
+    assert factor.determinant_sign == int(np.prod(np.sign(ev)))
+
+
+class CircleConstrainedQuadratic:
+    """min (x-a)^T D (x-a)/2 on the unit sphere |x|^2 = 1: a toy problem with a known answer."""
+
+    def __init__(self, a, d):
+        self.a, self.d = np.asarray(a, float), np.asarray(d, float)
+        self.n_dofs = len(a)
+        self.n_constraints = 1
+        self.fixed = np.zeros(0, dtype=np.int64)
+        self.mass = np.ones(len(a))
+
+    def energy(self, q):
+        r = q - self.a
+        return 0.5 * float(r @ (self.d * r))
+
+    def gradient(self, q):
+        return self.d * (q - self.a)
+
+    def hessian(self, q):
+        return HessianParts(sp.diags(self.d).tocsr(), np.zeros((0, self.n_dofs)), np.zeros(0))
+
+    def constraints(self, q):
+        return np.array([0.5 * (q @ q - 1.0)])
+
+    def constraint_jacobian(self, q):
+        return sp.csr_matrix(q[None, :])
+
+    def constraint_hessian(self, q, lam):
+        return sp.identity(self.n_dofs, format="csr") * float(lam[0])
+
+    def accept(self, q):
+        pass
+
+
+def test_newton_minimize_finds_the_constrained_minimum_with_quadratic_convergence():
+    # isotropic D: the minimiser of |x - a| on the sphere is a/|a|
+    a = np.array([3.0, -1.0, 2.0, 0.5])
+    prob = CircleConstrainedQuadratic(a, np.ones(4))
+    res = newton(prob, np.array([0.0, 1.0, 0.0, 0.0]), NewtonOptions(tolerance=1e-13))
+    assert res.converged
+    assert np.allclose(res.q, a / np.linalg.norm(a), atol=1e-12)
+    r = np.array(res.residual_history)
+    tail = r[(r > 1e-12) & (r < 1e-1)]
+    # quadratic: log r_{k+1} / log r_k -> 2
+    rates = np.log(tail[1:]) / np.log(tail[:-1])
+    assert rates.size >= 1 and np.all(rates[-1:] > 1.8)
+
+
+def test_newton_on_a_perturbed_ring_converges_quadratically_back_to_the_circle(rng):
+    p, q = twisted_circle_problem(2 / 3, 1.0, 60)
+    e_circle = p.energy(q)
+    bump = smooth_closed_curve(60, wobble=0.4) - smooth_closed_curve(60, wobble=0.0)
+    q0 = q + 0.02 * bump.ravel()
+    res = newton(p, q0, NewtonOptions(tolerance=1e-11))
+    assert res.converged, res.message
+    assert p.energy(res.q) == pytest.approx(e_circle, rel=1e-10)
+    r = np.array(res.residual_history)
+    # quadratic convergence: r_{k+1} <= C r_k^2 over the last two steps, and the
+    # local order log(r_{k+1}) / log(r_k) is at least 2 (nondimensional residuals < 1)
+    assert len(r) >= 3
+    assert np.all(r[-2:] <= 1e3 * r[-3:-1] ** 2), r
+    assert np.log(r[-1]) / np.log(r[-2]) > 1.9, r
+
+
+def test_newton_reports_failure_as_a_status():
+    a = np.array([3.0, -1.0, 2.0])
+    prob = CircleConstrainedQuadratic(a, np.array([1.0, 2.0, 3.0]))
+    res = newton(prob, np.array([0.0, 1.0, 0.0]), NewtonOptions(max_iterations=1,
+                                                                tolerance=1e-14))
+    assert not res.converged
+    assert res.status is Status.MAX_ITERATIONS
+    assert "no convergence" in res.message
+
+
+@pytest.mark.parametrize("bad", [dict(tolerance=0.0), dict(max_iterations=0),
+                                 dict(mode="maximize"), dict(max_step_norm=-1.0)])
+def test_newton_options_validate(bad):
+    with pytest.raises(ValueError):
+        NewtonOptions(**bad)

@@ -1,0 +1,94 @@
+"""Helpers of the ``supercoil`` command: input checks, one-line errors, JSON output.
+
+Exit statuses (DESIGN.md): 0 done; 1 computed but not converged (what was
+done is saved, and the message says where); 2 bad input. Errors are one line
+on standard error starting with ``error:``, never a traceback.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from pathlib import Path
+from typing import NoReturn
+
+import typer
+
+EXIT_NOT_CONVERGED = 1
+EXIT_BAD_INPUT = 2
+
+
+def fail(message: str) -> NoReturn:
+    """Print ``error: message`` as one line on standard error and exit with status 2."""
+    line = " ".join(str(message).split())
+    print(f"error: {line}", file=sys.stderr, flush=True)
+    raise typer.Exit(EXIT_BAD_INPUT)
+
+
+def warn(message: str) -> None:
+    """One line on standard error (for a computed but unconverged result)."""
+    print(" ".join(str(message).split()), file=sys.stderr, flush=True)
+
+
+def require_finite(option: str, value: float, valid: str = "a finite number") -> None:
+    if not math.isfinite(value):
+        fail(f"{option} must be {valid}, got {value!r}")
+
+
+def require_positive(option: str, value: float, valid: str) -> None:
+    if not math.isfinite(value) or value <= 0:
+        fail(f"{option} must be {valid}, got {value!r}")
+
+
+def require_nodes(option: str, value: int) -> None:
+    if value < 8:
+        fail(f"{option} must be an integer >= 8 (nodes of the discrete rod), got {value}")
+
+
+def parse_vector(option: str, text: str) -> tuple[float, float, float]:
+    """Three finite numbers separated by commas or spaces, not all zero."""
+    words = text.replace(",", " ").split()
+    try:
+        values = tuple(float(word) for word in words)
+    except ValueError:
+        fail(f'{option} {text!r} is not three numbers; give a direction like "0,0,1"')
+    if len(values) != 3:
+        fail(f'{option} {text!r} has {len(values)} numbers; give three, like "0,0,1"')
+    if not all(math.isfinite(v) for v in values):
+        fail(f'{option} {text!r} has a non-finite component; give finite numbers like "0,0,1"')
+    if not any(values):
+        fail(f'{option} {text!r} is the zero vector; give a non-zero direction like "0,0,1"')
+    return values  # type: ignore[return-value]
+
+
+def check_json_target(path: str | None) -> None:
+    """Refuse a ``--json`` path that cannot be written, before any computation."""
+    if path is None or path == "-":
+        return
+    target = Path(path)
+    folder = target.parent
+    if target.is_dir():
+        fail(f"--json {path}: is a folder; give a file path, or - for standard output")
+    if not folder.is_dir():
+        fail(
+            f"--json {path}: folder {folder} does not exist; give a path in an existing "
+            "folder, or - for standard output"
+        )
+    if not os.access(folder, os.W_OK | os.X_OK):
+        fail(
+            f"--json {path}: folder {folder} is not writable; give a path in a writable "
+            "folder, or - for standard output"
+        )
+
+
+def write_json_or_fail(data: dict, path: str) -> None:
+    from supercoil.io.results import write_json
+
+    try:
+        write_json(data, path)
+    except OSError as exc:
+        fail(
+            f"--json {path}: cannot write ({exc.strerror or exc}); give a path in a "
+            "writable folder, or - for standard output"
+        )

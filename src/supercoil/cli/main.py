@@ -1,0 +1,307 @@
+"""The ``supercoil`` command: thin, no numerics (parse, call the API, format, write).
+
+Numerical modules are imported inside the commands (JAX takes about a second
+to import), so that ``supercoil --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from supercoil import __version__
+from supercoil.cli._common import (
+    EXIT_NOT_CONVERGED,
+    check_json_target,
+    fail,
+    parse_vector,
+    require_finite,
+    require_nodes,
+    require_positive,
+    warn,
+    write_json_or_fail,
+)
+
+UNITS_NOTE = (
+    "Units are nondimensional: bending stiffness A = 1 and rod length L = 1, so energies are "
+    "E*L/A, forces F*L^2/A, torques M*L/A; the twist ratio is C/A; link, twist and writhe "
+    "are in turns (positive = right-handed)."
+)
+
+app = typer.Typer(
+    name="supercoil",
+    help="Equilibria and stability of elastic rods (Kirchhoff rods, closed rings, writhe). "
+    + UNITS_NOTE
+    + " Exit status: 0 done, 1 computed but not converged, 2 bad input.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+CLOSURES = ("closed", "none", "chord", "axis")
+NEWTON_TOLERANCE = 1e-10
+
+JsonOption = Annotated[
+    str | None,
+    typer.Option(
+        "--json",
+        metavar="PATH",
+        help="Write the machine-readable result as JSON to PATH ('-' = standard output, "
+        "which suppresses the human-readable output). The file carries schema_version, "
+        "units, conventions and provenance.",
+    ),
+]
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        print(f"supercoil {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version",
+            callback=_version_callback,
+            is_eager=True,
+            help="Print the supercoil version and exit.",
+        ),
+    ] = False,
+) -> None:
+    """Equilibria and stability of elastic rods."""
+
+
+# --------------------------------------------------------------------- writhe
+
+
+@app.command()
+def writhe(
+    file: Annotated[
+        Path,
+        typer.Argument(
+            metavar="FILE",
+            help="Text file of the curve: one vertex 'x y z' per line (spaces, tabs or "
+            "commas), each vertex once (a closed curve does not repeat its first vertex); "
+            "'#' starts a comment; blank lines are ignored. Any length unit: the writhe is "
+            "scale-free.",
+            show_default=False,
+        ),
+    ],
+    closure: Annotated[
+        str,
+        typer.Option(
+            "--closure",
+            metavar="closed|none|chord|axis",
+            help="How the curve is closed before the Gauss integral: 'closed' = closed "
+            "polygon (last vertex joined to the first); 'none' = the open polygon alone (not "
+            "a topological quantity); 'chord' = open curve closed by the straight chord "
+            "from its last vertex to its first; 'axis' = open curve closed by straight "
+            "semi-infinite tails along --axis (magnetic-tweezers convention).",
+        ),
+    ] = "closed",
+    axis: Annotated[
+        str,
+        typer.Option(
+            "--axis",
+            metavar="X,Y,Z",
+            help="Direction of the tails for --closure axis (normalised; the first vertex "
+            "continues along -axis, the last along +axis). Ignored for other closures.",
+        ),
+    ] = "0,0,1",
+    json_path: JsonOption = None,
+) -> None:
+    """Writhe of a polygonal curve (turns; a right-handed helix has positive writhe).
+
+    Exact Gauss double integral of the polygon, in its solid-angle (atan2) form.
+    """
+    if closure not in CLOSURES:
+        fail(f"--closure {closure!r} is unknown; valid closures are {', '.join(CLOSURES)}")
+    direction = parse_vector("--axis", axis)
+    check_json_target(json_path)
+
+    from supercoil.io.curves import CurveFileError, read_curve
+
+    try:
+        points = read_curve(file)
+    except CurveFileError as exc:
+        fail(str(exc))
+    needed = 3 if closure in ("closed", "chord") else 2
+    if len(points) < needed:
+        fail(
+            f"curve file {file}: {len(points)} vertex(es); closure {closure!r} needs at least "
+            f"{needed} vertices"
+        )
+
+    from supercoil.topology import writhe as compute_writhe
+
+    try:
+        value = compute_writhe(points, closure=closure, axis=direction)
+    except ValueError as exc:
+        fail(f"curve file {file}: {exc}")
+
+    payload = {"writhe": value, "n_nodes": len(points), "closure": closure}
+    if closure == "axis":
+        payload["axis"] = list(direction)
+    if json_path is not None:
+        from supercoil.io.results import envelope
+
+        data = envelope(payload, n_nodes=len(points), tolerances={})
+        write_json_or_fail(data, json_path)
+    if json_path != "-":
+        tail = f", axis {axis}" if closure == "axis" else ""
+        print(f"writhe {value:.15g}  ({len(points)} vertices, closure {closure}{tail})")
+
+
+# ----------------------------------------------------------------------- ring
+
+
+@app.command()
+def ring(
+    twist_ratio: Annotated[
+        float,
+        typer.Option(
+            "--twist-ratio",
+            metavar="C/A",
+            help="Twist stiffness over bending stiffness, C/A > 0 (dimensionless; about "
+            "2/3 for DNA, 1/(1 + Poisson ratio) for an isotropic elastic rod).",
+            show_default=False,
+        ),
+    ],
+    excess_link: Annotated[
+        float,
+        typer.Option(
+            "--excess-link",
+            metavar="TURNS",
+            help="Excess linking number dLk = Lk - Lk0 of the closed rod, in turns "
+            "(positive = right-handed, overwinding for DNA; any finite number).",
+            show_default=False,
+        ),
+    ],
+    nodes: Annotated[
+        int,
+        typer.Option(
+            "--nodes",
+            metavar="N",
+            help="Number of nodes (vertices) of the discrete ring, N >= 8; the "
+            "discretisation error falls as 1/N^2.",
+        ),
+    ] = 100,
+    json_path: JsonOption = None,
+) -> None:
+    """Equilibrium of a closed twisted ring and its stability.
+
+    Starts from the circle (length L = 1) twisted by the excess link and
+    reports energy (E*L/A), twist and writhe (turns), |Tw + Wr - dLk| from
+    independent computations, and the unstable count. The circle loses
+    stability at Michell's thresholds dLk = (A/C) sqrt(m^2 - 1), m = 2, 3, ...;
+    beyond them it is reported as an unstable equilibrium (leaving it needs
+    self-contact, not yet available).
+    """
+    require_positive("--twist-ratio", twist_ratio, "a positive finite number (C/A > 0)")
+    require_finite("--excess-link", excess_link, "a finite number of turns")
+    require_nodes("--nodes", nodes)
+    check_json_target(json_path)
+
+    from supercoil.problems.ring import solve_ring
+
+    try:
+        result = solve_ring(twist_ratio, excess_link, n_nodes=nodes, tolerance=NEWTON_TOLERANCE)
+    except ValueError as exc:
+        fail(str(exc))
+    summary = result.summary()
+    if json_path is not None:
+        from supercoil.io.results import envelope
+
+        payload = {**summary, "curvature_form": result.curvature}
+        tolerances = {"newton_residual": NEWTON_TOLERANCE, "zero_modes": result.zero_tolerance}
+        write_json_or_fail(envelope(payload, n_nodes=nodes, tolerances=tolerances), json_path)
+    if json_path != "-":
+        from rich.console import Console
+
+        from supercoil.cli._format import ring_table
+
+        Console().print(ring_table(summary))
+    if not summary["converged"]:
+        where = (
+            f"the last state was written to {json_path}"
+            if json_path not in (None, "-")
+            else "the last state was written to standard output"
+            if json_path == "-"
+            else "pass --json PATH to save the last state"
+        )
+        warn(
+            f"not converged: Newton stopped with status {summary['status']} "
+            f"({summary['message']}); {where}"
+        )
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+# ----------------------------------------------------------------------- demo
+
+
+@app.command()
+def demo(
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            metavar="DIR",
+            help="Folder for the figure and data. Default: ./supercoil-demo, or "
+            "./supercoil-demo-2, -3, ... if that exists. An existing non-empty DIR is "
+            "refused unless --force.",
+            show_default=False,
+        ),
+    ] = None,
+    force: Annotated[
+        bool,
+        typer.Option(
+            "--force",
+            help="Write into an existing non-empty --out DIR, "
+            "overwriting the demo's own files (other files are left alone).",
+        ),
+    ] = False,
+) -> None:
+    """Energy and stability of the twisted ring against the excess link (DNA's C/A = 2/3).
+
+    Solves the ring at N = 100 nodes for 25 values of dLk from 0 to
+    1.2 (A/C) sqrt(8) turns, locates the discrete mode-2 and mode-3 thresholds
+    by bisection on the unstable count, and writes ring_stability.png (energy
+    E*L/A with the exact 2 pi^2 (1 + (C/A) dLk^2), and the unstable count with
+    Michell's thresholds (A/C) sqrt(m^2 - 1)), ring_stability.json and
+    ring_stability.csv into a new folder.
+    """
+    from supercoil.cli.demo import prepare_folder, run_demo
+
+    folder = prepare_folder(out, force)
+    converged = run_demo(folder)
+    if not converged:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _single_threaded_blas() -> None:
+    """Default the BLAS/LAPACK thread pools to one thread (the user's setting wins).
+
+    The solves of one rod call LAPACK on many small blocks; threads only add
+    contention there. Measured on the 2-core development machine under load:
+    the mode-3 threshold at N = 100 takes 0.9 s with one OpenBLAS thread and
+    9 s with two. Must run before numpy is imported, hence here.
+    """
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(name, "1")
+
+
+def main() -> None:
+    """Entry point of the ``supercoil`` console script."""
+    _single_threaded_blas()
+    app()
+
+
+if __name__ == "__main__":
+    main()

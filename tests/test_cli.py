@@ -1,0 +1,522 @@
+"""Tests of the ``supercoil`` command and its JSON envelope. Every test has an oracle.
+
+Oracles used here:
+
+- exact values: a planar curve has writhe 0; a mirror image flips the sign of
+  the writhe; the twisted circle has energy 2 pi^2 (1 + (C/A) dLk^2), Lk = Tw + Wr
+  to 1e-9, and unstable count 0 below Michell's (A/C) sqrt(3), 2 between it and
+  (A/C) sqrt(8), 4 above, with a determinant that keeps its sign (pair crossings);
+- the contract of DESIGN.md: JSON keys, envelope, exit statuses (0, 1, 2), one-line
+  ``error:`` messages without a traceback, output folders never overwritten;
+- round trips: numpy values written by ``write_json`` read back equal.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from supercoil import __version__
+from supercoil.cli import demo as demo_module
+from supercoil.cli.main import app
+from supercoil.io.results import CONVENTIONS, envelope, write_json
+
+ENVELOPE = ("schema_version", "units", "conventions", "provenance")
+RING_KEYS = (
+    "twist_ratio",
+    "excess_link",
+    "twist",
+    "writhe",
+    "link_error",
+    "energy",
+    "energy_circle_exact",
+    "unstable_count",
+    "zero_modes",
+    "negative_eigenvalue_count",
+    "determinant_sign",
+    "lowest_eigenvalues",
+    "stable",
+    "converged",
+    "status",
+    "message",
+    "residual",
+    "newton_iterations",
+    "n_nodes",
+    "michell_threshold_exact",
+)
+
+
+@pytest.fixture
+def runner() -> CliRunner:
+    return CliRunner()
+
+
+def invoke(runner: CliRunner, *args: str):
+    return runner.invoke(app, [str(a) for a in args], catch_exceptions=False)
+
+
+def json_out(result) -> dict:
+    assert result.exit_code == 0, result.stderr
+    return json.loads(result.stdout)
+
+
+def write_curve(path: Path, points: np.ndarray, header: str = "") -> Path:
+    """Write ``(n, 3)`` points with a comment, a blank line and mixed separators."""
+    lines = [f"# {header}", ""]
+    for i, (x, y, z) in enumerate(points):
+        sep = ", " if i % 2 else "\t"
+        lines.append(f"{float(x)!r}{sep}{float(y)!r} {float(z)!r}  # vertex {i}")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def trefoil(n: int = 90) -> np.ndarray:
+    """A (2, 3) torus knot ``(n, 3)``: non-planar and chiral, |Wr| of order 3."""
+    s = 2 * np.pi * np.arange(n) / n
+    r = 2 + np.cos(3 * s)
+    return np.stack([r * np.cos(2 * s), r * np.sin(2 * s), np.sin(3 * s)], axis=1)
+
+
+def assert_one_line_error(result, *words: str) -> None:
+    assert result.exit_code == 2, (result.exit_code, result.stdout, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("error:"), lines[0]
+    assert "Traceback" not in result.stderr + result.stdout
+    for word in words:
+        assert word in lines[0], (word, lines[0])
+
+
+# ---------------------------------------------------------------- help, version
+
+
+def test_help_does_not_import_the_numerics():
+    """``supercoil --help`` stays fast: JAX, numba and the solvers are imported lazily."""
+    code = (
+        "import sys\n"
+        "from supercoil.cli.main import app\n"
+        "heavy = [m for m in sys.modules if m.split('.')[0] in ('jax', 'numba', 'scipy',"
+        " 'matplotlib') or m.startswith('supercoil.problems')]\n"
+        "assert not heavy, heavy\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
+
+
+@pytest.mark.parametrize(
+    ("command", "words"),
+    [
+        (
+            "writhe",
+            ["--closure", "closed", "none", "chord", "axis", "--axis", "--json", "turns", "x y z"],
+        ),
+        ("ring", ["--twist-ratio", "C/A", "--excess-link", "turns", "--nodes", "--json", "E*L/A"]),
+        ("demo", ["--out", "--force", "2/3", "E*L/A"]),
+    ],
+)
+def test_help_explains_parameters_and_units(runner, command, words):
+    result = invoke(runner, command, "--help")
+    assert result.exit_code == 0
+    text = " ".join(result.stdout.split())
+    for word in words:
+        assert word in text, word
+
+
+def test_version(runner):
+    result = invoke(runner, "--version")
+    assert result.exit_code == 0
+    assert result.stdout.strip() == f"supercoil {__version__}"
+
+
+# ---------------------------------------------------------------------- writhe
+
+
+def test_writhe_of_planar_square_is_zero(runner, tmp_path):
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    path = write_curve(tmp_path / "square.txt", square, "unit square in the plane z = 0")
+    data = json_out(invoke(runner, "writhe", path, "--json", "-"))
+    assert data["writhe"] == pytest.approx(0.0, abs=1e-14)
+    assert data["n_nodes"] == 4
+    assert data["closure"] == "closed"
+    for key in ENVELOPE:
+        assert key in data
+    human = invoke(runner, "writhe", path)
+    assert human.exit_code == 0
+    assert human.stdout.startswith("writhe ")
+    assert float(human.stdout.split()[1]) == pytest.approx(0.0, abs=1e-14)
+
+
+def test_writhe_of_mirror_image_flips_sign(runner, tmp_path):
+    knot = trefoil()
+    mirror = knot * np.array([1.0, 1.0, -1.0])
+    original = json_out(
+        invoke(runner, "writhe", write_curve(tmp_path / "k.txt", knot), "--json", "-")
+    )["writhe"]
+    mirrored = json_out(
+        invoke(runner, "writhe", write_curve(tmp_path / "m.txt", mirror), "--json", "-")
+    )["writhe"]
+    assert abs(original) > 1.0
+    assert mirrored == pytest.approx(-original, rel=1e-12)
+
+
+def test_writhe_open_closures_and_axis(runner, tmp_path):
+    """A right-handed helix closed by axial tails has positive writhe; reversing the
+    axis is the same as rotating the curve by pi about x, which keeps the writhe of the
+    closed curve: Wr(curve, -z) = Wr(rotated curve, +z)."""
+    t = np.linspace(0, 4 * np.pi, 81)
+    helix = np.stack([np.cos(t), np.sin(t), 0.3 * t], axis=1)
+    rotated = helix * np.array([1.0, -1.0, -1.0])
+    path = write_curve(tmp_path / "helix.txt", helix)
+    up = json_out(invoke(runner, "writhe", path, "--closure", "axis", "--json", "-"))
+    assert up["closure"] == "axis"
+    assert up["axis"] == [0.0, 0.0, 1.0]
+    assert up["writhe"] > 0
+    down = json_out(
+        invoke(runner, "writhe", path, "--closure", "axis", "--axis", "0,0,-1", "--json", "-")
+    )
+    turned = json_out(
+        invoke(
+            runner,
+            "writhe",
+            write_curve(tmp_path / "r.txt", rotated),
+            "--closure",
+            "axis",
+            "--json",
+            "-",
+        )
+    )
+    assert down["writhe"] == pytest.approx(turned["writhe"], rel=1e-12)
+    chord = json_out(invoke(runner, "writhe", path, "--closure", "chord", "--json", "-"))
+    closed = json_out(invoke(runner, "writhe", path, "--json", "-"))
+    assert chord["writhe"] == closed["writhe"]  # same polygon, the convention is named
+    none = json_out(invoke(runner, "writhe", path, "--closure", "none", "--json", "-"))
+    assert none["closure"] == "none" and none["n_nodes"] == 81
+
+
+def test_writhe_json_file_and_human_output(runner, tmp_path):
+    path = write_curve(tmp_path / "k.txt", trefoil(60))
+    target = tmp_path / "out.json"
+    result = invoke(runner, "writhe", path, "--json", target)
+    assert result.exit_code == 0
+    data = json.loads(target.read_text())
+    assert float(result.stdout.split()[1]) == pytest.approx(data["writhe"], rel=1e-14)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.json")]
+
+
+# ------------------------------------------------------------------------ ring
+
+
+def test_ring_below_threshold_matches_the_exact_circle(runner):
+    data = json_out(
+        invoke(runner, "ring", "--excess-link", "1", "--twist-ratio", "0.6667", "--json", "-")
+    )
+    exact = 2 * math.pi**2 * (1 + 0.6667 * 1.0**2)
+    assert data["energy"] == pytest.approx(exact, rel=1e-6)
+    assert data["unstable_count"] == 0
+    assert data["zero_modes"] == 0
+    assert data["stable"] is True
+    assert data["converged"] is True
+    assert data["link_error"] < 1e-9
+    assert data["twist"] + data["writhe"] == pytest.approx(1.0, abs=1e-9)
+    assert data["n_nodes"] == 100
+    for key in RING_KEYS + ENVELOPE:
+        assert key in data, key
+
+
+@pytest.mark.parametrize(("excess_link", "count"), [(1.5, 0), (2.0, 2), (3.0, 4)])
+def test_ring_unstable_count_rises_in_pairs(runner, excess_link, count):
+    """C/A = 1: Michell's thresholds are sqrt(3) = 1.73 and sqrt(8) = 2.83; each is a
+    pair crossing, so the count goes 0, 2, 4 and the determinant keeps its sign +1."""
+    data = json_out(
+        invoke(
+            runner,
+            "ring",
+            "--twist-ratio",
+            "1",
+            "--excess-link",
+            str(excess_link),
+            "--nodes",
+            "50",
+            "--json",
+            "-",
+        )
+    )
+    assert data["unstable_count"] == count
+    assert data["negative_eigenvalue_count"] == count
+    assert data["determinant_sign"] == +1
+    assert data["stable"] is (count == 0)
+    assert data["michell_threshold_exact"] == pytest.approx(math.sqrt(3), rel=1e-15)
+    assert data["converged"] is True
+    assert data["link_error"] < 1e-9
+
+
+def test_ring_json_envelope(runner, tmp_path):
+    target = tmp_path / "ring.json"
+    result = invoke(
+        runner,
+        "ring",
+        "--twist-ratio",
+        "0.5",
+        "--excess-link",
+        "-0.5",
+        "--nodes",
+        "24",
+        "--json",
+        target,
+    )
+    assert result.exit_code == 0
+    assert "energy" in result.stdout  # the human table is still printed
+    data = json.loads(target.read_text())
+    assert data["schema_version"] == "1.0"
+    assert data["units"] == "nondimensional"
+    assert set(CONVENTIONS) <= set(data["conventions"])
+    assert "A = 1" in data["conventions"]["units"]
+    assert "right-handed" in data["conventions"]["writhe"]
+    provenance = data["provenance"]
+    assert provenance["supercoil_version"] == __version__
+    assert provenance["n_nodes"] == 24
+    assert provenance["contact_treatment"] == "none"
+    assert provenance["tolerances"]["zero_modes"] > 0
+    assert provenance["numpy_version"] == np.__version__
+    assert data["excess_link"] == -0.5 and data["twist_ratio"] == 0.5
+    assert data["energy"] == pytest.approx(2 * math.pi**2 * (1 + 0.5 * 0.25), rel=1e-12)
+
+
+def test_ring_not_converged_exits_1_and_saves(runner, tmp_path, monkeypatch):
+    """Exit status 1 when Newton does not converge; the state is still written."""
+    from supercoil.problems import ring as ring_module
+
+    real = ring_module.solve_ring
+
+    def unconverged(*args, **kwargs):
+        return dataclasses.replace(
+            real(*args, **kwargs),
+            converged=False,
+            status="max_iterations",
+            message="stopped (test)",
+        )
+
+    monkeypatch.setattr(ring_module, "solve_ring", unconverged)
+    target = tmp_path / "ring.json"
+    result = invoke(
+        runner,
+        "ring",
+        "--twist-ratio",
+        "1",
+        "--excess-link",
+        "0.5",
+        "--nodes",
+        "16",
+        "--json",
+        target,
+    )
+    assert result.exit_code == 1
+    assert "not converged" in result.stderr and str(target) in result.stderr
+    assert json.loads(target.read_text())["converged"] is False
+
+
+# ------------------------------------------------------------------- bad input
+
+
+def _bad_files(tmp_path: Path) -> dict[str, Path]:
+    files = {
+        "malformed": "0 0 0\n1 0\n1 1 0\n",
+        "words": "0 0 0\n1 zero 0\n1 1 0\n",
+        "nan": "0 0 0\n1 0 0\nnan 1 0\n",
+        "two": "0 0 0\n1 0 0\n",
+        "empty": "# nothing here\n\n",
+        "repeated": "0 0 0\n1 0 0\n1 1 0\n0 0 0\n",
+    }
+    paths = {}
+    for name, text in files.items():
+        paths[name] = tmp_path / f"{name}.txt"
+        paths[name].write_text(text)
+    paths["binary"] = tmp_path / "binary.txt"
+    paths["binary"].write_bytes(b"\xff\xfe\x00\x01")
+    return paths
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["ring", "--twist-ratio", "0", "--excess-link", "1"], ["--twist-ratio", "positive"]),
+        (["ring", "--twist-ratio", "-1", "--excess-link", "1"], ["--twist-ratio"]),
+        (["ring", "--twist-ratio", "nan", "--excess-link", "1"], ["--twist-ratio"]),
+        (["ring", "--twist-ratio", "inf", "--excess-link", "1"], ["--twist-ratio"]),
+        (["ring", "--twist-ratio", "1", "--excess-link", "nan"], ["--excess-link", "finite"]),
+        (["ring", "--twist-ratio", "1", "--excess-link", "-inf"], ["--excess-link"]),
+        (["ring", "--twist-ratio", "1", "--excess-link", "1", "--nodes", "7"], ["--nodes", ">= 8"]),
+        (
+            ["ring", "--twist-ratio", "1", "--excess-link", "1", "--json", "{tmp}/no/such/r.json"],
+            ["--json", "does not exist"],
+        ),
+        (
+            ["ring", "--twist-ratio", "1", "--excess-link", "1", "--json", "{tmp}"],
+            ["--json", "folder"],
+        ),
+        (["writhe", "{tmp}/missing.txt"], ["missing.txt", "no such file"]),
+        (["writhe", "{tmp}"], ["is a folder"]),
+        (["writhe", "{tmp}/malformed.txt"], ["malformed.txt", "line 2", "3 numbers"]),
+        (["writhe", "{tmp}/words.txt"], ["words.txt", "line 2"]),
+        (["writhe", "{tmp}/nan.txt"], ["nan.txt", "line 3", "finite"]),
+        (["writhe", "{tmp}/binary.txt"], ["binary.txt", "UTF-8"]),
+        (["writhe", "{tmp}/two.txt"], ["two.txt", "at least 3"]),
+        (["writhe", "{tmp}/empty.txt"], ["empty.txt", "no vertices"]),
+        (["writhe", "{tmp}/repeated.txt"], ["repeated.txt", "do not repeat"]),
+        (
+            ["writhe", "{tmp}/two.txt", "--closure", "spiral"],
+            ["--closure", "spiral", "closed, none, chord, axis"],
+        ),
+        (["writhe", "{tmp}/two.txt", "--closure", "axis", "--axis", "0,0,0"], ["--axis", "zero"]),
+        (["writhe", "{tmp}/two.txt", "--closure", "axis", "--axis", "1,2"], ["--axis", "three"]),
+        (["writhe", "{tmp}/two.txt", "--closure", "axis", "--axis", "a,b,c"], ["--axis"]),
+        (["writhe", "{tmp}/two.txt", "--closure", "axis", "--axis", "0,0,inf"], ["--axis"]),
+        (["demo", "--out", "{tmp}/two.txt"], ["--out", "file"]),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(runner, tmp_path, args, words):
+    _bad_files(tmp_path)
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    result = invoke(runner, *args)
+    assert_one_line_error(result, *words)
+    assert result.stdout == ""
+
+
+def test_bad_input_through_the_console_script(tmp_path):
+    """The real process: stderr is one line, exit status 2, no traceback."""
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "supercoil.cli.main",
+            "ring",
+            "--twist-ratio",
+            "-2",
+            "--excess-link",
+            "1",
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 2
+    assert result.stderr.count("\n") == 1 and result.stderr.startswith("error: --twist-ratio")
+    assert "Traceback" not in result.stderr
+
+
+# ------------------------------------------------------------------------ demo
+
+
+def test_demo_writes_files_and_never_overwrites(runner, tmp_path, monkeypatch):
+    """The full demo through the console script, then a refused and a forced rerun."""
+    out = tmp_path / "demo"
+    first = subprocess.run(
+        [sys.executable, "-m", "supercoil.cli.main", "demo", "--out", out],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert first.returncode == 0, first.stderr
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(demo_module.FILES)
+    assert str(out.resolve()) in first.stdout
+    assert (out / "ring_stability.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+    data = json.loads((out / "ring_stability.json").read_text())
+    for key in ENVELOPE:
+        assert key in data
+    assert data["twist_ratio"] == pytest.approx(2 / 3)
+    assert data["n_nodes"] == 100 and data["provenance"]["n_nodes"] == 100
+    points = data["points"]
+    assert len(points) == demo_module.N_SAMPLES
+    dlk = np.array([p["excess_link"] for p in points])
+    assert dlk[0] == 0 and dlk[-1] == pytest.approx(1.2 * 1.5 * math.sqrt(8), rel=1e-12)
+    for point in points:
+        assert set(RING_KEYS) <= set(point)
+        assert point["energy"] == pytest.approx(
+            2 * math.pi**2 * (1 + (2 / 3) * point["excess_link"] ** 2), rel=1e-9
+        )
+        assert point["link_error"] < 1e-9
+    exact = {2: 1.5 * math.sqrt(3), 3: 1.5 * math.sqrt(8)}
+    for threshold in data["thresholds"]:
+        m = threshold["mode"]
+        assert threshold["excess_link_exact"] == pytest.approx(exact[m], rel=1e-14)
+        assert abs(threshold["excess_link_computed"] / exact[m] - 1) < 1e-2
+        counts_below = [
+            p["unstable_count"]
+            for p in points
+            if p["excess_link"] < threshold["excess_link_computed"]
+        ]
+        counts_above = [
+            p["unstable_count"]
+            for p in points
+            if p["excess_link"] > threshold["excess_link_computed"]
+        ]
+        assert max(counts_below) == 2 * (m - 2) and min(counts_above) == 2 * (m - 1)
+
+    with open(out / "ring_stability.csv", newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    assert len(rows) == demo_module.N_SAMPLES
+    assert [float(r["excess_link"]) for r in rows] == pytest.approx(dlk, rel=1e-15)
+    assert [int(r["unstable_count"]) for r in rows] == [p["unstable_count"] for p in points]
+
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    second = invoke(runner, "demo", "--out", out)
+    assert_one_line_error(second, "--out", "not empty", "--force")
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+    # --force reuses the folder (the computation itself is stubbed: it ran above).
+    calls = []
+    monkeypatch.setattr(demo_module, "run_demo", lambda folder: calls.append(folder) or True)
+    (out / "notes.txt").write_text("mine")
+    forced = invoke(runner, "demo", "--out", out, "--force")
+    assert forced.exit_code == 0, forced.stderr
+    assert calls == [out]
+    assert (out / "notes.txt").read_text() == "mine"
+
+
+def test_demo_default_folder_is_always_new(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    made = [demo_module.prepare_folder(None, force=False) for _ in range(3)]
+    assert [p.name for p in made] == ["supercoil-demo", "supercoil-demo-2", "supercoil-demo-3"]
+    assert all(p.is_dir() for p in made)
+
+
+# --------------------------------------------------------------- JSON envelope
+
+
+def test_envelope_and_write_json_round_trip(tmp_path, capsys):
+    payload = {
+        "energy": np.float64(1.5),
+        "unstable_count": np.int64(2),
+        "stable": np.bool_(False),
+        "points": np.arange(6.0).reshape(2, 3),
+        "residual": float("nan"),
+    }
+    data = envelope(payload, n_nodes=np.int64(12), tolerances={"zero_modes": 1e-6})
+    assert list(data)[:2] == ["schema_version", "units"]
+    target = tmp_path / "r.json"
+    write_json(data, target)
+    back = json.loads(target.read_text())
+    assert back["energy"] == 1.5 and back["unstable_count"] == 2 and back["stable"] is False
+    assert back["points"] == [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]]
+    assert back["residual"] is None  # strict JSON has no NaN
+    assert back["provenance"]["n_nodes"] == 12
+    assert back["provenance"]["tolerances"] == {"zero_modes": 1e-6}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.json"]  # no temporary left
+    write_json(data, "-")
+    assert json.loads(capsys.readouterr().out) == back
+    with pytest.raises(ValueError, match="reserved"):
+        envelope({"units": "pN"}, n_nodes=3, tolerances={})
+    with pytest.raises(OSError):
+        write_json(data, tmp_path / "missing" / "r.json")

@@ -30,7 +30,7 @@ def ring_table(summary: dict) -> Table:
         ("writhe (turns)", _number(summary["writhe"])),
         ("|Tw + Wr - dLk|", f"{summary['link_error']:.2e}"),
         ("energy E*L/A", _number(summary["energy"])),
-        ("exact circle 2pi^2(1+(C/A)dLk^2)", _number(summary["energy_circle_exact"])),
+        ("exact circle energy", _number(summary["energy_circle_exact"])),
         (
             "stability",
             (

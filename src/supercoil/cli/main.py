@@ -293,7 +293,7 @@ def _single_threaded_blas() -> None:
     the mode-3 threshold at N = 100 takes 0.9 s with one OpenBLAS thread and
     9 s with two. Must run before numpy is imported, hence here.
     """
-    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, "1")
 
 

@@ -20,6 +20,7 @@ from supercoil.rod.closed import ClosedRodEnergy, Rod
 from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
 from supercoil.solvers.problem import free_dofs
 from supercoil.stability.analysis import DEFAULT_ZERO_TOLERANCE, analyse, negative_count
+from supercoil.stability.bisection import locate_count_change
 from supercoil.topology import twist_from_frames, writhe
 
 
@@ -163,20 +164,11 @@ def michell_threshold(twist_ratio: float, n_nodes: int, mode: int = 2,
         raise ValueError(f"mode must be an integer >= 2, got {mode!r}")
     exact = michell_excess_link(twist_ratio, mode)
     below, above = 2 * (mode - 2), 2 * (mode - 1)
-    lo, hi = 0.9 * exact, 1.1 * exact
     count = _CircleInertia(twist_ratio, n_nodes, curvature)
-    count_lo, count_hi = count(lo), count(hi)
-    if count_lo > below or count_hi < above:
-        raise RuntimeError(
-            f"could not bracket the mode-{mode} threshold at n_nodes={n_nodes}: "
-            f"counts {count_lo} at {lo:.4g} and {count_hi} at {hi:.4g}")
-    while hi - lo > rtol * exact:
-        mid = 0.5 * (lo + hi)
-        if count(mid) >= above:
-            hi = mid
-        else:
-            lo = mid
-    return 0.5 * (lo + hi)
+    if count(0.9 * exact) != below:
+        raise RuntimeError(f"unexpected unstable count below the mode-{mode} threshold "
+                           f"at n_nodes={n_nodes}")
+    return locate_count_change(count, 0.9 * exact, 1.1 * exact, above, rtol=rtol)
 
 
 def richardson(coarse: float, fine: float, order: float = 2.0, ratio: float = 2.0) -> float:

@@ -23,6 +23,7 @@ as for the full model with material angles.
 
 from __future__ import annotations
 
+import abc
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,7 +40,8 @@ class Rod:
     """Material and discretisation of an isotropic Kirchhoff rod.
 
     ``bending_stiffness`` A, ``twist_stiffness`` C, ``length`` L (A = L = 1 in
-    the nondimensional default), ``n_nodes`` vertices, ``curvature`` form.
+    the nondimensional default), ``n_nodes`` vertices, ``curvature`` form,
+    ``closed`` (a ring has ``n_nodes`` edges, an open rod ``n_nodes - 1``).
     """
 
     n_nodes: int
@@ -47,6 +49,7 @@ class Rod:
     bending_stiffness: float = 1.0
     length: float = 1.0
     curvature: str = "angle"
+    closed: bool = True
 
     def __post_init__(self) -> None:
         for name in ("twist_stiffness", "bending_stiffness", "length"):
@@ -65,8 +68,19 @@ class Rod:
         return self.twist_stiffness / self.bending_stiffness
 
     @property
+    def n_edges(self) -> int:
+        return self.n_nodes if self.closed else self.n_nodes - 1
+
+    @property
     def edge_length(self) -> float:
-        return self.length / self.n_nodes
+        """Rest length ``h`` of every edge.
+
+        A ring has ``L / n_nodes``. An open rod has ``L / (n_nodes - 2)``: its
+        ends are the midpoints of the first and last edges, where the clamps
+        act (with the clamps at the end nodes instead, the clamped rod would be
+        ``h`` too short and its buckling load first-order accurate — measured).
+        """
+        return self.length / (self.n_nodes if self.closed else self.n_nodes - 2)
 
 
 def initial_reference_frames(points: np.ndarray) -> np.ndarray:
@@ -90,67 +104,62 @@ def initial_reference_frames(points: np.ndarray) -> np.ndarray:
     return np.cos(angle)[:, None] * u + np.sin(angle)[:, None] * v
 
 
-class ClosedRodEnergy:
-    """The constrained energy problem of a closed rod at excess link ``excess_link``.
+class RodEnergy(abc.ABC):
+    """Shared machinery of the discrete rods: stencils, frames, constraints.
 
-    Implements :class:`supercoil.solvers.problem.ConstrainedEnergy`. Holds the
-    reference directors as mutable state, carried along by :meth:`accept`.
-    ``reference_link`` is ``Lk_u``; pass it to continue from a saved state.
+    Subclasses set ``self.rod``, the vertex stencils ``vertex_nodes``
+    ``(n_vertices, 3)``, the edges ``edge_nodes`` ``(n_edges, 2)``, the
+    previous/next edge of each vertex, and :meth:`twist_offset` (turns).
+    The excess twist is ``Tw = twist_offset + Phi / 2pi`` and its energy
+    ``2 pi^2 C Tw^2 / L``.
     """
 
-    def __init__(self, rod: Rod, points: np.ndarray, excess_link: float,
-                 reference_directors: np.ndarray | None = None,
-                 reference_link: int | None = None):
-        points = np.asarray(points, dtype=float)
-        if points.shape != (rod.n_nodes, 3):
-            raise ValueError(f"points must have shape ({rod.n_nodes}, 3), got {points.shape}")
-        if not np.isfinite(points).all():
-            raise ValueError("points contain non-finite coordinates")
-        if not np.isfinite(excess_link):
-            raise ValueError(f"excess_link must be finite, got {excess_link!r}")
+    def _setup(self, rod: Rod, points: np.ndarray, vertex_nodes: np.ndarray,
+               edge_nodes: np.ndarray, prev_edge: np.ndarray, next_edge: np.ndarray,
+               reference_directors: np.ndarray) -> None:
         self.rod = rod
-        self.excess_link = float(excess_link)
-        n = rod.n_nodes
+        n = len(points)
         self.n_dofs = 3 * n
-        self.n_constraints = n
-        idx = np.arange(n)
-        self._pattern = StencilPattern(np.stack([(idx - 1) % n, idx, (idx + 1) % n], 1), 3 * n)
-        self._prev_edge = (idx - 1) % n
-        self._bend_weight = np.full(n, rod.bending_stiffness / (2.0 * rod.edge_length))
+        self.edge_nodes = np.asarray(edge_nodes, dtype=np.int64)
+        self.set_constrained_edges(np.arange(len(self.edge_nodes)))
+        self._pattern = StencilPattern(vertex_nodes, 3 * n)
+        self._prev_edge = np.asarray(prev_edge, dtype=np.int64)
+        self._next_edge = np.asarray(next_edge, dtype=np.int64)
+        self._bend_weight = np.full(len(vertex_nodes), rod.bending_stiffness / (2 * rod.edge_length))
         self._bending = kernels.bending_kernels(rod.curvature)
         self._twist_coefficient = 4.0 * np.pi**2 * rod.twist_stiffness / rod.length
         self.mass = np.full(3 * n, rod.edge_length)
-        self._tangents = unit(edges(points, closed=True))
-        if reference_directors is None:
-            reference_directors = initial_reference_frames(points)
+        self._tangents = unit(self._edge_vectors(points.ravel()))
         self._directors = np.asarray(reference_directors, dtype=float)
-        if reference_link is None:
-            from supercoil.topology import writhe  # set-up only, never inside Newton
 
-            frame_twist = self.reference_twist_total(points.ravel()) / (2 * np.pi)
-            reference_link = int(np.rint(frame_twist + writhe(points)))
-        self.reference_link = int(reference_link)
-        self.fixed = rigid_pins(points)
+    def set_constrained_edges(self, edges_index: np.ndarray) -> None:
+        """Edges whose length is a constraint (edges with both ends fixed are left out)."""
+        self._constrained = np.asarray(edges_index, dtype=np.int64)
+        self.n_constraints = len(self._constrained)
+
+    def _edge_vectors(self, q: np.ndarray) -> np.ndarray:
+        x = q.reshape(-1, 3)
+        return x[self.edge_nodes[:, 1]] - x[self.edge_nodes[:, 0]]
+
+    @abc.abstractmethod
+    def twist_offset(self) -> float:
+        """Turns added to ``Phi / 2pi`` to give the excess twist (set by the boundary)."""
 
     # ----------------------------------------------------------------- pieces
     def _frames(self) -> np.ndarray:
-        """Per-vertex reference data ``(n, 4, 3)``: u_{i-1}, t_{i-1}, u_i, t_i."""
-        p = self._prev_edge
-        return np.stack([self._directors[p], self._tangents[p], self._directors,
-                         self._tangents], axis=1)
+        """Per-vertex reference data ``(n_vertices, 4, 3)``: u_prev, t_prev, u_next, t_next."""
+        p, nx = self._prev_edge, self._next_edge
+        return np.stack([self._directors[p], self._tangents[p], self._directors[nx],
+                         self._tangents[nx]], axis=1)
 
     def reference_twist_total(self, q: np.ndarray) -> float:
         """``Phi``: the sum of the reference twists (radians)."""
         local = np.asarray(kernels.twist_value(self._pattern.gather(q), self._frames()))
         return float(local.sum())
 
-    def writhe_local(self, q: np.ndarray) -> float:
-        """Writhe from the reference twist: ``Lk_u - Phi / 2pi`` (no double sum)."""
-        return self.reference_link - self.reference_twist_total(q) / (2 * np.pi)
-
     def twist(self, q: np.ndarray) -> float:
-        """Excess twist in turns, ``dLk - Wr``."""
-        return self.excess_link - self.writhe_local(q)
+        """Excess twist in turns, ``twist_offset + Phi / 2pi``."""
+        return self.twist_offset() + self.reference_twist_total(q) / (2 * np.pi)
 
     def bending_energy(self, q: np.ndarray) -> float:
         return float(np.sum(self._bending[0](self._pattern.gather(q), self._bend_weight)))
@@ -158,9 +167,12 @@ class ClosedRodEnergy:
     def twist_energy(self, q: np.ndarray) -> float:
         return 0.5 * self._twist_coefficient * self.twist(q) ** 2
 
+    def elastic_energy(self, q: np.ndarray) -> float:
+        return self.bending_energy(q) + self.twist_energy(q)
+
     # -------------------------------------------------------------- protocol
     def energy(self, q: np.ndarray) -> float:
-        return self.bending_energy(q) + self.twist_energy(q)
+        return self.elastic_energy(q)
 
     def _twist_gradient(self, q: np.ndarray) -> np.ndarray:
         """``grad(Phi) / 2pi`` (shape ``(n_dofs,)``) = minus the gradient of the writhe."""
@@ -185,30 +197,87 @@ class ClosedRodEnergy:
         return HessianParts(sparse, g[None, :], np.array([k]))
 
     def constraints(self, q: np.ndarray) -> np.ndarray:
-        e = edges(q.reshape(-1, 3), closed=True)
+        """Inextensibility ``c_j = (|e_j|^2 - h^2) / (2h)``; multipliers are tensions."""
+        e = self._edge_vectors(q)[self._constrained]
         h = self.rod.edge_length
         return (np.sum(e * e, axis=1) - h * h) / (2 * h)
 
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
-        n = self.rod.n_nodes
-        e = edges(q.reshape(-1, 3), closed=True) / self.rod.edge_length
-        rows = np.repeat(np.arange(n), 6)
-        nxt = (np.arange(n) + 1) % n
-        cols = np.concatenate([3 * np.arange(n)[:, None] + np.arange(3),
-                               3 * nxt[:, None] + np.arange(3)], axis=1).ravel()
+        m = self.n_constraints
+        e = self._edge_vectors(q)[self._constrained] / self.rod.edge_length
+        nodes = self.edge_nodes[self._constrained]
+        a = 3 * nodes[:, :1] + np.arange(3)
+        b = 3 * nodes[:, 1:] + np.arange(3)
+        rows = np.repeat(np.arange(m), 6)
+        cols = np.concatenate([a, b], axis=1).ravel()
         data = np.concatenate([-e, e], axis=1).ravel()
-        return sp.csr_matrix((data, (rows, cols)), shape=(n, 3 * n))
+        return sp.csr_matrix((data, (rows, cols)), shape=(m, self.n_dofs))
 
     def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
-        n = self.rod.n_nodes
-        w = np.asarray(multipliers) / self.rod.edge_length
-        a = 3 * np.arange(n)[:, None] + np.arange(3)
-        b = 3 * ((np.arange(n) + 1) % n)[:, None] + np.arange(3)
+        w = np.repeat(np.asarray(multipliers) / self.rod.edge_length, 3)
+        nodes = self.edge_nodes[self._constrained]
+        a = 3 * nodes[:, :1] + np.arange(3)
+        b = 3 * nodes[:, 1:] + np.arange(3)
         rows = np.concatenate([a, b, a, b]).ravel()
         cols = np.concatenate([a, b, b, a]).ravel()
-        ww = np.repeat(w, 3)
-        data = np.concatenate([ww, ww, -ww, -ww])
-        return sp.csr_matrix((data, (rows, cols)), shape=(3 * n, 3 * n))
+        data = np.concatenate([w, w, -w, -w])
+        return sp.csr_matrix((data, (rows, cols)), shape=(self.n_dofs, self.n_dofs))
+
+    def accept(self, q: np.ndarray) -> None:
+        """Carry the reference directors to the new tangents (time-parallel transport)."""
+        t_new = unit(self._edge_vectors(q))
+        u = parallel_transport(self._directors, self._tangents, t_new)
+        u = unit(u - np.sum(u * t_new, axis=1, keepdims=True) * t_new)  # against drift
+        self._directors = u
+        self._tangents = t_new
+
+    @property
+    def reference_directors(self) -> np.ndarray:
+        return self._directors.copy()
+
+
+class ClosedRodEnergy(RodEnergy):
+    """The constrained energy problem of a closed rod at excess link ``excess_link``.
+
+    Implements :class:`supercoil.solvers.problem.ConstrainedEnergy`. Holds the
+    reference directors as mutable state, carried along by :meth:`accept`.
+    ``reference_link`` is ``Lk_u``; pass it to continue from a saved state.
+    Rigid motions are removed by fixing six DOFs (:func:`rigid_pins`).
+    """
+
+    def __init__(self, rod: Rod, points: np.ndarray, excess_link: float,
+                 reference_directors: np.ndarray | None = None,
+                 reference_link: int | None = None):
+        points = np.asarray(points, dtype=float)
+        if points.shape != (rod.n_nodes, 3):
+            raise ValueError(f"points must have shape ({rod.n_nodes}, 3), got {points.shape}")
+        if not np.isfinite(points).all():
+            raise ValueError("points contain non-finite coordinates")
+        if not rod.closed:
+            raise ValueError("ClosedRodEnergy needs a closed Rod (closed=True)")
+        if not np.isfinite(excess_link):
+            raise ValueError(f"excess_link must be finite, got {excess_link!r}")
+        self.excess_link = float(excess_link)
+        n = rod.n_nodes
+        idx = np.arange(n)
+        if reference_directors is None:
+            reference_directors = initial_reference_frames(points)
+        self._setup(rod, points, np.stack([(idx - 1) % n, idx, (idx + 1) % n], 1),
+                    np.stack([idx, (idx + 1) % n], 1), (idx - 1) % n, idx, reference_directors)
+        if reference_link is None:
+            from supercoil.topology import writhe  # set-up only, never inside Newton
+
+            frame_twist = self.reference_twist_total(points.ravel()) / (2 * np.pi)
+            reference_link = int(np.rint(frame_twist + writhe(points)))
+        self.reference_link = int(reference_link)
+        self.fixed = rigid_pins(points)
+
+    def twist_offset(self) -> float:
+        return self.excess_link - self.reference_link
+
+    def writhe_local(self, q: np.ndarray) -> float:
+        """Writhe from the reference twist: ``Lk_u - Phi / 2pi`` (no double sum)."""
+        return self.reference_link - self.reference_twist_total(q) / (2 * np.pi)
 
     def symmetry_modes(self, q: np.ndarray) -> np.ndarray:
         """The six rigid motions at ``q`` (shape ``(6, n_dofs)``): translations, rotations.
@@ -226,16 +295,6 @@ class ClosedRodEnergy:
             modes.append(np.cross(e, r).ravel())
         return np.array(modes)
 
-    def accept(self, q: np.ndarray) -> None:
-        """Carry the reference directors to the new tangents (time-parallel transport)."""
-        t_new = unit(edges(q.reshape(-1, 3), closed=True))
-        u = parallel_transport(self._directors, self._tangents, t_new)
-        # Re-orthonormalise against drift.
-        u = unit(u - np.sum(u * t_new, axis=1, keepdims=True) * t_new)
-        self._directors = u
-        self._tangents = t_new
-
-    # ------------------------------------------------------------- frames out
     def material_directors(self, q: np.ndarray) -> np.ndarray:
         """Material directors ``d1`` (shape ``(n, 3)``) with uniform excess twist.
 
@@ -256,10 +315,6 @@ class ClosedRodEnergy:
         u = self._directors
         v = np.cross(t, u)
         return np.cos(theta)[:, None] * u + np.sin(theta)[:, None] * v
-
-    @property
-    def reference_directors(self) -> np.ndarray:
-        return self._directors.copy()
 
 
 def rigid_pins(points: np.ndarray) -> np.ndarray:

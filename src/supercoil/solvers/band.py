@@ -33,7 +33,9 @@ _MAX_MERGED = 8
 def bandwidth_order(A: sp.spmatrix) -> np.ndarray:
     """Reverse Cuthill–McKee ordering of a symmetric sparse matrix."""
     n = A.shape[0]
-    pattern = (abs(sp.csr_matrix(A)) + sp.identity(n)).tocsr()
+    pattern = sp.csr_matrix(A, copy=True)
+    pattern.eliminate_zeros()
+    pattern = (abs(pattern) + sp.identity(n)).tocsr()
     return np.asarray(reverse_cuthill_mckee(pattern, symmetric_mode=True), dtype=np.int64)
 
 
@@ -44,7 +46,8 @@ def symmetric_inertia(A: sp.spmatrix, order: np.ndarray | None = None) -> tuple[
     Every eigenvalue gets the sign it is computed with (the caller decides
     which ones are numerically zero, e.g. from the eigenvalues themselves).
     """
-    A = sp.csr_matrix(A, dtype=float)
+    A = sp.csr_matrix(A, dtype=float, copy=True)
+    A.eliminate_zeros()
     n = A.shape[0]
     if n == 0:
         return 0, 0, 0

@@ -93,12 +93,14 @@ def kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
     (measured at N = 400 near Michell's mode-3 threshold).
     """
     n, m = S.shape[0], J.shape[0]
+    J = sp.csr_matrix(J, copy=True)
+    J.eliminate_zeros()  # a straight rod's constraints do not touch its lateral DOFs
     x_order = bandwidth_order(abs(S) + abs(J.T @ J))
     if m == 0:
         return x_order
     position = np.empty(n, dtype=np.int64)
     position[x_order] = np.arange(n)
-    Jc = sp.csr_matrix(J)
+    Jc = J
     row_of_entry = np.repeat(np.arange(m), np.diff(Jc.indptr))
     first = np.full(m, n, dtype=np.int64)
     np.minimum.at(first, row_of_entry, position[Jc.indices])

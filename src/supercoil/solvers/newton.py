@@ -145,7 +145,7 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
     for it in range(opts.max_iterations + 1):
         r = kkt_residual(problem, q, lam, free)
         if not np.all(np.isfinite(r)):
-            return done(Status.NONFINITE, "non-finite residual at iteration %d" % it, it)
+            return done(Status.NONFINITE, f"non-finite residual at iteration {it}", it)
         res = float(np.max(np.abs(r))) if r.size else 0.0
         history.append(res)
         H = _hessian(problem, q, lam, free)

@@ -1,0 +1,140 @@
+"""Open discrete Kirchhoff rod with clamped ends along a pulling axis.
+
+Both ends are clamped (position and frame) with their tangents along the
+axis ``+z``: nodes 0 and 1 are fixed, nodes ``n-2`` and ``n-1`` stay on the
+axis. The rod's ends are the midpoints of the first and last edges (edge
+length ``L / (n - 2)``), so the clamps sit at ``s = 0`` and ``s = L`` to
+second order. The turned end is rotated by ``turns`` (right-handed about ``+z``) and
+either slides freely along the axis under a dead load ``tension`` F
+(load control: total potential ``E - F (z_{n-1} - z_0)``) or is held at its
+initial end-to-end distance (displacement control).
+
+Twist (isotropic rod, uniform at equilibrium, material angles minimised out):
+``Tw = turns + Phi / 2pi`` with ``Phi`` the sum of the reference twists of the
+interior vertices; the reference director of the first edge is the clamp
+director. With the rod closed by straight tails along the axis,
+``turns = Tw + Wr`` (Fuller; fails when the rod wraps around a tail).
+Rotating the whole centreline about the axis is an exact symmetry; it is
+removed by fixing the azimuthal coordinate of the node farthest from the axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from supercoil.rod.closed import Rod, RodEnergy
+
+AXIS = np.array([0.0, 0.0, 1.0])
+
+
+def straight_rod(n_nodes: int, length: float = 1.0) -> np.ndarray:
+    """Straight rod along +z, shape ``(n_nodes, 3)``; its ends (mid-edges) at z = 0 and L."""
+    h = length / (n_nodes - 2)
+    z = (np.arange(n_nodes) - 0.5) * h
+    return np.stack([np.zeros(n_nodes), np.zeros(n_nodes), z], axis=1)
+
+
+class ClampedRodEnergy(RodEnergy):
+    """Constrained energy problem of a rod clamped at both ends on the ``z`` axis."""
+
+    def __init__(self, rod: Rod, points: np.ndarray, turns: float, tension: float = 0.0,
+                 end_distance_control: bool = False,
+                 reference_directors: np.ndarray | None = None):
+        points = np.asarray(points, dtype=float)
+        n = rod.n_nodes
+        if rod.closed:
+            raise ValueError("ClampedRodEnergy needs an open Rod (closed=False)")
+        if points.shape != (n, 3):
+            raise ValueError(f"points must have shape ({n}, 3), got {points.shape}")
+        if not np.isfinite(points).all():
+            raise ValueError("points contain non-finite coordinates")
+        for name, value in (("turns", turns), ("tension", tension)):
+            if not np.isfinite(value):
+                raise ValueError(f"{name} must be finite, got {value!r}")
+        h = rod.edge_length
+        for label, a, b in (("first", 0, 1), ("last", n - 2, n - 1)):
+            e = points[b] - points[a]
+            if not np.allclose(e, h * AXIS, atol=1e-9 * rod.length):
+                raise ValueError(f"the {label} edge must lie along +z with length L/(n_nodes-1) "
+                                 "(clamped end on the pulling axis)")
+        if np.any(np.abs(points[[0, 1, n - 2, n - 1], :2]) > 1e-9 * rod.length):
+            raise ValueError("the clamped end nodes must lie on the z axis")
+        self.turns = float(turns)
+        self.tension = float(tension)
+        self.end_distance_control = bool(end_distance_control)
+        idx = np.arange(1, n - 1)
+        if reference_directors is None:
+            reference_directors = _transported_directors(points)
+        self._setup(rod, points, np.stack([idx - 1, idx, idx + 1], 1),
+                    np.stack([np.arange(n - 1), np.arange(1, n)], 1), idx - 1, idx,
+                    reference_directors)
+        fixed = [0, 1, 2, 3, 4, 5, 3 * (n - 2), 3 * (n - 2) + 1, 3 * (n - 1), 3 * (n - 1) + 1]
+        if self.end_distance_control:
+            fixed += [3 * (n - 2) + 2, 3 * (n - 1) + 2]
+        fixed += _axis_rotation_pin(points)
+        self.fixed = np.array(sorted(fixed), dtype=np.int64)
+        # The clamped first edge (and, under displacement control, the last one)
+        # has both ends fixed: its length is not a constraint on the unknowns.
+        last = n - 2 if not self.end_distance_control else n - 3
+        self.set_constrained_edges(np.arange(1, last + 1))
+        # Angle (about +z) from the last reference director to the end clamp's
+        # unturned director +x. The last edge stays along the axis, so the
+        # director there never moves and this angle is a constant of the set-up.
+        u_last = self._directors[-1]
+        self._end_mismatch = float(np.arctan2(-u_last[1], u_last[0]))  # (u x e_x).e_z, u.e_x
+
+    def twist_offset(self) -> float:
+        return self.turns + self._end_mismatch / (2 * np.pi)
+
+    def load_potential(self, q: np.ndarray) -> float:
+        """``-F z``: the potential of the dead load, ``z`` the end-to-end distance."""
+        return -self.tension * self.extension(q) * self.rod.length
+
+    def energy(self, q: np.ndarray) -> float:
+        """Total potential: elastic energy plus the load potential."""
+        return self.elastic_energy(q) + self.load_potential(q)
+
+    def gradient(self, q: np.ndarray) -> np.ndarray:
+        g = super().gradient(q)
+        g[2] += self.tension
+        g[-1] -= self.tension
+        return g
+
+    def extension(self, q: np.ndarray) -> float:
+        """End-to-end distance along the axis between the rod's ends (mid-edges), over L."""
+        x = q.reshape(-1, 3)
+        return (x[-1, 2] - x[0, 2] - self.rod.edge_length) / self.rod.length
+
+    def writhe_local(self, q: np.ndarray) -> float:
+        """Writhe with axial tails from the reference twist (no double sum): ``turns - Tw``."""
+        return self.turns - self.twist(q)
+
+    def symmetry_modes(self, q: np.ndarray) -> np.ndarray:
+        """Rotation of the centreline about the axis (empty when the rod is straight)."""
+        x = q.reshape(-1, 3)
+        mode = np.cross(AXIS, x).ravel()
+        if np.max(np.abs(mode)) <= 1e-9 * self.rod.length:
+            return np.zeros((0, q.size))
+        return mode[None, :]
+
+
+def _transported_directors(points: np.ndarray) -> np.ndarray:
+    """Reference directors by space-parallel transport from the clamp director ``+x``."""
+    from supercoil.geometry.curves import parallel_transport, unit
+
+    t = unit(np.diff(points, axis=0))
+    u = np.empty_like(t)
+    u[0] = [1.0, 0.0, 0.0]
+    for i in range(1, len(t)):
+        u[i] = parallel_transport(u[i - 1 : i], t[i - 1 : i], t[i : i + 1])[0]
+    return u
+
+
+def _axis_rotation_pin(points: np.ndarray) -> list[int]:
+    """The azimuthal coordinate of the node farthest from the axis (if any is off it)."""
+    radius = np.linalg.norm(points[:, :2], axis=1)
+    k = int(np.argmax(radius))
+    if radius[k] <= 1e-6 * np.ptp(points[:, 2]):
+        return []
+    azimuth = np.array([-points[k, 1], points[k, 0]]) / radius[k]
+    return [3 * k + int(np.argmax(np.abs(azimuth)))]

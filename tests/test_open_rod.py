@@ -1,0 +1,121 @@
+"""The clamped open rod: derivatives, exact twisted state, Greenhill buckling, Fuller closure."""
+
+import numpy as np
+import pytest
+
+from supercoil.problems.ring import richardson
+from supercoil.rod.closed import Rod
+from supercoil.rod.open import ClampedRodEnergy, straight_rod
+from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
+from supercoil.solvers.problem import free_dofs
+from supercoil.stability.analysis import negative_count
+from supercoil.stability.bisection import locate_count_change
+from supercoil.topology import writhe
+
+# Greenhill: a rod clamped at both ends, free to slide axially (no tension),
+# buckles under the axial moment M L / A = 2 x1 with tan(x1) = x1.
+GREENHILL = 8.986818916
+
+
+def bent_rod(n, amplitude, rng=None):
+    """A rod with the clamps satisfied and an off-axis smooth bend in between."""
+    pts = straight_rod(n)
+    s = np.clip(pts[:, 2], 0, 1)
+    bump = np.sin(np.pi * s) ** 3  # flat (C^2) at the clamped ends
+    pts[:, 0] += amplitude * bump * np.cos(3 * s)
+    pts[:, 1] += amplitude * bump * np.sin(2 * s)
+    pts[[0, 1, -2, -1], :2] = 0.0
+    return pts
+
+
+def fourth_order_difference(f, q, d, eps=1e-5):
+    """Directional derivative with an O(eps^4) central stencil (stiff rod terms)."""
+    return (-f(q + 2 * eps * d) + 8 * f(q + eps * d) - 8 * f(q - eps * d)
+            + f(q - 2 * eps * d)) / (12 * eps)
+
+
+def make(n=30, turns=0.8, tension=5.0, pts=None, control=False):
+    rod = Rod(n, twist_stiffness=0.7, closed=False)
+    pts = straight_rod(n) if pts is None else pts
+    return ClampedRodEnergy(rod, pts, turns, tension=tension, end_distance_control=control), pts
+
+
+def test_gradient_and_hessian_match_finite_differences(rng):
+    p, pts = make(pts=bent_rod(30, 0.05))
+    q = pts.ravel() + 1e-4 * rng.standard_normal(90)
+    H = p.hessian(q)
+    g = p.gradient(q)
+    for _ in range(3):
+        d = rng.standard_normal(q.size)
+        assert g @ d == pytest.approx(fourth_order_difference(p.energy, q, d), rel=1e-8)
+        fdh = fourth_order_difference(p.gradient, q, d)
+        assert np.max(np.abs(H.matvec(d) - fdh)) <= 1e-7 * np.max(np.abs(fdh))
+
+
+def test_straight_twisted_rod_energy_is_exact():
+    p, pts = make(n=40, turns=1.3, tension=0.0)
+    assert p.energy(pts.ravel()) == pytest.approx(2 * np.pi**2 * 0.7 * 1.3**2, rel=1e-13)
+    assert p.extension(pts.ravel()) == pytest.approx(1.0, abs=1e-14)
+
+
+def test_tension_load_potential_and_equilibrium_of_the_straight_rod():
+    p, pts = make(n=30, turns=0.5, tension=3.0)
+    q = pts.ravel()
+    assert p.load_potential(q) == pytest.approx(-3.0, rel=1e-13)
+    res = newton(p, q, NewtonOptions(mode="stationary"))
+    assert res.converged
+    # the straight rod carries the tension: every constrained edge has multiplier +F
+    # (grad c = +-t at its end nodes; at the pulled end -F t + lambda t = 0)
+    assert np.allclose(res.multipliers, 3.0, rtol=1e-9)
+
+
+def greenhill_turns(n):
+    p, pts = make(n=n, turns=0.0, tension=0.0)
+    p.rod = Rod(n, closed=False)  # C/A = 1 for the threshold in turns
+    p._twist_coefficient = 4 * np.pi**2
+    q = pts.ravel()
+    free = free_dofs(p)
+
+    def count(turns):
+        p.turns = turns
+        return negative_count(p, q, least_squares_multipliers(p, q, free))
+
+    guess = GREENHILL / (2 * np.pi)
+    return locate_count_change(count, 0.9 * guess, 1.1 * guess, 2, rtol=1e-11)
+
+
+def test_greenhill_buckling_converges_with_second_order():
+    exact = GREENHILL / (2 * np.pi)
+    values = {n: greenhill_turns(n) for n in (50, 100, 200, 400)}
+    errors = np.array([abs(values[n] - exact) / exact for n in (50, 100, 200, 400)])
+    orders = np.log2(errors[:-1] / errors[1:])
+    assert np.all(np.abs(orders - 2) < 0.2), (errors, orders)
+    assert abs(richardson(values[200], values[400]) - exact) / exact < 1e-5
+
+
+def test_fuller_closure_turns_equal_twist_plus_writhe():
+    """turns = Tw + Wr with straight tails along the axis, Wr from the double sum."""
+    p, pts = make(n=60, pts=bent_rod(60, 0.02))
+    for amp in np.linspace(0.02, 0.25, 12):
+        q = bent_rod(60, amp).ravel()
+        p.accept(q)
+        tw = p.twist(q)
+        wr = writhe(q.reshape(-1, 3), closure="axis")
+        assert tw + wr == pytest.approx(p.turns, abs=1e-10)
+        assert p.writhe_local(q) == pytest.approx(wr, abs=1e-10)
+
+
+def test_rotation_about_the_axis_is_removed():
+    p, pts = make(n=30, pts=bent_rod(30, 0.1))
+    assert len(p.fixed) == 11  # 6 (clamp) + 4 (axis) + 1 (azimuth pin)
+    assert p.symmetry_modes(pts.ravel()).shape == (1, 90)
+
+
+@pytest.mark.parametrize("bad", ["closed", "offaxis", "turns"])
+def test_bad_input(bad):
+    rod = Rod(20, closed=(bad == "closed"))
+    pts = straight_rod(20)
+    if bad == "offaxis":
+        pts[0, 0] = 0.1
+    with pytest.raises(ValueError):
+        ClampedRodEnergy(rod, pts, np.inf if bad == "turns" else 0.0)

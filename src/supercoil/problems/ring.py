@@ -19,7 +19,12 @@ from supercoil.geometry.curves import circle
 from supercoil.rod.closed import ClosedRodEnergy, Rod
 from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
 from supercoil.solvers.problem import free_dofs
-from supercoil.stability.analysis import DEFAULT_ZERO_TOLERANCE, analyse, negative_count
+from supercoil.stability.analysis import (
+    DEFAULT_ZERO_TOLERANCE,
+    analyse,
+    eigenvalue_nearest_zero,
+    negative_count,
+)
 from supercoil.stability.bisection import locate_count_change
 from supercoil.topology import twist_from_frames, writhe
 
@@ -146,6 +151,11 @@ class _CircleInertia:
         lam = least_squares_multipliers(self.problem, self.q, self.free)
         return negative_count(self.problem, self.q, lam)
 
+    def eigenvalue(self, excess_link: float) -> float:
+        self.problem.excess_link = float(excess_link)
+        lam = least_squares_multipliers(self.problem, self.q, self.free)
+        return eigenvalue_nearest_zero(self.problem, self.q, lam)
+
 
 def circle_negative_count(twist_ratio: float, excess_link: float, n_nodes: int,
                           curvature: str = "angle") -> int:
@@ -158,7 +168,9 @@ def michell_threshold(twist_ratio: float, n_nodes: int, mode: int = 2,
     """Discrete excess link where the circle's unstable count rises to ``2 (m - 1)``.
 
     Bisection on the exact negative-eigenvalue count (seed 000 bisects on the
-    sign of the determinant, which cannot see this pair crossing).
+    sign of the determinant, which cannot see this pair crossing) down to a
+    bracket of relative width 1e-3, then Brent's method on the crossing
+    eigenvalue (the inertia cannot resolve eigenvalues below its round-off).
     """
     if mode < 2:
         raise ValueError(f"mode must be an integer >= 2, got {mode!r}")
@@ -168,7 +180,8 @@ def michell_threshold(twist_ratio: float, n_nodes: int, mode: int = 2,
     if count(0.9 * exact) != below:
         raise RuntimeError(f"unexpected unstable count below the mode-{mode} threshold "
                            f"at n_nodes={n_nodes}")
-    return locate_count_change(count, 0.9 * exact, 1.1 * exact, above, rtol=rtol)
+    return locate_count_change(count, 0.9 * exact, 1.1 * exact, above, rtol=rtol,
+                               eigenvalue=count.eigenvalue)
 
 
 def richardson(coarse: float, fine: float, order: float = 2.0, ratio: float = 2.0) -> float:

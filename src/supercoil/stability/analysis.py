@@ -77,6 +77,19 @@ def negative_count(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.nd
     return KKTFactor(H, J).reduced_negative_count
 
 
+def eigenvalue_nearest_zero(problem: ConstrainedEnergy, q: np.ndarray,
+                            multipliers: np.ndarray) -> float:
+    """The signed eigenvalue of ``H_L v = mu M v`` (constrained, symmetry removed) nearest 0."""
+    mass = problem.mass
+    sym = _symmetry_basis(problem, q, mass)
+    H_all = _hessian(problem, q, multipliers, np.arange(problem.n_dofs))
+    J_all = problem.constraint_jacobian(q) if problem.n_constraints else None
+    m = J_all.shape[0] if J_all is not None else 0
+    values, _ = _lowest_pairs(H_all, J_all, mass, n_wanted=4, n=problem.n_dofs, m=m,
+                              symmetry=sym, force_sparse=True)
+    return float(values[np.argmin(np.abs(values))])
+
+
 def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
             n_modes: int = 6, zero_tolerance: float = DEFAULT_ZERO_TOLERANCE) -> StabilityReport:
     """Full stability report at an equilibrium (see module docstring)."""

@@ -111,6 +111,25 @@ def test_local_writhe_equals_double_sum_along_a_deformation_path(rng):
         assert p.writhe_local(q) == pytest.approx(writhe(q.reshape(-1, 3)), abs=1e-10)
 
 
+def test_link_equals_twist_from_material_frames_plus_double_sum_writhe():
+    """Lk = Tw + Wr at non-planar states: Tw from explicit material directors, Wr double sum."""
+    from supercoil.topology import twist_from_frames
+
+    start = smooth_closed_curve(50, wobble=0.05)
+    end = smooth_closed_curve(50, wobble=0.7)
+    p = make(start, excess_link=2.3)
+    for t in np.linspace(0, 1, 15):
+        pts = (1 - t) * start + t * end
+        q = pts.ravel()
+        p.accept(q)
+        d1 = p.material_directors(q)
+        # excess twist = twist of the material ribbon - its intrinsic link (Lk_u - dLk)
+        tw = twist_from_frames(pts, d1, closed=True) - p.reference_link + p.excess_link
+        wr = writhe(pts)
+        assert abs(tw + wr - p.excess_link) < 1e-9
+        assert tw == pytest.approx(p.twist(q), abs=1e-9)  # the twist the energy uses
+
+
 def test_writhe_tracking_survives_passing_the_half_turn():
     """Wr crossing +-1/2 (where the holonomy wraps) keeps being tracked continuously."""
     n = 80

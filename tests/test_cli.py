@@ -27,7 +27,7 @@ from typer.testing import CliRunner
 
 from supercoil import __version__
 from supercoil.cli import demo as demo_module
-from supercoil.cli.main import app
+from supercoil.cli.main import app, run
 from supercoil.io.results import CONVENTIONS, envelope, write_json
 
 ENVELOPE = ("schema_version", "units", "conventions", "provenance")
@@ -353,7 +353,25 @@ def _bad_files(tmp_path: Path) -> dict[str, Path]:
         (["ring", "--twist-ratio", "inf", "--excess-link", "1"], ["--twist-ratio"]),
         (["ring", "--twist-ratio", "1", "--excess-link", "nan"], ["--excess-link", "finite"]),
         (["ring", "--twist-ratio", "1", "--excess-link", "-inf"], ["--excess-link"]),
-        (["ring", "--twist-ratio", "1", "--excess-link", "1", "--nodes", "7"], ["--nodes", ">= 8"]),
+        (
+            ["ring", "--twist-ratio", "1", "--excess-link", "1", "--nodes", "7"],
+            ["--nodes", "8 to 100000", "got 7"],
+        ),
+        (
+            ["ring", "--twist-ratio", "1", "--excess-link", "1", "--nodes", "100001"],
+            ["--nodes", "8 to 100000", "got 100001"],
+        ),
+        (
+            ["ring", "--twist-ratio", "1", "--excess-link", "1", "--nodes", "1000000000"],
+            ["--nodes", "8 to 100000", "got 1000000000"],
+        ),
+        (
+            ["ring", "--twist-ratio", "1", "--excess-link", "1e300"],
+            ["--excess-link", "|dLk| <= 1e6", "1e+300"],
+        ),
+        (["ring", "--twist-ratio", "1", "--excess-link", "-2e6"], ["--excess-link", "1e6"]),
+        (["ring", "--twist-ratio", "2e6", "--excess-link", "1"], ["--twist-ratio", "<= 1e6"]),
+        (["ring", "--twist-ratio", "1e300", "--excess-link", "1"], ["--twist-ratio", "<= 1e6"]),
         (
             ["ring", "--twist-ratio", "1", "--excess-link", "1", "--json", "{tmp}/no/such/r.json"],
             ["--json", "does not exist"],
@@ -379,6 +397,12 @@ def _bad_files(tmp_path: Path) -> dict[str, Path]:
         (["writhe", "{tmp}/two.txt", "--closure", "axis", "--axis", "1,2"], ["--axis", "three"]),
         (["writhe", "{tmp}/two.txt", "--closure", "axis", "--axis", "a,b,c"], ["--axis"]),
         (["writhe", "{tmp}/two.txt", "--closure", "axis", "--axis", "0,0,inf"], ["--axis"]),
+        (
+            ["writhe", "{tmp}/two.txt", "--closure", "none", "--axis", "0,0,1"],
+            ["--axis", "--closure axis", "'none'"],
+        ),
+        (["writhe", "{tmp}/two.txt", "--axis", "1,0,0"], ["--axis", "'closed'"]),
+        (["writhe", "{tmp}/two.txt", "--closure", "chord", "--axis", "1,0,0"], ["'chord'"]),
         (["demo", "--out", "{tmp}/two.txt"], ["--out", "file"]),
     ],
 )
@@ -411,6 +435,126 @@ def test_bad_input_through_the_console_script(tmp_path):
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and result.stderr.startswith("error: --twist-ratio")
     assert "Traceback" not in result.stderr
+
+
+def run_main(capsys, *args) -> tuple[int, str, str]:
+    """The console script's entry point in-process: (exit status, stdout, stderr)."""
+    status = run([str(a) for a in args])
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+def assert_one_line(status: int, out: str, err: str, expected: int, *words: str) -> None:
+    assert status == expected, (status, out, err)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("error:"), lines[0]
+    for box in ("Traceback", "Usage", "\u256d", "Try '"):
+        assert box not in err + out, (box, err)
+    for word in words:
+        assert word in lines[0], (word, lines[0])
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["ring", "--twist-ratio", "1", "--excess-link", "0", "--nodes", "1e9"], ["'--nodes'"]),
+        (["ring", "--twist-ratio", "abc", "--excess-link", "0"], ["'--twist-ratio'", "number"]),
+        (["ring", "--excess-link", "0"], ["Missing option", "'--twist-ratio'"]),
+        (["ring", "--twist-ratio", "1", "--excess-link", "0", "--bogus"], ["--bogus"]),
+        (["ring", "--twist-ratio"], ["--twist-ratio", "requires an argument"]),
+        (["rng"], ["No such command", "ring"]),
+        (["writhe"], ["Missing argument", "FILE"]),
+    ],
+)
+def test_parse_errors_are_one_line_and_exit_2(capsys, args, words):
+    """typer/click's own errors: one ``error:`` line naming the command's help, no box."""
+    status, out, err = run_main(capsys, *args)
+    assert_one_line(status, out, err, 2, *words)
+    assert "--help'" in err
+    assert out == ""
+
+
+def test_help_and_version_through_the_entry_point(capsys):
+    status, out, err = run_main(capsys, "--help")
+    assert status == 0 and "ring" in out and err == ""
+    status, out, err = run_main(capsys, "ring", "--help")
+    assert status == 0 and "--twist-ratio" in out and err == ""
+    status, out, err = run_main(capsys, "--version")
+    assert status == 0 and out.strip() == f"supercoil {__version__}" and err == ""
+    status, out, _ = run_main(
+        capsys, "ring", "--twist-ratio", "1", "--excess-link", "0.5", "--nodes", "16", "--json", "-"
+    )
+    assert status == 0 and json.loads(out)["converged"] is True
+
+
+def test_unexpected_exception_is_one_line_internal_error(capsys, monkeypatch):
+    """A bug ends as one line with exit status 1; SUPERCOIL_DEBUG=1 re-raises it."""
+    from supercoil.problems import ring as ring_module
+
+    def broken(*args, **kwargs):
+        raise OverflowError("math range\nerror")
+
+    monkeypatch.setattr(ring_module, "solve_ring", broken)
+    monkeypatch.delenv("SUPERCOIL_DEBUG", raising=False)
+    args = ("ring", "--twist-ratio", "1", "--excess-link", "0.5", "--nodes", "16")
+    status, out, err = run_main(capsys, *args)
+    assert_one_line(status, out, err, 1)
+    assert err.strip() == ("error: internal error: OverflowError: math range error (please report)")
+    monkeypatch.setenv("SUPERCOIL_DEBUG", "1")
+    with pytest.raises(OverflowError):
+        run([*args])
+
+
+@pytest.mark.parametrize(
+    ("message", "expected"),
+    [
+        (
+            "converged; warning: under-resolved, N < 20",
+            "warning: converged; warning: under-resolved, N < 20",
+        ),
+        ("Warning: twist per edge 0.9 rad\nraise N", "warning: twist per edge 0.9 rad raise N"),
+        ("converged", None),
+        ("no warnings here", None),
+    ],
+)
+def test_ring_message_warning_goes_to_stderr(runner, monkeypatch, message, expected):
+    """A result message with the word warning becomes a ``warning:`` line; status unchanged."""
+    from supercoil.problems import ring as ring_module
+
+    real = ring_module.solve_ring
+
+    def warned(*args, **kwargs):
+        return dataclasses.replace(real(*args, **kwargs), message=message)
+
+    monkeypatch.setattr(ring_module, "solve_ring", warned)
+    result = invoke(runner, "ring", "--twist-ratio", "1", "--excess-link", "0.5", "--nodes", "16")
+    assert result.exit_code == 0
+    if expected is None:
+        assert result.stderr == ""
+    else:
+        assert result.stderr.splitlines() == [expected]
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--nodes", "1000000000"], ["--nodes", "8 to 100000"]),
+        (["--nodes", "1e9"], ["'--nodes'"]),
+        (["--excess-link", "1e300"], ["--excess-link", "1e6"]),
+    ],
+)
+def test_bounds_through_the_console_script(args, words):
+    """The real process refuses huge inputs at once: one line, exit 2, no traceback."""
+    base = ["ring", "--twist-ratio", "1", "--excess-link", "0", "--nodes", "16"]
+    result = subprocess.run(
+        [sys.executable, "-m", "supercoil.cli.main", *base, *args],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert_one_line(result.returncode, result.stdout, result.stderr, 2, *words)
 
 
 # ------------------------------------------------------------------------ demo

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import sys
 from pathlib import Path
 from typing import NoReturn
@@ -17,6 +18,14 @@ import typer
 
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
+
+# Bounds of the command-line inputs. The numerics would accept more, but beyond
+# these the run either exhausts memory (N = 1e9 asked for 24 GB before being
+# killed) or overflows (dLk = 1e300), so the command refuses them up front.
+MAX_NODES = 100_000
+MIN_NODES = 8
+MAX_MAGNITUDE = 1e6  # |excess link| in turns, twist ratio C/A
+MAX_MAGNITUDE_TEXT = "1e6"
 
 
 def fail(message: str) -> NoReturn:
@@ -31,6 +40,18 @@ def warn(message: str) -> None:
     print(" ".join(str(message).split()), file=sys.stderr, flush=True)
 
 
+_WARNING_WORD = re.compile(r"\bwarning\b", re.IGNORECASE)
+_WARNING_PREFIX = re.compile(r"^\s*warning\s*:?\s*", re.IGNORECASE)
+
+
+def warning_in(message: str | None) -> str | None:
+    """The ``warning: ...`` line for a result message that contains the word warning."""
+    if not message or not _WARNING_WORD.search(message):
+        return None
+    text = " ".join(_WARNING_PREFIX.sub("", str(message), count=1).split())
+    return f"warning: {text}"
+
+
 def require_finite(option: str, value: float, valid: str = "a finite number") -> None:
     if not math.isfinite(value):
         fail(f"{option} must be {valid}, got {value!r}")
@@ -41,9 +62,18 @@ def require_positive(option: str, value: float, valid: str) -> None:
         fail(f"{option} must be {valid}, got {value!r}")
 
 
+def require_magnitude(option: str, value: float, valid: str) -> None:
+    """A finite number with ``|value| <= MAX_MAGNITUDE``."""
+    if not math.isfinite(value) or abs(value) > MAX_MAGNITUDE:
+        fail(f"{option} must be {valid}, got {value!r}")
+
+
 def require_nodes(option: str, value: int) -> None:
-    if value < 8:
-        fail(f"{option} must be an integer >= 8 (nodes of the discrete rod), got {value}")
+    if not MIN_NODES <= value <= MAX_NODES:
+        fail(
+            f"{option} must be an integer from {MIN_NODES} to {MAX_NODES} "
+            f"(nodes of the discrete rod), got {value}"
+        )
 
 
 def parse_vector(option: str, text: str) -> tuple[float, float, float]:

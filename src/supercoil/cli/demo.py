@@ -11,7 +11,7 @@ import csv
 import sys
 from pathlib import Path
 
-from supercoil.cli._common import fail, warn
+from supercoil.cli._common import fail, warn, warning_in
 
 TWIST_RATIO = 2.0 / 3.0  # C/A of DNA (seed 001)
 N_NODES = 100
@@ -164,6 +164,9 @@ def run_demo(folder: Path) -> bool:
     for name in FILES:
         print(f"  {where / name}")
     sys.stdout.flush()
+    warnings = dict.fromkeys(filter(None, (warning_in(row.get("message")) for row in rows)))
+    for line in warnings:
+        warn(line)
     failures = [row["excess_link"] for row in rows if not row["converged"]]
     if failures:
         warn(

@@ -7,23 +7,34 @@ to import), so that ``supercoil --help`` stays fast.
 from __future__ import annotations
 
 import os
+import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NoReturn
 
 import typer
 
 from supercoil import __version__
 from supercoil.cli._common import (
+    EXIT_BAD_INPUT,
     EXIT_NOT_CONVERGED,
+    MAX_MAGNITUDE_TEXT,
     check_json_target,
     fail,
     parse_vector,
-    require_finite,
+    require_magnitude,
     require_nodes,
     require_positive,
     warn,
+    warning_in,
     write_json_or_fail,
 )
+
+try:  # typer >= 0.25 vendors click as typer._click; older typer depends on click
+    from typer._click.exceptions import ClickException, NoArgsIsHelpError
+except ImportError:  # pragma: no cover - depends on the installed typer
+    from click.exceptions import ClickException, NoArgsIsHelpError
+from typer.exceptions import Abort
 
 UNITS_NOTE = (
     "Units are nondimensional: bending stiffness A = 1 and rod length L = 1, so energies are "
@@ -107,14 +118,16 @@ def writhe(
         ),
     ] = "closed",
     axis: Annotated[
-        str,
+        str | None,
         typer.Option(
             "--axis",
             metavar="X,Y,Z",
             help="Direction of the tails for --closure axis (normalised; the first vertex "
-            "continues along -axis, the last along +axis). Ignored for other closures.",
+            "continues along -axis, the last along +axis). Default 0,0,1. Only with "
+            "--closure axis: giving it with another closure is an error.",
+            show_default=False,
         ),
-    ] = "0,0,1",
+    ] = None,
     json_path: JsonOption = None,
 ) -> None:
     """Writhe of a polygonal curve (turns; a right-handed helix has positive writhe).
@@ -123,6 +136,13 @@ def writhe(
     """
     if closure not in CLOSURES:
         fail(f"--closure {closure!r} is unknown; valid closures are {', '.join(CLOSURES)}")
+    if axis is not None and closure != "axis":
+        fail(
+            f"--axis {axis} is only used with --closure axis, but --closure is {closure!r}; "
+            "drop --axis, or give --closure axis"
+        )
+    if axis is None:
+        axis = "0,0,1"
     direction = parse_vector("--axis", axis)
     check_json_target(json_path)
 
@@ -169,8 +189,8 @@ def ring(
         typer.Option(
             "--twist-ratio",
             metavar="C/A",
-            help="Twist stiffness over bending stiffness, C/A > 0 (dimensionless; about "
-            "2/3 for DNA, 1/(1 + Poisson ratio) for an isotropic elastic rod).",
+            help="Twist stiffness over bending stiffness, 0 < C/A <= 1e6 (dimensionless; "
+            "about 2/3 for DNA, 1/(1 + Poisson ratio) for an isotropic elastic rod).",
             show_default=False,
         ),
     ],
@@ -180,7 +200,7 @@ def ring(
             "--excess-link",
             metavar="TURNS",
             help="Excess linking number dLk = Lk - Lk0 of the closed rod, in turns "
-            "(positive = right-handed, overwinding for DNA; any finite number).",
+            "(positive = right-handed, overwinding for DNA; |dLk| <= 1e6).",
             show_default=False,
         ),
     ],
@@ -189,7 +209,7 @@ def ring(
         typer.Option(
             "--nodes",
             metavar="N",
-            help="Number of nodes (vertices) of the discrete ring, N >= 8; the "
+            help="Number of nodes (vertices) of the discrete ring, 8 <= N <= 100000; the "
             "discretisation error falls as 1/N^2.",
         ),
     ] = 100,
@@ -204,8 +224,21 @@ def ring(
     beyond them it is reported as an unstable equilibrium (leaving it needs
     self-contact, not yet available).
     """
-    require_positive("--twist-ratio", twist_ratio, "a positive finite number (C/A > 0)")
-    require_finite("--excess-link", excess_link, "a finite number of turns")
+    require_positive(
+        "--twist-ratio",
+        twist_ratio,
+        f"a positive finite number with 0 < C/A <= {MAX_MAGNITUDE_TEXT}",
+    )
+    require_magnitude(
+        "--twist-ratio",
+        twist_ratio,
+        f"a positive finite number with 0 < C/A <= {MAX_MAGNITUDE_TEXT}",
+    )
+    require_magnitude(
+        "--excess-link",
+        excess_link,
+        f"a finite number of turns with |dLk| <= {MAX_MAGNITUDE_TEXT}",
+    )
     require_nodes("--nodes", nodes)
     check_json_target(json_path)
 
@@ -228,6 +261,9 @@ def ring(
         from supercoil.cli._format import ring_table
 
         Console().print(ring_table(summary))
+    warning = warning_in(summary.get("message"))
+    if warning is not None:
+        warn(warning)
     if not summary["converged"]:
         where = (
             f"the last state was written to {json_path}"
@@ -297,10 +333,52 @@ def _single_threaded_blas() -> None:
         os.environ.setdefault(name, "1")
 
 
-def main() -> None:
-    """Entry point of the ``supercoil`` console script."""
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
+def run(argv: Sequence[str] | None = None) -> int:
+    """Run the command on ``argv`` (default: ``sys.argv[1:]``) and return the exit status.
+
+    Parse errors of typer/click, bad input and unexpected exceptions all end as
+    one line on standard error (DESIGN.md, CLI): ``error: ...`` with status 2
+    for bad input, ``error: internal error: ...`` with status 1 for a bug.
+    ``SUPERCOIL_DEBUG=1`` re-raises unexpected exceptions with their traceback.
+    """
     _single_threaded_blas()
-    app()
+    args = list(sys.argv[1:] if argv is None else argv)
+    try:
+        status = app(args=args, prog_name="supercoil", standalone_mode=False)
+    except NoArgsIsHelpError as exc:  # bare ``supercoil``: the help, as click does
+        print(exc.ctx.get_help())
+        return EXIT_BAD_INPUT
+    except ClickException as exc:
+        ctx = getattr(exc, "ctx", None)
+        command = ctx.command_path if ctx is not None else "supercoil"
+        print(
+            f"error: {_one_line(exc.format_message())} (see '{command} --help')",
+            file=sys.stderr,
+            flush=True,
+        )
+        return exc.exit_code
+    except Abort:
+        print("error: aborted", file=sys.stderr, flush=True)
+        return 1
+    except Exception as exc:
+        if os.environ.get("SUPERCOIL_DEBUG", "") not in ("", "0"):
+            raise
+        print(
+            f"error: internal error: {type(exc).__name__}: {_one_line(exc)} (please report)",
+            file=sys.stderr,
+            flush=True,
+        )
+        return EXIT_NOT_CONVERGED
+    return status if isinstance(status, int) else 0
+
+
+def main(argv: Sequence[str] | None = None) -> NoReturn:
+    """Entry point of the ``supercoil`` console script."""
+    sys.exit(run(argv))
 
 
 if __name__ == "__main__":

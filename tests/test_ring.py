@@ -114,3 +114,30 @@ def test_angle_curvature_beats_tangent_form_at_michell():
 def test_bad_ring_input_raises(bad):
     with pytest.raises(ValueError):
         solve_ring(**bad)
+
+
+@pytest.mark.parametrize("n_nodes", [3000, 10000])
+def test_inertia_stays_exact_on_fine_meshes(n_nodes):
+    """Counts 0, 2, 4 on both sides of sqrt(3), sqrt(8) at N = 3000 and 10000.
+
+    (A bounded look-ahead that finally divided by near-null pivots reported the
+    stable circle as unstable from N ~ 2000 on.)
+    """
+    from supercoil.problems.ring import circle_negative_count
+
+    for excess_link, expected in ((1.0, 0), (2.0, 2), (3.0, 4)):
+        assert circle_negative_count(1.0, excess_link, n_nodes) == expected
+
+
+def test_fine_mesh_ring_reports_round_off_limited_convergence_honestly():
+    r = solve_ring(1.0, 1.0, n_nodes=3000)
+    assert r.converged and r.unstable_count == 0 and r.stability_certified
+    if r.residual > 1e-10:
+        assert r.status.startswith("converged to the round-off floor")
+        assert "round-off floor" in r.message
+
+
+def test_under_resolved_twist_is_flagged():
+    r = solve_ring(1.0, 30.0, n_nodes=50)
+    assert "warning: modes up to m = 30" in r.message
+    assert "warning" not in solve_ring(1.0, 3.0, n_nodes=50).message

@@ -55,7 +55,7 @@ class ClampedRodEnergy(RodEnergy):
         for label, a, b in (("first", 0, 1), ("last", n - 2, n - 1)):
             e = points[b] - points[a]
             if not np.allclose(e, h * AXIS, atol=1e-9 * rod.length):
-                raise ValueError(f"the {label} edge must lie along +z with length L/(n_nodes-1) "
+                raise ValueError(f"the {label} edge must lie along +z with length L/(n_nodes-2) "
                                  "(clamped end on the pulling axis)")
         if np.any(np.abs(points[[0, 1, n - 2, n - 1], :2]) > 1e-9 * rod.length):
             raise ValueError("the clamped end nodes must lie on the z axis")

@@ -44,6 +44,8 @@ class StabilityReport:
     lowest_eigenvalues: np.ndarray  # (k,), ascending
     lowest_modes: np.ndarray  # (k, n_dofs), full DOF vectors, M-orthonormal
     zero_tolerance: float
+    certified: bool = True  # inertia consistent with the eigenvalues and the determinant
+    message: str = ""
 
     @property
     def stable(self) -> bool:
@@ -118,6 +120,14 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     # inertia gave them; the count of clearly negative ones is at least what
     # the eigensolver found and at least the inertia minus the zero modes.
     unstable = max(below, neg - zero)
+    # Cross-checks of the inertia: the determinant's sign is its parity, and the
+    # eigensolver cannot find more clearly negative eigenvalues than it counts.
+    problems = []
+    if det_sign != (-1) ** neg:
+        problems.append(f"determinant sign {det_sign:+d} contradicts {neg} negative eigenvalues")
+    if below > neg:
+        problems.append(f"{below} negative eigenvalues found but the inertia counts {neg}")
+    message = ("inertia not certified: " + "; ".join(problems)) if problems else ""
     modes = np.zeros((len(values), problem.n_dofs))
     if sym.shape[1]:
         modes = vectors_all.T
@@ -131,6 +141,8 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
         lowest_eigenvalues=values,
         lowest_modes=modes,
         zero_tolerance=zero_tolerance,
+        certified=not problems,
+        message=message,
     )
 
 

@@ -342,6 +342,64 @@ def test_numba_kernel_matches_numpy_reference_on_a_long_curve() -> None:
         )
 
 
+def nearly_crossing_quadrilateral(eps: float) -> np.ndarray:
+    """Closed (4, 3) polygon whose edges 0 and 2 pass each other at height ``eps/2``: Wr ≈ sign(eps)."""
+    return np.array([[1.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, eps], [-1.0, 1.0, 0.0]])
+
+
+NEAR_CROSSING_EPS = [sign * 10.0**-k for k in range(6, 14) for sign in (1.0, -1.0)]
+
+
+@pytest.mark.parametrize("eps", NEAR_CROSSING_EPS)
+def test_nearly_crossing_edges_keep_the_sign_of_their_solid_angle(eps: float) -> None:
+    # |Ω| → 2π for the crossing pair: the combined atan2 of the two triangles used to
+    # pick the wrong branch there and return Wr = +1 for eps < 0 (an error of 2)
+    points = nearly_crossing_quadrilateral(eps)
+    mirror = points * np.array([1.0, 1.0, -1.0])
+    value = writhe(points)
+    assert value == pytest.approx(writhe_reference(points), abs=1e-9)
+    assert value == pytest.approx(math.copysign(1.0, eps), abs=1e-5)
+    assert writhe(mirror) == pytest.approx(-value, abs=1e-12)
+    assert writhe(mirror) == pytest.approx(writhe_reference(mirror), abs=1e-9)
+    for closure in ("chord", "none"):
+        assert writhe(points, closure) == pytest.approx(writhe_reference(points, closure), abs=1e-9)
+
+
+@pytest.mark.parametrize("eps", [1e-8, -1e-8, 1e-10, -1e-10, 1e-12, -1e-12])
+def test_nearly_crossing_edges_under_random_rotations(eps: float) -> None:
+    # After a rotation the rounded coordinates perturb the crossing distance by ~1e-16,
+    # and the two-triangle split of this symmetric quadrilateral (diagonal endpoints
+    # nearly antipodal) amplifies that by ~1/eps in both kernels; a wrong branch
+    # would be an error of 2, far above the tolerance (at most 1e-2).
+    rng = np.random.default_rng(2024)
+    points = nearly_crossing_quadrilateral(eps)
+    tolerance = max(1e-9, 1e-14 / abs(eps))
+    for _ in range(200):
+        rotated = points @ random_rotation(rng).T
+        fast, reference = writhe(rotated), writhe_reference(rotated)
+        assert fast == pytest.approx(reference, abs=tolerance)
+        assert fast == pytest.approx(math.copysign(1.0, eps), abs=tolerance)
+        assert reference == pytest.approx(math.copysign(1.0, eps), abs=tolerance)
+
+
+@pytest.mark.parametrize("eps", [1e-6, -1e-6, 1e-10, -1e-10, 1e-12, -1e-12])
+def test_linking_number_of_nearly_touching_polygons(eps: float) -> None:
+    # an edge of the second square passes the edge x = 1 of the first at distance |eps|:
+    # through the first square (Lk = 1) for eps < 0, beside it (Lk = 0) for eps > 0
+    ring = np.array([[1.0, 1.0, 0.0], [-1.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]])
+    other = np.array(
+        [[1.0 + eps, 0.0, -1.0], [1.0 + eps, 0.0, 1.0], [3.0, 0.0, 1.0], [3.0, 0.0, -1.0]]
+    )
+    expected = 1.0 if eps < 0 else 0.0
+    rng = np.random.default_rng(2025)
+    assert linking_number(ring, other) == pytest.approx(expected, abs=1e-3)
+    for _ in range(200):
+        rotation = random_rotation(rng)
+        assert linking_number(ring @ rotation.T, other @ rotation.T) == pytest.approx(
+            expected, abs=1e-3
+        )
+
+
 # ---------------------------------------------------------------- Fuller's theorem
 
 

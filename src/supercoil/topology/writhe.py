@@ -27,7 +27,13 @@ product of complex numbers:
     Ω_ij = 2 arg((D1 + iN)(D2 + iN)) = 2 atan2(N (D1 + D2), D1 D2 − N²),
 
 a single ``atan2`` whose principal value is the right branch because
-``|Ω_ij| < 2π``. Edges that share a vertex are coplanar and contribute exactly 0
+``|Ω_ij| < 2π``. In floating point that branch is not safe near ``|Ω_ij| = 2π``
+(two edges nearly crossing): there ``D1 + D2 → 0`` and a rounding error in its
+sign would return ``Ω ∓ 4π``, an error of ±2 in the writhe. Both half angles
+``atan2(N, D_k)`` have the sign of ``N``, so ``Ω_ij`` has it too; the kernel
+takes ``atan2(|N (D1 + D2)|, D1 D2 − N²) ∈ [0, π]`` and gives it the sign of
+``N``, which is correct on both sides of ``|Ω| = 2π`` and costs one select.
+Edges that share a vertex are coplanar and contribute exactly 0
 and are skipped. The fast kernel evaluates that ``atan2`` with a branch-free
 rational approximation (Cephes) so that the pair loop vectorises; the numpy
 reference adds the two triangles' ``arctan2`` separately.
@@ -203,11 +209,17 @@ def _quadrilateral_angles(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.nda
     """Gauss integrals of the segment pairs ``a→b``, ``c→d`` (arrays broadcasting to ``(..., 3)``).
 
     The signed area of the spherical quadrilateral ``(c−a, c−b, d−b, d−a)`` as two
-    Van Oosterom–Strackee triangles, wrapped into ``(−2π, 2π]``.
+    Van Oosterom–Strackee triangles, clipped to ``[−2π, 2π]``.
+
+    The two triangles share the sign of their (mathematically equal) numerators
+    and ``|Ω| < 2π``, so their sum needs no reduction modulo 4π; near
+    ``|Ω| = 2π`` (nearly crossing edges) rounding can push it just past ``±2π``,
+    and wrapping it to ``∓2π`` there would flip the sign of a nearly crossing
+    pair (an error of ±2 in the writhe), so it is clipped instead.
     """
     v1, v2, v3, v4 = c - a, c - b, d - b, d - a
     omega = _solid_angle_triangles(v1, v2, v3) + _solid_angle_triangles(v1, v3, v4)
-    return omega - 4.0 * np.pi * np.round(omega / (4.0 * np.pi))
+    return np.clip(omega, -2.0 * np.pi, 2.0 * np.pi)
 
 
 def _tail_angles_reference(vertices: np.ndarray, axis: np.ndarray) -> np.ndarray:
@@ -378,7 +390,12 @@ def _row_half_angles(
         d34 = v3x * v4x + v3y * v4y + v3z * v4z
         den1 = l1 * l2 * l3 + d12 * l3 + d13 * l2 + d23 * l1
         den2 = l1 * l3 * l4 + d13 * l4 + d14 * l3 + d34 * l1
-        half_angle[j] = _atan2(numerator * (den1 + den2), den1 * den2 - numerator * numerator)
+        # Ω/2 = atan2(N, D1) + atan2(N, D2) has the sign of N and |Ω/2| < π, so the
+        # combined atan2 is taken with |imaginary part| and the sign of N restored:
+        # near |Ω| = 2π (nearly crossing edges) D1 + D2 → 0 and its rounded sign
+        # would otherwise pick the wrong branch (an error of ±2 in the writhe).
+        magnitude = _atan2(abs(numerator * (den1 + den2)), den1 * den2 - numerator * numerator)
+        half_angle[j] = -magnitude if numerator < 0.0 else magnitude
     # four partial sums: a fixed order (reproducible) that does not serialise on one adder
     s0 = s1 = s2 = s3 = 0.0
     j = j_start

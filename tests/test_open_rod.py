@@ -95,7 +95,7 @@ def test_greenhill_buckling_converges_with_second_order():
 
 def test_fuller_closure_turns_equal_twist_plus_writhe():
     """turns = Tw + Wr with straight tails along the axis, Wr from the double sum."""
-    p, pts = make(n=60, pts=bent_rod(60, 0.02))
+    p, _pts = make(n=60, pts=bent_rod(60, 0.02))
     for amp in np.linspace(0.02, 0.25, 12):
         q = bent_rod(60, amp).ravel()
         p.accept(q)

@@ -108,9 +108,9 @@ def test_angle_curvature_beats_tangent_form_at_michell():
     assert err["angle"] < 1e-3 < err["tan"]
 
 
-@pytest.mark.parametrize("bad", [dict(twist_ratio=0.0, excess_link=1.0),
-                                 dict(twist_ratio=1.0, excess_link=np.nan),
-                                 dict(twist_ratio=-1.0, excess_link=1.0)])
+@pytest.mark.parametrize("bad", [{"twist_ratio": 0.0, "excess_link": 1.0},
+                                 {"twist_ratio": 1.0, "excess_link": np.nan},
+                                 {"twist_ratio": -1.0, "excess_link": 1.0}])
 def test_bad_ring_input_raises(bad):
     with pytest.raises(ValueError):
         solve_ring(**bad)

@@ -163,9 +163,9 @@ def _arclength_curve(n_nodes):
         return np.array([-np.cos(t) - 0.4 * np.cos(2 * t), -np.sin(t) + 0.32 * np.sin(2 * t),
                          -0.3 * np.sin(t)])
 
-    speed = lambda t: np.linalg.norm(dr(t))  # noqa: E731
+    speed = lambda t: np.linalg.norm(dr(t))
     total = quad(speed, 0, 2 * np.pi, epsabs=1e-13, epsrel=1e-13, limit=200)[0]
-    cum = lambda t: quad(speed, 0, t, epsabs=1e-13, epsrel=1e-13, limit=200)[0]  # noqa: E731
+    cum = lambda t: quad(speed, 0, t, epsabs=1e-13, epsrel=1e-13, limit=200)[0]
     ts = [0.0] + [brentq(lambda t, s=s: cum(t) - s, 0, 2 * np.pi, xtol=1e-14)
                   for s in total * np.arange(1, n_nodes) / n_nodes]
     pts = np.array([r(t) for t in ts])
@@ -190,10 +190,10 @@ def test_bending_energy_converges_with_second_order():
     assert np.all(np.abs(orders - 2) < 0.2), (errors, orders)
 
 
-@pytest.mark.parametrize("bad", [dict(n_nodes=4), dict(n_nodes=10, twist_stiffness=0.0),
-                                 dict(n_nodes=10, length=-1.0),
-                                 dict(n_nodes=10, bending_stiffness=np.nan),
-                                 dict(n_nodes=10, curvature="cubic")])
+@pytest.mark.parametrize("bad", [{"n_nodes": 4}, {"n_nodes": 10, "twist_stiffness": 0.0},
+                                 {"n_nodes": 10, "length": -1.0},
+                                 {"n_nodes": 10, "bending_stiffness": np.nan},
+                                 {"n_nodes": 10, "curvature": "cubic"}])
 def test_bad_rod_parameters_raise(bad):
     with pytest.raises(ValueError):
         Rod(**bad)

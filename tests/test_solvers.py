@@ -148,8 +148,8 @@ def test_newton_reports_failure_as_a_status():
     assert "no convergence" in res.message
 
 
-@pytest.mark.parametrize("bad", [dict(tolerance=0.0), dict(max_iterations=0),
-                                 dict(mode="maximize"), dict(max_step_norm=-1.0)])
+@pytest.mark.parametrize("bad", [{"tolerance": 0.0}, {"max_iterations": 0},
+                                 {"mode": "maximize"}, {"max_step_norm": -1.0}])
 def test_newton_options_validate(bad):
     with pytest.raises(ValueError):
         NewtonOptions(**bad)

@@ -510,8 +510,8 @@ def test_unexpected_exception_is_one_line_internal_error(capsys, monkeypatch):
     ("message", "expected"),
     [
         (
-            "converged; warning: under-resolved, N < 20",
-            "warning: converged; warning: under-resolved, N < 20",
+            "converged; warning: under-resolved, N < 20; warning: second",
+            "warning: under-resolved, N < 20; second",
         ),
         ("Warning: twist per edge 0.9 rad\nraise N", "warning: twist per edge 0.9 rad raise N"),
         ("converged", None),

@@ -48,7 +48,9 @@ def warning_in(message: str | None) -> str | None:
     """The ``warning: ...`` line for a result message that contains the word warning."""
     if not message or not _WARNING_WORD.search(message):
         return None
-    text = " ".join(_WARNING_PREFIX.sub("", str(message), count=1).split())
+    # Only the warning parts of a "status; warning: ...; warning: ..." message.
+    parts = [part for part in str(message).split("; ") if _WARNING_WORD.search(part)]
+    text = "; ".join(" ".join(_WARNING_PREFIX.sub("", part, count=1).split()) for part in parts)
     return f"warning: {text}"
 
 

@@ -111,6 +111,20 @@ def test_rotation_about_the_axis_is_removed():
     assert p.symmetry_modes(pts.ravel()).shape == (1, 90)
 
 
+def test_eigenmodes_keep_the_clamps_when_the_gauge_pin_is_released():
+    """Off the axis the azimuth pin is released for the eigenvalues, the clamps are not."""
+    from supercoil.stability.analysis import analyse
+
+    pts = bent_rod(40, 0.08)
+    p, _ = make(n=40, pts=pts)
+    q = pts.ravel()
+    rep = analyse(p, q, least_squares_multipliers(p, q, free_dofs(p)))
+    clamped = np.setdiff1d(p.fixed, p.gauge_dofs)
+    assert p.gauge_dofs.size == 1 and clamped.size == 10
+    assert np.max(np.abs(rep.lowest_modes[:, clamped])) == 0.0
+    assert np.max(np.abs(rep.lowest_modes[:, p.gauge_dofs])) > 0.0
+
+
 @pytest.mark.parametrize("bad", ["closed", "offaxis", "turns"])
 def test_bad_input(bad):
     rod = Rod(20, closed=(bad == "closed"))

@@ -11,9 +11,9 @@ from supercoil.problems.ring import (
     solve_ring,
     twisted_circle_problem,
 )
-from supercoil.solvers.newton import _hessian, least_squares_multipliers
+from supercoil.solvers.newton import least_squares_multipliers
 from supercoil.solvers.problem import free_dofs
-from supercoil.stability.analysis import _lowest_pairs, _symmetry_basis, analyse
+from supercoil.stability.analysis import _eigen_system, _lowest_pairs, analyse
 
 
 @pytest.mark.parametrize("twist_ratio,excess_link", [(2 / 3, 0.0), (2 / 3, 1.5), (1.0, 3.3),
@@ -58,14 +58,11 @@ def test_lanczos_eigenvalues_equal_dense_oracle():
     """Shift-invert Lanczos on the constrained pencil == dense null-space eigenproblem."""
     p, q = twisted_circle_problem(1.0, 1.5, 200)
     lam = least_squares_multipliers(p, q, free_dofs(p))
-    allf = np.arange(p.n_dofs)
-    H = _hessian(p, q, lam, allf)
-    J = p.constraint_jacobian(q)
-    sym = _symmetry_basis(p, q, p.mass)
+    dofs, H, J, mass, sym = _eigen_system(p, q, lam)
     from supercoil.stability.analysis import dense_constrained_eigenpairs
 
-    dense, _ = dense_constrained_eigenpairs(H, J, p.mass, sym)
-    sparse_vals, _ = _lowest_pairs(H, J, p.mass, n_wanted=8, n=p.n_dofs, m=J.shape[0],
+    dense, _ = dense_constrained_eigenpairs(H, J, mass, sym)
+    sparse_vals, _ = _lowest_pairs(H, J, mass, n_wanted=8, n=dofs.size, m=J.shape[0],
                                    symmetry=sym, force_sparse=True)
     nearest = dense[np.argsort(np.abs(dense + 1e-3))[:8]]
     assert np.allclose(np.sort(sparse_vals), np.sort(nearest), rtol=1e-8, atol=1e-6)

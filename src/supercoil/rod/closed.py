@@ -271,6 +271,7 @@ class ClosedRodEnergy(RodEnergy):
             reference_link = int(np.rint(frame_twist + writhe(points)))
         self.reference_link = int(reference_link)
         self.fixed = rigid_pins(points)
+        self.gauge_dofs = self.fixed  # all six pins only remove rigid motions
 
     def twist_offset(self) -> float:
         return self.excess_link - self.reference_link

@@ -71,8 +71,8 @@ class ClampedRodEnergy(RodEnergy):
         fixed = [0, 1, 2, 3, 4, 5, 3 * (n - 2), 3 * (n - 2) + 1, 3 * (n - 1), 3 * (n - 1) + 1]
         if self.end_distance_control:
             fixed += [3 * (n - 2) + 2, 3 * (n - 1) + 2]
-        fixed += _axis_rotation_pin(points)
-        self.fixed = np.array(sorted(fixed), dtype=np.int64)
+        self.gauge_dofs = np.array(_axis_rotation_pin(points), dtype=np.int64)
+        self.fixed = np.array(sorted(fixed + list(self.gauge_dofs)), dtype=np.int64)
         # The clamped first edge (and, under displacement control, the last one)
         # has both ends fixed: its length is not a constraint on the unknowns.
         last = n - 2 if not self.end_distance_control else n - 3

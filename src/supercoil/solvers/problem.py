@@ -51,7 +51,10 @@ class ConstrainedEnergy(Protocol):
     """Minimise (or make stationary) ``E(q)`` subject to ``c(q) = 0``, some DOFs fixed.
 
     ``mass`` (positive, shape ``(n_dofs,)``) is the metric in which eigenvalues
-    are reported, so that they converge under mesh refinement.
+    are reported, so that they converge under mesh refinement. Optionally,
+    ``gauge_dofs`` (a subset of ``fixed`` that only removes continuous
+    symmetries) and ``symmetry_modes(q)`` (shape ``(r, n_dofs)``) let the
+    stability analysis report eigenvalues independent of the pins.
     """
 
     n_dofs: int

@@ -59,18 +59,40 @@ def _reduced_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.n
     return free, H, J
 
 
-def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, mass: np.ndarray) -> np.ndarray:
-    """M-orthonormal basis ``(n_dofs, r)`` of the problem's continuous symmetry modes."""
+def _eigen_dofs(problem: ConstrainedEnergy) -> np.ndarray:
+    """DOFs of the eigenproblem: the free ones plus the gauge pins.
+
+    Fixed DOFs are either boundary conditions (clamps) or ``gauge_dofs`` that
+    only remove continuous symmetries (rigid motions of a ring, rotation of a
+    clamped rod about its axis). The count uses the pinned system (same
+    inertia at an equilibrium); the eigenvalues release the gauge pins and
+    project the symmetry modes out M-orthogonally, so that they do not depend
+    on which DOFs were pinned.
+    """
+    mask = np.zeros(problem.n_dofs, dtype=bool)
+    mask[free_dofs(problem)] = True
+    mask[np.asarray(getattr(problem, "gauge_dofs", ()), dtype=np.int64)] = True
+    return np.flatnonzero(mask)
+
+
+def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+    """M-orthonormal basis ``(len(dofs), r)`` of the symmetry modes on ``dofs``."""
     getter = getattr(problem, "symmetry_modes", None)
-    if getter is None:
-        return np.zeros((problem.n_dofs, 0))
-    modes = np.asarray(getter(q), dtype=float).T  # (n_dofs, r)
+    modes = np.zeros((0, problem.n_dofs)) if getter is None else np.asarray(getter(q), float)
     if modes.size == 0:
-        return np.zeros((problem.n_dofs, 0))
-    root = np.sqrt(mass)
-    qmat, rfac = np.linalg.qr(root[:, None] * modes)
+        return np.zeros((dofs.size, 0))
+    root = np.sqrt(problem.mass[dofs])
+    qmat, rfac = np.linalg.qr(root[:, None] * modes[:, dofs].T)
     keep = np.abs(np.diag(rfac)) > 1e-10 * np.max(np.abs(np.diag(rfac)))
     return qmat[:, keep] / root[:, None]
+
+
+def _eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray):
+    """``(dofs, H, J, mass, symmetry)`` of the constrained eigenproblem (see _eigen_dofs)."""
+    dofs = _eigen_dofs(problem)
+    H = _hessian(problem, q, multipliers, dofs)
+    J = problem.constraint_jacobian(q)[:, dofs] if problem.n_constraints else None
+    return dofs, H, J, problem.mass[dofs], _symmetry_basis(problem, q, dofs)
 
 
 def negative_count(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray) -> int:
@@ -82,38 +104,24 @@ def negative_count(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.nd
 def eigenvalue_nearest_zero(problem: ConstrainedEnergy, q: np.ndarray,
                             multipliers: np.ndarray) -> float:
     """The signed eigenvalue of ``H_L v = mu M v`` (constrained, symmetry removed) nearest 0."""
-    mass = problem.mass
-    sym = _symmetry_basis(problem, q, mass)
-    H_all = _hessian(problem, q, multipliers, np.arange(problem.n_dofs))
-    J_all = problem.constraint_jacobian(q) if problem.n_constraints else None
-    m = J_all.shape[0] if J_all is not None else 0
-    values, _ = _lowest_pairs(H_all, J_all, mass, n_wanted=4, n=problem.n_dofs, m=m,
-                              symmetry=sym, force_sparse=True)
+    dofs, H, J, mass, sym = _eigen_system(problem, q, multipliers)
+    m = J.shape[0] if J is not None else 0
+    values, _ = _lowest_pairs(H, J, mass, n_wanted=4, n=dofs.size, m=m, symmetry=sym,
+                              force_sparse=True)
     return float(values[np.argmin(np.abs(values))])
 
 
 def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
             n_modes: int = 6, zero_tolerance: float = DEFAULT_ZERO_TOLERANCE) -> StabilityReport:
     """Full stability report at an equilibrium (see module docstring)."""
-    free, H, J = _reduced_system(problem, q, multipliers)
-    n = free.size
+    _free, H, J = _reduced_system(problem, q, multipliers)
     m = J.shape[0] if J is not None else 0
     factor = KKTFactor(H, J)
     neg = factor.reduced_negative_count
     det_sign = int(factor.determinant_sign * (-1) ** m)
-    mass_full = problem.mass
-    mass = mass_full[free]
-    # The eigenvalues are those of the quotient by the symmetry modes (M-orthogonal
-    # complement): the pinned DOFs are released and the symmetry modes projected out.
-    sym = _symmetry_basis(problem, q, mass_full)
-    if sym.shape[1]:
-        H_all = _hessian(problem, q, multipliers, np.arange(problem.n_dofs))
-        J_all = (problem.constraint_jacobian(q) if problem.n_constraints else None)
-        values, vectors_all = _lowest_pairs(H_all, J_all, mass_full, n_wanted=neg + n_modes,
-                                            n=problem.n_dofs, m=m, symmetry=sym)
-        vectors = vectors_all[free]
-    else:
-        values, vectors = _lowest_pairs(H, J, mass, n_wanted=neg + n_modes, n=n, m=m)
+    dofs, H_e, J_e, mass_e, sym = _eigen_system(problem, q, multipliers)
+    values, vectors = _lowest_pairs(H_e, J_e, mass_e, n_wanted=neg + n_modes, n=dofs.size,
+                                    m=m, symmetry=sym)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # Eigenvalues within the tolerance are zero modes, whatever sign the
@@ -129,10 +137,7 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
         problems.append(f"{below} negative eigenvalues found but the inertia counts {neg}")
     message = ("inertia not certified: " + "; ".join(problems)) if problems else ""
     modes = np.zeros((len(values), problem.n_dofs))
-    if sym.shape[1]:
-        modes = vectors_all.T
-    else:
-        modes[:, free] = vectors.T
+    modes[:, dofs] = vectors.T
     return StabilityReport(
         unstable_count=unstable,
         zero_modes=zero,

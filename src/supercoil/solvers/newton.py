@@ -143,19 +143,21 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
         res = history[-1] if history else float("nan")
         return NewtonResult(q, lam, status, message, it, res, tuple(history))
 
-    floor = 0.0
     for it in range(opts.max_iterations + 1):
-        r = kkt_residual(problem, q, lam, free)
+        g = problem.gradient(q)[free]
+        c = problem.constraints(q) if m else np.zeros(0)
+        J = problem.constraint_jacobian(q)[:, free] if m else None
+        r = np.concatenate([g + J.T @ lam if m else g, c])
         if not np.all(np.isfinite(r)):
             return done(Status.NONFINITE, f"non-finite residual at iteration {it}", it)
         res = float(np.max(np.abs(r))) if r.size else 0.0
         history.append(res)
-        H = _hessian(problem, q, lam, free)
-        floor = roundoff_floor(H, q)
         if res <= opts.tolerance:
             return done(Status.CONVERGED,
                         f"converged in {it} iterations, residual {res:.2e} "
                         f"(tolerance {opts.tolerance:.1e})", it)
+        H = _hessian(problem, q, lam, free)
+        floor = roundoff_floor(H, q)
         if res <= floor:
             return done(Status.ROUNDOFF_LIMITED,
                         f"converged to the round-off floor in {it} iterations: residual "
@@ -164,9 +166,7 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
                         f"of {q.size // 3} nodes can be evaluated", it)
         if it == opts.max_iterations:
             break
-        J = problem.constraint_jacobian(q)[:, free] if m else None
-        rhs = -np.concatenate([problem.gradient(q)[free],
-                               problem.constraints(q) if m else np.zeros(0)])
+        rhs = -np.concatenate([g, c])
         delta = 0.0
         try:
             for _ in range(40):
@@ -188,9 +188,9 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
         if res > opts.full_step_below:
             if opts.mode == "minimize":
                 mu = max(mu, 2.0 * float(np.max(np.abs(lam_new))) if m else 0.0)
-                c0 = np.sum(np.abs(problem.constraints(q))) if m else 0.0
+                c0 = float(np.sum(np.abs(c)))
                 phi0 = problem.energy(q) + mu * c0
-                slope = float(problem.gradient(q)[free] @ dq_free) - mu * c0
+                slope = float(g @ dq_free) - mu * c0
                 while alpha >= opts.min_step:
                     qt = q + alpha * dq
                     ct = np.sum(np.abs(problem.constraints(qt))) if m else 0.0

@@ -136,6 +136,11 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     if below > neg:
         problems.append(f"{below} negative eigenvalues found but the inertia counts {neg}")
     message = ("inertia not certified: " + "; ".join(problems)) if problems else ""
+    if below > neg:
+        # The inertia is the verified method (tests up to N = 20 000); on very fine
+        # meshes the shift-invert eigenvalues lose accuracy first. Report the
+        # inertia count and keep the warning.
+        unstable = neg
     modes = np.zeros((len(values), problem.n_dofs))
     modes[:, dofs] = vectors.T
     return StabilityReport(

@@ -1,0 +1,1 @@
+"""Self-contact of rods: segment distances, continuous collision detection, contact treatments."""

@@ -1,0 +1,423 @@
+"""Segment–segment distance with exact first and second derivatives.
+
+Notation. Two segments ``p(s) = p0 + s e_p`` and ``q(t) = q0 + t e_q`` with
+``e_p = p1 - p0``, ``e_q = q1 - q0`` and ``s, t`` in ``[0, 1]``; ``w = p0 - q0``,
+``r(s, t) = p(s) - q(t)``. The distance is ``d = min |r(s, t)|`` over the unit
+square.
+
+Classification (Li et al., *Incremental Potential Contact*, SIGGRAPH 2020,
+supplementary "edge-edge distance"). The minimum of the convex quadratic
+``|r|^2`` over the square is attained either
+
+* in the interior: the *edge–edge* type, the distance of the two infinite
+  lines ``|w . n| / |n|`` with ``n = e_p x e_q``;
+* on a side of the square with the foot strictly inside the other segment:
+  one of four *point–edge* types, the distance of an endpoint to the infinite
+  line of the other segment, ``|(x - a) x e| / |e|``;
+* at a corner: one of four *point–point* types, ``|x - y|``.
+
+So ``d`` is the minimum over five candidates — the interior critical point
+(when it lies in the square) and the four endpoint-to-segment distances — and
+the type is the candidate that attains it (:class:`DistanceKind`). Each type is
+a smooth function of the 12 coordinates where it is active, and ``d`` is C¹
+across the boundaries between types (at a boundary the stationarity condition
+of the free parameter holds for both neighbouring types, so their gradients
+agree); the Hessian jumps there.
+
+Derivatives. Write ``h = |r|^2 / 2 = |C(s, t) x|^2 / 2`` with ``x`` the 12
+coordinates ``(p0, p1, q0, q1)`` and ``C = c ⊗ I_3``,
+``c = (1 - s, s, -(1 - t), -t)``. A type minimises ``h`` over its free
+parameters ``u`` (``(s, t)``, ``t``, ``s`` or none), so by the envelope
+theorem and the implicit function theorem
+
+    grad h = C^T r,      hess h = C^T C - h_xu h_uu^{-1} h_ux,
+
+with ``h_uu = [[e_p.e_p, -e_p.e_q], [-e_p.e_q, e_q.e_q]]`` (restricted to the
+free parameters), ``d h_s / d x_k = c_k e_p + dp_k r`` and
+``d h_t / d x_k = -(c_k e_q + dq_k r)`` where ``dp = (-1, 1, 0, 0)``,
+``dq = (0, 0, -1, 1)``. Then with ``r̂ = r / d``
+
+    grad d = c ⊗ r̂,      hess d = (hess h - grad d grad d^T) / d.
+
+These are the exact derivatives of the closed-form type functions (checked
+against JAX autodiff and finite differences in ``tests/test_contact_distance.py``).
+
+Near-parallel segments. The edge–edge Hessian contains ``h_uu^{-1}``, which
+grows like ``1 / sin^2 θ`` (the distance's Hessian like ``1 / sin θ``); for
+exactly parallel segments the line distance is not even differentiable. When
+``|e_p x e_q|^2 <= parallel_tolerance |e_p|^2 |e_q|^2`` (``sin^2 θ`` below the
+tolerance) :func:`segment_distance_derivatives` therefore drops the edge–edge
+candidate and uses the minimum over the point–edge / point–point types. That is
+exact for parallel segments (some minimiser then lies on the boundary of the
+square), and its derivatives stay bounded (``O(1/d + 1/ℓ)``), which keeps line
+contacts — two parallel strands of a plectoneme — smooth enough for Newton.
+For a near-parallel pair whose exact minimiser is interior, the fallback
+over-estimates the distance: along the valley of ``|r|^2`` the distance from a
+point of one line to the other line is ``sqrt(d^2 + (δs ℓ_p sin θ)^2)``, and the
+valley leaves the square within ``|δs| <= 1`` (and ``|δt| <= 1``), so
+
+    0 <= d_fallback - d <= sqrt(d^2 + ℓ_min^2 sin^2 θ) - d
+                         <= min(ℓ_min sin θ, ℓ_min^2 sin^2 θ / (2 d)),
+
+``ℓ_min = min(|e_p|, |e_q|)``. With the default ``parallel_tolerance = 1e-6``
+this is at most ``ℓ_min^2 / (2e6 d)`` (``5e-7 ℓ`` for ``d ≈ ℓ``). The returned
+function therefore jumps by at most this amount where ``sin^2 θ`` crosses the
+tolerance; elsewhere it is C¹ as above. :func:`segment_distance` never uses the
+fallback: it is exact in all cases.
+
+Degenerate cases. Zero-length segments are points (their foot parameter is 0).
+When ``d <= 1e-12 max(|e_p|, |e_q|)`` (crossing or touching segments, or two
+coincident points) the distance is not differentiable: the gradient and the
+Hessian returned are **zero** (finite), ``d`` is the computed value (tiny or 0)
+and ``kind`` the type found. Callers refuse such states.
+
+Speed. The kernels are compiled with numba (one pass over the pairs, no
+temporary arrays per pair); no recompilation when the number of pairs changes.
+"""
+
+from __future__ import annotations
+
+import enum
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "CROSSING_RELATIVE_DISTANCE",
+    "DistanceKind",
+    "segment_distance",
+    "segment_distance_derivatives",
+]
+
+# Below this fraction of the longer segment length the pair counts as crossing.
+CROSSING_RELATIVE_DISTANCE = 1e-12
+
+
+class DistanceKind(enum.IntEnum):
+    """Type of the closest pair (the ``kind`` codes of :func:`segment_distance_derivatives`)."""
+
+    EDGE_EDGE = 0  # interior points of both segments: distance of the two lines
+    P0_EDGE_Q = 1  # endpoint p0 and the interior of segment q
+    P1_EDGE_Q = 2
+    Q0_EDGE_P = 3  # endpoint q0 and the interior of segment p
+    Q1_EDGE_P = 4
+    P0_Q0 = 5  # two endpoints
+    P0_Q1 = 6
+    P1_Q0 = 7
+    P1_Q1 = 8
+
+
+_EE = 0
+_P0_EQ, _P1_EQ, _Q0_EP, _Q1_EP = 1, 2, 3, 4
+_P0_Q0, _P0_Q1, _P1_Q0, _P1_Q1 = 5, 6, 7, 8
+
+
+def _njit(**options: object):
+    """``numba.njit(cache=True, **options)``, falling back to an in-memory compile."""
+
+    def decorate(function):
+        try:
+            return numba.njit(cache=True, **options)(function)
+        except RuntimeError:  # no writable cache directory
+            return numba.njit(cache=False, **options)(function)
+
+    return decorate
+
+
+# --------------------------------------------------------------------------
+# per-pair building blocks (scalars only: no allocation inside the loops)
+# --------------------------------------------------------------------------
+
+
+@_njit()
+def _clamp01(x):
+    return min(max(x, 0.0), 1.0)
+
+
+@_njit()
+def _r2(wx, wy, wz, ux, uy, uz, vx, vy, vz, s, t):
+    rx = wx + s * ux - t * vx
+    ry = wy + s * uy - t * vy
+    rz = wz + s * uz - t * vz
+    return rx * rx + ry * ry + rz * rz
+
+
+@_njit()
+def _foot_kind(t, interior, at0, at1):
+    if t <= 0.0:
+        return at0
+    if t >= 1.0:
+        return at1
+    return interior
+
+
+@_njit()
+def _closest(P0, P1, Q0, Q1, i, parallel_tolerance, exact):
+    """Closest parameters of pair ``i``: ``(d, s, t, kind)``.
+
+    ``exact=True``: the interior candidate is used whenever the lines are not
+    exactly parallel and its value is the distance between the two actual
+    (clamped) points, so ``d`` is always attained by real points.
+    ``exact=False``: the interior candidate needs ``sin^2 θ > parallel_tolerance``
+    and its value is the line distance ``|w.n|/|n|`` (the smooth type function).
+    """
+    ux = P1[i, 0] - P0[i, 0]
+    uy = P1[i, 1] - P0[i, 1]
+    uz = P1[i, 2] - P0[i, 2]
+    vx = Q1[i, 0] - Q0[i, 0]
+    vy = Q1[i, 1] - Q0[i, 1]
+    vz = Q1[i, 2] - Q0[i, 2]
+    wx = P0[i, 0] - Q0[i, 0]
+    wy = P0[i, 1] - Q0[i, 1]
+    wz = P0[i, 2] - Q0[i, 2]
+    a = ux * ux + uy * uy + uz * uz
+    b = ux * vx + uy * vy + uz * vz
+    c = vx * vx + vy * vy + vz * vz
+    dw = ux * wx + uy * wy + uz * wz
+    ew = vx * wx + vy * wy + vz * wz
+    nx = uy * vz - uz * vy
+    ny = uz * vx - ux * vz
+    nz = ux * vy - uy * vx
+    big_d = nx * nx + ny * ny + nz * nz  # |e_p x e_q|^2 = ac - b^2, without cancellation
+
+    best = np.inf
+    s_best = 0.0
+    t_best = 0.0
+    kind = _P0_Q0
+
+    if exact:
+        use_interior = big_d > 0.0
+    else:
+        use_interior = big_d > parallel_tolerance * a * c and big_d > 0.0
+    if use_interior:
+        s = (b * ew - c * dw) / big_d
+        t = (a * ew - b * dw) / big_d
+        if exact:
+            s = _clamp01(s)
+            t = _clamp01(t)
+            best = _r2(wx, wy, wz, ux, uy, uz, vx, vy, vz, s, t)
+            s_best = s
+            t_best = t
+            kind = _EE
+        elif 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
+            wn = wx * nx + wy * ny + wz * nz
+            best = wn * wn / big_d
+            s_best = s
+            t_best = t
+            kind = _EE
+
+    # p0 and p1 against segment q
+    for end in range(2):
+        s = float(end)
+        t = (ew + s * b) / c if c > 0.0 else 0.0
+        if end == 0:
+            k = _foot_kind(t, _P0_EQ, _P0_Q0, _P0_Q1)
+        else:
+            k = _foot_kind(t, _P1_EQ, _P1_Q0, _P1_Q1)
+        t = _clamp01(t)
+        value = _r2(wx, wy, wz, ux, uy, uz, vx, vy, vz, s, t)
+        if value < best:
+            best = value
+            s_best = s
+            t_best = t
+            kind = k
+    # q0 and q1 against segment p
+    for end in range(2):
+        t = float(end)
+        s = (t * b - dw) / a if a > 0.0 else 0.0
+        if end == 0:
+            k = _foot_kind(s, _Q0_EP, _P0_Q0, _P1_Q0)
+        else:
+            k = _foot_kind(s, _Q1_EP, _P0_Q1, _P1_Q1)
+        s = _clamp01(s)
+        value = _r2(wx, wy, wz, ux, uy, uz, vx, vy, vz, s, t)
+        if value < best:
+            best = value
+            s_best = s
+            t_best = t
+            kind = k
+    return np.sqrt(best), s_best, t_best, kind
+
+
+@_njit()
+def _distance_kernel(P0, P1, Q0, Q1, d, s, t):
+    for i in range(P0.shape[0]):
+        d[i], s[i], t[i], _ = _closest(P0, P1, Q0, Q1, i, 0.0, True)
+
+
+@_njit()
+def _derivative_kernel(P0, P1, Q0, Q1, parallel_tolerance, d_out, grad, hess, kinds):
+    u = np.empty(3)
+    v = np.empty(3)
+    r = np.empty(3)
+    cc = np.empty(4)
+    dp = np.array([-1.0, 1.0, 0.0, 0.0])
+    dq = np.array([0.0, 0.0, -1.0, 1.0])
+    js = np.empty(12)
+    jt = np.empty(12)
+    for i in range(P0.shape[0]):
+        d, s, t, kind = _closest(P0, P1, Q0, Q1, i, parallel_tolerance, False)
+        d_out[i] = d
+        kinds[i] = kind
+        for x in range(3):
+            u[x] = P1[i, x] - P0[i, x]
+            v[x] = Q1[i, x] - Q0[i, x]
+        a = u[0] * u[0] + u[1] * u[1] + u[2] * u[2]
+        b = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+        c = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+        scale = np.sqrt(max(a, c))
+        if not d > CROSSING_RELATIVE_DISTANCE * scale:
+            for m in range(12):
+                grad[i, m] = 0.0
+                for n in range(12):
+                    hess[i, m, n] = 0.0
+            continue
+        if kind == _EE:
+            # r is along n = e_p x e_q: take its direction from n (accurate), its length d
+            nx = u[1] * v[2] - u[2] * v[1]
+            ny = u[2] * v[0] - u[0] * v[2]
+            nz = u[0] * v[1] - u[1] * v[0]
+            wn = ((P0[i, 0] - Q0[i, 0]) * nx + (P0[i, 1] - Q0[i, 1]) * ny
+                  + (P0[i, 2] - Q0[i, 2]) * nz)
+            factor = d / np.sqrt(nx * nx + ny * ny + nz * nz)
+            if wn < 0.0:
+                factor = -factor
+            r[0] = factor * nx
+            r[1] = factor * ny
+            r[2] = factor * nz
+        else:
+            for x in range(3):
+                r[x] = P0[i, x] + s * u[x] - Q0[i, x] - t * v[x]
+        cc[0] = 1.0 - s
+        cc[1] = s
+        cc[2] = t - 1.0
+        cc[3] = -t
+        inv_d = 1.0 / d
+        # gradient c ⊗ r̂ and the point-point part (c c^T) ⊗ (I - r̂ r̂^T) / d
+        for k in range(4):
+            for x in range(3):
+                grad[i, 3 * k + x] = cc[k] * r[x] * inv_d
+        for k in range(4):
+            for x in range(3):
+                row = 3 * k + x
+                for m in range(4):
+                    ckm = cc[k] * cc[m]
+                    for y in range(3):
+                        delta = 1.0 if x == y else 0.0
+                        hess[i, row, 3 * m + y] = ckm * (delta - r[x] * r[y] * inv_d * inv_d)
+        free_s = kind == _EE or kind == _Q0_EP or kind == _Q1_EP
+        free_t = kind == _EE or kind == _P0_EQ or kind == _P1_EQ
+        if free_s:
+            for k in range(4):
+                for x in range(3):
+                    js[3 * k + x] = cc[k] * u[x] + dp[k] * r[x]
+        if free_t:
+            for k in range(4):
+                for x in range(3):
+                    jt[3 * k + x] = -(cc[k] * v[x] + dq[k] * r[x])
+        # - h_xu h_uu^{-1} h_ux with h_uu = [[a, -b], [-b, c]]
+        if free_s and free_t:
+            nx = u[1] * v[2] - u[2] * v[1]
+            ny = u[2] * v[0] - u[0] * v[2]
+            nz = u[0] * v[1] - u[1] * v[0]
+            det = nx * nx + ny * ny + nz * nz
+            mss = c / det
+            mst = b / det
+            mtt = a / det
+            for m in range(12):
+                for n in range(12):
+                    hess[i, m, n] -= (mss * js[m] * js[n] + mst * (js[m] * jt[n] + jt[m] * js[n])
+                                      + mtt * jt[m] * jt[n])
+        elif free_s:
+            inv_a = 1.0 / a
+            for m in range(12):
+                for n in range(12):
+                    hess[i, m, n] -= inv_a * js[m] * js[n]
+        elif free_t:
+            inv_c = 1.0 / c
+            for m in range(12):
+                for n in range(12):
+                    hess[i, m, n] -= inv_c * jt[m] * jt[n]
+        for m in range(12):
+            for n in range(12):
+                hess[i, m, n] *= inv_d
+
+
+# --------------------------------------------------------------------------
+# public API
+# --------------------------------------------------------------------------
+
+
+def _as_segment_pairs(p0, p1, q0, q1) -> tuple[list[np.ndarray], tuple[int, ...]]:
+    """Broadcast the four endpoint arrays to ``(..., 3)``; return them flat ``(m, 3)``."""
+    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (p0, p1, q0, q1)))
+    shape = arrays[0].shape
+    if len(shape) == 0 or shape[-1] != 3:
+        raise ValueError(f"segment endpoints must have shape (m, 3) or (3,), got {shape}")
+    flat = [np.ascontiguousarray(x.reshape(-1, 3)) for x in arrays]
+    if not all(np.isfinite(x).all() for x in flat):
+        raise ValueError("segment endpoints must be finite")
+    return flat, shape[:-1]
+
+
+def segment_distance(
+    p0: npt.ArrayLike, p1: npt.ArrayLike, q0: npt.ArrayLike, q1: npt.ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Closest distance between the segments ``[p0, p1]`` and ``[q0, q1]``.
+
+    The endpoints are arrays of shape ``(m, 3)`` (or ``(3,)``, or anything that
+    broadcasts to a common ``(..., 3)``). Returns ``d, s, t`` of shape ``(m,)``
+    (the broadcast batch shape) with ``d = |p0 + s (p1 - p0) - q0 - t (q1 - q0)|``
+    and ``s, t`` in ``[0, 1]``: ``d`` is always attained by the returned points.
+
+    Exact in every case: the minimum over the interior critical point of the
+    two lines (clamped to the square) and the four endpoint-to-segment
+    distances (see the module docstring). For parallel or collinear
+    overlapping segments, where the closest pair is not unique, one valid pair
+    is returned (an endpoint of one segment); a zero-length segment has foot
+    parameter 0.
+    """
+    (P0, P1, Q0, Q1), batch = _as_segment_pairs(p0, p1, q0, q1)
+    m = P0.shape[0]
+    d = np.empty(m)
+    s = np.empty(m)
+    t = np.empty(m)
+    _distance_kernel(P0, P1, Q0, Q1, d, s, t)
+    return d.reshape(batch), s.reshape(batch), t.reshape(batch)
+
+
+def segment_distance_derivatives(
+    p0: npt.ArrayLike,
+    p1: npt.ArrayLike,
+    q0: npt.ArrayLike,
+    q1: npt.ArrayLike,
+    parallel_tolerance: float = 1e-6,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Distance, gradient and Hessian of the segment–segment distance.
+
+    Returns ``d`` ``(m,)``, ``gradient`` ``(m, 12)``, ``hessian`` ``(m, 12, 12)``
+    with respect to ``(p0, p1, q0, q1)`` flattened in that order (index
+    ``3 k + xyz``, ``k = 0..3``), and ``kind`` ``(m,)`` int, the
+    :class:`DistanceKind` of the smooth formula evaluated.
+
+    Each type's closed-form distance (line–line, point–line or point–point,
+    module docstring) is differentiated exactly. Segments with
+    ``sin^2 θ <= parallel_tolerance`` never use the line–line type: the
+    minimum over the point–edge and point–point types is used instead, exact
+    for parallel segments, with bounded derivatives, and at most
+    ``min(ℓ sin θ, ℓ^2 sin^2 θ / (2 d))`` above the true distance otherwise.
+    For crossing pairs (``d <= 1e-12 max(|e_p|, |e_q|)``) the gradient and
+    Hessian are returned as zeros.
+    """
+    if not (np.isfinite(parallel_tolerance) and 0.0 <= parallel_tolerance < 1.0):
+        raise ValueError(f"parallel_tolerance must be in [0, 1), got {parallel_tolerance!r}")
+    (P0, P1, Q0, Q1), batch = _as_segment_pairs(p0, p1, q0, q1)
+    m = P0.shape[0]
+    d = np.empty(m)
+    gradient = np.empty((m, 12))
+    hessian = np.empty((m, 12, 12))
+    kind = np.empty(m, dtype=np.int64)
+    _derivative_kernel(P0, P1, Q0, Q1, float(parallel_tolerance), d, gradient, hessian, kind)
+    return (d.reshape(batch), gradient.reshape(batch + (12,)),
+            hessian.reshape(batch + (12, 12)), kind.reshape(batch))

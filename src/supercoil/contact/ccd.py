@@ -1,0 +1,167 @@
+"""Continuous collision detection of segment pairs over a linear step.
+
+The nodes move linearly, ``x(τ) = x0 + τ dx`` for ``τ`` in ``[0, 1]``. For a
+pair of segments the relative position of the two points with parameters
+``(s, t)`` is bilinear in ``(s, t)``: its velocity is a convex combination of
+the four endpoint differences ``dx_pi - dx_qj``. The segment distance ``D(τ)``
+is therefore Lipschitz with constant
+
+    u = max_{i, j} |dx_pi - dx_qj|
+
+(invariant under a common translation and never larger than Mirtich's bound
+``max |dx_p| + max |dx_q|``), and from a time ``τ_k`` the pair cannot reach the
+distance ``threshold`` before ``τ_k + (D(τ_k) - threshold) / u``.
+
+Conservative advancement (Mirtich 1996; the *additive CCD* of Li et al.,
+"Codimensional Incremental Potential Contact", SIGGRAPH 2021, is the same bound
+with a safety factor) advances each pair by this bound, scaled by
+``1 - _SAFETY`` so that every iterate keeps a positive margin
+``D(τ_k) - threshold >= _SAFETY (D(τ_{k-1}) - threshold)`` above the threshold,
+also under round-off. Every ``τ_k`` is a proven lower bound on the pair's first
+time of approach. A pair stops when
+
+* the full bound reaches ``τ >= 1``: the pair is clear for the whole step;
+* its gap ``D - threshold`` is at most ``tolerance`` times its initial gap: a
+  hit, reported at ``τ_k`` (slightly *before* the true time; when the pair
+  approaches at the bounding speed ``u`` the time error is at most
+  ``tolerance · τ_hit``);
+* ``max_iterations`` are spent (slow, tangential approaches): reported as a hit
+  at ``τ_k``, still a lower bound, so the caller shortens the step instead of
+  accepting one it could not certify.
+
+All active pairs advance together (vectorised); a pair whose current time is
+already later than the earliest hit found is dropped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from supercoil.contact.distance import _distance_kernel
+
+__all__ = ["first_time_of_approach", "segments_cross_during_step"]
+
+# Fraction of the safe advance that is held back at each iteration.
+_SAFETY = 0.1
+
+
+def _pair_distance(x0: np.ndarray, dx: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Segment distances of pairs ``(m, 4, 3)`` at their own times ``tau`` ``(m,)``."""
+    x = x0 + tau[:, None, None] * dx
+    m = x.shape[0]
+    d = np.empty(m)
+    s = np.empty(m)
+    t = np.empty(m)
+    _distance_kernel(np.ascontiguousarray(x[:, 0]), np.ascontiguousarray(x[:, 1]),
+                     np.ascontiguousarray(x[:, 2]), np.ascontiguousarray(x[:, 3]), d, s, t)
+    return d
+
+
+def _validate(x0, dx, pairs, threshold):
+    x0 = np.asarray(x0, dtype=np.float64)
+    dx = np.asarray(dx, dtype=np.float64)
+    if x0.ndim != 2 or x0.shape[1] != 3 or dx.shape != x0.shape:
+        raise ValueError(f"x0 and dx must both have shape (n, 3), got {x0.shape} and {dx.shape}")
+    if not (np.isfinite(x0).all() and np.isfinite(dx).all()):
+        raise ValueError("x0 and dx must be finite")
+    pairs = np.asarray(pairs)
+    if pairs.size == 0:
+        pairs = pairs.reshape(0, 4)
+    if pairs.ndim != 2 or pairs.shape[1] != 4 or not np.issubdtype(pairs.dtype, np.integer):
+        raise ValueError(f"pairs must be an integer array of shape (m, 4), got {pairs.shape}")
+    if pairs.size and (pairs.min() < 0 or pairs.max() >= x0.shape[0]):
+        raise ValueError("pairs refer to nodes outside x0")
+    threshold = np.broadcast_to(np.asarray(threshold, dtype=np.float64), (pairs.shape[0],))
+    if not (np.isfinite(threshold).all() and (threshold >= 0.0).all()):
+        raise ValueError("threshold must be finite and >= 0")
+    return x0, dx, pairs, threshold
+
+
+def first_time_of_approach(
+    x0: npt.ArrayLike,
+    dx: npt.ArrayLike,
+    pairs: npt.ArrayLike,
+    threshold: float | npt.ArrayLike,
+    max_iterations: int = 100,
+    tolerance: float = 1e-3,
+) -> tuple[float, int]:
+    """Earliest time at which a pair of moving segments comes within ``threshold``.
+
+    Nodes move as ``x(τ) = x0 + τ dx``, ``x0`` and ``dx`` of shape
+    ``(n_nodes, 3)``; ``pairs`` ``(m, 4)`` holds node indices
+    ``(p0, p1, q0, q1)`` of segment pairs; ``threshold`` is a scalar or ``(m,)``.
+
+    Returns ``(t_hit, k)``: a conservative lower bound ``t_hit`` in ``[0, 1)``
+    on the first time some pair's segment distance falls to its threshold
+    (the distance of every pair stays ``>= threshold`` on ``[0, t_hit]``), and
+    the index ``k`` of that pair; ``(1.0, -1)`` when the whole step is clear.
+    Pairs already at or below their threshold at ``τ = 0`` give ``(0.0, k)``,
+    ``k`` the deepest one. ``tolerance``: a pair is a hit once its gap
+    ``D - threshold`` is below ``tolerance`` times its initial gap; a pair
+    still unresolved after ``max_iterations`` is reported as a hit at its last
+    safe time (module docstring).
+    """
+    x0, dx, pairs, threshold = _validate(x0, dx, pairs, threshold)
+    if not (max_iterations >= 1 and 0.0 < tolerance < 1.0):
+        raise ValueError("need max_iterations >= 1 and 0 < tolerance < 1")
+    if pairs.shape[0] == 0:
+        return 1.0, -1
+    pair_x0 = x0[pairs]  # (m, 4, 3)
+    pair_dx = dx[pairs]
+    relative = pair_dx[:, :2, None, :] - pair_dx[:, None, 2:, :]  # (m, 2, 2, 3)
+    speed = np.linalg.norm(relative, axis=-1).max(axis=(1, 2))
+
+    gap0 = _pair_distance(pair_x0, pair_dx, np.zeros(pairs.shape[0])) - threshold
+    if (gap0 <= 0.0).any():
+        return 0.0, int(np.argmin(gap0))
+
+    # pairs that do not move relative to each other keep their distance
+    active = np.flatnonzero(speed > 0.0)
+    tau = np.zeros(active.size)
+    gap = gap0[active]
+    best_t, best_k = 1.0, -1
+    for _ in range(max_iterations):
+        reach = tau + gap / speed[active]
+        keep = reach < min(best_t, 1.0)  # otherwise clear, or no earlier than the best hit
+        active, tau, gap = active[keep], tau[keep], gap[keep]
+        if active.size == 0:
+            break
+        tau = tau + (1.0 - _SAFETY) * gap / speed[active]
+        gap = _pair_distance(pair_x0[active], pair_dx[active], tau) - threshold[active]
+        converged = gap <= tolerance * gap0[active]
+        if converged.any():
+            j = np.argmin(np.where(converged, tau, np.inf))
+            if tau[j] < best_t:
+                best_t, best_k = float(tau[j]), int(active[j])
+            active, tau, gap = active[~converged], tau[~converged], gap[~converged]
+    else:
+        if active.size:  # unresolved after max_iterations: report the last safe time
+            j = np.argmin(tau)
+            if tau[j] < best_t:
+                best_t, best_k = float(tau[j]), int(active[j])
+    return best_t, best_k
+
+
+def segments_cross_during_step(
+    x0: npt.ArrayLike,
+    dx: npt.ArrayLike,
+    pairs: npt.ArrayLike,
+    max_iterations: int = 100,
+    tolerance: float = 1e-3,
+) -> bool:
+    """Whether some pair of segments ``pairs`` ``(m, 4)`` meets (distance 0) during the step.
+
+    :func:`first_time_of_approach` with the threshold ``1e-12 · scale``,
+    ``scale`` the diagonal of the box holding ``x0`` and ``x0 + dx``.
+    Conservative: ``True`` also when a pair comes within ``tolerance`` of its
+    initial distance of touching, or is not resolved in ``max_iterations``.
+    Pairs sharing a node are at distance 0 already: exclude neighbours.
+    """
+    x0, dx, pairs, _ = _validate(x0, dx, pairs, 0.0)
+    if pairs.shape[0] == 0:
+        return False
+    points = np.concatenate([x0, x0 + dx])
+    scale = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    _, k = first_time_of_approach(x0, dx, pairs, 1e-12 * scale, max_iterations, tolerance)
+    return k >= 0

@@ -1,0 +1,381 @@
+"""Broad phase of self-contact: the segment pairs that may be closer than a cutoff.
+
+A rod is a tube of diameter ``D`` around a polygonal centreline. Self-contact
+needs the pairs of segments ``(i, j)`` whose distance is at most a cutoff
+(``D`` plus a margin) and that lie far enough apart *along the rod* (the
+arc-length neighbour exclusion; seed 001 excludes points closer than about
+``πD/2`` along the rod, which can never touch without a kink). The narrow phase
+(`supercoil.contact.distance.segment_distance`) then measures the candidates.
+
+Segments are described generically, so closed rods, open rods and rods whose
+end segments are half-edges all fit: segment ``i`` runs from ``starts[i]`` to
+``ends[i]`` in space and from ``s_start[i]`` to ``s_end[i]`` in arc length.
+
+Bounding test. With midpoint ``m_i = (starts[i] + ends[i]) / 2`` and half chord
+``r_i = |ends[i] − starts[i]| / 2``, every point of segment ``i`` lies in the
+ball of radius ``r_i`` about ``m_i``, so by the triangle inequality
+
+    dist(seg_i, seg_j) ≤ cutoff   ⇒   |m_i − m_j| ≤ cutoff + r_i + r_j.
+
+The pairs that pass the right-hand test are therefore a superset of the pairs
+within the cutoff. The test is widened by ``1e-12 × scale`` (``scale`` = the
+largest of the coordinates' magnitudes and the cutoff) so that the superset
+property also holds under rounding, for both methods alike.
+
+Arc-length separation. Two segments are separated by the arc length between
+their nearest points along the rod: ``max(0, s_start[j] − s_end[i],
+s_start[i] − s_end[j])`` on an open rod. On a closed rod of length ``P``
+(``period``) the arcs live on a circle; with ``δ = (s_start[j] − s_start[i])
+mod P`` and arc lengths ``ℓ = s_end − s_start`` the separation is
+
+    max(0, min(δ − ℓ_i, P − δ − ℓ_j)),
+
+the shorter of the two gaps around the loop (zero when the arcs overlap or
+touch, e.g. the last and the first segment of a closed polygon). A pair is kept
+when its separation is at least ``exclusion − 1e-12 × s_scale`` (``s_scale`` =
+the period or the largest ``|s|``): a pair exactly at the exclusion, such as
+segments ``i`` and ``i + 3`` of a uniform polygon with ``exclusion = 2h``, is
+kept even if rounding puts it an ulp short.
+
+Methods. ``"kdtree"`` builds a `scipy.spatial.cKDTree` on the midpoints and
+asks for all pairs within ``cutoff + 2 max(r)`` (``query_pairs``, returned as
+an array), then applies the exact per-pair test and the exclusion, vectorised:
+O(N log N) to build plus the output size. ``"brute"`` tests all pairs,
+vectorised over blocks of rows so that memory stays bounded (about
+``2**20`` pairs at a time); it is the reference the tests compare against.
+
+Why a KD tree and not a cell list: a cell list in vectorised numpy (sort the
+midpoints by cell, then for each of the 27 neighbour offsets match cell ranges
+and expand the pairs) was measured against ``cKDTree.query_pairs`` on the
+plectonemic ring of ``benchmarks/bench_contact.py`` and was slower at every N
+(about 1.5–3× at N = 1000 … 10000, see docs/benchmarks.md): the tree search
+is compiled C++, and the cost of the call is dominated by the output (pairs
+near along the rod, which the exclusion then drops), which both methods must
+produce. The tree needs no cell size, so it also copes with segments of very
+unequal length. Its radius uses the largest half chord, so one very long
+segment makes every query wider; rods with comparable segment lengths (every
+discretisation in this package) do not suffer from that.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["candidate_pairs", "pair_separation", "polygon_segments"]
+
+METHODS = ("kdtree", "brute")
+
+# Relative widening of the tests, see the module docstring.
+_ROUNDING_SLACK = 1e-12
+# The loose prefilters (tree radius, brute-force blocks) are wider still, so
+# that they never drop a pair the exact test keeps.
+_PREFILTER_SLACK = 1e-9
+# Pairs tested at once by the brute-force reference.
+_BRUTE_BLOCK_PAIRS = 1 << 20
+# Segments per block of the KD tree (measured on the plectonemic ring of
+# benchmarks/bench_contact.py: 3 to 6 are equally fast, 2 and 8 slower).
+_BLOCK_SIZE = 4
+# A block whose sphere is this many times wider than the median one is split.
+_WIDE_BLOCK = 2.0
+_INNER_ROW, _INNER_COLUMN = np.triu_indices(_BLOCK_SIZE, 1)
+
+
+def polygon_segments(
+    points: np.ndarray, closed: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float | None]:
+    """Segments between consecutive vertices of a polygon, with arc length by chord lengths.
+
+    Parameters
+    ----------
+    points : (n, 3) vertices; for a closed polygon the first vertex is not repeated
+        at the end (n ≥ 3), for an open one n ≥ 2.
+    closed : whether the last vertex is joined to the first.
+
+    Returns
+    -------
+    starts, ends : (k, 3) segment end points, ``k = n`` (closed) or ``n − 1`` (open);
+    s_start, s_end : (k,) arc length at the segment ends, ``s_start[0] = 0``,
+        ``s_end[i] = s_start[i] + |ends[i] − starts[i]|``;
+    period : the total length for a closed polygon, else None.
+    """
+    points = np.asarray(points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f"points must have shape (n, 3), got {points.shape}")
+    minimum = 3 if closed else 2
+    if points.shape[0] < minimum:
+        kind = "closed" if closed else "open"
+        raise ValueError(f"a {kind} polygon needs at least {minimum} points, got {points.shape[0]}")
+    if not np.all(np.isfinite(points)):
+        raise ValueError("points must be finite")
+    starts = points if closed else points[:-1]
+    ends = np.roll(points, -1, axis=0) if closed else points[1:]
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    s_end = np.cumsum(lengths)
+    s_start = s_end - lengths
+    # s_start[i + 1] == s_end[i] exactly, so consecutive segments touch in arc length.
+    s_start[1:] = s_end[:-1]
+    s_start[0] = 0.0
+    period = float(s_end[-1]) if closed else None
+    return starts.copy(), ends.copy(), s_start, s_end, period
+
+
+def pair_separation(
+    first: np.ndarray,
+    second: np.ndarray,
+    s_start: np.ndarray,
+    s_end: np.ndarray,
+    period: float | None = None,
+) -> np.ndarray:
+    """Arc-length separation (m,) of the segment pairs ``(first[m], second[m])``.
+
+    Open rod: ``max(0, s_start[j] − s_end[i], s_start[i] − s_end[j])``. Closed rod
+    of length ``P = period``: ``max(0, min(δ − ℓ_i, P − δ − ℓ_j))`` with
+    ``δ = (s_start[j] − s_start[i]) mod P`` and ``ℓ = s_end − s_start`` (the
+    shorter gap around the loop). No validation: `candidate_pairs` validates.
+    """
+    if period is None:
+        gap = np.maximum(s_start[second] - s_end[first], s_start[first] - s_end[second])
+        return np.maximum(gap, 0.0, out=gap)
+    lengths = s_end - s_start
+    wrapped_start = np.mod(s_start, period)
+    # np.mod on every pair would cost half of the whole broad phase; the
+    # difference of two wrapped starts lies in (−P, P] and needs one shift at most.
+    offset = wrapped_start[second] - wrapped_start[first]
+    offset += np.where(offset < 0.0, period, 0.0)
+    forward = offset - lengths[first]
+    backward = np.subtract(period, offset, out=offset)
+    backward -= lengths[second]
+    separation = np.minimum(forward, backward, out=forward)
+    return np.maximum(separation, 0.0, out=separation)
+
+
+def candidate_pairs(
+    starts: np.ndarray,
+    ends: np.ndarray,
+    s_start: np.ndarray,
+    s_end: np.ndarray,
+    cutoff: float,
+    exclusion: float,
+    period: float | None = None,
+    method: str = "kdtree",
+) -> np.ndarray:
+    """All pairs (i, j), i < j, of segments that may be within ``cutoff`` and are not excluded.
+
+    A pair is returned when its arc-length separation along the rod is
+    ``≥ exclusion`` and the bounding test ``|m_i − m_j| ≤ cutoff + r_i + r_j``
+    passes (``m`` = midpoint, ``r = |end − start| / 2``); both tests are widened
+    by ``1e-12`` relative to the problem's scale (module docstring). The result
+    is a superset of the pairs with segment–segment distance ``≤ cutoff`` and
+    separation ``≥ exclusion``.
+
+    Parameters
+    ----------
+    starts, ends : (k, 3) segment end points.
+    s_start, s_end : (k,) arc-length positions of the segment ends along the rod,
+        ``s_end ≥ s_start``. The separation of two segments is the arc length
+        between their nearest points along the rod (0 if they share a point),
+        measured around the loop (the shorter way) when ``period`` is given.
+    cutoff : distance threshold, finite and ≥ 0.
+    exclusion : arc-length neighbour exclusion, ≥ 0 (``inf`` excludes every pair).
+    period : total length of a closed rod (> 0, at least every ``s_end − s_start``),
+        or None for an open rod.
+    method : ``"kdtree"`` (`scipy.spatial.cKDTree` on the midpoints, O(N log N))
+        or ``"brute"`` (all pairs in bounded-memory blocks; the reference).
+
+    Returns
+    -------
+    (m, 2) int64 array of pairs with ``i < j``, sorted lexicographically.
+    """
+    starts, ends, s_start, s_end = _validated(
+        starts, ends, s_start, s_end, cutoff, exclusion, period, method
+    )
+    cutoff, exclusion = float(cutoff), float(exclusion)
+    n_segments = starts.shape[0]
+    if n_segments < 2 or exclusion == np.inf:
+        return np.empty((0, 2), dtype=np.int64)
+
+    midpoints = 0.5 * (starts + ends)
+    half_chords = 0.5 * np.linalg.norm(ends - starts, axis=1)
+    scale = max(float(np.max(np.abs(starts))), float(np.max(np.abs(ends))), cutoff)
+    distance_slack = _ROUNDING_SLACK * scale
+    if period is None:
+        s_scale = max(float(np.max(np.abs(s_start))), float(np.max(np.abs(s_end))))
+    else:
+        s_scale = period
+    separation_floor = exclusion - _ROUNDING_SLACK * s_scale
+
+    if method == "kdtree":
+        arc_start = s_start if period is None else np.mod(s_start, period)
+        first, second = _kdtree_prefilter(
+            midpoints,
+            half_chords + distance_slack,
+            arc_start,
+            arc_start + (s_end - s_start),
+            cutoff,
+            exclusion - _PREFILTER_SLACK * s_scale,
+        )
+    else:
+        first, second = _brute_prefilter(midpoints, half_chords, cutoff + distance_slack)
+
+    keep = pair_separation(first, second, s_start, s_end, period) >= separation_floor
+    first, second = first[keep], second[keep]
+    bound = cutoff + distance_slack + half_chords[first] + half_chords[second]
+    squared = np.zeros(first.shape)
+    for coordinate in np.asarray(midpoints.T, order="C"):
+        difference = coordinate[first] - coordinate[second]
+        squared += difference * difference
+    keep = squared <= bound * bound
+    # i < j < k, so i·k + j orders the pairs lexicographically.
+    keys = np.sort(first[keep] * n_segments + second[keep])
+    return np.column_stack([keys // n_segments, keys % n_segments])
+
+
+def _kdtree_prefilter(
+    midpoints: np.ndarray,
+    radii: np.ndarray,
+    arc_start: np.ndarray,
+    arc_end: np.ndarray,
+    cutoff: float,
+    separation_floor: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (i < j) that may pass the exact tests, from a KD tree over blocks of segments.
+
+    The segments, sorted by ``arc_start``, are grouped in blocks of
+    ``_BLOCK_SIZE``; block ``A`` gets the centre ``c_A`` (mean of its midpoints) and the
+    radius ``ρ_A = max_{i∈A} |m_i − c_A| + radii[i]``, so every pair (i ∈ A, j ∈ B) with
+    ``|m_i − m_j| ≤ cutoff + radii[i] + radii[j]`` has ``|c_A − c_B| ≤ cutoff + ρ_A + ρ_B``.
+    Its arc-length separation is at most ``max(0, max_B arc_start − min_A arc_end,
+    max_A arc_start − min_B arc_end)`` (for a closed rod too: the gap around the loop is
+    never longer than the gap along ``[0, P)``). Block pairs failing either bound are
+    dropped whole; the others are expanded into their segment pairs. Blocks much wider than
+    the typical one (a gap in the data, e.g. two rods in one call) are split into single
+    segments so that they do not widen every query.
+    """
+    n_segments = midpoints.shape[0]
+    order = np.argsort(arc_start, kind="stable")
+    n_blocks = -(-n_segments // _BLOCK_SIZE)
+    members = np.full(n_blocks * _BLOCK_SIZE, -1, dtype=np.int64)
+    members[:n_segments] = order
+    members = members.reshape(n_blocks, _BLOCK_SIZE)
+    centres, block_radii = _block_spheres(members, midpoints, radii)
+    wide = block_radii > _WIDE_BLOCK * np.median(block_radii)
+    if np.any(wide):
+        singles = members[wide].ravel()
+        singles = singles[singles >= 0]
+        single_members = np.full((singles.size, _BLOCK_SIZE), -1, dtype=np.int64)
+        single_members[:, 0] = singles
+        members = np.concatenate([members[~wide], single_members])
+        centres = np.concatenate([centres[~wide], midpoints[singles]])
+        block_radii = np.concatenate([block_radii[~wide], radii[singles]])
+    filled = _filled(members)
+    latest_start = arc_start[filled].max(axis=1)
+    earliest_end = arc_end[filled].min(axis=1)
+
+    reach = (cutoff + 2.0 * float(np.max(block_radii))) * (1.0 + _PREFILTER_SLACK)
+    block_pairs = cKDTree(centres).query_pairs(reach, output_type="ndarray")
+    block_a, block_b = block_pairs[:, 0], block_pairs[:, 1]
+    widest_gap = np.maximum(
+        latest_start[block_b] - earliest_end[block_a], latest_start[block_a] - earliest_end[block_b]
+    )
+    keep = np.maximum(widest_gap, 0.0) >= separation_floor
+    block_a, block_b = block_a[keep], block_b[keep]
+    difference = centres[block_a] - centres[block_b]
+    reach = (cutoff + block_radii[block_a] + block_radii[block_b]) * (1.0 + _PREFILTER_SLACK)
+    keep = np.einsum("ij,ij->i", difference, difference) <= reach * reach
+    block_a, block_b = block_a[keep], block_b[keep]
+    first = np.broadcast_to(members[block_a][:, :, None], (block_a.size,) + (_BLOCK_SIZE,) * 2)
+    second = np.broadcast_to(members[block_b][:, None, :], (block_a.size,) + (_BLOCK_SIZE,) * 2)
+
+    # Pairs inside one block.
+    inner = members[np.maximum(latest_start - earliest_end, 0.0) >= separation_floor]
+    first = np.concatenate([first.ravel(), inner[:, _INNER_ROW].ravel()])
+    second = np.concatenate([second.ravel(), inner[:, _INNER_COLUMN].ravel()])
+    present = (first >= 0) & (second >= 0)
+    first, second = first[present], second[present]
+    return np.minimum(first, second), np.maximum(first, second)
+
+
+def _filled(members: np.ndarray) -> np.ndarray:
+    """Block member table with the padding (−1) replaced by the block's first member."""
+    return np.where(members >= 0, members, members[:, :1])
+
+
+def _block_spheres(
+    members: np.ndarray, midpoints: np.ndarray, radii: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (n_blocks, 3) and radii (n_blocks,) of spheres holding every member segment."""
+    filled = _filled(members)
+    points = midpoints[filled]
+    centres = points.mean(axis=1)
+    reach = np.linalg.norm(points - centres[:, None, :], axis=2) + radii[filled]
+    return centres, reach.max(axis=1)
+
+
+def _brute_prefilter(
+    midpoints: np.ndarray, half_chords: np.ndarray, widened_cutoff: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs i < j with ``|m_i − m_j| ≤ (widened_cutoff + r_i + r_j)(1 + slack)``, all pairs tested."""
+    n_segments = midpoints.shape[0]
+    rows_per_block = max(1, _BRUTE_BLOCK_PAIRS // n_segments)
+    x, y, z = (np.ascontiguousarray(midpoints[:, axis]) for axis in range(3))
+    found_first, found_second = [], []
+    for row_start in range(0, n_segments - 1, rows_per_block):
+        rows = np.arange(row_start, min(row_start + rows_per_block, n_segments - 1))
+        column_start = row_start + 1
+        dx = x[rows, None] - x[None, column_start:]
+        dy = y[rows, None] - y[None, column_start:]
+        dz = z[rows, None] - z[None, column_start:]
+        squared = dx * dx + dy * dy + dz * dz
+        reach = (widened_cutoff + half_chords[rows, None] + half_chords[None, column_start:]) * (
+            1.0 + _PREFILTER_SLACK
+        )
+        upper = np.arange(column_start, n_segments)[None, :] > rows[:, None]
+        block_rows, block_columns = np.nonzero((squared <= reach * reach) & upper)
+        found_first.append(rows[block_rows])
+        found_second.append(block_columns + column_start)
+    return (
+        np.concatenate(found_first).astype(np.int64),
+        np.concatenate(found_second).astype(np.int64),
+    )
+
+
+def _validated(starts, ends, s_start, s_end, cutoff, exclusion, period, method):
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    starts = np.asarray(starts, dtype=float)
+    ends = np.asarray(ends, dtype=float)
+    if starts.ndim != 2 or starts.shape[1] != 3:
+        raise ValueError(f"starts must have shape (k, 3), got {starts.shape}")
+    if ends.shape != starts.shape:
+        raise ValueError(f"ends must have the shape of starts {starts.shape}, got {ends.shape}")
+    n_segments = starts.shape[0]
+    s_start = np.asarray(s_start, dtype=float)
+    s_end = np.asarray(s_end, dtype=float)
+    for name, values in (("s_start", s_start), ("s_end", s_end)):
+        if values.shape != (n_segments,):
+            raise ValueError(f"{name} must have shape ({n_segments},), got {values.shape}")
+    for name, values in (
+        ("starts", starts),
+        ("ends", ends),
+        ("s_start", s_start),
+        ("s_end", s_end),
+    ):
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"{name} must be finite")
+    if np.any(s_end < s_start):
+        raise ValueError("s_end must be >= s_start for every segment")
+    if not _is_real(cutoff) or not np.isfinite(cutoff) or cutoff < 0:
+        raise ValueError(f"cutoff must be a finite number >= 0, got {cutoff!r}")
+    if not _is_real(exclusion) or np.isnan(exclusion) or exclusion < 0:
+        raise ValueError(f"exclusion must be a number >= 0, got {exclusion!r}")
+    if period is not None:
+        if not _is_real(period) or not np.isfinite(period) or period <= 0:
+            raise ValueError(f"period must be a finite number > 0 or None, got {period!r}")
+        if n_segments and np.max(s_end - s_start) > period:
+            raise ValueError("a segment is longer in arc length than the period")
+    return starts, ends, s_start, s_end
+
+
+def _is_real(value) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)

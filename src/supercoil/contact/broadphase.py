@@ -37,24 +37,48 @@ the period or the largest ``|s|``): a pair exactly at the exclusion, such as
 segments ``i`` and ``i + 3`` of a uniform polygon with ``exclusion = 2h``, is
 kept even if rounding puts it an ulp short.
 
-Methods. ``"kdtree"`` builds a `scipy.spatial.cKDTree` on the midpoints and
-asks for all pairs within ``cutoff + 2 max(r)`` (``query_pairs``, returned as
-an array), then applies the exact per-pair test and the exclusion, vectorised:
-O(N log N) to build plus the output size. ``"brute"`` tests all pairs,
-vectorised over blocks of rows so that memory stays bounded (about
-``2**20`` pairs at a time); it is the reference the tests compare against.
+Methods. ``"kdtree"`` groups the segments, in order of arc length, into blocks
+of 4, bounds each block by a sphere, asks a `scipy.spatial.cKDTree` on the
+block centres for all block pairs within ``cutoff + 2 max(ρ)``
+(``query_pairs``, returned as an array), drops the block pairs that fail the
+sphere test or whose segments are all closer along the rod than the exclusion,
+and expands the rest into segment pairs for the exact per-pair tests; all of it
+vectorised. ``"brute"`` tests all pairs, vectorised over blocks of rows so that
+memory stays bounded (about ``2**20`` pairs at a time); it is the reference the
+tests compare against. Both apply the same exact tests to a superset of the
+answer, so they return the same array.
+
+Why blocks. When the cutoff is many segment lengths (a tube of diameter ``D``
+resolved by ``h ≪ D``), most pairs within the cutoff are neighbours along the
+rod that the exclusion drops. On the plectonemic ring of
+``benchmarks/bench_contact.py`` at N = 10000 (``D/h ≈ 95``) a tree on the
+segment midpoints (``query_pairs`` with radius ``cutoff + 2 max(r)``) returns
+1.27 million pairs for 0.28 million kept, and the call took 45–49 ms (median,
+warm, measured while writing this module); with blocks of 4 the neighbours are
+dropped four by four before expansion, 0.53 million pairs are tested and the
+call took 20–27 ms. At N ≤ 3000 the two took the same time. Blocks of 3 to 6
+were equally fast, 2 and 8 slower. A block is only compact if consecutive arc
+lengths are close in space, as on any rod; a block much wider than the median
+(a gap in the data) is split into single segments.
 
 Why a KD tree and not a cell list: a cell list in vectorised numpy (sort the
-midpoints by cell, then for each of the 27 neighbour offsets match cell ranges
-and expand the pairs) was measured against ``cKDTree.query_pairs`` on the
-plectonemic ring of ``benchmarks/bench_contact.py`` and was slower at every N
-(about 1.5–3× at N = 1000 … 10000, see docs/benchmarks.md): the tree search
-is compiled C++, and the cost of the call is dominated by the output (pairs
-near along the rod, which the exclusion then drops), which both methods must
-produce. The tree needs no cell size, so it also copes with segments of very
-unequal length. Its radius uses the largest half chord, so one very long
-segment makes every query wider; rods with comparable segment lengths (every
-discretisation in this package) do not suffer from that.
+midpoints by cell, match the ranges of the 13 neighbour cells of a half shell
+with ``searchsorted``, expand the pairs) returned the same pairs as
+``cKDTree.query_pairs`` for the same radius on that ring but took 2.6, 15 and
+135 ms at N = 1000, 3000 and 10000 against 0.25, 2.4 and 19 ms for the tree:
+the tree search is compiled C++, the cell list needs per-cell-pair
+temporaries. The tree also needs no cell size. Its radius uses the largest
+block sphere, so one very long segment makes every query wider; rods with
+comparable segment lengths (every discretisation in this package) do not
+suffer from that.
+
+Cost. The tree is O(N log N) to build and query plus the output. At a fixed
+geometry refined with N, the output itself grows faster than N: where two
+strands are in line contact (a plectoneme) the bounding test, which is ``h``
+wider than the cutoff, holds for O(sqrt(cutoff / h)) segments of the other
+strand per segment (the strands separate quadratically away from the closest
+point), so the answer has O(N^1.5) pairs (see docs/benchmarks.md, "Contact
+detection").
 """
 
 from __future__ import annotations

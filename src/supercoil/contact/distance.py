@@ -65,6 +65,16 @@ function therefore jumps by at most this amount where ``sin^2 θ`` crosses the
 tolerance; elsewhere it is C¹ as above. :func:`segment_distance` never uses the
 fallback: it is exact in all cases.
 
+What the fallback does not fix: at exactly parallel overlapping segments the
+exact distance itself is not differentiable (its minimisers form a segment, so
+only directional derivatives exist), and the fallback's gradient is that of one
+end of the overlap. Where two endpoint types are equally close — the two ends
+of the overlap of two exactly parallel segments — the fallback is the minimum of
+two smooth functions: bounded Hessian, but a gradient that switches between
+them (the contact force moves from one end of the overlap to the other).
+Smoothing that (e.g. summing the endpoint–segment terms in the energy) belongs
+to the contact potential, not to this distance.
+
 Degenerate cases. Zero-length segments are points (their foot parameter is 0).
 When ``d <= 1e-12 max(|e_p|, |e_q|)`` (crossing or touching segments, or two
 coincident points) the distance is not differentiable: the gradient and the

@@ -118,10 +118,29 @@ def curves(draw):
 
 
 @st.composite
+def generic_segments(draw):
+    """Unconnected segments with arbitrary (possibly overlapping) arcs, in random order."""
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    n_segments = draw(st.integers(2, 60))
+    starts = rng.normal(size=(n_segments, 3))
+    ends = starts + rng.normal(scale=draw(st.sampled_from([0.0, 0.1, 1.0])), size=(n_segments, 3))
+    period = draw(st.sampled_from([None, 5.0]))
+    spread = draw(st.sampled_from([1.0, 10.0]))  # 1: most arcs overlap
+    s_start = rng.uniform(-spread, spread, size=n_segments)
+    s_end = s_start + rng.uniform(0.0, 2.0, size=n_segments)
+    return "generic", starts, ends, s_start, s_end, period
+
+
+@st.composite
 def broad_phase_inputs(draw):
-    kind, closed, points = draw(curves())
-    starts, ends, s_start, s_end, period = polygon_segments(points, closed)
-    length = float(s_end[-1])
+    if draw(st.integers(0, 5)) == 0:
+        kind, starts, ends, s_start, s_end, period = draw(generic_segments())
+        points = np.concatenate([starts, ends])
+        length = period or float(np.ptp(np.concatenate([s_start, s_end])))
+    else:
+        kind, closed, points = draw(curves())
+        starts, ends, s_start, s_end, period = polygon_segments(points, closed)
+        length = float(s_end[-1])
     extent = float(np.ptp(points, axis=0).max()) or 1.0
     cutoff = draw(st.sampled_from([0.0, 0.01, 0.1, 0.3, 1.0, 3.0])) * extent
     exclusion_fraction = draw(
@@ -146,7 +165,7 @@ def test_kdtree_equals_brute_force(case):
 def test_output_is_the_definition(case):
     _, starts, ends, s_start, s_end, cutoff, exclusion, period = case
     pairs = candidate_pairs(starts, ends, s_start, s_end, cutoff, exclusion, period)
-    scale = max(1.0, float(np.abs(starts).max()), float(s_end[-1]))
+    scale = max(1.0, float(np.abs(starts).max()), float(np.abs(s_end).max()))
     sure, possible = definition_oracle(
         starts, ends, s_start, s_end, cutoff, exclusion, period, 1e-9 * scale
     )
@@ -166,7 +185,7 @@ def test_superset_of_pairs_within_the_cutoff(case):
         [separation_oracle(i, j, s_start, s_end, period) for i, j in zip(first, second)]
     )
     # the exclusion boundary itself is decided up to rounding (definition test above)
-    s_tolerance = 1e-9 * float(s_end[-1])
+    s_tolerance = 1e-9 * float(np.abs(s_end).max())
     needed = (distance <= cutoff) & (separation >= exclusion + s_tolerance)
     assert set(zip(first[needed].tolist(), second[needed].tolist())) <= found
 
@@ -234,6 +253,20 @@ def test_exclusion_on_unit_arcs(method, closed, exclusion):
     # exclusion 0 keeps neighbours (gap 0); a gap equal to the exclusion is kept
     expected = gap_pairs(n_segments, closed, exclusion)
     assert list(map(tuple, pairs.tolist())) == expected
+
+
+@pytest.mark.parametrize("method", ["kdtree", "brute"])
+@pytest.mark.parametrize("period", [None, 3.0])
+def test_overlapping_arcs_are_not_excluded(method, period):
+    """Arcs that overlap have separation 0: kept with exclusion 0, dropped with any more."""
+    rng = np.random.default_rng(1)
+    starts = rng.normal(scale=0.1, size=(40, 3))
+    ends = rng.normal(scale=0.1, size=(40, 3))
+    s_start = np.linspace(0.0, 0.9, 40)
+    s_end = s_start + 1.0
+    pairs = candidate_pairs(starts, ends, s_start, s_end, 10.0, 0.0, period, method)
+    assert len(pairs) == 40 * 39 // 2
+    assert len(candidate_pairs(starts, ends, s_start, s_end, 10.0, 1e-6, period, method)) == 0
 
 
 @pytest.mark.parametrize("method", ["kdtree", "brute"])

@@ -38,28 +38,34 @@ segments ``i`` and ``i + 3`` of a uniform polygon with ``exclusion = 2h``, is
 kept even if rounding puts it an ulp short.
 
 Methods. ``"kdtree"`` groups the segments, in order of arc length, into blocks
-of 4, bounds each block by a sphere, asks a `scipy.spatial.cKDTree` on the
+of 8, bounds each block by a sphere, asks a `scipy.spatial.cKDTree` on the
 block centres for all block pairs within ``cutoff + 2 max(ρ)``
-(``query_pairs``, returned as an array), drops the block pairs that fail the
-sphere test or whose segments are all closer along the rod than the exclusion,
-and expands the rest into segment pairs for the exact per-pair tests; all of it
-vectorised. ``"brute"`` tests all pairs, vectorised over blocks of rows so that
-memory stays bounded (about ``2**20`` pairs at a time); it is the reference the
-tests compare against. Both apply the same exact tests to a superset of the
-answer, so they return the same array.
+(``query_pairs``, returned as an array) and drops, vectorised, the block pairs
+that fail the sphere test or whose segments are all closer along the rod than
+the exclusion; one compiled loop (numba) then applies the exact per-pair tests
+to the segment pairs of the remaining block pairs. ``"brute"`` tests all pairs,
+vectorised over blocks of rows so that memory stays bounded (about ``2**20``
+pairs at a time), then applies the same compiled exact tests; it is the
+reference the tests compare against. Both apply the same exact tests to a
+superset of the answer, so they return the same array.
 
 Why blocks. When the cutoff is many segment lengths (a tube of diameter ``D``
 resolved by ``h ≪ D``), most pairs within the cutoff are neighbours along the
 rod that the exclusion drops. On the plectonemic ring of
-``benchmarks/bench_contact.py`` at N = 10000 (``D/h ≈ 95``) a tree on the
+``benchmarks/bench_contact.py`` at N = 10000 (``D/h ≈ 95``), a tree on the
 segment midpoints (``query_pairs`` with radius ``cutoff + 2 max(r)``) returns
-1.27 million pairs for 0.28 million kept, and the call took 45–49 ms (median,
-warm, measured while writing this module); with blocks of 4 the neighbours are
-dropped four by four before expansion, 0.53 million pairs are tested and the
-call took 20–27 ms. At N ≤ 3000 the two took the same time. Blocks of 3 to 6
-were equally fast, 2 and 8 slower. A block is only compact if consecutive arc
-lengths are close in space, as on any rod; a block much wider than the median
-(a gap in the data) is split into single segments.
+1.27 million pairs of which 0.28 million are kept; blocks drop the neighbours
+a block at a time before any segment pair is formed. Medians of warm calls,
+measured while writing this module on the machine of docs/benchmarks.md: 61,
+8.4, 7.1 and 7.3 ms with blocks of 1 (the plain tree), 4, 8 and 12 segments at
+N = 10000; 7.8, 2.4, 2.0 ms (1, 4, 8) at N = 3000; 1.5, 0.6, 0.6 ms at
+N = 1000. Blocks of 8 were also the fastest, or within 15 % of it, on a
+random walk and a tight helix of 10000 nodes. The exact tests as numpy
+expressions over the expanded pairs (about twenty passes over 0.5 million
+pairs) took 20 ms at N = 10000 against 8 ms for the compiled loop. A block is
+only compact if consecutive arc lengths are close in space, as on any rod; a
+block much wider than the median (a gap in the data) is split into single
+segments.
 
 Why a KD tree and not a cell list: a cell list in vectorised numpy (sort the
 midpoints by cell, match the ranges of the 13 neighbour cells of a half shell
@@ -83,6 +89,7 @@ detection").
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -97,12 +104,22 @@ _ROUNDING_SLACK = 1e-12
 _PREFILTER_SLACK = 1e-9
 # Pairs tested at once by the brute-force reference.
 _BRUTE_BLOCK_PAIRS = 1 << 20
-# Segments per block of the KD tree (measured on the plectonemic ring of
-# benchmarks/bench_contact.py: 3 to 6 are equally fast, 2 and 8 slower).
-_BLOCK_SIZE = 4
+# Segments per block of the KD tree (measured, see the module docstring).
+_BLOCK_SIZE = 8
 # A block whose sphere is this many times wider than the median one is split.
 _WIDE_BLOCK = 2.0
-_INNER_ROW, _INNER_COLUMN = np.triu_indices(_BLOCK_SIZE, 1)
+
+
+def _njit(**options: object):
+    """``numba.njit(cache=True, **options)``, or in memory when no cache directory is writable."""
+
+    def decorate(function):
+        try:
+            return numba.njit(cache=True, **options)(function)
+        except RuntimeError:
+            return numba.njit(cache=False, **options)(function)
+
+    return decorate
 
 
 def polygon_segments(
@@ -229,30 +246,105 @@ def candidate_pairs(
         s_scale = period
     separation_floor = exclusion - _ROUNDING_SLACK * s_scale
 
+    arc_start = s_start if period is None else np.mod(s_start, period)
+    arc_length = s_end - s_start
+    arc_end = s_end if period is None else arc_start + arc_length
     if method == "kdtree":
-        arc_start = s_start if period is None else np.mod(s_start, period)
-        first, second = _kdtree_prefilter(
+        block_a, block_b, members = _kdtree_prefilter(
             midpoints,
             half_chords + distance_slack,
             arc_start,
-            arc_start + (s_end - s_start),
+            arc_end,
             cutoff,
             exclusion - _PREFILTER_SLACK * s_scale,
         )
     else:
-        first, second = _brute_prefilter(midpoints, half_chords, cutoff + distance_slack)
+        block_a, block_b = _brute_prefilter(midpoints, half_chords, cutoff + distance_slack)
+        members = np.arange(n_segments, dtype=np.int64)[:, None]
 
-    keep = pair_separation(first, second, s_start, s_end, period) >= separation_floor
-    first, second = first[keep], second[keep]
-    bound = cutoff + distance_slack + half_chords[first] + half_chords[second]
-    squared = np.zeros(first.shape)
-    for coordinate in np.asarray(midpoints.T, order="C"):
-        difference = coordinate[first] - coordinate[second]
-        squared += difference * difference
-    keep = squared <= bound * bound
+    keys = np.empty(block_a.size * members.shape[1] ** 2, dtype=np.int64)
+    x, y, z = (np.ascontiguousarray(midpoints[:, axis]) for axis in range(3))
+    count = _exact_tests(
+        block_a.astype(np.int64, copy=False),
+        block_b.astype(np.int64, copy=False),
+        members,
+        x,
+        y,
+        z,
+        half_chords,
+        arc_start,
+        arc_end,
+        arc_length,
+        -1.0 if period is None else float(period),
+        cutoff + distance_slack,
+        separation_floor,
+        keys,
+    )
     # i < j < k, so i·k + j orders the pairs lexicographically.
-    keys = np.sort(first[keep] * n_segments + second[keep])
+    keys = np.sort(keys[:count])
     return np.column_stack([keys // n_segments, keys % n_segments])
+
+
+@_njit(error_model="numpy")
+def _exact_tests(
+    block_a,
+    block_b,
+    members,
+    x,
+    y,
+    z,
+    half_chords,
+    arc_start,
+    arc_end,
+    arc_length,
+    period,
+    cutoff,
+    separation_floor,
+    keys,
+):
+    """Write ``i·k + j`` (i < j) of the pairs that pass both exact tests; return their count.
+
+    The pairs tested are (members[A, u], members[B, v]) for every block pair (A, B)
+    (u < v when A == B; padding −1 skipped). The separation is `pair_separation`'s
+    formula (``period < 0``: open rod, ``arc_start``, ``arc_end`` = ``s_start``, ``s_end``;
+    closed rod: ``arc_start`` wrapped into ``[0, P)``, ``arc_length = s_end − s_start``); the bounding test is ``|m_i − m_j|² ≤ (cutoff + r_i + r_j)²``. One
+    compiled loop: the same tests as numpy expressions made about twenty passes
+    over the pairs (measured 2.5× slower at N = 10000, see the module docstring).
+    """
+    n_segments = x.size
+    width = members.shape[1]
+    count = 0
+    for pair in range(block_a.size):
+        a = block_a[pair]
+        b = block_b[pair]
+        for u in range(width):
+            i = members[a, u]
+            if i < 0:
+                continue
+            for v in range(u + 1 if a == b else 0, width):
+                j = members[b, v]
+                if j < 0:
+                    continue
+                first, second = (i, j) if i < j else (j, i)
+                if period < 0.0:
+                    gap = max(
+                        arc_start[second] - arc_end[first], arc_start[first] - arc_end[second]
+                    )
+                else:
+                    offset = arc_start[second] - arc_start[first]
+                    if offset < 0.0:
+                        offset += period
+                    gap = min(offset - arc_length[first], (period - offset) - arc_length[second])
+                if max(gap, 0.0) < separation_floor:
+                    continue
+                dx = x[first] - x[second]
+                dy = y[first] - y[second]
+                dz = z[first] - z[second]
+                bound = cutoff + half_chords[first] + half_chords[second]
+                if dx * dx + dy * dy + dz * dz <= bound * bound:
+                    keys[count] = first * n_segments + second
+                    count += 1
+    return count
 
 
 def _kdtree_prefilter(
@@ -262,8 +354,8 @@ def _kdtree_prefilter(
     arc_end: np.ndarray,
     cutoff: float,
     separation_floor: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs (i < j) that may pass the exact tests, from a KD tree over blocks of segments.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Block pairs (A, B) holding every segment pair that may pass the exact tests.
 
     The segments, sorted by ``arc_start``, are grouped in blocks of
     ``_BLOCK_SIZE``; block ``A`` gets the centre ``c_A`` (mean of its midpoints) and the
@@ -272,7 +364,8 @@ def _kdtree_prefilter(
     Its arc-length separation is at most ``max(0, max_B arc_start − min_A arc_end,
     max_A arc_start − min_B arc_end)`` (for a closed rod too: the gap around the loop is
     never longer than the gap along ``[0, P)``). Block pairs failing either bound are
-    dropped whole; the others are expanded into their segment pairs. Blocks much wider than
+    dropped whole; the others, and every block with itself, are returned with the member
+    table (n_blocks, _BLOCK_SIZE) (padding −1) for `_exact_tests`. Blocks much wider than
     the typical one (a gap in the data, e.g. two rods in one call) are split into single
     segments so that they do not widen every query.
     """
@@ -308,16 +401,9 @@ def _kdtree_prefilter(
     reach = (cutoff + block_radii[block_a] + block_radii[block_b]) * (1.0 + _PREFILTER_SLACK)
     keep = np.einsum("ij,ij->i", difference, difference) <= reach * reach
     block_a, block_b = block_a[keep], block_b[keep]
-    first = np.broadcast_to(members[block_a][:, :, None], (block_a.size,) + (_BLOCK_SIZE,) * 2)
-    second = np.broadcast_to(members[block_b][:, None, :], (block_a.size,) + (_BLOCK_SIZE,) * 2)
-
-    # Pairs inside one block.
-    inner = members[np.maximum(latest_start - earliest_end, 0.0) >= separation_floor]
-    first = np.concatenate([first.ravel(), inner[:, _INNER_ROW].ravel()])
-    second = np.concatenate([second.ravel(), inner[:, _INNER_COLUMN].ravel()])
-    present = (first >= 0) & (second >= 0)
-    first, second = first[present], second[present]
-    return np.minimum(first, second), np.maximum(first, second)
+    # Pairs inside one block: the block paired with itself.
+    inner = np.flatnonzero(np.maximum(latest_start - earliest_end, 0.0) >= separation_floor)
+    return np.concatenate([block_a, inner]), np.concatenate([block_b, inner]), members
 
 
 def _filled(members: np.ndarray) -> np.ndarray:

@@ -49,6 +49,21 @@ def ring_table(summary: dict) -> Table:
             ),
         ),
     ]
+    if summary.get("contact_treatment") is not None:
+        gap = summary["min_gap_over_diameter"]
+        rows += [
+            ("L/D, contact treatment",
+             f"{_number(summary['length_over_diameter'], 6)}, {summary['contact_treatment']}"),
+            ("closest approach / D", "none within reach" if gap is None else _number(gap, 8)),
+            ("contact points (s1, s2, force)",
+             "; ".join(f"({c['s1']:.4f}, {c['s2']:.4f}, {c['force']:.4g})"
+                       for c in summary["contact_points"]) or "none"),
+            ("contact intervals",
+             "; ".join(f"[{c['s1_start']:.4f}, {c['s1_end']:.4f}] x "
+                       f"[{c['s2_start']:.4f}, {c['s2_end']:.4f}], "
+                       f"{c['force_per_length']:.4g} per length"
+                       for c in summary["contact_intervals"]) or "none"),
+        ]
     for name, value in rows:
         table.add_row(name, value)
     return table

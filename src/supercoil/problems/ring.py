@@ -66,10 +66,14 @@ class RingResult:
     zero_tolerance: float
     curvature: str
     stability_certified: bool = True
+    # self-contact (None for a ring computed without it)
+    length_over_diameter: float | None = None
+    contact_treatment: str | None = None
+    contact: dict | None = None  # keys of supercoil.contact.report.contact_summary
 
     def summary(self) -> dict:
         """The JSON keys of ``supercoil ring`` (see DESIGN.md conventions)."""
-        return {
+        out = {
             "twist_ratio": self.twist_ratio,
             "excess_link": self.excess_link,
             "twist": self.twist,
@@ -92,6 +96,11 @@ class RingResult:
             "n_nodes": self.n_nodes,
             "michell_threshold_exact": michell_excess_link(self.twist_ratio, 2),
         }
+        if self.contact_treatment is not None:
+            out["length_over_diameter"] = self.length_over_diameter
+            out["contact_treatment"] = self.contact_treatment
+            out.update(self.contact or {})
+        return out
 
 
 def twisted_circle_problem(twist_ratio: float, excess_link: float, n_nodes: int,
@@ -120,10 +129,24 @@ def solve_ring(twist_ratio: float, excess_link: float, n_nodes: int = 100,
         raise ValueError(f"excess_link must be a finite number, got {excess_link!r}")
     problem, q0 = twisted_circle_problem(twist_ratio, excess_link, n_nodes, curvature)
     result = newton(problem, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
-    q = result.q
-    stab = analyse(problem, q, result.multipliers, n_modes=n_modes, zero_tolerance=zero_tolerance)
+    stab = analyse(problem, result.q, result.multipliers, n_modes=n_modes,
+                   zero_tolerance=zero_tolerance)
+    return ring_result(problem, result.q, result.multipliers, stab, converged=result.converged,
+                       status=result.status.value, message=result.message,
+                       residual=result.residual, iterations=result.iterations,
+                       zero_tolerance=zero_tolerance)
+
+
+def ring_result(problem, q: np.ndarray, multipliers: np.ndarray, stab, *, converged: bool,
+                status: str, message: str, residual: float, iterations: int,
+                zero_tolerance: float, **extra) -> RingResult:
+    """Assemble a :class:`RingResult`: topology from independent double sums and frames.
+
+    ``problem`` is a :class:`ClosedRodEnergy` (or a wrapper forwarding to one).
+    """
+    rod = problem.rod
+    twist_ratio, excess_link, n_nodes = rod.twist_ratio, problem.excess_link, rod.n_nodes
     points = q.reshape(-1, 3)
-    message = result.message
     if not stab.certified:
         message += "; warning: " + stab.message
     # Modes m with (A/C) sqrt(m^2 - 1) < |dLk| have crossed; a mode needs about
@@ -138,15 +161,15 @@ def solve_ring(twist_ratio: float, excess_link: float, n_nodes: int = 100,
     tw = frame_twist - problem.reference_link + excess_link
     return RingResult(
         twist_ratio=twist_ratio, excess_link=excess_link, n_nodes=n_nodes, points=points,
-        multipliers=result.multipliers, energy=problem.energy(q), twist=tw, writhe=wr,
+        multipliers=multipliers, energy=problem.elastic_energy(q), twist=tw, writhe=wr,
         link_error=abs(tw + wr - excess_link),
         writhe_error=abs(problem.writhe_local(q) - wr),
         unstable_count=stab.unstable_count, zero_modes=stab.zero_modes,
         negative_count=stab.negative_count, determinant_sign=stab.determinant_sign,
-        lowest_eigenvalues=stab.lowest_eigenvalues, converged=result.converged,
-        status=result.status.value, message=message, residual=result.residual,
-        iterations=result.iterations, zero_tolerance=zero_tolerance, curvature=curvature,
-        stability_certified=stab.certified,
+        lowest_eigenvalues=stab.lowest_eigenvalues, converged=converged,
+        status=status, message=message, residual=residual,
+        iterations=iterations, zero_tolerance=zero_tolerance, curvature=rod.curvature,
+        stability_certified=stab.certified, **extra,
     )
 
 

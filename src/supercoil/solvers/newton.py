@@ -16,6 +16,13 @@ on the free unknowns (fixed DOFs removed). Two globalisations:
   the KKT residual, which converges to saddle points as well (needed on
   unstable branches).
 
+A problem may offer ``step_bound(q, dq)``: the largest admissible fraction of
+the step (self-contact uses continuous collision detection); every step,
+full steps included, is shortened to it. In ``minimize`` mode a problem may
+also offer ``step_size_ratio(q, dq)`` (step length over its trust radius): a
+longer step is replaced by the shifted step ``(H + delta M) dq = -g`` with
+``delta`` raised until it fits (Levenberg–Marquardt-style damping).
+
 Near the solution (residual below ``full_step_below``) full steps are taken,
 so the local convergence is quadratic. Failures are returned as a status,
 never raised or printed.
@@ -126,6 +133,37 @@ def _hessian(problem, q, lam, free):
     return parts.restrict(free)
 
 
+def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, radius):
+    """Add a step along the most negative curvature direction (saddle escape).
+
+    Near a saddle the shifted Newton step ``(H + delta M)^-1 g`` is short in the
+    unstable direction (its gradient component is small), so minimisation
+    creeps away from saddles. The lowest eigenvector ``v`` of ``H v = mu M v``
+    on ``ker J`` is found by inverse iteration with the shifted factor
+    (``H + delta M`` is positive definite there), and, if ``mu < 0``, a multiple
+    of ``v`` pointing downhill is added (Moré & Sorensen 1979): as long as the
+    trust radius when the problem defines one, else as long as the Newton step.
+    """
+    v = np.random.default_rng(0).standard_normal(n)
+    for _ in range(12):
+        z = factor.solve(np.concatenate([mass * v, np.zeros(m)]))[:n]
+        v = z / np.sqrt(z @ (mass * z))
+    curvature = float(v @ H.matvec(v))
+    if curvature >= 0:
+        return sol
+    if float(g @ v) > 0:
+        v = -v
+    full = np.zeros_like(q)
+    full[free] = v
+    if hasattr(problem, "step_size_ratio"):
+        tau = radius / max(problem.step_size_ratio(q, full), 1e-300)
+    else:
+        tau = float(np.sqrt(sol[:n] @ (mass * sol[:n])))
+    out = sol.copy()
+    out[:n] += tau * v
+    return out
+
+
 def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | None = None,
            multipliers: np.ndarray | None = None) -> NewtonResult:
     """Find an equilibrium of ``problem`` starting from ``q0`` (full DOF vector)."""
@@ -137,6 +175,7 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
            else np.array(multipliers, dtype=float))
     history: list[float] = []
     mu = 1.0
+    radius = 1.0  # trust radius in units of the problem's step_size_ratio
     mass = problem.mass[free]
 
     def done(status: Status, message: str, it: int) -> NewtonResult:
@@ -168,14 +207,33 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
             break
         rhs = -np.concatenate([g, c])
         delta = 0.0
+        diag_scale = float(np.max(np.abs(H.sparse.diagonal()))) / float(np.mean(mass))
+        negatives = 0
         try:
-            for _ in range(40):
+            for attempt in range(40):
                 factor = KKTFactor(H, J, shift=-delta, mass=mass)
                 if opts.mode != "minimize" or factor.reduced_negative_count == 0:
                     break
-                delta = max(2.0 * delta, 1e-4 * float(np.max(np.abs(H.sparse.diagonal()))) /
-                            float(np.mean(mass)))
+                if attempt == 0:
+                    negatives = factor.reduced_negative_count
+                delta = max(2.0 * delta, 1e-4 * diag_scale)
             sol = factor.solve(rhs)
+            # Trust region (minimize): a step longer than the problem allows is
+            # replaced by a shorter, better-conditioned one, (H + delta M) dq = -g,
+            # rather than scaled down: near-null directions (a closed rod's
+            # material sliding) then get gradient-like steps instead of huge ones.
+            if opts.mode == "minimize" and hasattr(problem, "step_size_ratio"):
+                for _ in range(60):
+                    dq_try = np.zeros_like(q)
+                    dq_try[free] = sol[:n]
+                    if problem.step_size_ratio(q, dq_try) <= radius:
+                        break
+                    delta = max(4.0 * delta, 1e-10 * diag_scale)
+                    factor = KKTFactor(H, J, shift=-delta, mass=mass)
+                    sol = factor.solve(rhs)
+            if negatives:
+                sol = _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m,
+                                              radius)
         except SingularMatrixError as exc:
             return done(Status.SINGULAR, f"iteration {it}: {exc}", it)
         dq_free, lam_new = sol[:n], sol[n:]
@@ -184,7 +242,14 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
             dq_free *= opts.max_step_norm / step_norm
         dq = np.zeros_like(q)
         dq[free] = dq_free
-        alpha = 1.0
+        # Problems with an admissible set (self-contact) bound the step so that
+        # nothing inadmissible happens along it (continuous collision detection).
+        bound = problem.step_bound(q, dq) if hasattr(problem, "step_bound") else 1.0
+        alpha = min(1.0, float(bound))
+        if alpha < opts.min_step:
+            return done(Status.LINE_SEARCH_FAILED,
+                        f"iteration {it}: the step guard allows no step (fraction {bound:.1e}): "
+                        f"the state is at the edge of the admissible set", it)
         if res > opts.full_step_below:
             if opts.mode == "minimize":
                 mu = max(mu, 2.0 * float(np.max(np.abs(lam_new))) if m else 0.0)
@@ -214,7 +279,13 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
         q = q + alpha * dq
         lam = lam + alpha * (lam_new - lam)
         problem.accept(q)
-        log.debug("newton it=%d residual=%.3e alpha=%.3g delta=%.3g", it, res, alpha, delta)
+        # The trust radius grows after full steps and shrinks when the line
+        # search (not the collision guard) had to cut the step.
+        if alpha == 1.0:
+            radius = min(2.0 * radius, 16.0)
+        elif alpha < min(1.0, float(bound)):
+            radius = max(0.5 * radius, 1 / 16)
+        log.debug("newton it=%d residual=%.3e alpha=%.3g delta=%.3g bound=%.3g radius=%.3g", it, res, alpha, delta, bound, radius)
     return done(Status.MAX_ITERATIONS,
                 f"no convergence in {opts.max_iterations} iterations "
                 f"(residual {history[-1]:.2e} > tolerance {opts.tolerance:.1e})",

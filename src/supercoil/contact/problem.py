@@ -1,0 +1,421 @@
+"""Self-contact of a rod as a constrained-energy problem.
+
+:class:`ContactProblem` wraps a rod energy (closed or clamped) and adds the
+condition that two points of the centreline farther apart along the rod than
+the neighbour exclusion stay at least the tube diameter ``D`` apart. The
+centreline is a polygon, so the condition is imposed on every pair of its
+segments, with the exact segment–segment distance ``d`` (smooth per distance
+type, :mod:`supercoil.contact.distance`) and the gap ``g = d - D``:
+
+* ``penalty``, ``augmented``, ``barrier``: ``E + sum_pairs psi(g)``
+  (:mod:`supercoil.contact.potentials`);
+* ``exact``: ``g >= 0`` as inequality constraints; the active ones join the
+  rod's equality constraints, and their multipliers are minus the contact
+  forces (:mod:`supercoil.contact.solve` runs the active-set loop).
+
+The wrapper speaks the :class:`~supercoil.solvers.problem.ConstrainedEnergy`
+protocol, so Newton, the inertia count and the eigenvalues see the contact
+terms through the Hessian (energy treatments) or through the active
+constraints (exact treatment): a direction that would open a contact carrying
+a positive force is excluded from the tangent space. It also offers
+``step_bound(q, dq)``: continuous collision detection along the straight step,
+which Newton uses to shorten a step before any two segments could pass
+through each other.
+
+Neighbour exclusion: two points closer than ``pi D / 2`` along the rod are not
+a contact. A tube of diameter ``D`` cannot bend more tightly than radius
+``D/2`` without overlapping itself locally, and on a curve whose radius of
+curvature is at least ``D/2`` two points ``s`` apart along it are at a chord
+distance of at least ``D sin(s/D)``, which first reaches ``D`` at ``s = pi D/2``
+(a half turn of radius ``D/2``): closer pairs are neighbours within one tube,
+farther pairs are genuine contacts (the global radius of curvature of
+Gonzalez & Maddocks 1999 formalises this).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from supercoil.contact import potentials
+from supercoil.contact.broadphase import candidate_pairs
+from supercoil.contact.ccd import first_time_of_approach
+from supercoil.contact.distance import segment_distance, segment_distance_derivatives
+from supercoil.solvers.problem import HessianParts
+
+TREATMENTS = ("barrier", "augmented", "penalty", "exact")
+DEFAULT_TREATMENT = "barrier"
+
+
+@dataclass(frozen=True)
+class ContactOptions:
+    """How self-contact is imposed; validated on construction.
+
+    ``diameter`` D (in units of L). ``exclusion``: arc length below which two
+    points are neighbours, default ``pi D / 2``. ``stiffness``: ``k`` of the
+    penalty and augmented Lagrangian, ``kappa`` of the barrier; default
+    ``stiffness_scale * A / h^3``, the stiffness with which one node of the
+    discrete rod resists a transverse displacement in bending, so that the
+    contact neither dominates the conditioning nor is soft next to the rod.
+    ``penetration_tolerance``: largest accepted penetration over D (augmented,
+    exact; the penalty reports what it gets). ``barrier_activation``: the
+    barrier acts on gaps below ``barrier_activation * D``.
+    """
+
+    diameter: float
+    treatment: str = DEFAULT_TREATMENT
+    exclusion: float | None = None
+    stiffness: float | None = None
+    stiffness_scale: float = 1.0
+    penetration_tolerance: float = 1e-4
+    barrier_activation: float = 1e-2
+    max_outer_iterations: int = 50
+    force_tolerance: float = 1e-8
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.diameter) and self.diameter > 0):
+            raise ValueError(f"the tube diameter D must be positive and finite, got {self.diameter!r}")
+        if self.treatment not in TREATMENTS:
+            raise ValueError(f"contact treatment must be one of {', '.join(TREATMENTS)}; "
+                             f"got {self.treatment!r}")
+        if self.exclusion is not None and not (np.isfinite(self.exclusion) and self.exclusion >= 0):
+            raise ValueError(f"exclusion must be a non-negative arc length, got {self.exclusion!r}")
+        if self.stiffness is not None and not (np.isfinite(self.stiffness) and self.stiffness > 0):
+            raise ValueError(f"contact stiffness must be positive, got {self.stiffness!r}")
+        for name in ("stiffness_scale", "penetration_tolerance", "barrier_activation",
+                     "force_tolerance"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be positive, got {value!r}")
+        if self.max_outer_iterations < 1:
+            raise ValueError("max_outer_iterations must be >= 1")
+
+    @property
+    def exclusion_length(self) -> float:
+        return 0.5 * np.pi * self.diameter if self.exclusion is None else float(self.exclusion)
+
+
+@dataclass(frozen=True)
+class PairState:
+    """Segment pairs near contact at one configuration (arrays over pairs)."""
+
+    pairs: np.ndarray  # (m, 2) segment indices, i < j
+    distance: np.ndarray  # (m,)
+    s: np.ndarray  # (m,) closest parameter on segment i
+    t: np.ndarray  # (m,) closest parameter on segment j
+
+
+class ContactProblem:
+    """A rod energy plus impenetrability; see the module docstring.
+
+    ``base`` is a :class:`~supercoil.rod.closed.RodEnergy` (closed or clamped).
+    Unknown attributes are looked up on ``base`` (twist, writhe_local, ...).
+    """
+
+    def __init__(self, base, options: ContactOptions):
+        self.base = base
+        self.options = options
+        rod = base.rod
+        self.diameter = float(options.diameter)
+        self.closed = bool(rod.closed)
+        h = rod.edge_length
+        self.edge_length = h
+        self.stiffness = (options.stiffness if options.stiffness is not None
+                          else options.stiffness_scale * rod.bending_stiffness / h**3)
+        self.segments = np.asarray(base.edge_nodes, dtype=np.int64)
+        k = np.arange(len(self.segments), dtype=float)
+        offset = 0.0 if self.closed else -0.5  # open rods: ends at mid-edges
+        self.s_start = (k + offset) * h
+        self.s_end = (k + offset + 1.0) * h
+        self.period = rod.length if self.closed else None
+        self.exclusion = options.exclusion_length
+        self.n_dofs = base.n_dofs
+        self.fixed = base.fixed
+        self.mass = base.mass
+        # augmented Lagrangian multipliers (contact forces) per segment pair
+        self.pair_multipliers: dict[tuple[int, int], float] = {}
+        # exact treatment: active pairs, constraints g_p = d_p - D = 0
+        self.active = np.zeros((0, 2), dtype=np.int64)
+        self._slide_pin: tuple[int, np.ndarray, np.ndarray] | None = None
+        self._cache_key: bytes | None = None
+        self._cache: PairState | None = None
+
+    def __getattr__(self, name):  # forward rod-specific queries to the wrapped energy
+        if name == "base":
+            raise AttributeError(name)
+        return getattr(self.base, name)
+
+    # ----------------------------------------------------------- geometry
+    @property
+    def treatment(self) -> str:
+        return self.options.treatment
+
+    @property
+    def n_equalities(self) -> int:
+        """Constraints before the contact ones: the rod's, plus the sliding gauge if set."""
+        return self.base.n_constraints + (self._slide_pin is not None)
+
+    @property
+    def n_constraints(self) -> int:
+        return self.n_equalities + len(self.active)
+
+    def pin_sliding(self, q: np.ndarray) -> None:
+        """Remove the material-sliding near-symmetry of a closed homogeneous rod.
+
+        Off the circle, sliding the material along the centreline leaves the
+        continuum energy unchanged; the discretisation breaks the symmetry
+        only weakly (a ripple of period one edge), so the mode is nearly null:
+        unremoved, it lets Newton wander along the rod and lets the
+        augmented-Lagrangian multipliers (attached to segment pairs) drag the
+        state along it (DESIGN.md, traps). The gauge is the linear constraint
+        ``t_k . (x_k - x_k(q)) = 0`` on one node ``k`` (tangential motion of
+        that node), whose multiplier is the ripple's reaction, reported by
+        :meth:`sliding_reaction`; it vanishes as ``h -> 0``.
+        """
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        n = len(x)
+        fixed_nodes = set((np.asarray(self.base.fixed) // 3).tolist())
+        k = next(i for i in range(n // 4, n // 4 + n) if i % n not in fixed_nodes) % n
+        t = x[(k + 1) % n] - x[(k - 1) % n]
+        self._slide_pin = (k, t / np.linalg.norm(t), x[k].copy())
+        self.invalidate()
+
+    def sliding_reaction(self, multipliers: np.ndarray) -> float:
+        """The sliding gauge's reaction force (0 when no gauge is set)."""
+        if self._slide_pin is None:
+            return 0.0
+        return float(np.asarray(multipliers)[self.base.n_constraints])
+
+    @property
+    def gauge_dofs(self):
+        return getattr(self.base, "gauge_dofs", np.zeros(0, dtype=np.int64))
+
+    def _endpoints(self, q: np.ndarray):
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        return x[self.segments[:, 0]], x[self.segments[:, 1]]
+
+    def pair_state(self, q: np.ndarray, cutoff: float) -> PairState:
+        """Pairs (beyond the exclusion) whose segment distance is at most ``cutoff``."""
+        a, b = self._endpoints(q)
+        cand = candidate_pairs(a, b, self.s_start, self.s_end, cutoff, self.exclusion,
+                               period=self.period)
+        if len(cand) == 0:
+            empty = np.zeros(0)
+            return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)
+        i, j = cand[:, 0], cand[:, 1]
+        d, s, t = segment_distance(a[i], b[i], a[j], b[j])
+        keep = d <= cutoff
+        return PairState(cand[keep], d[keep], s[keep], t[keep])
+
+    def min_distance(self, q: np.ndarray) -> float:
+        """Smallest centreline distance over non-neighbour segment pairs (``inf`` if none)."""
+        cutoff = 2.0 * self.diameter
+        a, b = self._endpoints(q)
+        span = float(np.max(np.ptp(np.concatenate([a, b]), axis=0)))
+        while True:
+            st = self.pair_state(q, cutoff)
+            if len(st.pairs):
+                return float(st.distance.min())
+            if cutoff > 2 * span + self.diameter:
+                return float("inf")
+            cutoff *= 4.0
+
+    def _cutoff(self) -> float:
+        """Distance below which a pair contributes to the energy or may become active."""
+        D = self.diameter
+        if self.treatment == "penalty":
+            return D
+        if self.treatment == "barrier":
+            return D * (1.0 + self.options.barrier_activation)
+        if self.treatment == "augmented":
+            lam_max = max(self.pair_multipliers.values(), default=0.0)
+            return D + lam_max / self.stiffness
+        return D
+
+    def _state(self, q: np.ndarray) -> PairState:
+        key = np.asarray(q, dtype=float).tobytes()
+        if key != self._cache_key:
+            self._cache = self.pair_state(q, self._cutoff())
+            self._cache_key = key
+        return self._cache
+
+    def invalidate(self) -> None:
+        """Forget cached pair data (after multipliers or the active set change)."""
+        self._cache_key = None
+
+    def _multipliers_of(self, pairs: np.ndarray) -> np.ndarray:
+        get = self.pair_multipliers.get
+        return np.array([get((int(i), int(j)), 0.0) for i, j in pairs], dtype=float)
+
+    def _psi(self, gap: np.ndarray, pairs: np.ndarray):
+        opts = self.options
+        if self.treatment == "penalty":
+            return potentials.penalty(gap, self.stiffness)
+        if self.treatment == "augmented":
+            return potentials.augmented(gap, self._multipliers_of(pairs), self.stiffness)
+        if self.treatment == "barrier":
+            return potentials.barrier(gap, self.stiffness, opts.barrier_activation * self.diameter)
+        zero = np.zeros_like(gap)
+        return zero, zero, zero
+
+    def _pair_nodes(self, pairs: np.ndarray) -> np.ndarray:
+        """``(m, 4)`` node indices (p0, p1, q0, q1) of segment pairs."""
+        return np.concatenate([self.segments[pairs[:, 0]], self.segments[pairs[:, 1]]], axis=1)
+
+    def _pair_derivatives(self, q: np.ndarray, pairs: np.ndarray):
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        nodes = self._pair_nodes(pairs)
+        d, grad, hess, _kind = segment_distance_derivatives(
+            x[nodes[:, 0]], x[nodes[:, 1]], x[nodes[:, 2]], x[nodes[:, 3]])
+        dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(len(pairs), 12)
+        return d, grad, hess, dofs
+
+    # ------------------------------------------------------------ energy
+    def contact_energy(self, q: np.ndarray) -> float:
+        st = self._state(q)
+        if len(st.pairs) == 0:
+            return 0.0
+        value, _, _ = self._psi(st.distance - self.diameter, st.pairs)
+        return float(np.sum(value))
+
+    def energy(self, q: np.ndarray) -> float:
+        return self.base.energy(q) + self.contact_energy(q)
+
+    def gradient(self, q: np.ndarray) -> np.ndarray:
+        g = self.base.gradient(q)
+        st = self._state(q)
+        if len(st.pairs) and self.treatment != "exact":
+            d, grad, _hess, dofs = self._pair_derivatives(q, st.pairs)
+            _, first, _ = self._psi(d - self.diameter, st.pairs)
+            np.add.at(g, dofs.ravel(), (first[:, None] * grad).ravel())
+        return g
+
+    def contact_hessian(self, q: np.ndarray) -> sp.csr_matrix:
+        st = self._state(q)
+        n = self.n_dofs
+        if len(st.pairs) == 0 or self.treatment == "exact":
+            return sp.csr_matrix((n, n))
+        d, grad, hess, dofs = self._pair_derivatives(q, st.pairs)
+        _, first, second = self._psi(d - self.diameter, st.pairs)
+        local = (second[:, None, None] * grad[:, :, None] * grad[:, None, :]
+                 + first[:, None, None] * hess)
+        rows = np.repeat(dofs, 12, axis=1).ravel()
+        cols = np.tile(dofs, (1, 12)).ravel()
+        return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))
+
+    def hessian(self, q: np.ndarray) -> HessianParts:
+        return self.base.hessian(q).plus_sparse(self.contact_hessian(q))
+
+    # ------------------------------------------------------- constraints
+    def constraints(self, q: np.ndarray) -> np.ndarray:
+        c = self.base.constraints(q)
+        if self._slide_pin is not None:
+            k, t, xk = self._slide_pin
+            x = np.asarray(q, dtype=float).reshape(-1, 3)
+            c = np.concatenate([c, [float(t @ (x[k] - xk))]])
+        if len(self.active) == 0:
+            return c
+        a, b = self._endpoints(q)
+        i, j = self.active[:, 0], self.active[:, 1]
+        d, _, _ = segment_distance(a[i], b[i], a[j], b[j])
+        return np.concatenate([c, d - self.diameter])
+
+    def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
+        J = self.base.constraint_jacobian(q)
+        if self._slide_pin is not None:
+            k, t, _ = self._slide_pin
+            row = sp.csr_matrix((t, (np.zeros(3, dtype=np.int64), 3 * k + np.arange(3))),
+                                shape=(1, self.n_dofs))
+            J = sp.vstack([J, row]).tocsr()
+        if len(self.active) == 0:
+            return J
+        _d, grad, _hess, dofs = self._pair_derivatives(q, self.active)
+        m = len(self.active)
+        rows = np.repeat(np.arange(m), 12)
+        Jc = sp.csr_matrix((grad.ravel(), (rows, dofs.ravel())), shape=(m, self.n_dofs))
+        return sp.vstack([J, Jc]).tocsr()
+
+    def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
+        m0 = self.n_equalities  # the sliding gauge is linear: no Hessian
+        lam = np.asarray(multipliers, dtype=float)
+        H = self.base.constraint_hessian(q, lam[: self.base.n_constraints])
+        if len(self.active) == 0:
+            return H
+        _d, _grad, hess, dofs = self._pair_derivatives(q, self.active)
+        local = lam[m0:, None, None] * hess
+        rows = np.repeat(dofs, 12, axis=1).ravel()
+        cols = np.tile(dofs, (1, 12)).ravel()
+        n = self.n_dofs
+        return (H + sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))).tocsr()
+
+    def accept(self, q: np.ndarray) -> None:
+        self.base.accept(q)
+
+    # ---------------------------------------------------- step guard (CCD)
+    def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:
+        """Largest node displacement of ``dq`` over the trust radius (one edge length)."""
+        dx = np.asarray(dq, dtype=float).reshape(-1, 3)
+        return float(np.max(np.linalg.norm(dx, axis=1))) / self.edge_length if dx.size else 0.0
+
+    def step_bound(self, q: np.ndarray, dq: np.ndarray) -> float:
+        """Largest fraction of the step ``dq`` free of collisions (continuous detection).
+
+        No pair's centreline distance may fall below ``min(0.9 d0, max(0.1 d0, D/2))``
+        during the step (``d0`` its distance at ``q``), so segments never pass
+        through each other; for the barrier, no gap may fall below a tenth of
+        its value (Li et al. 2020, sec. 4.3), so the state stays free of contact.
+        """
+        x0 = np.asarray(q, dtype=float).reshape(-1, 3)
+        dx = np.asarray(dq, dtype=float).reshape(-1, 3)
+        largest = float(np.max(np.linalg.norm(dx, axis=1))) if dx.size else 0.0
+        if largest == 0.0:
+            return 1.0
+        # Trust region: no node moves more than one edge length per step. The
+        # stiff contact terms and the near-null mode of a closed rod (sliding
+        # the material along itself) otherwise give Newton steps far outside
+        # the region where the quadratic model holds.
+        cap = min(1.0, self.edge_length / largest)
+        st = self.pair_state(q, self.diameter + 2.0 * cap * largest)
+        if len(st.pairs) == 0:
+            return cap
+        d0, D = st.distance, self.diameter
+        if self.treatment == "barrier":
+            threshold = D + 0.1 * np.maximum(d0 - D, 0.0)
+        else:
+            threshold = np.minimum(0.9 * d0, np.maximum(0.1 * d0, 0.5 * D))
+        t_hit, _k = first_time_of_approach(x0, cap * dx, self._pair_nodes(st.pairs), threshold)
+        return cap * float(t_hit)
+
+    # ------------------------------------------------------------ forces
+    def pair_forces(self, q: np.ndarray, multipliers: np.ndarray | None = None):
+        """``(PairState, force)`` of the pairs that carry a contact force at ``q``.
+
+        Energy treatments: ``force = -psi'(g)``; exact: minus the multipliers
+        of the active constraints (``multipliers`` is the full vector).
+        """
+        if self.treatment == "exact":
+            m0 = self.n_equalities
+            lam = np.zeros(len(self.active)) if multipliers is None else \
+                np.asarray(multipliers, dtype=float)[m0:]
+            if len(self.active) == 0:
+                return self.pair_state(q, 0.0), np.zeros(0)
+            a, b = self._endpoints(q)
+            i, j = self.active[:, 0], self.active[:, 1]
+            d, s, t = segment_distance(a[i], b[i], a[j], b[j])
+            return PairState(self.active.copy(), d, s, t), -lam
+        st = self.pair_state(q, self._cutoff())
+        if len(st.pairs) == 0:
+            return st, np.zeros(0)
+        _, first, _ = self._psi(st.distance - self.diameter, st.pairs)
+        force = -first
+        keep = force > 0
+        return PairState(st.pairs[keep], st.distance[keep], st.s[keep], st.t[keep]), force[keep]
+
+    def arclength(self, segment: np.ndarray, param: np.ndarray) -> np.ndarray:
+        """Arc-length fraction ``s/L`` of the point ``param`` along ``segment``."""
+        L = self.base.rod.length
+        s = self.s_start[segment] + param * (self.s_end[segment] - self.s_start[segment])
+        s = np.clip(s, 0.0, L) if not self.closed else np.mod(s, L)
+        return s / L

@@ -1,0 +1,215 @@
+"""Equilibria with self-contact: the four treatments behind one call.
+
+* ``penalty`` and ``barrier``: one Newton minimisation of ``E + sum psi``.
+* ``augmented``: Newton on the augmented Lagrangian, then the multiplier
+  update ``lam <- max(lam - k g, 0)``, repeated until the largest
+  penetration is below ``penetration_tolerance * D`` (seed 000's scheme with a
+  finite penalty).
+* ``exact``: an active-set method on the inequality constraints ``g >= 0``.
+  The augmented-Lagrangian solution gives the first active set (the pairs with
+  a positive force, one per closest-feature pair so that line contacts do not
+  produce identical constraints); Newton then solves the equality-constrained
+  problem exactly (the multipliers are minus the contact forces); a contact
+  whose force comes out negative is released, a pair that penetrates is added,
+  and the solve is repeated until the forces are non-negative and nothing
+  penetrates.
+
+Every step of every Newton iteration is bounded by continuous collision
+detection (:meth:`ContactProblem.step_bound`), so segments never pass
+through each other. The result says whether the state is admissible (gap
+within tolerance) and the solve converged; nothing is returned silently.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from supercoil.contact import potentials
+from supercoil.contact.problem import ContactProblem
+from supercoil.solvers.newton import NewtonOptions, newton
+
+
+@dataclass(frozen=True)
+class ContactSolveResult:
+    q: np.ndarray
+    multipliers: np.ndarray
+    converged: bool
+    admissible: bool  # no penetration beyond the tolerance, forces >= 0
+    status: str
+    message: str
+    newton_iterations: int
+    outer_iterations: int
+    residual: float
+    max_penetration_over_diameter: float  # max(0, 1 - d_min / D)
+
+
+def max_penetration(problem: ContactProblem, q: np.ndarray) -> float:
+    """``max(0, 1 - d_min / D)`` over non-neighbour segment pairs."""
+    st = problem.pair_state(q, problem.diameter)
+    if len(st.pairs) == 0:
+        return 0.0
+    return float(max(0.0, 1.0 - st.distance.min() / problem.diameter))
+
+
+def _feature_keys(problem: ContactProblem, pairs, s, t, eps: float = 1e-9):
+    """Closest-feature key of each pair: a node when the closest point is an end."""
+    keys = []
+    for (i, j), si, tj in zip(pairs, s, t):
+        def feature(seg, u):
+            if u <= eps:
+                return ("node", int(problem.segments[seg, 0]))
+            if u >= 1 - eps:
+                return ("node", int(problem.segments[seg, 1]))
+            return ("edge", int(seg))
+        keys.append(tuple(sorted((feature(i, si), feature(j, tj)))))
+    return keys
+
+
+def solve_contact(problem: ContactProblem, q0: np.ndarray,
+                  options: NewtonOptions | None = None) -> ContactSolveResult:
+    """Equilibrium of ``problem`` (a :class:`ContactProblem`) from ``q0``."""
+    opts = options or NewtonOptions(mode="minimize", max_iterations=200)
+    treatment = problem.treatment
+    tol = problem.options.penetration_tolerance
+    d0 = problem.min_distance(q0)
+    if treatment == "barrier" and not d0 > problem.diameter:
+        return _result(problem, q0, np.zeros(problem.n_constraints), False, "inadmissible start",
+                       f"the initial state touches or penetrates (d_min/D = "
+                       f"{d0 / problem.diameter:.6f}); the barrier needs a gap", 0, 0, np.nan)
+    if problem.closed and problem._slide_pin is None:
+        problem.pin_sliding(q0)
+    if treatment in ("penalty", "barrier"):
+        res = newton(problem, q0, opts)
+        return _finish(problem, res, 1, "")
+    if treatment == "augmented":
+        return _augmented(problem, q0, opts)
+    return _exact(problem, q0, opts)
+
+
+def _result(problem, q, lam, converged, status, message, its, outer, residual):
+    pen = max_penetration(problem, q)
+    tol = problem.options.penetration_tolerance
+    admissible = pen <= tol or problem.treatment == "penalty" and pen <= 10 * tol
+    return ContactSolveResult(q, lam, converged, admissible, status, message, its, outer,
+                              residual, pen)
+
+
+def _finish(problem, res, outer, extra):
+    pen = max_penetration(problem, res.q)
+    tol = problem.options.penetration_tolerance
+    message = res.message + extra
+    admissible = pen <= tol
+    if not admissible:
+        message += (f"; warning: penetration {pen:.2e} D exceeds the tolerance {tol:.0e} D"
+                    + (" (raise the penalty stiffness or use 'augmented')"
+                       if problem.treatment == "penalty" else ""))
+    return ContactSolveResult(res.q, res.multipliers, res.converged, admissible,
+                              res.status.value, message, res.iterations, outer, res.residual, pen)
+
+
+def _augmented(problem: ContactProblem, q0, opts, max_outer=None):
+    tol = problem.options.penetration_tolerance
+    D = problem.diameter
+    q, lam = np.asarray(q0, float), None
+    total = 0
+    max_outer = max_outer or problem.options.max_outer_iterations
+    res = None
+    for outer in range(1, max_outer + 1):
+        res = newton(problem, q, opts, multipliers=lam)
+        total += res.iterations
+        q, lam = res.q, res.multipliers
+        if not res.converged:
+            return _finish(problem, res, outer, f" (augmented Lagrangian, outer iteration {outer})")
+        st = problem.pair_state(q, problem._cutoff())
+        gap = st.distance - D
+        old = problem._multipliers_of(st.pairs)
+        new = potentials.augmented_update(gap, old, problem.stiffness)
+        problem.pair_multipliers = {(int(i), int(j)): float(f)
+                                    for (i, j), f in zip(st.pairs, new) if f > 0}
+        problem.invalidate()
+        pen = max(0.0, -float(gap.min()) / D) if gap.size else 0.0
+        if pen <= tol:
+            break
+    extra = f"; augmented Lagrangian: {outer} outer iterations, penetration {pen:.1e} D"
+    return _finish(problem, res, outer, extra)
+
+
+def _exact(problem: ContactProblem, q0, opts):
+    """Active-set solve of the inequality-constrained problem (see module docstring)."""
+    D = problem.diameter
+    tol = problem.options.penetration_tolerance
+    warm = ContactProblem(problem.base, dataclasses.replace(problem.options,
+                                                             treatment="augmented"))
+    warm._slide_pin = problem._slide_pin
+    start = _augmented(warm, q0, opts)
+    if not start.converged:
+        return dataclasses.replace(start, message="warm start failed: " + start.message)
+    q = start.q
+    st, force = warm.pair_forces(q)
+    keys = _feature_keys(problem, st.pairs, st.s, st.t)
+    chosen: dict = {}
+    for pair, f, key in zip(st.pairs, force, keys):
+        if key not in chosen or f > chosen[key][1]:
+            chosen[key] = (pair, f)
+    active = np.array([p for p, _ in chosen.values()], dtype=np.int64).reshape(-1, 2)
+    forces = np.array([f for _, f in chosen.values()])
+    m0 = problem.n_equalities
+    lam = np.concatenate([start.multipliers[:m0], -forces])
+    total, outer = start.newton_iterations, start.outer_iterations
+    scale = max(float(np.max(np.abs(lam))) if lam.size else 1.0, 1.0)
+    for cycle in range(1, problem.options.max_outer_iterations + 1):
+        problem.active = active
+        problem.invalidate()
+        stat_opts = dataclasses.replace(opts, mode="stationary")
+        res = newton(problem, q, stat_opts, multipliers=lam)
+        total += res.iterations
+        if not res.converged:
+            return _finish(problem, res, outer + cycle, f" (exact contact, active-set cycle {cycle})")
+        q, lam = res.q, res.multipliers
+        contact_force = -lam[m0:]
+        changed = False
+        if contact_force.size and contact_force.min() < -problem.options.force_tolerance * scale:
+            drop = int(np.argmin(contact_force))
+            keep = np.ones(len(active), dtype=bool)
+            keep[drop] = False
+            active, lam = active[keep], np.concatenate([lam[:m0], lam[m0:][keep]])
+            changed = True
+        st = problem.pair_state(q, D * (1 - tol))
+        if len(st.pairs):
+            have = {tuple(p) for p in active.tolist()}
+            new_keys = set(map(tuple, (_feature_keys(problem, active, *_params(problem, q,
+                                                                              active)))))
+            add = []
+            for pair, key in zip(st.pairs, _feature_keys(problem, st.pairs, st.s, st.t)):
+                if tuple(pair) not in have and key not in new_keys:
+                    add.append(pair)
+                    new_keys.add(key)
+            if add:
+                active = np.concatenate([active, np.array(add, dtype=np.int64)])
+                lam = np.concatenate([lam, np.zeros(len(add))])
+                changed = True
+        if not changed:
+            break
+    else:
+        problem.active = active
+        return _result(problem, q, lam, False, "active set did not settle",
+                       f"exact contact: the active set changed in each of "
+                       f"{problem.options.max_outer_iterations} cycles", total, outer + cycle,
+                       res.residual)
+    problem.active = active
+    problem.invalidate()
+    message = res.message + f"; exact contact: {len(active)} active constraints, {cycle} cycles"
+    out = _finish(problem, res, outer + cycle, "")
+    return dataclasses.replace(out, message=message + out.message[len(res.message):],
+                               newton_iterations=total)
+
+
+def _params(problem, q, pairs):
+    from supercoil.contact.distance import segment_distance
+
+    a, b = problem._endpoints(q)
+    _d, s, t = segment_distance(a[pairs[:, 0]], b[pairs[:, 0]], a[pairs[:, 1]], b[pairs[:, 1]])
+    return pairs, s, t

@@ -1,0 +1,98 @@
+"""The supercoiled ring: a twisted ring of diameter D that cannot pass through itself.
+
+Below Michell's threshold the twisted circle is stable and is the answer.
+Above it the circle is an unstable equilibrium; the ring is then pushed off
+it along the lowest unstable mode and relaxed by Newton minimisation with
+self-contact until it lands on a stable equilibrium with contact (seed 001).
+
+Perturbation: the M-normalised lowest eigenmode of the circle (symmetry
+modes removed), scaled so that the largest node displacement is
+``PERTURBATION_AMPLITUDE * L`` (1 % of the length: large enough to leave the
+circle in a few Newton steps, far below the ring's radius ``L / 2 pi``), with
+the sign that makes its largest component positive. Every step is guarded by
+continuous collision detection, and the result reports whether the linking
+number was kept (independent double-sum writhe plus frame twist).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from supercoil.contact.problem import DEFAULT_TREATMENT, ContactOptions, ContactProblem
+from supercoil.contact.report import contact_summary
+from supercoil.contact.solve import solve_contact
+from supercoil.problems.ring import RingResult, ring_result, twisted_circle_problem
+from supercoil.solvers.newton import NewtonOptions, newton
+from supercoil.stability.analysis import DEFAULT_ZERO_TOLERANCE, analyse
+
+PERTURBATION_AMPLITUDE = 1e-2
+
+
+def validate_diameter(length_over_diameter: float) -> float:
+    """The tube diameter D (units of L) of a ring, or a ValueError saying what is valid."""
+    lod = length_over_diameter
+    if not np.isfinite(lod) or lod <= 0:
+        raise ValueError(f"length_over_diameter (L/D) must be a positive finite number, got {lod!r}")
+    if lod <= np.pi:
+        raise ValueError(f"length_over_diameter (L/D) = {lod:g} is too small: a ring of "
+                         f"diameter D must have L > pi D (L/D > {np.pi:.4f})")
+    return 1.0 / lod
+
+
+def perturb_along_lowest_mode(problem, q: np.ndarray, multipliers: np.ndarray,
+                              amplitude: float = PERTURBATION_AMPLITUDE) -> np.ndarray:
+    """``q`` displaced along the lowest eigenmode (see the module docstring)."""
+    stab = analyse(problem, q, multipliers, n_modes=2)
+    mode = stab.lowest_modes[0].reshape(-1, 3)
+    norms = np.linalg.norm(mode, axis=1)
+    k = int(np.argmax(np.abs(mode.ravel())))
+    sign = 1.0 if mode.ravel()[k] >= 0 else -1.0
+    return q + sign * amplitude * problem.rod.length * (mode / norms.max()).ravel()
+
+
+def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_diameter: float,
+                           n_nodes: int = 100, treatment: str = DEFAULT_TREATMENT,
+                           curvature: str = "angle", tolerance: float = 1e-9,
+                           zero_tolerance: float = DEFAULT_ZERO_TOLERANCE, n_modes: int = 6,
+                           max_iterations: int = 300) -> RingResult:
+    """Stable equilibrium of the ring with self-contact (see the module docstring)."""
+    if not np.isfinite(twist_ratio) or twist_ratio <= 0:
+        raise ValueError(f"twist_ratio (C/A) must be a positive finite number, got {twist_ratio!r}")
+    if not np.isfinite(excess_link):
+        raise ValueError(f"excess_link must be a finite number, got {excess_link!r}")
+    diameter = validate_diameter(length_over_diameter)
+    base, q0 = twisted_circle_problem(twist_ratio, excess_link, n_nodes, curvature)
+    circle = newton(base, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
+    options = ContactOptions(diameter=diameter * base.rod.length, treatment=treatment)
+    problem = ContactProblem(base, options)
+    start = circle.q
+    note = "circle stable: no perturbation"
+    if analyse(base, circle.q, circle.multipliers, n_modes=1).unstable_count > 0:
+        start = perturb_along_lowest_mode(base, circle.q, circle.multipliers)
+        note = (f"circle unstable: perturbed along its lowest mode by "
+                f"{PERTURBATION_AMPLITUDE:g} L")
+    d0 = problem.min_distance(start)
+    if not d0 > diameter * (1 - options.penetration_tolerance):
+        raise ValueError(f"the starting ring already penetrates itself (closest approach "
+                         f"{d0 / diameter:.4f} D)")
+    res = solve_contact(problem, start, NewtonOptions(tolerance=tolerance, mode="minimize",
+                                                      max_iterations=max_iterations))
+    stab = analyse(problem, res.q, res.multipliers, n_modes=n_modes,
+                   zero_tolerance=zero_tolerance)
+    contact = contact_summary(problem, res.q, res.multipliers)
+    message = note + "; " + res.message
+    if not res.admissible:
+        message += "; warning: the state is not admissible (penetration beyond tolerance)"
+    result = ring_result(problem, res.q, res.multipliers, stab,
+                         converged=res.converged and res.admissible, status=res.status,
+                         message=message, residual=res.residual,
+                         iterations=res.newton_iterations, zero_tolerance=zero_tolerance,
+                         length_over_diameter=float(length_over_diameter),
+                         contact_treatment=treatment, contact=contact)
+    if result.link_error > 1e-6:
+        result = dataclasses.replace(
+            result, converged=False,
+            message=result.message + f"; error: Lk changed by {result.link_error:.2e}")
+    return result

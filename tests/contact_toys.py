@@ -1,0 +1,84 @@
+"""Toy problems for the contact tests (not rods: oracles with exact answers)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from supercoil.solvers.problem import HessianParts
+
+
+@dataclass(frozen=True)
+class _ToyRod:
+    closed: bool
+    edge_length: float
+    length: float
+    bending_stiffness: float = 1.0
+
+
+class CrossedRods:
+    """Rod A (fixed, along x at z = 0) and rod B (along y, above A) pushed down by ``load``.
+
+    B's nodes move only in z (x, y fixed), with a stiff bending spring
+    ``K/2 sum (z_{i-1} - 2 z_i + z_{i+1})^2``, a spring ``K/2 (z_0 - z_last)^2``
+    against tilting (internal: no net vertical force) and the dead load
+    ``load * mean(z)``, symmetric about the crossing. At equilibrium B rests
+    level on A with a total normal contact force equal to ``load``.
+    """
+
+    def __init__(self, n: int = 10, spacing: float = 0.1, height: float = 0.25,
+                 load: float = 1.0, stiffness: float = 1e3):
+        self.n = n
+        self.load = float(load)
+        self.K = float(stiffness)
+        u = (np.arange(n) - (n - 1) / 2) * spacing  # symmetric about 0
+        a = np.stack([u + 0.013, np.zeros(n), np.zeros(n)], axis=1)  # crossing off A's nodes
+        b = np.stack([np.full(n, 0.021), u, np.full(n, height)], axis=1)
+        self.points = np.concatenate([a, b])
+        self.rod = _ToyRod(closed=False, edge_length=spacing, length=spacing * (2 * n - 1))
+        edges_a = np.stack([np.arange(n - 1), np.arange(1, n)], 1)
+        # a dummy edge (n-1, n) joins the rods so that the arc-length bookkeeping
+        # is contiguous; it is far from the crossing and never near contact.
+        edges_b = np.stack([np.arange(n - 1, 2 * n - 1), np.arange(n, 2 * n)], 1)
+        self.edge_nodes = np.concatenate([edges_a, edges_b])
+        self.n_dofs = 3 * 2 * n
+        fixed = list(range(3 * n)) + [3 * k + c for k in range(n, 2 * n) for c in (0, 1)]
+        self.fixed = np.array(sorted(fixed), dtype=np.int64)
+        self.mass = np.full(self.n_dofs, spacing)
+        self.n_constraints = 0
+        z = 3 * np.arange(n, 2 * n) + 2
+        rows = []
+        for i in range(1, n - 1):
+            row = np.zeros(self.n_dofs)
+            row[z[i - 1]], row[z[i]], row[z[i + 1]] = 1.0, -2.0, 1.0
+            rows.append(row)
+        row = np.zeros(self.n_dofs)
+        row[z[0]], row[z[-1]] = 1.0, -1.0
+        rows.append(row)
+        self._D2 = sp.csr_matrix(np.array(rows))
+        self._load = np.zeros(self.n_dofs)
+        self._load[z] = self.load / n
+
+    def energy(self, q):
+        r = self._D2 @ q
+        return 0.5 * self.K * float(r @ r) + float(self._load @ q)
+
+    def gradient(self, q):
+        return self.K * (self._D2.T @ (self._D2 @ q)) + self._load
+
+    def hessian(self, q):
+        return HessianParts((self.K * (self._D2.T @ self._D2)).tocsr())
+
+    def constraints(self, q):
+        return np.zeros(0)
+
+    def constraint_jacobian(self, q):
+        return sp.csr_matrix((0, self.n_dofs))
+
+    def constraint_hessian(self, q, multipliers):
+        return sp.csr_matrix((self.n_dofs, self.n_dofs))
+
+    def accept(self, q):
+        pass

@@ -1,0 +1,146 @@
+"""Self-contact treatments, the contact problem, the step guard and contact output."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from contact_toys import CrossedRods
+
+from supercoil.contact import potentials
+from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.report import contact_summary
+from supercoil.contact.solve import solve_contact
+from supercoil.solvers.newton import NewtonOptions
+
+
+# ------------------------------------------------------------------ potentials
+@pytest.mark.parametrize("name", ["penalty", "augmented", "barrier"])
+def test_potential_derivatives_match_finite_differences(name):
+    D = 0.1
+    gaps = np.array([-3e-3, -1e-4, 2e-4, 7e-4, 1.5e-3])
+    lam = np.array([0.5, 0.0, 2.0, 0.0, 1.0])
+
+    def psi(g):
+        if name == "penalty":
+            return potentials.penalty(g, 50.0)
+        if name == "augmented":
+            return potentials.augmented(g, lam, 50.0)
+        return potentials.barrier(g, 50.0, 1e-2 * D)
+
+    gaps = np.abs(gaps) if name == "barrier" else gaps
+    v, d1, d2 = psi(gaps)
+    eps = 1e-8
+    vp, d1p, _ = psi(gaps + eps)
+    vm, d1m, _ = psi(gaps - eps)
+    np.testing.assert_allclose(d1, (vp - vm) / (2 * eps), rtol=1e-5, atol=1e-9)
+    np.testing.assert_allclose(d2, (d1p - d1m) / (2 * eps), rtol=1e-5, atol=1e-6)
+
+
+def test_barrier_is_infinite_at_contact_and_c2_at_activation():
+    v, d1, d2 = potentials.barrier(np.array([0.0, -1.0, 1.0 - 1e-12, 1.0 + 1e-12]), 3.0, 1.0)
+    assert np.isinf(v[:2]).all()
+    np.testing.assert_allclose(v[2:], 0.0, atol=1e-20)
+    np.testing.assert_allclose(d1[2:], 0.0, atol=1e-10)
+    np.testing.assert_allclose(d2[2:], 0.0, atol=1e-10)
+
+
+def test_augmented_update_is_the_pair_force():
+    # At a stationary point of psi_AL the force -psi' equals the updated multiplier.
+    g = np.array([-1e-3, 2e-3, 0.0])
+    lam = np.array([1.0, 0.05, 0.3])
+    _, first, _ = potentials.augmented(g, lam, 100.0)
+    np.testing.assert_allclose(-first, potentials.augmented_update(g, lam, 100.0))
+
+
+# ------------------------------------------------------------ crossed rods
+def _crossed(treatment, **kw):
+    toy = CrossedRods(load=2.0)
+    problem = ContactProblem(toy, ContactOptions(diameter=0.05, treatment=treatment, **kw))
+    return toy, problem
+
+
+@pytest.mark.parametrize("treatment", ["exact", "augmented", "penalty", "barrier"])
+def test_crossed_rods_contact_force_equals_load(treatment):
+    toy, problem = _crossed(treatment)
+    res = solve_contact(problem, toy.points.ravel(), NewtonOptions(max_iterations=200))
+    assert res.converged, res.message
+    summary = contact_summary(problem, res.q, res.multipliers)
+    total = sum(c["force"] for c in summary["contacts"])
+    force_scale = toy.rod.length**2 / toy.rod.bending_stiffness
+    # oracle: vertical equilibrium of rod B, the contact carries the whole load
+    np.testing.assert_allclose(total / force_scale, toy.load, rtol=1e-6)
+    assert summary["n_contact_points"] == 1 and summary["n_contact_intervals"] == 0
+    d_min = summary["min_gap_over_diameter"]
+    if treatment == "penalty":
+        # the penalty needs a penetration F / k
+        np.testing.assert_allclose((1 - d_min) * 0.05, toy.load / problem.stiffness, rtol=1e-6)
+    elif treatment == "barrier":
+        assert 1.0 < d_min < 1.0 + problem.options.barrier_activation
+    else:
+        assert abs(d_min - 1.0) <= problem.options.penetration_tolerance
+
+
+def test_penalty_tends_to_exact_as_stiffness_grows():
+    toy, exact = _crossed("exact")
+    ref = solve_contact(exact, toy.points.ravel())
+    z_exact = ref.q[3 * toy.n + 2]
+    errors = []
+    for k in (1e3, 1e4, 1e5):
+        toy, pen = _crossed("penalty", stiffness=k)
+        res = solve_contact(pen, toy.points.ravel())
+        assert res.converged
+        errors.append(abs(res.q[3 * toy.n + 2] - z_exact))
+    # penetration F/k: the error falls tenfold per tenfold stiffness
+    np.testing.assert_allclose(np.array(errors[:-1]) / np.array(errors[1:]), 10.0, rtol=1e-3)
+
+
+def test_contact_energy_derivatives_match_finite_differences():
+    toy, problem = _crossed("penalty", stiffness=50.0)
+    q = toy.points.ravel().copy()
+    rng = np.random.default_rng(3)
+    q[3 * toy.n:] += 1e-3 * rng.standard_normal(3 * toy.n)
+    # push B into A so that pairs penetrate
+    q[3 * toy.n + 2 :: 3] -= 0.25 - 0.045
+    assert problem.contact_energy(q) > 0
+    g = problem.gradient(q)
+    H = problem.hessian(q).dense()
+    eps = 1e-7
+    for k in range(3 * toy.n, 6 * toy.n, 5):
+        e = np.zeros_like(q)
+        e[k] = eps
+        fd = (problem.energy(q + e) - problem.energy(q - e)) / (2 * eps)
+        assert abs(fd - g[k]) <= 1e-5 * max(1.0, abs(g[k]))
+        fd_h = (problem.gradient(q + e) - problem.gradient(q - e)) / (2 * eps)
+        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-4, atol=1e-4)
+
+
+def test_step_guard_stops_a_segment_passing_through_another():
+    toy, problem = _crossed("penalty")
+    q = toy.points.ravel()
+    dq = np.zeros_like(q)
+    dq[3 * toy.n + 2 :: 3] = -0.5  # B moves from z = 0.25 to -0.25: straight through A
+    # an end-of-step check sees nothing wrong
+    assert problem.min_distance(q + dq) > problem.diameter
+    bound = problem.step_bound(q, dq)
+    # the guard stops B at half a diameter above A's centreline at the latest
+    assert 0 < bound <= (0.25 - 0.5 * problem.diameter) / 0.5 + 1e-12
+    assert problem.min_distance(q + bound * dq) >= 0.5 * problem.diameter * (1 - 1e-9)
+
+
+def test_barrier_step_guard_keeps_a_gap():
+    toy, problem = _crossed("barrier")
+    q = toy.points.ravel()
+    dq = np.zeros_like(q)
+    dq[3 * toy.n + 2 :: 3] = -0.5
+    bound = problem.step_bound(q, dq)
+    assert problem.min_distance(q + bound * dq) > problem.diameter
+
+
+def test_options_validate():
+    with pytest.raises(ValueError, match="diameter"):
+        ContactOptions(diameter=0.0)
+    with pytest.raises(ValueError, match="diameter"):
+        ContactOptions(diameter=-1.0)
+    with pytest.raises(ValueError, match="treatment"):
+        ContactOptions(diameter=0.1, treatment="springs")
+    assert ContactOptions(diameter=0.2).exclusion_length == pytest.approx(0.1 * np.pi)

@@ -132,12 +132,15 @@ class KKTFactor:
 
     ``hessian`` holds the sparse part and rank-one terms of ``H`` on the free
     unknowns, ``jacobian`` is ``(m, n)``; ``shift`` and ``mass`` (diagonal,
-    ``(n,)``) are for shift-invert eigenvalue computations. The inertia is
+    ``(n,)``) are for shift-invert eigenvalue computations; ``order`` reuses
+    the :func:`kkt_order` of an earlier factor of the same pattern
+    (:attr:`order`). The inertia is
     computed on first use of :attr:`reduced_negative_count`.
     """
 
     def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix | None = None,
-                 shift: float = 0.0, mass: np.ndarray | None = None):
+                 shift: float = 0.0, mass: np.ndarray | None = None,
+                 order: np.ndarray | None = None):
         S = hessian.sparse.tocsr()
         n = S.shape[0]
         if shift != 0.0:
@@ -150,7 +153,7 @@ class KKTFactor:
         K = sp.bmat([[S, J.T], [J, None]], format="csr") if self.m else S.tocsr()
         self._K = K
         # A banded ordering keeps the partial-pivoting LU within twice the band.
-        self._order = kkt_order(S, J)
+        self._order = kkt_order(S, J) if order is None else order
         try:
             self._lu = _OrderedLU(K, self._order)
         except RuntimeError as exc:  # "Factor is exactly singular"
@@ -164,6 +167,10 @@ class KKTFactor:
             self._KU, self._small, self._woodbury_correction = _woodbury_negatives(
                 self._lu.solve, self._U, self._w)
         self._reduced_neg: int | None = None
+
+    @property
+    def order(self) -> np.ndarray:
+        return self._order
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve ``K z = rhs`` for the full matrix (rank-one terms included)."""

@@ -11,7 +11,12 @@ on the free unknowns (fixed DOFs removed). Two globalisations:
   shifted by ``delta * M`` until it is positive definite on ``ker J``
   (inertia correction, Nocedal & Wright 2006, sec. 18.3); the step is then a
   descent direction of the exact-penalty merit ``E + mu ||c||_1`` and an
-  Armijo backtracking line search is applied to it.
+  Armijo backtracking line search is applied to it. With
+  ``inertia_test="curvature"`` the (costlier) inertia is replaced by the
+  inertia-free test of Chiang & Zavala (2016): the shift is raised until the
+  curvature ``dq^T H dq`` along the step is clearly positive. When the first
+  test fails, a step along the most negative curvature direction is added
+  (saddle escape, see :func:`_add_negative_curvature`).
 * ``mode="stationary"``: plain Newton steps with backtracking on the norm of
   the KKT residual, which converges to saddle points as well (needed on
   unstable branches).
@@ -66,6 +71,7 @@ class NewtonOptions:
     armijo: float = 1e-4
     min_step: float = 1e-10
     max_step_norm: float = float("inf")
+    inertia_test: str = "exact"
 
     def __post_init__(self) -> None:
         if not (self.tolerance > 0):
@@ -74,6 +80,9 @@ class NewtonOptions:
             raise ValueError(f"max_iterations must be >= 1, got {self.max_iterations!r}")
         if self.mode not in ("minimize", "stationary"):
             raise ValueError(f"mode must be 'minimize' or 'stationary', got {self.mode!r}")
+        if self.inertia_test not in ("exact", "curvature"):
+            raise ValueError(f"inertia_test must be 'exact' or 'curvature', got "
+                             f"{self.inertia_test!r}")
         if not (self.max_step_norm > 0):
             raise ValueError(f"max_step_norm must be positive, got {self.max_step_norm!r}")
 
@@ -133,6 +142,48 @@ def _hessian(problem, q, lam, free):
     return parts.restrict(free)
 
 
+def _shifted_step(problem, q, free, H, J, mass, rhs, radius, opts):
+    """Step of ``(H + delta M) dq + J^T lam = -g, J dq = -c`` for minimisation.
+
+    ``delta`` starts at 0 and is raised until (i) the shifted Hessian is
+    positive definite on ``ker J`` (``inertia_test="exact"``) or has clearly
+    positive curvature along the step (``"curvature"``), and (ii) the step fits
+    the problem's trust radius (``step_size_ratio <= radius``) when it defines
+    one: a longer step is replaced by a shorter, better-conditioned one rather
+    than scaled down, so near-null directions (a closed rod's material sliding)
+    get gradient-like steps instead of huge ones (Levenberg–Marquardt). Returns
+    ``(factor, solution, delta, whether the unshifted test failed)``.
+    """
+    n = len(free)
+    diag_scale = float(np.max(np.abs(H.sparse.diagonal()))) / float(np.mean(mass))
+    delta, order, negatives = 0.0, None, False
+    sized = hasattr(problem, "step_size_ratio")
+    factor = sol = None
+    for attempt in range(80):
+        factor = KKTFactor(H, J, shift=-delta, mass=mass, order=order)
+        order = factor.order
+        if opts.inertia_test == "exact":
+            curved = factor.reduced_negative_count == 0
+            sol = factor.solve(rhs) if curved or attempt == 79 else None
+        else:
+            sol = factor.solve(rhs)
+            s = sol[:n]
+            mass_norm = float(s @ (mass * s))
+            curved = float(s @ H.matvec(s)) + delta * mass_norm > 1e-8 * diag_scale * mass_norm
+        if not curved:
+            negatives = negatives or attempt == 0
+            delta = max(2.0 * delta, 1e-4 * diag_scale)
+            continue
+        if sized:
+            full = np.zeros_like(q)
+            full[free] = sol[:n]
+            if problem.step_size_ratio(q, full) > radius:
+                delta = max(4.0 * delta, 1e-10 * diag_scale)
+                continue
+        break
+    return factor, sol, delta, negatives
+
+
 def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, radius):
     """Add a step along the most negative curvature direction (saddle escape).
 
@@ -142,7 +193,8 @@ def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, rad
     on ``ker J`` is found by inverse iteration with the shifted factor
     (``H + delta M`` is positive definite there), and, if ``mu < 0``, a multiple
     of ``v`` pointing downhill is added (Moré & Sorensen 1979): as long as the
-    trust radius when the problem defines one, else as long as the Newton step.
+    trust radius (at most 1) when the problem defines one, else as long as the
+    Newton step.
     """
     v = np.random.default_rng(0).standard_normal(n)
     for _ in range(12):
@@ -156,7 +208,7 @@ def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, rad
     full = np.zeros_like(q)
     full[free] = v
     if hasattr(problem, "step_size_ratio"):
-        tau = radius / max(problem.step_size_ratio(q, full), 1e-300)
+        tau = min(radius, 1.0) / max(problem.step_size_ratio(q, full), 1e-300)
     else:
         tau = float(np.sqrt(sol[:n] @ (mass * sol[:n])))
     out = sol.copy()
@@ -207,33 +259,16 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
             break
         rhs = -np.concatenate([g, c])
         delta = 0.0
-        diag_scale = float(np.max(np.abs(H.sparse.diagonal()))) / float(np.mean(mass))
-        negatives = 0
         try:
-            for attempt in range(40):
-                factor = KKTFactor(H, J, shift=-delta, mass=mass)
-                if opts.mode != "minimize" or factor.reduced_negative_count == 0:
-                    break
-                if attempt == 0:
-                    negatives = factor.reduced_negative_count
-                delta = max(2.0 * delta, 1e-4 * diag_scale)
-            sol = factor.solve(rhs)
-            # Trust region (minimize): a step longer than the problem allows is
-            # replaced by a shorter, better-conditioned one, (H + delta M) dq = -g,
-            # rather than scaled down: near-null directions (a closed rod's
-            # material sliding) then get gradient-like steps instead of huge ones.
-            if opts.mode == "minimize" and hasattr(problem, "step_size_ratio"):
-                for _ in range(60):
-                    dq_try = np.zeros_like(q)
-                    dq_try[free] = sol[:n]
-                    if problem.step_size_ratio(q, dq_try) <= radius:
-                        break
-                    delta = max(4.0 * delta, 1e-10 * diag_scale)
-                    factor = KKTFactor(H, J, shift=-delta, mass=mass)
-                    sol = factor.solve(rhs)
-            if negatives:
-                sol = _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m,
-                                              radius)
+            if opts.mode == "minimize":
+                factor, sol, delta, negatives = _shifted_step(problem, q, free, H, J, mass, rhs,
+                                                              radius, opts)
+                if negatives:
+                    sol = _add_negative_curvature(problem, q, free, H, factor, sol, g, mass,
+                                                  n, m, radius)
+            else:
+                factor = KKTFactor(H, J)
+                sol = factor.solve(rhs)
         except SingularMatrixError as exc:
             return done(Status.SINGULAR, f"iteration {it}: {exc}", it)
         dq_free, lam_new = sol[:n], sol[n:]
@@ -256,12 +291,34 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
                 c0 = float(np.sum(np.abs(c)))
                 phi0 = problem.energy(q) + mu * c0
                 slope = float(g @ dq_free) - mu * c0
+
+                def merit(qt):
+                    ct = np.sum(np.abs(problem.constraints(qt))) if m else 0.0
+                    return problem.energy(qt) + mu * ct
+
+                first = True
                 while alpha >= opts.min_step:
                     qt = q + alpha * dq
-                    ct = np.sum(np.abs(problem.constraints(qt))) if m else 0.0
-                    phit = problem.energy(qt) + mu * ct
+                    phit = merit(qt)
                     if np.isfinite(phit) and phit <= phi0 + opts.armijo * alpha * min(slope, 0.0):
                         break
+                    if first and m and alpha == 1.0:
+                        # Second-order correction (Nocedal & Wright 2006, alg. 18.3): the
+                        # curvature of the constraints can make the l1 merit reject a good
+                        # full step (Maratos effect); project it back onto c = 0 first.
+                        soc = factor.solve(np.concatenate(
+                            [np.zeros(n), -problem.constraints(qt)]))[:n]
+                        q_soc = qt.copy()
+                        q_soc[free] += soc
+                        phis = merit(q_soc)
+                        if np.isfinite(phis) and phis <= phi0 + opts.armijo * min(slope, 0.0):
+                            dq = q_soc - q
+                            bound_soc = (problem.step_bound(q, dq)
+                                         if hasattr(problem, "step_bound") else 1.0)
+                            if bound_soc >= 1.0:
+                                break
+                            dq = qt - q
+                    first = False
                     alpha *= 0.5
             else:
                 norm0 = float(np.linalg.norm(r))
@@ -273,6 +330,9 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
                         break
                     alpha *= 0.5
             if alpha < opts.min_step:
+                log.debug("line search failed: slope %.3e, step %.3e, bound %.3g, delta %.3g",
+                          slope if opts.mode == "minimize" else float("nan"),
+                          float(np.max(np.abs(dq))), bound, delta)
                 return done(Status.LINE_SEARCH_FAILED,
                             f"iteration {it}: no step length reduced the merit function "
                             f"(residual {res:.2e})", it)

@@ -28,7 +28,7 @@ def test_potential_derivatives_match_finite_differences(name):
         return potentials.barrier(g, 50.0, 1e-2 * D)
 
     gaps = np.abs(gaps) if name == "barrier" else gaps
-    v, d1, d2 = psi(gaps)
+    _, d1, d2 = psi(gaps)
     eps = 1e-8
     vp, d1p, _ = psi(gaps + eps)
     vm, d1m, _ = psi(gaps - eps)
@@ -112,6 +112,20 @@ def test_contact_energy_derivatives_match_finite_differences():
         assert abs(fd - g[k]) <= 1e-5 * max(1.0, abs(g[k]))
         fd_h = (problem.gradient(q + e) - problem.gradient(q - e)) / (2 * eps)
         np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-4, atol=1e-4)
+
+
+def test_active_contact_removes_the_free_direction_from_stability():
+    """Rod B resting on A: without the contact its vertical translation is a zero
+    mode (the load is linear); the active contact removes it from the admissible
+    directions, and the state is strictly stable."""
+    from supercoil.stability.analysis import analyse
+
+    toy, problem = _crossed("exact")
+    res = solve_contact(problem, toy.points.ravel())
+    with_contact = analyse(problem, res.q, res.multipliers, n_modes=3)
+    assert with_contact.unstable_count == 0 and with_contact.zero_modes == 0
+    without = analyse(toy, res.q, np.zeros(0), n_modes=3)
+    assert without.zero_modes == 1 and without.unstable_count == 0
 
 
 def test_step_guard_stops_a_segment_passing_through_another():

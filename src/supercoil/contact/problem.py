@@ -11,7 +11,9 @@ type, :mod:`supercoil.contact.distance`) and the gap ``g = d - D``:
   (:mod:`supercoil.contact.potentials`);
 * ``exact``: ``g >= 0`` as inequality constraints; the active ones join the
   rod's equality constraints, and their multipliers are minus the contact
-  forces (:mod:`supercoil.contact.solve` runs the active-set loop).
+  forces (:mod:`supercoil.contact.solve` runs the active-set loop). Inactive
+  pairs that penetrate during the search meet the penalty, which vanishes at
+  a solution (no inactive pair penetrates there).
 
 The wrapper speaks the :class:`~supercoil.solvers.problem.ConstrainedEnergy`
 protocol, so Newton, the inertia count and the eigenvalues see the contact
@@ -34,6 +36,7 @@ Gonzalez & Maddocks 1999 formalises this).
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,7 +63,10 @@ class ContactOptions:
     discrete rod resists a transverse displacement in bending, so that the
     contact neither dominates the conditioning nor is soft next to the rod.
     ``penetration_tolerance``: largest accepted penetration over D (augmented,
-    exact; the penalty reports what it gets). ``barrier_activation``: the
+    exact). ``penalty_tolerance``: the same for the penalty, which needs a
+    penetration ``F / k`` to carry a force ``F`` (with the default ``k`` a few
+    per cent of D for DNA-like L/D at N = 100, falling like ``h^3``): states
+    beyond it are flagged, not returned silently. ``barrier_activation``: the
     barrier acts on gaps below ``barrier_activation * D``.
     """
 
@@ -70,6 +76,7 @@ class ContactOptions:
     stiffness: float | None = None
     stiffness_scale: float = 1.0
     penetration_tolerance: float = 1e-4
+    penalty_tolerance: float = 5e-2
     barrier_activation: float = 1e-2
     max_outer_iterations: int = 50
     force_tolerance: float = 1e-8
@@ -84,13 +91,18 @@ class ContactOptions:
             raise ValueError(f"exclusion must be a non-negative arc length, got {self.exclusion!r}")
         if self.stiffness is not None and not (np.isfinite(self.stiffness) and self.stiffness > 0):
             raise ValueError(f"contact stiffness must be positive, got {self.stiffness!r}")
-        for name in ("stiffness_scale", "penetration_tolerance", "barrier_activation",
-                     "force_tolerance"):
+        for name in ("stiffness_scale", "penetration_tolerance", "penalty_tolerance",
+                     "barrier_activation", "force_tolerance"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be positive, got {value!r}")
         if self.max_outer_iterations < 1:
             raise ValueError("max_outer_iterations must be >= 1")
+
+    @property
+    def tolerance(self) -> float:
+        """Largest accepted penetration over D for this treatment."""
+        return self.penalty_tolerance if self.treatment == "penalty" else self.penetration_tolerance
 
     @property
     def exclusion_length(self) -> float:
@@ -122,8 +134,9 @@ class ContactProblem:
         self.closed = bool(rod.closed)
         h = rod.edge_length
         self.edge_length = h
-        self.stiffness = (options.stiffness if options.stiffness is not None
-                          else options.stiffness_scale * rod.bending_stiffness / h**3)
+        self.default_stiffness = (options.stiffness if options.stiffness is not None
+                                  else options.stiffness_scale * rod.bending_stiffness / h**3)
+        self.stiffness = self.default_stiffness  # the augmented Lagrangian may raise it
         self.segments = np.asarray(base.edge_nodes, dtype=np.int64)
         k = np.arange(len(self.segments), dtype=float)
         offset = 0.0 if self.closed else -0.5  # open rods: ends at mid-edges
@@ -139,6 +152,8 @@ class ContactProblem:
         # exact treatment: active pairs, constraints g_p = d_p - D = 0
         self.active = np.zeros((0, 2), dtype=np.int64)
         self._slide_pin: tuple[int, np.ndarray, np.ndarray] | None = None
+        # see stability_view()
+        self.stability_mode = False
         self._cache_key: bytes | None = None
         self._cache: PairState | None = None
 
@@ -172,7 +187,10 @@ class ContactProblem:
         state along it (DESIGN.md, traps). The gauge is the linear constraint
         ``t_k . (x_k - x_k(q)) = 0`` on one node ``k`` (tangential motion of
         that node), whose multiplier is the ripple's reaction, reported by
-        :meth:`sliding_reaction`; it vanishes as ``h -> 0``.
+        :meth:`sliding_reaction`. With contact the ripple is not small (a
+        reaction of 4 % of the contact forces measured at N = 100), so the
+        gauge only steers the augmented-Lagrangian outer iterations; every
+        returned state is an equilibrium without it.
         """
         x = np.asarray(q, dtype=float).reshape(-1, 3)
         n = len(x)
@@ -180,6 +198,11 @@ class ContactProblem:
         k = next(i for i in range(n // 4, n // 4 + n) if i % n not in fixed_nodes) % n
         t = x[(k + 1) % n] - x[(k - 1) % n]
         self._slide_pin = (k, t / np.linalg.norm(t), x[k].copy())
+        self.invalidate()
+
+    def release_sliding(self) -> None:
+        """Remove the sliding gauge (see :meth:`pin_sliding`)."""
+        self._slide_pin = None
         self.invalidate()
 
     def sliding_reaction(self, multipliers: np.ndarray) -> float:
@@ -257,8 +280,15 @@ class ContactProblem:
             return potentials.augmented(gap, self._multipliers_of(pairs), self.stiffness)
         if self.treatment == "barrier":
             return potentials.barrier(gap, self.stiffness, opts.barrier_activation * self.diameter)
-        zero = np.zeros_like(gap)
-        return zero, zero, zero
+        # exact: the active pairs are constraints; any other pair that
+        # penetrates meets the penalty (a guard while the active set is being
+        # found: it vanishes at a solution, where no inactive pair penetrates)
+        value, first, second = potentials.penalty(gap, self.stiffness)
+        if len(self.active):
+            active = {(int(i), int(j)) for i, j in self.active}
+            inactive = np.array([(int(i), int(j)) not in active for i, j in pairs], dtype=bool)
+            value, first, second = value * inactive, first * inactive, second * inactive
+        return value, first, second
 
     def _pair_nodes(self, pairs: np.ndarray) -> np.ndarray:
         """``(m, 4)`` node indices (p0, p1, q0, q1) of segment pairs."""
@@ -286,19 +316,30 @@ class ContactProblem:
     def gradient(self, q: np.ndarray) -> np.ndarray:
         g = self.base.gradient(q)
         st = self._state(q)
-        if len(st.pairs) and self.treatment != "exact":
+        if len(st.pairs):
             d, grad, _hess, dofs = self._pair_derivatives(q, st.pairs)
             _, first, _ = self._psi(d - self.diameter, st.pairs)
             np.add.at(g, dofs.ravel(), (first[:, None] * grad).ravel())
         return g
 
     def contact_hessian(self, q: np.ndarray) -> sp.csr_matrix:
-        st = self._state(q)
+        one_sided = self.stability_mode and self.treatment in ("penalty", "augmented")
+        D = self.diameter
+        if one_sided:
+            st = self.pair_state(q, max(self._cutoff(), D * (1 + self.options.tolerance)))
+        else:
+            st = self._state(q)
         n = self.n_dofs
-        if len(st.pairs) == 0 or self.treatment == "exact":
+        if len(st.pairs) == 0:
             return sp.csr_matrix((n, n))
         d, grad, hess, dofs = self._pair_derivatives(q, st.pairs)
-        _, first, second = self._psi(d - self.diameter, st.pairs)
+        _, first, second = self._psi(d - D, st.pairs)
+        if one_sided:
+            # A pair touching without force sits on the kink of psi (C^1 only):
+            # closing it costs k g^2/2, opening it nothing. Admissible second-order
+            # directions cannot penetrate it, so its closing stiffness counts.
+            touching = (second == 0) & (d - D <= self.options.tolerance * D)
+            second = np.where(touching, self.stiffness, second)
         local = (second[:, None, None] * grad[:, :, None] * grad[:, None, :]
                  + first[:, None, None] * hess)
         rows = np.repeat(dofs, 12, axis=1).ravel()
@@ -307,6 +348,18 @@ class ContactProblem:
 
     def hessian(self, q: np.ndarray) -> HessianParts:
         return self.base.hessian(q).plus_sparse(self.contact_hessian(q))
+
+    def stability_view(self) -> ContactProblem:
+        """This problem as the stability analysis must see it (shares the state).
+
+        Penalty and augmented Lagrangian energies are only C¹ where a pair just
+        touches without force; the view adds the closing stiffness of such
+        pairs so that the unstable count does not include directions that
+        would push through a touching pair (DESIGN.md: zero-force contacts).
+        """
+        view = copy.copy(self)
+        view.stability_mode = True
+        return view
 
     # ------------------------------------------------------- constraints
     def constraints(self, q: np.ndarray) -> np.ndarray:

@@ -4,12 +4,13 @@
 * ``augmented``: Newton on the augmented Lagrangian, then the multiplier
   update ``lam <- max(lam - k g, 0)``, repeated until the largest
   penetration is below ``penetration_tolerance * D`` (seed 000's scheme with a
-  finite penalty).
+  finite penalty; the penalty grows tenfold, at most to 1000 times its
+  default, whenever an update fails to cut the penetration fourfold).
 * ``exact``: an active-set method on the inequality constraints ``g >= 0``.
-  The augmented-Lagrangian solution gives the first active set (the pairs with
-  a positive force, one per closest-feature pair so that line contacts do not
-  produce identical constraints); Newton then solves the equality-constrained
-  problem exactly (the multipliers are minus the contact forces); a contact
+  The penalty solution gives the first active set (the pairs with a positive
+  force, one per closest-feature pair so that line contacts do not produce
+  identical constraints); Newton (in the caller's mode) then solves the
+  equality-constrained problem exactly (the multipliers are minus the contact forces); a contact
   whose force comes out negative is released, a pair that penetrates is added,
   and the solve is repeated until the forces are non-negative and nothing
   penetrates.
@@ -28,8 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from supercoil.contact import potentials
+from supercoil.contact.distance import segment_distance
 from supercoil.contact.problem import ContactProblem
-from supercoil.solvers.newton import NewtonOptions, newton
+from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
+from supercoil.solvers.problem import free_dofs
 
 
 @dataclass(frozen=True)
@@ -82,8 +85,6 @@ def solve_contact(problem: ContactProblem, q0: np.ndarray,
         return _result(problem, q0, np.zeros(problem.n_constraints), False, "inadmissible start",
                        f"the initial state touches or penetrates (d_min/D = "
                        f"{d0 / problem.diameter:.6f}); the barrier needs a gap", 0, 0, np.nan)
-    if problem.closed and problem._slide_pin is None:
-        problem.pin_sliding(q0)
     if treatment in ("penalty", "barrier"):
         res = newton(problem, q0, opts)
         return _finish(problem, res, 1, "")
@@ -94,15 +95,14 @@ def solve_contact(problem: ContactProblem, q0: np.ndarray,
 
 def _result(problem, q, lam, converged, status, message, its, outer, residual):
     pen = max_penetration(problem, q)
-    tol = problem.options.penetration_tolerance
-    admissible = pen <= tol or problem.treatment == "penalty" and pen <= 10 * tol
+    admissible = pen <= problem.options.tolerance
     return ContactSolveResult(q, lam, converged, admissible, status, message, its, outer,
                               residual, pen)
 
 
 def _finish(problem, res, outer, extra):
     pen = max_penetration(problem, res.q)
-    tol = problem.options.penetration_tolerance
+    tol = problem.options.tolerance
     message = res.message + extra
     admissible = pen <= tol
     if not admissible:
@@ -120,7 +120,17 @@ def _augmented(problem: ContactProblem, q0, opts, max_outer=None):
     total = 0
     max_outer = max_outer or problem.options.max_outer_iterations
     res = None
+    k0, pen_prev = problem.default_stiffness, np.inf
+    # The multipliers belong to segment pairs: on a closed rod, sliding the
+    # material along itself (nearly free) would carry the contacts away from
+    # them, so the outer iterations run with the sliding gauge and the last
+    # ones without it (the gauge's reaction must vanish at an equilibrium).
+    pinned = problem.closed and problem._slide_pin is None
+    if pinned:
+        problem.pin_sliding(q)
     for outer in range(1, max_outer + 1):
+        if lam is not None and len(lam) != problem.n_constraints:
+            lam = None  # the gauge was released: fresh least-squares multipliers
         res = newton(problem, q, opts, multipliers=lam)
         total += res.iterations
         q, lam = res.q, res.multipliers
@@ -132,42 +142,78 @@ def _augmented(problem: ContactProblem, q0, opts, max_outer=None):
         new = potentials.augmented_update(gap, old, problem.stiffness)
         problem.pair_multipliers = {(int(i), int(j)): float(f)
                                     for (i, j), f in zip(st.pairs, new) if f > 0}
-        problem.invalidate()
         pen = max(0.0, -float(gap.min()) / D) if gap.size else 0.0
-        if pen <= tol:
+        if pen <= tol and problem._slide_pin is None:
             break
-    extra = f"; augmented Lagrangian: {outer} outer iterations, penetration {pen:.1e} D"
-    return _finish(problem, res, outer, extra)
+        if pen <= 10 * tol and problem._slide_pin is not None:
+            problem.release_sliding()
+            problem.invalidate()
+            continue
+        # Penalty growth (Conn, Gould & Toint 1991; Bertsekas 1982): when an
+        # update did not cut the penetration fourfold, the rod is stiffer than
+        # the penalty at the contacts and first-order updates crawl.
+        if pen > 0.25 * pen_prev and problem.stiffness < 1e3 * k0:
+            problem.stiffness *= 10.0
+        pen_prev = pen
+        problem.invalidate()
+    if problem._slide_pin is not None:  # never return a state held by the gauge
+        problem.release_sliding()
+        res = newton(problem, q, opts)
+        total += res.iterations
+    extra = (f"; augmented Lagrangian: {outer} outer iterations, {total} Newton iterations, "
+             f"penetration {pen:.1e} D, penalty {problem.stiffness / k0:g} x the default")
+    return dataclasses.replace(_finish(problem, res, outer, extra), newton_iterations=total)
 
 
 def _exact(problem: ContactProblem, q0, opts):
     """Active-set solve of the inequality-constrained problem (see module docstring)."""
     D = problem.diameter
     tol = problem.options.penetration_tolerance
-    warm = ContactProblem(problem.base, dataclasses.replace(problem.options,
-                                                             treatment="augmented"))
-    warm._slide_pin = problem._slide_pin
-    start = _augmented(warm, q0, opts)
-    if not start.converged:
-        return dataclasses.replace(start, message="warm start failed: " + start.message)
-    q = start.q
-    st, force = warm.pair_forces(q)
-    keys = _feature_keys(problem, st.pairs, st.s, st.t)
-    chosen: dict = {}
-    for pair, f, key in zip(st.pairs, force, keys):
-        if key not in chosen or f > chosen[key][1]:
-            chosen[key] = (pair, f)
-    active = np.array([p for p, _ in chosen.values()], dtype=np.int64).reshape(-1, 2)
-    forces = np.array([f for _, f in chosen.values()])
+    touching = problem.pair_state(q0, D * (1 + tol))
+    if len(touching.pairs):
+        # already in contact (e.g. a neighbouring equilibrium): start from the
+        # touching pairs, closest first; Newton's least-squares multipliers
+        # give their forces
+        q, st, force = np.asarray(q0, float), touching, -touching.distance
+        warm_multipliers = None
+        total, outer = 0, 0
+    else:
+        warm = ContactProblem(problem.base, dataclasses.replace(problem.options,
+                                                                 treatment="penalty"))
+        res0 = newton(warm, q0, opts)
+        start = _finish(warm, res0, 1, "")
+        if not start.converged:
+            return dataclasses.replace(start, message="warm start failed: " + start.message)
+        q = start.q
+        st, force = warm.pair_forces(q)
+        warm_multipliers = start.multipliers
+        total, outer = start.newton_iterations, start.outer_iterations
+    # One constraint per segment: the pairs, strongest force first, form a
+    # matching of segments. Along a line contact every segment touches two or
+    # three of the other strand, and constraining all of those pairs makes
+    # the constraint gradients nearly dependent (a singular KKT matrix); the
+    # matching keeps one per segment, and any pair left out that still
+    # penetrates is added by the loop below.
+    used: set[int] = set()
+    chosen = []
+    for k in np.argsort(-force):
+        i, j = (int(v) for v in st.pairs[k])
+        if i not in used and j not in used:
+            used.update((i, j))
+            chosen.append((st.pairs[k], force[k]))
+    active = np.array([p for p, _ in chosen], dtype=np.int64).reshape(-1, 2)
+    forces = np.array([f for _, f in chosen])
     m0 = problem.n_equalities
-    lam = np.concatenate([start.multipliers[:m0], -forces])
-    total, outer = start.newton_iterations, start.outer_iterations
+    if warm_multipliers is None:
+        problem.active = active
+        lam = least_squares_multipliers(problem, q, free_dofs(problem))
+    else:
+        lam = np.concatenate([warm_multipliers[:m0], -forces])
     scale = max(float(np.max(np.abs(lam))) if lam.size else 1.0, 1.0)
     for cycle in range(1, problem.options.max_outer_iterations + 1):
         problem.active = active
         problem.invalidate()
-        stat_opts = dataclasses.replace(opts, mode="stationary")
-        res = newton(problem, q, stat_opts, multipliers=lam)
+        res = newton(problem, q, opts, multipliers=lam)
         total += res.iterations
         if not res.converged:
             return _finish(problem, res, outer + cycle, f" (exact contact, active-set cycle {cycle})")
@@ -183,8 +229,7 @@ def _exact(problem: ContactProblem, q0, opts):
         st = problem.pair_state(q, D * (1 - tol))
         if len(st.pairs):
             have = {tuple(p) for p in active.tolist()}
-            new_keys = set(map(tuple, (_feature_keys(problem, active, *_params(problem, q,
-                                                                              active)))))
+            new_keys = set(_feature_keys(problem, *_params(problem, q, active)))
             add = []
             for pair, key in zip(st.pairs, _feature_keys(problem, st.pairs, st.s, st.t)):
                 if tuple(pair) not in have and key not in new_keys:
@@ -211,8 +256,7 @@ def _exact(problem: ContactProblem, q0, opts):
 
 
 def _params(problem, q, pairs):
-    from supercoil.contact.distance import segment_distance
-
+    """``(pairs, s, t)``: closest parameters of segment pairs at ``q``."""
     a, b = problem._endpoints(q)
     _d, s, t = segment_distance(a[pairs[:, 0]], b[pairs[:, 0]], a[pairs[:, 1]], b[pairs[:, 1]])
     return pairs, s, t

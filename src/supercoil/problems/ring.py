@@ -79,6 +79,7 @@ class RingResult:
             "twist": self.twist,
             "writhe": self.writhe,
             "link_error": self.link_error,
+            "writhe_error": self.writhe_error,
             "energy": self.energy,
             "energy_circle_exact": circle_energy(self.twist_ratio, self.excess_link),
             "unstable_count": self.unstable_count,

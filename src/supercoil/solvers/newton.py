@@ -292,7 +292,7 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
                 phi0 = problem.energy(q) + mu * c0
                 slope = float(g @ dq_free) - mu * c0
 
-                def merit(qt):
+                def merit(qt, mu=mu):
                     ct = np.sum(np.abs(problem.constraints(qt))) if m else 0.0
                     return problem.energy(qt) + mu * ct
 
@@ -302,6 +302,16 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
                     phit = merit(qt)
                     if np.isfinite(phit) and phit <= phi0 + opts.armijo * alpha * min(slope, 0.0):
                         break
+                    if first and alpha == 1.0 and delta == 0.0 and np.isfinite(phit):
+                        # A pure Newton step (no shift: the Hessian is positive definite
+                        # on ker J, so the limit is a minimum) that halves the KKT
+                        # residual is taken even if the merit rises: kinks of the
+                        # contact terms (changes of distance type, C¹ only) otherwise
+                        # stall the merit line search next to the solution (a
+                        # filter-like second acceptance test, Fletcher & Leyffer 2002).
+                        rt = kkt_residual(problem, qt, lam_new, free)
+                        if np.all(np.isfinite(rt)) and np.max(np.abs(rt)) <= 0.5 * res:
+                            break
                     if first and m and alpha == 1.0:
                         # Second-order correction (Nocedal & Wright 2006, alg. 18.3): the
                         # curvature of the constraints can make the l1 merit reject a good

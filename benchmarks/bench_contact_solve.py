@@ -1,0 +1,79 @@
+"""Benchmark: one equilibrium solve of a ring with self-contact from a nearby state.
+
+Run from the repository root:
+
+    python benchmarks/bench_contact_solve.py [--nodes 200] [--treatment barrier]
+
+Set-up (untimed): the twisted ring C/A = 1, L/D = 100, excess link 3.0 is
+relaxed from its perturbed circle to a stable supercoiled equilibrium with
+contact (``solve_supercoiled_ring``'s path). Timed: the excess link is
+raised by ``--step`` (0.02 turns by default) and the equilibrium is solved
+again from the previous one with :func:`supercoil.contact.solve.solve_contact`
+(Newton with the collision guard), as a continuation step would; the best and
+the median of ``--repeat`` such steps are reported (each from the same
+starting state), warm. Target (issue 3): at most 0.1 s at N = 200.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import statistics
+import sys
+import time
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--nodes", type=int, default=200)
+    parser.add_argument("--treatment", default="barrier")
+    parser.add_argument("--step", type=float, default=0.02)
+    parser.add_argument("--repeat", type=int, default=7)
+    args = parser.parse_args(argv)
+
+    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.solve import solve_contact
+    from supercoil.problems.ring import twisted_circle_problem
+    from supercoil.problems.ring_contact import perturb_along_lowest_mode
+    from supercoil.solvers.newton import NewtonOptions, newton
+
+    excess_link, lod = 3.0, 100.0
+    t0 = time.perf_counter()
+    base, q0 = twisted_circle_problem(1.0, excess_link, args.nodes)
+    circle = newton(base, q0, NewtonOptions(mode="stationary"))
+    start = perturb_along_lowest_mode(base, circle.q, circle.multipliers)
+    problem = ContactProblem(base, ContactOptions(diameter=1.0 / lod, treatment=args.treatment))
+    options = NewtonOptions(tolerance=1e-9, max_iterations=1000)
+    relaxed = solve_contact(problem, start, options)
+    setup = time.perf_counter() - t0
+    if not relaxed.converged:
+        print(f"set-up relaxation failed: {relaxed.message}")
+        return 1
+    print(f"set-up: relaxed from the circle in {relaxed.newton_iterations} Newton iterations, "
+          f"{setup:.1f} s (includes compilation)")
+    times, iterations = [], []
+    for k in range(args.repeat + 1):
+        trial = copy.deepcopy(problem)
+        trial.base.excess_link = excess_link + args.step
+        trial.invalidate()
+        t = time.perf_counter()
+        res = solve_contact(trial, relaxed.q, options)
+        elapsed = time.perf_counter() - t
+        if not res.converged:
+            print(f"nearby solve failed: {res.message}")
+            return 1
+        if k:  # the first run is the warm-up
+            times.append(elapsed)
+            iterations.append(res.newton_iterations)
+    print("| N | treatment | dLk step | Newton iterations | best (s) | median (s) |")
+    print("|---:|---|---:|---:|---:|---:|")
+    print(f"| {args.nodes} | {args.treatment} | {args.step} | {iterations[0]} | "
+          f"{min(times):.3f} | {statistics.median(times):.3f} |")
+    target = 0.1
+    verdict = "meets" if statistics.median(times) <= target else "misses"
+    print(f"median {verdict} the {target} s target (N = 200 in issue 3)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

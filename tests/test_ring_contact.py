@@ -1,0 +1,128 @@
+"""The supercoiled ring: a twisted ring that cannot pass through itself.
+
+Oracles: Lk conservation (the writhe carried continuously through the solve
+equals the double-sum writhe of the final state: no strand passed through
+another), impenetrability (closest approach >= (1 - tol) D), non-negative
+exact contact forces, the recomputed inertia (stable), agreement of the four
+treatments on one state, and penalty -> exact as the penalty stiffens.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.solve import solve_contact
+from supercoil.problems.ring_contact import solve_supercoiled_ring, validate_diameter
+from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.solvers.newton import NewtonOptions
+
+TWIST_RATIO, EXCESS_LINK, LOD, NODES = 1.0, 3.0, 100.0, 100
+TOLERANCE = {"barrier": 0.0, "augmented": 1e-4, "exact": 1e-4, "penalty": 5e-2}
+
+
+@pytest.fixture(scope="module")
+def supercoiled():
+    return {t: solve_supercoiled_ring(TWIST_RATIO, EXCESS_LINK, LOD, n_nodes=NODES, treatment=t)
+            for t in ("exact", "barrier", "augmented", "penalty")}
+
+
+@pytest.mark.parametrize("treatment", ["exact", "barrier", "augmented", "penalty"])
+def test_ring_above_michell_lands_on_a_stable_state_with_contact(supercoiled, treatment):
+    r = supercoiled[treatment]
+    s = r.summary()
+    assert r.converged, r.message
+    assert r.unstable_count == 0 and r.zero_modes == 0
+    # the circle's excess link went partly into writhe: supercoiled, with contact
+    assert r.writhe > 1.0
+    assert s["n_contact_points"] + s["n_contact_intervals"] >= 1
+    assert all(c["force"] > 0 for c in s["contacts"])
+    # impenetrable within the treatment's tolerance
+    assert s["min_gap_over_diameter"] >= 1.0 - TOLERANCE[treatment]
+    # Lk conserved: writhe carried continuously == double-sum writhe (a strand
+    # passing through another would change the latter by 2)
+    assert r.writhe_error < 1e-8
+    assert abs(r.twist + r.writhe - EXCESS_LINK) < 1e-8
+
+
+def test_ring_contact_output_keys(supercoiled):
+    s = supercoiled["exact"].summary()
+    for key in ("contacts", "contact_points", "contact_intervals", "n_contact_points",
+                "n_contact_intervals", "min_gap_over_diameter", "contact_treatment",
+                "length_over_diameter"):
+        assert key in s
+    assert s["contact_treatment"] == "exact"
+    for c in s["contact_points"]:
+        assert 0 <= c["s1"] < 1 and 0 <= c["s2"] < 1 and c["force"] > 0
+    # grouping keeps the total force: points carry the sum of their pairs' forces
+    total = sum(c["force"] for c in s["contacts"])
+    if not s["contact_intervals"]:
+        np.testing.assert_allclose(sum(c["force"] for c in s["contact_points"]), total,
+                                   rtol=1e-12)
+
+
+def _problem_at(treatment, q_start, **options):
+    # a rod set up at the given state (its reference link from the double sum)
+    rod = Rod(n_nodes=NODES, twist_stiffness=TWIST_RATIO)
+    base = ClosedRodEnergy(rod, np.asarray(q_start).reshape(-1, 3), EXCESS_LINK)
+    problem = ContactProblem(base, ContactOptions(diameter=validate_diameter(LOD),
+                                                  treatment=treatment, **options))
+    return problem, q_start
+
+
+def test_four_treatments_agree_on_one_state(supercoiled):
+    """All four treatments, started from the exact equilibrium, stay on it.
+
+    The differences are set by each treatment's own gap: the barrier keeps a
+    gap below 1 % of D, the penalty a penetration of a few per cent of D.
+    """
+    ref = supercoiled["exact"]
+    q0 = ref.points.ravel()
+    results = {}
+    for treatment in ("exact", "augmented", "barrier", "penalty"):
+        # start the barrier slightly outside contact (it needs a gap)
+        q = q0 * (1.0 + 2e-3) if treatment == "barrier" else q0
+        problem, _ = _problem_at(treatment, q)
+        res = solve_contact(problem, q, NewtonOptions(tolerance=1e-9, max_iterations=300))
+        assert res.converged, (treatment, res.message)
+        results[treatment] = (problem.writhe_local(res.q), problem.elastic_energy(res.q),
+                              res.max_penetration_over_diameter)
+    wr_exact, e_exact, _ = results["exact"]
+    np.testing.assert_allclose(wr_exact, ref.writhe, atol=1e-6)
+    for treatment, (wr, energy, _pen) in results.items():
+        allowed = {"exact": 1e-6, "augmented": 1e-3, "barrier": 2e-2, "penalty": 5e-2}[treatment]
+        assert abs(wr - wr_exact) <= allowed, (treatment, wr, wr_exact)
+        assert abs(energy - e_exact) <= allowed * abs(e_exact), (treatment, energy, e_exact)
+
+
+def test_penalty_tends_to_exact_on_the_ring(supercoiled):
+    q0 = supercoiled["exact"].points.ravel()
+    wr_exact = supercoiled["exact"].writhe
+    errors = []
+    for scale in (1.0, 10.0, 100.0):
+        problem, _ = _problem_at("penalty", q0, stiffness_scale=scale)
+        res = solve_contact(problem, q0, NewtonOptions(tolerance=1e-9, max_iterations=300))
+        assert res.converged, res.message
+        errors.append(abs(problem.writhe_local(res.q) - wr_exact))
+    # the penetration F/k falls tenfold per tenfold stiffness, and so does the error
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[0] / errors[2] > 30
+
+
+def test_below_michell_the_ring_stays_a_circle():
+    r = solve_supercoiled_ring(TWIST_RATIO, 1.0, LOD, n_nodes=40, treatment="barrier")
+    s = r.summary()
+    assert r.converged and r.unstable_count == 0
+    assert abs(r.writhe) < 1e-10 and s["contacts"] == []
+    # closest approach of non-neighbours on the circle of radius L/2pi: the
+    # chord across the exclusion arc pi D / 2 (sampled at the polygon's segments)
+    assert s["min_gap_over_diameter"] > 1.0
+
+
+@pytest.mark.parametrize("lod, message", [(0.0, "positive"), (-5.0, "positive"),
+                                          (np.pi, "L > pi D"), (2.0, "L > pi D"),
+                                          (np.nan, "positive")])
+def test_bad_diameter_is_a_clear_error(lod, message):
+    with pytest.raises(ValueError, match=message):
+        solve_supercoiled_ring(TWIST_RATIO, 3.0, lod, n_nodes=40)

@@ -2,8 +2,28 @@
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import scipy.sparse as sp
+
+
+def _njit(**options: object):
+    """``numba.njit(cache=True, **options)``, falling back to an in-memory compile."""
+
+    def decorate(function):
+        try:
+            return numba.njit(cache=True, **options)(function)
+        except RuntimeError:  # no writable cache directory
+            return numba.njit(cache=False, **options)(function)
+
+    return decorate
+
+
+@_njit()
+def _accumulate(slot, values, out):
+    """``out[slot[k]] += values[k]`` in the order of ``k`` (as ``np.bincount``)."""
+    for k in range(slot.size):
+        out[slot[k]] += values[k]
 
 
 class StencilPattern:
@@ -28,8 +48,11 @@ class StencilPattern:
         ucols = unique_keys % n_dofs
         indptr = np.zeros(n_dofs + 1, dtype=np.int64)
         np.add.at(indptr, urows + 1, 1)
-        self._indptr = np.cumsum(indptr)
-        self._indices = ucols
+        # scipy keeps 32-bit indices when they fit; store them so, to save a
+        # conversion per matrix.
+        index_type = np.int32 if max(n_dofs, unique_keys.size) < 2**31 - 1 else np.int64
+        self._indptr = np.cumsum(indptr).astype(index_type)
+        self._indices = ucols.astype(index_type)
         self._nnz = unique_keys.size
 
     def gather(self, q: np.ndarray) -> np.ndarray:
@@ -42,6 +65,15 @@ class StencilPattern:
                            minlength=self.n_dofs)
 
     def scatter_matrix(self, local: np.ndarray) -> sp.csr_matrix:
-        """Sum local Hessians ``(n_stencils, 9, 9)`` into a CSR matrix ``(n_dofs, n_dofs)``."""
-        data = np.bincount(self._slot, weights=np.asarray(local).ravel(), minlength=self._nnz)
-        return sp.csr_matrix((data, self._indices, self._indptr), shape=(self.n_dofs, self.n_dofs))
+        """Sum local Hessians ``(n_stencils, 9, 9)`` into a CSR matrix ``(n_dofs, n_dofs)``.
+
+        Entries are summed in stencil order, so symmetric local Hessians give an
+        exactly symmetric matrix. The matrix owns its index arrays.
+        """
+        values = np.ascontiguousarray(local, dtype=np.float64).ravel()
+        if values.size != self._slot.size:
+            raise ValueError(f"local Hessians must have shape ({len(self.dofs)}, 9, 9)")
+        data = np.zeros(self._nnz)
+        _accumulate(self._slot, values, data)
+        return sp.csr_matrix((data, self._indices.copy(), self._indptr.copy()),
+                             shape=(self.n_dofs, self.n_dofs))

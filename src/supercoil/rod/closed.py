@@ -104,6 +104,11 @@ def initial_reference_frames(points: np.ndarray) -> np.ndarray:
     return np.cos(angle)[:, None] * u + np.sin(angle)[:, None] * v
 
 
+def _key(q: np.ndarray) -> bytes:
+    """The exact value of ``q`` as a dictionary key (its float64 bytes)."""
+    return np.ascontiguousarray(q, dtype=np.float64).tobytes()
+
+
 class RodEnergy(abc.ABC):
     """Shared machinery of the discrete rods: stencils, frames, constraints.
 
@@ -126,11 +131,13 @@ class RodEnergy(abc.ABC):
         self._prev_edge = np.asarray(prev_edge, dtype=np.int64)
         self._next_edge = np.asarray(next_edge, dtype=np.int64)
         self._bend_weight = np.full(len(vertex_nodes), rod.bending_stiffness / (2 * rod.edge_length))
+        self._curvature = rod.curvature
         self._bending = kernels.bending_kernels(rod.curvature)
         self._twist_coefficient = 4.0 * np.pi**2 * rod.twist_stiffness / rod.length
+        self._local_hessians: np.ndarray | None = None  # work array of hessian()
         self.mass = np.full(3 * n, rod.edge_length)
-        self._tangents = unit(self._edge_vectors(points.ravel()))
-        self._directors = np.asarray(reference_directors, dtype=float)
+        self._set_frames(unit(self._edge_vectors(points.ravel())),
+                         np.asarray(reference_directors, dtype=float))
 
     def set_constrained_edges(self, edges_index: np.ndarray) -> None:
         """Edges whose length is a constraint (edges with both ends fixed are left out)."""
@@ -146,23 +153,50 @@ class RodEnergy(abc.ABC):
         """Turns added to ``Phi / 2pi`` to give the excess twist (set by the boundary)."""
 
     # ----------------------------------------------------------------- pieces
+    def _set_frames(self, tangents: np.ndarray, directors: np.ndarray) -> None:
+        """New reference frames; forgets what was computed with the old ones."""
+        self._tangents = tangents
+        self._directors = directors
+        p, nx = self._prev_edge, self._next_edge
+        self._frame_data = np.stack([directors[p], tangents[p], directors[nx], tangents[nx]],
+                                    axis=1)
+        self._phi_cache: tuple[bytes, float] | None = None
+
     def _frames(self) -> np.ndarray:
         """Per-vertex reference data ``(n_vertices, 4, 3)``: u_prev, t_prev, u_next, t_next."""
-        p, nx = self._prev_edge, self._next_edge
-        return np.stack([self._directors[p], self._tangents[p], self._directors[nx],
-                         self._tangents[nx]], axis=1)
+        return self._frame_data
+
+    def _stencils(self, q: np.ndarray) -> np.ndarray:
+        """Stencil coordinates ``(n_vertices, 9)`` (float64, C order)."""
+        return self._pattern.gather(np.asarray(q, dtype=np.float64))
+
+    def _twist_terms(self, q: np.ndarray, order: int, hessians: np.ndarray | None = None,
+                     scale: float = 1.0) -> tuple[float, np.ndarray]:
+        """``Phi`` and the local twist gradients (order >= 1); Hessians added at order 2."""
+        values, gradients, _ = kernels.twist_terms(self._stencils(q), self._frame_data, order,
+                                                   hessians, scale)
+        phi = float(values.sum())
+        self._phi_cache = (_key(q), phi)
+        return phi, gradients
 
     def reference_twist_total(self, q: np.ndarray) -> float:
-        """``Phi``: the sum of the reference twists (radians)."""
-        local = np.asarray(kernels.twist_value(self._pattern.gather(q), self._frames()))
-        return float(local.sum())
+        """``Phi``: the sum of the reference twists (radians).
+
+        Cached for the last ``q`` (the energy, gradient and Hessian of one
+        Newton iteration share it); the cache is emptied when the reference
+        frames change (:meth:`accept`). Only ``Phi`` is cached, never an
+        energy, so changing ``excess_link``, ``turns`` or ``tension`` is safe.
+        """
+        if self._phi_cache is not None and self._phi_cache[0] == _key(q):
+            return self._phi_cache[1]
+        return self._twist_terms(q, 0)[0]
 
     def twist(self, q: np.ndarray) -> float:
         """Excess twist in turns, ``twist_offset + Phi / 2pi``."""
         return self.twist_offset() + self.reference_twist_total(q) / (2 * np.pi)
 
     def bending_energy(self, q: np.ndarray) -> float:
-        return float(np.sum(self._bending[0](self._pattern.gather(q), self._bend_weight)))
+        return float(np.sum(self._bending[0](self._stencils(q), self._bend_weight)))
 
     def twist_energy(self, q: np.ndarray) -> float:
         return 0.5 * self._twist_coefficient * self.twist(q) ** 2
@@ -176,25 +210,34 @@ class RodEnergy(abc.ABC):
 
     def _twist_gradient(self, q: np.ndarray) -> np.ndarray:
         """``grad(Phi) / 2pi`` (shape ``(n_dofs,)``) = minus the gradient of the writhe."""
-        local = kernels.twist_gradient(self._pattern.gather(q), self._frames())
-        return self._pattern.scatter_vector(local) / (2 * np.pi)
+        return self._pattern.scatter_vector(self._twist_terms(q, 1)[1]) / (2 * np.pi)
 
     def gradient(self, q: np.ndarray) -> np.ndarray:
-        stencils = self._pattern.gather(q)
+        stencils = self._stencils(q)
         g = self._pattern.scatter_vector(self._bending[1](stencils, self._bend_weight))
-        return g + self._twist_coefficient * self.twist(q) * self._twist_gradient(q)
+        phi, twist_local = self._twist_terms(q, 1)
+        tw = self.twist_offset() + phi / (2 * np.pi)
+        return g + (self._twist_coefficient * tw / (2 * np.pi)) * self._pattern.scatter_vector(
+            twist_local)
 
     def hessian(self, q: np.ndarray) -> HessianParts:
-        stencils = self._pattern.gather(q)
+        """Banded part (bending + ``k Tw`` times the twist Hessian) plus ``k g g^T``.
+
+        The local Hessians are exactly symmetric and the scatter keeps that, so
+        the sparse part needs no symmetrisation.
+        """
         k = self._twist_coefficient
         tw = self.twist(q)
-        local = np.asarray(self._bending[2](stencils, self._bend_weight))
-        local = local + (k * tw / (2 * np.pi)) * np.asarray(
-            kernels.twist_hessian(stencils, self._frames()))
-        sparse = self._pattern.scatter_matrix(local)
-        sparse = (0.5 * (sparse + sparse.T)).tocsr()
-        g = self._twist_gradient(q)
-        return HessianParts(sparse, g[None, :], np.array([k]))
+        # One buffer per problem: fresh (n, 9, 9) arrays cost page faults that
+        # doubled the time at N = 10000 (measured).
+        if self._local_hessians is None:
+            self._local_hessians = np.zeros((len(self._bend_weight), 9, 9))
+        local = self._local_hessians
+        local.fill(0.0)
+        kernels.bending_terms(self._stencils(q), self._bend_weight, self._curvature, 2, local)
+        twist_local = self._twist_terms(q, 2, local, k * tw / (2 * np.pi))[1]
+        g = self._pattern.scatter_vector(twist_local) / (2 * np.pi)
+        return HessianParts(self._pattern.scatter_matrix(local), g[None, :], np.array([k]))
 
     def constraints(self, q: np.ndarray) -> np.ndarray:
         """Inextensibility ``c_j = (|e_j|^2 - h^2) / (2h)``; multipliers are tensions."""
@@ -228,8 +271,7 @@ class RodEnergy(abc.ABC):
         t_new = unit(self._edge_vectors(q))
         u = parallel_transport(self._directors, self._tangents, t_new)
         u = unit(u - np.sum(u * t_new, axis=1, keepdims=True) * t_new)  # against drift
-        self._directors = u
-        self._tangents = t_new
+        self._set_frames(t_new, u)
 
     @property
     def reference_directors(self) -> np.ndarray:
@@ -307,8 +349,7 @@ class ClosedRodEnergy(RodEnergy):
         of Lk = Tw + Wr.
         """
         self.accept(q)  # directors adapted to the current tangents
-        stencils = self._pattern.gather(q)
-        ref = np.asarray(kernels.twist_value(stencils, self._frames()))
+        ref = kernels.twist_value(self._stencils(q), self._frames())
         mean = ref.mean()
         theta = np.zeros(len(ref))
         theta[1:] = np.cumsum(mean - ref[1:])

@@ -158,3 +158,21 @@ def test_options_validate():
     with pytest.raises(ValueError, match="treatment"):
         ContactOptions(diameter=0.1, treatment="springs")
     assert ContactOptions(diameter=0.2).exclusion_length == pytest.approx(0.1 * np.pi)
+
+
+def test_newton_never_lets_a_rod_pass_through_another():
+    """A load far beyond what a soft penalty can hold: without the collision
+    guard the Newton iterates would carry rod B through rod A (the penalty
+    force then pushes it further down). With the guard B stays above A, and
+    the state is flagged as inadmissible instead of being returned silently."""
+    toy = CrossedRods(load=50.0)
+    problem = ContactProblem(toy, ContactOptions(diameter=0.05, treatment="penalty",
+                                                 stiffness=10.0))
+    res = solve_contact(problem, toy.points.ravel(), NewtonOptions(max_iterations=60))
+    z_b = res.q[3 * toy.n + 2 :: 3]
+    # B's segment over the crossing (y = 0, between its two middle nodes) is
+    # still above A's centreline (z = 0): squeezed, but never passed through
+    middle = [toy.n // 2 - 1, toy.n // 2]
+    assert np.all(z_b[middle] > 0)
+    assert not res.admissible
+    assert "penetration" in res.message

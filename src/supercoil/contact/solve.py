@@ -8,8 +8,8 @@
   default, whenever an update fails to cut the penetration fourfold).
 * ``exact``: an active-set method on the inequality constraints ``g >= 0``.
   The penalty solution gives the first active set (the pairs with a positive
-  force, one per closest-feature pair so that line contacts do not produce
-  identical constraints); Newton (in the caller's mode) then solves the
+  force, one per segment so that line contacts do not produce nearly
+  dependent constraints); Newton (in the caller's mode) then solves the
   equality-constrained problem exactly (the multipliers are minus the contact forces); a contact
   whose force comes out negative is released, a pair that penetrates is added,
   and the solve is repeated until the forces are non-negative and nothing
@@ -27,11 +27,12 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from supercoil.contact import potentials
 from supercoil.contact.distance import segment_distance
 from supercoil.contact.problem import ContactProblem
-from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
+from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.solvers.problem import free_dofs
 
 
@@ -169,46 +170,18 @@ def _exact(problem: ContactProblem, q0, opts):
     """Active-set solve of the inequality-constrained problem (see module docstring)."""
     D = problem.diameter
     tol = problem.options.penetration_tolerance
-    touching = problem.pair_state(q0, D * (1 + tol))
-    if len(touching.pairs):
-        # already in contact (e.g. a neighbouring equilibrium): start from the
-        # touching pairs, closest first; Newton's least-squares multipliers
-        # give their forces
-        q, st, force = np.asarray(q0, float), touching, -touching.distance
-        warm_multipliers = None
-        total, outer = 0, 0
-    else:
-        warm = ContactProblem(problem.base, dataclasses.replace(problem.options,
-                                                                 treatment="penalty"))
-        res0 = newton(warm, q0, opts)
-        start = _finish(warm, res0, 1, "")
-        if not start.converged:
-            return dataclasses.replace(start, message="warm start failed: " + start.message)
-        q = start.q
-        st, force = warm.pair_forces(q)
-        warm_multipliers = start.multipliers
-        total, outer = start.newton_iterations, start.outer_iterations
-    # One constraint per segment: the pairs, strongest force first, form a
-    # matching of segments. Along a line contact every segment touches two or
-    # three of the other strand, and constraining all of those pairs makes
-    # the constraint gradients nearly dependent (a singular KKT matrix); the
-    # matching keeps one per segment, and any pair left out that still
-    # penetrates is added by the loop below.
-    used: set[int] = set()
-    chosen = []
-    for k in np.argsort(-force):
-        i, j = (int(v) for v in st.pairs[k])
-        if i not in used and j not in used:
-            used.update((i, j))
-            chosen.append((st.pairs[k], force[k]))
-    active = np.array([p for p, _ in chosen], dtype=np.int64).reshape(-1, 2)
-    forces = np.array([f for _, f in chosen])
+    warm = ContactProblem(problem.base, dataclasses.replace(problem.options,
+                                                             treatment="augmented"))
+    start = _augmented(warm, q0, opts)
+    opts = dataclasses.replace(opts, mode="stationary")  # a polish from next to the solution
+    if not start.converged:
+        return dataclasses.replace(start, message="warm start failed: " + start.message)
+    q = start.q
+    st, force = warm.pair_forces(q)
+    total, outer = start.newton_iterations, start.outer_iterations
+    active, forces = _independent_pairs(problem, q, st.pairs, force)
     m0 = problem.n_equalities
-    if warm_multipliers is None:
-        problem.active = active
-        lam = least_squares_multipliers(problem, q, free_dofs(problem))
-    else:
-        lam = np.concatenate([warm_multipliers[:m0], -forces])
+    lam = np.concatenate([start.multipliers[:m0], -forces])
     scale = max(float(np.max(np.abs(lam))) if lam.size else 1.0, 1.0)
     for cycle in range(1, problem.options.max_outer_iterations + 1):
         problem.active = active
@@ -236,9 +209,15 @@ def _exact(problem: ContactProblem, q0, opts):
                     add.append(pair)
                     new_keys.add(key)
             if add:
-                active = np.concatenate([active, np.array(add, dtype=np.int64)])
-                lam = np.concatenate([lam, np.zeros(len(add))])
-                changed = True
+                grown = np.concatenate([active, np.array(add, dtype=np.int64)])
+                kept, _ = _independent_pairs(problem, q, grown,
+                                             np.concatenate([-lam[m0:], np.zeros(len(add))]))
+                if len(kept) > len(active):
+                    old_lam = {tuple(p): v for p, v in zip(active.tolist(), lam[m0:])}
+                    active = kept
+                    lam = np.concatenate([lam[:m0], [old_lam.get(tuple(p), 0.0)
+                                                     for p in kept.tolist()]])
+                    changed = True
         if not changed:
             break
     else:
@@ -253,6 +232,57 @@ def _exact(problem: ContactProblem, q0, opts):
     out = _finish(problem, res, outer + cycle, "")
     return dataclasses.replace(out, message=message + out.message[len(res.message):],
                                newton_iterations=total)
+
+
+def _independent_pairs(problem: ContactProblem, q, pairs, force, rtol: float = 1e-3):
+    """A maximal set of ``pairs`` with linearly independent constraint gradients.
+
+    Along a line contact every segment touches two or three segments of the
+    other strand, and the gradients of those pairs' gaps are (nearly)
+    dependent: constraining all of them makes the KKT matrix singular (LICQ
+    fails and the forces are not unique). Column-pivoted QR of the gradients
+    on the free DOFs, the strongest force first, keeps a maximal independent
+    subset (relative tolerance ``rtol`` on the diagonal of R); holding those at
+    zero gap holds the others to first order. Returns ``(pairs, forces)``.
+    """
+    if len(pairs) == 0:
+        return np.zeros((0, 2), dtype=np.int64), np.zeros(0)
+    order = np.argsort(-np.asarray(force), kind="stable")
+    pairs, force = np.asarray(pairs)[order], np.asarray(force)[order]
+    _d, grad, _hess, dofs = problem._pair_derivatives(q, pairs)
+    # Work on the DOFs near the contacts only (cost independent of N): the
+    # free DOFs of the pair nodes and of the rod constraints touching them.
+    free = np.zeros(problem.n_dofs, dtype=bool)
+    free[free_dofs(problem)] = True
+    near = np.zeros(problem.n_dofs, dtype=bool)
+    near[dofs.ravel()] = True
+    J = (problem.base.constraint_jacobian(q).tocsr() if problem.base.n_constraints
+         else sp.csr_matrix((0, problem.n_dofs)))
+    rows = np.unique(J[:, near].nonzero()[0]) if J.shape[0] else np.zeros(0, dtype=np.int64)
+    if len(rows):
+        near[J[rows].nonzero()[1]] = True
+    local = np.flatnonzero(near & free)
+    index = np.full(problem.n_dofs, -1)
+    index[local] = np.arange(len(local))
+    G = np.zeros((len(local), len(pairs)))
+    cols = np.repeat(np.arange(len(pairs))[:, None], 12, axis=1)
+    inside = index[dofs] >= 0
+    np.add.at(G, (index[dofs][inside], cols[inside]), grad[inside])
+    # the rod's own constraints come first: contact gradients are judged
+    # relative to what inextensibility already fixes
+    Jl = J[rows][:, local].toarray() if len(rows) else np.zeros((0, len(local)))
+    basis = np.linalg.qr(Jl.T)[0] if len(Jl) else np.zeros((len(local), 0))
+    G = G - basis @ (basis.T @ G)
+    keep = []
+    for k in range(G.shape[1]):  # greedy Gram–Schmidt in force order
+        v = G[:, k].copy()
+        for u in keep:
+            v -= (G[:, u] @ v) * G[:, u]
+        norm = np.linalg.norm(v)
+        if norm > rtol * max(np.linalg.norm(G[:, k]), 1e-300):
+            G[:, k] = v / norm
+            keep.append(k)
+    return pairs[keep].astype(np.int64), force[keep]
 
 
 def _params(problem, q, pairs):

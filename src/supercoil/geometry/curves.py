@@ -55,3 +55,26 @@ def circle(n_nodes: int, length: float = 1.0) -> np.ndarray:
     angle = 2.0 * np.pi * np.arange(n_nodes) / n_nodes
     radius = length / (2.0 * n_nodes * np.sin(np.pi / n_nodes))
     return np.stack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(n_nodes)], axis=1)
+
+
+def resample_closed(points: np.ndarray, n_nodes: int, length: float = 1.0) -> np.ndarray:
+    """A closed polygon scaled to perimeter ``length`` and resampled at ``n_nodes``
+    points equally spaced in arc length (linear interpolation along its edges).
+
+    ``points`` ``(m, 3)``, each vertex once (the closing edge is implied);
+    returns ``(n_nodes, 3)``. The chords of the result are slightly shorter than
+    ``length / n_nodes`` where the input turns; an inextensible rod set up on it
+    restores them in its first Newton step.
+    """
+    x = np.asarray(points, dtype=float)
+    if x.ndim != 2 or x.shape[1] != 3 or len(x) < 3:
+        raise ValueError(f"a closed curve needs at least 3 points of shape (m, 3), got {x.shape}")
+    closed = np.vstack([x, x[:1]])
+    seg = np.linalg.norm(np.diff(closed, axis=0), axis=1)
+    total = float(seg.sum())
+    if not np.isfinite(total) or total <= 0:
+        raise ValueError("the curve has zero or non-finite length")
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    target = np.arange(n_nodes) * total / n_nodes
+    out = np.stack([np.interp(target, s, closed[:, k]) for k in range(3)], axis=1)
+    return (out - out.mean(axis=0)) * (length / total)

@@ -23,7 +23,9 @@ import numpy as np
 from supercoil.contact.problem import DEFAULT_TREATMENT, ContactOptions, ContactProblem
 from supercoil.contact.report import contact_summary
 from supercoil.contact.solve import solve_contact
+from supercoil.geometry.curves import resample_closed
 from supercoil.problems.ring import RingResult, ring_result, twisted_circle_problem
+from supercoil.rod.closed import ClosedRodEnergy, Rod
 from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.stability.analysis import DEFAULT_ZERO_TOLERANCE, analyse
 
@@ -58,27 +60,44 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
                            n_nodes: int = 100, treatment: str = DEFAULT_TREATMENT,
                            curvature: str = "angle", tolerance: float = 1e-9,
                            zero_tolerance: float = DEFAULT_ZERO_TOLERANCE, n_modes: int = 6,
-                           max_iterations: int = 300) -> RingResult:
-    """Stable equilibrium of the ring with self-contact (see the module docstring)."""
+                           max_iterations: int = 300,
+                           initial_points: np.ndarray | None = None) -> RingResult:
+    """Stable equilibrium of the ring with self-contact (see the module docstring).
+
+    ``initial_points`` ``(m, 3)``: start from this closed curve instead of the
+    circle (scaled to length L = 1 and resampled at ``n_nodes`` equally spaced
+    points; its knot type is kept). Its writhe is the reference: the excess
+    link is counted from the ribbon without twist on it. A curve that already
+    penetrates itself is a ValueError.
+    """
     if not np.isfinite(twist_ratio) or twist_ratio <= 0:
         raise ValueError(f"twist_ratio (C/A) must be a positive finite number, got {twist_ratio!r}")
     if not np.isfinite(excess_link):
         raise ValueError(f"excess_link must be a finite number, got {excess_link!r}")
     diameter = validate_diameter(length_over_diameter)
-    base, q0 = twisted_circle_problem(twist_ratio, excess_link, n_nodes, curvature)
-    circle = newton(base, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
+    if initial_points is None:
+        base, q0 = twisted_circle_problem(twist_ratio, excess_link, n_nodes, curvature)
+        circle = newton(base, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
+        start = circle.q
+        note = "circle stable: no perturbation"
+        if analyse(base, circle.q, circle.multipliers, n_modes=1).unstable_count > 0:
+            start = perturb_along_lowest_mode(base, circle.q, circle.multipliers)
+            note = (f"circle unstable: perturbed along its lowest mode by "
+                    f"{PERTURBATION_AMPLITUDE:g} L")
+    else:
+        rod = Rod(n_nodes=n_nodes, twist_stiffness=twist_ratio, curvature=curvature)
+        points = resample_closed(initial_points, n_nodes, rod.length)
+        base = ClosedRodEnergy(rod, points, excess_link)
+        start = points.ravel()
+        note = "started from the given curve"
     options = ContactOptions(diameter=diameter * base.rod.length, treatment=treatment)
     problem = ContactProblem(base, options)
-    start = circle.q
-    note = "circle stable: no perturbation"
-    if analyse(base, circle.q, circle.multipliers, n_modes=1).unstable_count > 0:
-        start = perturb_along_lowest_mode(base, circle.q, circle.multipliers)
-        note = (f"circle unstable: perturbed along its lowest mode by "
-                f"{PERTURBATION_AMPLITUDE:g} L")
     d0 = problem.min_distance(start)
-    if not d0 > diameter * (1 - options.penetration_tolerance):
-        raise ValueError(f"the starting ring already penetrates itself (closest approach "
-                         f"{d0 / diameter:.4f} D)")
+    if not d0 > diameter * (1 - options.tolerance):
+        what = "the initial curve" if initial_points is not None else "the starting ring"
+        raise ValueError(f"{what} already penetrates itself: closest approach of "
+                         f"non-neighbouring points {d0 / diameter:.4f} D < D "
+                         f"(L/D = {length_over_diameter:g}, {n_nodes} nodes)")
     options_newton = NewtonOptions(tolerance=tolerance, mode="minimize",
                                    max_iterations=max_iterations)
     res = solve_contact(problem, start, options_newton)
@@ -103,6 +122,10 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
                        zero_tolerance=zero_tolerance)
     if restarts:
         note += f"; left {restarts} saddle(s) along the unstable mode"
+    if base.rod.edge_length > options.diameter:
+        note += (f"; warning: segments ({base.rod.edge_length:.3g} L) are longer than the tube "
+                 f"diameter ({options.diameter:.3g} L): contact lines are under-resolved, use "
+                 f"--nodes >= {int(np.ceil(base.rod.length / options.diameter))}")
     contact = contact_summary(problem, res.q, res.multipliers)
     message = note + "; " + res.message
     if not res.admissible:

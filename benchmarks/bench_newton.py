@@ -46,7 +46,6 @@ import pstats
 import sys
 import time
 
-import jax
 import numpy as np
 import scipy
 
@@ -186,7 +185,7 @@ def main() -> int:
 
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} CPUs; Python {platform.python_version()}, "
-        f"numpy {np.__version__}, scipy {scipy.__version__}, jax {jax.__version__}"
+        f"numpy {np.__version__}, scipy {scipy.__version__}"
     )
     print(
         f"ring: C/A = {TWIST_RATIO:.4g}, excess link {EXCESS_LINK}, out-of-plane bump {BUMP} L; "

@@ -54,6 +54,25 @@ def warning_in(message: str | None) -> str | None:
     return f"warning: {text}"
 
 
+_SOLVING_PACKAGES = ("supercoil.solvers", "supercoil.stability", "supercoil.continuation")
+
+
+def raised_while_solving(exc: BaseException) -> bool:
+    """True if ``exc`` was raised inside a solve (Newton, stability, continuation).
+
+    The API raises ValueError for bad input while it sets a problem up; a
+    ValueError from inside the numerics is a failure of theirs (a solve should
+    return a status, DESIGN.md), which the command must not report as bad input.
+    """
+    tb = exc.__traceback__
+    while tb is not None:
+        name = tb.tb_frame.f_globals.get("__name__", "")
+        if any(name == p or name.startswith(p + ".") for p in _SOLVING_PACKAGES):
+            return True
+        tb = tb.tb_next
+    return False
+
+
 def require_finite(option: str, value: float, valid: str = "a finite number") -> None:
     if not math.isfinite(value):
         fail(f"{option} must be {valid}, got {value!r}")

@@ -9,10 +9,12 @@ def _number(value: float, digits: int = 10) -> str:
     return f"{value:.{digits}g}"
 
 
-def ring_table(summary: dict) -> Table:
-    """A two-column table of a ring result (keys of ``RingResult.summary()``)."""
+def ring_table(summary: dict, initial: str | None = None) -> Table:
+    """A two-column table of a ring result (keys of ``RingResult.summary()``);
+    ``initial``: the file of the starting curve, if not the circle."""
+    kind = "Twisted ring" if summary.get("contact_treatment") is None else "Supercoiled ring"
     table = Table(
-        title=f"Twisted ring, C/A = {_number(summary['twist_ratio'], 6)}, "
+        title=f"{kind}, C/A = {_number(summary['twist_ratio'], 6)}, "
         f"N = {summary['n_nodes']} (A = 1, L = 1)",
         show_header=False,
     )
@@ -52,9 +54,13 @@ def ring_table(summary: dict) -> Table:
     if summary.get("contact_treatment") is not None:
         gap = summary["min_gap_over_diameter"]
         rows += [
+            ("started from", "the circle" if initial is None else initial),
             ("L/D, contact treatment",
              f"{_number(summary['length_over_diameter'], 6)}, {summary['contact_treatment']}"),
             ("closest approach / D", "none within reach" if gap is None else _number(gap, 8)),
+            ("contacts",
+             (f"{summary['n_contact_points']} point(s), "
+              f"{summary['n_contact_intervals']} interval(s)")),
             ("contact points (s1, s2, force)",
              "; ".join(f"({c['s1']:.4f}, {c['s2']:.4f}, {c['force']:.4g})"
                        for c in summary["contact_points"]) or "none"),
@@ -64,6 +70,9 @@ def ring_table(summary: dict) -> Table:
                        f"{c['force_per_length']:.4g} per length"
                        for c in summary["contact_intervals"]) or "none"),
         ]
+    if initial is not None:  # references that belong to the circle
+        circle_rows = ("exact circle energy", "Michell threshold (A/C)sqrt(3)")
+        rows = [row for row in rows if row[0] not in circle_rows]
     for name, value in rows:
         table.add_row(name, value)
     return table

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Annotated, NoReturn
@@ -23,6 +24,7 @@ from supercoil.cli._common import (
     check_json_target,
     fail,
     parse_vector,
+    raised_while_solving,
     require_magnitude,
     require_nodes,
     require_positive,
@@ -56,6 +58,44 @@ app = typer.Typer(
 
 CLOSURES = ("closed", "none", "chord", "axis")
 NEWTON_TOLERANCE = 1e-10
+CONTACT_NEWTON_TOLERANCE = 1e-9  # residual of the contact solves (the default of the API)
+
+# Literal copies of supercoil.contact.problem.TREATMENTS, DEFAULT_TREATMENT and
+# of ContactOptions' default tolerances: importing that module pulls in numba
+# and scipy (about 0.6 s), too slow for ``supercoil --help``. tests/test_cli.py
+# asserts that the copies are equal to the originals.
+CONTACT_TREATMENTS = ("barrier", "augmented", "penalty", "exact")
+DEFAULT_CONTACT_TREATMENT = "exact"
+BARRIER_ACTIVATION = 1e-2  # ContactOptions.barrier_activation, over D
+PENETRATION_TOLERANCE = 1e-4  # ContactOptions.penetration_tolerance, over D
+PENALTY_TOLERANCE = 5e-2  # ContactOptions.penalty_tolerance, over D
+
+
+def _e(value: float) -> str:
+    """``1e-4`` rather than ``0.0001`` (``:g``) or ``1e-04`` (``:.0e``)."""
+    mantissa, exponent = f"{value:.0e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+_TREATMENT_HELP = {
+    "barrier": f"a barrier potential on gaps below {_e(BARRIER_ACTIVATION)} D that never lets "
+    "the tube touch (its forces are the contact forces)",
+    "augmented": "augmented Lagrangian (penalty plus multiplier updates), penetration below "
+    f"{_e(PENETRATION_TOLERANCE)} D",
+    "penalty": "quadratic penalty, which carries a force F only through a penetration F/k "
+    f"(accepted up to {_e(PENALTY_TOLERANCE)} D)",
+    "exact": "inequality constraints with an active set: the tube touches (penetration "
+    f"below {_e(PENETRATION_TOLERANCE)} D) and the contact forces are the multipliers",
+}
+
+
+def _contact_help() -> str:
+    parts = "; ".join(f"{name} = {_TREATMENT_HELP[name]}" for name in CONTACT_TREATMENTS)
+    return (
+        f"How impenetrability is imposed (only with --length-over-diameter): {parts}. "
+        f"Default: {DEFAULT_CONTACT_TREATMENT}."
+    )
+
 
 JsonOption = Annotated[
     str | None,
@@ -226,16 +266,31 @@ def ring(
         ),
     ] = None,
     contact: Annotated[
-        str,
+        str | None,
         typer.Option(
             "--contact",
             metavar="TREATMENT",
-            help="How impenetrability is imposed (with --length-over-diameter): barrier "
-            "(default; never touches, most robust), augmented (augmented Lagrangian, "
-            "penetration < 1e-4 D), penalty (needs a penetration), exact (inequality "
-            "constraints, active set; forces as multipliers).",
+            help=_contact_help(),
+            show_default=False,
         ),
-    ] = "barrier",
+    ] = None,
+    initial: Annotated[
+        Path | None,
+        typer.Option(
+            "--initial",
+            metavar="PATH",
+            help="Start from the closed curve in PATH instead of the circle (the format "
+            "of 'supercoil writhe': one vertex 'x y z' per line, each vertex once, the "
+            "last joined to the first; at least 3 vertices). The curve is scaled to "
+            "length L = 1 and resampled at --nodes equally spaced points, so its size in "
+            "the file does not matter; its knot type is kept. Needs "
+            "--length-over-diameter, and the resampled curve must not penetrate itself "
+            "(non-neighbouring points at least D apart). The excess link counts as for "
+            "the circle (twist = dLk - writhe), so a knot of writhe about W carries "
+            "little twist only near --excess-link W (a trefoil: about +3 or -3).",
+            show_default=False,
+        ),
+    ] = None,
     json_path: JsonOption = None,
 ) -> None:
     """Equilibrium of a closed twisted ring and its stability.
@@ -248,6 +303,8 @@ def ring(
     equilibrium; with it, the ring is perturbed along its lowest mode (largest
     node displacement 0.01 L) and relaxed to a stable supercoiled state with
     self-contact (contacts, contact points and intervals, closest approach).
+    With --initial the relaxation starts from a given closed curve (a knot,
+    say) instead.
     """
     require_positive(
         "--twist-ratio",
@@ -265,18 +322,23 @@ def ring(
         f"a finite number of turns with |dLk| <= {MAX_MAGNITUDE_TEXT}",
     )
     require_nodes("--nodes", nodes)
-    treatments = ("barrier", "augmented", "penalty", "exact")
-    if contact not in treatments:
-        fail(f"--contact: unknown treatment {contact!r}; valid: {', '.join(treatments)}")
-    if length_over_diameter is not None:
-        require_positive("--length-over-diameter", length_over_diameter,
-                         f"a finite number with pi < L/D <= {MAX_MAGNITUDE_TEXT}")
-        require_magnitude("--length-over-diameter", length_over_diameter,
-                          f"a finite number with pi < L/D <= {MAX_MAGNITUDE_TEXT}")
+    if contact is not None and contact not in CONTACT_TREATMENTS:
+        fail(f"--contact: unknown treatment {contact!r}; valid: {', '.join(CONTACT_TREATMENTS)}")
+    lod_valid = f"a finite number with pi < L/D <= {MAX_MAGNITUDE_TEXT}"
+    if length_over_diameter is None:
+        for option, given in (("--contact", contact), ("--initial", initial)):
+            if given is not None:
+                fail(f"{option} needs --length-over-diameter L/D (self-contact of a tube of "
+                     f"diameter D = L/(L/D)); give it, e.g. --length-over-diameter 100")
+    else:
+        require_positive("--length-over-diameter", length_over_diameter, lod_valid)
+        require_magnitude("--length-over-diameter", length_over_diameter, lod_valid)
         if length_over_diameter <= math.pi:
             fail(f"--length-over-diameter: got {length_over_diameter:g}, but a ring of tube "
                  f"diameter D needs L > pi D; give L/D > {math.pi:.4f}")
+    treatment = DEFAULT_CONTACT_TREATMENT if contact is None else contact
     check_json_target(json_path)
+    initial_points = None if initial is None else _read_initial_curve(initial)
 
     try:
         if length_over_diameter is None:
@@ -288,22 +350,45 @@ def ring(
             from supercoil.problems.ring_contact import solve_supercoiled_ring
 
             result = solve_supercoiled_ring(twist_ratio, excess_link, length_over_diameter,
-                                            n_nodes=nodes, treatment=contact)
+                                            n_nodes=nodes, treatment=treatment,
+                                            tolerance=CONTACT_NEWTON_TOLERANCE,
+                                            initial_points=initial_points)
     except ValueError as exc:
-        fail(str(exc))
+        if raised_while_solving(exc):
+            raise  # a failure of the numerics, not of the input: run() reports it
+        if initial is None:
+            fail(str(exc))
+        hint = ("; give a larger --length-over-diameter (a thinner tube) or a curve whose "
+                "non-neighbouring points are farther apart" if "penetrat" in str(exc) else "")
+        fail(f"--initial {initial}: {exc}{hint}")
     summary = result.summary()
     if json_path is not None:
         from supercoil.io.results import envelope
 
         payload = {**summary, "curvature_form": result.curvature}
         tolerances = {"newton_residual": NEWTON_TOLERANCE, "zero_modes": result.zero_tolerance}
-        write_json_or_fail(envelope(payload, n_nodes=nodes, tolerances=tolerances), json_path)
+        treatment_name = "none"
+        if length_over_diameter is not None:
+            from supercoil.contact.problem import ContactOptions
+
+            treatment_name = treatment
+            payload["initial_curve"] = None if initial is None else str(initial)
+            tolerances["newton_residual"] = CONTACT_NEWTON_TOLERANCE
+            # the options solve_supercoiled_ring uses (their defaults)
+            tolerances["penetration_over_diameter"] = ContactOptions(
+                diameter=1.0 / length_over_diameter, treatment=treatment
+            ).tolerance
+        write_json_or_fail(
+            envelope(payload, n_nodes=nodes, tolerances=tolerances,
+                     contact_treatment=treatment_name),
+            json_path,
+        )
     if json_path != "-":
         from rich.console import Console
 
         from supercoil.cli._format import ring_table
 
-        Console().print(ring_table(summary))
+        Console().print(ring_table(summary, initial=None if initial is None else str(initial)))
     warning = warning_in(summary.get("message"))
     if warning is not None:
         warn(warning)
@@ -320,6 +405,30 @@ def ring(
             f"({summary['message']}); {where}"
         )
         raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _read_initial_curve(path: Path):
+    """The vertices of ``--initial PATH`` (a closed polygon), or a one-line error."""
+    from supercoil.io.curves import CurveFileError, read_curve
+
+    try:
+        points = read_curve(path)
+    except CurveFileError as exc:
+        fail(f"--initial: {exc}")
+    if len(points) < 3:
+        fail(f"--initial: curve file {path}: {len(points)} vertex(es); a closed curve needs "
+             "at least 3 vertices 'x y z'")
+    import numpy as np
+
+    edges = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
+    zero = np.flatnonzero(edges == 0.0)
+    if zero.size:
+        k = int(zero[0])
+        hint = (" (do not repeat the first vertex at the end: the last vertex is joined "
+                "to the first)" if k == len(points) - 1 else "")
+        fail(f"--initial: curve file {path}: vertices {k} and {(k + 1) % len(points)} "
+             f"coincide; consecutive vertices must be distinct{hint}")
+    return points
 
 
 # ----------------------------------------------------------------------- demo
@@ -386,12 +495,21 @@ def run(argv: Sequence[str] | None = None) -> int:
     Parse errors of typer/click, bad input and unexpected exceptions all end as
     one line on standard error (DESIGN.md, CLI): ``error: ...`` with status 2
     for bad input, ``error: internal error: ...`` with status 1 for a bug.
-    ``SUPERCOIL_DEBUG=1`` re-raises unexpected exceptions with their traceback.
+    RuntimeWarnings (numpy's overflow and invalid-value warnings) are silenced.
+    ``SUPERCOIL_DEBUG=1`` re-raises unexpected exceptions with their traceback
+    and shows the warnings.
     """
     _single_threaded_blas()
     args = list(sys.argv[1:] if argv is None else argv)
+    debug = os.environ.get("SUPERCOIL_DEBUG", "") not in ("", "0")
     try:
-        status = app(args=args, prog_name="supercoil", standalone_mode=False)
+        with warnings.catch_warnings():
+            if not debug:
+                # numpy's overflow/invalid-value warnings from trial steps that a
+                # solver then rejects: the result's status and message say what
+                # happened, so they would only break the one-line stderr contract
+                warnings.simplefilter("ignore", RuntimeWarning)
+            status = app(args=args, prog_name="supercoil", standalone_mode=False)
     except NoArgsIsHelpError as exc:  # bare ``supercoil``: the help, as click does
         print(exc.ctx.get_help())
         return EXIT_BAD_INPUT
@@ -408,7 +526,7 @@ def run(argv: Sequence[str] | None = None) -> int:
         print("error: aborted", file=sys.stderr, flush=True)
         return 1
     except Exception as exc:
-        if os.environ.get("SUPERCOIL_DEBUG", "") not in ("", "0"):
+        if debug:
             raise
         print(
             f"error: internal error: {type(exc).__name__}: {_one_line(exc)} (please report)",

@@ -66,9 +66,11 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
 
     ``initial_points`` ``(m, 3)``: start from this closed curve instead of the
     circle (scaled to length L = 1 and resampled at ``n_nodes`` equally spaced
-    points; its knot type is kept). Its writhe is the reference: the excess
-    link is counted from the ribbon without twist on it. A curve that already
-    penetrates itself is a ValueError.
+    points; its knot type is kept). The excess link keeps its meaning,
+    ``dLk = Tw + Wr`` with ``Tw`` the excess twist: the rod starts with the
+    uniform twist ``dLk - Wr(curve)`` (a trefoil at ``dLk = 0`` carries about
+    3 turns of twist, opposite to its writhe). A curve that already penetrates
+    itself is a ValueError.
     """
     if not np.isfinite(twist_ratio) or twist_ratio <= 0:
         raise ValueError(f"twist_ratio (C/A) must be a positive finite number, got {twist_ratio!r}")

@@ -338,6 +338,15 @@ class ClosedRodEnergy(RodEnergy):
             modes.append(np.cross(e, r).ravel())
         return np.array(modes)
 
+    def near_symmetry_modes(self, q: np.ndarray) -> np.ndarray:
+        """Sliding the material along the centreline, ``(x_{i+1} - x_{i-1}) / 2`` (shape
+        ``(1, n_dofs)``): an exact symmetry of the continuous homogeneous ring,
+        broken only by the discretisation. DESIGN.md removes it from the
+        unstable count; on the circle it is a rigid rotation.
+        """
+        x = q.reshape(-1, 3)
+        return (0.5 * (np.roll(x, -1, axis=0) - np.roll(x, 1, axis=0))).ravel()[None, :]
+
     def material_directors(self, q: np.ndarray) -> np.ndarray:
         """Material directors ``d1`` (shape ``(n, 3)``) with uniform excess twist.
 

@@ -75,10 +75,22 @@ def _eigen_dofs(problem: ConstrainedEnergy) -> np.ndarray:
     return np.flatnonzero(mask)
 
 
-def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, dofs: np.ndarray) -> np.ndarray:
-    """M-orthonormal basis ``(len(dofs), r)`` of the symmetry modes on ``dofs``."""
-    getter = getattr(problem, "symmetry_modes", None)
+def _modes(problem: ConstrainedEnergy, q: np.ndarray, name: str) -> np.ndarray:
+    getter = getattr(problem, name, None)
     modes = np.zeros((0, problem.n_dofs)) if getter is None else np.asarray(getter(q), float)
+    return modes.reshape(-1, problem.n_dofs)
+
+
+def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, dofs: np.ndarray,
+                    near: bool = True) -> np.ndarray:
+    """M-orthonormal basis ``(len(dofs), r)`` of the symmetry modes on ``dofs``.
+
+    ``near``: include the approximate symmetries (``near_symmetry_modes``, e.g.
+    a closed rod's material sliding), which DESIGN.md removes from the count.
+    """
+    modes = _modes(problem, q, "symmetry_modes")
+    if near:
+        modes = np.vstack([modes, _modes(problem, q, "near_symmetry_modes")])
     if modes.size == 0:
         return np.zeros((dofs.size, 0))
     root = np.sqrt(problem.mass[dofs])
@@ -124,10 +136,15 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
                                     m=m, symmetry=sym)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
+    # Approximate symmetries (a closed rod's material sliding) are removed from
+    # the eigenvalues above; the inertia removes them through the Schur
+    # complement of the constraints that exclude them (exact, Haynsworth).
+    near_schur = _near_symmetry_schur(problem, q, factor, _free)
+    near_negative = int(np.sum(near_schur < 0))
     # Eigenvalues within the tolerance are zero modes, whatever sign the
     # inertia gave them; the count of clearly negative ones is at least what
     # the eigensolver found and at least the inertia minus the zero modes.
-    unstable = max(below, neg - zero)
+    unstable = max(below, neg - near_negative - zero)
     # Cross-checks of the inertia: the determinant's sign is its parity, and the
     # eigensolver cannot find more clearly negative eigenvalues than it counts.
     problems = []
@@ -135,7 +152,13 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
         problems.append(f"determinant sign {det_sign:+d} contradicts {neg} negative eigenvalues")
     if below > neg:
         problems.append(f"{below} negative eigenvalues found but the inertia counts {neg}")
+    notes = []
+    if near_negative:
+        notes.append(f"{near_negative} negative direction(s) along the material sliding "
+                     "(an approximate symmetry) removed from the count")
     message = ("inertia not certified: " + "; ".join(problems)) if problems else ""
+    if notes:
+        message = "; ".join([m for m in (message, *notes) if m])
     if below > neg:
         # The inertia is the verified method (tests up to N = 20 000); on very fine
         # meshes the shift-invert eigenvalues lose accuracy first. Report the
@@ -154,6 +177,40 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
         certified=not problems,
         message=message,
     )
+
+
+def _near_symmetry_schur(problem, q, factor, free) -> np.ndarray:
+    """Eigenvalues of ``S = B^T K^-1 B`` for the approximate symmetry modes.
+
+    ``K`` is the (pinned) KKT matrix whose inertia gives the count; ``B`` holds
+    the constraints ``v . M s = 0`` that remove the approximate symmetries
+    ``s`` (made M-orthogonal to the exact ones; modes inside their span, as
+    sliding on the circle, are skipped). By Haynsworth's additivity,
+    appending these constraints lowers the reduced negative count by the
+    number of negative eigenvalues of ``S``.
+    """
+    near = _modes(problem, q, "near_symmetry_modes")
+    if near.size == 0:
+        return np.zeros(0)
+    all_dofs = np.arange(problem.n_dofs)
+    exact = _symmetry_basis(problem, q, all_dofs, near=False)
+    mass = problem.mass
+    columns = []
+    for mode in near:
+        v = mode.copy()
+        scale = np.sqrt(v @ (mass * v))
+        if exact.size:
+            v -= exact @ (exact.T @ (mass * v))
+        if np.sqrt(v @ (mass * v)) <= 1e-6 * scale:
+            continue
+        b = np.zeros(factor.n + factor.m)
+        b[: factor.n] = (mass * v)[free]
+        columns.append(b)
+    if not columns:
+        return np.zeros(0)
+    B = np.array(columns).T
+    S = B.T @ np.column_stack([factor.solve(B[:, k]) for k in range(B.shape[1])])
+    return np.linalg.eigvalsh(0.5 * (S + S.T))
 
 
 def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False):

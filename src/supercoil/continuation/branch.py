@@ -1,0 +1,220 @@
+"""Results of continuation: :class:`SpecialPoint` and :class:`Branch` (save / load).
+
+A branch file is one ``.npz`` archive: the per-point arrays, the special
+points' arrays under ``special_<i>_<field>``, and a JSON header
+(``header``) with ``schema_version``, names, status and message. States are
+kept in full (every DOF), so that any point can be redrawn or continued from.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+
+import numpy as np
+
+from supercoil.continuation.options import ContinuationStatus
+
+SCHEMA_VERSION = 1
+
+SPECIAL_KINDS = ("fold", "bifurcation", "endpoint")
+
+
+def _frozen(a) -> np.ndarray:
+    a = np.array(a)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class SpecialPoint:
+    """A located event on a branch.
+
+    ``kind``: ``fold``, ``bifurcation`` or a user event's kind (e.g.
+    ``contact_onset``); ``label`` names the user scalar that changed sign (or
+    repeats the kind). The point lies between points ``index`` and
+    ``index + 1`` of ``branch``, at arclength ``arclength``; ``q`` (n_dofs,),
+    ``multipliers`` (m,), ``parameter`` its state, ``tangent`` (n_dofs + m + 1,)
+    the branch tangent there. For bifurcations ``critical_eigenvalues`` (k,)
+    and ``critical_modes`` (k, n_dofs) are the eigenpairs nearest zero (``k``
+    = the jump of the unstable count, at least 1) and ``count_before`` /
+    ``count_after`` the unstable counts on either side. ``located`` is False
+    when a trial correction failed during localisation (the point is then
+    the last bracket midpoint). ``tolerance`` is the arclength accuracy.
+    """
+
+    kind: str
+    label: str
+    branch: str
+    index: int
+    parameter: float
+    arclength: float
+    q: np.ndarray
+    multipliers: np.ndarray
+    tangent: np.ndarray
+    unstable_count: int = -1
+    count_before: int = -1
+    count_after: int = -1
+    critical_eigenvalues: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    critical_modes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    located: bool = True
+    tolerance: float = float("nan")
+    records: dict = field(default_factory=dict)
+
+    def summary(self) -> dict:
+        """JSON-serialisable description (no states)."""
+        out = {"kind": self.kind, "label": self.label, "branch": self.branch,
+               "index": int(self.index), "parameter": float(self.parameter),
+               "arclength": float(self.arclength), "unstable_count": int(self.unstable_count),
+               "count_before": int(self.count_before), "count_after": int(self.count_after),
+               "critical_eigenvalues": [float(v) for v in self.critical_eigenvalues],
+               "located": bool(self.located), "tolerance": float(self.tolerance)}
+        out.update({k: _jsonable(v) for k, v in self.records.items()})
+        return out
+
+
+def _jsonable(v):
+    a = np.asarray(v)
+    return a.item() if a.ndim == 0 else a.tolist()
+
+
+@dataclass(frozen=True, eq=False)
+class Branch:
+    """A computed branch (immutable; arrays are read-only).
+
+    Per point (``k`` points): ``parameter_values`` (k,), ``states`` (k, n_dofs),
+    ``multipliers`` (k, m), ``unstable_count`` (k,), ``zero_modes`` (k,),
+    ``determinant_sign`` (k,) (seed 000's test), ``nearest_eigenvalue`` (k,)
+    (the signed eigenvalue nearest zero), ``tangents`` (k, n_dofs + m + 1)
+    (``[dq, dmu, dlambda]``, unit in the arclength metric), ``arclength``
+    (k,), ``records`` (name -> (k, ...) arrays from the caller's record
+    function). ``phase_modes`` (r, n_dofs) and ``phase_state`` (n_dofs,) are
+    the phase conditions the branch was computed with (``r = 0`` if none).
+    """
+
+    name: str
+    parent: str | None
+    origin: SpecialPoint | None
+    parameter: str
+    parameter_values: np.ndarray
+    states: np.ndarray
+    multipliers: np.ndarray
+    unstable_count: np.ndarray
+    zero_modes: np.ndarray
+    determinant_sign: np.ndarray
+    nearest_eigenvalue: np.ndarray
+    tangents: np.ndarray
+    arclength: np.ndarray
+    special_points: tuple[SpecialPoint, ...]
+    status: ContinuationStatus
+    message: str
+    records: dict = field(default_factory=dict)
+    phase_modes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    phase_state: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, np.ndarray):
+                object.__setattr__(self, f.name, _frozen(value))
+        object.__setattr__(self, "records",
+                           {k: _frozen(v) for k, v in dict(self.records).items()})
+
+    def __len__(self) -> int:
+        return int(self.parameter_values.size)
+
+    @property
+    def ok(self) -> bool:
+        return self.status.ok
+
+    @property
+    def stable(self) -> np.ndarray:
+        """(k,) bool: strictly stable points (no negative and no zero eigenvalue)."""
+        return (self.unstable_count == 0) & (self.zero_modes == 0)
+
+    def points_of_kind(self, kind: str) -> tuple[SpecialPoint, ...]:
+        return tuple(p for p in self.special_points if p.kind == kind)
+
+    def summary(self) -> dict:
+        """JSON-serialisable summary: names, status, and one entry per point (no states)."""
+        points = []
+        for i in range(len(self)):
+            entry = {"branch": self.name, "index": i,
+                     self.parameter: float(self.parameter_values[i]),
+                     "arclength": float(self.arclength[i]),
+                     "unstable_count": int(self.unstable_count[i]),
+                     "zero_modes": int(self.zero_modes[i]),
+                     "determinant_sign": int(self.determinant_sign[i])}
+            entry.update({k: _jsonable(v[i]) for k, v in self.records.items()})
+            points.append(entry)
+        return {"schema_version": SCHEMA_VERSION, "name": self.name, "parent": self.parent,
+                "origin": None if self.origin is None else self.origin.summary(),
+                "parameter": self.parameter, "status": self.status.name,
+                "message": self.message, "points": points,
+                "special_points": [p.summary() for p in self.special_points]}
+
+    # -- files ----------------------------------------------------------------------------
+    def save(self, path: str | Path) -> Path:
+        """Write the branch to ``path`` (``.npz``); returns the path written."""
+        path = Path(path)
+        arrays: dict[str, np.ndarray] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, np.ndarray):
+                arrays[f.name] = value
+        for k, v in self.records.items():
+            arrays[f"record_{k}"] = v
+        specials = list(self.special_points)
+        header_specials = []
+        for i, p in enumerate([*specials, *([self.origin] if self.origin else [])]):
+            meta = {}
+            for f in fields(p):
+                value = getattr(p, f.name)
+                if isinstance(value, np.ndarray):
+                    arrays[f"special_{i}_{f.name}"] = value
+                elif f.name == "records":
+                    for k, v in value.items():
+                        arrays[f"special_{i}_record_{k}"] = np.asarray(v)
+                    meta["records"] = list(value)
+                else:
+                    meta[f.name] = value
+            header_specials.append(meta)
+        header = {"schema_version": SCHEMA_VERSION, "name": self.name, "parent": self.parent,
+                  "parameter": self.parameter, "status": self.status.name,
+                  "message": self.message, "records": list(self.records),
+                  "special_points": header_specials[:len(specials)],
+                  "origin": header_specials[len(specials)] if self.origin else None}
+        arrays["header"] = np.array(json.dumps(header))
+        with open(path, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> Branch:
+        """Read a branch written by :meth:`save` (checks the schema version)."""
+        with np.load(Path(path), allow_pickle=False) as data:
+            header = json.loads(str(data["header"]))
+            if header.get("schema_version") != SCHEMA_VERSION:
+                raise ValueError(f"{path}: branch schema version {header.get('schema_version')}"
+                                 f", this supercoil reads version {SCHEMA_VERSION}")
+
+            def special(i, meta):
+                kwargs = {k: v for k, v in meta.items() if k != "records"}
+                for f in fields(SpecialPoint):
+                    key = f"special_{i}_{f.name}"
+                    if key in data:
+                        kwargs[f.name] = data[key]
+                kwargs["records"] = {k: data[f"special_{i}_record_{k}"]
+                                     for k in meta.get("records", [])}
+                return SpecialPoint(**kwargs)
+
+            n_special = len(header["special_points"])
+            specials = tuple(special(i, meta) for i, meta in enumerate(header["special_points"]))
+            origin = (special(n_special, header["origin"]) if header["origin"] is not None
+                      else None)
+            kwargs = {f.name: data[f.name] for f in fields(cls) if f.name in data}
+            return cls(name=header["name"], parent=header["parent"], origin=origin,
+                       parameter=header["parameter"], special_points=specials,
+                       status=ContinuationStatus[header["status"]], message=header["message"],
+                       records={k: data[f"record_{k}"] for k in header["records"]}, **kwargs)

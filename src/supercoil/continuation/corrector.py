@@ -1,0 +1,90 @@
+"""Newton corrector on the bordered system and tangents (Keller 1977).
+
+The corrector solves
+
+    F(x) = 0,   b . (x - x_ref) = sigma,
+
+with ``b`` a row in the arclength metric (``W t`` for pseudo-arclength,
+``e_lambda`` to land on a parameter bound), by Newton's method on the bordered
+Jacobian ``[[K, F_lambda], [b^T]]`` (:class:`BorderedFactor`). Trial points are
+never accepted by the problem (``problem.accept`` is called by the caller once
+a point is kept), and a problem's ``step_bound(q, dq)`` shortens every Newton
+step. The tangent at ``x`` solves ``[[K, F_lambda], [b^T]] z = e_last``:
+``z`` spans the kernel of ``[K, F_lambda]`` and ``b . z = 1`` orients it like ``b``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from supercoil.continuation.bordered import BorderedFactor
+from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.kkt import SingularMatrixError
+from supercoil.solvers.newton import roundoff_floor
+
+
+@dataclass(frozen=True)
+class Correction:
+    x: np.ndarray | None
+    ok: bool
+    iterations: int
+    residual: float
+    message: str
+
+
+def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
+                    hessian=None) -> BorderedFactor:
+    H = system.hessian(x) if hessian is None else hessian
+    return BorderedFactor(H, system.jacobian(x), system.parameter_derivative(x), row)
+
+
+def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref: np.ndarray,
+            sigma: float, tolerance: float, max_iterations: int) -> Correction:
+    """Newton on ``F(x) = 0, row . (x - x_ref) = sigma`` from ``x_start`` (see module doc)."""
+    problem = system.problem
+    x = np.array(x_start, dtype=float)
+    bounded = hasattr(problem, "step_bound")
+    previous = np.inf
+    res = np.nan
+    for it in range(max_iterations + 1):
+        F = system.residual(x)
+        if not np.all(np.isfinite(F)):
+            return Correction(None, False, it, np.inf, f"non-finite residual at iteration {it}")
+        res = float(np.max(np.abs(F))) if F.size else 0.0
+        H = system.hessian(x)
+        if res <= tolerance or res <= roundoff_floor(H, system.q(x)):
+            return Correction(x, True, it, res, f"converged in {it} iterations (residual "
+                              f"{res:.2e})")
+        if it == max_iterations:
+            break
+        if it >= 2 and res > previous:
+            return Correction(None, False, it, res, f"corrector diverging at iteration {it} "
+                              f"(residual {res:.2e} > {previous:.2e})")
+        previous = res
+        try:
+            factor = bordered_factor(system, x, row, H)
+            dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
+        except SingularMatrixError as exc:
+            return Correction(None, False, it, res, f"iteration {it}: {exc}")
+        alpha = 1.0
+        if bounded:
+            dq = np.zeros(problem.n_dofs)
+            dq[system.free] = dx[:system.n]
+            alpha = min(1.0, float(problem.step_bound(system.q(x), dq)))
+            if alpha <= 1e-10:
+                return Correction(None, False, it, res, f"iteration {it}: the step guard "
+                                  f"allows no step (fraction {alpha:.1e})")
+        x = x + alpha * dx
+    return Correction(None, False, max_iterations, res, f"no convergence in {max_iterations} "
+                      f"corrector iterations (residual {res:.2e} > {tolerance:.1e})")
+
+
+def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray) -> np.ndarray:
+    """Unit tangent (arclength metric) at ``x``, oriented so that ``row . t > 0``."""
+    factor = bordered_factor(system, x, row)
+    e_last = np.zeros(system.size)
+    e_last[-1] = 1.0
+    z = factor.solve(e_last)
+    return z / system.norm(z)

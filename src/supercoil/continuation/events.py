@@ -1,0 +1,174 @@
+"""Detection and localisation of special points between two branch points.
+
+Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
+``u`` in ``[0, 1]``: the point at ``u`` solves ``F(x) = 0`` with
+``W d . (x - x_a) = u |d|_W^2``, ``d = x_b - x_a`` (re-corrected from
+``x_a + u d`` at every trial, never accepted by the problem). Then
+
+* a **fold** is a sign change of ``dlambda/ds`` (the tangent's last
+  component, oriented along ``d``), located by Brent's method (secant steps
+  safeguarded by bisection) on ``u`` to ``event_tolerance`` in arclength;
+* a **bifurcation** is a change of the unstable count that a fold does not
+  explain (a fold changes it by exactly one). Bisection on the exact inertia
+  count (seed 000; pairs of eigenvalues crossing together are seen, unlike
+  with the determinant's sign) down to ``switch_below``, then Brent's method
+  on the signed eigenvalue nearest zero to ``event_tolerance``;
+* a **user event** is a sign change of one of the named scalars returned by a
+  :class:`UserEvent`'s function, located by Brent's method (bisection
+  safeguarded: discontinuous indicators are bracketed as well).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from supercoil.continuation.corrector import correct, tangent
+from supercoil.continuation.stability import eigenpairs, inertia
+from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.kkt import InertiaError, SingularMatrixError
+
+
+@dataclass(frozen=True)
+class UserEvent:
+    """An event defined by the caller.
+
+    ``function(q, multipliers, parameter)`` returns named scalars (a mapping
+    ``name -> float``); a sign change of any of them between two branch
+    points is an event of kind ``kind`` (e.g. ``"contact_onset"``), labelled
+    by the name. The problem's parameter attribute is set before each call.
+    """
+
+    kind: str
+    function: Callable[[np.ndarray, np.ndarray, float], Mapping[str, float]]
+
+
+class LocationFailed(RuntimeError):
+    """A trial correction inside a bracket did not converge."""
+
+
+class Segment:
+    """The branch between two accepted points, re-corrected on demand (see module doc)."""
+
+    def __init__(self, system: ExtendedSystem, x_a: np.ndarray, x_b: np.ndarray,
+                 tolerance: float, max_iterations: int, zero_tolerance: float):
+        self.system = system
+        self.x_a, self.x_b = x_a, x_b
+        self.d = x_b - x_a
+        self.length = system.norm(self.d)
+        self.row = system.weights * self.d / self.length**2
+        self.tolerance = tolerance
+        self.max_iterations = max_iterations
+        self.zero_tolerance = zero_tolerance
+        self._points: dict[float, np.ndarray] = {0.0: x_a, 1.0: x_b}
+
+    def point(self, u: float) -> np.ndarray:
+        u = float(u)
+        if u not in self._points:
+            corr = correct(self.system, self.x_a + u * self.d, self.row, self.x_a, u,
+                           self.tolerance, self.max_iterations)
+            if not corr.ok:
+                raise LocationFailed(f"trial correction at u = {u:.6g} failed: {corr.message}")
+            self._points[u] = corr.x
+        return self._points[u]
+
+    def tangent(self, u: float) -> np.ndarray:
+        try:
+            return tangent(self.system, self.point(u), self.row)
+        except SingularMatrixError as exc:
+            raise LocationFailed(str(exc)) from None
+
+    def count(self, u: float) -> int:
+        try:
+            return inertia(self.system, self.point(u), self.zero_tolerance)[0]
+        except (SingularMatrixError, InertiaError) as exc:
+            raise LocationFailed(str(exc)) from None
+
+    def nearest_eigenvalue(self, u: float) -> float:
+        values, _ = eigenpairs(self.system, self.point(u), 4)
+        return float(values[np.argmin(np.abs(values))]) if values.size else float("nan")
+
+
+@dataclass(frozen=True)
+class Located:
+    """A located event before it becomes a SpecialPoint: fraction ``u`` of the segment."""
+
+    kind: str
+    label: str
+    u: float
+    x: np.ndarray
+    tangent: np.ndarray | None  # None when localisation failed
+    located: bool
+    count_before: int = -1
+    count_after: int = -1
+
+
+def _brent(f, lo: float, hi: float, xtol: float) -> float:
+    return float(brentq(f, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200))
+
+
+def locate_fold(segment: Segment, xtol: float) -> Located:
+    """Root of ``dlambda/ds`` on the segment."""
+    try:
+        u = _brent(lambda u: segment.tangent(u)[-1], 0.0, 1.0, xtol)
+        return Located("fold", "fold", u, segment.point(u), segment.tangent(u), True)
+    except (LocationFailed, ValueError):
+        return Located("fold", "fold", 1.0, segment.x_b, None, False)
+
+
+def locate_count_change(segment: Segment, xtol: float, switch_below: float) -> Located | None:
+    """Where the unstable count changes on the segment (None if the raw inertia does not)."""
+    try:
+        lo, hi = 0.0, 1.0
+        c_lo, c_hi = segment.count(lo), segment.count(hi)
+        if c_lo == c_hi:
+            return None
+        while hi - lo > max(switch_below, xtol):
+            mid = 0.5 * (lo + hi)
+            c_mid = segment.count(mid)
+            if c_mid == c_lo:
+                lo = mid
+            else:
+                hi, c_hi = mid, c_mid
+        f_lo, f_hi = segment.nearest_eigenvalue(lo), segment.nearest_eigenvalue(hi)
+        if np.isfinite(f_lo) and np.isfinite(f_hi) and f_lo * f_hi < 0:
+            u = _brent(segment.nearest_eigenvalue, lo, hi, xtol)
+        else:
+            while hi - lo > xtol:
+                mid = 0.5 * (lo + hi)
+                c_mid = segment.count(mid)
+                if c_mid == c_lo:
+                    lo = mid
+                else:
+                    hi, c_hi = mid, c_mid
+            u = 0.5 * (lo + hi)
+        x = segment.point(u)
+        try:
+            t = segment.tangent(u)
+        except LocationFailed:
+            # [K, F_lambda] has a two-dimensional kernel at a bifurcation point: the
+            # bordered matrix may be exactly singular there; use the secant instead
+            t = segment.d / segment.length
+        return Located("bifurcation", "bifurcation", u, x, t, True, c_lo, c_hi)
+    except LocationFailed:
+        return Located("bifurcation", "bifurcation", 1.0, segment.x_b, None, False)
+
+
+def user_values(event: UserEvent, system: ExtendedSystem, x: np.ndarray) -> dict[str, float]:
+    system.set_parameter(x[-1])
+    return {k: float(v) for k, v in
+            event.function(system.q(x), system.multipliers(x), float(x[-1])).items()}
+
+
+def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: float) -> Located:
+    def value(u):
+        return user_values(event, segment.system, segment.point(u))[label]
+
+    try:
+        u = _brent(value, 0.0, 1.0, xtol)
+        return Located(event.kind, label, u, segment.point(u), segment.tangent(u), True)
+    except (LocationFailed, ValueError):
+        return Located(event.kind, label, 1.0, segment.x_b, None, False)

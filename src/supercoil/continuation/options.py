@@ -1,0 +1,122 @@
+"""Options and status of a continuation run (immutable, validated on construction)."""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+
+
+class ContinuationStatus(enum.Enum):
+    """How a continuation run ended; :attr:`ok` runs ended where they were asked to."""
+
+    PARAMETER_BOUND = "reached a bound of the parameter (the last point lies on it)"
+    MAX_POINTS = "maximum number of points reached"
+    MAX_ARCLENGTH = "maximum arclength reached"
+    STEP_TOO_SMALL = "the corrector failed at the minimum step"
+    START_FAILED = "the starting point did not converge"
+
+    @property
+    def ok(self) -> bool:
+        return self in (ContinuationStatus.PARAMETER_BOUND, ContinuationStatus.MAX_POINTS,
+                        ContinuationStatus.MAX_ARCLENGTH)
+
+
+@dataclass(frozen=True)
+class ContinuationOptions:
+    """Options of :func:`supercoil.continuation.continuation`.
+
+    Arclength is measured in the metric ``ds^2 = sum_i M_i dq_i^2 +
+    parameter_weight^2 dlambda^2`` (``M`` the problem's lumped ``mass``, so that
+    steps mean the same under mesh refinement; multipliers carry no weight).
+
+    * ``initial_step``, ``min_step``, ``max_step``: arclength steps. After a
+      corrector that converged in at most ``fast_iterations`` iterations the
+      step grows by ``growth``; after a failure (no convergence in
+      ``max_corrector_iterations``, divergence, a singular bordered matrix, a
+      tangent turned by more than ``max_turn_degrees``) it is multiplied by
+      ``shrink`` and the step is retried from the last accepted point.
+    * ``parameter_bounds``: ``(low, high)``; the run stops on the bound, the last
+      point corrected at exactly that parameter value.
+    * ``max_points`` (the starting point included), ``max_arclength``.
+    * ``tolerance``: corrector tolerance on ``max |F|``, F the KKT residual;
+      a residual below the round-off floor ``eps ||H|| ||q||`` is accepted too.
+    * ``direction``: +1 starts towards increasing parameter, -1 decreasing.
+    * ``predictor``: ``"tangent"`` (Euler) or ``"secant"`` (after two points).
+    * ``zero_tolerance``: eigenvalues (of ``H v = mu M v`` on the constraint
+      tangent space) with ``|mu|`` below it are ``zero_modes``, never signed.
+    * ``n_modes``: eigenvalues computed at each point beyond the unstable ones.
+    * ``detect_folds``, ``detect_bifurcations``: event detection switches.
+    * ``event_tolerance``: arclength accuracy of located special points (folds,
+      bifurcations, user events). At a fold the parameter value is then exact
+      to about ``curvature * event_tolerance^2``.
+    * ``switch_below``: bisection on the unstable count stops at this fraction
+      of a step; the signed eigenvalue nearest zero is then solved for by
+      Brent's method (seed 000 bisects only).
+    * ``phase_conditions``: add ``<M s_k, q - q_start> = 0`` for each symmetry
+      mode ``s_k`` of ``problem.symmetry_modes(q_start)`` (with a Lagrange
+      unknown each), to follow branches whose continuous symmetry is not pinned
+      by the problem (e.g. an O(2) orbit after branch switching). Dense rows:
+      for small problems; rod problems pin gauge DOFs instead.
+    * ``finite_difference_step``: relative step of the central difference of
+      the residual in the parameter when the problem has no
+      ``parameter_derivative`` (error ``O(step^2)`` relative).
+    """
+
+    initial_step: float = 0.05
+    min_step: float = 1e-6
+    max_step: float = 0.5
+    growth: float = 1.5
+    shrink: float = 0.5
+    fast_iterations: int = 3
+    max_corrector_iterations: int = 10
+    max_turn_degrees: float = 30.0
+    parameter_bounds: tuple[float, float] = (-math.inf, math.inf)
+    max_points: int = 200
+    max_arclength: float = math.inf
+    tolerance: float = 1e-10
+    direction: int = 1
+    predictor: str = "tangent"
+    parameter_weight: float = 1.0
+    zero_tolerance: float = 1e-6
+    n_modes: int = 2
+    detect_folds: bool = True
+    detect_bifurcations: bool = True
+    event_tolerance: float = 1e-10
+    switch_below: float = 1e-3
+    phase_conditions: bool = False
+    finite_difference_step: float = 6e-6
+
+    def __post_init__(self) -> None:
+        def positive(name):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and value > 0):
+                raise ValueError(f"{name} must be positive, got {value!r}")
+
+        for name in ("initial_step", "min_step", "max_step", "tolerance", "parameter_weight",
+                     "zero_tolerance", "event_tolerance", "switch_below", "max_arclength",
+                     "finite_difference_step", "max_turn_degrees"):
+            positive(name)
+        if not self.min_step <= self.initial_step <= self.max_step:
+            raise ValueError(f"need min_step <= initial_step <= max_step, got {self.min_step}, "
+                             f"{self.initial_step}, {self.max_step}")
+        if not self.growth >= 1.0:
+            raise ValueError(f"growth must be >= 1, got {self.growth!r}")
+        if not 0.0 < self.shrink < 1.0:
+            raise ValueError(f"shrink must be in (0, 1), got {self.shrink!r}")
+        low, high = self.parameter_bounds
+        if not low < high:
+            raise ValueError(f"parameter_bounds must be (low, high) with low < high, got "
+                             f"{self.parameter_bounds!r}")
+        if self.max_points < 2:
+            raise ValueError(f"max_points must be >= 2, got {self.max_points!r}")
+        if self.fast_iterations < 0 or self.max_corrector_iterations < 1:
+            raise ValueError("fast_iterations must be >= 0 and max_corrector_iterations >= 1")
+        if self.direction not in (1, -1):
+            raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
+        if self.predictor not in ("tangent", "secant"):
+            raise ValueError(f"predictor must be 'tangent' or 'secant', got {self.predictor!r}")
+        if self.n_modes < 1:
+            raise ValueError(f"n_modes must be >= 1, got {self.n_modes!r}")
+        if self.max_turn_degrees >= 180.0:
+            raise ValueError(f"max_turn_degrees must be below 180, got {self.max_turn_degrees!r}")

@@ -1,0 +1,289 @@
+"""Pseudo-arclength continuation with adaptive steps, stability and events.
+
+Keller's predictor–corrector (Keller 1977; Allgower & Georg 1990, ch. 2): from
+the point ``x_k`` with unit tangent ``t_k`` the predictor is
+``x_k + ds t_k`` (or along the secant), the corrector Newton's method on
+``F(x) = 0, W t_k . (x - x_k) = ds`` with the bordered Jacobian factorised as
+one sparse matrix (:mod:`supercoil.continuation.bordered`), and the new
+tangent solves ``[[K, F_lambda], [W t_k]] t = e_last`` (same orientation).
+Steps grow after fast corrections and shrink after failures (no convergence,
+divergence, a singular matrix, or a tangent turned by more than
+``max_turn_degrees``, the guard against jumping between branches). A step
+that crosses a parameter bound is replaced by a correction at exactly the
+bound. At every accepted point the problem's ``accept(q)`` is called, then
+the stability (:mod:`supercoil.continuation.stability`), the caller's records
+and user events are evaluated, and the interval to the previous point is
+searched for folds, bifurcations and user events
+(:mod:`supercoil.continuation.events`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from supercoil.continuation.branch import Branch, SpecialPoint
+from supercoil.continuation.corrector import correct, tangent
+from supercoil.continuation.events import (
+    Segment,
+    UserEvent,
+    locate_count_change,
+    locate_fold,
+    locate_user_event,
+    user_values,
+)
+from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
+from supercoil.continuation.stability import point_stability
+from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.kkt import InertiaError, SingularMatrixError
+from supercoil.solvers.newton import least_squares_multipliers
+from supercoil.solvers.problem import ConstrainedEnergy
+
+log = logging.getLogger(__name__)
+
+RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
+
+
+def phase_modes(problem: ConstrainedEnergy, q: np.ndarray, relative: float = 1e-8) -> np.ndarray:
+    """The problem's symmetry modes at ``q`` that do not vanish there, ``(r, n_dofs)``."""
+    getter = getattr(problem, "symmetry_modes", None)
+    if getter is None:
+        return np.zeros((0, problem.n_dofs))
+    modes = np.atleast_2d(np.asarray(getter(q), dtype=float))
+    if modes.size == 0:
+        return np.zeros((0, problem.n_dofs))
+    scale = max(1.0, float(np.max(np.abs(q))))
+    norms = np.linalg.norm(modes, axis=1)
+    return modes[norms > relative * scale]
+
+
+class _Tracer:
+    """Follows one branch from a corrected point and tangent; collects points and events."""
+
+    def __init__(self, system: ExtendedSystem, options: ContinuationOptions, name: str,
+                 parent: str | None, origin: SpecialPoint | None,
+                 records: RecordFunction | None, events: Sequence[UserEvent]):
+        self.system = system
+        self.opts = options
+        self.name, self.parent, self.origin = name, parent, origin
+        self.records_fn = records
+        self.events = tuple(events)
+        self.xs: list[np.ndarray] = []
+        self.ts: list[np.ndarray] = []
+        self.stabs = []
+        self.s: list[float] = []
+        self.recs: list[dict] = []
+        self.user: list[list[dict]] = []
+        self.specials: list[SpecialPoint] = []
+
+    # -- per point ------------------------------------------------------------------------
+    def _records(self, x):
+        if self.records_fn is None:
+            return {}
+        self.system.set_parameter(x[-1])
+        return dict(self.records_fn(self.system.q(x), self.system.multipliers(x), float(x[-1])))
+
+    def add_point(self, x: np.ndarray, t: np.ndarray) -> None:
+        system = self.system
+        system.set_parameter(x[-1])
+        system.problem.accept(system.q(x))
+        self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))
+        self.xs.append(x)
+        self.ts.append(t)
+        self.stabs.append(point_stability(system, x, self.opts.zero_tolerance,
+                                          self.opts.n_modes))
+        self.recs.append(self._records(x))
+        self.user.append([user_values(ev, system, x) for ev in self.events])
+        if len(self.xs) >= 2:
+            self._search_events()
+
+    # -- events between the last two points -------------------------------------------------
+    def _search_events(self) -> None:
+        opts, k = self.opts, len(self.xs) - 2
+        x_a, x_b = self.xs[k], self.xs[k + 1]
+        segment = Segment(self.system, x_a, x_b, opts.tolerance, opts.max_corrector_iterations,
+                          opts.zero_tolerance)
+        xtol = opts.event_tolerance / segment.length
+        found = []
+        fold = (opts.detect_folds and self.ts[k][-1] * self.ts[k + 1][-1] < 0)
+        if fold:
+            found.append(locate_fold(segment, xtol))
+        jump = self.stabs[k + 1].unstable_count - self.stabs[k].unstable_count
+        if opts.detect_bifurcations and jump != 0 and not (fold and abs(jump) == 1):
+            located = locate_count_change(segment, xtol, opts.switch_below)
+            if located is not None:
+                found.append(located)
+        for event, before, after in zip(self.events, self.user[k], self.user[k + 1]):
+            for label in before:
+                if label in after and before[label] * after[label] < 0:
+                    found.append(locate_user_event(segment, event, label, xtol))
+        for ev in sorted(found, key=lambda e: e.u):
+            self.specials.append(self._special(ev, k, segment))
+            self.system.set_parameter(x_b[-1])
+
+    def _special(self, ev, k: int, segment: Segment) -> SpecialPoint:
+        system, opts = self.system, self.opts
+        x = ev.x
+        t = ev.tangent if ev.tangent is not None else self.ts[k + 1]
+        stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes)
+        values = modes = np.zeros(0)
+        if ev.kind == "bifurcation":
+            n_critical = max(1, abs(ev.count_after - ev.count_before))
+            values, modes = stab.critical_modes(n_critical)
+        else:
+            modes = np.zeros((0, system.problem.n_dofs))
+        return SpecialPoint(
+            kind=ev.kind, label=ev.label, branch=self.name, index=k,
+            parameter=float(x[-1]), arclength=self.s[k] + ev.u * segment.length,
+            q=system.q(x), multipliers=system.multipliers(x), tangent=system.full_tangent(t),
+            unstable_count=stab.unstable_count,
+            count_before=ev.count_before if ev.kind == "bifurcation" else
+            self.stabs[k].unstable_count,
+            count_after=ev.count_after if ev.kind == "bifurcation" else
+            self.stabs[k + 1].unstable_count,
+            critical_eigenvalues=values, critical_modes=modes, located=ev.located,
+            tolerance=opts.event_tolerance, records=self._records(x))
+
+    # -- the stepping loop ------------------------------------------------------------------
+    def run(self, step: float) -> tuple[ContinuationStatus, str]:
+        system, opts = self.system, self.opts
+        low, high = opts.parameter_bounds
+        cos_turn = math.cos(math.radians(opts.max_turn_degrees))
+        ds = step
+        while len(self.xs) < opts.max_points:
+            if self.s[-1] >= opts.max_arclength:
+                return ContinuationStatus.MAX_ARCLENGTH, (
+                    f"arclength {self.s[-1]:.4g} reached max_arclength after {len(self.xs)} points")
+            x_k, t_k = self.xs[-1], self.ts[-1]
+            d = t_k
+            if opts.predictor == "secant" and len(self.xs) >= 2:
+                d = x_k - self.xs[-2]
+                d = d / system.norm(d)
+            row = system.weights * d
+            corr = correct(system, x_k + ds * d, row, x_k, ds, opts.tolerance,
+                           opts.max_corrector_iterations)
+            failure = None if corr.ok else corr.message
+            x_new = t_new = None
+            if corr.ok:
+                x_new = corr.x
+                try:
+                    t_new = tangent(system, x_new, system.weights * t_k)
+                except SingularMatrixError as exc:
+                    failure = f"tangent: {exc}"
+            if failure is None and t_new @ (system.weights * t_k) < cos_turn:
+                failure = (f"the tangent turned by more than {opts.max_turn_degrees} degrees "
+                           f"(a jump to another branch?)")
+            bound = None
+            if failure is None and not low <= x_new[-1] <= high:
+                bound = low if x_new[-1] < low else high
+                u = (bound - x_k[-1]) / (x_new[-1] - x_k[-1])
+                e_lam = np.zeros(system.size)
+                e_lam[-1] = 1.0
+                landing = correct(system, x_k + u * (x_new - x_k), e_lam, x_k, bound - x_k[-1],
+                                  opts.tolerance, opts.max_corrector_iterations)
+                if landing.ok:
+                    x_new = landing.x
+                    x_new[-1] = bound
+                    try:
+                        t_new = tangent(system, x_new, system.weights * t_k)
+                    except SingularMatrixError as exc:
+                        failure = f"tangent at the bound: {exc}"
+                else:
+                    failure = f"landing on the bound {bound:.6g}: {landing.message}"
+            if failure is not None:
+                log.debug("step %.3g rejected: %s", ds, failure)
+                if ds <= opts.min_step:
+                    return ContinuationStatus.STEP_TOO_SMALL, (
+                        f"stopped after {len(self.xs)} points at {system.parameter} = "
+                        f"{x_k[-1]:.10g}: {failure} at the minimum step {opts.min_step:.1e}")
+                ds = max(ds * opts.shrink, opts.min_step)
+                continue
+            try:
+                self.add_point(x_new, t_new)
+            except (SingularMatrixError, InertiaError) as exc:
+                return ContinuationStatus.STEP_TOO_SMALL, (
+                    f"stability at point {len(self.xs)} failed: {exc}")
+            if bound is not None:
+                return ContinuationStatus.PARAMETER_BOUND, (
+                    f"reached {system.parameter} = {bound:.10g} after {len(self.xs)} points")
+            if corr.iterations <= opts.fast_iterations:
+                ds = min(ds * opts.growth, opts.max_step)
+        return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"
+
+    # -- result -------------------------------------------------------------------------------
+    def branch(self, status: ContinuationStatus, message: str) -> Branch:
+        system = self.system
+        n_dofs, m = system.problem.n_dofs, system.m
+        k = len(self.xs)
+        records = {}
+        if k and self.recs[0]:
+            records = {name: np.array([np.asarray(r[name]) for r in self.recs])
+                       for name in self.recs[0]}
+        if k:
+            system.set_parameter(self.xs[-1][-1])
+        return Branch(
+            name=self.name, parent=self.parent, origin=self.origin,
+            parameter=system.parameter,
+            parameter_values=np.array([x[-1] for x in self.xs]),
+            states=np.array([system.q(x) for x in self.xs]).reshape(k, n_dofs),
+            multipliers=np.array([system.multipliers(x) for x in self.xs]).reshape(k, m),
+            unstable_count=np.array([s.unstable_count for s in self.stabs], dtype=np.int64),
+            zero_modes=np.array([s.zero_modes for s in self.stabs], dtype=np.int64),
+            determinant_sign=np.array([s.determinant_sign for s in self.stabs], dtype=np.int64),
+            nearest_eigenvalue=np.array([s.nearest_eigenvalue for s in self.stabs]),
+            tangents=np.array([system.full_tangent(t) for t in self.ts]).reshape(
+                k, n_dofs + m + 1),
+            arclength=np.array(self.s),
+            special_points=tuple(self.specials), status=status, message=message,
+            records=records, phase_modes=system.phase_modes,
+            phase_state=system.q_phase_full)
+
+
+def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
+                 multipliers0: np.ndarray | None = None, parameter: str = "parameter",
+                 options: ContinuationOptions | None = None, *, name: str = "branch",
+                 records: RecordFunction | None = None,
+                 events: Sequence[UserEvent] = ()) -> Branch:
+    """Follow the equilibria of ``problem`` through ``q0`` as ``problem.<parameter>`` varies.
+
+    ``q0`` (n_dofs,) is a (near-)equilibrium at the current parameter value;
+    it is first corrected at fixed parameter. ``multipliers0`` (m,) default to
+    least squares. ``records(q, multipliers, parameter)`` returns named
+    per-point values kept in ``Branch.records``; ``events`` are
+    :class:`UserEvent` s. Returns a :class:`Branch` whose ``status`` says how
+    the run ended; numerical failures never raise. The problem is left at the
+    last point's parameter value and state (accepted).
+    """
+    opts = options or ContinuationOptions()
+    if not hasattr(problem, parameter):
+        raise ValueError(f"the problem has no parameter attribute {parameter!r}")
+    lam0 = float(getattr(problem, parameter))
+    low, high = opts.parameter_bounds
+    if not low <= lam0 <= high:
+        raise ValueError(f"the starting {parameter} = {lam0} is outside the bounds {low, high}")
+    q0 = np.array(q0, dtype=float)
+    modes = phase_modes(problem, q0) if opts.phase_conditions else None
+    system = ExtendedSystem(problem, parameter, q0, modes, q0, opts.parameter_weight,
+                            opts.finite_difference_step)
+    mu0 = (least_squares_multipliers(problem, q0, system.free) if multipliers0 is None
+           else np.asarray(multipliers0, dtype=float))
+    tracer = _Tracer(system, opts, name, None, None, records, events)
+    x0 = system.pack(q0, mu0, lam0)
+    e_lam = np.zeros(system.size)
+    e_lam[-1] = 1.0
+    corr = correct(system, x0, e_lam, x0, 0.0, opts.tolerance, 4 * opts.max_corrector_iterations)
+    if not corr.ok:
+        return tracer.branch(ContinuationStatus.START_FAILED,
+                             f"the starting point did not converge: {corr.message}")
+    try:
+        t0 = opts.direction * tangent(system, corr.x, e_lam)
+        tracer.add_point(corr.x, t0)
+    except (SingularMatrixError, InertiaError) as exc:
+        return tracer.branch(ContinuationStatus.START_FAILED,
+                             f"the starting point is singular ({exc}): start away from folds "
+                             f"and bifurcation points")
+    status, message = tracer.run(opts.initial_step)
+    return tracer.branch(status, message)

@@ -1,0 +1,100 @@
+"""Stability at a point of a branch: inertia count, zero modes, determinant sign.
+
+``unstable_count`` is the exact number of negative eigenvalues of the Hessian
+of the Lagrangian on the tangent space of the constraints (and of the phase
+conditions, if any), from the inertia of the KKT matrix on the free DOFs
+(:class:`~supercoil.solvers.kkt.KKTFactor`; the problem's pins remove rigid
+motions and gauges). Eigenvalues of ``H v = mu M v`` nearest zero come from
+the eigenproblem of :mod:`supercoil.stability.analysis` (gauge pins
+released, the problem's symmetry modes projected out): dense below 400
+unknowns, shift-invert Lanczos above. Those with ``|mu| <= zero_tolerance``
+are ``zero_modes`` and never signed, so ``unstable_count = max(found below
+-tol, inertia - zero_modes)`` (as :func:`~supercoil.stability.analysis.analyse`).
+``determinant_sign`` is the sign of ``det(Z^T H Z)``, seed 000's test: it is
+the parity of the inertia and misses eigenvalues that cross in pairs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.kkt import InertiaError, KKTFactor, SingularMatrixError
+from supercoil.stability.analysis import _eigen_system, _lowest_pairs, dense_constrained_eigenpairs
+
+_DENSE_BELOW = 400
+
+
+@dataclass(frozen=True)
+class PointStability:
+    unstable_count: int
+    zero_modes: int
+    negative_count: int  # raw inertia of the constrained Hessian
+    determinant_sign: int
+    eigenvalues: np.ndarray  # (k,) ascending, the computed ones nearest zero
+    modes: np.ndarray  # (k, n_dofs) M-orthonormal full DOF vectors
+
+    @property
+    def nearest_eigenvalue(self) -> float:
+        if self.eigenvalues.size == 0:
+            return float("nan")
+        return float(self.eigenvalues[np.argmin(np.abs(self.eigenvalues))])
+
+    def critical_modes(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """The ``k`` eigenpairs nearest zero: ``(values (k,), modes (k, n_dofs))``."""
+        idx = np.argsort(np.abs(self.eigenvalues))[:k]
+        return self.eigenvalues[idx], self.modes[idx]
+
+
+def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None = None
+            ) -> tuple[int, int]:
+    """``(negative count, determinant sign)`` of the constrained Hessian at ``x``.
+
+    With ``zero_tolerance``, an exactly singular Hessian (a special point located
+    exactly) is handled: the count is then that of the eigenvalues below
+    ``-zero_tolerance / 2`` (the inertia of ``H + M zero_tolerance / 2``) and the
+    determinant sign is 0.
+    """
+    J = system.jacobian(x)
+    H = system.hessian(x)
+    try:
+        factor = KKTFactor(H, J)
+        return factor.reduced_negative_count, int(factor.determinant_sign * (-1) ** J.shape[0])
+    except (SingularMatrixError, InertiaError):
+        if zero_tolerance is None:
+            raise
+    shifted = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=system.mass)
+    return shifted.reduced_negative_count, 0
+
+
+def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``."""
+    problem = system.problem
+    system.set_parameter(x[-1])
+    dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x))
+    m = J.shape[0] if J is not None else 0
+    dim = dofs.size - m - sym.shape[1]
+    if dim <= 0:
+        return np.zeros(0), np.zeros((0, problem.n_dofs))
+    if dim <= _DENSE_BELOW:
+        values, vectors = dense_constrained_eigenpairs(H, J, mass, sym)
+    else:
+        values, vectors = _lowest_pairs(H, J, mass, n_wanted=min(n_wanted, dim - 2), n=dofs.size,
+                                        m=m, symmetry=sym, force_sparse=True)
+    modes = np.zeros((values.size, problem.n_dofs))
+    modes[:, dofs] = vectors.T
+    return values, modes
+
+
+def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
+                    n_modes: int) -> PointStability:
+    """Stability report at the point ``x`` of the extended system (see module doc)."""
+    neg, det_sign = inertia(system, x, zero_tolerance)
+    values, modes = eigenpairs(system, x, neg + n_modes)
+    zero = int(np.sum(np.abs(values) <= zero_tolerance))
+    below = int(np.sum(values < -zero_tolerance))
+    unstable = max(below, neg - zero) if below <= neg else neg
+    return PointStability(unstable, zero, neg, det_sign, values, modes)

@@ -1,0 +1,102 @@
+"""Branch switching at a bifurcation point along the critical mode (Seydel 2010, sec. 5.6).
+
+At a bifurcation point ``x*`` of a branch with unit tangent ``t_old``, the
+critical mode ``phi`` (an eigenvector of the constrained Hessian for the
+eigenvalue crossing zero, :attr:`SpecialPoint.critical_modes`) is made
+W-orthogonal to ``t_old``: ``v = phi - (phi . W t_old) t_old``, normalised.
+The predictor is ``x* + side * eps * v`` and the corrector solves
+``F(x) = 0`` with the arclength condition ``W v . (x - x*) = side * eps``,
+a hyperplane orthogonal to the old tangent at distance ``eps``, which the old
+branch crosses only far away: Newton cannot fall back onto it. The new
+branch then continues from that point with the tangent oriented away from
+``x*``.
+
+Double zero eigenvalues from a symmetry (an O(2) orbit: eigenvalues crossing
+in pairs) are switched along one vector of the null space (``mode``, or an
+explicit ``direction``); the other solutions nearby are its images under the
+symmetry. The new branch is then a family of orbits, and the Jacobian has
+the symmetry's null mode: the problem must pin a gauge, or
+``ContinuationOptions(phase_conditions=True)`` adds the phase condition
+``<M s, q - q_pred> = 0`` for the symmetry modes ``s`` of
+``problem.symmetry_modes`` at the predicted point (they vanish at a
+symmetric point, so they are taken on the new branch).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from supercoil.continuation.branch import Branch, SpecialPoint
+from supercoil.continuation.corrector import correct, tangent
+from supercoil.continuation.events import UserEvent
+from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
+from supercoil.continuation.pseudo_arclength import RecordFunction, _Tracer, phase_modes
+from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.kkt import InertiaError, SingularMatrixError
+from supercoil.solvers.problem import ConstrainedEnergy
+
+
+def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: SpecialPoint,
+                  options: ContinuationOptions | None = None, *, side: int = 1,
+                  mode: int = 0, direction: np.ndarray | None = None,
+                  amplitude: float | None = None, name: str | None = None,
+                  records: RecordFunction | None = None,
+                  events: tuple[UserEvent, ...] = ()) -> Branch:
+    """Follow the branch that bifurcates from ``special_point`` of ``branch`` (see module doc).
+
+    ``side`` (+1 / -1) picks the half-branch along ``+-`` the critical mode
+    number ``mode`` (or along ``direction``, a full DOF vector in the null
+    space); ``amplitude`` is the distance of the first point from the
+    bifurcation (arclength metric; default ``options.initial_step``).
+    ``problem.accept(special_point.q)`` is called first so that a problem
+    with a reference state (rod frames) is brought back to that point.
+    """
+    opts = options or ContinuationOptions()
+    if side not in (1, -1):
+        raise ValueError(f"side must be +1 or -1, got {side!r}")
+    if direction is None:
+        if special_point.critical_modes.shape[0] <= mode:
+            raise ValueError(f"the special point has {special_point.critical_modes.shape[0]} "
+                             f"critical modes, mode {mode} asked for")
+        direction = special_point.critical_modes[mode]
+    direction = np.asarray(direction, dtype=float)
+    eps = opts.initial_step if amplitude is None else float(amplitude)
+    label = name or f"{branch.name}/{special_point.kind}{special_point.index}"
+    setattr(problem, branch.parameter, float(special_point.parameter))
+    problem.accept(special_point.q)
+    q_star = np.array(special_point.q, dtype=float)
+    plain = ExtendedSystem(problem, branch.parameter, q_star,
+                           parameter_weight=opts.parameter_weight)
+    n, m = plain.n, plain.m
+    # old tangent and critical direction in the layout [q_free, mu, lambda]
+    t_full = np.asarray(special_point.tangent, dtype=float)
+    t_old = np.concatenate([t_full[:problem.n_dofs][plain.free],
+                            t_full[problem.n_dofs:problem.n_dofs + m], t_full[-1:]])
+    t_old = t_old / plain.norm(t_old)
+    v = np.concatenate([direction[plain.free], np.zeros(m + 1)])
+    v = v - (v @ (plain.weights * t_old)) * t_old
+    v = v / plain.norm(v)
+    q_pred = plain.q(plain.pack(q_star, special_point.multipliers, special_point.parameter)
+                     + side * eps * v)
+    modes = phase_modes(problem, q_pred) if opts.phase_conditions else None
+    system = ExtendedSystem(problem, branch.parameter, q_star, modes, q_pred,
+                            opts.parameter_weight, opts.finite_difference_step)
+    v = np.concatenate([v[:n + m], np.zeros(system.r), v[-1:]])
+    x_star = system.pack(q_star, special_point.multipliers, special_point.parameter)
+    tracer = _Tracer(system, opts, label, branch.name, special_point, records, events)
+    row = system.weights * v
+    corr = correct(system, x_star + side * eps * v, row, x_star, side * eps, opts.tolerance,
+                   4 * opts.max_corrector_iterations)
+    if not corr.ok:
+        return tracer.branch(ContinuationStatus.START_FAILED,
+                             f"no point found on the bifurcating branch: {corr.message}")
+    secant = corr.x - x_star
+    try:
+        t1 = tangent(system, corr.x, system.weights * secant / system.norm(secant))
+        tracer.add_point(corr.x, t1)
+    except (SingularMatrixError, InertiaError) as exc:
+        return tracer.branch(ContinuationStatus.START_FAILED,
+                             f"the first point of the new branch is singular ({exc}); with a "
+                             f"continuous symmetry, pin a gauge or use phase_conditions=True")
+    status, message = tracer.run(opts.initial_step)
+    return tracer.branch(status, message)

@@ -1,0 +1,154 @@
+"""The extended system ``F(q, mu, lambda) = 0`` that continuation follows.
+
+A :class:`~supercoil.solvers.problem.ConstrainedEnergy` whose energy depends on
+a scalar parameter: continuation sets it with ``setattr(problem, parameter,
+value)``. On the free DOFs (``problem.fixed`` removed) the unknowns are
+
+    x = [q_free (n), mu (m), nu (r), lambda (1)],
+
+``mu`` the multipliers of the problem's constraints and ``nu`` those of the
+``r`` optional phase conditions ``P (q_free - q_phase) = 0``, ``P = S^T M``
+with ``S`` the problem's symmetry modes at the branch start (see
+:class:`~supercoil.continuation.options.ContinuationOptions`). The residual is
+
+    F(x) = [grad E + J^T mu + P^T nu ; c ; P (q_free - q_phase)]   ((n + m + r,))
+
+and its parameter derivative ``F_lambda`` comes from the problem's optional
+``parameter_derivative(q, multipliers, name)`` (``(n_dofs + n_constraints,)``,
+on all DOFs) or else from a central difference with step
+``finite_difference_step * max(1, |lambda|)`` (error ``O(step^2)``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from supercoil.solvers.newton import _hessian
+from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
+
+
+class ExtendedSystem:
+    """Residual, derivatives and layout of ``x`` for one branch (see module doc)."""
+
+    def __init__(self, problem: ConstrainedEnergy, parameter: str, q_template: np.ndarray,
+                 phase_modes: np.ndarray | None = None, q_phase: np.ndarray | None = None,
+                 parameter_weight: float = 1.0, finite_difference_step: float = 6e-6):
+        if not hasattr(problem, parameter):
+            raise ValueError(f"the problem has no parameter attribute {parameter!r}")
+        self.problem = problem
+        self.parameter = parameter
+        self.free = free_dofs(problem)
+        self.n = self.free.size
+        self.m = int(problem.n_constraints)
+        self.q_template = np.array(q_template, dtype=float)
+        mass = np.asarray(problem.mass, dtype=float)[self.free]
+        self.mass = mass
+        if phase_modes is None or np.size(phase_modes) == 0:
+            self.phase_modes = np.zeros((0, problem.n_dofs))
+            self.P = np.zeros((0, self.n))
+            self.q_phase = np.zeros(self.n)
+            self.q_phase_full = np.zeros(0)
+        else:
+            self.phase_modes = np.atleast_2d(np.asarray(phase_modes, dtype=float))
+            self.P = self.phase_modes[:, self.free] * mass[None, :]
+            self.q_phase_full = np.array(q_phase, dtype=float)
+            self.q_phase = self.q_phase_full[self.free]
+        self.r = self.P.shape[0]
+        self.size = self.n + self.m + self.r + 1
+        # metric of the arclength: mass on q, nothing on multipliers, weight^2 on lambda
+        self.weights = np.concatenate([mass, np.zeros(self.m + self.r),
+                                       [parameter_weight**2]])
+        self.fd_step = finite_difference_step
+
+    # -- layout -------------------------------------------------------------------------
+    def pack(self, q: np.ndarray, multipliers: np.ndarray, lam: float,
+             phase_multipliers: np.ndarray | None = None) -> np.ndarray:
+        nu = np.zeros(self.r) if phase_multipliers is None else phase_multipliers
+        return np.concatenate([np.asarray(q, float)[self.free],
+                               np.asarray(multipliers, float).reshape(self.m), nu, [lam]])
+
+    def q(self, x: np.ndarray) -> np.ndarray:
+        out = self.q_template.copy()
+        out[self.free] = x[:self.n]
+        return out
+
+    def multipliers(self, x: np.ndarray) -> np.ndarray:
+        return x[self.n:self.n + self.m].copy()
+
+    def all_multipliers(self, x: np.ndarray) -> np.ndarray:
+        return x[self.n:self.n + self.m + self.r]
+
+    @staticmethod
+    def parameter_value(x: np.ndarray) -> float:
+        return float(x[-1])
+
+    def norm(self, v: np.ndarray) -> float:
+        return float(np.sqrt(v @ (self.weights * v)))
+
+    def full_tangent(self, t: np.ndarray) -> np.ndarray:
+        """Tangent on all DOFs: ``[dq (n_dofs), dmu (m), dlambda]``."""
+        dq = np.zeros(self.problem.n_dofs)
+        dq[self.free] = t[:self.n]
+        return np.concatenate([dq, t[self.n:self.n + self.m], t[-1:]])
+
+    # -- residual and derivatives ----------------------------------------------------------
+    def set_parameter(self, lam: float) -> None:
+        setattr(self.problem, self.parameter, float(lam))
+
+    def _kkt_residual(self, q: np.ndarray, mu: np.ndarray) -> np.ndarray:
+        p = self.problem
+        g = p.gradient(q)[self.free]
+        if self.m:
+            g = g + p.constraint_jacobian(q)[:, self.free].T @ mu
+            return np.concatenate([g, p.constraints(q)])
+        return g
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        self.set_parameter(x[-1])
+        q = self.q(x)
+        mu = x[self.n:self.n + self.m]
+        F = self._kkt_residual(q, mu)
+        if self.r:
+            nu = x[self.n + self.m:self.n + self.m + self.r]
+            F[:self.n] += self.P.T @ nu
+            F = np.concatenate([F, self.P @ (x[:self.n] - self.q_phase)])
+        return F
+
+    def hessian(self, x: np.ndarray) -> HessianParts:
+        """Hessian of the Lagrangian on the free DOFs (phase conditions are linear)."""
+        self.set_parameter(x[-1])
+        return _hessian(self.problem, self.q(x), x[self.n:self.n + self.m], self.free)
+
+    def jacobian(self, x: np.ndarray) -> sp.csr_matrix:
+        """Constraint Jacobian with the phase rows, ``(m + r, n)``."""
+        self.set_parameter(x[-1])
+        rows = []
+        if self.m:
+            rows.append(sp.csr_matrix(self.problem.constraint_jacobian(self.q(x))[:, self.free]))
+        if self.r:
+            rows.append(sp.csr_matrix(self.P))
+        if not rows:
+            return sp.csr_matrix((0, self.n))
+        return sp.vstack(rows, format="csr")
+
+    def parameter_derivative(self, x: np.ndarray) -> np.ndarray:
+        """``dF/dlambda`` at ``x``, shape ``(n + m + r,)``."""
+        lam = float(x[-1])
+        q = self.q(x)
+        mu = x[self.n:self.n + self.m]
+        p = self.problem
+        derivative = getattr(p, "parameter_derivative", None)
+        if derivative is not None:
+            self.set_parameter(lam)
+            full = np.asarray(derivative(q, mu, self.parameter), dtype=float)
+            out = np.concatenate([full[self.free], full[p.n_dofs:p.n_dofs + self.m]])
+        else:
+            step = self.fd_step * max(1.0, abs(lam))
+            self.set_parameter(lam + step)
+            plus = self._kkt_residual(q, mu)
+            self.set_parameter(lam - step)
+            minus = self._kkt_residual(q, mu)
+            self.set_parameter(lam)
+            out = (plus - minus) / (2.0 * step)
+        return np.concatenate([out, np.zeros(self.r)])

@@ -1,0 +1,307 @@
+"""Generic continuation on toy problems, each against a known answer.
+
+Bratu's fold (independent Moore-Spence solve, observed order 2, Richardson
+against the continuum value), pitchforks of a diagonal problem at known
+parameter values (branch switching onto the known branches), a double
+eigenvalue crossing under O(2) symmetry, a constrained point on a sphere
+(multipliers), save/load and the consistency checker.
+"""
+
+import dataclasses
+import json
+import time
+
+import numpy as np
+import pytest
+from continuation_toys import BRATU_FOLD, Bratu, DiagonalQuartic, LoadedSphere, bratu_midpoint_exact
+from scipy.optimize import fsolve
+
+from supercoil.continuation import (
+    Branch,
+    ContinuationOptions,
+    ContinuationStatus,
+    UserEvent,
+    consistency_check,
+    continuation,
+    switch_branch,
+)
+from supercoil.continuation.system import ExtendedSystem
+
+
+def assert_consistent(branch, problem):
+    report = consistency_check(branch, problem)
+    assert report.ok, report.problems
+    assert report.checked_points == len(branch)
+
+
+def bratu_branch(n, lam0=3.0, low=None, **kw):
+    """Bratu from the lower branch at lam0 round the fold back down to ``low`` (default lam0)."""
+    p = Bratu(n, lam0, **kw.pop("problem_kw", {}))
+    opts = ContinuationOptions(parameter_bounds=(lam0 if low is None else low, 4.0),
+                               initial_step=0.05, max_step=0.5, **kw)
+    return p, continuation(p, np.zeros(n + 1), parameter="lam", options=opts)
+
+
+def moore_spence_fold(n):
+    """Independent fold of the discrete Bratu problem: G = 0, G_u phi = 0, |phi| = 1."""
+    p = Bratu(n)
+    inner = np.arange(1, n)
+
+    def equations(z):
+        u = np.zeros(n + 1)
+        u[inner] = z[:n - 1]
+        phi, lam = z[n - 1:2 * n - 2], z[-1]
+        p.lam = lam
+        G = p.gradient(u)[inner]
+        Gu = p.hessian(u).dense()[np.ix_(inner, inner)]
+        return np.concatenate([G, Gu @ phi, [phi @ phi - 1.0]])
+
+    x = np.linspace(0, 1, n + 1)[inner]
+    guess = np.concatenate([4 * 1.2 * x * (1 - x), np.sin(np.pi * x) / np.sqrt(n / 2), [3.4]])
+    z, _info, ok, msg = fsolve(equations, guess, full_output=True, xtol=1e-13)
+    assert ok == 1, msg
+    return z[-1]
+
+
+def test_bratu_fold_is_located_converges_at_order_two_and_extrapolates_to_the_continuum():
+    folds = {}
+    for n in (16, 32, 64):
+        p, b = bratu_branch(n)
+        assert b.status is ContinuationStatus.PARAMETER_BOUND, b.message
+        (fold,) = b.points_of_kind("fold")
+        assert fold.located
+        folds[n] = fold.parameter
+        assert_consistent(b, p)
+    assert folds[16] == pytest.approx(moore_spence_fold(16), abs=1e-10)
+    errors = np.array([BRATU_FOLD - folds[n] for n in (16, 32, 64)])
+    order = np.log2(errors[:-1] / errors[1:])
+    assert np.all((order > 1.95) & (order < 2.05)), order
+    richardson = (4 * folds[64] - folds[32]) / 3
+    assert abs(richardson - BRATU_FOLD) < 1e-6
+
+
+def test_bratu_through_the_fold_comes_back_down_the_upper_branch():
+    user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[16] - 1.0})
+    p = Bratu(32, 1.0)
+    opts = ContinuationOptions(parameter_bounds=(1.0, 4.0), initial_step=0.05, max_step=0.5)
+    b = continuation(p, np.zeros(33), parameter="lam", options=opts, events=[user],
+                     records=lambda q, mu, lam: {"u_mid": q[16], "energy": p.energy(q)})
+    assert b.status is ContinuationStatus.PARAMETER_BOUND, b.message
+    assert b.parameter_values[0] == 1.0 and b.parameter_values[-1] == 1.0  # landed exactly
+    (fold,) = b.points_of_kind("fold")
+    lam, u_mid = b.parameter_values, b.records["u_mid"]
+    i = fold.index
+    assert np.all(np.diff(lam[:i + 1]) > 0) and np.all(np.diff(lam[i + 1:]) < 0)
+    assert np.all(np.diff(u_mid) > 0)  # |u| grows all along, through the fold
+    # the lower branch is stable, the upper one has one unstable mode; seed 000's
+    # determinant sign changes with the count (a single eigenvalue crosses)
+    assert np.all(b.unstable_count[:i + 1] == 0) and np.all(b.unstable_count[i + 1:] == 1)
+    assert np.all(b.determinant_sign == (-1) ** b.unstable_count)
+    assert not b.points_of_kind("bifurcation")  # the count change is the fold's
+    # both ends against the continuum solution (second order in h)
+    h2 = (1 / 32) ** 2
+    assert abs(u_mid[0] - bratu_midpoint_exact(1.0, upper=False)) < 2 * h2
+    assert abs(u_mid[-1] - bratu_midpoint_exact(1.0, upper=True)) < 30 * h2
+    # user event: u(1/2) = 1 on the lower branch, located by re-corrected bisection
+    (threshold,) = b.points_of_kind("threshold")
+    assert threshold.label == "u_mid_minus_1"
+    assert abs(threshold.q[16] - 1.0) < 1e-9
+    assert abs(threshold.records["u_mid"] - 1.0) < 1e-9
+    assert threshold.index < fold.index
+    # every accepted state is a branch point (rejected trials never accepted)
+    accepted = np.array(p.accepted[-len(b):])
+    assert np.array_equal(accepted, b.states)
+    assert_consistent(b, p)
+
+
+def test_bordered_solve_with_rank_one_hessian_terms_equals_the_assembled_one():
+    folds = []
+    for rank_one in (True, False):
+        _, b = bratu_branch(24, lam0=2.0, problem_kw={"nonlocal_": -2.0, "rank_one": rank_one})
+        (fold,) = b.points_of_kind("fold")
+        folds.append((fold.parameter, b.parameter_values))
+    assert folds[0][0] == pytest.approx(folds[1][0], abs=1e-11)
+    assert np.allclose(folds[0][1], folds[1][1], atol=1e-11)
+    assert folds[0][0] < BRATU_FOLD - 0.1  # the nonlocal softening term moves the fold
+
+
+def test_secant_predictor_finds_the_same_fold():
+    _, tangent = bratu_branch(16)
+    _, secant = bratu_branch(16, predictor="secant")
+    assert secant.points_of_kind("fold")[0].parameter == pytest.approx(
+        tangent.points_of_kind("fold")[0].parameter, abs=1e-11)
+
+
+def test_pitchforks_of_the_diagonal_problem_are_located_and_switching_lands_on_the_known_branches():
+    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0, 8.0, 9.0])
+    p = DiagonalQuartic(d)
+    opts = ContinuationOptions(parameter_bounds=(0.0, 4.0), max_step=0.3)
+    b = continuation(p, np.zeros(8), parameter="lam", options=opts)
+    assert b.ok, b.message
+    assert_consistent(b, p)
+    bifurcations = b.points_of_kind("bifurcation")
+    assert [pt.located for pt in bifurcations] == [True] * 3
+    assert np.allclose([pt.parameter for pt in bifurcations], d[:3], atol=1e-9, rtol=0)
+    assert [(pt.count_before, pt.count_after) for pt in bifurcations] == [(0, 1), (1, 2), (2, 3)]
+    for i, pt in enumerate(bifurcations):
+        assert abs(pt.critical_eigenvalues[0]) < 1e-8
+        assert abs(abs(pt.critical_modes[0, i]) - 1.0) < 1e-8  # the mode is +-e_i
+    assert np.array_equal(b.determinant_sign, (-1) ** b.unstable_count)
+    for i, pt in enumerate(bifurcations[:2]):
+        for side in (1, -1):
+            new = switch_branch(p, b, pt, opts, side=side)
+            assert new.status is ContinuationStatus.PARAMETER_BOUND, new.message
+            assert new.parent == b.name and new.origin is pt
+            x, lam = new.states, new.parameter_values
+            assert np.allclose(np.sum(x**2, axis=1), lam - d[i], atol=1e-9, rtol=0)
+            assert np.all(np.sign(x[:, i]) == side)
+            assert np.max(np.abs(np.delete(x, i, axis=1))) < 1e-12
+            # the branch from d_i has the i lower modes x_j (j < i) unstable
+            assert np.all(new.unstable_count == i)
+            assert_consistent(new, p)
+
+
+def test_a_double_eigenvalue_crossing_under_o2_symmetry_is_seen_by_the_count_not_the_determinant():
+    d = np.array([1.0, 1.0, 3.0, 4.0, 5.0, 6.0, 7.0])
+    p = DiagonalQuartic(d, rotation_pairs=[(0, 1)])
+    opts = ContinuationOptions(parameter_bounds=(0.0, 2.0), max_step=0.3, phase_conditions=True)
+    b = continuation(p, np.zeros(7), parameter="lam", options=opts)
+    assert b.ok, b.message
+    (pt,) = b.points_of_kind("bifurcation")
+    assert pt.parameter == pytest.approx(1.0, abs=1e-9)
+    assert (pt.count_before, pt.count_after) == (0, 2)
+    assert np.all(b.determinant_sign == 1)  # seed 000's test sees nothing
+    assert set(np.unique(b.unstable_count)) == {0, 2}
+    # the two critical modes span the (x_0, x_1) plane
+    modes = pt.critical_modes
+    assert modes.shape == (2, 7)
+    assert np.allclose(modes[:, :2] @ modes[:, :2].T, np.eye(2), atol=1e-10)
+    assert np.max(np.abs(modes[:, 2:])) < 1e-10
+    assert_consistent(b, p)
+    # switch along one null vector; the phase condition removes the orbit's null mode
+    new = switch_branch(p, b, pt, opts)
+    assert new.ok, new.message
+    assert new.phase_modes.shape == (1, 7)
+    x, lam = new.states, new.parameter_values
+    assert np.allclose(np.sum(x**2, axis=1), lam - 1.0, atol=1e-9, rtol=0)
+    assert np.allclose(x[:, :2] @ (modes[0, :2]), np.linalg.norm(x[:, :2], axis=1), atol=1e-9)
+    assert np.all(new.unstable_count == 0) and np.all(new.zero_modes == 0)
+    assert_consistent(new, p)
+
+
+def test_a_constrained_point_on_a_sphere_exercises_multipliers_and_fixed_dofs():
+    d = [3.0, 1.0, 1.5, 2.0, 2.5]
+    p = LoadedSphere(d, 3.0)
+    q0 = np.zeros(p.n_dofs)
+    q0[0] = 1.0
+    opts = ContinuationOptions(parameter_bounds=(0.0, 3.0), max_step=0.3, direction=-1)
+    b = continuation(p, q0, parameter="lam", options=opts)
+    assert b.status is ContinuationStatus.PARAMETER_BOUND, b.message
+    assert b.parameter_values[-1] == 0.0
+    # the pole: mu = -x . grad E = lambda - d_0
+    assert np.allclose(b.multipliers[:, 0], b.parameter_values - d[0], atol=1e-10)
+    bifurcations = b.points_of_kind("bifurcation")
+    assert np.allclose([pt.parameter for pt in bifurcations], [2.0, 1.5, 1.0, 0.5], atol=1e-9)
+    assert list(b.unstable_count[[0, -1]]) == [0, 4]
+    assert_consistent(b, p)
+    new = switch_branch(p, b, bifurcations[0], opts)
+    assert new.status is ContinuationStatus.PARAMETER_BOUND, new.message
+    x, lam = new.states, new.parameter_values
+    # x_0 = lambda / (d_0 - d_1), x_1^2 = 1 - x_0^2, mu = -1, stable
+    assert np.allclose(x[:, 0], lam / 2.0, atol=1e-10)
+    assert np.allclose(x[:, 1] ** 2, 1 - x[:, 0] ** 2, atol=1e-10)
+    assert np.all(x[:, -1] == 0.0)  # the fixed DOF stays
+    assert np.allclose(new.multipliers[:, 0], -1.0, atol=1e-10)
+    assert np.all(new.unstable_count == 0)
+    assert_consistent(new, p)
+    # without parameter_derivative: central difference, O(step^2) accurate
+    system = ExtendedSystem(p, "lam", x[3])
+    xx = system.pack(x[3], new.multipliers[3], lam[3])
+    exact = np.zeros(system.n + 1)
+    exact[0] = -1.0
+    assert np.allclose(system.parameter_derivative(xx), exact, atol=1e-9)
+
+
+def test_the_corrector_respects_the_problems_step_bound():
+    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0, 8.0, 9.0])
+    p = DiagonalQuartic(d)
+    opts = ContinuationOptions(parameter_bounds=(0.0, 3.0), max_step=0.3)
+    b = continuation(p, np.zeros(8), parameter="lam", options=opts)
+    p.max_move = 0.01
+    new = switch_branch(p, b, b.points_of_kind("bifurcation")[0], opts)
+    assert new.ok and p.step_bound_calls > 0
+    assert np.allclose(np.sum(new.states**2, axis=1), new.parameter_values - 1.0, atol=1e-9)
+
+
+def test_save_load_round_trip_and_the_checker_catches_corruption(tmp_path):
+    p = Bratu(16, 3.0)
+    user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[8] - 1.0})
+    b = continuation(p, np.zeros(17), parameter="lam", events=[user],
+                     options=ContinuationOptions(parameter_bounds=(3.0, 4.0), max_step=0.5),
+                     records=lambda q, mu, lam: {"u_mid": q[8], "profile": q[::4]})
+    assert len(b.special_points) == 2
+    path = b.save(tmp_path / "bratu.npz")
+    loaded = Branch.load(path)
+    for f in dataclasses.fields(Branch):
+        if f.name in ("special_points", "origin", "records", "status"):
+            continue
+        a, c = getattr(b, f.name), getattr(loaded, f.name)
+        assert np.array_equal(a, c) if isinstance(a, np.ndarray) else a == c, f.name
+    assert loaded.status is b.status
+    assert loaded.records.keys() == b.records.keys()
+    assert all(np.array_equal(loaded.records[k], b.records[k]) for k in b.records)
+    for s, t in zip(b.special_points, loaded.special_points, strict=True):
+        for f in dataclasses.fields(s):
+            u, v = getattr(s, f.name), getattr(t, f.name)
+            if isinstance(u, np.ndarray):
+                assert np.array_equal(u, v), f.name
+            elif isinstance(u, dict):
+                assert all(np.array_equal(u[k], v[k]) for k in u)
+            else:
+                assert u == v, f.name
+    assert json.loads(json.dumps(loaded.summary())) == b.summary()
+    with pytest.raises(ValueError):
+        b.states[0, 0] = 1.0  # immutable
+    assert_consistent(loaded, p)
+    # a corrupted stored count and a misplaced special point are caught
+    count = b.unstable_count.copy()
+    count[2] += 1
+    report = consistency_check(dataclasses.replace(b, unstable_count=count), p)
+    assert not report.ok and any("point 2: stored unstable_count" in m for m in report.problems)
+    fold = b.points_of_kind("fold")[0]
+    moved = dataclasses.replace(fold, index=fold.index - 1)
+    report = consistency_check(dataclasses.replace(b, special_points=(moved,)), p)
+    assert not report.ok and any("not between its neighbours" in m for m in report.problems)
+
+
+def test_failures_are_returned_as_a_status():
+    p, first = bratu_branch(16)
+    p.lam = 3.0
+    tight = ContinuationOptions(initial_step=0.5, min_step=0.5, max_step=0.5,
+                                max_corrector_iterations=1)
+    b = continuation(p, first.states[0], parameter="lam", options=tight)
+    assert b.status is ContinuationStatus.STEP_TOO_SMALL and not b.ok
+    assert len(b) == 1 and "minimum step" in b.message
+    bad = continuation(Bratu(16, 3.0), np.full(17, 50.0), parameter="lam")
+    assert bad.status is ContinuationStatus.START_FAILED and len(bad) == 0
+    with pytest.raises(ValueError):
+        continuation(Bratu(16, 5.0), np.zeros(17), parameter="lam",
+                     options=ContinuationOptions(parameter_bounds=(0.0, 4.0)))
+    with pytest.raises(ValueError):
+        continuation(Bratu(16, 1.0), np.zeros(17), parameter="not_there")
+
+
+@pytest.mark.parametrize("bad", [{"initial_step": 0.0}, {"min_step": 1.0}, {"shrink": 1.0},
+                                 {"growth": 0.5}, {"parameter_bounds": (1.0, 0.0)},
+                                 {"max_points": 1}, {"direction": 0}, {"predictor": "euler"},
+                                 {"max_turn_degrees": 180.0}])
+def test_options_validate(bad):
+    with pytest.raises(ValueError):
+        ContinuationOptions(**bad)
+
+
+def test_branch_cost_stays_small():
+    start = time.perf_counter()
+    _, b = bratu_branch(64)
+    elapsed = time.perf_counter() - start
+    assert b.ok and elapsed < 5.0, elapsed

@@ -71,6 +71,8 @@ def test_bratu_fold_is_located_converges_at_order_two_and_extrapolates_to_the_co
         (fold,) = b.points_of_kind("fold")
         assert fold.located
         folds[n] = fold.parameter
+        # the constrained Hessian is singular there: its eigenvalue nearest zero vanishes
+        assert abs(fold.critical_eigenvalues[0]) < 1e-8
         assert_consistent(b, p)
     assert folds[16] == pytest.approx(moore_spence_fold(16), abs=1e-10)
     errors = np.array([BRATU_FOLD - folds[n] for n in (16, 32, 64)])

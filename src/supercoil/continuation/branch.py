@@ -36,8 +36,8 @@ class SpecialPoint:
     repeats the kind). The point lies between points ``index`` and
     ``index + 1`` of ``branch``, at arclength ``arclength``; ``q`` (n_dofs,),
     ``multipliers`` (m,), ``parameter`` its state, ``tangent`` (n_dofs + m + 1,)
-    the branch tangent there. For bifurcations ``critical_eigenvalues`` (k,)
-    and ``critical_modes`` (k, n_dofs) are the eigenpairs nearest zero (``k``
+    the branch tangent there. For folds and bifurcations ``critical_eigenvalues``
+    (k,) and ``critical_modes`` (k, n_dofs) are the eigenpairs nearest zero (``k``
     = the jump of the unstable count, at least 1) and ``count_before`` /
     ``count_after`` the unstable counts on either side. ``located`` is False
     when a trial correction failed during localisation (the point is then

@@ -130,7 +130,7 @@ class _Tracer:
         t = ev.tangent if ev.tangent is not None else self.ts[k + 1]
         stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes)
         values = modes = np.zeros(0)
-        if ev.kind == "bifurcation":
+        if ev.kind in ("bifurcation", "fold"):
             n_critical = max(1, abs(ev.count_after - ev.count_before))
             values, modes = stab.critical_modes(n_critical)
         else:

@@ -6,7 +6,8 @@ conditions, if any), from the inertia of the KKT matrix on the free DOFs
 (:class:`~supercoil.solvers.kkt.KKTFactor`; the problem's pins remove rigid
 motions and gauges). Eigenvalues of ``H v = mu M v`` nearest zero come from
 the eigenproblem of :mod:`supercoil.stability.analysis` (gauge pins
-released, the problem's symmetry modes projected out): dense below 400
+released, the problem's symmetry and near-symmetry modes projected out; the
+near-symmetries are removed from the inertia count as there): dense below 400
 unknowns, shift-invert Lanczos above. Those with ``|mu| <= zero_tolerance``
 are ``zero_modes`` and never signed, so ``unstable_count = max(found below
 -tol, inertia - zero_modes)`` (as :func:`~supercoil.stability.analysis.analyse`).
@@ -22,7 +23,12 @@ import numpy as np
 
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, KKTFactor, SingularMatrixError
-from supercoil.stability.analysis import _eigen_system, _lowest_pairs, dense_constrained_eigenpairs
+from supercoil.stability.analysis import (
+    _eigen_system,
+    _lowest_pairs,
+    _near_symmetry_schur,
+    dense_constrained_eigenpairs,
+)
 
 _DENSE_BELOW = 400
 
@@ -59,14 +65,20 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     """
     J = system.jacobian(x)
     H = system.hessian(x)
+    sign = None
     try:
         factor = KKTFactor(H, J)
-        return factor.reduced_negative_count, int(factor.determinant_sign * (-1) ** J.shape[0])
+        negative = factor.reduced_negative_count
+        sign = int(factor.determinant_sign * (-1) ** J.shape[0])
     except (SingularMatrixError, InertiaError):
         if zero_tolerance is None:
             raise
-    shifted = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=system.mass)
-    return shifted.reduced_negative_count, 0
+        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=system.mass)
+        negative = factor.reduced_negative_count
+    # approximate symmetries (a closed rod's material sliding) leave the count as in
+    # supercoil.stability.analysis.analyse (Schur complement of their constraints)
+    near = _near_symmetry_schur(system.problem, system.q(x), factor, system.free)
+    return negative - int(np.sum(near < 0)), (0 if sign is None else sign)
 
 
 def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int

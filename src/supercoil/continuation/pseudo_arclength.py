@@ -179,6 +179,10 @@ class _Tracer:
             bound = None
             if failure is None and not low <= x_new[-1] <= high:
                 bound = low if x_new[-1] < low else high
+                if x_k[-1] == bound:  # started on the bound, heading out
+                    return ContinuationStatus.PARAMETER_BOUND, (
+                        f"{system.parameter} = {bound:.10g} is a bound and the branch leaves "
+                        f"the interval there ({len(self.xs)} points)")
                 u = (bound - x_k[-1]) / (x_new[-1] - x_k[-1])
                 e_lam = np.zeros(system.size)
                 e_lam[-1] = 1.0
@@ -206,6 +210,8 @@ class _Tracer:
             except (SingularMatrixError, InertiaError) as exc:
                 return ContinuationStatus.STEP_TOO_SMALL, (
                     f"stability at point {len(self.xs)} failed: {exc}")
+            if bound is None and x_new[-1] in (low, high):
+                bound = x_new[-1]  # the step ended exactly on the bound
             if bound is not None:
                 return ContinuationStatus.PARAMETER_BOUND, (
                     f"reached {system.parameter} = {bound:.10g} after {len(self.xs)} points")

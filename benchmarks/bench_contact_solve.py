@@ -26,7 +26,7 @@ import time
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--nodes", type=int, default=200)
-    parser.add_argument("--treatment", default="barrier")
+    parser.add_argument("--treatment", default="barrier", help="contact treatment (default: the library default)")
     parser.add_argument("--step", type=float, default=0.02)
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args(argv)

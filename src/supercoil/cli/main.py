@@ -65,7 +65,7 @@ CONTACT_NEWTON_TOLERANCE = 1e-9  # residual of the contact solves (the default o
 # and scipy (about 0.6 s), too slow for ``supercoil --help``. tests/test_cli.py
 # asserts that the copies are equal to the originals.
 CONTACT_TREATMENTS = ("barrier", "augmented", "penalty", "exact")
-DEFAULT_CONTACT_TREATMENT = "exact"
+DEFAULT_CONTACT_TREATMENT = "barrier"
 BARRIER_ACTIVATION = 1e-2  # ContactOptions.barrier_activation, over D
 PENETRATION_TOLERANCE = 1e-4  # ContactOptions.penetration_tolerance, over D
 PENALTY_TOLERANCE = 5e-2  # ContactOptions.penalty_tolerance, over D

@@ -49,7 +49,7 @@ from supercoil.contact.distance import segment_distance, segment_distance_deriva
 from supercoil.solvers.problem import HessianParts
 
 TREATMENTS = ("barrier", "augmented", "penalty", "exact")
-DEFAULT_TREATMENT = "exact"
+DEFAULT_TREATMENT = "barrier"
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ within tolerance) and the solve converged; nothing is returned silently.
 from __future__ import annotations
 
 import dataclasses
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,6 +35,8 @@ from supercoil.contact.distance import segment_distance
 from supercoil.contact.problem import ContactProblem
 from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.solvers.problem import free_dofs
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -168,35 +171,55 @@ def _augmented(problem: ContactProblem, q0, opts, max_outer=None):
 
 def _exact(problem: ContactProblem, q0, opts):
     """Active-set solve of the inequality-constrained problem (see module docstring)."""
-    D = problem.diameter
-    tol = problem.options.penetration_tolerance
+    stationary = dataclasses.replace(opts, mode="stationary")
+    if len(problem.active):
+        # A neighbouring solve left its active set (continuation, a small load
+        # step): start the active-set loop from it; a contact that releases or
+        # forms on the way is handled by the loop. Start over if that fails.
+        out = _active_set_loop(problem, np.asarray(q0, float), problem.active, None,
+                               stationary, 0, 0, max_cycles=8)
+        if out.converged and out.admissible:
+            return dataclasses.replace(out, message=out.message + " (from the previous "
+                                       "active set)")
+        problem.active = np.zeros((0, 2), dtype=np.int64)
     warm = ContactProblem(problem.base, dataclasses.replace(problem.options,
                                                              treatment="augmented"))
     start = _augmented(warm, q0, opts)
-    opts = dataclasses.replace(opts, mode="stationary")  # a polish from next to the solution
     if not start.converged:
         return dataclasses.replace(start, message="warm start failed: " + start.message)
-    q = start.q
-    st, force = warm.pair_forces(q)
-    total, outer = start.newton_iterations, start.outer_iterations
-    active, forces = _independent_pairs(problem, q, st.pairs, force)
+    st, force = warm.pair_forces(start.q)
+    active, forces = _independent_pairs(problem, start.q, st.pairs, force)
+    lam = np.concatenate([start.multipliers[: problem.n_equalities], -forces])
+    # a polish from next to the solution
+    return _active_set_loop(problem, start.q, active, lam, stationary, start.newton_iterations,
+                            start.outer_iterations, problem.options.max_outer_iterations)
+
+
+def _active_set_loop(problem: ContactProblem, q, active, lam, opts, total, outer, max_cycles):
+    """Newton on the active contacts; release negative forces, add penetrating pairs; repeat."""
+    D = problem.diameter
+    tol = problem.options.penetration_tolerance
     m0 = problem.n_equalities
-    lam = np.concatenate([start.multipliers[:m0], -forces])
-    scale = max(float(np.max(np.abs(lam))) if lam.size else 1.0, 1.0)
-    for cycle in range(1, problem.options.max_outer_iterations + 1):
+    scale = max(float(np.max(np.abs(lam))) if lam is not None and lam.size else 1.0, 1.0)
+    res = None
+    for cycle in range(1, max_cycles + 1):
         problem.active = active
         problem.invalidate()
+        if lam is not None and len(lam) != problem.n_constraints:
+            lam = None
         res = newton(problem, q, opts, multipliers=lam)
         total += res.iterations
         if not res.converged:
             return _finish(problem, res, outer + cycle, f" (exact contact, active-set cycle {cycle})")
         q, lam = res.q, res.multipliers
+        scale = max(scale, float(np.max(np.abs(lam))) if lam.size else 1.0)
         contact_force = -lam[m0:]
         changed = False
         if contact_force.size and contact_force.min() < -problem.options.force_tolerance * scale:
-            drop = int(np.argmin(contact_force))
+            # release the contact that pulls hardest, one at a time (releasing
+            # all at once was measured to cycle)
             keep = np.ones(len(active), dtype=bool)
-            keep[drop] = False
+            keep[int(np.argmin(contact_force))] = False
             active, lam = active[keep], np.concatenate([lam[:m0], lam[m0:][keep]])
             changed = True
         st = problem.pair_state(q, D * (1 - tol))
@@ -218,14 +241,16 @@ def _exact(problem: ContactProblem, q0, opts):
                     lam = np.concatenate([lam[:m0], [old_lam.get(tuple(p), 0.0)
                                                      for p in kept.tolist()]])
                     changed = True
+        log.debug("active-set cycle %d: %d active, min force %.3g, %d penetrating, changed %s",
+                  cycle, len(active), float(contact_force.min()) if contact_force.size else 0.0,
+                  len(st.pairs), changed)
         if not changed:
             break
     else:
         problem.active = active
         return _result(problem, q, lam, False, "active set did not settle",
-                       f"exact contact: the active set changed in each of "
-                       f"{problem.options.max_outer_iterations} cycles", total, outer + cycle,
-                       res.residual)
+                       f"exact contact: the active set changed in each of {max_cycles} cycles",
+                       total, outer + max_cycles, res.residual)
     problem.active = active
     problem.invalidate()
     message = res.message + f"; exact contact: {len(active)} active constraints, {cycle} cycles"

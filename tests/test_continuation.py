@@ -307,3 +307,15 @@ def test_branch_cost_stays_small():
     _, b = bratu_branch(64)
     elapsed = time.perf_counter() - start
     assert b.ok and elapsed < 5.0, elapsed
+
+
+def test_critical_modes_are_brought_back_to_the_gauge_pins_before_switching():
+    from supercoil.continuation.switching import _pinned
+
+    p = DiagonalQuartic(np.ones(4), rotation_pairs=[(0, 1)])
+    p.gauge_dofs = np.array([1])
+    q = np.array([2.0, 0.0, 0.0, 0.0])
+    mode = np.array([0.3, 0.5, -0.2, 0.1])
+    pinned = _pinned(p, q, mode)
+    # mode minus the rotation generator (0, 2, 0, 0) scaled to zero the pinned DOF
+    assert np.allclose(pinned, [0.3, 0.0, -0.2, 0.1], atol=1e-15)

@@ -54,18 +54,12 @@ class PointStability:
         return self.eigenvalues[idx], self.modes[idx]
 
 
-def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None = None
-            ) -> tuple[int, int]:
-    """``(negative count, determinant sign)`` of the constrained Hessian at ``x``.
-
-    With ``zero_tolerance``, an exactly singular Hessian (a special point located
-    exactly) is handled: the count is then that of the eigenvalues below
-    ``-zero_tolerance / 2`` (the inertia of ``H + M zero_tolerance / 2``) and the
-    determinant sign is 0.
-    """
+def _inertia_parts(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None
+                   ) -> tuple[int, int, int]:
+    """``(raw negative count, near-symmetry negatives, determinant sign)`` at ``x``."""
     J = system.jacobian(x)
     H = system.hessian(x)
-    sign = None
+    sign = 0
     try:
         factor = KKTFactor(H, J)
         negative = factor.reduced_negative_count
@@ -78,7 +72,21 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     # approximate symmetries (a closed rod's material sliding) leave the count as in
     # supercoil.stability.analysis.analyse (Schur complement of their constraints)
     near = _near_symmetry_schur(system.problem, system.q(x), factor, system.free)
-    return negative - int(np.sum(near < 0)), (0 if sign is None else sign)
+    return negative, int(np.sum(near < 0)), sign
+
+
+def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None = None
+            ) -> tuple[int, int]:
+    """``(negative count, determinant sign)`` of the constrained Hessian at ``x``.
+
+    Near-symmetry directions are removed from the count as in
+    :func:`~supercoil.stability.analysis.analyse`. With ``zero_tolerance``, an
+    exactly singular Hessian (a special point located exactly) is handled: the
+    count is then that of the eigenvalues below ``-zero_tolerance / 2`` (the
+    inertia of ``H + M zero_tolerance / 2``) and the determinant sign is 0.
+    """
+    negative, near, sign = _inertia_parts(system, x, zero_tolerance)
+    return negative - near, sign
 
 
 def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int
@@ -104,9 +112,12 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
                     n_modes: int) -> PointStability:
     """Stability report at the point ``x`` of the extended system (see module doc)."""
-    neg, det_sign = inertia(system, x, zero_tolerance)
+    neg, near, det_sign = _inertia_parts(system, x, zero_tolerance)
     values, modes = eigenpairs(system, x, neg + n_modes)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
-    unstable = max(below, neg - zero) if below <= neg else neg
+    # as analyse: at least what the eigensolver found below -tol, at least the
+    # inertia less zero modes and near-symmetry directions; the inertia wins when
+    # the eigensolver finds more negatives than it counts
+    unstable = max(below, neg - near - zero) if below <= neg else neg
     return PointStability(unstable, zero, neg, det_sign, values, modes)

@@ -36,6 +36,25 @@ from supercoil.solvers.kkt import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
 
 
+def _pinned(problem: ConstrainedEnergy, q: np.ndarray, mode: np.ndarray) -> np.ndarray:
+    """The mode made zero on the gauge pins by adding symmetry modes.
+
+    Critical modes are computed with gauge pins released and the symmetry
+    modes projected out (:mod:`supercoil.stability.analysis`); the pinned
+    system's null vector is the same mode plus the symmetry motion that
+    brings the pinned DOFs back to zero (least squares on the pins).
+    """
+    gauge = np.asarray(getattr(problem, "gauge_dofs", ()), dtype=np.int64)
+    getter = getattr(problem, "symmetry_modes", None)
+    if gauge.size == 0 or getter is None:
+        return mode
+    modes = np.atleast_2d(np.asarray(getter(q), dtype=float))
+    if modes.size == 0:
+        return mode
+    coefficients = np.linalg.lstsq(modes[:, gauge].T, mode[gauge], rcond=None)[0]
+    return mode - coefficients @ modes
+
+
 def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: SpecialPoint,
                   options: ContinuationOptions | None = None, *, side: int = 1,
                   mode: int = 0, direction: np.ndarray | None = None,
@@ -59,7 +78,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
             raise ValueError(f"the special point has {special_point.critical_modes.shape[0]} "
                              f"critical modes, mode {mode} asked for")
         direction = special_point.critical_modes[mode]
-    direction = np.asarray(direction, dtype=float)
+    direction = _pinned(problem, special_point.q, np.asarray(direction, dtype=float))
     eps = opts.initial_step if amplitude is None else float(amplitude)
     label = name or f"{branch.name}/{special_point.kind}{special_point.index}"
     setattr(problem, branch.parameter, float(special_point.parameter))

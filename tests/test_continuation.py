@@ -13,8 +13,14 @@ import time
 
 import numpy as np
 import pytest
-from continuation_toys import BRATU_FOLD, Bratu, DiagonalQuartic, LoadedSphere, bratu_midpoint_exact
 from scipy.optimize import fsolve
+from test_continuation_toys import (
+    BRATU_FOLD,
+    Bratu,
+    DiagonalQuartic,
+    LoadedSphere,
+    bratu_midpoint_exact,
+)
 
 from supercoil.continuation import (
     Branch,

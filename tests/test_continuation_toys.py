@@ -1,4 +1,4 @@
-"""Toy problems for the generic continuation layer (each with a known answer)."""
+"""Toy problems for the generic continuation layer (each with a known answer; no tests here)."""
 
 import numpy as np
 import scipy.sparse as sp

@@ -60,7 +60,7 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
                            n_nodes: int = 100, treatment: str = DEFAULT_TREATMENT,
                            curvature: str = "angle", tolerance: float = 1e-9,
                            zero_tolerance: float = DEFAULT_ZERO_TOLERANCE, n_modes: int = 6,
-                           max_iterations: int = 300,
+                           max_iterations: int = 1000,
                            initial_points: np.ndarray | None = None) -> RingResult:
     """Stable equilibrium of the ring with self-contact (see the module docstring).
 
@@ -109,7 +109,7 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
     # tiny distance away by a contact about to form; push off along the
     # unstable mode (largest node displacement RESTART_AMPLITUDE * D) and
     # minimise again.
-    restarts = 0
+    restarts, iterations = 0, res.newton_iterations
     while res.converged and stab.unstable_count > 0 and restarts < MAX_RESTARTS:
         restarts += 1
         mode = stab.lowest_modes[0].reshape(-1, 3)
@@ -120,6 +120,7 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
         if not trial.converged:
             break
         res = trial
+        iterations += res.newton_iterations
         stab = analyse(problem.stability_view(), res.q, res.multipliers, n_modes=n_modes,
                        zero_tolerance=zero_tolerance)
     if restarts:
@@ -135,7 +136,7 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
     result = ring_result(problem, res.q, res.multipliers, stab,
                          converged=res.converged and res.admissible, status=res.status,
                          message=message, residual=res.residual,
-                         iterations=res.newton_iterations, zero_tolerance=zero_tolerance,
+                         iterations=iterations, zero_tolerance=zero_tolerance,
                          length_over_diameter=float(length_over_diameter),
                          contact_treatment=treatment, contact=contact)
     # The writhe the energy uses (carried continuously from the circle through

@@ -176,3 +176,29 @@ def test_newton_never_lets_a_rod_pass_through_another():
     assert np.all(z_b[middle] > 0)
     assert not res.admissible
     assert "penetration" in res.message
+
+
+def test_a_pulling_contact_is_flagged_not_dropped():
+    """Hold rod B on A with the contact as an equality while the load pulls B
+    away: the multiplier is a negative (pulling) contact force, which the
+    output must flag; the exact solve itself releases it."""
+    toy = CrossedRods(load=-2.0, height=0.05)  # B's centreline exactly D above A's
+    problem = ContactProblem(toy, ContactOptions(diameter=0.05, treatment="exact"))
+    q0 = toy.points.ravel()
+    st = problem.pair_state(q0, 0.05 * (1 + 1e-9))
+    problem.active = st.pairs[:1]
+    from supercoil.solvers.newton import newton
+
+    held = newton(problem, q0, NewtonOptions(mode="stationary"))
+    assert held.converged
+    summary = contact_summary(problem, held.q, held.multipliers)
+    assert summary["negative_contact_forces"] == 1
+    force_scale = toy.rod.length**2 / toy.rod.bending_stiffness
+    np.testing.assert_allclose(summary["contacts"][0]["force"] / force_scale, -2.0, rtol=1e-8)
+    # the exact treatment never holds it: B is pulled away (there is no
+    # equilibrium, so the solve does not converge) and no contact remains
+    problem.active = st.pairs[:0]
+    free = solve_contact(problem, q0, NewtonOptions(max_iterations=20))
+    after = contact_summary(problem, free.q, free.multipliers)
+    assert after["negative_contact_forces"] == 0 and after["contacts"] == []
+    assert np.all(free.q[3 * toy.n + 2 :: 3] > 0.05)

@@ -5,6 +5,9 @@ F·L²/A. ``contacts`` lists every touching segment pair as ``{s1, s2, force}``
 with ``s1 < s2``; pairs whose closest points coincide (both segments of a
 joint touching at the same node) are merged and their forces added.
 
+A negative force (only the exact treatment's multipliers can have one) is
+counted in ``negative_contact_forces`` and kept in the lists.
+
 Grouping. Two contacts are linked when they lie within 1.5 segment lengths of
 each other on both strands (i.e. they touch along neighbouring segments;
 across the seam s = 0 of a closed rod too); chains are the connected groups
@@ -108,7 +111,12 @@ def contact_summary(problem: ContactProblem, q: np.ndarray,
                 s1, s2 = s1 % 1.0, s2 % 1.0
             points.append({"s1": s1, "s2": s2, "force": float(f.sum())})
     d_min = problem.min_distance(q)
+    # Contact forces push apart (seed 001, eq. 10): a negative one (possible
+    # only for the exact treatment's multipliers) is not an admissible
+    # equilibrium and is flagged, never dropped.
+    negative = [c for c in contacts if c["force"] < 0]
     return {
+        "negative_contact_forces": len(negative),
         "contacts": contacts,
         "contact_points": points,
         "contact_intervals": intervals,

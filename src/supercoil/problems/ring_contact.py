@@ -131,10 +131,15 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
                  f"--nodes >= {int(np.ceil(base.rod.length / options.diameter))}")
     contact = contact_summary(problem, res.q, res.multipliers)
     message = note + "; " + res.message
+    if contact["negative_contact_forces"]:
+        message += (f"; warning: {contact['negative_contact_forces']} contact force(s) are "
+                    "negative: not an admissible equilibrium")
     if not res.admissible:
         message += "; warning: the state is not admissible (penetration beyond tolerance)"
     result = ring_result(problem, res.q, res.multipliers, stab,
-                         converged=res.converged and res.admissible, status=res.status,
+                         converged=(res.converged and res.admissible
+                                    and not contact["negative_contact_forces"]),
+                         status=res.status,
                          message=message, residual=res.residual,
                          iterations=iterations, zero_tolerance=zero_tolerance,
                          length_over_diameter=float(length_over_diameter),

@@ -21,6 +21,11 @@ Two ways to find the contact pairs are timed (median of ``--repeat`` warm runs):
     the last measured one, as N²) to take at most ``--all-pairs-budget``
     seconds; only measured times are printed.
 
+With ``--fixed-resolution`` the plectoneme grows with N instead (9 turns per
+1000 nodes: D/h fixed, the number of contacts proportional to N): the
+series that shows how the cost grows with the size of the problem rather
+than with the refinement of one shape.
+
 At every N where both run, the two sets of contact pairs must be equal (exit
 status 1 otherwise). Prints a markdown table, the ratios and the exponents p of
 ``time ~ N^p`` fitted by least squares on log-log axes.
@@ -45,7 +50,8 @@ CONTACT_TOLERANCE = 1e-3  # contact: d <= D (1 + CONTACT_TOLERANCE)
 ALL_PAIRS_CHUNK = 1 << 20
 
 
-def plectonemic_ring(n_nodes: int, fine_points: int = 40000) -> tuple[np.ndarray, float]:
+def plectonemic_ring(n_nodes: int, fine_points: int = 40000,
+                     turns: float = 9.0) -> tuple[np.ndarray, float]:
     """(n_nodes, 3) nodes of a closed plectoneme of length 1, equally spaced in arc length, and D.
 
     Built in a frame that turns about the z axis: two straight strands at x = ±R
@@ -55,13 +61,13 @@ def plectonemic_ring(n_nodes: int, fine_points: int = 40000) -> tuple[np.ndarray
     half under (x, z) → (−x, H − z). Each point is then rotated about the z axis
     by z / p with p = 1.2 R, so the strands are interwound helices of radius R in
     phase opposition; their distance is ≥ 2R = D, with equality at equal
-    heights, because p ≥ R. Nine turns of the superhelix, C¹ (piecewise circular
-    and straight in the turning frame).
+    heights, because p ≥ R. ``turns`` turns of the superhelix (nine by
+    default), C¹ (piecewise circular and straight in the turning frame).
     """
     diameter = 0.01
     radius = diameter / 2
     rise = 1.2 * radius  # axial rise per radian of superhelical turn
-    height = 9 * 2 * np.pi * rise
+    height = turns * 2 * np.pi * rise
     bulge_radius, bulge_angle = 1.5 * diameter, 0.6
     bulge_x = radius + bulge_radius * (1 - np.cos(bulge_angle))
     bulge_z = height + bulge_radius * np.sin(bulge_angle)
@@ -152,6 +158,12 @@ def main() -> int:
         "--all-pairs-budget", type=float, default=20.0, help="seconds allowed for one run of (b)"
     )
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
+    parser.add_argument(
+        "--fixed-resolution",
+        action="store_true",
+        help="scale the plectoneme with N (9 superhelical turns per 1000 nodes), so that D/h "
+        "stays fixed and the number of contacts grows like N",
+    )
     arguments = parser.parse_args()
 
     # compile (or load the numba cache) outside the timings
@@ -173,7 +185,9 @@ def main() -> int:
     last_all_pairs = None  # (N, seconds of one run)
     all_agree = True
     for n_nodes in arguments.sizes:
-        points, diameter = plectonemic_ring(n_nodes)
+        turns = 9.0 * n_nodes / 1000 if arguments.fixed_resolution else 9.0
+        fine = max(40000, 40 * n_nodes)
+        points, diameter = plectonemic_ring(n_nodes, fine_points=fine, turns=turns)
         segments = polygon_segments(points, True)
         spacing = float(np.mean(segments[3] - segments[2]))
         totals, broads = [], []

@@ -202,3 +202,16 @@ def test_a_pulling_contact_is_flagged_not_dropped():
     after = contact_summary(problem, free.q, free.multipliers)
     assert after["negative_contact_forces"] == 0 and after["contacts"] == []
     assert np.all(free.q[3 * toy.n + 2 :: 3] > 0.05)
+
+
+def test_load_parameters_set_on_the_wrapper_reach_the_rod():
+    from supercoil.problems.ring import twisted_circle_problem
+
+    base, q0 = twisted_circle_problem(1.0, 1.0, 40)
+    problem = ContactProblem(base, ContactOptions(diameter=0.02))
+    e_before = problem.energy(q0)
+    problem.excess_link = 1.5  # as a continuation in excess_link does
+    assert base.excess_link == 1.5
+    assert problem.energy(q0) > e_before  # twist energy 2 pi^2 C dLk^2 grew
+    problem.stability_mode = True  # the wrapper's own attributes stay its own
+    assert "stability_mode" not in vars(base)

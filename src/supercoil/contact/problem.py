@@ -162,6 +162,18 @@ class ContactProblem:
             raise AttributeError(name)
         return getattr(self.base, name)
 
+    def __setattr__(self, name, value):
+        # Load parameters live on the rod (``excess_link``, ``turns``,
+        # ``tension``): a continuation that sets them on this wrapper must
+        # reach the rod, and the cached pair data are then stale.
+        own = self.__dict__
+        if "base" in own and name not in own and name not in type(self).__dict__ \
+                and hasattr(own["base"], name):
+            setattr(own["base"], name, value)
+            own["_cache_key"] = None
+            return
+        object.__setattr__(self, name, value)
+
     # ----------------------------------------------------------- geometry
     @property
     def treatment(self) -> str:

@@ -1082,3 +1082,127 @@ def test_envelope_and_write_json_round_trip(tmp_path, capsys):
         envelope({"units": "pN"}, n_nodes=3, tolerances={})
     with pytest.raises(OSError):
         write_json(data, tmp_path / "missing" / "r.json")
+
+
+# ------------------------------------------------------------- ring --dna (units)
+
+DNA_KEYS = (
+    "base_pairs",
+    "superhelical_density",
+    "relaxed_link",
+    "length_nm",
+    "diameter_nm",
+    "salt_mM",
+    "temperature_K",
+    "kT_pN_nm",
+    "energy_kT",
+    "energy_circle_exact_kT",
+    "michell_threshold_superhelical_density",
+    "min_gap_nm",
+)
+
+
+def test_ring_dna_plasmid_json_and_table(runner, tmp_path):
+    """A 1000 bp plasmid at sigma = -0.04 in 100 mM salt. Oracles by hand: L = 340 nm,
+    C/A = 95/50, dLk = -0.04 * 1000/10.5, D = 5 nm (a table point), L/D = 68; every
+    suffixed key is its nondimensional value times A/L (in kT), A/L^2 (pN) or D (nm),
+    with A = 50 nm * 4.11 pN nm; Lk = Tw + Wr; the units are the preset's name."""
+    target = tmp_path / "plasmid.json"
+    result = invoke(runner, "ring", "--dna", "--bp", "1000", "--sigma", "-0.04",
+                    "--salt-mM", "100", "--nodes", "70", "--json", target)
+    data = json.loads(target.read_text())
+    assert result.exit_code == 0, (result.stderr, data["message"])
+    for key in (*ENVELOPE, *RING_KEYS, *CONTACT_KEYS, *DNA_KEYS):
+        assert key in data, key
+    assert data["units"] == "dna"
+    a_pN_nm2, length_nm = 50 * 4.11, 1000 * 0.34
+    assert data["twist_ratio"] == pytest.approx(1.9, rel=1e-15)
+    assert data["excess_link"] == pytest.approx(-0.04 * 1000 / 10.5, rel=1e-14)
+    assert data["superhelical_density"] == -0.04
+    assert data["relaxed_link"] == pytest.approx(1000 / 10.5, rel=1e-15)
+    assert data["length_over_diameter"] == pytest.approx(68.0, rel=1e-14)
+    assert data["length_nm"] == pytest.approx(length_nm, rel=1e-15)
+    assert data["diameter_nm"] == 5.0 and data["salt_mM"] == 100.0
+    assert data["temperature_K"] == 298.0 and data["kT_pN_nm"] == 4.11
+    assert data["energy_kT"] == pytest.approx(data["energy"] * a_pN_nm2 / length_nm / 4.11,
+                                              rel=1e-14)
+    assert data["energy_circle_exact_kT"] == pytest.approx(
+        data["energy_circle_exact"] * 50 / length_nm, rel=1e-14)
+    assert data["michell_threshold_superhelical_density"] == pytest.approx(
+        data["michell_threshold_exact"] / (1000 / 10.5), rel=1e-14)
+    assert data["min_gap_nm"] == pytest.approx(data["min_gap_over_diameter"] * 5.0, rel=1e-14)
+    assert data["contact_points"], "a supercoiled plasmid touches itself"
+    for key in ("contacts", "contact_points"):
+        for contact in data[key]:
+            assert contact["force_pN"] == pytest.approx(
+                contact["force"] * a_pN_nm2 / length_nm**2, rel=1e-14)
+    for interval in data["contact_intervals"]:
+        assert interval["force_per_length_pN_per_nm"] == pytest.approx(
+            interval["force_per_length"] * a_pN_nm2 / length_nm**3, rel=1e-14)
+    assert data["converged"] and data["stable"]
+    assert abs(data["twist"] + data["writhe"] - data["excess_link"]) < 1e-9
+    assert data["writhe"] < -1.0  # underwound: negative supercoils
+    assert "athermal" in data["conventions"] and "units_preset" in data["conventions"]
+    record = data["provenance"]["units_preset"]
+    assert record["name"] == "dna" and record["base_pairs"] == 1000
+    assert record["bending_persistence_nm"] == 50.0 and record["twist_persistence_nm"] == 95.0
+    assert record["rise_nm_per_bp"] == 0.34 and record["helical_repeat_bp"] == 10.5
+    assert record["kT_reference_pN_nm"] == 4.11 and record["diameter_nm"] == 5.0
+    text = " ".join(result.stdout.replace("\u2502", " ").split())  # cells rejoined
+    assert "DNA supercoiled ring, 1000 bp" in text
+    for row in ("energy (kT)", "superhelical density sigma", "contact forces (pN)",
+                "closest approach (nm)", "L = 340 nm", "D = 5 nm (100 mM salt)",
+                "Athermal model (zero temperature)"):
+        assert row in text, row
+
+
+def test_ring_dna_help_names_the_options_and_the_caveat(runner):
+    result = invoke(runner, "ring", "--help")
+    text = " ".join(result.stdout.split())
+    for word in ("--dna", "--bp", "--sigma", "--salt-mM", "--diameter-nm", "--temperature-K",
+                 "--twist-persistence-nm", "athermal", "kT"):
+        assert word in text, word
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--dna", "--bp", "1000", "--sigma", "-0.04", "--twist-ratio", "1"],
+         ["--twist-ratio", "cannot be combined with --dna"]),
+        (["--dna", "--bp", "1000", "--sigma", "-0.04", "--excess-link", "-3"],
+         ["--excess-link", "cannot be combined with --dna"]),
+        (["--dna", "--bp", "1000", "--sigma", "-0.04", "--length-over-diameter", "60"],
+         ["--length-over-diameter", "cannot be combined with --dna"]),
+        (["--dna", "--bp", "1000"], ["--dna needs --sigma"]),
+        (["--dna", "--sigma", "-0.04"], ["--dna needs --bp"]),
+        (["--dna"], ["--dna needs --bp", "--sigma"]),
+        (["--bp", "1000", "--sigma", "-0.04"], ["--bp, --sigma need --dna"]),
+        (["--twist-ratio", "1", "--excess-link", "1", "--salt-mM", "100"],
+         ["--salt-mM needs --dna"]),
+        (["--twist-ratio", "1", "--excess-link", "1", "--temperature-K", "300"],
+         ["--temperature-K needs --dna"]),
+        (["--excess-link", "1"], ["Missing option", "'--twist-ratio'", "--dna"]),
+        (["--twist-ratio", "1"], ["Missing option", "'--excess-link'"]),
+        (["--dna", "--bp", "0", "--sigma", "0"], ["--bp", ">= 1", "got 0"]),
+        (["--dna", "--bp", "1000", "--sigma", "nan"], ["--sigma", "finite"]),
+        (["--dna", "--bp", "1000", "--sigma", "0", "--salt-mM", "5"],
+         ["--salt-mM", "outside the tabulated range 10-200 mM"]),
+        (["--dna", "--bp", "1000", "--sigma", "0", "--salt-mM", "1000"],
+         ["--salt-mM", "outside the tabulated range"]),
+        (["--dna", "--bp", "1000", "--sigma", "0", "--temperature-K", "0"],
+         ["--temperature-K", "positive"]),
+        (["--dna", "--bp", "1000", "--sigma", "0", "--salt-mM", "100", "--diameter-nm", "4"],
+         ["--salt-mM and --diameter-nm"]),
+        (["--dna", "--bp", "1000", "--sigma", "0", "--diameter-nm", "-4"],
+         ["--diameter-nm", "positive"]),
+        (["--dna", "--bp", "5", "--sigma", "0"], ["--bp 5", "L/D > pi", "--bp >= 40"]),
+        (["--dna", "--bp", "1000", "--sigma", "1e9"], ["--sigma", "|dLk| must be <= 1e6"]),
+    ],
+)
+def test_ring_dna_bad_input_is_one_line_and_exit_2(runner, capsys, args, words):
+    """Mixed, missing or invalid DNA options: one ``error:`` line, exit 2, nothing solved,
+    both through typer's runner and through the console script's entry point."""
+    assert_one_line_error(invoke(runner, "ring", *args), *words)
+    status, out, err = run_main(capsys, "ring", *args)
+    assert_one_line(status, out, err, 2, *words)
+    assert out == ""

@@ -11,11 +11,21 @@ def _number(value: float, digits: int = 10) -> str:
 
 def ring_table(summary: dict, initial: str | None = None) -> Table:
     """A two-column table of a ring result (keys of ``RingResult.summary()``);
-    ``initial``: the file of the starting curve, if not the circle."""
+    ``initial``: the file of the starting curve, if not the circle. A summary
+    in DNA units (``supercoil.units.dna.ring_summary_in_dna_units``) adds rows in
+    bp, nm, kT and pN and the athermal caveat as the caption."""
     kind = "Twisted ring" if summary.get("contact_treatment") is None else "Supercoiled ring"
+    dna = "base_pairs" in summary
+    caption = None
+    if dna:
+        from supercoil.units.dna import ATHERMAL_CAVEAT
+
+        kind = f"DNA {kind[0].lower()}{kind[1:]}, {summary['base_pairs']} bp"
+        caption = ATHERMAL_CAVEAT
     table = Table(
         title=f"{kind}, C/A = {_number(summary['twist_ratio'], 6)}, "
         f"N = {summary['n_nodes']} (A = 1, L = 1)",
+        caption=caption,
         show_header=False,
     )
     table.add_column("quantity", style="bold")
@@ -70,9 +80,38 @@ def ring_table(summary: dict, initial: str | None = None) -> Table:
                        f"{c['force_per_length']:.4g} per length"
                        for c in summary["contact_intervals"]) or "none"),
         ]
+    if dna:
+        rows += _dna_rows(summary)
     if initial is not None:  # references that belong to the circle
-        circle_rows = ("exact circle energy", "Michell threshold (A/C)sqrt(3)")
+        circle_rows = ("exact circle energy", "Michell threshold (A/C)sqrt(3)",
+                       "circle buckles at sigma (Michell)")
         rows = [row for row in rows if row[0] not in circle_rows]
     for name, value in rows:
         table.add_row(name, value)
     return table
+
+
+def _dna_rows(summary: dict) -> list[tuple[str, str]]:
+    """Rows in DNA units (keys added by ``ring_summary_in_dna_units``)."""
+    salt = summary["salt_mM"]
+    diameter = f"D = {_number(summary['diameter_nm'], 4)} nm" + (
+        f" ({_number(salt, 4)} mM salt)" if salt is not None else " (given)")
+    rows = [
+        ("DNA (preset dna)",
+         (f"{summary['base_pairs']} bp, L = {_number(summary['length_nm'], 6)} nm, {diameter}, "
+         f"T = {_number(summary['temperature_K'], 5)} K")),
+        ("superhelical density sigma",
+         (f"{_number(summary['superhelical_density'], 6)} "
+         f"(Lk0 = {_number(summary['relaxed_link'], 6)} turns)")),
+        ("energy (kT)", _number(summary["energy_kT"], 6)),
+        ("circle buckles at sigma (Michell)",
+         f"+/-{_number(summary['michell_threshold_superhelical_density'], 4)}"),
+    ]
+    if summary.get("contact_treatment") is not None:
+        gap = summary.get("min_gap_nm")
+        rows += [
+            ("closest approach (nm)", "none within reach" if gap is None else _number(gap, 6)),
+            ("contact forces (pN)",
+             ", ".join(f"{c['force_pN']:.4g}" for c in summary["contact_points"]) or "none"),
+        ]
+    return rows

@@ -20,17 +20,29 @@ from supercoil import __version__
 from supercoil.cli._common import (
     EXIT_BAD_INPUT,
     EXIT_NOT_CONVERGED,
+    MAX_MAGNITUDE,
     MAX_MAGNITUDE_TEXT,
     check_json_target,
     fail,
     parse_vector,
     raised_while_solving,
+    require_finite,
     require_magnitude,
     require_nodes,
     require_positive,
     warn,
     warning_in,
     write_json_or_fail,
+)
+from supercoil.units.dna import (  # plain constants (math only): cheap at start-up
+    BENDING_PERSISTENCE_NM,
+    DEFAULT_SALT_MM,
+    HELICAL_REPEAT_BP,
+    KT_REFERENCE_PN_NM,
+    REFERENCE_TEMPERATURE_K,
+    RISE_NM_PER_BP,
+    SALT_RANGE_MM,
+    TWIST_PERSISTENCE_NM,
 )
 
 try:  # typer >= 0.25 vendors click as typer._click; older typer depends on click
@@ -42,7 +54,8 @@ from typer.exceptions import Abort
 UNITS_NOTE = (
     "Units are nondimensional: bending stiffness A = 1 and rod length L = 1, so energies are "
     "E*L/A, forces F*L^2/A, torques M*L/A; the twist ratio is C/A; link, twist and writhe "
-    "are in turns (positive = right-handed)."
+    "are in turns (positive = right-handed). 'ring --dna' takes DNA units instead (base pairs, "
+    "superhelical density, salt in mM) and adds nm, kT and pN to its output."
 )
 
 app = typer.Typer(
@@ -92,7 +105,7 @@ _TREATMENT_HELP = {
 def _contact_help() -> str:
     parts = "; ".join(f"{name} = {_TREATMENT_HELP[name]}" for name in CONTACT_TREATMENTS)
     return (
-        f"How impenetrability is imposed (only with --length-over-diameter): {parts}. "
+        f"How impenetrability is imposed (only with --length-over-diameter or --dna): {parts}. "
         f"Default: {DEFAULT_CONTACT_TREATMENT}."
     )
 
@@ -226,25 +239,29 @@ def writhe(
 @app.command()
 def ring(
     twist_ratio: Annotated[
-        float,
+        float | None,
         typer.Option(
             "--twist-ratio",
             metavar="C/A",
             help="Twist stiffness over bending stiffness, 0 < C/A <= 1e6 (dimensionless; "
-            "about 2/3 for DNA, 1/(1 + Poisson ratio) for an isotropic elastic rod).",
+            "1/(1 + Poisson ratio) for an isotropic elastic rod; "
+            f"{TWIST_PERSISTENCE_NM:g}/{BENDING_PERSISTENCE_NM:g} = "
+            f"{TWIST_PERSISTENCE_NM / BENDING_PERSISTENCE_NM:g} for DNA with --dna). Required "
+            "unless --dna.",
             show_default=False,
         ),
-    ],
+    ] = None,
     excess_link: Annotated[
-        float,
+        float | None,
         typer.Option(
             "--excess-link",
             metavar="TURNS",
             help="Excess linking number dLk = Lk - Lk0 of the closed rod, in turns "
-            "(positive = right-handed, overwinding for DNA; |dLk| <= 1e6).",
+            "(positive = right-handed, overwinding for DNA; |dLk| <= 1e6). Required unless "
+            "--dna.",
             show_default=False,
         ),
-    ],
+    ] = None,
     nodes: Annotated[
         int,
         typer.Option(
@@ -284,12 +301,65 @@ def ring(
             "last joined to the first; at least 3 vertices). The curve is scaled to "
             "length L = 1 and resampled at --nodes equally spaced points, so its size in "
             "the file does not matter; its knot type is kept. Needs "
-            "--length-over-diameter, and the resampled curve must not penetrate itself "
-            "(non-neighbouring points at least D apart). The excess link counts as for "
+            "--length-over-diameter (or --dna), and the resampled curve must not penetrate "
+            "itself (non-neighbouring points at least D apart). The excess link counts as for "
             "the circle (twist = dLk - writhe), so a knot of writhe about W carries "
             "little twist only near --excess-link W (a trefoil: about +3 or -3).",
             show_default=False,
         ),
+    ] = None,
+    dna: Annotated[
+        bool,
+        typer.Option(
+            "--dna",
+            help="DNA units instead of --twist-ratio/--excess-link/--length-over-diameter: "
+            "the plasmid is given by --bp and --sigma; C/A = "
+            f"{TWIST_PERSISTENCE_NM:g}/{BENDING_PERSISTENCE_NM:g} (twist/bending persistence "
+            f"lengths), dLk = sigma * bp / {HELICAL_REPEAT_BP:g}, tube diameter D from "
+            f"--salt-mM (default {DEFAULT_SALT_MM:g} mM) or --diameter-nm, so self-contact is "
+            "always on; the JSON adds keys in nm, kT and "
+            "pN and its units become 'dna'. The model is athermal (zero temperature).",
+        ),
+    ] = False,
+    bp: Annotated[
+        int | None,
+        typer.Option("--bp", metavar="N", help="With --dna: number of base pairs (>= 1); "
+                     f"contour length L = {RISE_NM_PER_BP:g} nm per bp.", show_default=False),
+    ] = None,
+    sigma: Annotated[
+        float | None,
+        typer.Option("--sigma", metavar="S", help="With --dna: superhelical density "
+                     f"sigma = dLk / Lk0 with Lk0 = bp / {HELICAL_REPEAT_BP:g} turns "
+                     "(negative = underwound, "
+                     "e.g. -0.06).", show_default=False),
+    ] = None,
+    salt_mM: Annotated[
+        float | None,
+        typer.Option("--salt-mM", metavar="MM", help="With --dna: monovalent salt (NaCl) "
+                     f"in mM, from {SALT_RANGE_MM[0]:g} to {SALT_RANGE_MM[1]:g} (default "
+                     f"{DEFAULT_SALT_MM:g}); sets the effective diameter D "
+                     "from an approximate table after Rybenkov et al. 1993 (docs/units.md).",
+                     show_default=False),
+    ] = None,
+    diameter_nm: Annotated[
+        float | None,
+        typer.Option("--diameter-nm", metavar="D", help="With --dna: the effective "
+                     "diameter D in nm, instead of --salt-mM.", show_default=False),
+    ] = None,
+    temperature_K: Annotated[
+        float | None,
+        typer.Option("--temperature-K", metavar="T", help="With --dna: temperature in "
+                     f"kelvin (> 0, default {REFERENCE_TEMPERATURE_K:g}) of the kT unit, "
+                     f"kT = {KT_REFERENCE_PN_NM:g} pN nm * T / {REFERENCE_TEMPERATURE_K:g}; "
+                     f"the stiffnesses stay those of {REFERENCE_TEMPERATURE_K:g} K.",
+                     show_default=False),
+    ] = None,
+    twist_persistence_nm: Annotated[
+        float | None,
+        typer.Option("--twist-persistence-nm", metavar="P_T", help="With --dna: twist "
+                     f"persistence length in nm (default {TWIST_PERSISTENCE_NM:g}; published "
+                     "estimates about 75-120).",
+                     show_default=False),
     ] = None,
     json_path: JsonOption = None,
 ) -> None:
@@ -305,7 +375,34 @@ def ring(
     self-contact (contacts, contact points and intervals, closest approach).
     With --initial the relaxation starts from a given closed curve (a knot,
     say) instead.
+
+    With --dna the ring is a DNA plasmid: --bp N base pairs at superhelical
+    density --sigma S, in monovalent salt --salt-mM (tube diameter D); the
+    output adds energies in kT, lengths in nm and contact forces in pN. The
+    model is athermal: energies and writhes are those of the elastic minimum,
+    not thermal averages.
     """
+    preset = None
+    if dna:
+        preset = _dna_preset(twist_ratio, excess_link, length_over_diameter, bp, sigma,
+                             salt_mM, diameter_nm, temperature_K, twist_persistence_nm)
+        twist_ratio, excess_link = preset.twist_ratio, preset.excess_link
+        length_over_diameter = preset.length_over_diameter
+    else:
+        dna_options = (("--bp", bp), ("--sigma", sigma), ("--salt-mM", salt_mM),
+                       ("--diameter-nm", diameter_nm), ("--temperature-K", temperature_K),
+                       ("--twist-persistence-nm", twist_persistence_nm))
+        given = [option for option, value in dna_options if value is not None]
+        if given:
+            verb = "needs" if len(given) == 1 else "need"
+            fail(f"{', '.join(given)} {verb} --dna (DNA units); give --dna --bp N --sigma S, "
+                 "or drop them and give --twist-ratio and --excess-link")
+        for option, value, meaning in (("--twist-ratio", twist_ratio, "C/A"),
+                                       ("--excess-link", excess_link, "turns")):
+            if value is None:
+                fail(f"Missing option '{option}' ({meaning}); give --twist-ratio C/A "
+                     "--excess-link TURNS, or DNA units --dna --bp N --sigma S "
+                     "(see 'supercoil ring --help')")
     require_positive(
         "--twist-ratio",
         twist_ratio,
@@ -362,6 +459,10 @@ def ring(
                 "non-neighbouring points are farther apart" if "penetrat" in str(exc) else "")
         fail(f"--initial {initial}: {exc}{hint}")
     summary = result.summary()
+    if preset is not None:
+        from supercoil.units.dna import ring_summary_in_dna_units
+
+        summary = ring_summary_in_dna_units(summary, preset)
     if json_path is not None:
         from supercoil.io.results import envelope
 
@@ -378,11 +479,13 @@ def ring(
             tolerances["penetration_over_diameter"] = ContactOptions(
                 diameter=1.0 / length_over_diameter, treatment=treatment
             ).tolerance
-        write_json_or_fail(
-            envelope(payload, n_nodes=nodes, tolerances=tolerances,
-                     contact_treatment=treatment_name),
-            json_path,
-        )
+        data = envelope(payload, n_nodes=nodes, tolerances=tolerances,
+                        contact_treatment=treatment_name,
+                        units="nondimensional" if preset is None else preset.name)
+        if preset is not None:
+            data["conventions"].update(preset.conventions())
+            data["provenance"]["units_preset"] = preset.record()
+        write_json_or_fail(data, json_path)
     if json_path != "-":
         from rich.console import Console
 
@@ -405,6 +508,67 @@ def ring(
             f"({summary['message']}); {where}"
         )
         raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _dna_preset(twist_ratio, excess_link, length_over_diameter, bp, sigma, salt_mM,
+                diameter_nm, temperature_K, twist_persistence_nm):
+    """The DNA preset of ``ring --dna``, or a one-line error (exit 2) naming the option."""
+    mixed = [option for option, value in (("--twist-ratio", twist_ratio),
+                                          ("--excess-link", excess_link),
+                                          ("--length-over-diameter", length_over_diameter))
+             if value is not None]
+    if mixed:
+        fail(f"{', '.join(mixed)} cannot be combined with --dna: in DNA units the ring is "
+             "given by --bp N and --sigma S (C/A, dLk and L/D follow from the preset); drop "
+             f"{', '.join(mixed)}, or drop --dna")
+    missing = [option for option, value in (("--bp N (base pairs)", bp),
+                                            ("--sigma S (superhelical density)", sigma))
+               if value is None]
+    if missing:
+        fail(f"--dna needs {' and '.join(missing)}, e.g. supercoil ring --dna --bp 3000 "
+             "--sigma -0.06")
+    if bp < 1:
+        fail(f"--bp must be a whole number of base pairs >= 1, got {bp}")
+    require_finite("--sigma", sigma, "a finite superhelical density (e.g. -0.06)")
+    if salt_mM is not None and diameter_nm is not None:
+        fail("--salt-mM and --diameter-nm both set the tube diameter; give one of them")
+    if diameter_nm is not None:
+        require_positive("--diameter-nm", diameter_nm, "a positive diameter in nm (e.g. 5)")
+    if temperature_K is not None:
+        require_positive("--temperature-K", temperature_K,
+                         "a positive temperature in kelvin (e.g. 298)")
+    if twist_persistence_nm is not None:
+        require_positive("--twist-persistence-nm", twist_persistence_nm,
+                         "a positive length in nm (e.g. 95)")
+    from supercoil.units.dna import DNAPreset, effective_diameter_nm
+
+    if salt_mM is not None:
+        try:
+            effective_diameter_nm(salt_mM)
+        except ValueError as exc:
+            fail(f"--salt-mM: {exc}")
+    options = {"salt_mM": salt_mM, "diameter_nm": diameter_nm}
+    if temperature_K is not None:
+        options["temperature_K"] = temperature_K
+    if twist_persistence_nm is not None:
+        options["twist_persistence_nm"] = twist_persistence_nm
+    try:
+        preset = DNAPreset(base_pairs=bp, superhelical_density=sigma, **options)
+    except ValueError as exc:
+        fail(f"--dna: {exc}")
+    if abs(preset.excess_link) > MAX_MAGNITUDE:
+        fail(f"--sigma {sigma:g} with --bp {bp} gives dLk = {preset.excess_link:.6g} turns; "
+             f"|dLk| must be <= {MAX_MAGNITUDE_TEXT}")
+    lod = preset.length_over_diameter
+    diameter = preset.effective_diameter_nm
+    if lod <= math.pi:
+        fail(f"--bp {bp}: a ring {preset.length_nm:g} nm long with tube diameter "
+             f"{diameter:.3g} nm has L/D = {lod:.3g}, but a ring needs L/D > pi; give "
+             f"--bp >= {math.floor(math.pi * diameter / preset.rise_nm_per_bp) + 1}")
+    if lod > MAX_MAGNITUDE or preset.twist_ratio > MAX_MAGNITUDE:
+        fail(f"--dna: L/D = {lod:.3g} and C/A = {preset.twist_ratio:.3g} must be <= "
+             f"{MAX_MAGNITUDE_TEXT}; give fewer --bp or a larger --twist-persistence-nm")
+    return preset
 
 
 def _read_initial_curve(path: Path):

@@ -620,7 +620,9 @@ def demo(
         ),
     ] = False,
 ) -> None:
-    """Energy and stability of the twisted ring against the excess link (DNA's C/A = 2/3).
+    """Energy and stability of the twisted ring against the excess link.
+
+    C/A = 2/3, the value Coleman & Swigon (seed 001) take for DNA.
 
     Solves the ring at N = 100 nodes for 25 values of dLk from 0 to
     1.2 (A/C) sqrt(8) turns, locates the discrete mode-2 and mode-3 thresholds

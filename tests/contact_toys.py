@@ -29,10 +29,13 @@ class CrossedRods:
     """
 
     def __init__(self, n: int = 10, spacing: float = 0.1, height: float = 0.25,
-                 load: float = 1.0, stiffness: float = 1e3):
+                 load: float = 1.0, stiffness: float = 1e3, anchor: float = 0.0):
         self.n = n
         self.load = float(load)
         self.K = float(stiffness)
+        # optional springs (anchor / n each) holding B's nodes at the start height
+        self.anchor = float(anchor)
+        self.height = float(height)
         u = (np.arange(n) - (n - 1) / 2) * spacing  # symmetric about 0
         a = np.stack([u + 0.013, np.zeros(n), np.zeros(n)], axis=1)  # crossing off A's nodes
         b = np.stack([np.full(n, 0.021), u, np.full(n, height)], axis=1)
@@ -61,15 +64,24 @@ class CrossedRods:
         self._load = np.zeros(self.n_dofs)
         self._load[z] = self.load / n
 
+    def _anchor(self):
+        z = np.zeros(self.n_dofs)
+        z[3 * np.arange(self.n, 2 * self.n) + 2] = 1.0
+        return z
+
     def energy(self, q):
         r = self._D2 @ q
-        return 0.5 * self.K * float(r @ r) + float(self._load @ q)
+        dz = self._anchor() * (q - self.height)
+        return (0.5 * self.K * float(r @ r) + float(self._load @ q)
+                + 0.5 * self.anchor / self.n * float(dz @ dz))
 
     def gradient(self, q):
-        return self.K * (self._D2.T @ (self._D2 @ q)) + self._load
+        return (self.K * (self._D2.T @ (self._D2 @ q)) + self._load
+                + self.anchor / self.n * self._anchor() * (q - self.height))
 
     def hessian(self, q):
-        return HessianParts((self.K * (self._D2.T @ self._D2)).tocsr())
+        return HessianParts((self.K * (self._D2.T @ self._D2)
+                             + sp.diags(self.anchor / self.n * self._anchor())).tocsr())
 
     def constraints(self, q):
         return np.zeros(0)

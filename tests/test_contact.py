@@ -195,23 +195,93 @@ def test_a_pulling_contact_is_flagged_not_dropped():
     assert summary["negative_contact_forces"] == 1
     force_scale = toy.rod.length**2 / toy.rod.bending_stiffness
     np.testing.assert_allclose(summary["contacts"][0]["force"] / force_scale, -2.0, rtol=1e-8)
-    # the exact treatment never holds it: B is pulled away (there is no
-    # equilibrium, so the solve does not converge) and no contact remains
-    problem.active = st.pairs[:0]
-    free = solve_contact(problem, q0, NewtonOptions(max_iterations=20))
-    after = contact_summary(problem, free.q, free.multipliers)
-    assert after["negative_contact_forces"] == 0 and after["contacts"] == []
-    assert np.all(free.q[3 * toy.n + 2 :: 3] > 0.05)
 
 
-def test_load_parameters_set_on_the_wrapper_reach_the_rod():
-    from supercoil.problems.ring import twisted_circle_problem
 
-    base, q0 = twisted_circle_problem(1.0, 1.0, 40)
-    problem = ContactProblem(base, ContactOptions(diameter=0.02))
-    e_before = problem.energy(q0)
-    problem.excess_link = 1.5  # as a continuation in excess_link does
-    assert base.excess_link == 1.5
-    assert problem.energy(q0) > e_before  # twist energy 2 pi^2 C dLk^2 grew
-    problem.stability_mode = True  # the wrapper's own attributes stay its own
-    assert "stability_mode" not in vars(base)
+def test_exact_active_set_releases_a_pulling_contact():
+    """B anchored by springs at z = 0.25 and pushed onto A: contact, force = load.
+    Reverse the load on the same problem: the previous active set gives a
+    pulling force, the active-set loop releases it, and B hangs above A where
+    the anchor balances the load (z = 0.25 + load / anchor)."""
+    toy = CrossedRods(load=30.0, anchor=100.0)
+    problem = ContactProblem(toy, ContactOptions(diameter=0.05, treatment="exact"))
+    pushed = solve_contact(problem, toy.points.ravel())
+    assert pushed.converged and len(problem.active) >= 1
+    force_scale = toy.rod.length**2 / toy.rod.bending_stiffness
+    total = sum(c["force"] for c in contact_summary(problem, pushed.q,
+                                                     pushed.multipliers)["contacts"])
+    # anchor holds part of the load: contact force = load - anchor * (0.25 - z)
+    z = pushed.q[3 * toy.n + 2 :: 3].mean()
+    np.testing.assert_allclose(total / force_scale, 30.0 - 100.0 * (0.25 - z), rtol=1e-6)
+    pulled = CrossedRods(load=-30.0, anchor=100.0)
+    problem.base = pulled  # same problem object, previous active set kept
+    released = solve_contact(problem, pushed.q)
+    assert released.converged and len(problem.active) == 0
+    np.testing.assert_allclose(released.q[3 * toy.n + 2 :: 3], 0.25 + 30.0 / 100.0, rtol=1e-8)
+    summary = contact_summary(problem, released.q, released.multipliers)
+    assert summary["contacts"] == [] and summary["negative_contact_forces"] == 0
+
+
+# --------------------------------------------------------------- grouping
+def test_grouping_a_line_contact_across_the_seam():
+    from supercoil.contact.report import group_contacts
+
+    h = 0.01
+    k = np.arange(6)
+    a = np.mod(0.98 + k * h, 1.0)  # strand 1 runs across s = 0
+    b = 0.5 - k * h  # antiparallel strand 2
+    lo, hi = np.minimum(a, b), np.maximum(a, b)  # stored as s1 < s2: the order flips at 0
+    force = np.full(6, 2.0)
+    points, intervals = group_contacts(lo, hi, force, h, closed=True)
+    assert points == [] and len(intervals) == 1
+    iv = intervals[0]
+    np.testing.assert_allclose([iv["s1_start"], iv["s1_end"]], [0.45, 0.5], atol=1e-12)
+    np.testing.assert_allclose([iv["s2_start"], iv["s2_end"]], [0.98, 0.03], atol=1e-12)
+    # total force over the length the six contacts stand for (5 h + h)
+    np.testing.assert_allclose(iv["force_per_length"], 12.0 / (6 * h))
+
+
+def test_grouping_a_point_across_the_seam_and_separate_points():
+    from supercoil.contact.report import group_contacts
+
+    h = 0.01
+    # one point contact split over two pairs on either side of s = 0, and a
+    # second contact far from it; forces 1, 3 and 5
+    s1 = np.array([0.4, 0.402, 0.2])
+    s2 = np.array([0.999, 0.001, 0.7])
+    points, intervals = group_contacts(s1, s2, np.array([1.0, 3.0, 5.0]), h, closed=True)
+    assert intervals == [] and len(points) == 2
+    seam = min(points, key=lambda p: abs(p["force"] - 4.0))
+    assert seam["force"] == pytest.approx(4.0)
+    # force-weighted position: (0.999 * 1 + 1.001 * 3) / 4 = 1.0005 -> 0.0005
+    assert seam["s1"] == pytest.approx(0.0005) and seam["s2"] == pytest.approx(0.4015)
+    # on an open rod the same positions are far apart: three points
+    points, intervals = group_contacts(s1, s2, np.array([1.0, 3.0, 5.0]), h, closed=False)
+    assert len(points) == 3 and intervals == []
+
+
+def test_a_state_that_changed_the_linking_number_is_refused():
+    """Newton's per-step guard: a figure-eight with one strand just above the
+    other at its crossing (z = +-eps), then the same curve with the strands
+    swapped (its mirror image: a crossing change). The double-sum writhe jumps
+    by 2 while the writhe carried by the rod's frames does not: the second
+    state is refused, the first is admissible."""
+    from supercoil.geometry.curves import resample_closed
+    from supercoil.rod.closed import ClosedRodEnergy, Rod
+    from supercoil.topology import writhe
+
+    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    eps = 0.01
+
+    def eight(e):
+        return resample_closed(np.stack([np.sin(t), np.sin(t) * np.cos(t), e * np.cos(t)], 1),
+                               80)
+
+    above, swapped = eight(eps), eight(-eps)
+    base = ClosedRodEnergy(Rod(n_nodes=80, twist_stiffness=1.0), above, 0.0)
+    problem = ContactProblem(base, ContactOptions(diameter=0.005))
+    assert problem.admissible(above.ravel())
+    # the crossing change: carried and double-sum writhe differ by 2 turns
+    gap = problem.writhe_local(swapped.ravel()) - writhe(swapped)
+    assert abs(abs(gap) - 2.0) < 0.1
+    assert not problem.admissible(swapped.ravel())

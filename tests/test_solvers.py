@@ -153,3 +153,52 @@ def test_newton_reports_failure_as_a_status():
 def test_newton_options_validate(bad):
     with pytest.raises(ValueError):
         NewtonOptions(**bad)
+
+
+class DoubleWell:
+    """E = -x^2/2 + x^4/4 + y^4: a saddle at the origin, minima at (+-1, 0)."""
+
+    n_dofs, n_constraints = 2, 0
+    fixed = np.zeros(0, dtype=np.int64)
+    mass = np.ones(2)
+
+    def energy(self, q):
+        x, y = q
+        return -0.5 * x * x + 0.25 * x**4 + y**4
+
+    def gradient(self, q):
+        x, y = q
+        return np.array([-x + x**3, 4 * y**3])
+
+    def hessian(self, q):
+        x, y = q
+        return HessianParts(sp.diags([-1 + 3 * x * x, 12 * y * y]).tocsr(),
+                            np.zeros((0, 2)), np.zeros(0))
+
+    def constraints(self, q):
+        return np.zeros(0)
+
+    def constraint_jacobian(self, q):
+        return sp.csr_matrix((0, 2))
+
+    def constraint_hessian(self, q, lam):
+        return sp.csr_matrix((2, 2))
+
+    def accept(self, q):
+        pass
+
+
+def test_minimize_with_the_exact_inertia_leaves_the_saddle():
+    """From next to the saddle along the stable direction, the inertia-corrected
+    step plus the negative-curvature escape reach a minimum (x = +-1, y = 0)."""
+    res = newton(DoubleWell(), np.array([1e-3, 1.0]),
+                 NewtonOptions(mode="minimize", tolerance=1e-10, max_iterations=200))
+    assert res.converged
+    np.testing.assert_allclose(abs(res.q[0]), 1.0, atol=1e-8)
+    assert abs(res.q[1]) < 1e-2  # y^4 is flat at its minimum: slow, sublinear in y
+
+
+def test_stationary_mode_converges_to_the_saddle_it_starts_next_to():
+    res = newton(DoubleWell(), np.array([1e-3, 0.1]),
+                 NewtonOptions(mode="stationary", tolerance=1e-12, max_iterations=200))
+    assert res.converged and abs(res.q[0]) < 1e-8

@@ -5,48 +5,45 @@ F·L²/A. ``contacts`` lists every touching segment pair as ``{s1, s2, force}``
 with ``s1 < s2``; pairs whose closest points coincide (both segments of a
 joint touching at the same node) are merged and their forces added.
 
-A negative force (only the exact treatment's multipliers can have one) is
-counted in ``negative_contact_forces`` and kept in the lists.
+A force below ``-force_tolerance * max(1, largest |force|)`` (only the exact
+treatment's multipliers can pull) is counted in ``negative_contact_forces``
+and kept in the lists.
 
-Grouping. Two contacts are linked when they lie within 1.5 segment lengths of
-each other on both strands (i.e. they touch along neighbouring segments;
-across the seam s = 0 of a closed rod too); chains are the connected groups
-(O(n^2) in the number of touching pairs, which is small). A chain that extends over more than two segment
-lengths on either strand is a contact interval (a line contact, seed 001's
-"contact line"): ``{s1_start, s1_end, s2_start, s2_end, force_per_length}``
-(on a closed rod an interval across the seam has ``start > end``)
-with the force per length = total force / (extent + one segment length), the
-length the chain's contacts stand for. Any other chain is an isolated contact
-point ``{s1, s2, force}`` at the force-weighted mean position with the total
-force (a point contact is spread over one or two segment pairs by the
-discretisation). This is the data of seed 001's Figure 4.
+Grouping into points and intervals uses the contacts that carry at least
+``GROUPING_FLOOR`` (1 %) of the largest contact force: a barrier (or penalty)
+pair at the edge of its activation carries a vanishing force and would
+otherwise bridge separate contacts, so that the grouping would depend on the
+treatment. Two such contacts are linked when they lie within 1.5 segment
+lengths of each other on both strands (they touch along neighbouring
+segments). A contact is an unordered pair of positions, so each is linked in
+both orientations (across the seam s = 0 of a closed rod the order of its two
+positions flips); chains are the connected groups, read in one orientation.
+A chain that extends over more than two segment lengths on either strand is a
+contact interval (a line contact, seed 001's "contact line"):
+``{s1_start, s1_end, s2_start, s2_end, force_per_length}`` (strand 1 is the
+one that starts first; on a closed rod an interval across the seam has
+``start > end``) with the force per length =
+total force / (extent + one segment length), the length the chain's contacts
+stand for. Any other chain is an isolated contact point ``{s1, s2, force}`` at
+the force-weighted mean position with the total force (a point contact is
+spread over one or two segment pairs by the discretisation). This is the data
+of seed 001's Figure 4.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from supercoil.contact.problem import ContactProblem
 
-
-def _circular_gap(a: float, b: float, period: float | None) -> float:
-    d = abs(a - b)
-    return min(d, period - d) if period else d
+GROUPING_FLOOR = 1e-2  # of the largest contact force, see the module docstring
 
 
-def _close(c: dict, d: dict, reach: float, period: float | None) -> bool:
-    """Whether two contacts touch along neighbouring segments (either pairing of ends)."""
-    straight = (_circular_gap(c["s1"], d["s1"], period) <= reach
-                and _circular_gap(c["s2"], d["s2"], period) <= reach)
-    crossed = (_circular_gap(c["s1"], d["s2"], period) <= reach
-               and _circular_gap(c["s2"], d["s1"], period) <= reach)
-    return straight or crossed
-
-
-def _chains(contacts: list[dict], reach: float, period: float | None) -> list[list[dict]]:
-    """Connected groups of contacts (single linkage on :func:`_close`), each sorted by s1."""
-    n = len(contacts)
-    parent = list(range(n))
+def _components(points: np.ndarray, reach: float, periodic: bool) -> np.ndarray:
+    """Connected components (labels) of points within ``reach`` (max norm)."""
+    n = len(points)
+    parent = np.arange(n)
 
     def root(i: int) -> int:
         while parent[i] != i:
@@ -54,14 +51,14 @@ def _chains(contacts: list[dict], reach: float, period: float | None) -> list[li
             i = parent[i]
         return i
 
-    for i in range(n):
-        for j in range(i + 1, n):
-            if _close(contacts[i], contacts[j], reach, period):
-                parent[root(i)] = root(j)
-    groups: dict[int, list[dict]] = {}
-    for i in range(n):
-        groups.setdefault(root(i), []).append(contacts[i])
-    return sorted(groups.values(), key=lambda g: g[0]["s1"])
+    if n:
+        tree = cKDTree(np.mod(points, 1.0) if periodic else points,
+                       boxsize=1.0 if periodic else None)
+        for i, j in tree.query_pairs(reach, p=np.inf):
+            ri, rj = root(i), root(j)
+            if ri != rj:
+                parent[ri] = rj
+    return np.array([root(i) for i in range(n)])
 
 
 def _unwrap(values: np.ndarray) -> np.ndarray:
@@ -70,6 +67,51 @@ def _unwrap(values: np.ndarray) -> np.ndarray:
     gaps = np.diff(np.concatenate([order, [order[0] + 1.0]]))
     cut = order[(int(np.argmax(gaps)) + 1) % len(order)]  # start after the largest gap
     return np.where(values < cut, values + 1.0, values)
+
+
+def group_contacts(s1: np.ndarray, s2: np.ndarray, force: np.ndarray, spacing: float,
+                   closed: bool) -> tuple[list[dict], list[dict]]:
+    """``(contact_points, contact_intervals)`` of contacts at ``(s1, s2)`` (fractions of L).
+
+    ``spacing`` is the segment length over L; see the module docstring.
+    """
+    s1, s2, force = (np.asarray(v, dtype=float) for v in (s1, s2, force))
+    n = len(force)
+    if n == 0:
+        return [], []
+    # node k is contact k read as (s1, s2); node n + k the same contact read as (s2, s1)
+    nodes = np.concatenate([np.stack([s1, s2], 1), np.stack([s2, s1], 1)])
+    label = _components(nodes, 1.5 * spacing, closed)
+    groups: dict[tuple[int, int], list[tuple[int, bool]]] = {}
+    for k in range(n):
+        a, b = label[k], label[n + k]
+        key = (min(a, b), max(a, b))
+        groups.setdefault(key, []).append((k, a != key[0]))  # read in the key's orientation
+    points, intervals = [], []
+    for members in sorted(groups.values(), key=lambda m: min(s1[k] for k, _ in m)):
+        idx = np.array([k for k, _ in members])
+        flip = np.array([f for _, f in members])
+        a = np.where(flip, s2[idx], s1[idx])
+        b = np.where(flip, s1[idx], s2[idx])
+        f = force[idx]
+        if closed:
+            a, b = _unwrap(a), _unwrap(b)
+        extent = max(float(np.ptp(a)), float(np.ptp(b)))
+        wrap = (lambda v: float(v % 1.0)) if closed else float
+        if extent > 2 * spacing:
+            first, second = (wrap(a.min()), wrap(a.max())), (wrap(b.min()), wrap(b.max()))
+            if first[0] > second[0]:  # the strand that starts first is strand 1
+                first, second = second, first
+            intervals.append({
+                "s1_start": first[0], "s1_end": first[1],
+                "s2_start": second[0], "s2_end": second[1],
+                "force_per_length": float(f.sum() / (extent + spacing)),
+            })
+        else:
+            w = f / f.sum() if f.sum() > 0 else np.full(len(f), 1.0 / len(f))
+            p1, p2 = wrap(w @ a), wrap(w @ b)
+            points.append({"s1": min(p1, p2), "s2": max(p1, p2), "force": float(f.sum())})
+    return points, intervals
 
 
 def contact_summary(problem: ContactProblem, q: np.ndarray,
@@ -86,37 +128,21 @@ def contact_summary(problem: ContactProblem, q: np.ndarray,
         key = (round(float(a), 12), round(float(b), 12))
         merged[key] = merged.get(key, 0.0) + float(f)
     contacts = [{"s1": a, "s2": b, "force": f} for (a, b), f in sorted(merged.items())]
-    h = problem.edge_length / rod.length
-    period = 1.0 if problem.closed else None
-    chains = _chains(contacts, 1.5 * h, period)
-    points, intervals = [], []
-    for chain in chains:
-        a = np.array([c["s1"] for c in chain])
-        b = np.array([c["s2"] for c in chain])
-        f = np.array([c["force"] for c in chain])
-        if period:  # a chain may run across s = 0 on a closed rod: unwrap it
-            a, b = _unwrap(a), _unwrap(b)
-        extent = max(float(np.ptp(a)), float(np.ptp(b)))
-        if extent > 2 * h:
-            wrap = (lambda v: v % 1.0) if period else (lambda v: v)
-            intervals.append({
-                "s1_start": float(wrap(a.min())), "s1_end": float(wrap(a.max())),
-                "s2_start": float(wrap(b.min())), "s2_end": float(wrap(b.max())),
-                "force_per_length": float(f.sum() / (extent + h)),
-            })
-        else:
-            w = f / f.sum() if f.sum() > 0 else np.full(len(f), 1.0 / len(f))
-            s1, s2 = float(w @ a), float(w @ b)
-            if period:
-                s1, s2 = s1 % 1.0, s2 % 1.0
-            points.append({"s1": s1, "s2": s2, "force": float(f.sum())})
-    d_min = problem.min_distance(q)
-    # Contact forces push apart (seed 001, eq. 10): a negative one (possible
+    forces = np.array([c["force"] for c in contacts])
+    largest = float(np.max(np.abs(forces))) if forces.size else 0.0
+    # Contact forces push apart (seed 001, eq. 10): a pulling one (possible
     # only for the exact treatment's multipliers) is not an admissible
     # equilibrium and is flagged, never dropped.
-    negative = [c for c in contacts if c["force"] < 0]
+    negative = int(np.sum(forces < -problem.options.force_tolerance * max(1.0, largest)))
+    strong = forces >= GROUPING_FLOOR * largest if forces.size else np.zeros(0, dtype=bool)
+    points, intervals = group_contacts(
+        np.array([c["s1"] for c in contacts])[strong] if contacts else np.zeros(0),
+        np.array([c["s2"] for c in contacts])[strong] if contacts else np.zeros(0),
+        forces[strong] if forces.size else np.zeros(0),
+        problem.edge_length / rod.length, problem.closed)
+    d_min = problem.min_distance(q)
     return {
-        "negative_contact_forces": len(negative),
+        "negative_contact_forces": negative,
         "contacts": contacts,
         "contact_points": points,
         "contact_intervals": intervals,

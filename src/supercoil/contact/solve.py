@@ -79,7 +79,7 @@ def solve_contact(problem: ContactProblem, q0: np.ndarray,
                   options: NewtonOptions | None = None) -> ContactSolveResult:
     """Equilibrium of ``problem`` (a :class:`ContactProblem`) from ``q0``."""
     opts = options or NewtonOptions(mode="minimize", max_iterations=200)
-    if opts.mode == "minimize" and opts.inertia_test == "exact":
+    if opts.mode == "minimize" and opts.inertia_test is None:
         # the exact inertia costs a block factorisation per iteration; the
         # final state's stability is analysed separately anyway
         opts = dataclasses.replace(opts, inertia_test="curvature")
@@ -191,8 +191,21 @@ def _exact(problem: ContactProblem, q0, opts):
     active, forces = _independent_pairs(problem, start.q, st.pairs, force)
     lam = np.concatenate([start.multipliers[: problem.n_equalities], -forces])
     # a polish from next to the solution
-    return _active_set_loop(problem, start.q, active, lam, stationary, start.newton_iterations,
-                            start.outer_iterations, problem.options.max_outer_iterations)
+    out = _active_set_loop(problem, start.q, active, lam, stationary, start.newton_iterations,
+                           start.outer_iterations, problem.options.max_outer_iterations)
+    if out.converged and out.admissible:
+        return out
+    if start.admissible:
+        # The polish failed (its active set cycled or Newton stopped): return
+        # the augmented-Lagrangian state (an equilibrium within the penetration
+        # tolerance), not converged for this treatment, saying so.
+        problem.active = np.zeros((0, 2), dtype=np.int64)
+        return dataclasses.replace(
+            start, converged=False, status="exact polish failed",
+            message=start.message + "; exact contact: the active-set polish did not settle ("
+            + out.message + "); the state is the augmented-Lagrangian solution (use "
+            "--contact augmented for it)")
+    return out
 
 
 def _active_set_loop(problem: ContactProblem, q, active, lam, opts, total, outer, max_cycles):
@@ -202,7 +215,15 @@ def _active_set_loop(problem: ContactProblem, q, active, lam, opts, total, outer
     m0 = problem.n_equalities
     scale = max(float(np.max(np.abs(lam))) if lam is not None and lam.size else 1.0, 1.0)
     res = None
+    seen: set[frozenset] = set()
     for cycle in range(1, max_cycles + 1):
+        key = frozenset(map(tuple, np.asarray(active).tolist()))
+        if key in seen:  # the active set cycles: stop (the caller falls back)
+            problem.active = active
+            return _result(problem, q, lam, False, "active set cycled",
+                           f"exact contact: the active set returned to an earlier one after "
+                           f"{cycle - 1} cycles", total, outer + cycle, res.residual)
+        seen.add(key)
         problem.active = active
         problem.invalidate()
         if lam is not None and len(lam) != problem.n_constraints:

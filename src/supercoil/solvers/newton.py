@@ -16,14 +16,20 @@ on the free unknowns (fixed DOFs removed). Two globalisations:
   inertia-free test of Chiang & Zavala (2016): the shift is raised until the
   curvature ``dq^T H dq`` along the step is clearly positive. When the first
   test fails, a step along the most negative curvature direction is added
-  (saddle escape, see :func:`_add_negative_curvature`).
+  (saddle escape, see :func:`_add_negative_curvature`). The curvature test
+  only sees the step, so it can converge to a saddle whose unstable direction
+  the steps never touched: callers that need a minimum check the inertia of
+  the result (``solve_supercoiled_ring`` does, and restarts along the unstable
+  mode).
 * ``mode="stationary"``: plain Newton steps with backtracking on the norm of
   the KKT residual, which converges to saddle points as well (needed on
   unstable branches).
 
 A problem may offer ``step_bound(q, dq)``: the largest admissible fraction of
 the step (self-contact uses continuous collision detection); every step,
-full steps included, is shortened to it. In ``minimize`` mode a problem may
+full steps included, is shortened to it; and ``admissible(q)``: a state it
+refuses (e.g. a closed rod whose linking number changed) makes the step be
+retried shorter. In ``minimize`` mode a problem may
 also offer ``step_size_ratio(q, dq)`` (step length over its trust radius): a
 longer step is replaced by the shifted step ``(H + delta M) dq = -g`` with
 ``delta`` raised until it fits (Levenberg–Marquardt-style damping).
@@ -71,7 +77,7 @@ class NewtonOptions:
     armijo: float = 1e-4
     min_step: float = 1e-10
     max_step_norm: float = float("inf")
-    inertia_test: str = "exact"
+    inertia_test: str | None = None  # None: "exact" (callers such as contact pick otherwise)
 
     def __post_init__(self) -> None:
         if not (self.tolerance > 0):
@@ -80,7 +86,7 @@ class NewtonOptions:
             raise ValueError(f"max_iterations must be >= 1, got {self.max_iterations!r}")
         if self.mode not in ("minimize", "stationary"):
             raise ValueError(f"mode must be 'minimize' or 'stationary', got {self.mode!r}")
-        if self.inertia_test not in ("exact", "curvature"):
+        if self.inertia_test not in (None, "exact", "curvature"):
             raise ValueError(f"inertia_test must be 'exact' or 'curvature', got "
                              f"{self.inertia_test!r}")
         if not (self.max_step_norm > 0):
@@ -162,7 +168,7 @@ def _shifted_step(problem, q, free, H, J, mass, rhs, radius, opts):
     for attempt in range(80):
         factor = KKTFactor(H, J, shift=-delta, mass=mass, order=order)
         order = factor.order
-        if opts.inertia_test == "exact":
+        if opts.inertia_test in (None, "exact"):
             curved = factor.reduced_negative_count == 0
             sol = factor.solve(rhs) if curved or attempt == 79 else None
         else:
@@ -174,7 +180,7 @@ def _shifted_step(problem, q, free, H, J, mass, rhs, radius, opts):
             negatives = negatives or attempt == 0
             # the curvature test starts from a small shift: a near-null direction
             # (a closed rod's material sliding) needs only a little
-            delta = (max(2.0 * delta, 1e-4 * diag_scale) if opts.inertia_test == "exact"
+            delta = (max(2.0 * delta, 1e-4 * diag_scale) if opts.inertia_test != "curvature"
                      else max(4.0 * delta, 1e-8 * diag_scale))
             continue
         if sized:
@@ -192,9 +198,11 @@ def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, rad
 
     Near a saddle the shifted Newton step ``(H + delta M)^-1 g`` is short in the
     unstable direction (its gradient component is small), so minimisation
-    creeps away from saddles. The lowest eigenvector ``v`` of ``H v = mu M v``
-    on ``ker J`` is found by inverse iteration with the shifted factor
-    (``H + delta M`` is positive definite there), and, if ``mu < 0``, a multiple
+    creeps away from saddles. An eigenvector ``v`` of ``H v = mu M v`` on
+    ``ker J`` is found by inverse iteration with the shifted factor (the
+    eigenvalue nearest ``-delta``: the lowest one when ``H + delta M`` is
+    positive definite on ``ker J``, as with the exact inertia test; with the
+    curvature test it need not be), and, if ``mu < 0``, a multiple
     of ``v`` pointing downhill is added (Moré & Sorensen 1979): as long as the
     trust radius (at most 1) when the problem defines one, else as long as the
     Newton step.
@@ -230,7 +238,9 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
            else np.array(multipliers, dtype=float))
     history: list[float] = []
     mu = 1.0
-    radius = 1.0  # trust radius in units of the problem's step_size_ratio
+    # Trust radius in units of the problem's step_size_ratio, in [1/16, 1]:
+    # shrunk when the line search cuts a step, regrown after full steps.
+    radius = 1.0
     mass = problem.mass[free]
 
     def done(status: Status, message: str, it: int) -> NewtonResult:
@@ -306,8 +316,7 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
                     if np.isfinite(phit) and phit <= phi0 + opts.armijo * alpha * min(slope, 0.0):
                         break
                     if first and alpha == 1.0 and delta == 0.0 and np.isfinite(phit):
-                        # A pure Newton step (no shift: the Hessian is positive definite
-                        # on ker J, so the limit is a minimum) that halves the KKT
+                        # A pure Newton step (no shift was needed) that halves the KKT
                         # residual is taken even if the merit rises: kinks of the
                         # contact terms (changes of distance type, C¹ only) otherwise
                         # stall the merit line search next to the solution (a
@@ -349,13 +358,21 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
                 return done(Status.LINE_SEARCH_FAILED,
                             f"iteration {it}: no step length reduced the merit function "
                             f"(residual {res:.2e})", it)
+        # A problem may refuse a state (a closed rod whose linking number
+        # changed): the step is then retried shorter.
+        if hasattr(problem, "admissible"):
+            while alpha >= opts.min_step and not problem.admissible(q + alpha * dq):
+                alpha *= 0.5
+            if alpha < opts.min_step:
+                return done(Status.LINE_SEARCH_FAILED,
+                            f"iteration {it}: every step length gave an inadmissible state", it)
         q = q + alpha * dq
         lam = lam + alpha * (lam_new - lam)
         problem.accept(q)
         # The trust radius grows after full steps and shrinks when the line
         # search (not the collision guard) had to cut the step.
         if alpha == 1.0:
-            radius = min(2.0 * radius, 16.0)
+            radius = min(2.0 * radius, 1.0)
         elif alpha < min(1.0, float(bound)):
             radius = max(0.5 * radius, 1 / 16)
         log.debug("newton it=%d residual=%.3e alpha=%.3g delta=%.3g bound=%.3g radius=%.3g", it, res, alpha, delta, bound, radius)

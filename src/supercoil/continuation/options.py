@@ -58,6 +58,12 @@ class ContinuationOptions:
       unknown each), to follow branches whose continuous symmetry is not pinned
       by the problem (e.g. an O(2) orbit after branch switching). Dense rows:
       for small problems; rod problems pin gauge DOFs instead.
+    * ``near_symmetry_gauge``: pin one DOF (as a phase row ``q_i = q_i(start)``)
+      against each approximate symmetry of the problem that is not a
+      combination of its exact ones at the start (``near_symmetry_modes``: a
+      closed rod's material sliding off the circle, nearly null and otherwise
+      unremoved, which makes Newton, the tangent and the count ill-posed).
+      Sparse; nothing changes for problems without near-symmetries.
     * ``finite_difference_step``: relative step of the central difference of
       the residual in the parameter when the problem has no
       ``parameter_derivative`` (error ``O(step^2)`` relative).
@@ -85,6 +91,7 @@ class ContinuationOptions:
     event_tolerance: float = 1e-10
     switch_below: float = 1e-3
     phase_conditions: bool = False
+    near_symmetry_gauge: bool = True
     finite_difference_step: float = 6e-6
 
     def __post_init__(self) -> None:

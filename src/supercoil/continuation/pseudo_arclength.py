@@ -41,10 +41,37 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, SingularMatrixError
 from supercoil.solvers.newton import least_squares_multipliers
 from supercoil.solvers.problem import ConstrainedEnergy
+from supercoil.stability.analysis import near_symmetry_gauge
 
 log = logging.getLogger(__name__)
 
 RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
+
+
+def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
+                       options: ContinuationOptions) -> np.ndarray | None:
+    """Phase-condition modes of a branch started at ``q`` (None when there are none).
+
+    ``phase_conditions``: the symmetry modes (:func:`phase_modes`).
+    ``near_symmetry_gauge``: one unit row per approximate symmetry that is
+    not a combination of the exact ones at ``q`` (a closed rod's material
+    sliding off the circle), on the DOF of
+    :func:`~supercoil.stability.analysis.near_symmetry_gauge`: the row
+    ``q_i = q_i(start)`` keeps Newton and the tangent off the nearly
+    singular direction; its multiplier is the small force that the
+    discretisation's ripple exerts along the sliding, which the stored
+    points' residual (without it) shows.
+    """
+    rows = []
+    if options.phase_conditions:
+        rows.append(phase_modes(problem, q))
+    if options.near_symmetry_gauge:
+        dofs = near_symmetry_gauge(problem, q)
+        gauge = np.zeros((dofs.size, problem.n_dofs))
+        gauge[np.arange(dofs.size), dofs] = 1.0 / np.asarray(problem.mass, float)[dofs]
+        rows.append(gauge)
+    modes = np.vstack(rows) if rows else np.zeros((0, problem.n_dofs))
+    return modes if modes.shape[0] else None
 
 
 def phase_modes(problem: ConstrainedEnergy, q: np.ndarray, relative: float = 1e-8) -> np.ndarray:
@@ -271,7 +298,7 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     if not low <= lam0 <= high:
         raise ValueError(f"the starting {parameter} = {lam0} is outside the bounds {low, high}")
     q0 = np.array(q0, dtype=float)
-    modes = phase_modes(problem, q0) if opts.phase_conditions else None
+    modes = branch_phase_modes(problem, q0, opts)
     system = ExtendedSystem(problem, parameter, q0, modes, q0, opts.parameter_weight,
                             opts.finite_difference_step)
     mu0 = (least_squares_multipliers(problem, q0, system.free) if multipliers0 is None

@@ -26,8 +26,9 @@ from supercoil.solvers.kkt import InertiaError, KKTFactor, SingularMatrixError
 from supercoil.stability.analysis import (
     _eigen_system,
     _lowest_pairs,
-    _near_symmetry_schur,
     dense_constrained_eigenpairs,
+    goldstone_modes,
+    near_symmetry_gauge,
 )
 
 _DENSE_BELOW = 400
@@ -54,25 +55,43 @@ class PointStability:
         return self.eigenvalues[idx], self.modes[idx]
 
 
-def _inertia_parts(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None
-                   ) -> tuple[int, int, int]:
-    """``(raw negative count, near-symmetry negatives, determinant sign)`` at ``x``."""
+def count_gauge(system: ExtendedSystem, x: np.ndarray) -> np.ndarray:
+    """Positions (in ``system.free``) of the DOFs pinned out of the count at ``x``.
+
+    The approximate symmetries (a closed rod's material sliding) leave the
+    count as in :func:`~supercoil.stability.analysis.analyse`: by pinning a DOF
+    (:func:`~supercoil.stability.analysis.near_symmetry_gauge`), unless the
+    system's phase rows already remove them (a continuation started with
+    ``near_symmetry_gauge``: one row per mode, coupled to it).
+    """
+    problem = system.problem
+    q = system.q(x)
+    modes = goldstone_modes(problem, q)
+    if modes.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if system.r:
+        g = modes[:, system.free]
+        coupling = np.abs(system.P @ g.T) / np.outer(np.linalg.norm(system.P, axis=1),
+                                                      np.linalg.norm(g, axis=1))
+        if np.all(coupling.max(axis=0) > 0.1 / np.sqrt(system.n)):
+            return np.zeros(0, dtype=np.int64)
+        touched = system.free[np.flatnonzero(np.any(system.P != 0, axis=0))]
+    else:
+        touched = None
+    dofs = near_symmetry_gauge(problem, q, exclude=touched)
+    return np.searchsorted(system.free, dofs)
+
+
+def _count_system(system: ExtendedSystem, x: np.ndarray):
+    """``(H, J)`` of the count at ``x``: the system's, less the near-symmetry gauge."""
     J = system.jacobian(x)
     H = system.hessian(x)
-    sign = 0
-    try:
-        factor = KKTFactor(H, J)
-        negative = factor.reduced_negative_count
-        sign = int(factor.determinant_sign * (-1) ** J.shape[0])
-    except (SingularMatrixError, InertiaError):
-        if zero_tolerance is None:
-            raise
-        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=system.mass)
-        negative = factor.reduced_negative_count
-    # approximate symmetries (a closed rod's material sliding) leave the count as in
-    # supercoil.stability.analysis.analyse (Schur complement of their constraints)
-    near = _near_symmetry_schur(system.problem, system.q(x), factor, system.free)
-    return negative, int(np.sum(near < 0)), sign
+    drop = count_gauge(system, x)
+    if drop.size:
+        keep = np.setdiff1d(np.arange(system.n), drop)
+        H = H.restrict(keep)
+        J = J[:, keep]
+    return H, J
 
 
 def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None = None
@@ -80,13 +99,23 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     """``(negative count, determinant sign)`` of the constrained Hessian at ``x``.
 
     Near-symmetry directions are removed from the count as in
-    :func:`~supercoil.stability.analysis.analyse`. With ``zero_tolerance``, an
-    exactly singular Hessian (a special point located exactly) is handled: the
-    count is then that of the eigenvalues below ``-zero_tolerance / 2`` (the
-    inertia of ``H + M zero_tolerance / 2``) and the determinant sign is 0.
+    :func:`~supercoil.stability.analysis.analyse` (:func:`count_gauge`). With
+    ``zero_tolerance``, an exactly singular Hessian (a special point located
+    exactly) is handled: the count is then that of the eigenvalues below
+    ``-zero_tolerance / 2`` (the inertia of ``H + M zero_tolerance / 2``) and
+    the determinant sign is 0.
     """
-    negative, near, sign = _inertia_parts(system, x, zero_tolerance)
-    return negative - near, sign
+    H, J = _count_system(system, x)
+    try:
+        factor = KKTFactor(H, J)
+        negative = factor.reduced_negative_count
+        return negative, int(factor.determinant_sign * (-1) ** J.shape[0])
+    except (SingularMatrixError, InertiaError):
+        if zero_tolerance is None:
+            raise
+        mass = system.mass[np.setdiff1d(np.arange(system.n), count_gauge(system, x))]
+        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=mass)
+        return factor.reduced_negative_count, 0
 
 
 def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int
@@ -112,12 +141,12 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
                     n_modes: int) -> PointStability:
     """Stability report at the point ``x`` of the extended system (see module doc)."""
-    neg, near, det_sign = _inertia_parts(system, x, zero_tolerance)
+    neg, det_sign = inertia(system, x, zero_tolerance)
     values, modes = eigenpairs(system, x, neg + n_modes)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # as analyse: at least what the eigensolver found below -tol, at least the
-    # inertia less zero modes and near-symmetry directions; the inertia wins when
-    # the eigensolver finds more negatives than it counts
-    unstable = max(below, neg - near - zero) if below <= neg else neg
+    # inertia less zero modes; the inertia wins when the eigensolver finds more
+    # negatives than it counts
+    unstable = max(below, neg - zero) if below <= neg else neg
     return PointStability(unstable, zero, neg, det_sign, values, modes)

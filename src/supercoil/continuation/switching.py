@@ -30,7 +30,7 @@ from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
-from supercoil.continuation.pseudo_arclength import RecordFunction, _Tracer, phase_modes
+from supercoil.continuation.pseudo_arclength import RecordFunction, _Tracer, branch_phase_modes
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
@@ -97,7 +97,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     v = v / plain.norm(v)
     q_pred = plain.q(plain.pack(q_star, special_point.multipliers, special_point.parameter)
                      + side * eps * v)
-    modes = phase_modes(problem, q_pred) if opts.phase_conditions else None
+    modes = branch_phase_modes(problem, q_pred, opts)
     system = ExtendedSystem(problem, branch.parameter, q_star, modes, q_pred,
                             opts.parameter_weight, opts.finite_difference_step)
     v = np.concatenate([v[:n + m], np.zeros(system.r), v[-1:]])

@@ -200,8 +200,8 @@ class ContactProblem:
         augmented-Lagrangian multipliers (attached to segment pairs) drag the
         state along it (DESIGN.md, traps). The gauge is the linear constraint
         ``t_k . (x_k - x_k(q)) = 0`` on one node ``k`` (tangential motion of
-        that node), whose multiplier is the ripple's reaction, reported by
-        :meth:`sliding_reaction`. With contact the ripple is not small (a
+        that node), whose multiplier is the ripple's reaction. With contact the
+        ripple is not small (a
         reaction of 4 % of the contact forces measured at N = 100), so the
         gauge only steers the augmented-Lagrangian outer iterations; every
         returned state is an equilibrium without it.
@@ -218,12 +218,6 @@ class ContactProblem:
         """Remove the sliding gauge (see :meth:`pin_sliding`)."""
         self._slide_pin = None
         self.invalidate()
-
-    def sliding_reaction(self, multipliers: np.ndarray) -> float:
-        """The sliding gauge's reaction force (0 when no gauge is set)."""
-        if self._slide_pin is None:
-            return 0.0
-        return float(np.asarray(multipliers)[self.base.n_constraints])
 
     @property
     def gauge_dofs(self):

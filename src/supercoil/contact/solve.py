@@ -7,13 +7,16 @@
   finite penalty; the penalty grows tenfold, at most to 1000 times its
   default, whenever an update fails to cut the penetration fourfold).
 * ``exact``: an active-set method on the inequality constraints ``g >= 0``.
-  The penalty solution gives the first active set (the pairs with a positive
-  force, one per segment so that line contacts do not produce nearly
-  dependent constraints); Newton (in the caller's mode) then solves the
-  equality-constrained problem exactly (the multipliers are minus the contact forces); a contact
-  whose force comes out negative is released, a pair that penetrates is added,
-  and the solve is repeated until the forces are non-negative and nothing
-  penetrates.
+  The augmented-Lagrangian solution gives the first active set (or the
+  previous solve's active set when there is one): a maximal set of its
+  touching pairs with linearly independent gap gradients (greedy Gram–Schmidt,
+  strongest force first; along a line contact the pairs' gradients are
+  dependent and LICQ fails). Newton in stationary mode then solves the
+  equality-constrained problem exactly (the multipliers are minus the
+  contact forces); the contact that pulls hardest is released, pairs that
+  penetrate are added, and the solve is repeated until the forces are
+  non-negative and nothing penetrates. An active set that repeats stops the
+  loop; the augmented-Lagrangian state is then returned, not converged.
 
 Every step of every Newton iteration is bounded by continuous collision
 detection (:meth:`ContactProblem.step_bound`), so segments never pass
@@ -165,7 +168,7 @@ def _augmented(problem: ContactProblem, q0, opts, max_outer=None):
         res = newton(problem, q, opts)
         total += res.iterations
     extra = (f"; augmented Lagrangian: {outer} outer iterations, {total} Newton iterations, "
-             f"penetration {pen:.1e} D, penalty {problem.stiffness / k0:g} x the default")
+             f"penalty {problem.stiffness / k0:g} x the default")
     return dataclasses.replace(_finish(problem, res, outer, extra), newton_iterations=total)
 
 
@@ -286,10 +289,12 @@ def _independent_pairs(problem: ContactProblem, q, pairs, force, rtol: float = 1
     Along a line contact every segment touches two or three segments of the
     other strand, and the gradients of those pairs' gaps are (nearly)
     dependent: constraining all of them makes the KKT matrix singular (LICQ
-    fails and the forces are not unique). Column-pivoted QR of the gradients
-    on the free DOFs, the strongest force first, keeps a maximal independent
-    subset (relative tolerance ``rtol`` on the diagonal of R); holding those at
-    zero gap holds the others to first order. Returns ``(pairs, forces)``.
+    fails and the forces are not unique). Greedy Gram–Schmidt of the gradients
+    on the free DOFs near the contacts (after removing what the rod's own
+    constraints fix), strongest force first, keeps a maximal independent
+    subset (a gradient is kept when more than ``rtol`` of its norm is new);
+    holding those at zero gap holds the others to first order. Returns
+    ``(pairs, forces)``.
     """
     if len(pairs) == 0:
         return np.zeros((0, 2), dtype=np.int64), np.zeros(0)

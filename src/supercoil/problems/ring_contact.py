@@ -115,6 +115,8 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
         mode = stab.lowest_modes[0].reshape(-1, 3)
         step = mode / np.linalg.norm(mode, axis=1).max() * RESTART_AMPLITUDE * problem.diameter
         gradient = problem.gradient(res.q)
+        # (at an equilibrium the gradient is the constraint reaction, so this
+        # sign is a deterministic choice rather than a descent direction)
         sign = -1.0 if float(gradient @ step.ravel()) > 0 else 1.0
         trial = solve_contact(problem, res.q + sign * step.ravel(), options_newton)
         if not trial.converged:
@@ -125,6 +127,11 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
                        zero_tolerance=zero_tolerance)
     if restarts:
         note += f"; left {restarts} saddle(s) along the unstable mode"
+    if res.converged and stab.unstable_count > 0:
+        note += (f"; warning: the state is unstable ({stab.unstable_count} negative "
+                 f"eigenvalue(s)) after {restarts} restart(s) along the unstable mode")
+    if not res.converged:
+        note += "; the stability reported is that of a state that is not an equilibrium"
     if base.rod.edge_length > options.diameter:
         note += (f"; warning: segments ({base.rod.edge_length:.3g} L) are longer than the tube "
                  f"diameter ({options.diameter:.3g} L): contact lines are under-resolved, use "
@@ -151,5 +158,6 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
         result = dataclasses.replace(
             result, converged=False,
             message=result.message + f"; error: Lk not conserved (continuous writhe differs "
-            f"from the double sum by {result.writhe_error:.2e})")
+            f"from the double sum by {result.writhe_error:.2e}, |Tw + Wr - dLk| = "
+            f"{result.link_error:.2e})")
     return result

@@ -142,6 +142,8 @@ def _augmented(problem: ContactProblem, q0, opts, max_outer=None):
         total += res.iterations
         q, lam = res.q, res.multipliers
         if not res.converged:
+            if problem._slide_pin is not None:  # a failed state is not held by the gauge either
+                problem.release_sliding()
             return _finish(problem, res, outer, f" (augmented Lagrangian, outer iteration {outer})")
         st = problem.pair_state(q, problem._cutoff())
         gap = st.distance - D
@@ -149,20 +151,20 @@ def _augmented(problem: ContactProblem, q0, opts, max_outer=None):
         new = potentials.augmented_update(gap, old, problem.stiffness)
         problem.pair_multipliers = {(int(i), int(j)): float(f)
                                     for (i, j), f in zip(st.pairs, new) if f > 0}
+        problem.invalidate()  # the multipliers set the reach of the pair data
         pen = max(0.0, -float(gap.min()) / D) if gap.size else 0.0
         if pen <= tol and problem._slide_pin is None:
             break
         if pen <= 10 * tol and problem._slide_pin is not None:
             problem.release_sliding()
-            problem.invalidate()
             continue
         # Penalty growth (Conn, Gould & Toint 1991; Bertsekas 1982): when an
         # update did not cut the penetration fourfold, the rod is stiffer than
         # the penalty at the contacts and first-order updates crawl.
         if pen > 0.25 * pen_prev and problem.stiffness < 1e3 * k0:
             problem.stiffness *= 10.0
+            problem.invalidate()
         pen_prev = pen
-        problem.invalidate()
     if problem._slide_pin is not None:  # never return a state held by the gauge
         problem.release_sliding()
         res = newton(problem, q, opts)

@@ -10,7 +10,9 @@ Steps grow after fast corrections and shrink after failures (no convergence,
 divergence, a singular matrix, or a tangent turned by more than
 ``max_turn_degrees``, the guard against jumping between branches). A step
 that crosses a parameter bound is replaced by a correction at exactly the
-bound. At every accepted point the problem's ``accept(q)`` is called, then
+bound. A problem's ``step_bound`` also vets the predictor step (a step that is
+not collision-free is retried shorter) and its ``admissible(q)`` every
+corrected point. At every accepted point the problem's ``accept(q)`` is called, then
 the stability (:mod:`supercoil.continuation.stability`), the caller's records
 and user events are evaluated, and the interval to the previous point is
 searched for folds, bifurcations and user events
@@ -190,16 +192,26 @@ class _Tracer:
                 d = x_k - self.xs[-2]
                 d = d / system.norm(d)
             row = system.weights * d
-            corr = correct(system, x_k + ds * d, row, x_k, ds, opts.tolerance,
-                           opts.max_corrector_iterations)
-            failure = None if corr.ok else corr.message
+            problem = system.problem
+            q_k = system.q(x_k)
+            if hasattr(problem, "step_bound") and \
+                    problem.step_bound(q_k, system.q(x_k + ds * d) - q_k) < 1.0:
+                # the predictor would carry the state through an obstacle (self-contact)
+                corr, failure = None, "the predictor step is not collision-free"
+            else:
+                corr = correct(system, x_k + ds * d, row, x_k, ds, opts.tolerance,
+                               opts.max_corrector_iterations)
+                failure = None if corr.ok else corr.message
             x_new = t_new = None
-            if corr.ok:
+            if failure is None:
                 x_new = corr.x
                 try:
                     t_new = tangent(system, x_new, system.weights * t_k)
                 except SingularMatrixError as exc:
                     failure = f"tangent: {exc}"
+            if failure is None and hasattr(problem, "admissible") and \
+                    not problem.admissible(system.q(x_new)):
+                failure = "the corrected state is inadmissible (e.g. its linking number changed)"
             if failure is None and t_new @ (system.weights * t_k) < cos_turn:
                 failure = (f"the tangent turned by more than {opts.max_turn_degrees} degrees "
                            f"(a jump to another branch?)")
@@ -242,7 +254,7 @@ class _Tracer:
             if bound is not None:
                 return ContinuationStatus.PARAMETER_BOUND, (
                     f"reached {system.parameter} = {bound:.10g} after {len(self.xs)} points")
-            if corr.iterations <= opts.fast_iterations:
+            if corr is not None and corr.iterations <= opts.fast_iterations:
                 ds = min(ds * opts.growth, opts.max_step)
         return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"
 

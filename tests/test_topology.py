@@ -29,6 +29,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.polynomial.legendre import leggauss
 
+from supercoil._numba import njit as _njit
 from supercoil.topology import (
     linking_number,
     parallel_transport,
@@ -36,7 +37,7 @@ from supercoil.topology import (
     writhe,
     writhe_reference,
 )
-from supercoil.topology.writhe import _atan2, _njit, _solid_angle_triangles
+from supercoil.topology.writhe import _atan2, _solid_angle_triangles
 
 Z = np.array([0.0, 0.0, 1.0])
 

@@ -92,9 +92,10 @@ detection").
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 from scipy.spatial import cKDTree
+
+from supercoil._numba import njit
 
 __all__ = ["candidate_pairs", "pair_separation", "polygon_segments"]
 
@@ -113,16 +114,6 @@ _BLOCK_SIZE = 8
 _WIDE_BLOCK = 2.0
 
 
-def _njit(**options: object):
-    """``numba.njit(cache=True, **options)``, or in memory when no cache directory is writable."""
-
-    def decorate(function):
-        try:
-            return numba.njit(cache=True, **options)(function)
-        except RuntimeError:
-            return numba.njit(cache=False, **options)(function)
-
-    return decorate
 
 
 def polygon_segments(
@@ -288,7 +279,7 @@ def candidate_pairs(
     return np.column_stack([keys // n_segments, keys % n_segments])
 
 
-@_njit(error_model="numpy")
+@njit(error_model="numpy")
 def _exact_tests(
     block_a,
     block_b,

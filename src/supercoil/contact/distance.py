@@ -89,9 +89,10 @@ from __future__ import annotations
 
 import enum
 
-import numba
 import numpy as np
 import numpy.typing as npt
+
+from supercoil._numba import njit
 
 __all__ = [
     "CROSSING_RELATIVE_DISTANCE",
@@ -123,16 +124,6 @@ _P0_EQ, _P1_EQ, _Q0_EP, _Q1_EP = 1, 2, 3, 4
 _P0_Q0, _P0_Q1, _P1_Q0, _P1_Q1 = 5, 6, 7, 8
 
 
-def _njit(**options: object):
-    """``numba.njit(cache=True, **options)``, falling back to an in-memory compile."""
-
-    def decorate(function):
-        try:
-            return numba.njit(cache=True, **options)(function)
-        except RuntimeError:  # no writable cache directory
-            return numba.njit(cache=False, **options)(function)
-
-    return decorate
 
 
 # --------------------------------------------------------------------------
@@ -140,12 +131,12 @@ def _njit(**options: object):
 # --------------------------------------------------------------------------
 
 
-@_njit()
+@njit()
 def _clamp01(x):
     return min(max(x, 0.0), 1.0)
 
 
-@_njit()
+@njit()
 def _r2(wx, wy, wz, ux, uy, uz, vx, vy, vz, s, t):
     rx = wx + s * ux - t * vx
     ry = wy + s * uy - t * vy
@@ -153,7 +144,7 @@ def _r2(wx, wy, wz, ux, uy, uz, vx, vy, vz, s, t):
     return rx * rx + ry * ry + rz * rz
 
 
-@_njit()
+@njit()
 def _foot_kind(t, interior, at0, at1):
     if t <= 0.0:
         return at0
@@ -162,7 +153,7 @@ def _foot_kind(t, interior, at0, at1):
     return interior
 
 
-@_njit()
+@njit()
 def _closest(P0, P1, Q0, Q1, i, parallel_tolerance, exact):
     """Closest parameters of pair ``i``: ``(d, s, t, kind)``.
 
@@ -250,13 +241,13 @@ def _closest(P0, P1, Q0, Q1, i, parallel_tolerance, exact):
     return np.sqrt(best), s_best, t_best, kind
 
 
-@_njit()
+@njit()
 def _distance_kernel(P0, P1, Q0, Q1, d, s, t):
     for i in range(P0.shape[0]):
         d[i], s[i], t[i], _ = _closest(P0, P1, Q0, Q1, i, 0.0, True)
 
 
-@_njit()
+@njit()
 def _derivative_kernel(P0, P1, Q0, Q1, parallel_tolerance, d_out, grad, hess, kinds):
     u = np.empty(3)
     v = np.empty(3)

@@ -2,24 +2,13 @@
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 import scipy.sparse as sp
 
-
-def _njit(**options: object):
-    """``numba.njit(cache=True, **options)``, falling back to an in-memory compile."""
-
-    def decorate(function):
-        try:
-            return numba.njit(cache=True, **options)(function)
-        except RuntimeError:  # no writable cache directory
-            return numba.njit(cache=False, **options)(function)
-
-    return decorate
+from supercoil._numba import njit
 
 
-@_njit()
+@njit()
 def _accumulate(slot, values, out):
     """``out[slot[k]] += values[k]`` in the order of ``k`` (as ``np.bincount``)."""
     for k in range(slot.size):

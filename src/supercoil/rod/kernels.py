@@ -70,8 +70,9 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-import numba
 import numpy as np
+
+from supercoil._numba import njit
 
 CURVATURE_FORMS = ("angle", "tan", "sin")
 _FORM_CODE = {"tan": 0, "sin": 1, "angle": 2}
@@ -84,16 +85,6 @@ _SERIES_BELOW = 1e-3
 _SERIES_TERMS = 7
 
 
-def _njit(**options: object):
-    """``numba.njit(cache=True, **options)``, falling back to an in-memory compile."""
-
-    def decorate(function):
-        try:
-            return numba.njit(cache=True, **options)(function)
-        except RuntimeError:  # no writable cache directory
-            return numba.njit(cache=False, **options)(function)
-
-    return decorate
 
 
 # --------------------------------------------------------------------------
@@ -101,23 +92,23 @@ def _njit(**options: object):
 # --------------------------------------------------------------------------
 
 
-@_njit()
+@njit()
 def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@_njit()
+@njit()
 def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@_njit()
+@njit()
 def _edges(x):
     """``e = x_i - x_{i-1}`` and ``f = x_{i+1} - x_i`` of a stencil ``(9,)``."""
     return ((x[3] - x[0], x[4] - x[1], x[5] - x[2]), (x[6] - x[3], x[7] - x[4], x[8] - x[5]))
 
 
-@_njit()
+@njit()
 def _transport(v, a, b):
     """Parallel transport of ``v`` from unit ``a`` to unit ``b`` (rotation about ``a x b``)."""
     n = _cross(a, b)
@@ -127,7 +118,7 @@ def _transport(v, a, b):
     return (c * v[0] + nv[0] + k * n[0], c * v[1] + nv[1] + k * n[1], c * v[2] + nv[2] + k * n[2])
 
 
-@_njit()
+@njit()
 def _measure(s, form):
     """``K(s)``, ``K'(s)``, ``K''(s)`` with ``k^2 = K(s)``, ``s = tan^2(phi/2)``."""
     if form == _TAN:
@@ -150,7 +141,7 @@ def _measure(s, form):
     return 4.0 * s * m * m, 4.0 * m * u, 4.0 * u * (dm - m * u)
 
 
-@_njit()
+@njit()
 def _set_gradient(g6, out):
     """``out (9,) = P^T g6``: the ``(e, f)`` gradient ``g6`` on the three vertices."""
     for k in range(3):
@@ -159,7 +150,7 @@ def _set_gradient(g6, out):
         out[6 + k] = g6[3 + k]
 
 
-@_njit()
+@njit()
 def _add_hessian(h6, scale, out):
     """``out (9, 9) += scale P^T h6 P`` for a symmetric ``(e, f)`` Hessian ``h6``."""
     for i in range(3):
@@ -184,7 +175,7 @@ def _add_hessian(h6, scale, out):
 # --------------------------------------------------------------------------
 
 
-@_njit()
+@njit()
 def _bending_loop(stencils, weights, form, order, scale, values, gradients, hessians):
     g6 = np.empty(6)
     h6 = np.empty((6, 6))
@@ -246,7 +237,7 @@ def _bending_loop(stencils, weights, form, order, scale, values, gradients, hess
 # --------------------------------------------------------------------------
 
 
-@_njit()
+@njit()
 def _atan2_derivatives(y, x):
     """First and second derivatives of ``atan2(y, x)``: t_y, t_x, t_yy, t_xx, t_xy."""
     rho = x * x + y * y
@@ -254,7 +245,7 @@ def _atan2_derivatives(y, x):
     return x / rho, -y / rho, -2.0 * x * y / rho2, 2.0 * x * y / rho2, (y * y - x * x) / rho2
 
 
-@_njit()
+@njit()
 def _add_atan2_outer(out, row, col, coefficient, y_row, x_row, y_col, x_col, tyy, txx, txy):
     """``out[row + i, col + j] += coefficient (t_yy y y^T + t_xx x x^T + t_xy (y x^T + x y^T))``."""
     for i in range(3):
@@ -266,7 +257,7 @@ def _add_atan2_outer(out, row, col, coefficient, y_row, x_row, y_col, x_col, tyy
             )
 
 
-@_njit()
+@njit()
 def _project_block(gz, row, col, u, v, lu, lv, out):
     """``out`` block at (row, col) = ``(I - u u^T) G (I - v v^T) / (lu lv)``, ``G`` that of ``gz``."""
     for k in range(3):
@@ -279,7 +270,7 @@ def _project_block(gz, row, col, u, v, lu, lv, out):
             out[row + k, col + j] = (out[row + k, col + j] - u[k] * ug) / (lu * lv)
 
 
-@_njit()
+@njit()
 def _add_unit_curvature(h6, row, u, g, length):
     """``h6`` block += ``sum_k g_k d^2 u_k / de^2 = -(u g^T + g u^T + (u.g)(I - 3 u u^T)) / |e|^2``."""
     ug = _dot(u, g)
@@ -291,7 +282,7 @@ def _add_unit_curvature(h6, row, u, g, length):
             ) / (length * length)
 
 
-@_njit()
+@njit()
 def _twist_loop(stencils, frames, order, scale, values, gradients, hessians):
     g6 = np.empty(6)
     h6 = np.empty((6, 6))

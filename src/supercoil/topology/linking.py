@@ -21,12 +21,13 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from supercoil.topology.writhe import _as_polygon, _components, _extended, _njit, _row_half_angles
+from supercoil._numba import njit
+from supercoil.topology.writhe import _as_polygon, _components, _extended, _row_half_angles
 
 __all__ = ["linking_number"]
 
 
-@_njit(parallel=True, error_model="numpy")
+@njit(parallel=True, error_model="numpy")
 def _linking_half_angle_rows(
     ax: np.ndarray, ay: np.ndarray, az: np.ndarray, bx: np.ndarray, by: np.ndarray, bz: np.ndarray
 ) -> np.ndarray:

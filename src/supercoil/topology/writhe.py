@@ -65,6 +65,8 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
+from supercoil._numba import njit
+
 Closure = Literal["closed", "chord", "none", "axis"]
 
 _CLOSURES: tuple[str, ...] = ("closed", "chord", "none", "axis")
@@ -72,21 +74,6 @@ _CLOSURES: tuple[str, ...] = ("closed", "chord", "none", "axis")
 __all__ = ["Closure", "writhe", "writhe_reference"]
 
 
-def _njit(**options: object):
-    """``numba.njit(cache=True, **options)``, or without cache if none is usable.
-
-    Numba raises ``RuntimeError`` at decoration time when neither the source
-    tree's ``__pycache__`` nor a user-wide cache directory is writable; the
-    kernels then simply compile in memory on each new process.
-    """
-
-    def decorate(function):
-        try:
-            return numba.njit(cache=True, **options)(function)
-        except RuntimeError:
-            return numba.njit(cache=False, **options)(function)
-
-    return decorate
 
 
 # --------------------------------------------------------------------------
@@ -304,7 +291,7 @@ _Q0, _Q1, _Q2, _Q3, _Q4 = (
 _TAN_PI_8 = 0.41421356237309504880
 
 
-@_njit(inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _atan2(y: float, x: float) -> float:
     """``atan2(y, x)`` in ``[−π, π]`` without branches, so that loops calling it vectorise.
 
@@ -335,7 +322,7 @@ def _atan2(y: float, x: float) -> float:
     return -angle if y < 0.0 else angle
 
 
-@_njit(error_model="numpy")
+@njit(error_model="numpy")
 def _row_half_angles(
     sx: np.ndarray,
     sy: np.ndarray,
@@ -411,7 +398,7 @@ def _row_half_angles(
     return (s0 + s1) + (s2 + s3)
 
 
-@_njit(parallel=True, error_model="numpy")
+@njit(parallel=True, error_model="numpy")
 def _self_half_angle_rows(
     nx: np.ndarray, ny: np.ndarray, nz: np.ndarray, closed: bool
 ) -> np.ndarray:
@@ -442,7 +429,7 @@ def _self_half_angle_rows(
     return rows
 
 
-@_njit()
+@njit()
 def _tail_half_angles(vertices: np.ndarray, axis: np.ndarray) -> float:
     """Σ over edges of the Gauss integrals with the two axial tails, halved.
 

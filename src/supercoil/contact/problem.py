@@ -453,7 +453,10 @@ class ContactProblem:
         # the material along itself) otherwise give Newton steps far outside
         # the region where the quadratic model holds.
         cap = min(1.0, self.edge_length / largest)
-        st = self.pair_state(q, self.diameter + 2.0 * cap * largest)
+        # pairs that may come within reach: relative motion at most twice the
+        # largest node displacement; the barrier's threshold sits above D, so
+        # a margin (2.5 rather than 2) keeps every pair that could reach it
+        st = self.pair_state(q, self.diameter + 2.5 * cap * largest)
         if len(st.pairs) == 0:
             return cap
         d0, D = st.distance, self.diameter

@@ -1,5 +1,14 @@
+import os
+
 import numpy as np
 import pytest
+from hypothesis import settings
+
+# CI runs the same hypothesis examples every time (a landing must not depend
+# on which random examples a run happens to draw); local runs keep exploring.
+settings.register_profile("ci", derandomize=True, print_blob=True)
+if os.environ.get("CI"):
+    settings.load_profile("ci")
 
 
 def smooth_closed_curve(n_nodes: int, length: float = 1.0, wobble: float = 0.3) -> np.ndarray:

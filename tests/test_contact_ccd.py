@@ -7,7 +7,7 @@ bisected) for tilting pairs and random motions.
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.spatial.transform import Rotation
@@ -168,6 +168,11 @@ def test_hypothesis_reported_time_is_never_late(x0, dx, threshold):
     if d0 <= threshold:
         assert (t_hit, k) == (0.0, 0)
         return
+    # The brute-force oracle evaluates positions x0 + t dx, whose rounding
+    # (~1e-16 of the coordinates) hides gaps smaller than that: such starts
+    # (found by hypothesis: a gap of 2.5e-29 under a common translation) are
+    # beyond what the oracle can judge.
+    assume(d0 - threshold > 1e-12)
     first = brute_force_first_time(x0, dx, PAIR[0], threshold)
     assert t_hit <= first + 1e-12
     assert_conservative(x0, dx, PAIR, threshold, t_hit)

@@ -422,13 +422,25 @@ class ContactProblem:
         must equal the double-sum writhe: a strand that passed through another
         changes the latter by 2, so half a turn separates the two cases far
         beyond round-off. The double sum costs O(N^2) (0.1 s at N = 5000): it
-        runs up to ``LINK_CHECK_MAX_NODES`` nodes; beyond, the collision
-        detection of :meth:`step_bound` is the guard. Open rods: always True.
+        runs up to ``LINK_CHECK_MAX_NODES`` nodes, and only when ``q`` is not
+        within half the closest approach of the last verified state (then no
+        pair can have crossed); beyond that size the collision detection of
+        :meth:`step_bound` is the guard. Open rods: always True.
         """
         if not self.closed or self.n_dofs // 3 > LINK_CHECK_MAX_NODES:
             return True
         x = np.asarray(q, dtype=float).reshape(-1, 3)
-        return abs(self.base.writhe_local(q) - writhe(x)) < 0.5
+        verified = self.__dict__.get("_verified")
+        if verified is not None:
+            # No pair's distance can fall by more than twice the largest node
+            # displacement: within that of a verified state nothing crossed.
+            x_v, d_v = verified
+            if x_v.shape == x.shape and 2.0 * np.max(np.linalg.norm(x - x_v, axis=1)) < d_v:
+                return True
+        ok = abs(self.base.writhe_local(q) - writhe(x)) < 0.5
+        if ok:
+            self.__dict__["_verified"] = (x.copy(), self.min_distance(q))
+        return ok
 
     def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:
         """Largest node displacement of ``dq`` over the trust radius (one edge length)."""

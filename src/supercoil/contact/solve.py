@@ -182,13 +182,20 @@ def _exact(problem: ContactProblem, q0, opts):
         # step): start the active-set loop from it; a contact that releases or
         # forms on the way is handled by the loop. Start over if that fails.
         out = _active_set_loop(problem, np.asarray(q0, float), problem.active, None,
-                               stationary, 0, 0, max_cycles=8)
+                               stationary, 0, 0, max_cycles=3)
         if out.converged and out.admissible:
             return dataclasses.replace(out, message=out.message + " (from the previous "
                                        "active set)")
         problem.active = np.zeros((0, 2), dtype=np.int64)
-    warm = ContactProblem(problem.base, dataclasses.replace(problem.options,
-                                                             treatment="augmented"))
+    # The augmented-Lagrangian warm start keeps its multipliers (and penalty)
+    # from the previous solve of this problem: from a nearby state it then
+    # needs one or two outer iterations.
+    warm = problem.__dict__.get("_warm")
+    if warm is None or warm.base is not problem.base:
+        warm = ContactProblem(problem.base, dataclasses.replace(problem.options,
+                                                                 treatment="augmented"))
+        problem.__dict__["_warm"] = warm
+    warm.invalidate()
     start = _augmented(warm, q0, opts)
     if not start.converged:
         return dataclasses.replace(start, message="warm start failed: " + start.message)

@@ -639,6 +639,170 @@ def demo(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
+# -------------------------------------------------------------------- diagram
+
+diagram_app = typer.Typer(
+    help="Bifurcation diagrams with self-contact (branches, stability, contact events).",
+    no_args_is_help=True,
+)
+app.add_typer(diagram_app, name="diagram")
+
+DIAGRAM_TREATMENTS = ("barrier", "penalty")  # supercoil.problems.ring_diagram's
+DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configurations.png")
+
+
+@diagram_app.command("ring")
+def diagram_ring(
+    twist_ratio: Annotated[
+        float,
+        typer.Option("--twist-ratio", metavar="C/A", help="Twist stiffness over bending "
+                     "stiffness, 0 < C/A <= 1e6 (2/3 in seed 001's DNA example).",
+                     show_default=False),
+    ],
+    length_over_diameter: Annotated[
+        float,
+        typer.Option("--length-over-diameter", metavar="L/D", help="Rod length over tube "
+                     "diameter, L/D > pi (122 in seed 001's DNA example).",
+                     show_default=False),
+    ],
+    out: Annotated[
+        Path,
+        typer.Option("--out", metavar="DIR", help="Folder for diagram.json, branches/*.npz "
+                     "and the figures; an existing non-empty DIR is refused unless --force.",
+                     show_default=False),
+    ],
+    nodes: Annotated[
+        int,
+        typer.Option("--nodes", metavar="N", help="Nodes of the discrete ring; contact "
+                     "lines need segments shorter than D (N >= L/D)."),
+    ] = 100,
+    modes: Annotated[
+        str,
+        typer.Option("--modes", metavar="M,M", help="Michell modes of the circle whose "
+                     "primary branches are followed: 2 = alpha, 3 = beta, ..."),
+    ] = "2,3",
+    max_excess_link: Annotated[
+        float,
+        typer.Option("--max-excess-link", metavar="X", help="Upper bound of the excess link "
+                     "dLk (turns) on the contact branches and the circle."),
+    ] = 6.0,
+    contact: Annotated[
+        str,
+        typer.Option("--contact", metavar="TREATMENT", help="Self-contact treatment of the "
+                     "contact branches: barrier (default; never penetrates) or penalty "
+                     "(exact and augmented are not continued yet)."),
+    ] = "barrier",
+    force: Annotated[
+        bool,
+        typer.Option("--force", help="Write into an existing non-empty --out DIR, "
+                     "overwriting the diagram's own files (other files are left alone)."),
+    ] = False,
+) -> None:
+    """The ring's bifurcation diagram with self-contact (seed 001, Figures 1-4).
+
+    The circle and its Michell bifurcations, the primary branches of --modes
+    without contact up to the first contact (contact_onset), then with
+    self-contact up to --max-excess-link; contact events and stability along
+    them. Writes diagram.json, branches/<name>.npz (reloadable with
+    supercoil.continuation.Branch.load), link_writhe.png (dLk against Wr,
+    stable parts heavy), contact_map.png (s/L of the contacts against Wr) and
+    configurations.png (tubes of diameter D) into --out.
+    """
+    require_magnitude("--twist-ratio", twist_ratio, "a positive number up to 1e6")
+    require_positive("--twist-ratio", twist_ratio, "a positive number up to 1e6")
+    require_positive("--length-over-diameter", length_over_diameter,
+                     f"a finite number above pi ({math.pi:.4f})")
+    if length_over_diameter <= math.pi:
+        fail(f"--length-over-diameter {length_over_diameter:g} is too small: a ring of "
+             f"diameter D needs L/D > pi ({math.pi:.4f})")
+    require_nodes("--nodes", nodes)
+    require_positive("--max-excess-link", max_excess_link, "a positive number of turns")
+    require_magnitude("--max-excess-link", max_excess_link, "a positive number up to 1e6")
+    words = modes.replace(",", " ").split()
+    if not words or not all(w.isdigit() and 2 <= int(w) <= 12 for w in words) \
+            or len(set(words)) != len(words):
+        fail(f"--modes {modes!r}: give distinct Michell modes from 2 to 12 separated by "
+             "commas, like 2,3 (2 = alpha, 3 = beta)")
+    if contact not in DIAGRAM_TREATMENTS:
+        fail(f"--contact {contact!r}: give one of {', '.join(DIAGRAM_TREATMENTS)}")
+    if out.exists() and not out.is_dir():
+        fail(f"--out {out}: is a file, not a folder; give a new folder")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        fail(f"--out {out}: folder exists and is not empty; give a new folder, or add --force "
+             "to overwrite the diagram's files in it")
+    try:
+        (out / "branches").mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
+             "writable location")
+    from supercoil.io.results import envelope, write_json
+    from supercoil.plotting.ring_diagram import (
+        plot_configurations,
+        plot_contact_map,
+        plot_link_writhe,
+    )
+    from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
+
+    try:
+        options = DiagramOptions(twist_ratio, length_over_diameter, nodes,
+                                 tuple(int(w) for w in words), max_excess_link, contact)
+    except ValueError as exc:
+        fail(str(exc))
+    print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "
+          f"N = {nodes}, modes {', '.join(words)}, dLk <= {max_excess_link:g}", flush=True)
+    diagram = ring_diagram(options, progress=lambda line: warn(f"  {line}"))
+    for branch in diagram.branches:
+        branch.save(out / "branches" / f"{branch.name}.npz")
+    payload = diagram.payload()
+    points = payload["points"]
+    by_branch = {b["name"]: [p for p in points if p["branch"] == b["name"]]
+                 for b in payload["branches"]}
+    title = (f"twisted ring, C/A = {twist_ratio:.4g}, L/D = {length_over_diameter:g}, "
+             f"N = {nodes}")
+    shown = []
+    for b in payload["branches"]:
+        rows = by_branch[b["name"]]
+        if not b["contact"] and b["parent"] is not None and rows:
+            rows = rows[:-1]  # the last contact-free point lies beyond the contact onset
+        shown.append({"name": b["name"], "writhe": [r["writhe"] for r in rows],
+                      "excess_link": [r["excess_link"] for r in rows],
+                      "stable": [r["stable"] for r in rows],
+                      "contact_points": [r["contact_points"] for r in rows],
+                      "contact_intervals": [r["contact_intervals"] for r in rows]})
+    plot_link_writhe(out / "link_writhe.png", branches=shown,
+                     special_points=payload["special_points"], title=title)
+    plot_contact_map(out / "contact_map.png",
+                     branches=[b for b, e in zip(shown, payload["branches"]) if e["contact"]],
+                     title=title)
+    configurations = []
+    for branch in diagram.branches:
+        if branch.name not in diagram.contact_branches or len(branch) == 0:
+            continue
+        for index in sorted({len(branch) // 3, 2 * len(branch) // 3, len(branch) - 1}):
+            configurations.append({
+                "label": f"{branch.name}, dLk = {branch.parameter_values[index]:.3f}, "
+                         f"Wr = {float(branch.records['writhe'][index]):.3f}",
+                "points": branch.states[index].reshape(-1, 3)})
+    plot_configurations(out / "configurations.png", configurations=configurations,
+                        diameter=options.diameter, title=title)
+    write_json(envelope(payload, n_nodes=nodes, tolerances=options.tolerances,
+                        contact_treatment=contact), out / "diagram.json")
+    where = out.resolve()
+    for b in payload["branches"]:
+        specials = [p for p in payload["special_points"] if p["branch"] == b["name"]]
+        kinds = ", ".join(f"{p['kind']} at dLk {p['excess_link']:.4f}" for p in specials)
+        print(f"  {b['name']}: {b['n_points']} points, {b['seconds']:.1f} s, "
+              f"{b['status'].lower()}" + (f"; {kinds}" if kinds else ""))
+    print(f"wrote {', '.join(DIAGRAM_FILES)} and branches/*.npz to {where}")
+    for note in payload["notes"]:
+        warn(f"note: {note}")
+    if not diagram.ok:
+        failed = [b["name"] for b in payload["branches"] if not b["ok"]]
+        warn(f"incomplete: branch(es) {', '.join(failed)} stopped early (see 'message' in "
+             f"{where / 'diagram.json'})")
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
 def _single_threaded_blas() -> None:
     """Default the BLAS/LAPACK thread pools to one thread (the user's setting wins).
 

@@ -1,0 +1,570 @@
+"""The bifurcation diagram of a ring with self-contact (seed 001, Figures 1-4).
+
+:func:`ring_diagram` computes, for a ring of twist ratio ``C/A`` and tube
+diameter ``D = L / (L/D)``:
+
+1. the circle in ``dLk`` (branch ``circle``) and its Michell bifurcation
+   points (:mod:`supercoil.problems.ring_branches`);
+2. for each requested mode ``m`` the primary branch switched from the
+   circle's bifurcation of mode ``m`` (``alpha``, ``beta``, ...) and followed
+   **without contact**. A :class:`~supercoil.continuation.UserEvent` watches
+   the closest approach of non-neighbouring centreline points,
+   ``d_min / D - 1`` (``ContactProblem.min_distance``: segments closer than
+   the neighbour exclusion ``pi D / 2`` along the rod are not compared); its
+   sign change is located by Brent's method and is the special point
+   ``contact_onset`` (label ``min_gap``). The contact-free branch is then cut
+   after the first point beyond the onset (that last point penetrates; it is
+   kept so that the onset lies between two points of the branch). The
+   continuation itself cannot stop at an event, so the contact-free run goes
+   on to its bounds and the rest is discarded (the cost of a few points);
+3. from the last point before the onset (a state without contact, gap > 0)
+   the branch is continued **with self-contact** (branch ``alpha_contact``,
+   parent ``alpha``, origin the ``contact_onset`` point) in the direction the
+   contact-free branch was going, within ``0 <= dLk <= max_excess_link``
+   (folds are passed, so a branch that turns is followed back up or down).
+   Steps are a fraction of ``D`` in the arclength metric (the RMS node
+   displacement, plus ``D`` times the change of ``dLk``: a step of ``D/2``
+   changes ``dLk`` by at most 1/2), so that no strand can cross another
+   within a step; the
+   corrector's steps are guarded by continuous collision detection
+   (``ContactProblem.step_bound``) as well.
+
+Contact events along a contact branch: the number of contact points and of
+contact intervals (:func:`supercoil.contact.report.contact_summary`) are
+integers, so a change between two branch points is a jump of the indicators
+``n - k + 1/2`` (``k = 1 .. MAX_LEVEL``), one named scalar of a single
+:class:`UserEvent` each; the jump is bracketed by Brent's method (bisection
+safeguarded) on the branch between the two points, re-corrected at every
+trial, to ``contact_event_tolerance`` in arclength. The kind is then read
+from the counts at the two neighbouring points (both indicators of one
+transition, e.g. a point opening into an interval, land on the same state
+and are merged into one special point):
+
+* the number of intervals rises: ``contact_interval_onset``;
+* otherwise the number of contacts (points + intervals) rises: a
+  ``contact_split`` when every contact after it lies within
+  ``SPLIT_DISTANCE`` (in s/L, on both strands) of a contact before it (a
+  point that became two nearby points), else a ``contact_onset``;
+* otherwise (a count falls): ``contact_release``.
+
+With the barrier treatment a contact carries a force once its gap is below
+``barrier_activation * D`` (1 % of D), so the ``contact_onset`` of a contact
+branch sits where the gap reaches that value, a little before the geometric
+onset of the contact-free branch (``d_min = D``). The grouping into points
+and intervals is done on the discrete rod (``contact_summary``): a contact
+that slides along a segment can make a count flicker at coarse resolution.
+
+Per point the branches' ``records`` hold ``excess_link``, ``writhe`` (double
+sum), ``twist`` (material frames), ``energy`` (elastic only), ``link_error``
+= ``|Tw + Wr - dLk|``, ``n_contact_points``, ``n_contact_intervals`` and
+``min_gap_over_diameter``; the contact lists with positions are recomputed
+from the stored states by :meth:`RingDiagram.points`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from supercoil.contact.problem import DEFAULT_TREATMENT, ContactOptions, ContactProblem
+from supercoil.contact.report import contact_summary
+from supercoil.continuation import (
+    Branch,
+    ContinuationOptions,
+    SpecialPoint,
+    UserEvent,
+    continuation,
+    switch_branch,
+)
+from supercoil.problems.ring import michell_excess_link
+from supercoil.problems.ring_branches import PRIMARY_NAMES, circle_branch, ring_records
+from supercoil.problems.ring_contact import validate_diameter
+
+MAX_LEVEL = 8  # contact-count indicators n - k + 1/2 for k = 1 .. MAX_LEVEL
+SPLIT_DISTANCE = 0.1  # s/L, see the module docstring
+# Smallest arclength step of a contact branch. Where a contact forms, the branch
+# turns within a gap range of about barrier_activation * D * K_rod / kappa
+# (the barrier stiffness grows from zero like 6 kappa (g_hat - g) / g_hat):
+# about 1e-8 L at N = 60, L/D = 122, so steps far below D are needed there.
+CONTACT_MIN_STEP = 1e-12
+SWITCH_AMPLITUDE = 2e-3  # first point of a primary branch from its bifurcation (arclength)
+SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1.5e-2)  # tried in turn, see _switch_off_circle
+SWITCH_TRIAL_POINTS = 4
+# energy treatments whose equilibria are plain stationary points of E + sum psi
+CONTINUATION_TREATMENTS = ("barrier", "penalty")
+CONTACT_KINDS = ("contact_onset", "contact_release", "contact_split", "contact_interval_onset")
+
+
+@dataclass(frozen=True)
+class DiagramOptions:
+    """What :func:`ring_diagram` computes; validated on construction.
+
+    ``twist_ratio`` C/A; ``length_over_diameter`` L/D (> pi); ``n_nodes`` N;
+    ``modes`` the circle's bifurcation modes (integers >= 2) whose primary
+    branches are followed; ``max_excess_link`` the upper bound of ``dLk``
+    (the circle is followed at least 10 % beyond its highest requested
+    Michell point); ``contact`` the treatment of self-contact.
+    ``free_max_step`` / ``contact_max_step``: largest arclength steps of the
+    contact-free branches (units of L) and of the contact branches (units of
+    D); ``free_max_points`` / ``contact_max_points`` bound their lengths.
+    ``event_tolerance``: arclength accuracy of the contact-free branches'
+    events (the geometric contact onset included);
+    ``contact_event_tolerance`` that of the contact branches' events.
+    ``contact_tolerance``: corrector tolerance (max |KKT residual|) on the
+    contact branches; the barrier's stiffness (``A / h^3`` growing like
+    ``1 / gap``) puts the residual's round-off floor near 1e-7 at N = 60,
+    L/D = 122, so the contact-free default 1e-10 cannot be reached there.
+    ``contact_gauge``: pin the material sliding on contact branches
+    (``ContinuationOptions.near_symmetry_gauge``). Measured: with the pin,
+    its reaction grows along the branch (KKT residual without it 1e-11 at the
+    start, 0.45 after 26 points at N = 48, L/D = 40), so the stored states are
+    equilibria only with the pin; see the report of issue 4.
+    """
+
+    twist_ratio: float
+    length_over_diameter: float
+    n_nodes: int = 100
+    modes: tuple[int, ...] = (2, 3)
+    max_excess_link: float = 6.0
+    contact: str = DEFAULT_TREATMENT
+    free_max_step: float = 0.05
+    free_max_points: int = 80
+    contact_max_step: float = 0.5
+    contact_max_points: int = 150
+    event_tolerance: float = 1e-8
+    contact_event_tolerance: float = 1e-6
+    contact_tolerance: float = 1e-8
+    contact_gauge: bool = True
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.twist_ratio) and self.twist_ratio > 0):
+            raise ValueError(f"twist_ratio (C/A) must be positive and finite, got "
+                             f"{self.twist_ratio!r}")
+        validate_diameter(self.length_over_diameter)
+        if int(self.n_nodes) != self.n_nodes or self.n_nodes < 8:
+            raise ValueError(f"n_nodes must be an integer >= 8, got {self.n_nodes!r}")
+        modes = tuple(self.modes)
+        if not modes or any(int(m) != m or m < 2 for m in modes) or len(set(modes)) != len(modes):
+            raise ValueError(f"modes must be distinct integers >= 2, got {self.modes!r}")
+        object.__setattr__(self, "modes", tuple(sorted(int(m) for m in modes)))
+        if not (math.isfinite(self.max_excess_link) and self.max_excess_link > 0):
+            raise ValueError(f"max_excess_link must be positive and finite, got "
+                             f"{self.max_excess_link!r}")
+        if self.contact not in CONTINUATION_TREATMENTS:
+            raise ValueError(f"contact treatment {self.contact!r} cannot be continued: give one "
+                             f"of {', '.join(CONTINUATION_TREATMENTS)} (the exact and augmented "
+                             "treatments need their active-set or multiplier loops, which the "
+                             "continuation does not run)")
+        for name in ("free_max_step", "contact_max_step", "event_tolerance",
+                     "contact_event_tolerance", "contact_tolerance"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+        for name in ("free_max_points", "contact_max_points"):
+            if getattr(self, name) < 2:
+                raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
+
+    @property
+    def diameter(self) -> float:
+        """Tube diameter D in units of L."""
+        return 1.0 / self.length_over_diameter
+
+    @property
+    def tolerances(self) -> dict:
+        return {"corrector_residual": ContinuationOptions.tolerance,
+                "zero_modes": ContinuationOptions.zero_tolerance,
+                "event_arclength": self.event_tolerance,
+                "contact_event_arclength": self.contact_event_tolerance,
+                "contact_corrector_residual": self.contact_tolerance}
+
+
+@dataclass(frozen=True)
+class RingDiagram:
+    """The computed diagram: branches (circle, primary, contact), their problems' settings."""
+
+    options: DiagramOptions
+    branches: tuple[Branch, ...]
+    contact_branches: frozenset[str]  # names of the branches computed with self-contact
+    seconds: dict[str, float] = field(default_factory=dict)  # wall time per branch
+    notes: tuple[str, ...] = ()
+    contact_problem: ContactProblem | None = None  # for contact lists of stored states
+
+    @property
+    def ok(self) -> bool:
+        """Every branch ended as asked, and no step failed (notes starting ``failed:``)."""
+        return (all(b.ok for b in self.branches)
+                and not any(n.startswith("failed:") for n in self.notes))
+
+    def branch(self, name: str) -> Branch:
+        for b in self.branches:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+    def special_points(self) -> list[SpecialPoint]:
+        return [p for b in self.branches for p in b.special_points]
+
+    def points(self) -> list[dict]:
+        """One record per branch point (DESIGN.md keys), contact lists included."""
+        out = []
+        cp = self.contact_problem
+        for b in self.branches:
+            contact = b.name in self.contact_branches
+            for i in range(len(b)):
+                rec = {k: _scalar(v[i]) for k, v in b.records.items()}
+                entry = {"branch": b.name, "index": i, **rec,
+                         "unstable_count": int(b.unstable_count[i]),
+                         "zero_modes": int(b.zero_modes[i]),
+                         "determinant_sign": int(b.determinant_sign[i]),
+                         "stable": bool(b.stable[i])}
+                if contact and cp is not None:
+                    summary = contact_summary(cp, b.states[i], b.multipliers[i])
+                    entry["contact_points"] = summary["contact_points"]
+                    entry["contact_intervals"] = summary["contact_intervals"]
+                else:
+                    entry["contact_points"], entry["contact_intervals"] = [], []
+                out.append(entry)
+        return out
+
+    def payload(self) -> dict:
+        """The ``diagram.json`` payload (without the envelope of :mod:`supercoil.io.results`)."""
+        opts = self.options
+        branches = []
+        for b in self.branches:
+            branches.append({
+                "name": b.name, "parent": b.parent,
+                "origin": None if b.origin is None else _special_summary(b.origin),
+                "contact": b.name in self.contact_branches,
+                "parameter": b.parameter, "n_points": len(b), "status": b.status.name,
+                "ok": b.ok, "message": b.message,
+                "seconds": round(self.seconds.get(b.name, float("nan")), 3),
+                "file": f"branches/{b.name}.npz"})
+        return {
+            "description": "bifurcation diagram of a twisted ring with self-contact: the "
+            "circle, its bifurcations, the primary branches without contact up to first "
+            "contact, then with self-contact",
+            "twist_ratio": opts.twist_ratio,
+            "length_over_diameter": opts.length_over_diameter,
+            "diameter": opts.diameter,
+            "n_nodes": opts.n_nodes,
+            "modes": list(opts.modes),
+            "max_excess_link": opts.max_excess_link,
+            "michell_excess_link": {str(m): float(michell_excess_link(opts.twist_ratio, m))
+                                    for m in opts.modes},
+            "branches": branches,
+            "special_points": [_special_summary(p) for p in self.special_points()],
+            "points": self.points(),
+            "notes": list(self.notes),
+            "ok": self.ok,
+        }
+
+
+def _scalar(v):
+    a = np.asarray(v)
+    return a.item() if a.ndim == 0 else a.tolist()
+
+
+def _special_summary(p: SpecialPoint) -> dict:
+    out = {"kind": p.kind, "label": p.label, "branch": p.branch, "index": int(p.index),
+           "excess_link": float(p.parameter), "arclength": float(p.arclength),
+           "unstable_count": int(p.unstable_count), "count_before": int(p.count_before),
+           "count_after": int(p.count_after), "located": bool(p.located),
+           "tolerance": float(p.tolerance)}
+    for k, v in p.records.items():
+        if k != "excess_link":
+            out[k] = _scalar(v)
+    return out
+
+
+# ----------------------------------------------------------------- records and events
+def _contact_records(problem: ContactProblem, base_records, free: bool):
+    """Per-point records: the ring's plus the contact counts and the closest approach."""
+
+    def records(q, multipliers, excess_link):
+        out = dict(base_records(q, multipliers, excess_link))
+        if free:
+            d_min = problem.min_distance(q)
+            out.update(n_contact_points=0, n_contact_intervals=0,
+                       min_gap_over_diameter=float(d_min / problem.diameter))
+        else:
+            summary = contact_summary(problem, q, multipliers)
+            gap = summary["min_gap_over_diameter"]
+            out.update(n_contact_points=summary["n_contact_points"],
+                       n_contact_intervals=summary["n_contact_intervals"],
+                       min_gap_over_diameter=float("inf") if gap is None else gap)
+        return out
+
+    return records
+
+
+def onset_event(problem: ContactProblem) -> UserEvent:
+    """``d_min / D - 1`` (closest approach of non-neighbouring points): contact onset."""
+
+    def gap(q, multipliers, excess_link):
+        d_min = problem.min_distance(q)
+        return {"min_gap": float(min(d_min / problem.diameter - 1.0, 1e3))}
+
+    return UserEvent("contact_onset", gap)
+
+
+def contact_count_event(problem: ContactProblem) -> UserEvent:
+    """Indicators ``n - k + 1/2`` of the contact point and interval counts (module doc)."""
+
+    def levels(q, multipliers, excess_link):
+        summary = contact_summary(problem, q, multipliers)
+        out = {}
+        for k in range(1, MAX_LEVEL + 1):
+            out[f"points>={k}"] = summary["n_contact_points"] - k + 0.5
+            out[f"intervals>={k}"] = summary["n_contact_intervals"] - k + 0.5
+        return out
+
+    return UserEvent("contact_change", levels)
+
+
+def _positions(problem: ContactProblem, q, multipliers) -> np.ndarray:
+    """(k, 2) positions (s1, s2) of the contacts (interval midpoints) at a state."""
+    summary = contact_summary(problem, q, multipliers)
+    rows = [(p["s1"], p["s2"]) for p in summary["contact_points"]]
+    for iv in summary["contact_intervals"]:
+        rows.append((_mid(iv["s1_start"], iv["s1_end"]), _mid(iv["s2_start"], iv["s2_end"])))
+    return np.array(rows, dtype=float).reshape(-1, 2)
+
+
+def _mid(a: float, b: float) -> float:
+    return (0.5 * (a + b + (1.0 if b < a else 0.0))) % 1.0
+
+
+def _near(after: np.ndarray, before: np.ndarray, distance: float) -> bool:
+    if len(before) == 0 or len(after) == 0:
+        return False
+    for a in after:
+        d = np.abs(before - a)
+        d = np.minimum(d, 1.0 - d)  # periodic in s/L
+        d_swapped = np.abs(before[:, ::-1] - a)
+        d_swapped = np.minimum(d_swapped, 1.0 - d_swapped)
+        if min(np.max(d, axis=1).min(), np.max(d_swapped, axis=1).min()) > distance:
+            return False
+    return True
+
+
+def classify_contact_events(branch: Branch, problem: ContactProblem) -> Branch:
+    """The branch with its ``contact_change`` points given their kinds (module doc), merged."""
+    out: list[SpecialPoint] = []
+    if "n_contact_points" not in branch.records:  # no point computed (a failed start)
+        return branch
+    n_points = branch.records["n_contact_points"]
+    n_intervals = branch.records["n_contact_intervals"]
+    for p in branch.special_points:
+        if p.kind != "contact_change":
+            out.append(p)
+            continue
+        i = p.index
+        previous = out[-1] if out else None
+        if (previous is not None and previous.kind in CONTACT_KINDS and previous.index == i
+                and abs(previous.arclength - p.arclength) <= 4 * p.tolerance + 1e-12):
+            continue  # the other indicator of the same transition
+        dp = int(n_points[i + 1] - n_points[i])
+        di = int(n_intervals[i + 1] - n_intervals[i])
+        total_before = int(n_points[i] + n_intervals[i])
+        if di > 0:
+            kind = "contact_interval_onset"
+        elif dp + di > 0:
+            before = _positions(problem, branch.states[i], branch.multipliers[i])
+            after = _positions(problem, branch.states[i + 1], branch.multipliers[i + 1])
+            split = total_before >= 1 and _near(after, before, SPLIT_DISTANCE)
+            kind = "contact_split" if split else "contact_onset"
+        else:
+            kind = "contact_release"
+        label = (f"{p.label}: points {int(n_points[i])}->{int(n_points[i + 1])}, intervals "
+                 f"{int(n_intervals[i])}->{int(n_intervals[i + 1])}")
+        out.append(dataclasses.replace(p, kind=kind, label=label))
+    return dataclasses.replace(branch, special_points=tuple(out))
+
+
+def truncate_after(branch: Branch, point: SpecialPoint, message: str) -> Branch:
+    """The branch up to the first point beyond ``point`` (later special points dropped)."""
+    k = point.index + 2
+    keep = tuple(p for p in branch.special_points
+                 if p.index < point.index or (p.index == point.index
+                                              and p.arclength <= point.arclength))
+    arrays = {name: getattr(branch, name)[:k] for name in (
+        "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+        "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")}
+    return dataclasses.replace(branch, special_points=keep,
+                               records={n: v[:k] for n, v in branch.records.items()},
+                               message=message, **arrays)
+
+
+# ------------------------------------------------------------------------- the diagram
+def ring_diagram(options: DiagramOptions,
+                 progress: Callable[[str], None] | None = None) -> RingDiagram:
+    """Compute the diagram (module docstring); numerical failures end up in branch statuses."""
+    opts = options
+    say = progress or (lambda message: None)
+    seconds: dict[str, float] = {}
+    notes: list[str] = []
+    top = max(michell_excess_link(opts.twist_ratio, m) for m in opts.modes)
+    circle_top = max(opts.max_excess_link, 1.1 * top)
+    say(f"circle up to dLk = {circle_top:.4g}")
+    start = time.perf_counter()
+    circle, problem = circle_branch(opts.twist_ratio, opts.n_nodes, circle_top)
+    seconds["circle"] = time.perf_counter() - start
+    D = opts.diameter * problem.rod.length
+    contact_options = ContactOptions(diameter=D, treatment=opts.contact)
+    probe = ContactProblem(problem, ContactOptions(diameter=D, treatment="barrier"))
+    cp = ContactProblem(problem, contact_options)
+    if problem.rod.edge_length > D:
+        notes.append(f"segments ({problem.rod.edge_length:.3g} L) are longer than the tube "
+                     f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "
+                     f"{int(np.ceil(problem.rod.length / D))}")
+    circle_records = _contact_records(probe, ring_records(problem), free=True)
+    circle = _with_records(circle, problem, circle_records)
+    branches: list[Branch] = [circle]
+    contact_names: set[str] = set()
+    bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
+    for mode in opts.modes:
+        name = PRIMARY_NAMES.get(mode, f"mode{mode}")
+        point = bifurcations.get(2 * (mode - 1))
+        if point is None or point.count_before != 2 * (mode - 2):
+            notes.append(f"the circle branch has no bifurcation point of mode {mode}: "
+                         f"{name} not computed")
+            continue
+        say(f"{name}: switched from the circle at dLk = {point.parameter:.4g}, no contact")
+        start = time.perf_counter()
+        free_opts = ContinuationOptions(
+            initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
+            max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
+            event_tolerance=opts.event_tolerance)
+        free = _switch_off_circle(problem, circle, point, free_opts, name, probe, notes)
+        onsets = [p for p in free.points_of_kind("contact_onset")
+                  if p.index + 1 < len(free)]
+        seconds[name] = time.perf_counter() - start
+        if not onsets:
+            notes.append(f"{name}: no contact found without contact ({free.message})")
+            branches.append(free)
+            continue
+        onset = onsets[0]
+        free = truncate_after(free, onset, f"stopped at the first contact (dLk = "
+                              f"{onset.parameter:.6g}); the contact-free run: {free.message}")
+        branches.append(free)
+        contact_name = f"{name}_contact"
+        say(f"{contact_name}: from dLk = {onset.parameter:.4g}, with self-contact "
+            f"({opts.contact})")
+        start = time.perf_counter()
+        # Start from the last contact-free point the contact terms do not yet
+        # act on (closest approach above the treatment's reach, e.g. the
+        # barrier's 1 % of D): it is an equilibrium of the contact problem too,
+        # so the continuation's start correction has nothing to do. Points
+        # inside the reach are off that problem's equilibria (the branch turns
+        # sharply there) and the start correction diverged from them.
+        reach = 1.0 + (cp.options.barrier_activation if cp.treatment == "barrier" else 0.0)
+        gaps = free.records["min_gap_over_diameter"]
+        k = onset.index
+        while k > 0 and gaps[k] <= reach:
+            k -= 1
+        direction = 1 if free.tangents[k, -1] >= 0 else -1
+        cp.excess_link = float(free.parameter_values[k])
+        cp.accept(free.states[k])
+        contact_opts = ContinuationOptions(
+            initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
+            max_step=opts.contact_max_step * D, max_points=opts.contact_max_points,
+            parameter_bounds=(0.0, opts.max_excess_link), direction=direction,
+            parameter_weight=D, tolerance=opts.contact_tolerance,
+            near_symmetry_gauge=opts.contact_gauge,
+            event_tolerance=opts.contact_event_tolerance)
+        if not 0.0 <= cp.excess_link <= opts.max_excess_link:
+            notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "
+                         f"[0, {opts.max_excess_link:g}]: not computed")
+            continue
+        contact = continuation(cp, free.states[k], parameter="excess_link",
+                               options=contact_opts, name=contact_name,
+                               records=_contact_records(cp, ring_records(cp), free=False),
+                               events=(contact_count_event(cp),))
+        contact = classify_contact_events(contact, cp)
+        if len(contact):
+            residual = _unpinned_residual(cp, contact, len(contact) - 1)
+            if residual > 1e3 * opts.contact_tolerance:
+                notes.append(f"warning: {contact_name}: the last state is an equilibrium only "
+                             f"with the sliding gauge pinned (KKT residual without it "
+                             f"{residual:.2e}): the pin's reaction grows along contact "
+                             "branches")
+        contact = dataclasses.replace(contact, parent=name, origin=onset)
+        seconds[contact_name] = time.perf_counter() - start
+        branches.append(contact)
+        contact_names.add(contact_name)
+    return RingDiagram(opts, tuple(branches), frozenset(contact_names), seconds, tuple(notes),
+                       cp)
+
+
+def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
+                       options: ContinuationOptions, name: str, probe: ContactProblem,
+                       notes: list[str]) -> Branch:
+    """The primary branch from ``point``, checked to leave the circle.
+
+    Measured: the switch can fall back onto the circle (writhe ~1e-6 and the
+    circle's count along the "new" branch; C/A = 0.6667, N = 40). A short
+    trial run (``SWITCH_TRIAL_POINTS`` points) must show the writhe growing
+    away from zero; otherwise the other side of the critical mode and larger
+    amplitudes are tried, in that order. The last attempt is returned anyway.
+    """
+    records = _contact_records(probe, ring_records(problem), free=True)
+    attempts = [(a, side) for a in SWITCH_AMPLITUDES for side in (1, -1)]
+    for number, (amplitude, side) in enumerate(attempts):
+        trial_opts = dataclasses.replace(options, max_points=SWITCH_TRIAL_POINTS,
+                                         initial_step=amplitude)
+        trial = switch_branch(problem, circle, point, trial_opts, side=side,
+                              amplitude=amplitude, name=name, records=records)
+        wr = np.abs(trial.records.get("writhe", np.zeros(0)))
+        leaves = wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0]
+        if leaves or number == len(attempts) - 1:
+            if number:
+                notes.append(f"{name}: switched with amplitude {amplitude:g}, side {side:+d} "
+                             f"({number} earlier attempt(s) fell back onto the circle)")
+            if not leaves:
+                notes.append(f"failed: {name}: every switching attempt fell back onto the "
+                             "circle")
+            opts = dataclasses.replace(options, initial_step=amplitude)
+            return switch_branch(problem, circle, point, opts, side=side, amplitude=amplitude,
+                                 name=name, records=records, events=(onset_event(probe),))
+    raise AssertionError("unreachable")
+
+
+def _unpinned_residual(problem, branch: Branch, index: int) -> float:
+    """max |KKT residual| of a stored point without the branch's phase rows (gauge pins)."""
+    from supercoil.continuation.system import ExtendedSystem
+
+    system = ExtendedSystem(problem, branch.parameter, branch.states[index])
+    problem.excess_link = float(branch.parameter_values[index])
+    problem.accept(branch.states[index])
+    F = system.residual(system.pack(branch.states[index], branch.multipliers[index],
+                                    branch.parameter_values[index]))
+    return float(np.max(np.abs(F))) if F.size else 0.0
+
+
+def _with_records(branch: Branch, problem, records) -> Branch:
+    """The branch with its records recomputed by ``records`` (the problem follows it)."""
+    rows = []
+    for q, mu, lam in zip(branch.states, branch.multipliers, branch.parameter_values):
+        problem.excess_link = float(lam)
+        problem.accept(q)
+        rows.append(records(q, mu, float(lam)))
+    merged = {k: np.array([r[k] for r in rows]) for k in rows[0]} if rows else {}
+    return dataclasses.replace(branch, records=merged)
+
+
+def parse_modes(text: str | Sequence[int]) -> tuple[int, ...]:
+    """``"2,3"`` -> ``(2, 3)``; a ValueError naming what is valid otherwise."""
+    words = text.replace(",", " ").split() if isinstance(text, str) else list(text)
+    try:
+        modes = tuple(int(w) for w in words)
+    except ValueError:
+        raise ValueError(f"modes {text!r}: give integers >= 2 separated by commas, like 2,3"
+                         ) from None
+    if not modes or any(m < 2 for m in modes) or len(set(modes)) != len(modes):
+        raise ValueError(f"modes {text!r}: give distinct integers >= 2 (2 = alpha, 3 = beta), "
+                         "like 2,3")
+    return tuple(sorted(modes))

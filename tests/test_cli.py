@@ -320,21 +320,21 @@ def test_ring_json_envelope(runner, tmp_path):
     assert data["energy"] == pytest.approx(2 * math.pi**2 * (1 + 0.5 * 0.25), rel=1e-12)
 
 
+def _unconverged(solve):
+    """``solve`` with its result marked not converged (the state is kept)."""
+
+    def wrapped(*args, **kwargs):
+        return dataclasses.replace(solve(*args, **kwargs), converged=False,
+                                   status="max_iterations", message="stopped (test)")
+
+    return wrapped
+
+
 def test_ring_not_converged_exits_1_and_saves(runner, tmp_path, monkeypatch):
     """Exit status 1 when Newton does not converge; the state is still written."""
     from supercoil.problems import ring as ring_module
 
-    real = ring_module.solve_ring
-
-    def unconverged(*args, **kwargs):
-        return dataclasses.replace(
-            real(*args, **kwargs),
-            converged=False,
-            status="max_iterations",
-            message="stopped (test)",
-        )
-
-    monkeypatch.setattr(ring_module, "solve_ring", unconverged)
+    monkeypatch.setattr(ring_module, "solve_ring", _unconverged(ring_module.solve_ring))
     target = tmp_path / "ring.json"
     result = invoke(
         runner,
@@ -447,17 +447,8 @@ def test_ring_with_contact_not_converged_exits_1_and_saves(runner, tmp_path, mon
     """Exit status 1 when the contact solve does not converge; the state is still written."""
     from supercoil.problems import ring_contact
 
-    real = ring_contact.solve_supercoiled_ring
-
-    def unconverged(*args, **kwargs):
-        return dataclasses.replace(
-            real(*args, **kwargs),
-            converged=False,
-            status="max_iterations",
-            message="stopped (test)",
-        )
-
-    monkeypatch.setattr(ring_contact, "solve_supercoiled_ring", unconverged)
+    monkeypatch.setattr(ring_contact, "solve_supercoiled_ring",
+                        _unconverged(ring_contact.solve_supercoiled_ring))
     target = tmp_path / "ring.json"
     result = invoke(
         runner,

@@ -303,6 +303,17 @@ class ContactProblem:
         return np.concatenate([self.segments[pairs[:, 0]], self.segments[pairs[:, 1]]], axis=1)
 
     def _pair_derivatives(self, q: np.ndarray, pairs: np.ndarray):
+        """``(d, gradient, Hessian, dofs)`` of the pairs' distances; the last call is
+        cached (gradient and Hessian at one state ask for the same pairs)."""
+        key = (np.asarray(q, dtype=float).tobytes(), np.asarray(pairs).tobytes())
+        cached = self.__dict__.get("_derivative_cache")
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        value = self._compute_pair_derivatives(q, pairs)
+        self.__dict__["_derivative_cache"] = (key, value)
+        return value
+
+    def _compute_pair_derivatives(self, q: np.ndarray, pairs: np.ndarray):
         x = np.asarray(q, dtype=float).reshape(-1, 3)
         nodes = self._pair_nodes(pairs)
         d, grad, hess, _kind = segment_distance_derivatives(

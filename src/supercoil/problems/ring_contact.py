@@ -46,9 +46,13 @@ def validate_diameter(length_over_diameter: float) -> float:
 
 
 def perturb_along_lowest_mode(problem, q: np.ndarray, multipliers: np.ndarray,
-                              amplitude: float = PERTURBATION_AMPLITUDE) -> np.ndarray:
-    """``q`` displaced along the lowest eigenmode (see the module docstring)."""
-    stab = analyse(problem, q, multipliers, n_modes=2)
+                              amplitude: float = PERTURBATION_AMPLITUDE,
+                              report=None) -> np.ndarray:
+    """``q`` displaced along the lowest eigenmode (see the module docstring).
+
+    ``report``: the stability report of ``q`` if the caller has one.
+    """
+    stab = report if report is not None else analyse(problem, q, multipliers, n_modes=2)
     mode = stab.lowest_modes[0].reshape(-1, 3)
     norms = np.linalg.norm(mode, axis=1)
     k = int(np.argmax(np.abs(mode.ravel())))
@@ -82,8 +86,10 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
         circle = newton(base, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
         start = circle.q
         note = "circle stable: no perturbation"
-        if analyse(base, circle.q, circle.multipliers, n_modes=1).unstable_count > 0:
-            start = perturb_along_lowest_mode(base, circle.q, circle.multipliers)
+        circle_stability = analyse(base, circle.q, circle.multipliers, n_modes=2)
+        if circle_stability.unstable_count > 0:
+            start = perturb_along_lowest_mode(base, circle.q, circle.multipliers,
+                                              report=circle_stability)
             note = (f"circle unstable: perturbed along its lowest mode by "
                     f"{PERTURBATION_AMPLITUDE:g} L")
     else:

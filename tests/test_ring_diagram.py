@@ -94,8 +94,28 @@ def test_branches_are_consistent(diagram):
         assert not problems, (b.name, problems)
 
 
+def test_sliding_residual_is_the_unpinned_kkt_residual(diagram):
+    """The record is the residual without the gauge, recomputed by the extended system;
+    before the first contact the pinned states are equilibria of the unpinned problem."""
+    from supercoil.continuation.system import ExtendedSystem
+
+    contact = diagram.branch("alpha_contact")
+    cp = ContactProblem(_problem(), ContactOptions(diameter=OPTIONS.diameter))
+    system = ExtendedSystem(cp, "excess_link", contact.states[0])
+    for i in range(len(contact)):
+        cp.excess_link = float(contact.parameter_values[i])
+        cp.accept(contact.states[i])
+        x = system.pack(contact.states[i], contact.multipliers[i], contact.parameter_values[i])
+        residual = float(np.max(np.abs(system.residual(x))))
+        assert contact.records["sliding_residual"][i] == pytest.approx(residual, rel=1e-6,
+                                                                       abs=1e-12)
+    free = (contact.records["n_contact_points"] + contact.records["n_contact_intervals"]) == 0
+    assert free[0] and np.all(contact.records["sliding_residual"][free] < 1e-8)
+
+
 @pytest.mark.xfail(strict=True, reason="contact branches are equilibria only with the "
-                   "continuation's sliding gauge pinned; its reaction grows along the branch")
+                   "material sliding pinned: the polygon contact pushes the material along "
+                   "the rod (ring_diagram's docs, 'Material sliding')")
 def test_contact_branch_states_are_equilibria_without_the_gauge(diagram):
     base = _problem()
     cp = ContactProblem(base, ContactOptions(diameter=OPTIONS.diameter))

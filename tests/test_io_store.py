@@ -1,0 +1,282 @@
+"""Result files (supercoil.io.store): round trips, partial branches, interrupted writers."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+import supercoil
+from supercoil.continuation import Branch, ContinuationStatus, SpecialPoint
+from supercoil.io.store import ResultFileError, ResultWriter, load
+
+POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+                "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")
+
+
+def special(rng, name, index, n_dofs, m, kind="bifurcation", records=True):
+    return SpecialPoint(
+        kind=kind, label=f"{kind}-label", branch=name, index=index,
+        parameter=float(rng.normal()), arclength=float(rng.random()),
+        q=rng.normal(size=n_dofs), multipliers=rng.normal(size=m),
+        tangent=rng.normal(size=n_dofs + m + 1), unstable_count=2, count_before=0,
+        count_after=2, critical_eigenvalues=rng.normal(size=2),
+        critical_modes=rng.normal(size=(2, n_dofs)), located=bool(index % 2),
+        tolerance=1e-8, records={"writhe": np.float64(rng.normal()),
+                                 "vector": rng.normal(size=3)} if records else {})
+
+
+def make_branch(k=7, n_dofs=12, m=4, name="alpha", seed=0, origin=True) -> Branch:
+    rng = np.random.default_rng(seed)
+    return Branch(
+        name=name, parent="circle" if origin else None,
+        origin=special(rng, "circle", 3, n_dofs, m) if origin else None,
+        parameter="excess_link", parameter_values=rng.normal(size=k),
+        states=rng.normal(size=(k, n_dofs)), multipliers=rng.normal(size=(k, m)),
+        unstable_count=rng.integers(0, 4, size=k), zero_modes=rng.integers(0, 2, size=k),
+        determinant_sign=rng.choice([-1, 1], size=k), nearest_eigenvalue=rng.normal(size=k),
+        tangents=rng.normal(size=(k, n_dofs + m + 1)), arclength=np.cumsum(rng.random(k)),
+        special_points=tuple(special(rng, name, i, n_dofs, m, kind)
+                             for i, kind in ((1, "fold"), (4, "contact_onset"))),
+        status=ContinuationStatus.MAX_POINTS, message="7 points computed (max_points)",
+        records={"writhe": rng.normal(size=k), "n_contact_points": rng.integers(0, 3, size=k),
+                 "pair": rng.normal(size=(k, 2))},
+        phase_modes=rng.normal(size=(1, n_dofs)), phase_state=rng.normal(size=n_dofs))
+
+
+def prefix(branch: Branch, k: int) -> Branch:
+    """The branch as the continuation saw it after ``k`` points."""
+    return dataclasses.replace(
+        branch, special_points=tuple(p for p in branch.special_points if p.index + 1 < k),
+        records={n: v[:k] for n, v in branch.records.items()},
+        **{n: getattr(branch, n)[:k] for n in POINT_ARRAYS})
+
+
+def assert_special_equal(a: SpecialPoint, b: SpecialPoint):
+    for f in dataclasses.fields(SpecialPoint):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if f.name == "records":
+            assert x.keys() == y.keys()
+            for key in x:
+                np.testing.assert_array_equal(x[key], y[key])
+        elif isinstance(x, np.ndarray):
+            assert x.shape == y.shape
+            np.testing.assert_array_equal(x, y)
+        else:
+            assert x == y, f.name
+            assert type(x) is type(y), f.name
+
+
+def assert_branch_equal(a: Branch, b: Branch):
+    for f in dataclasses.fields(Branch):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, np.ndarray):
+            assert x.shape == y.shape, f.name
+            assert x.dtype.kind == y.dtype.kind, f.name
+            np.testing.assert_array_equal(x, y, err_msg=f.name)
+        elif f.name == "records":
+            assert x.keys() == y.keys()
+            for key in x:
+                np.testing.assert_array_equal(x[key], y[key], err_msg=key)
+        elif f.name == "special_points":
+            assert len(x) == len(y)
+            for p, q in zip(x, y):
+                assert_special_equal(p, q)
+        elif f.name == "origin":
+            assert (x is None) == (y is None)
+            if x is not None:
+                assert_special_equal(x, y)
+        else:
+            assert x == y, f.name
+
+
+def new_writer(path, **kw):
+    kw.setdefault("settings", {"rod": {"twist_ratio": 0.5, "nodes": 4}, "list": [1, 2]})
+    return ResultWriter.create(path, problem="ring_diagram",
+                               attributes={"n_nodes": 4, "diameter": 0.025, "closed": True,
+                                           "twist_ratio": 0.5}, study_text="[rod]\n", **kw)
+
+
+def test_round_trip_whole_branches(tmp_path):
+    path = tmp_path / "r.h5"
+    branches = [make_branch(name="circle", origin=False, seed=1), make_branch(seed=2),
+                make_branch(k=1, name="single", seed=3), make_branch(k=0, name="empty", seed=4)]
+    with new_writer(path) as writer:
+        for b in branches:
+            writer.write_branch(b, contact=b.name == "alpha")
+        writer.set_summary({"points": [{"branch": "alpha", "index": 0, "x": 1.5}], "ok": True})
+        writer.set_status("complete", "done")
+    result = supercoil.load(path)
+    assert result.branch_names == ("circle", "alpha", "single", "empty")
+    for b in branches:
+        assert_branch_equal(b, result.branch(b.name))
+    assert result.status == "complete" and result.message == "done"
+    assert result.settings == {"rod": {"twist_ratio": 0.5, "nodes": 4}, "list": [1, 2]}
+    assert result.summary == {"points": [{"branch": "alpha", "index": 0, "x": 1.5}], "ok": True}
+    assert result.points("alpha") == [{"branch": "alpha", "index": 0, "x": 1.5}]
+    assert result.study_text == "[rod]\n"
+    assert result.complete_branches == frozenset(b.name for b in branches)
+    assert result.contact_branches == {"alpha"}
+    assert result.attributes["n_nodes"] == 4 and result.diameter == 0.025 and result.closed
+    assert result.provenance["supercoil_version"] == supercoil.__version__
+    assert "excess_link" in result.conventions
+    np.testing.assert_array_equal(result.centreline("alpha", -1),
+                                  branches[1].states[-1].reshape(4, 3))
+
+
+def test_appending_point_by_point_equals_the_whole_branch(tmp_path):
+    branch = make_branch(k=9, seed=5)
+    path = tmp_path / "r.h5"
+    with new_writer(path) as writer:
+        for k in range(1, len(branch) + 1):
+            assert writer.append(prefix(branch, k)) == k
+            partial = load(path).branch("alpha")  # readable after every point
+            assert_branch_equal(prefix(branch, k), partial)
+        writer.append(branch)  # same length: nothing new
+    result = load(path)
+    assert_branch_equal(branch, result.branch("alpha"))
+    assert result.status == "running" and result.complete_branches == frozenset()
+    rows = result.points("alpha")  # no summary: built from the records
+    assert [r["index"] for r in rows] == list(range(9))
+    np.testing.assert_array_equal([r["writhe"] for r in rows], branch.records["writhe"])
+    np.testing.assert_array_equal([r["excess_link"] for r in rows], branch.parameter_values)
+    assert [r["stable"] for r in rows] == list(branch.stable)
+
+
+def test_write_branch_replaces_a_partial_one_and_keeps_its_order(tmp_path):
+    path = tmp_path / "r.h5"
+    first, second = make_branch(name="circle", origin=False, seed=1), make_branch(seed=2)
+    with new_writer(path) as writer:
+        writer.append(prefix(first, 3))
+        writer.write_branch(second)
+        final = prefix(first, 5)
+        writer.write_branch(final)
+        with h5py.File(path, "r") as raw:
+            assert sorted(raw["branches"]) == ["alpha", "circle"]
+    result = load(path)
+    assert result.branch_names == ("circle", "alpha")
+    assert_branch_equal(final, result.branch("circle"))
+    assert "circle" in result.complete_branches
+
+
+def test_rows_beyond_n_points_are_ignored(tmp_path):
+    """A write interrupted between the rows and the count: the reader trusts n_points."""
+    path = tmp_path / "r.h5"
+    branch = make_branch(seed=6)
+    with new_writer(path) as writer:
+        writer.append(prefix(branch, 4))
+    with h5py.File(path, "r+") as raw:
+        group = raw["branches/alpha"]
+        group["states"].resize((6, 12))  # half of a later append
+        group["states"][4:6] = 99.0
+    assert_branch_equal(prefix(branch, 4), load(path).branch("alpha"))
+
+
+@pytest.mark.parametrize("content, words", [
+    (None, "no such result file"),
+    (b"not hdf5 at all", "not a readable HDF5"),
+    ("foreign", "not a supercoil result file"),
+    ("version", "schema version '9.9'"),
+    ("folder", "is a folder"),
+])
+def test_bad_files_are_one_line_errors(tmp_path, content, words):
+    path = tmp_path / "x.h5"
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    elif content == "foreign":
+        with h5py.File(path, "w") as f:
+            f.attrs["something"] = 1
+    elif content == "version":
+        new_writer(path).close()
+        with h5py.File(path, "r+") as f:
+            f.attrs["schema_version"] = "9.9"
+    elif content == "folder":
+        path.mkdir()
+    with pytest.raises(ResultFileError) as info:
+        load(path)
+    message = str(info.value)
+    assert words in message and str(path) in message and "\n" not in message
+
+
+def test_damaged_file_is_reported(tmp_path):
+    path = tmp_path / "r.h5"
+    with new_writer(path) as writer:
+        writer.append(make_branch())
+    with h5py.File(path, "r+") as f:
+        del f["branches/alpha/states"]
+    with pytest.raises(ResultFileError, match="damaged result file"):
+        load(path)
+
+
+def test_create_refuses_an_existing_file(tmp_path):
+    path = tmp_path / "r.h5"
+    path.write_text("keep me")
+    with pytest.raises(FileExistsError):
+        new_writer(path)
+    assert path.read_text() == "keep me"
+
+
+def test_unknown_branch_and_point_name_what_is_valid(tmp_path):
+    path = tmp_path / "r.h5"
+    with new_writer(path) as writer:
+        writer.write_branch(make_branch(k=3))
+    result = load(path)
+    with pytest.raises(KeyError, match="stored: alpha"):
+        result.branch("beta")
+    with pytest.raises(IndexError, match=r"3 points \(0 .. 2\)"):
+        result.centreline("alpha", 3)
+
+
+WRITER = textwrap.dedent("""
+    import sys, time
+    sys.path.insert(0, {tests!r})
+    from test_io_store import make_branch, new_writer, prefix
+    branch = make_branch(k=100000 // 100, n_dofs=300, m=100, seed=7)
+    writer = new_writer({path!r})
+    try:
+        for k in range(1, len(branch) + 1):
+            writer.append(prefix(branch, k))
+            print(k, flush=True)
+            time.sleep(0.002)
+    except KeyboardInterrupt:
+        writer.set_status("interrupted", "Ctrl-C")
+        writer.close()
+        print("interrupted", flush=True)
+""")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
+def test_killed_writer_leaves_a_readable_file(tmp_path, sig):
+    """Kill a writer mid-run: every point it reported stored is in the file, exactly."""
+    path = tmp_path / "r.h5"
+    script = WRITER.format(tests=os.path.dirname(__file__), path=str(path))
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                            env=env)
+    reported = 0
+    deadline = time.monotonic() + 60
+    while reported < 40 and time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        if not line:
+            break
+        reported = int(line)
+    assert reported >= 40, "the writer did not start"
+    proc.send_signal(sig)
+    tail = proc.communicate(timeout=30)[0].split()
+    if sig == signal.SIGINT:
+        assert tail and tail[-1] == "interrupted"
+    reported = max([reported] + [int(w) for w in tail if w.isdigit()])
+    result = load(path)
+    stored = result.branch("alpha")
+    assert reported <= len(stored) <= reported + 1
+    assert_branch_equal(prefix(make_branch(k=1000, n_dofs=300, m=100, seed=7), len(stored)),
+                        stored)
+    assert result.status == ("interrupted" if sig == signal.SIGINT else "running")

@@ -1,0 +1,330 @@
+"""Publication figures of a result: diagram, contact map, hat curve, configurations.
+
+Plotting never computes: every value drawn comes from the result
+(:mod:`supercoil.plotting.result_data`). Each ``*_figure`` builds a matplotlib
+:class:`~matplotlib.figure.Figure` in the house style
+(:mod:`supercoil.plotting.style`); :func:`plot_result` draws one kind of
+figure of a result and saves it as PNG and SVG.
+
+* ``diagram``: the branch parameter against the writhe (ring: ΔLk against Wr,
+  seed 001 Figures 1-2), stable stretches heavy, special points by kind;
+* ``contact-map``: s/L of the contacts against the writhe (seed 001 Figure 4),
+  contact points as dots, contact intervals as bars;
+* ``hat-curve``: extension against end rotation (tweezers), stable heavy;
+* ``configurations``: a few centrelines as tubes of diameter D, contacts in red.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from supercoil.plotting import style
+from supercoil.plotting.result_data import ResultData, stable_mask
+
+KINDS = ("diagram", "contact-map", "hat-curve", "configurations")
+
+
+def _label(key: str) -> str:
+    return style.LABELS.get(key, key.replace("_", " "))
+
+
+# ------------------------------------------------------------------- builders
+
+
+def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
+                   title: str, x: str = "writhe", y: str = "excess_link",
+                   legend_title: str | None = None):
+    """``y`` against ``x``. ``branches``: ``{name, <x> (k,), <y> (k,), stable (k,)}``;
+    ``special_points``: ``{kind, <x>, <y>}``. Stable parts heavy, unstable thin."""
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    with style.styled():
+        fig = Figure(figsize=(style.SINGLE[0] * 1.25, style.SINGLE[1] * 1.25),
+                     layout="constrained")
+        ax = fig.subplots()
+        handles = []
+        for index, b in enumerate(branches):
+            xs = np.asarray(b[x], float)
+            ys = np.asarray(b[y], float)
+            stable = np.asarray(b["stable"], bool)
+            color = b.get("color") or style.branch_color(index)
+            ax.plot(xs, ys, "-", lw=style.UNSTABLE_WIDTH, color=color)
+            # a stable stretch includes the segments joining two stable points
+            ax.plot(xs, np.where(stable, ys, np.nan), "-", lw=style.STABLE_WIDTH, color=color)
+            handles.append(Line2D([], [], color=color, lw=2.0, label=b["name"]))
+        seen: set[str] = set()
+        for p in special_points:
+            marker, color = style.special_marker(p["kind"])
+            ax.plot(p[x], p[y], marker, color=color, ms=6, mfc="none", mew=1.4, zorder=5)
+            if p["kind"] not in seen:
+                seen.add(p["kind"])
+                handles.append(Line2D([], [], ls="", marker=marker, color=color, mfc="none",
+                                      mew=1.4, label=p["kind"].replace("_", " ")))
+        handles += [Line2D([], [], color="0.3", lw=style.STABLE_WIDTH, label="stable"),
+                    Line2D([], [], color="0.3", lw=style.UNSTABLE_WIDTH, label="unstable")]
+        ax.set_xlabel(_label(x))
+        ax.set_ylabel(_label(y))
+        ax.set_title(title)
+        ax.legend(handles=handles, loc="best", title=legend_title)
+    return fig
+
+
+def link_writhe_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
+                       title: str):
+    """ΔLk against Wr (seed 001, Figures 1-2); see :func:`diagram_figure`."""
+    return diagram_figure(branches, special_points, title=title, x="writhe", y="excess_link")
+
+
+def contact_map_figure(branches: Sequence[Mapping], *, title: str, x: str = "writhe"):
+    """s/L of the contacts against ``x``. ``branches``: ``{name, <x> (k,), contact_points
+    (k lists of {s1, s2}), contact_intervals (k lists of {s1_start, s1_end, s2_start,
+    s2_end})}``."""
+    from matplotlib.figure import Figure
+
+    with style.styled():
+        fig = Figure(figsize=(style.SINGLE[0] * 1.25, style.SINGLE[1] * 1.2),
+                     layout="constrained")
+        ax = fig.subplots()
+        drawn = False
+        for index, b in enumerate(branches):
+            color = b.get("color") or style.branch_color(index)
+            xs, ys, bars = [], [], []
+            for xv, points, intervals in zip(b[x], b["contact_points"],
+                                             b["contact_intervals"], strict=True):
+                for p in points:
+                    xs += [xv, xv]
+                    ys += [p["s1"], p["s2"]]
+                for iv in intervals:
+                    for start, end in ((iv["s1_start"], iv["s1_end"]),
+                                       (iv["s2_start"], iv["s2_end"])):
+                        pieces = [(start, end)] if start <= end else [(start, 1.0), (0.0, end)]
+                        bars += [[(xv, a), (xv, e)] for a, e in pieces]
+            if bars:
+                from matplotlib.collections import LineCollection
+
+                ax.add_collection(LineCollection(bars, colors=color, linewidths=1.5))
+            if xs or bars:
+                ax.plot(xs, ys, ".", ms=3.5, color=color, label=b["name"])
+                drawn = True
+        if not drawn:
+            ax.text(0.5, 0.5, "no contacts on the computed branches", ha="center",
+                    transform=ax.transAxes)
+        ax.autoscale_view()
+        ax.set_ylim(0, 1)
+        ax.set_xlabel(_label(x))
+        ax.set_ylabel("contact positions " + _label("arclength"))
+        ax.set_title(title + "\ndots: contact points, bars: contact intervals")
+        if drawn:
+            ax.legend(loc="best")
+    return fig
+
+
+def hat_curve_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
+                     title: str):
+    """Extension against end rotation (turns), stable heavy; see :func:`diagram_figure`."""
+    specials = [p for p in special_points if "turns" in p and "extension" in p]
+    return diagram_figure(branches, specials, title=title, x="turns", y="extension")
+
+
+def _arc_positions(points: np.ndarray, closed: bool) -> np.ndarray:
+    """s/L of every node, shape ``(n,)`` (nodes equally spaced in arc length)."""
+    n = len(points)
+    return np.arange(n) / (n if closed else n - 1)
+
+
+def _segment_contact(s_mid: np.ndarray, conf: Mapping) -> np.ndarray:
+    """True for segments whose midpoint lies in a contact interval or near a contact point."""
+    hit = np.zeros(len(s_mid), bool)
+    step = 1.0 / max(len(s_mid), 1)
+    for iv in conf.get("contact_intervals", ()):
+        for a, e in ((iv["s1_start"], iv["s1_end"]), (iv["s2_start"], iv["s2_end"])):
+            hit |= ((s_mid >= a) & (s_mid <= e)) if a <= e else ((s_mid >= a) | (s_mid <= e))
+    for p in conf.get("contact_points", ()):
+        for s in (p["s1"], p["s2"]):
+            d = np.abs(s_mid - s)
+            hit |= np.minimum(d, 1.0 - d) <= 1.5 * step
+    return hit
+
+
+def configurations_figure(configurations: Sequence[Mapping], *, diameter: float | None,
+                          title: str, closed: bool = True):
+    """Centrelines ``{label, points (n, 3), contact_points?, contact_intervals?}`` as tubes.
+
+    Each is projected on the plane of its two largest principal axes and drawn
+    as thick segments of width ``diameter`` in data units (units of L), far
+    segments first so crossings read as over or under; depth shades the tube,
+    a thin light line on top gives it relief, contacts are red.
+    """
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import to_rgb
+    from matplotlib.figure import Figure
+
+    n = max(1, len(configurations))
+    cols = min(n, 3)
+    rows = (n + cols - 1) // cols
+    base = np.array(to_rgb(style.TUBE_COLOR))
+    red = np.array(to_rgb(style.CONTACT_COLOR))
+    with style.styled():
+        fig = Figure(figsize=(2.7 * cols, 2.7 * rows + 0.45), layout="constrained")
+        axes = np.atleast_1d(fig.subplots(rows, cols)).ravel()
+        prepared = []
+        for ax, conf in zip(axes, configurations, strict=False):
+            x = np.asarray(conf["points"], float).reshape(-1, 3)
+            x = x - x.mean(axis=0)
+            _, _, vt = np.linalg.svd(x, full_matrices=False)
+            p = x @ vt.T
+            width = diameter if diameter else 0.01 * float(np.ptp(p[:, :2], axis=0).max())
+            span = float(np.ptp(p[:, :2], axis=0).max()) * 1.1 + width
+            ax.set_xlim(-span / 2, span / 2)
+            ax.set_ylim(-span / 2, span / 2)
+            ax.set_aspect("equal")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.grid(False)
+            ax.set_title(conf["label"], fontsize="small")
+            prepared.append((ax, conf, p, width, span))
+        for ax in axes[len(configurations):]:
+            ax.axis("off")
+        fig.draw_without_rendering()  # final axes sizes, for line widths in data units
+        for ax, conf, p, width, span in prepared:
+            path = np.vstack([p, p[:1]]) if closed else p
+            s_mid = _arc_positions(p, closed)[: len(path) - 1] + 0.5 / (
+                len(p) if closed else len(p) - 1)
+            segs = np.stack([path[:-1, :2], path[1:, :2]], axis=1)
+            depth = 0.5 * (path[:-1, 2] + path[1:, 2])
+            shade = (depth - depth.min()) / (np.ptp(depth) or 1.0)  # 1 = nearest
+            contact = _segment_contact(s_mid, conf)
+            body = np.where(contact[:, None], red, base) * (0.55 + 0.45 * shade[:, None])
+            light = body + 0.55 * (1.0 - body)
+            width_pt = max(width / span * ax.bbox.height * 72.0 / fig.dpi, 0.6)
+            order = np.argsort(depth)  # far segments first, near ones drawn over them
+            lines = np.empty((2 * len(order), 2, 2))
+            lines[0::2] = segs[order]
+            lines[1::2] = segs[order] + np.array([-0.18, 0.18]) * width
+            colors = np.empty((2 * len(order), 3))
+            colors[0::2] = body[order]
+            colors[1::2] = light[order]
+            widths = np.empty(2 * len(order))
+            widths[0::2] = width_pt
+            widths[1::2] = 0.3 * width_pt
+            ax.add_collection(LineCollection(lines, linewidths=widths, colors=colors,
+                                             capstyle="round"))
+        suffix = (f" (tubes of diameter D = {diameter:.3g} L, projected)" if diameter
+                  else " (centrelines, projected)")
+        fig.suptitle(title + suffix, fontsize="medium")
+    return fig
+
+
+# -------------------------------------------------------------------- results
+
+
+def supported_kinds(result: ResultData) -> tuple[str, ...]:
+    """The figure kinds that ``result`` has data for."""
+    kinds = ["diagram"] if result.kind == "ring" else ["hat-curve"]
+    if any(p.get("contact_points") is not None for b in result.branches for p in b.points):
+        kinds.append("contact-map")
+    if any(b._states is not None for b in result.branches):
+        kinds.append("configurations")
+    if result.kind == "tweezers" and all(
+            "writhe" in p for b in result.branches for p in b.points):
+        kinds.insert(1, "diagram")
+    return tuple(k for k in KINDS if k in kinds)
+
+
+def _branch_rows(result: ResultData, keys: Sequence[str]) -> list[dict]:
+    rows = []
+    for index, b in enumerate(result.branches):
+        row = {"name": b.name, "stable": stable_mask(b.points),
+               "color": style.branch_color(index)}
+        for key in keys:
+            row[key] = b.values(key)
+        rows.append(row)
+    return rows
+
+
+def _specials(result: ResultData, keys: Sequence[str]) -> list[Mapping]:
+    return [p for p in result.special_points
+            if all(isinstance(p.get(k), int | float) and math.isfinite(p[k]) for k in keys)]
+
+
+def configuration_picks(result: ResultData) -> list[tuple[str, int]]:
+    """(branch, index) of the configurations drawn: the contact branches (else every
+    branch with states) at a third, two thirds and their end."""
+    with_states = [b for b in result.branches if b._states is not None and b.points]
+    picked = [b for b in with_states if b.contact] or with_states
+    out = []
+    for b in picked:
+        k = len(b.points)
+        out += [(b.name, i) for i in sorted({k // 3, 2 * k // 3, k - 1})]
+    return out
+
+
+def figure_of(result: ResultData, kind: str):
+    """The figure ``kind`` (one of :data:`KINDS`) of ``result``; ValueError if it has no data."""
+    if kind not in supported_kinds(result):
+        valid = ", ".join(supported_kinds(result)) or "none"
+        raise ValueError(f"{result.path}: a {result.kind} result has no data for a {kind} "
+                         f"figure; kinds it has: {valid}")
+    param = result.parameter
+    if kind == "diagram":
+        rows = _branch_rows(result, ("writhe", param))
+        return diagram_figure(rows, _specials(result, ("writhe", param)), title=result.title,
+                              x="writhe", y=param)
+    if kind == "hat-curve":
+        rows = _branch_rows(result, ("turns", "extension"))
+        return hat_curve_figure(rows, _specials(result, ("turns", "extension")),
+                                title=result.title)
+    if kind == "contact-map":
+        x = "writhe" if result.kind == "ring" else "turns"
+        rows = []
+        for index, b in enumerate(result.branches):
+            if not any(p.get("contact_points") or p.get("contact_intervals")
+                       for p in b.points):
+                continue
+            rows.append({"name": b.name, x: b.values(x), "color": style.branch_color(index),
+                         "contact_points": [p.get("contact_points") or [] for p in b.points],
+                         "contact_intervals": [p.get("contact_intervals") or []
+                                               for p in b.points]})
+        return contact_map_figure(rows, title=result.title, x=x)
+    configurations = []
+    for name, index in configuration_picks(result):
+        b = result.branch(name)
+        states = b.states()
+        if states is None:
+            continue
+        p = b.points[index]
+        label = (f"{name}, {'ΔLk' if param == 'excess_link' else 'n'} = "
+                 f"{float(p[param]):.3f}, Wr = {_number_text(p.get('writhe'))}")
+        configurations.append({"label": label, "points": states[index],
+                               "contact_points": p.get("contact_points") or [],
+                               "contact_intervals": p.get("contact_intervals") or []})
+    if not configurations:
+        raise ValueError(f"{result.path}: the branch files with the states are missing; "
+                         "configurations need them (branches/<name>.npz beside the result)")
+    return configurations_figure(configurations, diameter=result.diameter,
+                                 title=result.title, closed=result.closed)
+
+
+def _number_text(value) -> str:
+    try:
+        return f"{float(value):.3f}"
+    except (TypeError, ValueError):
+        return "?"
+
+
+def output_stem(kind: str) -> str:
+    """File name (without suffix) of a figure kind: ``contact-map`` -> ``contact_map``."""
+    return kind.replace("-", "_")
+
+
+def plot_result(result: ResultData, kind: str, folder: str | os.PathLike,
+                formats: Sequence[str] = style.FORMATS) -> list[Path]:
+    """Draw ``kind`` of ``result`` into ``folder/<kind>.<fmt>`` for each format."""
+    fig = figure_of(result, kind)
+    return style.save(fig, Path(folder) / output_stem(kind), formats)

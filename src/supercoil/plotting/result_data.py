@@ -1,0 +1,318 @@
+"""What the figures and the viewer read from a result: one small adapter.
+
+Plotting never computes: this module only reads. :func:`load_result` turns a
+result on disk into a :class:`ResultData` (branches of per-point numbers, the
+special points, a lazy loader of the centrelines). It reads today
+
+* the output folder of ``supercoil diagram ring`` (``diagram.json`` and
+  ``branches/<name>.npz``), given as the folder or as its ``diagram.json``;
+* a one-branch JSON result with ``points`` keyed by ``turns`` (``supercoil
+  tweezers``'s ``branch.json``), numbers only.
+
+Result files of :func:`supercoil.load` (issue 6, item 2) plug in through
+:func:`_from_store`, the one function to change when that API lands.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+
+class ResultError(ValueError):
+    """A result that cannot be read; the message is one line naming the file."""
+
+
+@dataclass(frozen=True)
+class BranchData:
+    """One branch: ``points`` are the per-point numbers (the keys of DESIGN.md's
+    conventions: ``excess_link``, ``writhe``, ``twist``, ``energy``,
+    ``unstable_count``, ``contact_points``, ...), in branch order."""
+
+    name: str
+    parent: str | None
+    contact: bool
+    points: tuple[Mapping, ...]
+    _states: Callable[[], np.ndarray | None] | None = field(default=None, repr=False)
+
+    def states(self) -> np.ndarray | None:
+        """Centrelines, shape ``(len(points), n_nodes, 3)``, or None when not stored."""
+        if self._states is None:
+            return None
+        states = self._states()
+        if states is None:
+            return None
+        states = np.asarray(states, float)
+        return states.reshape(len(states), -1, 3)
+
+    def values(self, key: str) -> np.ndarray:
+        """The number ``key`` at every point, shape ``(len(points),)`` (NaN where missing)."""
+        return np.array([_number(p.get(key)) for p in self.points], float)
+
+
+@dataclass(frozen=True)
+class ResultData:
+    """A result as the figures and the viewer see it.
+
+    ``kind``: ``"ring"`` (closed rod, parameter ``excess_link``) or
+    ``"tweezers"`` (open rod, parameter ``turns``); ``parameter`` names the
+    continuation parameter; ``diameter`` is D/L (None without contact);
+    ``closed`` says whether the centreline closes on itself.
+    """
+
+    path: Path
+    kind: str
+    title: str
+    parameter: str
+    diameter: float | None
+    closed: bool
+    units: str
+    branches: tuple[BranchData, ...]
+    special_points: tuple[Mapping, ...]
+    parameters: Mapping = field(default_factory=dict)
+
+    def branch(self, name: str) -> BranchData:
+        for b in self.branches:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+
+def _number(value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def load_result(path: str | Path) -> ResultData:
+    """Read a result (see the module docstring); :class:`ResultError` when it cannot."""
+    path = Path(path)
+    if not path.exists():
+        raise ResultError(f"{path}: no such file or folder; give a result folder (with "
+                          "diagram.json) or a result file")
+    if path.is_dir():
+        # a result file holds every state; supercoil run writes it beside diagram.json
+        stores = sorted(p for p in path.iterdir() if p.suffix in _STORE_SUFFIXES)
+        if len(stores) == 1:
+            return _from_store(stores[0])
+        for name in ("diagram.json", "branch.json"):
+            if (path / name).is_file():
+                return _from_json(path / name)
+        raise ResultError(f"{path}: folder has no result.h5, diagram.json or branch.json; "
+                          "give the --out folder of 'supercoil run', 'supercoil diagram "
+                          "ring' or 'supercoil tweezers'")
+    if path.suffix in _STORE_SUFFIXES:
+        return _from_store(path)
+    if path.suffix == ".json":
+        return _from_json(path)
+    raise ResultError(f"{path}: unknown result type {path.suffix or '(no suffix)'!r}; give a "
+                      "result folder, its diagram.json or branch.json, or a "
+                      f"{'/'.join(_STORE_SUFFIXES)} result file")
+
+
+_STORE_SUFFIXES = (".h5", ".hdf5", ".nc")
+
+
+def _from_store(path: Path) -> ResultData:
+    """A result file of :func:`supercoil.load` (issue 6, item 2)."""
+    try:
+        from supercoil import load  # type: ignore[attr-defined]
+    except ImportError:
+        raise ResultError(f"{path}: result files (.h5/.nc) are not readable by this version "
+                          "yet; give the result folder with diagram.json") from None
+    try:
+        result = load(path)
+    except (OSError, ValueError, KeyError) as exc:
+        raise ResultError(f"{path}: cannot read the result file ({_one_line(exc)})") from None
+    return _from_loaded(path, result)
+
+
+def _from_loaded(path: Path, result) -> ResultData:
+    """Adapt a :class:`supercoil.io.store.Result` (docs/results.md): the finished run's
+    summary when there is one (it holds the contact lists), else the per-point
+    records of every branch stored so far (an interrupted run)."""
+    try:
+        names = list(result.branch_names)
+        contact_names = set(getattr(result, "contact_branches", ()))
+        summary = getattr(result, "summary", None)
+
+        def states(name: str, keep: int) -> Callable[[], np.ndarray | None]:
+            return lambda: np.asarray(result.branch(name).states, float)[:keep]
+
+        if isinstance(summary, dict) and isinstance(summary.get("points"), list) \
+                and summary["points"]:
+            data = {**dict(getattr(result, "attributes", {}) or {}), **summary}
+            data.setdefault("units", getattr(result, "units", "nondimensional"))
+            return _from_payload(path, data, states)
+        points, entries, specials = [], [], []
+        for name in names:
+            branch = result.branch(name)
+            points += [dict(p, branch=p.get("branch", name)) for p in result.points(name)]
+            entries.append({"name": name, "parent": branch.parent,
+                            "contact": name in contact_names})
+            for sp in branch.special_points:
+                entry = {"kind": sp.kind, "branch": sp.branch, branch.parameter: sp.parameter}
+                entry.update({k: _number(np.asarray(v).ravel()[0]) for k, v in
+                              sp.records.items() if np.asarray(v).size == 1})
+                specials.append(entry)
+        data = {**dict(getattr(result, "attributes", {}) or {}), "points": points,
+                "branches": entries, "special_points": specials,
+                "units": getattr(result, "units", "nondimensional")}
+    except (OSError, ValueError, KeyError, AttributeError, TypeError) as exc:
+        raise ResultError(f"{path}: cannot read the result file ({_one_line(exc)})") from None
+    return _from_payload(path, data, states)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ResultError(f"{path}: cannot read ({_one_line(exc)})") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ResultError(f"{path}: not valid JSON (line {exc.lineno}: {exc.msg}); give a "
+                          "result written by supercoil") from None
+    if not isinstance(data, dict):
+        raise ResultError(f"{path}: a JSON result is an object with 'points', got "
+                          f"{type(data).__name__}")
+    return data
+
+
+StatesFor = Callable[[str, int], Callable[[], np.ndarray | None]]
+
+
+def _from_json(path: Path) -> ResultData:
+    return _from_payload(path, _read_json(path), None)
+
+
+def _from_payload(path: Path, data: dict, states: StatesFor | None) -> ResultData:
+    """``states(name, keep)``: loader of a branch's first ``keep`` states (None: the
+    ``branches[].file`` archives beside ``path``)."""
+    points = data.get("points")
+    if not isinstance(points, list) or not points or not all(isinstance(p, dict)
+                                                             for p in points):
+        raise ResultError(f"{path}: no 'points' list of objects; give a result written by "
+                          "'supercoil diagram ring' or 'supercoil tweezers'")
+    if "excess_link" in points[0] and "branch" in points[0]:
+        return _ring_diagram(path, data, points, states)
+    if "turns" in points[0]:
+        return _tweezers(path, data, points, states)
+    raise ResultError(f"{path}: points carry neither 'excess_link' and 'branch' (ring "
+                      "diagram) nor 'turns' (tweezers); not a result this command draws")
+
+
+def _ring_diagram(path: Path, data: dict, points: list[dict],
+                  states: StatesFor | None) -> ResultData:
+    for i, p in enumerate(points):
+        missing = [k for k in ("excess_link", "writhe", "branch") if k not in p]
+        if missing:
+            raise ResultError(f"{path}: point {i} lacks {', '.join(missing)}")
+    entries = data.get("branches")
+    if not isinstance(entries, list) or not all(isinstance(b, dict) and "name" in b
+                                                for b in entries):
+        entries = [{"name": n} for n in dict.fromkeys(p["branch"] for p in points)]
+    folder = path.parent
+    branches = []
+    for entry in entries:
+        name = str(entry["name"])
+        rows = [p for p in points if p["branch"] == name]
+        contact = bool(entry.get("contact", False))
+        keep = len(rows)
+        if not contact and entry.get("parent") is not None and rows:
+            # 'supercoil diagram ring' stops a contact-free branch at the first
+            # step past the contact onset: that last state overlaps itself
+            keep -= 1
+        rows = rows[:keep]
+        file = entry.get("file")
+        if states is not None:
+            loader = states(name, keep)
+        else:
+            loader = _npz_states(folder / file, keep) if isinstance(file, str) else None
+        branches.append(BranchData(name, entry.get("parent"), contact, tuple(rows), loader))
+    ld = data.get("length_over_diameter")
+    diameter = _number(data.get("diameter", 1.0 / ld if ld else math.nan))
+    title = "twisted ring"
+    parts = []
+    if "twist_ratio" in data:
+        parts.append(f"C/A = {_number(data['twist_ratio']):.4g}")
+    if ld:
+        parts.append(f"L/D = {_number(ld):g}")
+    if "n_nodes" in data:
+        parts.append(f"N = {data['n_nodes']}")
+    if parts:
+        title += ", " + ", ".join(parts)
+    specials = tuple(s for s in data.get("special_points", []) if isinstance(s, dict)
+                     and "excess_link" in s and "writhe" in s)
+    return ResultData(path=path, kind="ring", title=title, parameter="excess_link",
+                      diameter=diameter if math.isfinite(diameter) else None, closed=True,
+                      units=str(data.get("units", "nondimensional")),
+                      branches=tuple(branches), special_points=specials,
+                      parameters={k: data[k] for k in ("twist_ratio", "length_over_diameter",
+                                                       "n_nodes") if k in data})
+
+
+def _npz_states(file: Path, keep: int) -> Callable[[], np.ndarray | None]:
+    def load() -> np.ndarray | None:
+        if not file.is_file():
+            return None
+        try:
+            with np.load(file, allow_pickle=False) as archive:
+                if "states" not in archive.files:
+                    return None
+                states = np.asarray(archive["states"], float)
+        except (OSError, ValueError) as exc:
+            raise ResultError(f"{file}: cannot read the branch file ({_one_line(exc)})") \
+                from None
+        if states.ndim != 2 or states.shape[1] % 3 or len(states) < keep:
+            raise ResultError(f"{file}: states of shape {states.shape}; expected at least "
+                              f"{keep} rows of 3 n_nodes coordinates")
+        return states[:keep]
+    return load
+
+
+def _tweezers(path: Path, data: dict, points: list[dict],
+              states_for: StatesFor | None) -> ResultData:
+    for i, p in enumerate(points):
+        if "turns" not in p:
+            raise ResultError(f"{path}: point {i} lacks 'turns'")
+    name = str(data.get("branch", data.get("name", "tweezers")))
+    rows = tuple(dict(p, branch=p.get("branch", name)) for p in points)
+    states = None
+    if states_for is not None:
+        states = states_for(name, len(points))
+    elif all("centreline" in p for p in points):
+        def states():
+            return np.array([np.asarray(p["centreline"], float).ravel() for p in points])
+    ld = data.get("length_over_diameter")
+    diameter = _number(data.get("diameter", 1.0 / ld if ld else math.nan))
+    parts = [f"{label} = {_number(data[k]):.4g}" for k, label in
+             (("force", "F"), ("twist_ratio", "C/A")) if k in data]
+    title = "rod in magnetic tweezers" + (", " + ", ".join(parts) if parts else "")
+    specials = tuple(s for s in data.get("special_points", []) if isinstance(s, dict))
+    return ResultData(path=path, kind="tweezers", title=title, parameter="turns",
+                      diameter=diameter if math.isfinite(diameter) else None, closed=False,
+                      units=str(data.get("units", "nondimensional")),
+                      branches=(BranchData(name, None, True, rows, states),),
+                      special_points=specials, parameters={})
+
+
+def stable_mask(points: Sequence[Mapping]) -> np.ndarray:
+    """``stable`` per point, else ``unstable_count == 0 and zero_modes == 0``."""
+    out = []
+    for p in points:
+        if "stable" in p:
+            out.append(bool(p["stable"]))
+        else:
+            out.append(p.get("unstable_count", -1) == 0 and p.get("zero_modes", 0) == 0)
+    return np.array(out, bool)

@@ -1,0 +1,191 @@
+"""``supercoil plot``: figures of a result (PNG and SVG, one style, axes with units)."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+from plot_results import DIAMETER, write_ring_result, write_tweezers_result
+
+from supercoil.cli.main import run
+from supercoil.plotting import style
+from supercoil.plotting.figures import KINDS, figure_of, supported_kinds
+from supercoil.plotting.result_data import ResultError, load_result
+
+
+@pytest.fixture
+def ring(tmp_path):
+    return write_ring_result(tmp_path / "ring")
+
+
+def _png(path):
+    from matplotlib.image import imread
+
+    return imread(path)
+
+
+def _svg_texts(path):
+    """The text of an SVG saved with svg.fonttype = path: matplotlib writes each text
+    element's string as a comment before its glyphs."""
+    return re.findall(r"<!-- (.*?) -->", path.read_text(encoding="utf-8"))
+
+
+def test_kinds_match_the_cli_copy():
+    from supercoil.cli import plot
+
+    assert plot.KINDS == KINDS
+
+
+def test_plot_writes_png_and_svg_with_unit_labels(ring, tmp_path, capsys):
+    out = tmp_path / "figs"
+    assert run(["plot", str(ring), "--out", str(out)]) == 0
+    assert "wrote diagram.png" in capsys.readouterr().out
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(f"{k}.{f}" for k in ("diagram", "contact_map", "configurations")
+                           for f in ("png", "svg"))
+    image = _png(out / "diagram.png")
+    assert image.shape[0] > 500 and image.shape[1] > 700  # 200 dpi
+    texts = _svg_texts(out / "diagram.svg")
+    assert style.LABELS["writhe"] in texts and style.LABELS["excess_link"] in texts
+    assert "fold" in texts and "bifurcation" in texts and "loop_contact" in texts
+    assert style.LABELS["arclength"] in " ".join(_svg_texts(out / "contact_map.svg"))
+
+
+def test_same_result_same_files(ring, tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert run(["plot", str(ring), "--out", str(a), "--kind", "diagram"]) == 0
+    assert run(["plot", str(ring), "--out", str(b), "--kind", "diagram"]) == 0
+    assert (a / "diagram.svg").read_bytes() == (b / "diagram.svg").read_bytes()
+    assert np.array_equal(_png(a / "diagram.png"), _png(b / "diagram.png"))
+
+
+def test_configurations_change_with_the_state(tmp_path):
+    one = write_ring_result(tmp_path / "one")
+    two = write_ring_result(tmp_path / "two", shift=0.0)
+    moved = write_ring_result(tmp_path / "moved", shift=0.0)
+    # move one node of the last contact state: only the third panel may change
+    from supercoil.continuation import Branch
+
+    path = moved / "branches" / "loop_contact.npz"
+    b = Branch.load(path)
+    states = np.array(b.states)
+    states[-1, 3 * 5:3 * 6] += 0.05
+    from dataclasses import replace
+
+    replace(b, states=states).save(path)
+    images = {}
+    for name, folder in (("one", one), ("two", two), ("moved", moved)):
+        out = tmp_path / f"out_{name}"
+        assert run(["plot", str(folder), "--out", str(out), "--kind", "configurations",
+                    "--format", "png"]) == 0
+        images[name] = _png(out / "configurations.png")
+    assert np.array_equal(images["one"], images["two"])
+    diff = np.any(images["one"] != images["moved"], axis=2)
+    assert diff.any()
+    columns = np.flatnonzero(diff.any(axis=0))
+    assert columns.min() > 2 * diff.shape[1] / 3 - 10  # the third panel only
+
+
+def test_diagram_heavy_exactly_where_stable(ring):
+    result = load_result(ring)
+    fig = figure_of(result, "diagram")
+    ax = fig.axes[0]
+    heavy = [line for line in ax.get_lines() if line.get_linewidth() == style.STABLE_WIDTH
+             and len(line.get_xdata()) > 1]
+    assert len(heavy) == 2  # one per branch
+    for line, branch in zip(heavy, result.branches, strict=True):
+        stable = np.array([p["stable"] for p in branch.points])
+        y = np.asarray(line.get_ydata(), float)
+        assert np.array_equal(np.isfinite(y), stable)
+        assert np.array_equal(y[stable], [p["excess_link"] for p, s in
+                                          zip(branch.points, stable, strict=True) if s])
+
+
+def test_contact_map_shows_the_stored_contacts(ring):
+    result = load_result(ring)
+    ax = figure_of(result, "contact-map").axes[0]
+    dots = [line for line in ax.get_lines() if line.get_marker() == "."]
+    assert len(dots) == 1
+    branch = result.branch("loop_contact")
+    expected = [(p["writhe"], s) for p in branch.points for c in p["contact_points"]
+                for s in (c["s1"], c["s2"])]
+    assert list(zip(dots[0].get_xdata(), dots[0].get_ydata(), strict=True)) == expected
+    bars = ax.collections[0].get_segments()
+    assert len(bars) == 2 * sum(len(p["contact_intervals"]) for p in branch.points)
+    assert {tuple(np.round(seg[:, 1], 12)) for seg in bars} == {(0.2, 0.3), (0.7, 0.8)}
+
+
+def test_configuration_tubes_have_the_diameter(ring):
+    fig = figure_of(load_result(ring), "configurations")
+    ax = fig.axes[0]
+    tubes = ax.collections[0]
+    width_pt = float(tubes.get_linewidths()[0])
+    span = ax.get_xlim()[1] - ax.get_xlim()[0]
+    fig.draw_without_rendering()
+    expected = DIAMETER / span * ax.bbox.height * 72.0 / fig.dpi
+    assert width_pt == pytest.approx(expected, rel=0.02)
+    assert "D = 0.025 L" in fig._suptitle.get_text()
+
+
+def test_hat_curve_from_a_tweezers_result(tmp_path):
+    folder = write_tweezers_result(tmp_path / "tw")
+    result = load_result(folder)
+    assert supported_kinds(result) == ("diagram", "hat-curve")
+    ax = figure_of(result, "hat-curve").axes[0]
+    assert ax.get_xlabel() == style.LABELS["turns"]
+    assert ax.get_ylabel() == style.LABELS["extension"]
+    thin = ax.get_lines()[0]
+    data = json.loads((folder / "branch.json").read_text())["points"]
+    assert list(thin.get_xdata()) == [p["turns"] for p in data]
+    assert list(thin.get_ydata()) == [p["extension"] for p in data]
+    out = tmp_path / "figs"
+    assert run(["plot", str(folder), "--kind", "hat-curve", "--out", str(out)]) == 0
+    assert (out / "hat_curve.png").is_file() and (out / "hat_curve.svg").is_file()
+
+
+def _error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("error: ")
+    return err
+
+
+def test_bad_input_is_one_line_and_exit_2(ring, tmp_path, capsys):
+    out = tmp_path / "figs"
+    assert run(["plot", str(tmp_path / "missing"), "--out", str(out)]) == 2
+    assert "no such file or folder" in _error(capsys)
+    assert run(["plot", str(ring), "--out", str(out), "--kind", "pie"]) == 2
+    assert "diagram, contact-map, hat-curve, configurations" in _error(capsys)
+    assert run(["plot", str(ring), "--out", str(out), "--kind", "hat-curve"]) == 2
+    assert "kinds it has: diagram, contact-map, configurations" in _error(capsys)
+    assert run(["plot", str(ring), "--out", str(out), "--format", "jpg"]) == 2
+    _error(capsys)
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "diagram.json").write_text("{not json", encoding="utf-8")
+    assert run(["plot", str(bad), "--out", str(out)]) == 2
+    assert f"{bad / 'diagram.json'}: not valid JSON" in _error(capsys)
+    (bad / "diagram.json").write_text('{"points": []}', encoding="utf-8")
+    assert run(["plot", str(bad / "diagram.json"), "--out", str(out)]) == 2
+    assert "no 'points' list" in _error(capsys)
+    assert not out.exists()
+    with pytest.raises(ResultError, match="unknown result type"):
+        load_result(ring / "branches" / "circle.npz")
+
+
+def test_existing_figures_are_not_overwritten(ring, tmp_path, capsys):
+    out = tmp_path / "figs"
+    assert run(["plot", str(ring), "--out", str(out), "--kind", "diagram"]) == 0
+    before = (out / "diagram.svg").read_bytes()
+    (out / "diagram.svg").write_text("mine", encoding="utf-8")
+    assert run(["plot", str(ring), "--out", str(out), "--kind", "diagram"]) == 2
+    assert "diagram.png exists" in _error(capsys)
+    assert (out / "diagram.svg").read_text(encoding="utf-8") == "mine"
+    # another kind into the same folder is fine; --force overwrites
+    assert run(["plot", str(ring), "--out", str(out), "--kind", "contact-map"]) == 0
+    assert run(["plot", str(ring), "--out", str(out), "--kind", "diagram", "--force"]) == 0
+    assert (out / "diagram.svg").read_bytes() == before
+    (tmp_path / "file").write_text("x", encoding="utf-8")
+    assert run(["plot", str(ring), "--out", str(tmp_path / "file")]) == 2
+    assert "is a file" in _error(capsys)

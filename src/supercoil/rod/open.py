@@ -82,9 +82,86 @@ class ClampedRodEnergy(RodEnergy):
         # director there never moves and this angle is a constant of the set-up.
         u_last = self._directors[-1]
         self._end_mismatch = float(np.arctan2(-u_last[1], u_last[0]))  # (u x e_x).e_z, u.e_x
+        self._turn_offset = 0  # whole turns restored after a rebuild of the frames (accept)
 
     def twist_offset(self) -> float:
-        return self.turns + self._end_mismatch / (2 * np.pi)
+        return self.turns + self._end_mismatch / (2 * np.pi) + self._turn_offset
+
+    # An accepted state whose edges turned by more than this (degrees) from the
+    # last one is a jump (a stored state), not a step: see accept.
+    jump_turn_degrees = 45.0
+
+    def accept(self, q: np.ndarray) -> None:
+        """Carry the reference directors to ``q``; rebuild them after a jump.
+
+        ``Phi`` is a sum of per-vertex signed angles in ``(-pi, pi]``; along a
+        branch time-parallel transport keeps them small, but a jump to a
+        stored state (a consistency check, a hysteresis jump) can pile them up
+        until one wraps and the twist slips by a whole turn. As for closed
+        rods (:meth:`ClosedRodEnergy.accept`): after a jump (some edge turned
+        by more than :attr:`jump_turn_degrees`) the directors are rebuilt by
+        space-parallel transport from the clamp and the whole turns restored
+        so that ``Tw = turns - Wr`` with the double-sum writhe (tails along
+        the axis: valid unless the rod wraps around a tail); after a step
+        whose vertex twist exceeds ``pi / 2`` they are rebuilt keeping the
+        twist continuous.
+        """
+        from supercoil.rod import kernels
+
+        q = np.asarray(q, dtype=float)
+        t_new = self._edge_vectors(q)
+        t_new = t_new / np.linalg.norm(t_new, axis=1, keepdims=True)
+        jump = bool(np.min(np.sum(t_new * self._tangents, axis=1))
+                    < np.cos(np.radians(self.jump_turn_degrees)))
+        target = None
+        if not jump:
+            super().accept(q)
+            if np.max(np.abs(kernels.twist_value(self._stencils(q), self._frames()))) \
+                    <= np.pi / 2:
+                return
+            target = self.twist(q)
+        points = q.reshape(-1, 3)
+        self._set_frames(t_new, _transported_directors(points))
+        u_last = self._directors[-1]
+        self._end_mismatch = float(np.arctan2(-u_last[1], u_last[0]))
+        self._turn_offset = 0
+        if target is None:
+            from supercoil.topology import writhe  # jumps only, never inside Newton
+
+            target = self.turns - writhe(points, closure="axis")
+        self._turn_offset = int(np.rint(target - self.twist(q)))
+
+    def repin(self, q: np.ndarray) -> None:
+        """Re-pick the azimuth pin (rotation about the axis) for the state ``q``.
+
+        The pin chosen at construction is the azimuthal coordinate of the node
+        then farthest from the axis; as the shape changes along a branch that
+        node can come back towards the axis, and the pin then barely removes
+        the rotation (a near-null mode: Newton and the count degrade). Call
+        this between continuation runs: the pinned coordinate keeps its value
+        at ``q``, so ``q`` stays a state of the problem.
+        """
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        gauge = np.array(_axis_rotation_pin(x), dtype=np.int64)
+        clamps = np.setdiff1d(self.fixed, self.gauge_dofs)
+        self.gauge_dofs = gauge
+        self.fixed = np.array(sorted(set(clamps.tolist()) | set(gauge.tolist())), dtype=np.int64)
+
+    def pin_quality(self, q: np.ndarray) -> float:
+        """How well the azimuth pin removes the rotation about the axis, in ``[0, 1]``.
+
+        The rotation's component on the pinned coordinate over its largest
+        nodal magnitude (1: the pin sits where the rotation moves the rod
+        most, along the pinned coordinate; 0: no pin, or it does not see the
+        rotation). 1 also for a straight rod, which has no rotation to remove.
+        """
+        mode = np.cross(AXIS, np.asarray(q, dtype=float).reshape(-1, 3))
+        largest = float(np.max(np.linalg.norm(mode, axis=1)))
+        if largest <= 1e-9 * self.rod.length:
+            return 1.0
+        if self.gauge_dofs.size == 0:
+            return 0.0
+        return float(np.max(np.abs(mode.ravel()[self.gauge_dofs]))) / largest
 
     def load_potential(self, q: np.ndarray) -> float:
         """``-F z``: the potential of the dead load, ``z`` the end-to-end distance."""

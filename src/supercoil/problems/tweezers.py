@@ -1,0 +1,525 @@
+"""A rod clamped at both ends, pulled and turned: the magnetic-tweezers experiment.
+
+:func:`tweezers_branches` computes, for a rod of twist ratio ``C/A`` and tube
+diameter ``D = L / (L/D)`` clamped on the ``z`` axis at both ends
+(:class:`~supercoil.rod.open.ClampedRodEnergy`) and turned by ``turns``:
+
+**Load control** (dead load ``F L^2/A``, the turned end slides along the axis):
+
+1. the straight twisted rod in ``turns`` (branch ``straight``), its buckling
+   located as a ``bifurcation`` (the unstable count jumps by 2: the rotation
+   about the axis makes the critical eigenvalue double) and compared with the
+   exact clamped condition (:mod:`supercoil.problems.greenhill`);
+2. the buckled branch switched from it along the critical mode (branch
+   ``buckled``), followed without contact until the closest approach of
+   non-neighbouring points reaches ``D`` (a ``contact_onset``, located as a
+   sign change of ``d_min/D - 1``; the branch is cut just after it);
+3. from the last point of ``buckled`` that the barrier does not reach yet,
+   the branch with self-contact (barrier treatment, ``buckled_contact``)
+   through the plectoneme's growth up to the last requested turn.
+
+**Displacement control** (end-to-end distance ``z/L < 1`` held): an
+inextensible rod cannot be straight at ``z < L``, so there is no straight
+branch: the branch starts from the clamped planar Euler buckle at
+``turns = 0`` (tangent angle ``a sin(2 pi s / L)`` with ``a`` chosen for the
+end distance, then Newton) and is followed in turns without, then with,
+contact as above (branch ``clamped``, ``clamped_contact``).
+
+The rotation about the axis is an exact symmetry of every state; the rod
+pins the azimuth of one node (:meth:`ClampedRodEnergy.repin`). Along a
+branch the pin is re-picked every ``segment_points`` points (a new
+continuation run from the last point, in the direction the branch was
+going), whenever the pinned node no longer sees the rotation well; the
+runs are merged into one :class:`~supercoil.continuation.Branch`. At an
+equilibrium the pin carries no reaction (the energy is invariant under the
+rotation, and the pinned coordinate moves under it), so every stored state
+is an equilibrium of the unpinned problem and the count does not depend on
+the pin.
+
+Per point the branches' ``records`` hold (DESIGN.md keys): ``turns``,
+``extension`` (end-to-end distance along the axis over L), ``torque`` (axial
+moment at the turned end, ``M L / A = 2 pi (C/A) Tw`` for the reduced twist),
+``twist`` (excess twist from the reference frames, turns), ``writhe`` (the
+double sum of the rod closed by straight tails along the axis),
+``closure_error`` = ``|Tw + Wr - turns|`` (Fuller's closure; above 1/2 the
+rod wraps around a tail: ``tail_wrapped``), ``energy`` (elastic only),
+``load_potential`` (``-F z``, zero under displacement control),
+``tension`` (the axial force: the dead load, or the reaction at the end
+under displacement control), ``n_contact_points``, ``n_contact_intervals``
+and ``min_gap_over_diameter``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.report import contact_summary
+from supercoil.continuation import (
+    Branch,
+    ContinuationOptions,
+    SpecialPoint,
+    UserEvent,
+    continuation,
+    switch_branch,
+)
+from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.ring_diagram import (
+    classify_contact_events,
+    contact_count_event,
+    onset_event,
+    truncate_after,
+)
+from supercoil.rod.closed import Rod
+from supercoil.rod.open import ClampedRodEnergy, straight_rod
+from supercoil.solvers.newton import NewtonOptions, newton
+from supercoil.topology import writhe
+
+# Smallest arclength step on a contact branch (see ring_diagram.CONTACT_MIN_STEP).
+CONTACT_MIN_STEP = 1e-12
+SWITCH_AMPLITUDE = 2e-2  # first point of the buckled branch from the bifurcation (arclength)
+PIN_QUALITY = 0.5  # re-pick the azimuth pin below this (ClampedRodEnergy.pin_quality)
+TAIL_WRAP = 0.5  # |Tw + Wr - turns| above this: the rod wraps around a tail
+
+
+@dataclass(frozen=True)
+class TweezersOptions:
+    """What :func:`tweezers_branches` computes; validated on construction.
+
+    ``twist_ratio`` C/A; ``length_over_diameter`` L/D (> pi), or None for a
+    rod without self-contact (the contact-free branch is then followed to the
+    last turn); exactly one of ``tension`` (F L^2/A >= 0, load control) and
+    ``end_distance`` (z/L in (0, 1), displacement control); ``turns`` the
+    interval ``(start, stop)`` of turns (``stop > start >= 0``; the straight
+    branch starts at ``start``); ``n_nodes`` N. ``free_max_step``: largest
+    arclength step without contact (units of L); ``contact_max_step``: with
+    contact (units of D); ``max_points`` bounds each branch;
+    ``segment_points`` the points per continuation run between pin checks.
+    Tolerances as in :class:`~supercoil.problems.ring_diagram.DiagramOptions`.
+    """
+
+    twist_ratio: float
+    length_over_diameter: float | None
+    tension: float | None = None
+    end_distance: float | None = None
+    turns: tuple[float, float] = (0.0, 5.0)
+    n_nodes: int = 100
+    free_max_step: float = 0.1
+    contact_max_step: float = 0.5
+    max_points: int = 400
+    segment_points: int = 30
+    event_tolerance: float = 1e-8
+    contact_event_tolerance: float = 1e-6
+    contact_tolerance: float = 1e-8
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.twist_ratio, (int, float)) and math.isfinite(self.twist_ratio)
+                and self.twist_ratio > 0):
+            raise ValueError(f"twist_ratio (C/A) must be positive and finite, got "
+                             f"{self.twist_ratio!r}")
+        if self.length_over_diameter is not None and not (
+                math.isfinite(self.length_over_diameter) and self.length_over_diameter > math.pi):
+            raise ValueError(f"length_over_diameter (L/D) must be a finite number > pi (a "
+                             f"longer tube cannot bend), got {self.length_over_diameter!r}")
+        if (self.tension is None) == (self.end_distance is None):
+            raise ValueError("give exactly one of tension (F L^2/A, load control) and "
+                             "end_distance (z/L, displacement control)")
+        if self.tension is not None and not (math.isfinite(self.tension) and self.tension >= 0):
+            raise ValueError(f"tension (F L^2/A) must be a finite number >= 0, got "
+                             f"{self.tension!r}")
+        if self.end_distance is not None and not (
+                math.isfinite(self.end_distance) and 0.0 < self.end_distance < 1.0):
+            raise ValueError(f"end_distance (z/L) must lie in (0, 1) (an inextensible rod "
+                             f"cannot be longer than L; at z/L = 1 it cannot deflect), got "
+                             f"{self.end_distance!r}")
+        start, stop = (float(v) for v in self.turns)
+        if not (math.isfinite(start) and math.isfinite(stop) and 0.0 <= start < stop):
+            raise ValueError(f"turns must be (start, stop) with 0 <= start < stop, got "
+                             f"{self.turns!r}")
+        object.__setattr__(self, "turns", (start, stop))
+        if int(self.n_nodes) != self.n_nodes or self.n_nodes < 12:
+            raise ValueError(f"n_nodes must be an integer >= 12, got {self.n_nodes!r}")
+        for name in ("free_max_step", "contact_max_step", "event_tolerance",
+                     "contact_event_tolerance", "contact_tolerance"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+        if self.max_points < 2 or self.segment_points < 2:
+            raise ValueError("max_points and segment_points must be >= 2")
+
+    @property
+    def load_control(self) -> bool:
+        return self.tension is not None
+
+    @property
+    def diameter(self) -> float | None:
+        return None if self.length_over_diameter is None else 1.0 / self.length_over_diameter
+
+    @property
+    def tolerances(self) -> dict:
+        return {"corrector_residual": ContinuationOptions.tolerance,
+                "zero_modes": ContinuationOptions.zero_tolerance,
+                "event_arclength": self.event_tolerance,
+                "contact_event_arclength": self.contact_event_tolerance,
+                "contact_corrector_residual": self.contact_tolerance}
+
+
+@dataclass(frozen=True)
+class TweezersResult:
+    """Computed branches (in order), the problems to re-evaluate their states, notes."""
+
+    options: TweezersOptions
+    branches: tuple[Branch, ...]
+    contact_branches: frozenset[str]
+    rod_problem: ClampedRodEnergy
+    contact_problem: ContactProblem | None
+    seconds: dict[str, float] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+    # per branch: (first point index, pinned DOFs) at each choice of the azimuth pin
+    pins: dict = field(default_factory=dict)
+
+    def pin_branch(self, name: str, index: int = 0):
+        """Set the azimuth pin with which point ``index`` of branch ``name`` was computed.
+
+        Returns the problem to check that branch against (the contact wrapper
+        for contact branches). The pinned coordinate keeps the value it had
+        at the first point of its run.
+        """
+        rod = self.rod_problem
+        dofs: tuple[int, ...] = ()
+        for start, chosen in self.pins.get(name, ((0, ()),)):
+            if start <= index:
+                dofs = chosen
+        clamps = np.setdiff1d(rod.fixed, rod.gauge_dofs)
+        rod.gauge_dofs = np.array(dofs, dtype=np.int64)
+        rod.fixed = np.array(sorted(set(clamps.tolist()) | set(dofs)), dtype=np.int64)
+        problem = self.contact_problem if name in self.contact_branches else rod
+        if problem is not rod:
+            problem.fixed = rod.fixed
+        return problem
+
+    @property
+    def ok(self) -> bool:
+        return (all(b.ok for b in self.branches)
+                and not any(n.startswith("failed:") for n in self.notes))
+
+    def branch(self, name: str) -> Branch:
+        for b in self.branches:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+    def special_points(self) -> list[SpecialPoint]:
+        return [p for b in self.branches for p in b.special_points]
+
+    @property
+    def greenhill_turns(self) -> float | None:
+        """Exact critical turns of the straight rod (load control), see greenhill.py."""
+        if not self.options.load_control:
+            return None
+        return critical_turns(self.options.twist_ratio, self.options.tension)
+
+
+# ------------------------------------------------------------------------ problem set-up
+def clamped_problem(options: TweezersOptions) -> tuple[ClampedRodEnergy, np.ndarray]:
+    """The rod problem at ``turns = start`` and its first state ``(n_nodes * 3,)``.
+
+    Load control: the straight rod. Displacement control: the planar clamped
+    Euler buckle at the end distance (module doc), before Newton.
+    """
+    opts = options
+    rod = Rod(opts.n_nodes, twist_stiffness=opts.twist_ratio, closed=False)
+    if opts.load_control:
+        pts = straight_rod(opts.n_nodes)
+        return ClampedRodEnergy(rod, pts, opts.turns[0], tension=opts.tension), pts.ravel()
+    pts = clamped_buckle(opts.n_nodes, opts.end_distance)
+    problem = ClampedRodEnergy(rod, pts, opts.turns[0], end_distance_control=True)
+    return problem, pts.ravel()
+
+
+def clamped_buckle(n_nodes: int, end_distance: float) -> np.ndarray:
+    """Planar clamped buckle ``(n_nodes, 3)`` in the x-z plane with the given end distance.
+
+    Edges of exact length ``h = L/(n - 2)`` at tangent angles
+    ``a sin(2 pi s)`` (``s`` the edge midpoints, so the first and last edges
+    lie along the axis); ``a`` solves ``sum h cos(theta) = z`` (Brent). The
+    shape is symmetric, so the far end lies on the axis.
+    """
+    from scipy.optimize import brentq
+
+    h = 1.0 / (n_nodes - 2)
+    s = (np.arange(n_nodes - 1)) * h  # edge midpoints: edge k spans [(k - 1/2) h, (k + 1/2) h]
+
+    def distance(a):
+        return float(np.sum(h * np.cos(a * np.sin(2 * np.pi * s)))) - h - end_distance
+
+    a = brentq(distance, 0.0, 2.4, xtol=1e-15)  # J0(2.4) ~ 0: below any z/L > 0 here
+    theta = a * np.sin(2 * np.pi * s)
+    steps = h * np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
+    pts = np.vstack([[0.0, 0.0, -0.5 * h], -0.5 * h * np.array([0, 0, 1.0]) + np.cumsum(
+        steps, axis=0)])
+    pts[[0, 1, -2, -1], 0] = 0.0  # round-off of the symmetric sum
+    return pts
+
+
+# ----------------------------------------------------------------------------- records
+def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
+    """Per-point records (module doc) for ``continuation(records=)``."""
+
+    def records(q: np.ndarray, multipliers: np.ndarray, turns: float) -> dict:
+        x = q.reshape(-1, 3)
+        wr = writhe(x, closure="axis")
+        tw = rod.twist(q)
+        error = abs(tw + wr - turns)
+        out = {"turns": float(turns), "extension": rod.extension(q),
+               "torque": 2 * math.pi * rod.rod.twist_ratio * tw, "twist": tw, "writhe": wr,
+               "closure_error": error, "tail_wrapped": bool(error > TAIL_WRAP),
+               "energy": rod.elastic_energy(q), "load_potential": rod.load_potential(q),
+               "tension": _axial_force(rod, multipliers)}
+        if contact:
+            summary = contact_summary(problem, q, multipliers)
+            gap = summary["min_gap_over_diameter"]
+            out.update(n_contact_points=summary["n_contact_points"],
+                       n_contact_intervals=summary["n_contact_intervals"],
+                       min_gap_over_diameter=float("inf") if gap is None else gap)
+        else:
+            gap = float("inf") if probe is None else probe.min_distance(q) / probe.diameter
+            out.update(n_contact_points=0, n_contact_intervals=0,
+                       min_gap_over_diameter=float(gap))
+        return out
+
+    return records
+
+
+def _axial_force(rod: ClampedRodEnergy, multipliers: np.ndarray) -> float:
+    """The axial force at the turned end: the dead load, or the last edge's tension."""
+    if not rod.end_distance_control:
+        return float(rod.tension)
+    mu = np.asarray(multipliers, dtype=float)
+    return float(mu[rod.n_constraints - 1]) if mu.size >= rod.n_constraints else float("nan")
+
+
+# ------------------------------------------------------------------ segmented continuation
+def set_pin(problem, rod: ClampedRodEnergy, q: np.ndarray) -> None:
+    """Re-pick the azimuth pin for ``q`` on the rod and on its contact wrapper (``problem``).
+
+    A straight ``q`` gets no pin (its rotation is trivial and pinning a DOF
+    would remove one of its two buckling directions).
+    """
+    rod.repin(q)
+    if problem is not rod:
+        problem.fixed = rod.fixed
+
+
+def merge_branches(parts: list[Branch], name: str) -> Branch:
+    """One branch from consecutive runs (each starts at the last point of the previous)."""
+    first = parts[0]
+    arrays = {k: [getattr(first, k)] for k in (
+        "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+        "determinant_sign", "nearest_eigenvalue", "tangents")}
+    arclength = [first.arclength]
+    records = {k: [v] for k, v in first.records.items()}
+    specials = list(first.special_points)
+    offset, s0 = len(first), float(first.arclength[-1]) if len(first) else 0.0
+    for part in parts[1:]:
+        if len(part) < 2:
+            continue
+        for k, values in arrays.items():
+            values.append(getattr(part, k)[1:])
+        arclength.append(part.arclength[1:] + s0)
+        for k, values in records.items():
+            values.append(part.records[k][1:])
+        specials += [dataclasses.replace(p, index=p.index + offset - 1,
+                                         arclength=p.arclength + s0) for p in part.special_points]
+        offset += len(part) - 1
+        s0 += float(part.arclength[-1])
+    last = parts[-1]
+    merged = {k: np.concatenate(v) for k, v in arrays.items()}
+    return dataclasses.replace(
+        first, name=name, arclength=np.concatenate(arclength),
+        records={k: np.concatenate(v) for k, v in records.items()},
+        special_points=tuple(dataclasses.replace(p, branch=name) for p in specials),
+        status=last.status, message=last.message, **merged)
+
+
+def follow(problem, rod: ClampedRodEnergy, first: Branch, options: ContinuationOptions,
+           name: str, records, events: tuple[UserEvent, ...] = (),
+           stop: Callable[[Branch], bool] | None = None, max_points: int = 400,
+           segment_points: int = 30) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
+    """Continue ``first`` (a computed run) in runs of ``segment_points``, re-pinning between.
+
+    Each run starts at the last point of the previous one, in the direction
+    its tangent had; the azimuth pin is re-picked there when its quality
+    fell below :data:`PIN_QUALITY`. Stops when a run ends early (a bound,
+    a failure), when ``stop(run)`` is true, or at ``max_points``. Returns the
+    merged branch and its pins: ``(first point index, pinned DOFs)`` per
+    change (the pinned coordinate keeps its value from that point on).
+    """
+    parts = [first]
+    pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
+    total = len(first)
+    run = first
+    while run.ok and len(run) >= 2 and total < max_points and not (stop and stop(run)) \
+            and run.status.name == "MAX_POINTS":
+        q = run.states[-1]
+        setattr(problem, run.parameter, float(run.parameter_values[-1]))
+        problem.accept(q)
+        if rod.pin_quality(q) < PIN_QUALITY:
+            set_pin(problem, rod, q)
+            pins.append((total - 1, tuple(int(d) for d in rod.gauge_dofs)))
+        direction = 1 if run.tangents[-1, -1] >= 0 else -1
+        step = float(np.clip(run.arclength[-1] - run.arclength[-2], options.min_step,
+                             options.max_step))
+        opts = dataclasses.replace(options, direction=direction, initial_step=step,
+                                   max_points=min(segment_points, max_points - total + 1))
+        run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
+                           options=opts, name=name, records=records, events=events)
+        parts.append(run)
+        total += len(run) - 1
+    merged = merge_branches(parts, name)
+    if merged.ok and total >= max_points and merged.status.name == "MAX_POINTS":
+        merged = dataclasses.replace(merged, message=f"{total} points computed (max_points)")
+    return merged, tuple(pins)
+
+
+def _rotated_mode(mode: np.ndarray) -> np.ndarray:
+    """The critical mode turned about the axis so the node it moves most moves along +x."""
+    v = mode.reshape(-1, 3).copy()
+    r = np.linalg.norm(v[:, :2], axis=1)
+    k = int(np.argmax(r))
+    a = -math.atan2(v[k, 1], v[k, 0])
+    c, s = math.cos(a), math.sin(a)
+    x, y = v[:, 0].copy(), v[:, 1].copy()
+    v[:, 0], v[:, 1] = c * x - s * y, s * x + c * y
+    return v.ravel()
+
+
+def _onset_stop(run: Branch) -> bool:
+    return any(p.kind == "contact_onset" and p.index + 1 < len(run) for p in run.special_points)
+
+
+# ----------------------------------------------------------------------------- branches
+def straight_branch(options: TweezersOptions, problem: ClampedRodEnergy, q0: np.ndarray,
+                    records) -> Branch:
+    """The straight rod in turns (load control), with its bifurcations located."""
+    opts = options
+    cont = ContinuationOptions(initial_step=0.05, max_step=0.25,
+                               parameter_bounds=opts.turns, max_points=opts.max_points,
+                               event_tolerance=opts.event_tolerance)
+    return continuation(problem, q0, parameter="turns", options=cont, name="straight",
+                        records=records)
+
+
+def tweezers_branches(options: TweezersOptions,
+                      progress: Callable[[str], None] | None = None) -> TweezersResult:
+    """Compute the branches (module docstring); numerical failures end up in statuses."""
+    opts = options
+    say = progress or (lambda message: None)
+    seconds: dict[str, float] = {}
+    notes: list[str] = []
+    rod, q0 = clamped_problem(opts)
+    D = opts.diameter
+    probe = ContactProblem(rod, ContactOptions(diameter=D)) if D is not None else None
+    cp = ContactProblem(rod, ContactOptions(diameter=D)) if D is not None else None
+    if D is not None and rod.rod.edge_length > D:
+        notes.append(f"segments ({rod.rod.edge_length:.3g} L) are longer than the tube "
+                     f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "
+                     f"{int(np.ceil(rod.rod.length / D)) + 2}")
+    free_records = tweezers_records(rod, rod, False, probe)
+    events = (onset_event(probe),) if probe is not None else ()
+    free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
+                                    parameter_bounds=opts.turns, max_points=opts.segment_points,
+                                    event_tolerance=opts.event_tolerance)
+    branches: list[Branch] = []
+    start = time.perf_counter()
+    if opts.load_control:
+        say(f"straight rod in turns at F L^2/A = {opts.tension:g}")
+        straight = straight_branch(opts, rod, q0, free_records)
+        seconds["straight"] = time.perf_counter() - start
+        branches.append(straight)
+        bifurcations = straight.points_of_kind("bifurcation")
+        if not bifurcations:
+            notes.append(f"the straight rod does not buckle below {opts.turns[1]:g} turns "
+                         f"(exact threshold {critical_turns(opts.twist_ratio, opts.tension):.6g})")
+            return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
+                                  tuple(notes))
+        point = bifurcations[0]
+        free_name = "buckled"
+        say(f"{free_name}: switched from the straight rod at {point.parameter:.6g} turns")
+        start = time.perf_counter()
+        direction = _rotated_mode(point.critical_modes[0])
+        rod.turns = point.parameter
+        set_pin(rod, rod, point.q + 1e-3 * direction)
+        first = switch_branch(rod, straight, point, free_opts, direction=direction,
+                              amplitude=SWITCH_AMPLITUDE, name=free_name, records=free_records,
+                              events=events)
+    else:
+        free_name = "clamped"
+        say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")
+        set_pin(rod, rod, q0)
+        res = newton(rod, q0, NewtonOptions(mode="stationary"))
+        if not res.converged:
+            notes.append(f"failed: the clamped buckle at z/L = {opts.end_distance:g} did not "
+                         f"converge ({res.message})")
+            return TweezersResult(opts, (), frozenset(), rod, cp, seconds, tuple(notes))
+        rod.accept(res.q)
+        first = continuation(rod, res.q, res.multipliers, parameter="turns", options=free_opts,
+                             name=free_name, records=free_records, events=events)
+    free, free_pins = follow(rod, rod, first, free_opts, free_name, free_records, events,
+                  stop=_onset_stop if probe is not None else None,
+                  max_points=opts.max_points, segment_points=opts.segment_points)
+    onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
+    seconds[free_name] = time.perf_counter() - start
+    pins = {"straight": ((0, ()),), free_name: free_pins}
+    if probe is None or not onsets:
+        if probe is not None:
+            notes.append(f"{free_name}: no contact found ({free.message})")
+        branches.append(free)
+        return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
+                              tuple(notes), pins)
+    onset = onsets[0]
+    free = truncate_after(free, onset, f"stopped at the first contact ({onset.parameter:.6g} "
+                          f"turns); the contact-free run: {free.message}")
+    branches.append(free)
+    contact_name = f"{free_name}_contact"
+    say(f"{contact_name}: from {onset.parameter:.6g} turns, with self-contact (barrier)")
+    start = time.perf_counter()
+    reach = 1.0 + cp.options.barrier_activation
+    gaps = free.records["min_gap_over_diameter"]
+    k = onset.index
+    while k > 0 and gaps[k] <= reach:
+        k -= 1
+    q = free.states[k]
+    cp.turns = float(free.parameter_values[k])
+    cp.accept(q)
+    set_pin(cp, rod, q)
+    contact_opts = ContinuationOptions(
+        initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
+        max_step=opts.contact_max_step * D, max_points=opts.segment_points,
+        parameter_bounds=opts.turns, direction=1 if free.tangents[k, -1] >= 0 else -1,
+        parameter_weight=D, tolerance=opts.contact_tolerance,
+        event_tolerance=opts.contact_event_tolerance)
+    contact_records = tweezers_records(cp, rod, True)
+    contact_events = (contact_count_event(cp),)
+    first = continuation(cp, q, parameter="turns", options=contact_opts, name=contact_name,
+                         records=contact_records, events=contact_events)
+    contact, contact_pins = follow(cp, rod, first, contact_opts, contact_name, contact_records,
+                     contact_events, max_points=opts.max_points,
+                     segment_points=opts.segment_points)
+    contact = classify_contact_events(contact, cp)
+    contact = dataclasses.replace(contact, parent=free_name, origin=onset)
+    seconds[contact_name] = time.perf_counter() - start
+    branches.append(contact)
+    if not contact.ok:
+        notes.append(f"failed: {contact_name}: {contact.message}")
+    elif contact.parameter_values[-1] < opts.turns[1] - 1e-9:
+        notes.append(f"{contact_name} ended at {contact.parameter_values[-1]:.6g} turns: "
+                     f"{contact.message}")
+    pins[contact_name] = contact_pins
+    return TweezersResult(opts, tuple(branches), frozenset({contact_name}), rod, cp, seconds,
+                          tuple(notes), pins)

@@ -1,0 +1,180 @@
+"""The tweezers problem: Greenhill with tension, the buckled branch, contact, invariants."""
+
+import math
+
+import numpy as np
+import pytest
+
+from supercoil.continuation import consistency_check
+from supercoil.problems.greenhill import (
+    GREENHILL_ZERO_TENSION,
+    critical_moment,
+    critical_turns,
+)
+from supercoil.problems.ring import richardson
+from supercoil.problems.tweezers import (
+    TweezersOptions,
+    clamped_problem,
+    straight_branch,
+    tweezers_branches,
+    tweezers_records,
+)
+
+
+def clamped_determinant(M, T, L=1.0, A=1.0):
+    """The 4 x 4 determinant of w = c1 + c2 s + c3 e^{i k1 s} + c4 e^{i k2 s}, w = w' = 0 at 0, L.
+
+    Independent of the reduction to g(m, t) in greenhill.py: built from the
+    roots of A k^2 + M k + T = 0 directly.
+    """
+    disc = np.sqrt(complex(M * M - 4 * A * T))
+    k1, k2 = (-M + disc) / (2 * A), (-M - disc) / (2 * A)
+    e1, e2 = np.exp(1j * k1 * L), np.exp(1j * k2 * L)
+    mat = np.array([[1, 0, 1, 1], [0, 1, 1j * k1, 1j * k2], [1, L, e1, e2],
+                    [0, 1, 1j * k1 * e1, 1j * k2 * e2]], dtype=complex)
+    return np.linalg.det(mat)
+
+
+@pytest.mark.parametrize("tension", [1.0, 20.0, 75.0])
+def test_critical_moment_is_a_root_of_the_clamped_determinant(tension):
+    Mc = critical_moment(tension)
+    # the determinant is i e^{-i M L / 2A} times a real function; it changes sign at Mc ...
+    def real(M):
+        return (clamped_determinant(M, tension) * np.exp(0.5j * M) / 1j).real
+
+    below, above = real(Mc * (1 - 1e-6)), real(Mc * (1 + 1e-6))
+    assert below * above < 0
+    # ... and nowhere between the infinite-rod threshold 2 sqrt(T) and Mc
+    grid = np.linspace(2 * math.sqrt(tension) * 1.001, Mc * 0.999, 400)
+    values = np.array([real(M) for M in grid])
+    assert np.all(np.sign(values) == np.sign(values[0]))
+
+
+def test_greenhill_without_tension_and_the_limit():
+    assert critical_moment(0.0) == pytest.approx(GREENHILL_ZERO_TENSION, rel=1e-10)
+    # (*) tends to tan m = m continuously: the threshold grows linearly in t
+    small = [critical_moment(t) for t in (0.01, 0.02)]
+    slope = (small[1] - small[0]) / 0.01
+    assert small[0] - slope * 0.01 == pytest.approx(GREENHILL_ZERO_TENSION, rel=1e-5)
+    with pytest.raises(ValueError):
+        critical_moment(-1.0)
+
+
+def _located_turns(n, tension, twist_ratio=4 / 3):
+    exact = critical_turns(twist_ratio, tension)
+    opts = TweezersOptions(twist_ratio=twist_ratio, length_over_diameter=None, tension=tension,
+                           turns=(0.0, 1.08 * exact), n_nodes=n)
+    problem, q0 = clamped_problem(opts)
+    branch = straight_branch(opts, problem, q0, None)
+    points = branch.points_of_kind("bifurcation")
+    assert len(points) == 1 and points[0].count_before == 0 and points[0].count_after == 2
+    return points[0].parameter
+
+
+@pytest.mark.parametrize("tension", [0.0, 20.0])
+def test_straight_branch_buckles_at_the_exact_threshold_with_order_two(tension):
+    exact = critical_turns(4 / 3, tension)
+    ns = (24, 48, 96)
+    values = [_located_turns(n, tension) for n in ns]
+    errors = np.abs(np.array(values) - exact) / exact
+    orders = np.log2(errors[:-1] / errors[1:])
+    assert np.all(np.abs(orders - 2) < 0.25), (errors, orders)
+    assert abs(richardson(values[1], values[2]) - exact) / exact < 2e-4
+
+
+# ----------------------------------------------------------------- the whole branch
+@pytest.fixture(scope="module")
+def small_run():
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=20, tension=20.0,
+                           turns=(0.0, 1.6), n_nodes=40, max_points=60)
+    return tweezers_branches(opts)
+
+
+KEYS = ("turns", "extension", "torque", "writhe", "twist", "energy", "load_potential",
+        "n_contact_points", "n_contact_intervals", "min_gap_over_diameter")
+
+
+def test_branches_keys_and_order(small_run):
+    names = [b.name for b in small_run.branches]
+    assert names == ["straight", "buckled", "buckled_contact"]
+    assert small_run.ok, small_run.notes
+    for b in small_run.branches:
+        for key in KEYS:
+            assert key in b.records, (b.name, key)
+    contact = small_run.branch("buckled_contact")
+    assert contact.parent == "buckled" and contact.origin.kind == "contact_onset"
+    assert contact.parameter_values[-1] == pytest.approx(1.6, abs=1e-12)
+
+
+def test_turns_equal_twist_plus_writhe_everywhere(small_run):
+    for b in small_run.branches:
+        r = b.records
+        assert np.max(np.abs(r["twist"] + r["writhe"] - r["turns"])) < 1e-9, b.name
+        assert not np.any(r["tail_wrapped"])
+        # the torque of the reduced twist: 2 pi (C/A) Tw
+        assert np.allclose(r["torque"], 2 * np.pi * (4 / 3) * r["twist"], rtol=1e-12)
+
+
+def test_straight_then_buckled_extension_drops(small_run):
+    straight = small_run.branch("straight")
+    assert np.allclose(straight.records["extension"], 1.0, atol=1e-12)
+    assert np.allclose(straight.records["writhe"], 0.0, atol=1e-12)
+    buckled = small_run.branch("buckled")
+    ext = buckled.records["extension"]
+    assert ext[0] < 1.0 and np.all(np.diff(ext) < 0)
+    # the energy bookkeeping: load potential is -F z
+    assert np.allclose(buckled.records["load_potential"], -20.0 * ext, rtol=1e-12)
+    # the count does not flicker on the contact-free buckled branch (one unstable mode)
+    assert np.all(buckled.unstable_count == 1)
+
+
+def test_contact_onset_and_no_penetration(small_run):
+    buckled = small_run.branch("buckled")
+    onset = buckled.points_of_kind("contact_onset")[0]
+    assert onset.records["min_gap_over_diameter"] == pytest.approx(1.0, abs=1e-6)
+    gaps = buckled.records["min_gap_over_diameter"]
+    assert np.all(gaps[:-1] > 1.0)  # the last point is past the onset (kept to bracket it)
+    contact = small_run.branch("buckled_contact")
+    assert np.all(contact.records["min_gap_over_diameter"] > 1.0)
+    assert np.max(contact.records["n_contact_points"] + contact.records["n_contact_intervals"]) >= 1
+    # the loop that touches itself is stable (the contact turns the branch at a fold)
+    assert contact.unstable_count[-1] == 0
+
+
+def test_branches_are_consistent(small_run):
+    for b in small_run.branches:
+        # one azimuth pin per branch here (re-picked only when it degrades)
+        assert len(small_run.pins[b.name]) == 1
+        problem = small_run.pin_branch(b.name)
+        points = np.unique(np.linspace(0, len(b) - 1, 6).astype(int))
+        report = consistency_check(b, problem, points=points, residual_tolerance=1e-6)
+        # A contact event that coincides with a fold (the loop touching itself turns
+        # the branch) lies beyond the stored points' range by the fold's curvature
+        # times the step squared: accepted when a located fold is that close.
+        folds = [p.parameter for p in b.points_of_kind("fold")]
+        left = [msg for msg in report.problems if not (
+            "outside the branch's parameter range" in msg
+            and any(abs(float(msg.split("= ")[1].split(":")[0]) - f) < 1e-6 for f in folds))]
+        assert not left, (b.name, left)
+
+
+def test_records_function_matches_straight_state():
+    opts = TweezersOptions(twist_ratio=1.5, length_over_diameter=None, tension=3.0,
+                           turns=(0.0, 1.0), n_nodes=20)
+    problem, q0 = clamped_problem(opts)
+    problem.turns = 0.7
+    rec = tweezers_records(problem, problem, False)(q0, np.full(problem.n_constraints, 3.0), 0.7)
+    assert rec["twist"] == pytest.approx(0.7, abs=1e-14)
+    assert rec["energy"] == pytest.approx(2 * np.pi**2 * 1.5 * 0.7**2, rel=1e-13)
+    assert rec["torque"] == pytest.approx(2 * np.pi * 1.5 * 0.7, rel=1e-13)
+
+
+@pytest.mark.parametrize("kwargs", [
+    {"tension": None}, {"tension": 1.0, "end_distance": 0.5}, {"tension": -1.0},
+    {"turns": (2.0, 1.0)}, {"twist_ratio": 0.0}, {"length_over_diameter": 2.0},
+    {"tension": None, "end_distance": 1.0}, {"n_nodes": 5}])
+def test_bad_options(kwargs):
+    base = {"twist_ratio": 1.0, "length_over_diameter": 30.0, "tension": 1.0}
+    base.update(kwargs)
+    with pytest.raises(ValueError):
+        TweezersOptions(**base)

@@ -189,3 +189,18 @@ def test_existing_figures_are_not_overwritten(ring, tmp_path, capsys):
     (tmp_path / "file").write_text("x", encoding="utf-8")
     assert run(["plot", str(ring), "--out", str(tmp_path / "file")]) == 2
     assert "is a file" in _error(capsys)
+
+
+def test_a_contact_free_child_branch_ends_before_its_contact_onset(ring):
+    """'supercoil diagram ring' stops a contact-free child branch one step past the
+    contact onset; that last state overlaps itself, so it is not shown (as the
+    command's own figure does)."""
+    path = ring / "diagram.json"
+    data = json.loads(path.read_text(encoding="utf-8"))
+    data["branches"][1]["contact"] = False
+    path.write_text(json.dumps(data), encoding="utf-8")
+    result = load_result(ring)
+    stored = [p for p in data["points"] if p["branch"] == "loop_contact"]
+    assert list(result.branch("loop_contact").points) == stored[:-1]
+    assert result.branch("loop_contact").states().shape == (len(stored) - 1, 24, 3)
+    assert len(result.branch("circle").points) == 7  # no parent: all points

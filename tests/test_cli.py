@@ -13,7 +13,6 @@ Oracles used here:
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import json
 import math
@@ -27,6 +26,7 @@ from typer.testing import CliRunner
 
 from supercoil import __version__
 from supercoil.cli import demo as demo_module
+from supercoil.cli import diagram_output
 from supercoil.cli.main import app, run
 from supercoil.io.results import CONVENTIONS, envelope, write_json
 
@@ -149,7 +149,7 @@ def test_help_does_not_import_the_numerics():
                 "knot",
             ],
         ),
-        ("demo", ["--out", "--force", "2/3", "E*L/A"]),
+        ("demo", ["--out", "--force", "2/3", "122"]),
     ],
 )
 def test_help_explains_parameters_and_units(runner, command, words):
@@ -970,63 +970,54 @@ def test_bounds_through_the_console_script(args, words):
 
 
 def test_demo_writes_files_and_never_overwrites(runner, tmp_path, monkeypatch):
-    """The full demo through the console script, then a refused and a forced rerun."""
+    """The full demo through the console script, then a refused and a forced rerun.
+
+    Oracles: Michell's points (A/C) sqrt(m^2 - 1) on the circle, Lk = Tw + Wr
+    at every point (twist from frames, writhe from the double sum), no
+    penetration on the contact branches, alpha's first contact close to the
+    figure eight (writhe just below 1) and before it in dLk.
+    """
     out = tmp_path / "demo"
     first = subprocess.run(
         [sys.executable, "-m", "supercoil.cli.main", "demo", "--out", out],
         check=False,
         capture_output=True,
         text=True,
-        timeout=300,
+        timeout=600,
     )
     assert first.returncode == 0, first.stderr
     names = sorted(p.name for p in out.iterdir())
-    assert names == sorted(demo_module.FILES)
+    assert names == sorted([*diagram_output.DIAGRAM_FILES, "branches"])
     assert str(out.resolve()) in first.stdout
-    assert (out / "ring_stability.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    for name in diagram_output.DIAGRAM_FILES[1:]:
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
-    data = json.loads((out / "ring_stability.json").read_text())
+    data = json.loads((out / "diagram.json").read_text())
     for key in ENVELOPE:
         assert key in data
     assert data["twist_ratio"] == pytest.approx(2 / 3)
-    assert data["n_nodes"] == 100 and data["provenance"]["n_nodes"] == 100
-    points = data["points"]
-    assert len(points) == demo_module.N_SAMPLES
-    dlk = np.array([p["excess_link"] for p in points])
-    assert dlk[0] == 0 and dlk[-1] == pytest.approx(1.2 * 1.5 * math.sqrt(8), rel=1e-12)
-    for point in points:
-        assert set(RING_KEYS) <= set(point)
-        assert point["energy"] == pytest.approx(
-            2 * math.pi**2 * (1 + (2 / 3) * point["excess_link"] ** 2), rel=1e-9
-        )
-        assert point["link_error"] < 1e-9
-    exact = {2: 1.5 * math.sqrt(3), 3: 1.5 * math.sqrt(8)}
-    for threshold in data["thresholds"]:
-        m = threshold["mode"]
-        assert threshold["excess_link_exact"] == pytest.approx(exact[m], rel=1e-14)
-        assert abs(threshold["excess_link_computed"] / exact[m] - 1) < 1e-2
-        counts_below = [
-            p["unstable_count"]
-            for p in points
-            if p["excess_link"] < threshold["excess_link_computed"]
-        ]
-        counts_above = [
-            p["unstable_count"]
-            for p in points
-            if p["excess_link"] > threshold["excess_link_computed"]
-        ]
-        assert max(counts_below) == 2 * (m - 2) and min(counts_above) == 2 * (m - 1)
+    assert data["length_over_diameter"] == 122
+    assert data["n_nodes"] == demo_module.N_NODES == data["provenance"]["n_nodes"]
+    names = [b["name"] for b in data["branches"]]
+    assert names == ["circle", "alpha", "alpha_contact", "beta", "beta_contact"]
+    for b in data["branches"]:
+        assert (out / b["file"]).is_file()
+    circle = sorted(p["excess_link"] for p in data["special_points"]
+                    if p["branch"] == "circle" and p["kind"] == "bifurcation")
+    for m, value in zip((2, 3), circle):
+        assert value == pytest.approx(1.5 * math.sqrt(m * m - 1), rel=2e-3)
+    for point in data["points"]:
+        assert abs(point["twist"] + point["writhe"] - point["excess_link"]) < 1e-8
+        if point["branch"].endswith("_contact"):
+            assert point["min_gap_over_diameter"] >= 1 - 1e-9
+    onset = next(p for p in data["special_points"]
+                 if p["branch"] == "alpha" and p["kind"] == "contact_onset")
+    assert 0.8 < onset["writhe"] < 1.0 and onset["excess_link"] < circle[0]
 
-    with open(out / "ring_stability.csv", newline="") as stream:
-        rows = list(csv.DictReader(stream))
-    assert len(rows) == demo_module.N_SAMPLES
-    assert [float(r["excess_link"]) for r in rows] == pytest.approx(dlk, rel=1e-15)
-    assert [int(r["unstable_count"]) for r in rows] == [p["unstable_count"] for p in points]
-
-    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    before = {p: p.read_bytes() for p in out.rglob('*') if p.is_file()}
     second = invoke(runner, "demo", "--out", out)
     assert_one_line_error(second, "--out", "not empty", "--force")
-    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert {p: p.read_bytes() for p in out.rglob('*') if p.is_file()} == before
 
     # --force reuses the folder (the computation itself is stubbed: it ran above).
     calls = []

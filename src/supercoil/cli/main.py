@@ -620,16 +620,14 @@ def demo(
         ),
     ] = False,
 ) -> None:
-    """Energy and stability of the twisted ring against the excess link.
+    """The bifurcation diagram of a DNA-like ring with self-contact (seed 001).
 
-    C/A = 2/3, the value Coleman & Swigon (seed 001) take for DNA.
-
-    Solves the ring at N = 100 nodes for 25 values of dLk from 0 to
-    1.2 (A/C) sqrt(8) turns, locates the discrete mode-2 and mode-3 thresholds
-    by bisection on the unstable count, and writes ring_stability.png (energy
-    E*L/A with the exact 2 pi^2 (1 + (C/A) dLk^2), and the unstable count with
-    Michell's thresholds (A/C) sqrt(m^2 - 1)), ring_stability.json and
-    ring_stability.csv into a new folder.
+    C/A = 2/3 and L/D = 122, Coleman & Swigon's DNA example, at N = 128 nodes:
+    the circle and its Michell bifurcations, the alpha and beta branches
+    without contact up to their first contact, then with self-contact up to
+    dLk = 4 (60 points each). Writes what 'supercoil diagram ring' writes
+    (diagram.json, branches/*.npz, link_writhe.png, contact_map.png,
+    configurations.png) into a new folder and says where. About a minute.
     """
     from supercoil.cli.demo import prepare_folder, run_demo
 
@@ -648,7 +646,6 @@ diagram_app = typer.Typer(
 app.add_typer(diagram_app, name="diagram")
 
 DIAGRAM_TREATMENTS = ("barrier", "penalty")  # supercoil.problems.ring_diagram's
-DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configurations.png")
 
 
 @diagram_app.command("ring")
@@ -735,12 +732,7 @@ def diagram_ring(
     except OSError as exc:
         fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
              "writable location")
-    from supercoil.io.results import envelope, write_json
-    from supercoil.plotting.ring_diagram import (
-        plot_configurations,
-        plot_contact_map,
-        plot_link_writhe,
-    )
+    from supercoil.cli.diagram_output import incomplete_message, write_diagram
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
     try:
@@ -751,55 +743,10 @@ def diagram_ring(
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "
           f"N = {nodes}, modes {', '.join(words)}, dLk <= {max_excess_link:g}", flush=True)
     diagram = ring_diagram(options, progress=lambda line: warn(f"  {line}"))
-    for branch in diagram.branches:
-        branch.save(out / "branches" / f"{branch.name}.npz")
-    payload = diagram.payload()
-    points = payload["points"]
-    by_branch = {b["name"]: [p for p in points if p["branch"] == b["name"]]
-                 for b in payload["branches"]}
-    title = (f"twisted ring, C/A = {twist_ratio:.4g}, L/D = {length_over_diameter:g}, "
-             f"N = {nodes}")
-    shown = []
-    for b in payload["branches"]:
-        rows = by_branch[b["name"]]
-        if not b["contact"] and b["parent"] is not None and rows:
-            rows = rows[:-1]  # the last contact-free point lies beyond the contact onset
-        shown.append({"name": b["name"], "writhe": [r["writhe"] for r in rows],
-                      "excess_link": [r["excess_link"] for r in rows],
-                      "stable": [r["stable"] for r in rows],
-                      "contact_points": [r["contact_points"] for r in rows],
-                      "contact_intervals": [r["contact_intervals"] for r in rows]})
-    plot_link_writhe(out / "link_writhe.png", branches=shown,
-                     special_points=payload["special_points"], title=title)
-    plot_contact_map(out / "contact_map.png",
-                     branches=[b for b, e in zip(shown, payload["branches"]) if e["contact"]],
-                     title=title)
-    configurations = []
-    for branch in diagram.branches:
-        if branch.name not in diagram.contact_branches or len(branch) == 0:
-            continue
-        for index in sorted({len(branch) // 3, 2 * len(branch) // 3, len(branch) - 1}):
-            configurations.append({
-                "label": f"{branch.name}, dLk = {branch.parameter_values[index]:.3f}, "
-                         f"Wr = {float(branch.records['writhe'][index]):.3f}",
-                "points": branch.states[index].reshape(-1, 3)})
-    plot_configurations(out / "configurations.png", configurations=configurations,
-                        diameter=options.diameter, title=title)
-    write_json(envelope(payload, n_nodes=nodes, tolerances=options.tolerances,
-                        contact_treatment=contact), out / "diagram.json")
-    where = out.resolve()
-    for b in payload["branches"]:
-        specials = [p for p in payload["special_points"] if p["branch"] == b["name"]]
-        kinds = ", ".join(f"{p['kind']} at dLk {p['excess_link']:.4f}" for p in specials)
-        print(f"  {b['name']}: {b['n_points']} points, {b['seconds']:.1f} s, "
-              f"{b['status'].lower()}" + (f"; {kinds}" if kinds else ""))
-    print(f"wrote {', '.join(DIAGRAM_FILES)} and branches/*.npz to {where}")
-    for note in payload["notes"]:
-        warn(f"note: {note}")
-    if not diagram.ok:
-        failed = [b["name"] for b in payload["branches"] if not b["ok"]]
-        warn(f"incomplete: branch(es) {', '.join(failed)} stopped early (see 'message' in "
-             f"{where / 'diagram.json'})")
+    payload = write_diagram(diagram, out, contact)
+    message = incomplete_message(payload, out)
+    if message is not None:
+        warn(message)
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 

@@ -1,0 +1,83 @@
+"""Write a computed ring diagram into a folder (``supercoil diagram ring`` and ``demo``).
+
+No numerics: the branches are saved, the payload of
+:meth:`~supercoil.problems.ring_diagram.RingDiagram.payload` goes into
+``diagram.json`` (with the JSON envelope), and the three figures of
+:mod:`supercoil.plotting.ring_diagram` are drawn from it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from supercoil.cli._common import warn
+
+DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configurations.png")
+
+
+def write_diagram(diagram, out: Path, contact: str) -> dict:
+    """Save ``diagram`` (a RingDiagram) into ``out``, print a summary; return the payload."""
+    from supercoil.io.results import envelope, write_json
+    from supercoil.plotting.ring_diagram import (
+        plot_configurations,
+        plot_contact_map,
+        plot_link_writhe,
+    )
+
+    options = diagram.options
+    (out / "branches").mkdir(parents=True, exist_ok=True)
+    for branch in diagram.branches:
+        branch.save(out / "branches" / f"{branch.name}.npz")
+    payload = diagram.payload()
+    points = payload["points"]
+    by_branch = {b["name"]: [p for p in points if p["branch"] == b["name"]]
+                 for b in payload["branches"]}
+    title = (f"twisted ring, C/A = {options.twist_ratio:.4g}, "
+             f"L/D = {options.length_over_diameter:g}, N = {options.n_nodes}")
+    shown = []
+    for b in payload["branches"]:
+        rows = by_branch[b["name"]]
+        if not b["contact"] and b["parent"] is not None and rows:
+            rows = rows[:-1]  # the last contact-free point lies beyond the contact onset
+        shown.append({"name": b["name"], "writhe": [r["writhe"] for r in rows],
+                      "excess_link": [r["excess_link"] for r in rows],
+                      "stable": [r["stable"] for r in rows],
+                      "contact_points": [r["contact_points"] for r in rows],
+                      "contact_intervals": [r["contact_intervals"] for r in rows]})
+    plot_link_writhe(out / "link_writhe.png", branches=shown,
+                     special_points=payload["special_points"], title=title)
+    plot_contact_map(out / "contact_map.png",
+                     branches=[b for b, e in zip(shown, payload["branches"]) if e["contact"]],
+                     title=title)
+    configurations = []
+    for branch in diagram.branches:
+        if branch.name not in diagram.contact_branches or len(branch) == 0:
+            continue
+        for index in sorted({len(branch) // 3, 2 * len(branch) // 3, len(branch) - 1}):
+            configurations.append({
+                "label": f"{branch.name}, dLk = {branch.parameter_values[index]:.3f}, "
+                         f"Wr = {float(branch.records['writhe'][index]):.3f}",
+                "points": branch.states[index].reshape(-1, 3)})
+    plot_configurations(out / "configurations.png", configurations=configurations,
+                        diameter=options.diameter, title=title)
+    write_json(envelope(payload, n_nodes=options.n_nodes, tolerances=options.tolerances,
+                        contact_treatment=contact), out / "diagram.json")
+    where = out.resolve()
+    for b in payload["branches"]:
+        specials = [p for p in payload["special_points"] if p["branch"] == b["name"]]
+        kinds = ", ".join(f"{p['kind']} at dLk {p['excess_link']:.4f}" for p in specials)
+        print(f"  {b['name']}: {b['n_points']} points, {b['seconds']:.1f} s, "
+              f"{b['status'].lower()}" + (f"; {kinds}" if kinds else ""))
+    print(f"wrote {', '.join(DIAGRAM_FILES)} and branches/*.npz to {where}", flush=True)
+    for note in payload["notes"]:
+        warn(f"note: {note}")
+    return payload
+
+
+def incomplete_message(payload: dict, out: Path) -> str | None:
+    """The warning for branches that stopped early, or None when every branch is ok."""
+    if payload["ok"]:
+        return None
+    failed = [b["name"] for b in payload["branches"] if not b["ok"]]
+    return (f"incomplete: branch(es) {', '.join(failed)} stopped early (see 'message' in "
+            f"{out.resolve() / 'diagram.json'})")

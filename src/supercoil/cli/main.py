@@ -759,6 +759,10 @@ from supercoil.cli import view as _view_command  # noqa: E402
 _plot_command.register(app)
 _view_command.register(app)
 
+from supercoil.cli.tweezers import tweezers as _tweezers_command
+
+app.command("tweezers")(_tweezers_command)
+
 
 def _single_threaded_blas() -> None:
     """Default the BLAS/LAPACK thread pools to one thread (the user's setting wins).

@@ -523,3 +523,4 @@ def tweezers_branches(options: TweezersOptions,
     pins[contact_name] = contact_pins
     return TweezersResult(opts, tuple(branches), frozenset({contact_name}), rod, cp, seconds,
                           tuple(notes), pins)
+

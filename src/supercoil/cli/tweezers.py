@@ -1,0 +1,178 @@
+"""``supercoil tweezers``: a clamped rod pulled and turned (magnetic tweezers).
+
+Thin: parses and checks the options, calls
+:func:`supercoil.problems.tweezers.tweezers_branches`, writes ``branch.json``
+(with the JSON envelope), ``branches/<name>.npz`` and the figures of
+:mod:`supercoil.plotting.tweezers` into ``--out``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from supercoil.cli._common import (
+    EXIT_NOT_CONVERGED,
+    fail,
+    require_magnitude,
+    require_nodes,
+    require_positive,
+    warn,
+)
+
+PROTOCOLS = ("up",)  # up-down and force-ramp: issue 5, item 3, not implemented yet
+OUTPUT_FILES = ("branch.json", "hat_curve.png", "torque.png", "writhe.png",
+                "configurations.png")
+
+
+def parse_turns(text: str) -> tuple[float, float]:
+    """``"START:STOP"`` -> ``(start, stop)``, ``0 <= start < stop``; one-line error otherwise."""
+    words = text.split(":")
+    try:
+        if len(words) != 2:
+            raise ValueError
+        start, stop = float(words[0]), float(words[1])
+    except ValueError:
+        fail(f"--turns {text!r}: give START:STOP in turns, like 0:5")
+    if not (math.isfinite(start) and math.isfinite(stop) and 0 <= start < stop <= 1e3):
+        fail(f"--turns {text!r}: need 0 <= START < STOP <= 1000 (turns), like 0:5")
+    return start, stop
+
+
+def tweezers(
+    twist_ratio: Annotated[float, typer.Option(
+        "--twist-ratio", metavar="C/A", help="Twist stiffness over bending stiffness, "
+        "0 < C/A <= 1e6 (4/3 in the benchmark; DNA about 1.9).", show_default=False)],
+    turns: Annotated[str, typer.Option(
+        "--turns", metavar="START:STOP", help="Turns of the end, from START to STOP "
+        "(0 <= START < STOP), e.g. 0:5.", show_default=False)],
+    out: Annotated[Path, typer.Option(
+        "--out", metavar="DIR", help="Folder for branch.json, branches/*.npz and the "
+        "figures; an existing non-empty DIR is refused unless --force.",
+        show_default=False)],
+    length_over_diameter: Annotated[float | None, typer.Option(
+        "--length-over-diameter", metavar="L/D", help="Rod length over tube diameter, "
+        "L/D > pi; omit for a rod without self-contact.", show_default=False)] = None,
+    tension: Annotated[float | None, typer.Option(
+        "--tension", metavar="F", help="Dead load F L^2/A >= 0 on the turned end (load "
+        "control, the magnetic tweezers).", show_default=False)] = None,
+    end_distance: Annotated[float | None, typer.Option(
+        "--end-distance", metavar="Z/L", help="End-to-end distance z/L in (0, 1) held fixed "
+        "(displacement control).", show_default=False)] = None,
+    nodes: Annotated[int, typer.Option(
+        "--nodes", metavar="N", help="Nodes of the discrete rod; contact lines need "
+        "segments shorter than D (N >= L/D + 2).")] = 100,
+    protocol: Annotated[str, typer.Option(
+        "--protocol", metavar="P", help="up: the branches from START to STOP "
+        "(up-down and force-ramp are not implemented yet).")] = "up",
+    max_points: Annotated[int, typer.Option(
+        "--max-points", metavar="K", help="Largest number of points per branch.")] = 400,
+    force: Annotated[bool, typer.Option(
+        "--force", help="Write into an existing non-empty --out DIR, overwriting this "
+        "command's own files (other files are left alone).")] = False,
+) -> None:
+    """A rod clamped at both ends on the pulling axis, turned at one end.
+
+    Load control (--tension): the straight rod, its buckling (bifurcation,
+    checked against the exact clamped condition), the buckled branch without
+    contact up to the first contact, then with self-contact (plectoneme) up to
+    STOP. Displacement control (--end-distance): from the planar clamped
+    buckle at 0 turns. Writes branch.json (points with turns, extension,
+    torque, writhe, twist, energy, load_potential, unstable_count, zero_modes,
+    contact counts, min_gap_over_diameter; special_points), branches/*.npz,
+    hat_curve.png (extension against turns), torque.png, writhe.png and
+    configurations.png (tubes) into --out.
+    """
+    require_magnitude("--twist-ratio", twist_ratio, "a positive number up to 1e6")
+    require_positive("--twist-ratio", twist_ratio, "a positive number up to 1e6")
+    start, stop = parse_turns(turns)
+    if (tension is None) == (end_distance is None):
+        fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
+             "--end-distance Z/L (displacement control, 0 < z/L < 1)")
+    if tension is not None and not (math.isfinite(tension) and 0 <= tension <= 1e6):
+        fail(f"--tension {tension:g}: give a force F L^2/A from 0 to 1e6")
+    if end_distance is not None and not (math.isfinite(end_distance)
+                                         and 0 < end_distance < 1):
+        fail(f"--end-distance {end_distance:g}: give z/L strictly between 0 and 1 (an "
+             "inextensible rod of length L)")
+    if length_over_diameter is not None:
+        require_positive("--length-over-diameter", length_over_diameter,
+                         f"a finite number above pi ({math.pi:.4f})")
+        if length_over_diameter <= math.pi:
+            fail(f"--length-over-diameter {length_over_diameter:g} is too small: a tube of "
+                 f"diameter D needs L/D > pi ({math.pi:.4f})")
+    require_nodes("--nodes", nodes)
+    if nodes < 12:
+        fail(f"--nodes {nodes}: a clamped rod needs at least 12 nodes")
+    if protocol not in PROTOCOLS:
+        fail(f"--protocol {protocol!r}: only 'up' is implemented (up-down and force-ramp "
+             "are not yet)")
+    if not 2 <= max_points <= 100_000:
+        fail(f"--max-points {max_points}: give an integer from 2 to 100000")
+    if out.exists() and not out.is_dir():
+        fail(f"--out {out}: is a file, not a folder; give a new folder")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        fail(f"--out {out}: folder exists and is not empty; give a new folder, or add --force "
+             "to overwrite this command's files in it")
+    try:
+        (out / "branches").mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
+             "writable location")
+    from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+
+    try:
+        options = TweezersOptions(twist_ratio=twist_ratio,
+                                  length_over_diameter=length_over_diameter, tension=tension,
+                                  end_distance=end_distance, turns=(start, stop),
+                                  n_nodes=nodes, max_points=max_points)
+    except ValueError as exc:
+        fail(str(exc))
+    control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")
+    print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
+          f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
+          f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
+    result = tweezers_branches(options, progress=lambda line: warn(f"  {line}"))
+    payload = write_tweezers(result, out)
+    if not payload["ok"]:
+        warn("not complete: " + "; ".join(payload["notes"] or
+                                          [b["message"] for b in payload["branches"]
+                                           if not b["ok"]]))
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def write_tweezers(result, out: Path) -> dict:
+    """Save the branches, branch.json (with the envelope) and the figures; return the payload."""
+    from supercoil.io.results import envelope, write_json
+    from supercoil.plotting.tweezers import pick_configurations, write_figures
+    from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
+
+    for branch in result.branches:
+        branch.save(out / "branches" / f"{branch.name}.npz")
+    payload = result_payload(result)
+    states = {b.name: b.states for b in result.branches}
+    write_figures(payload, pick_configurations(payload, states), out)
+    data = envelope(payload, n_nodes=result.options.n_nodes,
+                    tolerances=result.options.tolerances,
+                    contact_treatment="barrier" if result.contact_problem else "none")
+    data["conventions"].update(TWEEZERS_CONVENTIONS)
+    write_json(data, out / "branch.json")
+    for b in payload["branches"]:
+        specials = [p for p in payload["special_points"] if p["branch"] == b["name"]
+                    and p["kind"] != "fold"]
+        folds = sum(p["kind"] == "fold" for p in payload["special_points"]
+                    if p["branch"] == b["name"])
+        kinds = ", ".join(f"{p['kind']} at {p['turns']:.4f} turns" for p in specials[:6])
+        print(f"  {b['name']}: {b['n_points']} points, {b['seconds']:.1f} s, "
+              f"{b['status'].lower()}" + (f"; {kinds}" if kinds else "")
+              + (f"; {folds} folds" if folds else ""))
+    if payload.get("greenhill_turns") is not None:
+        print(f"  exact buckling of the straight rod (clamped Greenhill with tension): "
+              f"{payload['greenhill_turns']:.6f} turns")
+    print(f"wrote branch.json, branches/*.npz and figures to {out.resolve()}", flush=True)
+    for note in payload["notes"]:
+        warn(f"note: {note}")
+    return payload

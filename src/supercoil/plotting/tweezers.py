@@ -1,0 +1,88 @@
+"""Figures of ``supercoil tweezers``: hat curve, torque, writhe, tube pictures.
+
+Plotting never computes: the figures are drawn from the ``branch.json``
+payload (:mod:`supercoil.problems.tweezers_output`) and stored states, with
+the house builders of :mod:`supercoil.plotting.figures` (stable parts heavy,
+special points marked).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from supercoil.plotting.figures import configurations_figure, diagram_figure
+
+FIGURES = {"hat_curve.png": "extension", "torque.png": "torque", "writhe.png": "writhe"}
+
+
+def _branches(payload: Mapping, y: str) -> list[dict]:
+    out = []
+    for b in payload["branches"]:
+        rows = [p for p in payload["points"] if p["branch"] == b["name"]]
+        if not rows:
+            continue
+        out.append({"name": b["name"], "turns": [p["turns"] for p in rows],
+                    y: [p[y] for p in rows], "stable": [p["stable"] for p in rows]})
+    if payload.get("path"):
+        rows = payload["path"]
+        out.append({"name": "experiment path", "turns": [p["turns"] for p in rows],
+                    y: [p[y] for p in rows], "stable": [True] * len(rows), "color": "0.15"})
+    return out
+
+
+def _title(payload: Mapping) -> str:
+    parts = [f"C/A = {payload['twist_ratio']:.4g}"]
+    if payload.get("force") is not None:
+        parts.append(f"F L²/A = {payload['force']:.4g}")
+    if payload.get("end_distance") is not None:
+        parts.append(f"z/L = {payload['end_distance']:.4g}")
+    if payload.get("length_over_diameter") is not None:
+        parts.append(f"L/D = {payload['length_over_diameter']:.4g}")
+    parts.append(f"N = {payload['n_nodes']}")
+    return "clamped rod, " + ", ".join(parts)
+
+
+def write_figures(payload: Mapping, configurations: Sequence[Mapping],
+                  folder: str | os.PathLike) -> list[Path]:
+    """Write the PNG figures into ``folder``; returns the paths written.
+
+    ``configurations``: ``{label, points (n, 3), contact_points, contact_intervals}``
+    of the states to draw as tubes.
+    """
+    folder = Path(folder)
+    written = []
+    title = _title(payload)
+    for name, y in FIGURES.items():
+        specials = [p for p in payload["special_points"] if y in p and "turns" in p]
+        fig = diagram_figure(_branches(payload, y), specials, title=title, x="turns", y=y)
+        fig.savefig(folder / name, dpi=150)
+        written.append(folder / name)
+    if configurations:
+        fig = configurations_figure(configurations, diameter=payload.get("diameter"),
+                                    title=title, closed=False)
+        fig.savefig(folder / "configurations.png", dpi=150)
+        written.append(folder / "configurations.png")
+    return written
+
+
+def pick_configurations(payload: Mapping, states: Mapping[str, np.ndarray],
+                        count: int = 6) -> list[dict]:
+    """Up to ``count`` states spread along the branches (first and last of each included)."""
+    picks = []
+    names = [b["name"] for b in payload["branches"] if b["name"] != "straight"]
+    per = max(1, count // max(1, len(names)))
+    for name in names:
+        rows = [p for p in payload["points"] if p["branch"] == name]
+        if not rows or name not in states:
+            continue
+        for i in np.unique(np.linspace(0, len(rows) - 1, per).astype(int)):
+            p = rows[i]
+            picks.append({"label": f"{name}, {p['turns']:.3g} turns, z/L = "
+                          f"{p['extension']:.3g}", "points": states[name][i].reshape(-1, 3),
+                          "contact_points": p.get("contact_points", []),
+                          "contact_intervals": p.get("contact_intervals", [])})
+    return picks[:count]

@@ -1,0 +1,113 @@
+"""The ``branch.json`` payload of a tweezers run (:mod:`supercoil.problems.tweezers`).
+
+Formatting only: per-point records with DESIGN.md's keys, contact lists
+recomputed from the stored states, special points, branch metadata and the
+conventions the file states.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from supercoil.contact.report import contact_summary
+from supercoil.continuation import SpecialPoint
+from supercoil.problems.tweezers import TweezersResult
+
+
+def _scalar(v):
+    a = np.asarray(v)
+    return a.item() if a.ndim == 0 else a.tolist()
+
+
+def special_summary(p: SpecialPoint) -> dict:
+    """JSON entry of a special point: kind, branch, turns, extension and its records."""
+    out = {"kind": p.kind, "label": p.label, "branch": p.branch, "index": int(p.index),
+           "turns": float(p.parameter), "arclength": float(p.arclength),
+           "unstable_count": int(p.unstable_count), "count_before": int(p.count_before),
+           "count_after": int(p.count_after), "located": bool(p.located)}
+    for k, v in p.records.items():
+        if k != "turns":
+            out[k] = _scalar(v)
+    return out
+
+
+def result_points(result: TweezersResult) -> list[dict]:
+    """One entry per point of every branch (DESIGN.md keys), contact lists included."""
+    out = []
+    cp = result.contact_problem
+    for b in result.branches:
+        contact = b.name in result.contact_branches
+        for i in range(len(b)):
+            entry = {"branch": b.name, "index": i,
+                     **{k: _scalar(v[i]) for k, v in b.records.items()},
+                     "unstable_count": int(b.unstable_count[i]),
+                     "zero_modes": int(b.zero_modes[i]),
+                     "determinant_sign": int(b.determinant_sign[i]),
+                     "stable": bool(b.stable[i])}
+            if contact and cp is not None:
+                summary = contact_summary(cp, b.states[i], b.multipliers[i])
+                entry["contact_points"] = summary["contact_points"]
+                entry["contact_intervals"] = summary["contact_intervals"]
+            else:
+                entry["contact_points"], entry["contact_intervals"] = [], []
+            out.append(entry)
+    return out
+
+
+def result_payload(result: TweezersResult) -> dict:
+    """The ``branch.json`` payload (without the envelope of :mod:`supercoil.io.results`)."""
+    opts = result.options
+    branches = []
+    for b in result.branches:
+        branches.append({
+            "name": b.name, "parent": b.parent,
+            "origin": None if b.origin is None else special_summary(b.origin),
+            "contact": b.name in result.contact_branches, "parameter": b.parameter,
+            "n_points": len(b), "status": b.status.name, "ok": b.ok, "message": b.message,
+            "seconds": round(result.seconds.get(b.name, float("nan")), 3),
+            "azimuth_pins": [{"from_index": i, "dofs": list(d)}
+                             for i, d in result.pins.get(b.name, ())],
+            "file": f"branches/{b.name}.npz"})
+    payload = {
+        "description": "rod clamped at both ends on the pulling axis, turned at one end: the "
+        "straight rod, its buckling, the buckled branch without contact up to first contact, "
+        "then with self-contact (plectoneme)",
+        "control": "load" if opts.load_control else "displacement",
+        "twist_ratio": opts.twist_ratio,
+        "length_over_diameter": opts.length_over_diameter,
+        "diameter": opts.diameter,
+        "force": opts.tension,
+        "end_distance": opts.end_distance,
+        "turns_range": list(opts.turns),
+        "n_nodes": opts.n_nodes,
+        "greenhill_turns": result.greenhill_turns,
+        "branches": branches,
+        "special_points": [special_summary(p) for p in result.special_points()],
+        "points": result_points(result),
+        "notes": list(result.notes),
+        "ok": result.ok,
+    }
+    return payload
+
+
+TWEEZERS_CONVENTIONS = {
+    "turns": "rotation of the turned end about the pulling axis +z, in turns; positive = "
+    "right-handed (overwinding for DNA)",
+    "extension": "end-to-end distance along the axis between the clamps, over L",
+    "torque": "axial moment at the turned end, M L/A = 2 pi (C/A) twist (reduced twist: "
+    "uniform at equilibrium); positive in the sense of positive turns",
+    "twist": "excess twist in turns, from the reference frames carried along the branch",
+    "writhe": "double-sum writhe of the rod closed by straight tails along the axis from both "
+    "ends; turns = twist + writhe (closure_error = |twist + writhe - turns|; above 1/2 the "
+    "rod wraps around a tail and the closure fails: tail_wrapped)",
+    "energy": "elastic energy only (bending + twist), E L/A",
+    "load_potential": "-F z of the dead load (F L^2/A times extension); 0 under displacement "
+    "control",
+    "tension": "axial force F L^2/A: the dead load, or the end reaction under displacement "
+    "control",
+    "contacts": "barrier self-contact of a tube of diameter D; min_gap_over_diameter = closest "
+    "approach of non-neighbouring points over D (> 1: no penetration)",
+    "special_points": "bifurcation (count change not explained by a fold: the straight rod's "
+    "buckling, count +2), fold, contact_onset / contact_release / contact_split / "
+    "contact_interval_onset, jump",
+}

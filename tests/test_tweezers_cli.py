@@ -1,0 +1,84 @@
+"""``supercoil tweezers`` end to end at small N, and its bad input (one line, exit 2)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from supercoil.cli.main import run
+from supercoil.continuation import Branch
+from supercoil.problems.greenhill import critical_turns
+
+POINT_KEYS = ("turns", "extension", "torque", "writhe", "twist", "energy", "load_potential",
+              "unstable_count", "zero_modes", "n_contact_points", "n_contact_intervals",
+              "min_gap_over_diameter")
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    out = tmp_path_factory.mktemp("tweezers") / "run"
+    status = run(["tweezers", "--twist-ratio", "1.3333333333333333", "--length-over-diameter",
+                  "20", "--tension", "20", "--turns", "0:1.6", "--nodes", "40", "--out",
+                  str(out)])
+    assert status == 0
+    return out
+
+
+def test_branch_json_keys_and_invariants(folder):
+    data = json.loads((folder / "branch.json").read_text())
+    for key in ("schema_version", "units", "conventions", "provenance", "points",
+                "special_points", "branches"):
+        assert key in data
+    assert data["units"] == "nondimensional"
+    for p in data["points"]:
+        for key in POINT_KEYS:
+            assert key in p, key
+        assert abs(p["twist"] + p["writhe"] - p["turns"]) < 1e-9
+    kinds = {(s["kind"], s["branch"]) for s in data["special_points"]}
+    assert ("bifurcation", "straight") in kinds and ("contact_onset", "buckled") in kinds
+    for s in data["special_points"]:
+        assert {"kind", "branch", "turns", "extension"} <= set(s)
+    # the located buckling against the exact clamped condition (N = 40: 0.6 % off, O(h^2))
+    bif = next(s for s in data["special_points"] if s["kind"] == "bifurcation")
+    exact = critical_turns(1.3333333333333333, 20.0)
+    assert abs(bif["turns"] - exact) / exact < 1e-2
+    assert data["greenhill_turns"] == pytest.approx(exact, rel=1e-12)
+    contact = [p for p in data["points"] if p["branch"] == "buckled_contact"]
+    assert min(p["min_gap_over_diameter"] for p in contact) > 1.0
+
+
+def test_files_and_stored_states(folder):
+    for name in ("hat_curve.png", "torque.png", "writhe.png", "configurations.png"):
+        assert (folder / name).stat().st_size > 1000
+    data = json.loads((folder / "branch.json").read_text())
+    for b in data["branches"]:
+        branch = Branch.load(folder / b["file"])
+        rows = [p for p in data["points"] if p["branch"] == b["name"]]
+        assert len(branch) == len(rows) == b["n_points"]
+        assert np.allclose(branch.records["extension"], [p["extension"] for p in rows])
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--turns", "5:1"], "--turns"),
+    (["--turns", "abc"], "--turns"),
+    (["--tension", "1", "--end-distance", "0.5"], "exactly one"),
+    (["--end-distance", "1.5"], "--end-distance"),
+    (["--tension", "-1"], "--tension"),
+    (["--length-over-diameter", "2", "--tension", "1"], "--length-over-diameter"),
+    (["--protocol", "sideways", "--tension", "1"], "--protocol"),
+    (["--nodes", "5", "--tension", "1"], "--nodes"),
+])
+def test_bad_input_is_one_line_exit_2(tmp_path, capsys, args, words):
+    base = ["tweezers", "--twist-ratio", "1", "--out", str(tmp_path / "x")]
+    if "--turns" not in args:
+        base += ["--turns", "0:1"]
+    status = run(base + args)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2
+    assert len(err) == 1 and err[0].startswith("error:") and words in err[0]
+
+
+def test_existing_folder_needs_force(folder, capsys):
+    status = run(["tweezers", "--twist-ratio", "1", "--tension", "1", "--turns", "0:1",
+                  "--out", str(folder)])
+    assert status == 2 and "--force" in capsys.readouterr().err

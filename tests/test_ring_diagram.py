@@ -123,6 +123,16 @@ def test_contact_branch_states_are_equilibria_without_the_gauge(diagram):
     assert not [p for p in report.problems if "KKT residual" in p]
 
 
+def test_stable_points_satisfy_condition_e(diagram):
+    """Seed 001 (Tobias, Swigon & Coleman): a stable configuration of a family with
+    dLk a function of Wr needs d(dLk)/d(Wr) >= 0 ("condition E"). Off the circle,
+    every point with unstable_count 0 must have condition_e >= 0; and condition E
+    must fail somewhere (the subcritical alpha branch has dLk falling as Wr grows)."""
+    points = [p for p in diagram.payload()["points"] if p["branch"] != "circle"]
+    assert all(p["condition_e"] >= 0 for p in points if p["unstable_count"] == 0)
+    assert any(p["condition_e"] < 0 for p in points if p["branch"] == "alpha")
+
+
 def test_payload_keys_and_branch_files(diagram, tmp_path):
     payload = diagram.payload()
     for point in payload["points"]:

@@ -59,7 +59,10 @@ sum), ``twist`` (material frames), ``energy`` (elastic only), ``link_error``
 = ``|Tw + Wr - dLk|``, ``n_contact_points``, ``n_contact_intervals`` and
 ``min_gap_over_diameter``, and on contact branches ``sliding_residual``
 (below); the contact lists with positions are recomputed from the stored
-states by :meth:`RingDiagram.points`.
+states by :meth:`RingDiagram.points`, which adds ``condition_e``, the sign of
+``d(dLk)/d(Wr)`` along the branch (seed 001's condition E, necessary for
+stability: :func:`link_writhe_slope_sign`) beside ``unstable_count`` and
+seed 000's ``determinant_sign``.
 
 Material sliding on contact branches. Sliding the material along the
 centreline is an exact symmetry of the continuous homogeneous ring, with or
@@ -243,12 +246,14 @@ class RingDiagram:
         cp = self.contact_problem
         for b in self.branches:
             contact = b.name in self.contact_branches
+            condition_e = link_writhe_slope_sign(b)
             for i in range(len(b)):
                 rec = {k: _scalar(v[i]) for k, v in b.records.items()}
                 entry = {"branch": b.name, "index": i, **rec,
                          "unstable_count": int(b.unstable_count[i]),
                          "zero_modes": int(b.zero_modes[i]),
                          "determinant_sign": int(b.determinant_sign[i]),
+                         "condition_e": int(condition_e[i]),
                          "stable": bool(b.stable[i])}
                 if contact and cp is not None:
                     summary = contact_summary(cp, b.states[i], b.multipliers[i])
@@ -290,6 +295,29 @@ class RingDiagram:
             "notes": list(self.notes),
             "ok": self.ok,
         }
+
+
+def link_writhe_slope_sign(branch: Branch) -> np.ndarray:
+    """Seed 001's condition E per point: the sign of ``d(dLk)/d(Wr)`` along the branch, (k,).
+
+    ``d(dLk)/ds`` is the tangent's exact parameter component; ``d(Wr)/ds`` is the
+    second-order finite difference of the recorded writhe over the points'
+    arclength (``np.gradient``). 0 where the writhe does not change (the
+    circle: Wr = 0) or the branch has fewer than two points.
+    """
+    k = len(branch)
+    if k < 2 or "writhe" not in branch.records:
+        return np.zeros(k, dtype=np.int64)
+    s = np.asarray(branch.arclength, dtype=float)
+    writhe = np.asarray(branch.records["writhe"], dtype=float)
+    if np.any(np.diff(s) <= 0):
+        return np.zeros(k, dtype=np.int64)
+    d_writhe = np.gradient(writhe, s)
+    d_link = branch.tangents[:, -1]
+    scale = max(float(np.max(np.abs(d_writhe))), 1e-300)
+    sign = np.sign(d_link) * np.sign(d_writhe)
+    sign[np.abs(d_writhe) <= 1e-9 * max(scale, 1.0)] = 0
+    return sign.astype(np.int64)
 
 
 def _scalar(v):

@@ -30,15 +30,16 @@ def ring_state(t: float, n: int = N_NODES) -> np.ndarray:
 
 
 def _branch(name: str, parent: str | None, values: np.ndarray, states: np.ndarray,
-            unstable: np.ndarray) -> Branch:
+            unstable: np.ndarray, writhe: np.ndarray) -> Branch:
     k, n = states.shape
     return Branch(name=name, parent=parent, origin=None, parameter="excess_link",
-                  parameter_values=values, states=states, multipliers=np.zeros((k, 0)),
+                  parameter_values=values, states=states, multipliers=np.zeros((k, 1)),
                   unstable_count=unstable, zero_modes=np.zeros(k, int),
                   determinant_sign=np.where(unstable % 2, -1, 1),
-                  nearest_eigenvalue=np.ones(k), tangents=np.zeros((k, n + 1)),
+                  nearest_eigenvalue=np.ones(k), tangents=np.zeros((k, n + 2)),
                   arclength=values.copy(), special_points=(),
-                  status=ContinuationStatus.PARAMETER_BOUND, message="made up")
+                  status=ContinuationStatus.PARAMETER_BOUND, message="made up",
+                  records={"excess_link": values, "writhe": writhe})
 
 
 def write_ring_result(folder: Path, *, shift: float = 0.0) -> Path:
@@ -52,9 +53,10 @@ def write_ring_result(folder: Path, *, shift: float = 0.0) -> Path:
     contact_states[-1] += shift
     contact_dlk = 1.0 + 2.0 * contact_t
     contact_unstable = np.array([1, 1, 0, 0, 0, 0, 1, 0, 0])
-    branches = [_branch("circle", None, circle_dlk, circle_states, circle_unstable),
+    branches = [_branch("circle", None, circle_dlk, circle_states, circle_unstable,
+                        np.zeros_like(circle_dlk)),
                 _branch("loop_contact", "circle", contact_dlk, contact_states,
-                        contact_unstable)]
+                        contact_unstable, 0.8 * contact_t)]
     for b in branches:
         b.save(folder / "branches" / f"{b.name}.npz")
     points = []

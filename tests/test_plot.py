@@ -204,3 +204,56 @@ def test_a_contact_free_child_branch_ends_before_its_contact_onset(ring):
     assert list(result.branch("loop_contact").points) == stored[:-1]
     assert result.branch("loop_contact").states().shape == (len(stored) - 1, 24, 3)
     assert len(result.branch("circle").points) == 7  # no parent: all points
+
+
+def _store(ring, path, *, summary: bool):
+    from supercoil.continuation import Branch
+    from supercoil.io.store import ResultWriter
+
+    data = json.loads((ring / "diagram.json").read_text(encoding="utf-8"))
+    attributes = {k: data[k] for k in ("twist_ratio", "length_over_diameter", "diameter",
+                                       "n_nodes")}
+    with ResultWriter.create(path, problem="ring_diagram", settings={},
+                             attributes={**attributes, "closed": True}) as writer:
+        for entry in data["branches"]:
+            writer.write_branch(Branch.load(ring / entry["file"]), contact=entry["contact"])
+        if summary:
+            writer.set_summary(data)
+        writer.set_status("complete" if summary else "interrupted")
+    return path
+
+
+def test_a_result_file_reads_like_its_folder(ring, tmp_path):
+    folder = load_result(ring)
+    stored = load_result(_store(ring, tmp_path / "result.h5", summary=True))
+    assert (stored.kind, stored.title, stored.diameter) == (folder.kind, folder.title,
+                                                              folder.diameter)
+    for a, b in zip(folder.branches, stored.branches, strict=True):
+        assert (a.name, a.parent, a.contact) == (b.name, b.parent, b.contact)
+        assert list(a.points) == list(b.points)
+        assert np.array_equal(a.states(), b.states())
+    assert supported_kinds(stored) == ("diagram", "contact-map", "configurations")
+    # a folder holding a result file reads the file
+    (ring / "result.h5").write_bytes((tmp_path / "result.h5").read_bytes())
+    assert load_result(ring).path == ring / "result.h5"
+
+
+def test_an_interrupted_result_file_draws_from_its_records(ring, tmp_path):
+    """Without the finished run's summary the points come from the stored records
+    (no contact lists: no contact map)."""
+    result = load_result(_store(ring, tmp_path / "partial.h5", summary=False))
+    circle = result.branch("circle")
+    assert [p["excess_link"] for p in circle.points] == list(np.linspace(0.0, 3.0, 7))
+    assert [p["stable"] for p in circle.points] == [True] * 4 + [False] * 3
+    assert supported_kinds(result) == ("diagram", "configurations")
+    fig = figure_of(result, "diagram")
+    assert fig.axes[0].get_xlabel() == style.LABELS["writhe"]
+
+
+def test_a_damaged_result_file_is_one_line(tmp_path, capsys):
+    bad = tmp_path / "result.h5"
+    bad.write_bytes(b"not hdf5 at all")
+    with pytest.raises(ResultError, match="result.h5"):
+        load_result(bad)
+    assert run(["plot", str(bad), "--out", str(tmp_path / "figs")]) == 2
+    assert str(bad) in _error(capsys)

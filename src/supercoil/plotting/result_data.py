@@ -6,11 +6,12 @@ special points, a lazy loader of the centrelines). It reads today
 
 * the output folder of ``supercoil diagram ring`` (``diagram.json`` and
   ``branches/<name>.npz``), given as the folder or as its ``diagram.json``;
-* a one-branch JSON result with ``points`` keyed by ``turns`` (``supercoil
-  tweezers``'s ``branch.json``), numbers only.
-
-Result files of :func:`supercoil.load` (issue 6, item 2) plug in through
-:func:`_from_store`, the one function to change when that API lands.
+* the output folder of ``supercoil tweezers`` (``branch.json``, points keyed
+  by ``turns``, and ``branches/<name>.npz``), or its ``branch.json``;
+* a result file of :func:`supercoil.load` (``result.h5``, written by
+  ``supercoil run``), or a folder holding one (preferred to the JSON beside it:
+  it holds every state). :func:`_from_loaded` is the one place that knows
+  that API.
 """
 
 from __future__ import annotations
@@ -143,7 +144,7 @@ def _from_loaded(path: Path, result) -> ResultData:
         summary = getattr(result, "summary", None)
 
         def states(name: str, keep: int) -> Callable[[], np.ndarray | None]:
-            return lambda: np.asarray(result.branch(name).states, float)[:keep]
+            return lambda: np.array([result.centreline(name, i) for i in range(keep)])
 
         if isinstance(summary, dict) and isinstance(summary.get("points"), list) \
                 and summary["points"]:
@@ -204,24 +205,25 @@ def _from_payload(path: Path, data: dict, states: StatesFor | None) -> ResultDat
                                                              for p in points):
         raise ResultError(f"{path}: no 'points' list of objects; give a result written by "
                           "'supercoil diagram ring' or 'supercoil tweezers'")
-    if "excess_link" in points[0] and "branch" in points[0]:
-        return _ring_diagram(path, data, points, states)
-    if "turns" in points[0]:
-        return _tweezers(path, data, points, states)
-    raise ResultError(f"{path}: points carry neither 'excess_link' and 'branch' (ring "
-                      "diagram) nor 'turns' (tweezers); not a result this command draws")
-
-
-def _ring_diagram(path: Path, data: dict, points: list[dict],
-                  states: StatesFor | None) -> ResultData:
+    if "excess_link" in points[0]:
+        kind, parameter, required = "ring", "excess_link", ("excess_link", "writhe")
+    elif "turns" in points[0]:
+        kind, parameter, required = "tweezers", "turns", ("turns",)
+    else:
+        raise ResultError(f"{path}: points carry neither 'excess_link' (ring) nor 'turns' "
+                          "(tweezers); not a result this command draws")
+    default = str(data.get("branch", data.get("name", kind)))
     for i, p in enumerate(points):
-        missing = [k for k in ("excess_link", "writhe", "branch") if k not in p]
+        missing = [k for k in required if k not in p]
         if missing:
             raise ResultError(f"{path}: point {i} lacks {', '.join(missing)}")
+    points = [p if "branch" in p else dict(p, branch=default) for p in points]
     entries = data.get("branches")
     if not isinstance(entries, list) or not all(isinstance(b, dict) and "name" in b
                                                 for b in entries):
-        entries = [{"name": n} for n in dict.fromkeys(p["branch"] for p in points)]
+        entries = [{"name": n, "contact": kind == "tweezers"}
+                   for n in dict.fromkeys(p["branch"] for p in points)]
+    n_nodes = data.get("n_nodes") if isinstance(data.get("n_nodes"), int) else None
     folder = path.parent
     branches = []
     for entry in entries:
@@ -229,7 +231,7 @@ def _ring_diagram(path: Path, data: dict, points: list[dict],
         rows = [p for p in points if p["branch"] == name]
         contact = bool(entry.get("contact", False))
         keep = len(rows)
-        if not contact and entry.get("parent") is not None and rows:
+        if kind == "ring" and not contact and entry.get("parent") is not None and rows:
             # 'supercoil diagram ring' stops a contact-free branch at the first
             # step past the contact onset: that last state overlaps itself
             keep -= 1
@@ -237,32 +239,48 @@ def _ring_diagram(path: Path, data: dict, points: list[dict],
         file = entry.get("file")
         if states is not None:
             loader = states(name, keep)
+        elif isinstance(file, str):
+            loader = _npz_states(folder / file, keep, n_nodes)
+        elif rows and all("centreline" in p for p in rows):
+            loader = _inline_states(rows)
         else:
-            loader = _npz_states(folder / file, keep) if isinstance(file, str) else None
+            loader = None
         branches.append(BranchData(name, entry.get("parent"), contact, tuple(rows), loader))
-    ld = data.get("length_over_diameter")
-    diameter = _number(data.get("diameter", 1.0 / ld if ld else math.nan))
-    title = "twisted ring"
-    parts = []
-    if "twist_ratio" in data:
-        parts.append(f"C/A = {_number(data['twist_ratio']):.4g}")
-    if ld:
-        parts.append(f"L/D = {_number(ld):g}")
-    if "n_nodes" in data:
-        parts.append(f"N = {data['n_nodes']}")
+    ld = _number(data.get("length_over_diameter"))
+    diameter = _number(data.get("diameter", 1.0 / ld if ld > 0 else math.nan))
+    if kind == "ring":
+        title = "twisted ring"
+        labels = (("twist_ratio", "C/A", ".4g"), ("length_over_diameter", "L/D", "g"),
+                  ("n_nodes", "N", "d"))
+    else:
+        title = "rod in magnetic tweezers"
+        labels = (("force", "F L²/A", ".4g"), ("twist_ratio", "C/A", ".4g"),
+                  ("length_over_diameter", "L/D", "g"), ("n_nodes", "N", "d"))
+    parts = [f"{label} = {_number(data[k]):{spec}}" if spec != "d" else f"{label} = {data[k]}"
+             for k, label, spec in labels
+             if k in data and data[k] is not None and math.isfinite(_number(data[k]))]
     if parts:
         title += ", " + ", ".join(parts)
+    x = "writhe" if kind == "ring" else "extension"
     specials = tuple(s for s in data.get("special_points", []) if isinstance(s, dict)
-                     and "excess_link" in s and "writhe" in s)
-    return ResultData(path=path, kind="ring", title=title, parameter="excess_link",
-                      diameter=diameter if math.isfinite(diameter) else None, closed=True,
-                      units=str(data.get("units", "nondimensional")),
+                     and parameter in s and x in s)
+    return ResultData(path=path, kind=kind, title=title, parameter=parameter,
+                      diameter=diameter if math.isfinite(diameter) and diameter > 0 else None,
+                      closed=kind == "ring", units=str(data.get("units", "nondimensional")),
                       branches=tuple(branches), special_points=specials,
                       parameters={k: data[k] for k in ("twist_ratio", "length_over_diameter",
-                                                       "n_nodes") if k in data})
+                                                       "n_nodes", "force") if k in data})
 
 
-def _npz_states(file: Path, keep: int) -> Callable[[], np.ndarray | None]:
+def _inline_states(rows: Sequence[Mapping]) -> Callable[[], np.ndarray]:
+    def load() -> np.ndarray:
+        return np.array([np.asarray(p["centreline"], float).ravel() for p in rows])
+    return load
+
+
+def _npz_states(file: Path, keep: int, n_nodes: int | None) -> Callable[[], np.ndarray | None]:
+    """Loader of the first ``keep`` centrelines in a :meth:`Branch.save` archive: the
+    first ``3 n_nodes`` entries of each state (a ring's state is all coordinates)."""
     def load() -> np.ndarray | None:
         if not file.is_file():
             return None
@@ -274,37 +292,12 @@ def _npz_states(file: Path, keep: int) -> Callable[[], np.ndarray | None]:
         except (OSError, ValueError) as exc:
             raise ResultError(f"{file}: cannot read the branch file ({_one_line(exc)})") \
                 from None
-        if states.ndim != 2 or states.shape[1] % 3 or len(states) < keep:
+        width = 3 * n_nodes if n_nodes else states.shape[-1]
+        if states.ndim != 2 or len(states) < keep or states.shape[1] < width or width % 3:
             raise ResultError(f"{file}: states of shape {states.shape}; expected at least "
                               f"{keep} rows of 3 n_nodes coordinates")
-        return states[:keep]
+        return states[:keep, :width]
     return load
-
-
-def _tweezers(path: Path, data: dict, points: list[dict],
-              states_for: StatesFor | None) -> ResultData:
-    for i, p in enumerate(points):
-        if "turns" not in p:
-            raise ResultError(f"{path}: point {i} lacks 'turns'")
-    name = str(data.get("branch", data.get("name", "tweezers")))
-    rows = tuple(dict(p, branch=p.get("branch", name)) for p in points)
-    states = None
-    if states_for is not None:
-        states = states_for(name, len(points))
-    elif all("centreline" in p for p in points):
-        def states():
-            return np.array([np.asarray(p["centreline"], float).ravel() for p in points])
-    ld = data.get("length_over_diameter")
-    diameter = _number(data.get("diameter", 1.0 / ld if ld else math.nan))
-    parts = [f"{label} = {_number(data[k]):.4g}" for k, label in
-             (("force", "F"), ("twist_ratio", "C/A")) if k in data]
-    title = "rod in magnetic tweezers" + (", " + ", ".join(parts) if parts else "")
-    specials = tuple(s for s in data.get("special_points", []) if isinstance(s, dict))
-    return ResultData(path=path, kind="tweezers", title=title, parameter="turns",
-                      diameter=diameter if math.isfinite(diameter) else None, closed=False,
-                      units=str(data.get("units", "nondimensional")),
-                      branches=(BranchData(name, None, True, rows, states),),
-                      special_points=specials, parameters={})
 
 
 def stable_mask(points: Sequence[Mapping]) -> np.ndarray:

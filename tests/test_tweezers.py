@@ -178,3 +178,33 @@ def test_bad_options(kwargs):
     base.update(kwargs)
     with pytest.raises(ValueError):
         TweezersOptions(**base)
+
+
+def test_displacement_control_starts_from_the_clamped_elastica():
+    """At 0 turns and z/L = 0.7 the axial force is the clamped elastica's, order 2 in N.
+
+    The clamped-clamped first mode is four quarter-waves of a cantilever of length
+    L/4: P L^2/A = 16 K(m)^2 with z/L = 2 E(m)/K(m) - 1 (Love, sec. 263; m = k^2).
+    """
+    from scipy.optimize import brentq
+    from scipy.special import ellipe, ellipk
+
+    from supercoil.problems.tweezers import axial_force, set_pin
+    from supercoil.solvers.newton import NewtonOptions, newton
+
+    m = brentq(lambda m: 2 * ellipe(m) / ellipk(m) - 1 - 0.7, 1e-9, 0.999)
+    exact = -16 * ellipk(m) ** 2  # compression
+    forces = []
+    for n in (20, 40, 80):
+        opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, end_distance=0.7,
+                               turns=(0.0, 1.0), n_nodes=n)
+        problem, q0 = clamped_problem(opts)
+        assert problem.extension(q0) == pytest.approx(0.7, abs=1e-13)
+        set_pin(problem, problem, q0)
+        res = newton(problem, q0, NewtonOptions(mode="stationary"))
+        assert res.converged
+        forces.append(axial_force(problem, res.multipliers))
+    errors = np.abs(np.array(forces) - exact) / abs(exact)
+    orders = np.log2(errors[:-1] / errors[1:])
+    assert np.all(np.abs(orders - 2) < 0.2), (errors, orders)
+    assert abs(richardson(forces[1], forces[2]) - exact) / abs(exact) < 1e-3

@@ -280,7 +280,7 @@ def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
                "torque": 2 * math.pi * rod.rod.twist_ratio * tw, "twist": tw, "writhe": wr,
                "closure_error": error, "tail_wrapped": bool(error > TAIL_WRAP),
                "energy": rod.elastic_energy(q), "load_potential": rod.load_potential(q),
-               "tension": _axial_force(rod, multipliers)}
+               "tension": axial_force(rod, multipliers)}
         if contact:
             summary = contact_summary(problem, q, multipliers)
             gap = summary["min_gap_over_diameter"]
@@ -296,7 +296,7 @@ def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
     return records
 
 
-def _axial_force(rod: ClampedRodEnergy, multipliers: np.ndarray) -> float:
+def axial_force(rod: ClampedRodEnergy, multipliers: np.ndarray) -> float:
     """The axial force at the turned end: the dead load, or the last edge's tension."""
     if not rod.end_distance_control:
         return float(rod.tension)

@@ -45,7 +45,7 @@ def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping
     from matplotlib.lines import Line2D
 
     with style.styled():
-        fig = Figure(figsize=(style.SINGLE[0] * 1.25, style.SINGLE[1] * 1.25),
+        fig = Figure(figsize=(style.SINGLE[0] * 1.5, style.SINGLE[1] * 1.25),
                      layout="constrained")
         ax = fig.subplots()
         handles = []
@@ -71,7 +71,8 @@ def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping
         ax.set_xlabel(_label(x))
         ax.set_ylabel(_label(y))
         ax.set_title(title)
-        ax.legend(handles=handles, loc="best", title=legend_title)
+        # beside the axes: branches cross the whole diagram, so no corner is free
+        fig.legend(handles=handles, loc="outside right upper", title=legend_title)
     return fig
 
 

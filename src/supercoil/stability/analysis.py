@@ -250,6 +250,14 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
+    The sparse path (shift-invert Lanczos) solves the problem constrained by
+    ``J v = 0`` and ``S^T M v = 0`` exactly, as the dense reference does: the
+    ``r`` dense symmetry rows are eliminated by a Schur complement
+    (:func:`_constrained_shift_invert`), so that the KKT factorisation keeps
+    its banded pattern. (Projecting ``v`` onto the M-complement of ``S``
+    instead agrees only when ``S`` spans an invariant subspace of ``H``, which
+    an approximate symmetry does not: measured 3606 against the dense 3630 for
+    the lowest eigenvalue on a contact branch at N = 200.)
     """
     r = 0 if symmetry is None else symmetry.shape[1]
     dim = n - m - r
@@ -258,18 +266,7 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         return values[:k], vectors[:, :k]
     sigma = -1e-3
-    factor = KKTFactor(H, J, shift=sigma, mass=mass)
-
-    def project(v):
-        if r:
-            v = v - symmetry @ (symmetry.T @ (mass * v))
-        return v
-
-    def opinv(x):
-        rhs = np.zeros(n + m)
-        rhs[:n] = project(np.ravel(x))
-        return project(factor.solve(rhs)[:n])
-
+    opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma)
     Op = spla.LinearOperator((n, n), matvec=opinv, dtype=float)
     A = spla.LinearOperator((n, n), matvec=H.matvec, dtype=float)
     Mop = spla.LinearOperator((n, n), matvec=lambda x: mass * np.ravel(x), dtype=float)
@@ -279,6 +276,35 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
                                  tol=1e-12)
     order = np.argsort(values)
     return values[order], vectors[:, order]
+
+
+def _constrained_shift_invert(H, J, mass, symmetry, sigma: float):
+    """``x -> v`` solving ``(H - sigma M) v + J^T a + M S b = x, J v = 0, S^T M v = 0``.
+
+    One sparse KKT factorisation of ``[[H - sigma M, J^T], [J, 0]]``; the ``r``
+    dense rows ``C = S^T M`` by block elimination: with ``K w = [x; 0]`` and
+    ``K W = [C^T; 0]``, ``b = (C W_v)^-1 C w_v`` and ``v = w_v - W_v b``.
+    """
+    n = mass.size
+    m = J.shape[0] if J is not None else 0
+    factor = KKTFactor(H, J, shift=sigma, mass=mass)
+    r = 0 if symmetry is None else symmetry.shape[1]
+    if r:
+        C = (mass[:, None] * symmetry).T  # (r, n)
+        rhs = np.zeros((n + m, r))
+        rhs[:n] = C.T
+        W = factor.solve(rhs)[:n]
+        schur = C @ W
+
+    def opinv(x):
+        rhs = np.zeros(n + m)
+        rhs[:n] = np.ravel(x)
+        w = factor.solve(rhs)[:n]
+        if r:
+            w = w - W @ np.linalg.solve(schur, C @ w)
+        return w
+
+    return opinv
 
 
 def dense_constrained_eigenpairs(H, J, mass, symmetry=None):

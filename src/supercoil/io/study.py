@@ -240,7 +240,8 @@ def _dna_preset(units: Mapping, problem: Mapping):
 
     kwargs = {"base_pairs": units["base_pairs"],
               "superhelical_density": problem.get("superhelical_density", 0.0),
-              "salt_mM": units.get("salt_mM"), "diameter_nm": units.get("diameter_nm"),
+              "salt_mM": units.get("salt_mM") if units.get("diameter_nm") is None else None,
+              "diameter_nm": units.get("diameter_nm"),
               "temperature_K": units["temperature_K"],
               "twist_persistence_nm": units["twist_persistence_nm"]}
     return DNAPreset(**kwargs)
@@ -366,8 +367,9 @@ def _complete(s: dict, kind: str, preset: str, source: str) -> None:
         if lod <= math.pi:
             raise StudyError(f"{source}: [units] base_pairs = {units['base_pairs']} gives "
                              f"L/D = {lod:.3g}, but a ring needs L/D > pi; give more base pairs")
-        units["salt_mM"] = dna.salt_mM
-        units["diameter_nm"] = dna.effective_diameter_nm
+        if "diameter_nm" not in units:
+            units["salt_mM"] = float(dna.salt_mM)  # the default salt when none was given
+        units["effective_diameter_nm"] = dna.effective_diameter_nm
         rod["twist_ratio"] = dna.twist_ratio
         rod["length_over_diameter"] = lod
         if kind == "ring_diagram":

@@ -1,0 +1,405 @@
+"""Study files (supercoil.io.study), 'supercoil run', interrupts and --resume."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import supercoil
+from supercoil.cli.main import run as cli
+from supercoil.continuation import ContinuationOptions, continuation, switch_branch
+from supercoil.continuation.resume import resume_branch
+from supercoil.io.study import StudyError, load_study, parse_study
+from supercoil.units.dna import effective_diameter_nm
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+RING_DIAGRAM = """
+[rod]
+twist_ratio = 0.6667
+length_over_diameter = 20
+nodes = 24
+
+[problem]
+kind = "ring_diagram"
+modes = [2]
+max_excess_link = 4.0
+
+[continuation]
+free_max_points = 40
+contact_max_points = 8
+
+[outputs]
+figures = false
+"""
+
+
+def error(text: str, overrides=()) -> str:
+    with pytest.raises(StudyError) as info:
+        parse_study(text, "s.toml", overrides)
+    message = str(info.value)
+    assert "\n" not in message and message.startswith("s.toml: ") or message.startswith("--set")
+    return message
+
+
+# ------------------------------------------------------------------------ validation
+def test_defaults_filled_and_values_converted():
+    s = parse_study(RING_DIAGRAM).settings
+    assert s["rod"] == {"twist_ratio": 0.6667, "length_over_diameter": 20.0, "nodes": 24}
+    assert isinstance(s["rod"]["length_over_diameter"], float)
+    assert s["problem"] == {"kind": "ring_diagram", "modes": [2], "max_excess_link": 4.0,
+                            "contact": "barrier"}
+    assert s["continuation"]["free_max_step"] == 0.05  # DiagramOptions' default
+    assert s["outputs"] == {"figures": False, "json": True}
+    assert s["units"] == {"preset": "nondimensional"}
+
+
+def test_diagram_options_follow_the_study():
+    from supercoil.problems.ring_diagram import DiagramOptions
+
+    opts = parse_study(RING_DIAGRAM, overrides=["continuation.contact_gauge=false"]
+                       ).diagram_options()
+    assert opts == DiagramOptions(0.6667, 20.0, 24, (2,), 4.0, "barrier", free_max_points=40,
+                                  contact_max_points=8, contact_gauge=False)
+
+
+@pytest.mark.parametrize("edit, words", [
+    (("nodes = 24", "nodse = 24"), ["unknown key [rod] nodse", "did you mean 'nodes'",
+                                     "valid keys: twist_ratio, length_over_diameter, nodes"]),
+    (("[outputs]", "[output]"), ["unknown table [output]", "did you mean 'outputs'"]),
+    (("nodes = 24", 'nodes = "24"'), ["[rod] nodes must be an integer from 8", "'24'",
+                                      "a string"]),
+    (("nodes = 24", "nodes = 24.0"), ["[rod] nodes must be an integer", "a number"]),
+    (("nodes = 24", "nodes = 3"), ["[rod] nodes must be an integer from 8"]),
+    (("modes = [2]", "modes = [1, 2]"), ["[problem] modes must be a list of distinct"]),
+    (("length_over_diameter = 20", "length_over_diameter = 3"),
+     ["length_over_diameter must be L/D, a number above pi"]),
+    (('kind = "ring_diagram"', 'kind = "ring_diagramm"'),
+     ["kind = 'ring_diagramm' is not a problem kind", "did you mean 'ring_diagram'"]),
+    (("max_excess_link = 4.0", "excess_link = 4.0"),
+     ["[problem] excess_link does not apply to a ring_diagram problem"]),
+    (("max_excess_link = 4.0", 'contact = "exact"'),
+     ["contact = 'exact' is not a treatment a ring_diagram can use", "barrier, penalty"]),
+    (("figures = false", "figures = 0"), ["[outputs] figures must be true or false"]),
+    (("twist_ratio = 0.6667", "twist_ratio = true"), ["[rod] twist_ratio must be C/A",
+                                                      "a boolean"]),
+    (("twist_ratio = 0.6667", "twist_ratio = inf"), ["[rod] twist_ratio must be"]),
+    (("[rod]", "rod = 3\n[rodx]"), ["rod must be a table ([rod]), got an integer"]),
+    (("twist_ratio = 0.6667", ""), ["[rod] twist_ratio is missing"]),
+    (("[problem]", "[problem]\nkind2 = 1"), ["unknown key [problem] kind2"]),
+    (("nodes = 24", "nodes = = 24"), ["not valid TOML"]),
+])
+def test_bad_keys_and_types_are_one_line_errors(edit, words):
+    old, new = edit
+    assert old in RING_DIAGRAM
+    message = error(RING_DIAGRAM.replace(old, new, 1))
+    for w in words:
+        assert w in message, message
+
+
+def test_missing_tables_and_kind():
+    assert "missing table [problem]" in error("[rod]\ntwist_ratio = 1.0\n")
+    assert "[problem] kind is missing" in error("[rod]\ntwist_ratio = 1.0\n[problem]\n")
+
+
+def test_overrides():
+    s = parse_study(RING_DIAGRAM, overrides=["rod.nodes=32", "problem.contact=penalty",
+                                             "study.name='x y'"]).settings
+    assert s["rod"]["nodes"] == 32 and s["problem"]["contact"] == "penalty"
+    assert s["study"]["name"] == "x y"
+    assert "give TABLE.KEY=VALUE" in error(RING_DIAGRAM, ["nodes=3"])
+    assert "unknown table [rods]" in error(RING_DIAGRAM, ["rods.nodes=3"])
+    assert "[rod] nodes must be an integer" in error(RING_DIAGRAM, ["rod.nodes=many"])
+
+
+DNA = """
+[units]
+preset = "dna"
+base_pairs = 600
+salt_mM = 100
+[rod]
+nodes = 64
+[problem]
+kind = "ring_diagram"
+modes = [2]
+max_superhelical_density = 0.05
+"""
+
+
+def test_dna_preset_derives_the_nondimensional_numbers():
+    study = parse_study(DNA)
+    s = study.settings
+    length_nm = 600 * 0.34
+    assert s["rod"]["twist_ratio"] == pytest.approx(95 / 50, rel=1e-15)
+    assert s["rod"]["length_over_diameter"] == pytest.approx(
+        length_nm / effective_diameter_nm(100.0), rel=1e-15)
+    assert s["problem"]["max_excess_link"] == pytest.approx(0.05 * 600 / 10.5, rel=1e-15)
+    assert s["units"]["effective_diameter_nm"] == pytest.approx(effective_diameter_nm(100.0))
+    assert s["units"]["salt_mM"] == 100.0 and "diameter_nm" not in s["units"]
+    assert study.dna_preset().length_nm == pytest.approx(length_nm)
+
+
+@pytest.mark.parametrize("edit, words", [
+    (("nodes = 64", "nodes = 64\ntwist_ratio = 1.0"),
+     ["[rod] twist_ratio cannot be given with units preset 'dna'"]),
+    (("base_pairs = 600", ""), ["[units] base_pairs is missing"]),
+    (("salt_mM = 100", "salt_mM = 100\ndiameter_nm = 4"), ["salt_mM and diameter_nm both"]),
+    (("max_superhelical_density = 0.05", "max_excess_link = 3"),
+     ["[problem] max_excess_link cannot be given with units preset 'dna'"]),
+    (("base_pairs = 600", "base_pairs = 12"), ["L/D = ", "give more base pairs"]),
+    (("salt_mM = 100", "salt_mM = 1e9"), ["[units]"]),
+])
+def test_dna_errors(edit, words):
+    old, new = edit
+    message = error(DNA.replace(old, new, 1))
+    for w in words:
+        assert w in message, message
+
+
+def test_dna_keys_need_the_preset():
+    text = RING_DIAGRAM.replace("[rod]", "[units]\nbase_pairs = 600\n[rod]")
+    assert "[units] base_pairs cannot be given with units preset 'nondimensional'" in error(text)
+
+
+def test_examples_are_valid_studies():
+    names = sorted(p.name for p in EXAMPLES.glob("*.toml"))
+    assert {"ring_diagram.toml", "dna_plasmid.toml"} <= set(names)
+    for path in EXAMPLES.glob("*.toml"):
+        study = load_study(path)
+        assert study.kind in ("ring_diagram", "ring", "tweezers")
+
+
+def test_missing_study_file(tmp_path):
+    with pytest.raises(StudyError, match="no such study file"):
+        load_study(tmp_path / "none.toml")
+
+
+# ------------------------------------------------------------------------------- run
+def write_study(tmp_path, text=RING_DIAGRAM) -> Path:
+    path = tmp_path / "study.toml"
+    path.write_text(text)
+    return path
+
+
+def one_line_error(capsys, status, expected_status=2):
+    captured = capsys.readouterr()
+    assert status == expected_status, captured
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), captured.err
+    return lines[0]
+
+
+def test_run_bad_input_exit_2_and_nothing_touched(tmp_path, capsys):
+    study = write_study(tmp_path, RING_DIAGRAM.replace("nodes = 24", "nodez = 24"))
+    line = one_line_error(capsys, cli(["run", str(study), "--out", str(tmp_path / "o")]))
+    assert "nodez" in line and "did you mean 'nodes'" in line
+    assert not (tmp_path / "o").exists()
+    study = write_study(tmp_path)
+    taken = tmp_path / "taken"
+    taken.mkdir()
+    (taken / "keep.txt").write_text("mine")
+    line = one_line_error(capsys, cli(["run", str(study), "--out", str(taken)]))
+    assert "not empty" in line and (taken / "keep.txt").read_text() == "mine"
+    assert sorted(p.name for p in taken.iterdir()) == ["keep.txt"]
+    line = one_line_error(capsys, cli(["run", str(study), "--out", str(taken), "--resume"]))
+    assert "nothing to resume" in line
+    line = one_line_error(capsys, cli(["run", str(tmp_path / "nope.toml"), "--out",
+                                       str(tmp_path / "o")]))
+    assert "no such study file" in line
+    (tmp_path / "file").write_text("x")
+    line = one_line_error(capsys, cli(["run", str(study), "--out", str(tmp_path / "file")]))
+    assert "is a file" in line
+
+
+RING = """
+[rod]
+twist_ratio = 1.5
+nodes = 24
+[problem]
+kind = "ring"
+excess_link = 0.5
+"""
+
+
+def test_ring_study_stores_one_state(tmp_path, capsys):
+    study = write_study(tmp_path, RING)
+    out = tmp_path / "o"
+    assert cli(["run", str(study), "--out", str(out), "--quiet"]) == 0
+    result = supercoil.load(out / "result.h5")
+    assert result.problem == "ring" and result.status == "complete"
+    (branch,) = result.branches
+    assert len(branch) == 1 and branch.parameter_values[0] == 0.5
+    data = json.loads((out / "ring.json").read_text())
+    assert data == result.summary
+    # below Michell's threshold the answer is the twisted circle: its exact energy
+    assert branch.records["energy"][0] == pytest.approx(2 * math.pi**2 * (1 + 1.5 * 0.25),
+                                                        rel=2e-3)
+    assert data["energy"] == branch.records["energy"][0] and data["stable"]
+    points = result.centreline("ring", 0)
+    radii = np.linalg.norm(points - points.mean(axis=0), axis=1)
+    # a regular 24-gon of perimeter L = 1: circumradius 1 / (2 n sin(pi / n))
+    np.testing.assert_allclose(radii, 1 / (48 * math.sin(math.pi / 24)), rtol=1e-8)
+
+
+def run_diagram(tmp_path, name, progress=None, resume=False, text=RING_DIAGRAM):
+    from supercoil.cli.run import run_study
+
+    out = tmp_path / name
+    out.mkdir(exist_ok=True)
+    return out, run_study(parse_study(text), out, resume=resume, progress=progress)
+
+
+class InterruptAt:
+    """A progress sink that raises KeyboardInterrupt at its ``n``-th message or point."""
+
+    def __init__(self, n: int):
+        self.n, self.seen = n, 0
+
+    def _tick(self):
+        self.seen += 1
+        if self.seen == self.n:
+            raise KeyboardInterrupt
+
+    def message(self, text):
+        self._tick()
+
+    def point(self, *args):
+        self._tick()
+
+
+def assert_same_branches(a, b, atol=1e-10):
+    assert a.branch_names == b.branch_names
+    for x, y in zip(a.branches, b.branches):
+        assert len(x) == len(y), x.name
+        np.testing.assert_allclose(x.states, y.states, atol=atol, err_msg=x.name)
+        np.testing.assert_allclose(x.parameter_values, y.parameter_values, atol=atol)
+        np.testing.assert_array_equal(x.unstable_count, y.unstable_count)
+        assert [p.kind for p in x.special_points] == [p.kind for p in y.special_points]
+
+
+def test_interrupted_run_keeps_a_valid_file_and_resume_completes_it(tmp_path, capsys):
+    full_dir, full = run_diagram(tmp_path, "full")
+    assert full["status"] == "complete", full
+    reference = supercoil.load(full_dir / "result.h5")
+    assert [b.name for b in reference.branches] == ["circle", "alpha", "alpha_contact"]
+    assert json.loads((full_dir / "diagram.json").read_text()) == reference.summary
+    # interrupt while the contact branch is computed
+    out, outcome = run_diagram(tmp_path, "cut", progress=InterruptAt(4))
+    assert outcome["status"] == "interrupted"
+    cut = supercoil.load(out / "result.h5")
+    assert cut.status == "interrupted" and cut.summary is None
+    for b in cut.branches:  # whatever was saved is a prefix of the uninterrupted run
+        ref = reference.branch(b.name)
+        np.testing.assert_allclose(b.states, ref.states[:len(b)], atol=1e-10)
+    # --resume: a settings mismatch is refused and leaves the file alone
+    study = write_study(tmp_path)
+    before = (out / "result.h5").read_bytes()
+    other = tmp_path / "other.toml"
+    other.write_text(RING_DIAGRAM.replace("max_excess_link = 4.0", "max_excess_link = 3.0"))
+    line = one_line_error(capsys, cli(["run", str(other), "--out", str(out), "--resume"]))
+    assert "[problem] max_excess_link = 4.0 in the file, 3.0 in the study" in line
+    assert (out / "result.h5").read_bytes() == before
+    assert cli(["run", str(study), "--out", str(out), "--resume", "--quiet"]) == 0
+    resumed = supercoil.load(out / "result.h5")
+    assert resumed.status == "complete"
+    assert_same_branches(resumed, reference)
+    assert resumed.complete_branches == set(reference.branch_names)
+
+
+# -------------------------------------------------------------------- resume_branch
+def ring_alpha(n_nodes=24):
+    from supercoil.problems.ring_branches import circle_branch
+
+    circle, problem = circle_branch(0.6667, n_nodes, 3.0)
+    (point, *_) = circle.points_of_kind("bifurcation")
+    return problem, circle, point
+
+
+def test_resume_branch_reproduces_the_uninterrupted_ring_branch():
+    """alpha off the circle (near-symmetry gauge row) with constant steps: interrupted after
+    k points and resumed from the stored partial branch, the points are the same."""
+    from supercoil.problems.ring_branches import ring_records
+
+    problem, circle, point = ring_alpha()
+    opts = ContinuationOptions(initial_step=0.02, max_step=0.02, max_points=12,
+                               parameter_bounds=(0.0, 3.0))
+    records = ring_records(problem)
+    full = switch_branch(problem, circle, point, opts, amplitude=0.02, name="alpha",
+                         records=records)
+    assert len(full) == 12 and full.phase_modes.shape[0] == 1
+    saved = []
+
+    def stop_after_5(branch):
+        saved.append(branch)
+        if len(branch) == 5:
+            raise KeyboardInterrupt
+
+    problem, circle, point = ring_alpha()
+    with pytest.raises(KeyboardInterrupt):
+        switch_branch(problem, circle, point, opts, amplitude=0.02, name="alpha",
+                      records=records, on_point=stop_after_5)
+    partial = saved[-1]
+    assert len(partial) == 5
+    np.testing.assert_allclose(partial.states, full.states[:5], atol=1e-12)
+    problem, _, _ = ring_alpha()  # a fresh problem, as after a restart
+    seen = []
+    resumed = resume_branch(problem, partial, opts, records=ring_records(problem),
+                            on_point=lambda b: seen.append(len(b)))
+    assert seen == list(range(5, 13))
+    assert len(resumed) == len(full) and resumed.status is full.status
+    np.testing.assert_allclose(resumed.states, full.states, atol=1e-9)
+    np.testing.assert_allclose(resumed.arclength, full.arclength, atol=1e-9)
+    np.testing.assert_allclose(resumed.records["writhe"], full.records["writhe"], atol=1e-9)
+    np.testing.assert_array_equal(resumed.unstable_count, full.unstable_count)
+    assert resumed.parent == "circle" and resumed.origin is partial.origin
+    assert "resumed after point 4" in resumed.message
+
+
+def test_resume_branch_events_and_full_branch():
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_continuation_toys import Bratu
+
+    from supercoil.continuation import UserEvent
+
+    opts = ContinuationOptions(parameter_bounds=(1.0, 4.0), initial_step=0.1, max_step=0.1,
+                               max_points=60)
+    user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[16] - 1.0})
+
+    def run(**kw):
+        return continuation(Bratu(32, 1.0), np.zeros(33), parameter="lam", options=opts,
+                            events=[user], records=lambda q, mu, lam: {"u_mid": q[16]}, **kw)
+
+    full = run()
+    saved = []
+
+    def stop(branch):
+        saved.append(branch)
+        if len(branch) == 20:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run(on_point=stop)
+    resumed = resume_branch(Bratu(32, 1.0), saved[-1], opts, events=[user],
+                            records=lambda q, mu, lam: {"u_mid": q[16]})
+    np.testing.assert_allclose(resumed.states, full.states, atol=1e-10)
+    assert [(p.kind, p.index) for p in resumed.special_points] == \
+        [(p.kind, p.index) for p in full.special_points] == [("threshold", 25), ("fold", 27)]
+    for p, q in zip(resumed.special_points, full.special_points):
+        assert p.parameter == pytest.approx(q.parameter, abs=1e-9)
+        assert p.arclength == pytest.approx(q.arclength, abs=1e-9)
+    # a complete branch is returned as it is
+    again = resume_branch(Bratu(32, 1.0), resumed, opts)
+    assert len(again) == len(resumed)
+    with pytest.raises(ValueError, match="no point to resume"):
+        resume_branch(Bratu(32, 1.0), dataclasses.replace(
+            full, **{n: getattr(full, n)[:0] for n in (
+                "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+                "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")},
+            records={}), opts)

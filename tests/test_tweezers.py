@@ -208,3 +208,33 @@ def test_displacement_control_starts_from_the_clamped_elastica():
     orders = np.log2(errors[:-1] / errors[1:])
     assert np.all(np.abs(orders - 2) < 0.2), (errors, orders)
     assert abs(richardson(forces[1], forces[2]) - exact) / abs(exact) < 1e-3
+
+
+def test_up_down_path_shows_hysteresis(small_run):
+    """Turning up snaps the straight rod into the touching loop just past its buckling;
+    turning down keeps the loop until the contact branch's fold, then snaps back."""
+    from supercoil.problems.tweezers_protocol import quasistatic_path
+
+    path = quasistatic_path(small_run.options, "up-down", step=0.1)
+    assert path.ok, path.message
+    points = path.points
+    assert all(p["unstable_count"] == 0 for p in points)  # an experiment sees stable states
+    up = [j for j in path.jumps if j["direction"] > 0]
+    down = [j for j in path.jumps if j["direction"] < 0]
+    assert len(up) == 1 and len(down) == 1
+    bifurcation = small_run.branch("straight").points_of_kind("bifurcation")[0].parameter
+    assert bifurcation < up[0]["turns"] <= bifurcation + 0.1 + 1e-9
+    assert up[0]["extension"] == pytest.approx(1.0, abs=1e-9) and up[0]["extension_after"] < 0.4
+    contact = small_run.branch("buckled_contact")
+    fold = contact.points_of_kind("fold")[0].parameter
+    assert fold - 0.1 - 1e-9 <= down[0]["turns"] < fold
+    assert down[0]["extension_after"] == pytest.approx(1.0, abs=1e-3)  # back to straight
+    assert points[-1]["extension"] == pytest.approx(1.0, abs=1e-6)
+    # the stable looped states of the path lie on the contact branch
+    ext = contact.records["extension"]
+    lam = contact.parameter_values
+    rising = np.flatnonzero(np.diff(lam) > 0)
+    for p in points:
+        if p["extension"] < 0.9 and lam[rising[0]] < p["turns"] < lam[-1]:
+            on_branch = np.interp(p["turns"], lam[rising[0]:], ext[rising[0]:])
+            assert p["extension"] == pytest.approx(on_branch, abs=2e-3)

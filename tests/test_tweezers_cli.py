@@ -82,3 +82,24 @@ def test_existing_folder_needs_force(folder, capsys):
     status = run(["tweezers", "--twist-ratio", "1", "--tension", "1", "--turns", "0:1",
                   "--out", str(folder)])
     assert status == 2 and "--force" in capsys.readouterr().err
+
+
+def test_up_down_writes_the_path(tmp_path):
+    out = tmp_path / "ud"
+    status = run(["tweezers", "--twist-ratio", "1.3333333333333333", "--length-over-diameter",
+                  "20", "--tension", "20", "--turns", "0:1.6", "--nodes", "40", "--protocol",
+                  "up-down", "--step", "0.2", "--out", str(out)])
+    assert status == 0
+    data = json.loads((out / "branch.json").read_text())
+    path = data["path"]
+    assert path[0]["direction"] == 1 and path[-1]["direction"] == -1
+    assert path[0]["turns"] == 0.0 and path[-1]["turns"] == 0.0
+    jumps = [s for s in data["special_points"] if s["kind"] == "jump"]
+    assert jumps and all(s["branch"] == "path" and "extension" in s for s in jumps)
+    assert (out / "branches" / "path.npz").exists()
+
+
+def test_up_down_needs_tension(tmp_path, capsys):
+    status = run(["tweezers", "--twist-ratio", "1", "--end-distance", "0.5", "--turns", "0:1",
+                  "--protocol", "up-down", "--out", str(tmp_path / "x")])
+    assert status == 2 and "--tension" in capsys.readouterr().err

@@ -23,7 +23,7 @@ from supercoil.cli._common import (
     warn,
 )
 
-PROTOCOLS = ("up",)  # up-down and force-ramp: issue 5, item 3, not implemented yet
+PROTOCOLS = ("up", "up-down")  # force-ramp: issue 5, item 3, not implemented yet
 OUTPUT_FILES = ("branch.json", "hat_curve.png", "torque.png", "writhe.png",
                 "configurations.png")
 
@@ -66,8 +66,12 @@ def tweezers(
         "--nodes", metavar="N", help="Nodes of the discrete rod; contact lines need "
         "segments shorter than D (N >= L/D + 2).")] = 100,
     protocol: Annotated[str, typer.Option(
-        "--protocol", metavar="P", help="up: the branches from START to STOP "
-        "(up-down and force-ramp are not implemented yet).")] = "up",
+        "--protocol", metavar="P", help="up: the branches from START to STOP; up-down: "
+        "also the quasi-static path of an experiment turning up to STOP and back (stable "
+        "states, jumps at folds). force-ramp is not implemented yet.")] = "up",
+    step: Annotated[float, typer.Option(
+        "--step", metavar="DT", help="With --protocol up-down: turns per quasi-static "
+        "step.")] = 0.02,
     max_points: Annotated[int, typer.Option(
         "--max-points", metavar="K", help="Largest number of points per branch.")] = 400,
     force: Annotated[bool, typer.Option(
@@ -108,8 +112,12 @@ def tweezers(
     if nodes < 12:
         fail(f"--nodes {nodes}: a clamped rod needs at least 12 nodes")
     if protocol not in PROTOCOLS:
-        fail(f"--protocol {protocol!r}: only 'up' is implemented (up-down and force-ramp "
-             "are not yet)")
+        fail(f"--protocol {protocol!r}: give up or up-down (force-ramp is not implemented "
+             "yet)")
+    if protocol == "up-down" and tension is None:
+        fail("--protocol up-down needs --tension (load control, the tweezers experiment)")
+    if not (math.isfinite(step) and 0 < step <= stop - start):
+        fail(f"--step {step:g}: give a positive number of turns up to STOP - START")
     if not 2 <= max_points <= 100_000:
         fail(f"--max-points {max_points}: give an integer from 2 to 100000")
     if out.exists() and not out.is_dir():
@@ -136,16 +144,29 @@ def tweezers(
           f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
           f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
     result = tweezers_branches(options, progress=lambda line: warn(f"  {line}"))
-    payload = write_tweezers(result, out)
-    if not payload["ok"]:
+    path = None
+    if protocol == "up-down":
+        from supercoil.problems.tweezers_protocol import quasistatic_path
+
+        warn(f"  path: quasi-static up to {stop:g} turns and back, steps of {step:g} turns")
+        path = quasistatic_path(options, "up-down", step=step)
+    payload = write_tweezers(result, out, path)
+    if not payload["ok"] or (path is not None and not path.ok):
+        if path is not None and not path.ok:
+            payload["notes"].append(f"path: {path.message}")
         warn("not complete: " + "; ".join(payload["notes"] or
                                           [b["message"] for b in payload["branches"]
                                            if not b["ok"]]))
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def write_tweezers(result, out: Path) -> dict:
-    """Save the branches, branch.json (with the envelope) and the figures; return the payload."""
+def write_tweezers(result, out: Path, path=None) -> dict:
+    """Save the branches, branch.json (with the envelope) and the figures; return the payload.
+
+    ``path``: the quasi-static path (:class:`~supercoil.problems.tweezers_protocol.PathResult`)
+    of the up-down protocol, written as the list ``path`` with its jumps among the special
+    points, and its states as ``branches/path.npz``.
+    """
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.tweezers import pick_configurations, write_figures
     from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
@@ -154,6 +175,15 @@ def write_tweezers(result, out: Path) -> dict:
         branch.save(out / "branches" / f"{branch.name}.npz")
     payload = result_payload(result)
     states = {b.name: b.states for b in result.branches}
+    if path is not None:
+        import numpy as np
+
+        payload["path"] = list(path.points)
+        payload["path_ok"] = path.ok
+        payload["path_message"] = path.message
+        payload["special_points"] += list(path.jumps)
+        np.savez_compressed(out / "branches" / "path.npz", states=path.states,
+                            turns=np.array([p["turns"] for p in path.points]))
     write_figures(payload, pick_configurations(payload, states), out)
     data = envelope(payload, n_nodes=result.options.n_nodes,
                     tolerances=result.options.tolerances,
@@ -166,12 +196,19 @@ def write_tweezers(result, out: Path) -> dict:
         folds = sum(p["kind"] == "fold" for p in payload["special_points"]
                     if p["branch"] == b["name"])
         kinds = ", ".join(f"{p['kind']} at {p['turns']:.4f} turns" for p in specials[:6])
+        if len(specials) > 6:
+            kinds += f", ... ({len(specials)} in all)"
         print(f"  {b['name']}: {b['n_points']} points, {b['seconds']:.1f} s, "
               f"{b['status'].lower()}" + (f"; {kinds}" if kinds else "")
               + (f"; {folds} folds" if folds else ""))
     if payload.get("greenhill_turns") is not None:
         print(f"  exact buckling of the straight rod (clamped Greenhill with tension): "
               f"{payload['greenhill_turns']:.6f} turns")
+    if path is not None:
+        jumps = ", ".join(f"{j['turns']:.3f} ({'up' if j['direction'] > 0 else 'down'}, "
+                          f"z/L {j['extension']:.3f} -> {j['extension_after']:.3f})"
+                          for j in path.jumps)
+        print(f"  path: {len(path.points)} quasi-static steps; jumps at {jumps or 'none'}")
     print(f"wrote branch.json, branches/*.npz and figures to {out.resolve()}", flush=True)
     for note in payload["notes"]:
         warn(f"note: {note}")

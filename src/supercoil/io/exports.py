@@ -238,7 +238,7 @@ def tube_mesh(points, *, closed: bool, radius: float, sides: int = DEFAULT_SIDES
         for j in range(sides):
             jj = (j + 1) % sides
             a, b, c, d = i * sides + j, k * sides + j, k * sides + jj, i * sides + jj
-            faces += [(a, b, c), (a, c, d)]
+            faces += [(a, c, b), (a, d, c)]  # counter-clockwise seen from outside
     if not closed:
         start, end = len(vertices), len(vertices) + 1
         vertices = np.vstack([vertices, p[0], p[-1]])
@@ -263,7 +263,7 @@ def write_obj(path, points, *, closed: bool, radius: float, sides: int = DEFAULT
         normals = np.vstack([normals, -t[0], t[-1]])
     lines = [f"# {' '.join(title.split())}", f"# tube radius {radius:.12g}, {sides} sides",
              "o tube"]
-    lines += [f"v {x:.10g} {y:.10g} {z:.10g}" for x, y, z in vertices]
+    lines += [f"v {x:.12g} {y:.12g} {z:.12g}" for x, y, z in vertices]
     lines += [f"vn {x:.6f} {y:.6f} {z:.6f}" for x, y, z in normals]
     lines += [f"f {a + 1}//{a + 1} {b + 1}//{b + 1} {c + 1}//{c + 1}" for a, b, c in faces]
     return _write_text(path, "\n".join(lines) + "\n")

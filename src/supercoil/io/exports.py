@@ -12,7 +12,8 @@ and writes one text file atomically (temporary file + rename):
 * :func:`write_pdb`: PDB ``ATOM`` records, one coarse-grained bead per base
   pair (atom ``P``, residue ``DNA``, chain ``A``), the centreline resampled at
   equal arc-length steps of the rise (0.34 nm) by :func:`resample`,
-  coordinates in Å centred on the centroid, ``CONECT`` records along the chain
+  coordinates in Å with the bounding box shifted to start at 0 (the fixed-width
+  fields hold 0 .. 9999.999 Å), ``CONECT`` records along the chain
   (closed for rings);
 * :func:`write_obj`: Wavefront OBJ triangle mesh of the tube of radius D/2
   around the centreline: ``sides`` vertices on a circle in the plane normal to
@@ -133,11 +134,11 @@ def write_pdb(path, points_nm, *, closed: bool, rise_nm: float = 0.34, title: st
     if len(beads) > PDB_MAX_BEADS:
         raise ValueError(f"{len(beads)} beads: PDB atom numbers have five digits (at most "
                          f"{PDB_MAX_BEADS} beads); export xyz or vtk instead")
-    angstrom = 10.0 * (beads - beads.mean(axis=0))
-    if np.max(np.abs(angstrom)) > PDB_COORDINATE_LIMIT:
-        raise ValueError(f"the molecule spans {2 * np.max(np.abs(angstrom)) / 10:.0f} nm: PDB "
-                         "coordinates are limited to 9999.999 Å from the centre; export xyz "
-                         "or vtk instead")
+    # %8.3f holds -999.999 .. 9999.999: shift the bounding box to start at 0
+    angstrom = 10.0 * (beads - beads.min(axis=0))
+    if np.max(angstrom) > PDB_COORDINATE_LIMIT:
+        raise ValueError(f"the molecule spans {np.max(angstrom) / 10:.0f} nm: PDB coordinates "
+                         "hold at most 9999.999 Å (1 um); export xyz or vtk instead")
     lines = []
     if title:
         lines.append(f"TITLE     {' '.join(title.split())[:70]}")

@@ -103,3 +103,40 @@ def test_up_down_needs_tension(tmp_path, capsys):
     status = run(["tweezers", "--twist-ratio", "1", "--end-distance", "0.5", "--turns", "0:1",
                   "--protocol", "up-down", "--out", str(tmp_path / "x")])
     assert status == 2 and "--tension" in capsys.readouterr().err
+
+
+def test_dna_units(tmp_path, capsys):
+    from supercoil.units.dna import DNAPreset, tweezers_parameters
+
+    out = tmp_path / "dna"
+    status = run(["tweezers", "--dna", "--bp", "300", "--force-pN", "0.3", "--turns", "0:1.2",
+                  "--nodes", "30", "--out", str(out)])
+    assert status == 0
+    assert "Athermal" in capsys.readouterr().err
+    data = json.loads((out / "branch.json").read_text())
+    preset = DNAPreset(300)
+    assert data["units"] == "dna" and "athermal" in data["conventions"]
+    assert data["provenance"]["units_preset"]["base_pairs"] == 300
+    numbers = tweezers_parameters(preset, 0.3)
+    # F L^2/A = F / (A / L^2): 0.3 pN on 102 nm with A = 50 nm x 4.11 pN nm
+    assert data["force"] == pytest.approx(0.3 * 102.0**2 / (50 * 4.11), rel=1e-12)
+    assert numbers["tension"] == pytest.approx(data["force"], rel=1e-12)
+    for p in data["points"]:
+        assert p["extension_nm"] == pytest.approx(p["extension"] * 102.0, rel=1e-12)
+        assert p["torque_pN_nm"] == pytest.approx(p["torque"] * 50 * 4.11 / 102.0, rel=1e-12)
+        assert p["force_pN"] == pytest.approx(0.3, rel=1e-12)
+        assert p["superhelical_density"] == pytest.approx(p["turns"] * 10.5 / 300, rel=1e-12)
+        assert p["energy_kT"] == pytest.approx(p["energy"] * 50 / 102.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--dna", "--bp", "300"], "--force-pN"),
+    (["--dna", "--bp", "300", "--force-pN", "1", "--tension", "3"], "--tension"),
+    (["--dna", "--bp", "300", "--force-pN", "-1"], "force_pN"),
+    (["--bp", "300", "--twist-ratio", "1", "--tension", "1"], "--dna"),
+    (["--tension", "1"], "--twist-ratio"),
+])
+def test_dna_bad_input(tmp_path, capsys, args, words):
+    status = run(["tweezers", "--turns", "0:1", "--out", str(tmp_path / "x")] + args)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2 and len(err) == 1 and words in err[0]

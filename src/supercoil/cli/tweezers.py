@@ -43,9 +43,6 @@ def parse_turns(text: str) -> tuple[float, float]:
 
 
 def tweezers(
-    twist_ratio: Annotated[float, typer.Option(
-        "--twist-ratio", metavar="C/A", help="Twist stiffness over bending stiffness, "
-        "0 < C/A <= 1e6 (4/3 in the benchmark; DNA about 1.9).", show_default=False)],
     turns: Annotated[str, typer.Option(
         "--turns", metavar="START:STOP", help="Turns of the end, from START to STOP "
         "(0 <= START < STOP), e.g. 0:5.", show_default=False)],
@@ -53,6 +50,9 @@ def tweezers(
         "--out", metavar="DIR", help="Folder for branch.json, branches/*.npz and the "
         "figures; an existing non-empty DIR is refused unless --force.",
         show_default=False)],
+    twist_ratio: Annotated[float | None, typer.Option(
+        "--twist-ratio", metavar="C/A", help="Twist stiffness over bending stiffness, "
+        "0 < C/A <= 1e6 (4/3 in the benchmark); not with --dna.", show_default=False)] = None,
     length_over_diameter: Annotated[float | None, typer.Option(
         "--length-over-diameter", metavar="L/D", help="Rod length over tube diameter, "
         "L/D > pi; omit for a rod without self-contact.", show_default=False)] = None,
@@ -77,6 +77,25 @@ def tweezers(
     force: Annotated[bool, typer.Option(
         "--force", help="Write into an existing non-empty --out DIR, overwriting this "
         "command's own files (other files are left alone).")] = False,
+    dna: Annotated[bool, typer.Option(
+        "--dna", help="A DNA molecule in physical units (--bp, --force-pN, --salt-mM or "
+        "--diameter-nm, --temperature-K) instead of --twist-ratio, --tension and "
+        "--length-over-diameter. The model is athermal.")] = False,
+    bp: Annotated[int | None, typer.Option(
+        "--bp", metavar="N", help="With --dna: number of base pairs.",
+        show_default=False)] = None,
+    force_pN: Annotated[float | None, typer.Option(
+        "--force-pN", metavar="F", help="With --dna: pulling force in pN (>= 0).",
+        show_default=False)] = None,
+    salt_mM: Annotated[float | None, typer.Option(
+        "--salt-mM", metavar="MM", help="With --dna: monovalent salt in mM, giving the "
+        "effective diameter (default 150 mM).", show_default=False)] = None,
+    diameter_nm: Annotated[float | None, typer.Option(
+        "--diameter-nm", metavar="D", help="With --dna: the effective diameter in nm "
+        "(instead of --salt-mM).", show_default=False)] = None,
+    temperature_K: Annotated[float | None, typer.Option(
+        "--temperature-K", metavar="T", help="With --dna: temperature in K of the kT "
+        "unit (default 298 K).", show_default=False)] = None,
 ) -> None:
     """A rod clamped at both ends on the pulling axis, turned at one end.
 
@@ -90,6 +109,21 @@ def tweezers(
     hat_curve.png (extension against turns), torque.png, writhe.png and
     configurations.png (tubes) into --out.
     """
+    preset = None
+    if dna:
+        preset, twist_ratio, tension, length_over_diameter = _dna_inputs(
+            twist_ratio, tension, length_over_diameter, end_distance, bp, force_pN, salt_mM,
+            diameter_nm, temperature_K)
+    else:
+        for option, value in (("--bp", bp), ("--force-pN", force_pN), ("--salt-mM", salt_mM),
+                              ("--diameter-nm", diameter_nm),
+                              ("--temperature-K", temperature_K)):
+            if value is not None:
+                fail(f"{option} needs --dna (DNA units); without it give --twist-ratio, "
+                     "--tension or --end-distance and --length-over-diameter")
+        if twist_ratio is None:
+            fail("--twist-ratio C/A is missing; give it (e.g. --twist-ratio 1.3333), or use "
+                 "--dna --bp N --force-pN F")
     require_magnitude("--twist-ratio", twist_ratio, "a positive number up to 1e6")
     require_positive("--twist-ratio", twist_ratio, "a positive number up to 1e6")
     start, stop = parse_turns(turns)
@@ -150,7 +184,7 @@ def tweezers(
 
         warn(f"  path: quasi-static up to {stop:g} turns and back, steps of {step:g} turns")
         path = quasistatic_path(options, "up-down", step=step)
-    payload = write_tweezers(result, out, path)
+    payload = write_tweezers(result, out, path, preset)
     if not payload["ok"] or (path is not None and not path.ok):
         if path is not None and not path.ok:
             payload["notes"].append(f"path: {path.message}")
@@ -160,12 +194,14 @@ def tweezers(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def write_tweezers(result, out: Path, path=None) -> dict:
+def write_tweezers(result, out: Path, path=None, preset=None) -> dict:
     """Save the branches, branch.json (with the envelope) and the figures; return the payload.
 
     ``path``: the quasi-static path (:class:`~supercoil.problems.tweezers_protocol.PathResult`)
     of the up-down protocol, written as the list ``path`` with its jumps among the special
-    points, and its states as ``branches/path.npz``.
+    points, and its states as ``branches/path.npz``. ``preset``: a
+    :class:`~supercoil.units.dna.DNAPreset`; its suffixed keys are added to every point,
+    special point and path point, and ``units`` is ``dna``.
     """
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.tweezers import pick_configurations, write_figures
@@ -185,10 +221,24 @@ def write_tweezers(result, out: Path, path=None) -> dict:
         np.savez_compressed(out / "branches" / "path.npz", states=path.states,
                             turns=np.array([p["turns"] for p in path.points]))
     write_figures(payload, pick_configurations(payload, states), out)
+    if preset is not None:
+        from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
+
+        for key in ("points", "special_points", "path"):
+            if key in payload:
+                payload[key] = [tweezers_point_in_dna_units(p, preset) for p in payload[key]]
+        payload.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
+                       diameter_nm=preset.effective_diameter_nm,
+                       force_pN=preset.force_to_pN(result.options.tension),
+                       relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
     data = envelope(payload, n_nodes=result.options.n_nodes,
                     tolerances=result.options.tolerances,
+                    units="nondimensional" if preset is None else preset.name,
                     contact_treatment="barrier" if result.contact_problem else "none")
     data["conventions"].update(TWEEZERS_CONVENTIONS)
+    if preset is not None:
+        data["conventions"].update(preset.conventions())
+        data["provenance"]["units_preset"] = preset.record()
     write_json(data, out / "branch.json")
     for b in payload["branches"]:
         specials = [p for p in payload["special_points"] if p["branch"] == b["name"]
@@ -209,7 +259,39 @@ def write_tweezers(result, out: Path, path=None) -> dict:
                           f"z/L {j['extension']:.3f} -> {j['extension_after']:.3f})"
                           for j in path.jumps)
         print(f"  path: {len(path.points)} quasi-static steps; jumps at {jumps or 'none'}")
+    if preset is not None:
+        last = payload["points"][-1]
+        print(f"  DNA: {preset.base_pairs} bp = {preset.length_nm:.4g} nm, F = "
+              f"{payload['force_pN']:.4g} pN, D = {preset.effective_diameter_nm:.3g} nm; last "
+              f"state: extension {last['extension_nm']:.4g} nm, torque "
+              f"{last['torque_pN_nm']:.4g} pN nm")
+        warn(f"note: {ATHERMAL_CAVEAT}")
     print(f"wrote branch.json, branches/*.npz and figures to {out.resolve()}", flush=True)
     for note in payload["notes"]:
         warn(f"note: {note}")
     return payload
+
+
+def _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp, force_pN,
+                salt_mM, diameter_nm, temperature_K):
+    """``(preset, C/A, F L^2/A, L/D)`` of the --dna options; one-line errors otherwise."""
+    from supercoil.units.dna import DNAPreset, tweezers_parameters
+
+    for option, value in (("--twist-ratio", twist_ratio), ("--tension", tension),
+                          ("--length-over-diameter", length_over_diameter),
+                          ("--end-distance", end_distance)):
+        if value is not None:
+            fail(f"{option} cannot be combined with --dna (the DNA preset sets it); give "
+                 "--bp N --force-pN F [--salt-mM S | --diameter-nm D] [--temperature-K T]")
+    if bp is None or force_pN is None:
+        fail("--dna needs --bp N (base pairs) and --force-pN F (pulling force in pN)")
+    kwargs = {"base_pairs": bp, "salt_mM": salt_mM, "diameter_nm": diameter_nm}
+    if temperature_K is not None:
+        kwargs["temperature_K"] = temperature_K
+    try:
+        preset = DNAPreset(**kwargs)
+        numbers = tweezers_parameters(preset, force_pN)
+    except (TypeError, ValueError) as exc:
+        fail(f"--dna: {exc}")
+    return (preset, numbers["twist_ratio"], numbers["tension"],
+            numbers["length_over_diameter"])

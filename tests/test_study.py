@@ -403,3 +403,56 @@ def test_resume_branch_events_and_full_branch():
                 "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")},
             records={}), opts)
+
+
+TWEEZERS = """
+[rod]
+twist_ratio = 1.3333
+length_over_diameter = 20
+nodes = 40
+[problem]
+kind = "tweezers"
+tension = 20.0
+turns = [0, 1.6]
+"""
+
+
+def test_tweezers_study():
+    study = parse_study(TWEEZERS)
+    opts = study.tweezers_options()
+    assert opts.tension == 20.0 and opts.turns == (0.0, 1.6) and opts.n_nodes == 40
+    assert opts.free_max_step == 0.1  # the tweezers' default, not the ring diagram's 0.05
+    assert study.settings["continuation"]["max_points"] == 400
+    for edit, words in [
+        (("tension = 20.0", "tension = 20.0\nend_distance = 0.5"), "exactly one of tension"),
+        (("tension = 20.0", ""), "exactly one of tension"),
+        (("turns = [0, 1.6]", "turns = [2, 1]"), "[problem] turns must be [start, stop]"),
+        (("nodes = 40", "nodes = 10"), "at least 12 nodes"),
+        (("tension = 20.0", 'tension = 20.0\ncontact = "barrier"'),
+         "[problem] contact does not apply to a tweezers problem"),
+        (("[problem]", "[continuation]\ncontact_max_points = 3\n[problem]"),
+         "[continuation] contact_max_points does not apply to a tweezers problem"),
+    ]:
+        assert words in error(TWEEZERS.replace(*edit, 1))
+
+
+def test_dna_tweezers_study():
+    text = """
+[units]
+preset = "dna"
+base_pairs = 3000
+[rod]
+nodes = 60
+[problem]
+kind = "tweezers"
+force_pN = 0.5
+turns = [0, 10]
+"""
+    study = parse_study(text)
+    preset = study.dna_preset()
+    assert study.settings["problem"]["tension"] == pytest.approx(preset.force_from_pN(0.5))
+    assert study.tweezers_options().length_over_diameter == pytest.approx(
+        3000 * 0.34 / effective_diameter_nm(150.0))
+    assert "force_pN is missing" in error(text.replace("force_pN = 0.5", ""))
+    assert "[problem] tension cannot be given with units preset 'dna'" in error(
+        text.replace("force_pN = 0.5", "tension = 3.0"))

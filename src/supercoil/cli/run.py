@@ -28,7 +28,8 @@ import typer
 from supercoil.cli._common import EXIT_NOT_CONVERGED, fail, warn
 
 RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
-SUMMARY_FILES = {"ring_diagram": "diagram.json", "ring": "ring.json"}
+SUMMARY_FILES = {"ring_diagram": "diagram.json", "ring": "ring.json",
+                 "tweezers": "branch.json"}
 FIGURE_FORMATS = ("png",)
 NEWTON_TOLERANCE = 1e-10  # supercoil ring's (cli/main.py)
 CONTACT_NEWTON_TOLERANCE = 1e-9
@@ -175,6 +176,8 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
     try:
         if spec.kind == "ring_diagram":
             outcome = _run_ring_diagram(spec, writer, progress, saved, resume)
+        elif spec.kind == "tweezers":
+            outcome = _run_tweezers(spec, writer, progress, resume)
         else:
             outcome = _run_ring(spec, writer, progress)
     except KeyboardInterrupt:
@@ -199,7 +202,7 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
         name = SUMMARY_FILES[spec.kind]
         write_json(summary, out / name)
         files.append(name)
-        if spec.kind == "ring_diagram":  # diagram.json's branches[].file, as diagram ring
+        if spec.kind != "ring":  # the summary's branches[].file, as diagram ring / tweezers
             from supercoil.io.store import load
 
             (out / "branches").mkdir(exist_ok=True)
@@ -212,9 +215,12 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
 
 
 def _attributes(spec) -> dict:
-    rod = spec.settings["rod"]
-    out = {"twist_ratio": rod["twist_ratio"], "n_nodes": rod["nodes"], "closed": True,
-           "study_name": spec.name}
+    rod, problem = spec.settings["rod"], spec.settings["problem"]
+    out = {"twist_ratio": rod["twist_ratio"], "n_nodes": rod["nodes"],
+           "closed": spec.kind != "tweezers", "study_name": spec.name}
+    for key in ("tension", "end_distance"):
+        if key in problem:
+            out[key] = problem[key]
     if "length_over_diameter" in rod:
         out["length_over_diameter"] = rod["length_over_diameter"]
         out["diameter"] = 1.0 / rod["length_over_diameter"]
@@ -229,9 +235,14 @@ def _attributes(spec) -> dict:
     return out
 
 
+def _treatment(spec) -> str:
+    if spec.kind == "tweezers":
+        return "barrier" if "length_over_diameter" in spec.settings["rod"] else "none"
+    return spec.settings["problem"].get("contact", "none")
+
+
 def _provenance(spec) -> dict:
-    problem = spec.settings["problem"]
-    out = {"study_file": spec.source, "contact_treatment": problem.get("contact", "none"),
+    out = {"study_file": spec.source, "contact_treatment": _treatment(spec),
            "n_nodes": spec.settings["rod"]["nodes"]}
     preset = spec.dna_preset()
     if preset is not None:
@@ -244,7 +255,7 @@ def _envelope(spec, payload: dict, tolerances: dict) -> dict:
 
     preset = spec.dna_preset()
     data = envelope(payload, n_nodes=spec.settings["rod"]["nodes"], tolerances=tolerances,
-                    contact_treatment=spec.settings["problem"].get("contact", "none"),
+                    contact_treatment=_treatment(spec),
                     units=spec.units)
     data["provenance"]["study_file"] = spec.source
     if preset is not None:
@@ -344,6 +355,50 @@ def diagram_in_dna_units(payload: dict, preset, max_sigma: float) -> dict:
     out["points"] = [point(p) for p in payload["points"]]
     out["special_points"] = [point(p) for p in payload["special_points"]]
     return out
+
+
+def _run_tweezers(spec, writer, progress, resume: bool) -> dict:
+    from supercoil.problems.tweezers import tweezers_branches
+    from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
+
+    options = spec.tweezers_options()
+    notes = []
+    if resume:
+        notes.append("tweezers_branches cannot continue stored branches: the branches were "
+                     "computed again")
+    control = (f"F L^2/A = {options.tension:.6g}" if options.load_control
+               else f"z/L = {options.end_distance:.6g}")
+    progress.message(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
+                     f"{options.length_over_diameter or 'no contact'}, N = {options.n_nodes}, "
+                     f"turns {options.turns[0]:g} to {options.turns[1]:g}")
+    result = tweezers_branches(options, progress=progress.message)
+    stored_names = set(writer.branch_names())
+    for branch in result.branches:
+        writer.write_branch(branch, complete=True, contact=branch.name in result.contact_branches)
+    for name in stored_names - {b.name for b in result.branches}:
+        writer.remove_branch(name)
+    payload = result_payload(result)
+    preset = spec.dna_preset()
+    if preset is not None:
+        from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
+
+        for key in ("points", "special_points"):
+            payload[key] = [tweezers_point_in_dna_units(p, preset) for p in payload[key]]
+        payload.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
+                       diameter_nm=preset.effective_diameter_nm,
+                       force_pN=spec.settings["problem"]["force_pN"],
+                       relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
+    summary = _envelope(spec, payload, options.tolerances)
+    summary["conventions"].update(TWEEZERS_CONVENTIONS)
+    failed = [b["name"] for b in payload["branches"] if not b["ok"]]
+    if result.ok:
+        status, message = "complete", f"{len(result.branches)} branches computed"
+    else:
+        status = "incomplete"
+        message = (f"branch(es) {', '.join(failed)} stopped early" if failed else
+                   "a step failed (see notes)")
+    return {"status": status, "message": message, "summary": summary,
+            "notes": notes + list(payload["notes"])}
 
 
 def _run_ring(spec, writer, progress) -> dict:

@@ -8,15 +8,18 @@ A study has six tables (``[study]`` and ``[continuation]`` optional)::
                      twist_persistence_nm
     [rod]            twist_ratio (C/A), length_over_diameter (L/D), nodes
                      (under "dna" C/A and L/D follow from the preset: not given)
-    [problem]        kind = "ring_diagram" or "ring", and its keys (below)
-    [continuation]   ring_diagram only: the step, length and tolerance options of
-                     DiagramOptions (free_max_step, contact_max_points, ...)
+    [problem]        kind = "ring_diagram", "ring" or "tweezers", and its keys (below)
+    [continuation]   ring_diagram and tweezers: the step, length and tolerance options
+                     of DiagramOptions / TweezersOptions (free_max_step, ...)
     [outputs]        figures (PNG, default true), json (the JSON summary, true)
 
 ``[problem]`` keys: ``ring_diagram``: ``modes`` (list of Michell modes >= 2),
 ``max_excess_link`` (turns; "dna": ``max_superhelical_density``), ``contact``
 (barrier or penalty). ``ring``: ``excess_link`` ("dna":
 ``superhelical_density``), ``contact`` (a treatment; needs L/D).
+``tweezers``: ``tension`` (F L^2/A, load control) or ``end_distance`` (z/L,
+displacement control) ("dna": ``force_pN``), ``turns`` = [start, stop];
+without ``[rod] length_over_diameter`` the rod has no self-contact.
 
 Every key is checked: an unknown or misspelled key, a key of another problem
 kind, a wrong type or a value out of range is a :class:`StudyError` whose
@@ -41,7 +44,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-PROBLEM_KINDS = ("ring_diagram", "ring")
+PROBLEM_KINDS = ("ring_diagram", "ring", "tweezers")
 UNITS_PRESETS = ("nondimensional", "dna")
 DIAGRAM_TREATMENTS = ("barrier", "penalty")
 RING_TREATMENTS = ("barrier", "augmented", "penalty", "exact")
@@ -82,7 +85,7 @@ def _type_name(v) -> str:
 class _Key:
     valid: str  # what is valid, in words
     check: Callable[[Any], bool]
-    default: Any = None
+    default: Any = None  # or {kind: default} where the kinds differ
     kinds: tuple[str, ...] = PROBLEM_KINDS  # problem kinds the key belongs to
     presets: tuple[str, ...] = UNITS_PRESETS  # units presets the key belongs to
     convert: Callable[[Any], Any] = lambda v: v
@@ -106,6 +109,11 @@ def _choice(options: tuple[str, ...]):
 def _modes(v) -> bool:
     return (isinstance(v, list) and len(v) > 0 and all(_is_int(m) and 2 <= m <= 12 for m in v)
             and len(set(v)) == len(v))
+
+
+def _turns(v) -> bool:
+    return (isinstance(v, list) and len(v) == 2 and all(_is_number(x) and math.isfinite(x)
+                                                         for x in v) and 0 <= v[0] < v[1])
 
 
 def _count(low: int, high: int):
@@ -138,7 +146,8 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
             f"L/D, a number above pi ({math.pi:.4f}) up to {MAX_MAGNITUDE:g}",
             _number(math.pi, MAX_MAGNITUDE, low_open=True), presets=("nondimensional",),
             convert=float),
-        "nodes": _Key(f"an integer from 8 to {MAX_NODES}", _count(8, MAX_NODES), 100),
+        "nodes": _Key(f"an integer from 8 to {MAX_NODES} (12 for tweezers)",
+                      _count(8, MAX_NODES), 100),
     },
     "problem": {
         "kind": _Key(f"one of {', '.join(PROBLEM_KINDS)}", _choice(PROBLEM_KINDS)),
@@ -157,23 +166,39 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
         "superhelical_density": _Key("a superhelical density (e.g. -0.06)",
                                      _number(-10.0, 10.0), kinds=("ring",),
                                      presets=("dna",), convert=float),
-        "contact": _Key("a contact treatment", lambda v: isinstance(v, str), None),
+        "contact": _Key("a contact treatment", lambda v: isinstance(v, str), None,
+                        kinds=("ring_diagram", "ring")),
+        "tension": _Key(f"a force F L^2/A from 0 to {MAX_MAGNITUDE:g} (load control)",
+                        _number(0.0, MAX_MAGNITUDE), kinds=("tweezers",),
+                        presets=("nondimensional",), convert=float),
+        "end_distance": _Key("z/L strictly between 0 and 1 (displacement control)",
+                             _number(0.0, 1.0, low_open=True), kinds=("tweezers",),
+                             presets=("nondimensional",), convert=float),
+        "force_pN": _Key("a pulling force in pN (a number >= 0)", _number(0.0, 1e4),
+                         kinds=("tweezers",), presets=("dna",), convert=float),
+        "turns": _Key("[start, stop] turns with 0 <= start < stop", _turns, [0.0, 5.0],
+                      kinds=("tweezers",), convert=lambda v: [float(x) for x in v]),
     },
     "continuation": {
-        "free_max_step": _Key("a positive arclength step (units of L)", _POSITIVE, 0.05,
-                              kinds=("ring_diagram",), convert=float),
+        "free_max_step": _Key("a positive arclength step (units of L)", _POSITIVE,
+                              {"ring_diagram": 0.05, "tweezers": 0.1},
+                              kinds=("ring_diagram", "tweezers"), convert=float),
         "free_max_points": _Key("an integer >= 2", _count(2, 100_000), 80,
                                 kinds=("ring_diagram",)),
         "contact_max_step": _Key("a positive arclength step (units of D)", _POSITIVE, 0.5,
-                                 kinds=("ring_diagram",), convert=float),
+                                 kinds=("ring_diagram", "tweezers"), convert=float),
         "contact_max_points": _Key("an integer >= 2", _count(2, 100_000), 150,
                                    kinds=("ring_diagram",)),
+        "max_points": _Key("an integer >= 2 (points per branch)", _count(2, 100_000), 400,
+                           kinds=("tweezers",)),
+        "segment_points": _Key("an integer >= 2 (points per run between azimuth-pin checks)",
+                               _count(2, 100_000), 30, kinds=("tweezers",)),
         "event_tolerance": _Key("a positive arclength tolerance", _POSITIVE, 1e-8,
-                                kinds=("ring_diagram",), convert=float),
+                                kinds=("ring_diagram", "tweezers"), convert=float),
         "contact_event_tolerance": _Key("a positive arclength tolerance", _POSITIVE, 1e-6,
-                                        kinds=("ring_diagram",), convert=float),
+                                        kinds=("ring_diagram", "tweezers"), convert=float),
         "contact_tolerance": _Key("a positive residual tolerance", _POSITIVE, 1e-8,
-                                  kinds=("ring_diagram",), convert=float),
+                                  kinds=("ring_diagram", "tweezers"), convert=float),
         "contact_gauge": _Key("true or false", lambda v: isinstance(v, bool), True,
                               kinds=("ring_diagram",)),
     },
@@ -221,6 +246,23 @@ class Study:
         if self.units != "dna":
             return None
         return _dna_preset(self.settings["units"], self.settings["problem"])
+
+    def tweezers_options(self):
+        """:class:`~supercoil.problems.tweezers.TweezersOptions` of a tweezers study."""
+        from supercoil.problems.tweezers import TweezersOptions
+
+        s = self.settings
+        c = s["continuation"]
+        return TweezersOptions(
+            twist_ratio=s["rod"]["twist_ratio"],
+            length_over_diameter=s["rod"].get("length_over_diameter"),
+            tension=s["problem"].get("tension"), end_distance=s["problem"].get("end_distance"),
+            turns=tuple(s["problem"]["turns"]), n_nodes=s["rod"]["nodes"],
+            free_max_step=c["free_max_step"], contact_max_step=c["contact_max_step"],
+            max_points=c["max_points"], segment_points=c["segment_points"],
+            event_tolerance=c["event_tolerance"],
+            contact_event_tolerance=c["contact_event_tolerance"],
+            contact_tolerance=c["contact_tolerance"])
 
     def diagram_options(self):
         """:class:`~supercoil.problems.ring_diagram.DiagramOptions` of a ring_diagram study."""
@@ -339,8 +381,11 @@ def _validate(raw: dict, source: str) -> dict:
                                  f"{value!r} ({_type_name(value)})")
             out[key] = spec.convert(value)
         for key in valid:
-            if key not in out and schema[key].default is not None:
-                out[key] = copy.deepcopy(schema[key].default)
+            default = schema[key].default
+            if isinstance(default, dict):
+                default = default.get(kind)
+            if key not in out and default is not None:
+                out[key] = copy.deepcopy(default)
         settings[table] = out
     _complete(settings, kind, preset, source)
     return settings
@@ -374,8 +419,13 @@ def _complete(s: dict, kind: str, preset: str, source: str) -> None:
         rod["length_over_diameter"] = lod
         if kind == "ring_diagram":
             problem["max_excess_link"] = problem["max_superhelical_density"] * dna.relaxed_link
-        else:
+        elif kind == "ring":
             problem["excess_link"] = dna.excess_link
+        else:
+            if "force_pN" not in problem:
+                raise StudyError(f"{source}: [problem] force_pN is missing; DNA tweezers need "
+                                 "the pulling force, e.g. force_pN = 0.5")
+            problem["tension"] = dna.force_from_pN(problem["force_pN"])
     else:
         if "twist_ratio" not in rod:
             raise StudyError(f"{source}: [rod] twist_ratio is missing; give C/A, e.g. "
@@ -386,6 +436,9 @@ def _complete(s: dict, kind: str, preset: str, source: str) -> None:
         if kind == "ring" and "excess_link" not in problem:
             raise StudyError(f"{source}: [problem] excess_link is missing; give the excess "
                              "link in turns, e.g. excess_link = 2.5")
+    if kind == "tweezers":
+        _complete_tweezers(s, preset, source)
+        return
     treatments = DIAGRAM_TREATMENTS if kind == "ring_diagram" else RING_TREATMENTS
     contact = problem.get("contact")
     if contact is None:
@@ -399,3 +452,18 @@ def _complete(s: dict, kind: str, preset: str, source: str) -> None:
                          "tube diameter D = L/(L/D))")
     if problem["contact"] is None:
         del problem["contact"]
+
+
+def _complete_tweezers(s: dict, preset: str, source: str) -> None:
+    rod, problem = s["rod"], s["problem"]
+    if preset != "dna" and ("tension" in problem) == ("end_distance" in problem):
+        raise StudyError(f"{source}: [problem] give exactly one of tension (F L^2/A, load "
+                         "control) and end_distance (z/L, displacement control)")
+    if rod["nodes"] < 12:
+        raise StudyError(f"{source}: [rod] nodes = {rod['nodes']}: a clamped rod needs at least "
+                         "12 nodes")
+    study = Study(source, "", s)
+    try:
+        study.tweezers_options()
+    except ValueError as exc:
+        raise StudyError(f"{source}: {exc}") from None

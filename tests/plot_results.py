@@ -97,17 +97,35 @@ def write_ring_result(folder: Path, *, shift: float = 0.0) -> Path:
     return folder
 
 
-def write_tweezers_result(folder: Path) -> Path:
-    """A one-branch ``branch.json`` with ``points`` keyed by ``turns`` (a hat curve)."""
+def open_rod_state(t: float, n: int = N_NODES) -> np.ndarray:
+    """Nodes of an open rod from (0, 0, 0) along +z, bowed sideways by t."""
+    z = np.linspace(0.0, 1.0 - 0.3 * t, n)
+    return np.stack([0.2 * t * np.sin(np.pi * z), 0.1 * t * np.sin(2 * np.pi * z), z], axis=1)
+
+
+def write_tweezers_result(folder: Path, *, with_states: bool = False) -> Path:
+    """``branch.json`` with ``points`` keyed by ``turns`` (a hat curve); with
+    ``with_states`` as ``supercoil tweezers`` writes it (branch names, branch files)."""
     folder.mkdir(parents=True, exist_ok=True)
     turns = np.linspace(-6.0, 6.0, 13)
     extension = np.where(np.abs(turns) < 2.0, 0.98, 0.98 - 0.1 * (np.abs(turns) - 2.0))
+    unstable = np.where(np.abs(turns) < 5, 0, 1)
     points = [{"turns": float(n), "extension": float(z), "torque": float(0.1 * n),
                "writhe": float(0.5 * n), "twist": float(0.5 * n), "energy": float(n * n),
-               "unstable_count": 0 if abs(n) < 5 else 1, "zero_modes": 0}
-              for n, z in zip(turns, extension, strict=True)]
+               "unstable_count": int(u), "zero_modes": 0}
+              for n, z, u in zip(turns, extension, unstable, strict=True)]
     payload = {"schema_version": "1.0", "units": "nondimensional", "force": 10.0,
                "twist_ratio": 1.5, "points": points,
                "special_points": [{"kind": "bifurcation", "turns": 2.0, "extension": 0.98}]}
+    if with_states:
+        states = np.array([open_rod_state(abs(n) / 6.0).ravel() for n in turns])
+        branch = _branch("plectoneme", None, turns, states, unstable, 0.5 * turns)
+        (folder / "branches").mkdir(exist_ok=True)
+        branch.save(folder / "branches" / "plectoneme.npz")
+        for p in points:
+            p["branch"] = "plectoneme"
+        payload.update(n_nodes=N_NODES, diameter=DIAMETER, branches=[
+            {"name": "plectoneme", "parent": None, "contact": True,
+             "file": "branches/plectoneme.npz"}])
     (folder / "branch.json").write_text(json.dumps(payload), encoding="utf-8")
     return folder

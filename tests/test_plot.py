@@ -257,3 +257,16 @@ def test_a_damaged_result_file_is_one_line(tmp_path, capsys):
         load_result(bad)
     assert run(["plot", str(bad), "--out", str(tmp_path / "figs")]) == 2
     assert str(bad) in _error(capsys)
+
+
+def test_tweezers_configurations_are_open_tubes(tmp_path):
+    result = load_result(write_tweezers_result(tmp_path / "tw", with_states=True))
+    assert supported_kinds(result) == ("diagram", "hat-curve", "configurations")
+    ax = figure_of(result, "configurations").axes[0]
+    segments = ax.collections[0].get_segments()
+    assert len(segments) == 2 * (24 - 1)  # an open rod: n - 1 segments (each + stripe)
+    starts = np.array([seg[0] for seg in segments[0::2]])
+    xlim, ylim = ax.get_xlim(), ax.get_ylim()  # the box is centred on the picture
+    assert (starts[:, 0].min() + starts[:, 0].max()) / 2 == pytest.approx(
+        (xlim[0] + xlim[1]) / 2, abs=0.05 * (xlim[1] - xlim[0]))
+    assert ylim[0] < starts[:, 1].min() and starts[:, 1].max() < ylim[1]

@@ -251,3 +251,15 @@ def test_screenshots_show_the_selected_state(browser, page, tmp_path):
     changed = np.any(np.abs(touching - circle) > 10, axis=2)
     assert changed[tube[1]:tube[3], tube[0]:tube[2]].mean() > 0.02  # another tube
     assert changed[diagram[1]:diagram[3], diagram[0]:diagram[2]].any()  # marker moved
+
+
+def test_tweezers_page_shows_the_open_rod(tmp_path):
+    from supercoil.continuation import Branch
+
+    folder = write_tweezers_result(tmp_path / "tw", with_states=True)
+    assert run(["view", str(folder)]) == 0
+    data = _payload(folder / "viewer.html")
+    assert data["closed"] is False and data["diameter"] == 0.025
+    (branch,) = data["branches"]
+    stored = Branch.load(folder / "branches" / "plectoneme.npz").states
+    assert np.max(np.abs(np.array(branch["states"]) - stored)) <= 0.5e-5 + 1e-12

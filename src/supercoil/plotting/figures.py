@@ -180,6 +180,7 @@ def configurations_figure(configurations: Sequence[Mapping], *, diameter: float 
             x = x - x.mean(axis=0)
             _, _, vt = np.linalg.svd(x, full_matrices=False)
             p = x @ vt.T
+            p[:, :2] -= 0.5 * (p[:, :2].min(axis=0) + p[:, :2].max(axis=0))  # box centred
             width = diameter if diameter else 0.01 * float(np.ptp(p[:, :2], axis=0).max())
             span = float(np.ptp(p[:, :2], axis=0).max()) * 1.1 + width
             ax.set_xlim(-span / 2, span / 2)

@@ -21,9 +21,10 @@ FORMATS = ("png", "svg")
 def plot(
     result: Annotated[
         Path,
-        typer.Argument(metavar="RESULT", help="A result: the --out folder of 'supercoil "
-                       "diagram ring' (or its diagram.json), or of 'supercoil tweezers' "
-                       "(or its branch.json).", show_default=False),
+        typer.Argument(metavar="RESULT", help="A result: a result file (result.h5 of "
+                       "'supercoil run') or its folder, or the --out folder of 'supercoil "
+                       "diagram ring' (or its diagram.json) or of 'supercoil tweezers' (or "
+                       "its branch.json).", show_default=False),
     ],
     out: Annotated[
         Path,

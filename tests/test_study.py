@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import json
 import math
 from pathlib import Path
@@ -296,6 +297,11 @@ def test_interrupted_run_keeps_a_valid_file_and_resume_completes_it(tmp_path, ca
     for b in cut.branches:  # whatever was saved is a prefix of the uninterrupted run
         ref = reference.branch(b.name)
         np.testing.assert_allclose(b.states, ref.states[:len(b)], atol=1e-10)
+    from supercoil.problems.ring_diagram import ring_diagram
+
+    if "on_point" in inspect.signature(ring_diagram).parameters:
+        # saved point by point: the circle and the start of alpha_contact's run
+        assert cut.branch_names[:2] == ("circle", "alpha") and len(cut.branch("alpha")) > 0
     # --resume: a settings mismatch is refused and leaves the file alone
     study = write_study(tmp_path)
     before = (out / "result.h5").read_bytes()
@@ -321,17 +327,20 @@ def ring_alpha(n_nodes=24):
 
 
 def test_resume_branch_reproduces_the_uninterrupted_ring_branch():
-    """alpha off the circle (near-symmetry gauge row) with constant steps: interrupted after
-    k points and resumed from the stored partial branch, the points are the same."""
+    """alpha off the circle (near-symmetry gauge row), steps growing after fast corrections:
+    interrupted after k points and resumed from the stored partial branch, the points are
+    the same (the next step is recovered from the last one and its replayed correction)."""
     from supercoil.problems.ring_branches import ring_records
 
     problem, circle, point = ring_alpha()
-    opts = ContinuationOptions(initial_step=0.02, max_step=0.02, max_points=12,
+    opts = ContinuationOptions(initial_step=0.005, max_step=0.05, max_points=12,
                                parameter_bounds=(0.0, 3.0))
     records = ring_records(problem)
-    full = switch_branch(problem, circle, point, opts, amplitude=0.02, name="alpha",
+    full = switch_branch(problem, circle, point, opts, amplitude=0.005, name="alpha",
                          records=records)
     assert len(full) == 12 and full.phase_modes.shape[0] == 1
+    steps = np.diff(full.arclength)
+    assert steps[-1] > 2 * steps[0]  # the steps grew: the resume must know the next one
     saved = []
 
     def stop_after_5(branch):
@@ -341,7 +350,7 @@ def test_resume_branch_reproduces_the_uninterrupted_ring_branch():
 
     problem, circle, point = ring_alpha()
     with pytest.raises(KeyboardInterrupt):
-        switch_branch(problem, circle, point, opts, amplitude=0.02, name="alpha",
+        switch_branch(problem, circle, point, opts, amplitude=0.005, name="alpha",
                       records=records, on_point=stop_after_5)
     partial = saved[-1]
     assert len(partial) == 5
@@ -368,7 +377,7 @@ def test_resume_branch_events_and_full_branch():
 
     from supercoil.continuation import UserEvent
 
-    opts = ContinuationOptions(parameter_bounds=(1.0, 4.0), initial_step=0.1, max_step=0.1,
+    opts = ContinuationOptions(parameter_bounds=(1.0, 4.0), initial_step=0.02, max_step=0.1,
                                max_points=60)
     user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[16] - 1.0})
 
@@ -390,7 +399,8 @@ def test_resume_branch_events_and_full_branch():
                             records=lambda q, mu, lam: {"u_mid": q[16]})
     np.testing.assert_allclose(resumed.states, full.states, atol=1e-10)
     assert [(p.kind, p.index) for p in resumed.special_points] == \
-        [(p.kind, p.index) for p in full.special_points] == [("threshold", 25), ("fold", 27)]
+        [(p.kind, p.index) for p in full.special_points]
+    assert [p.kind for p in full.special_points] == ["threshold", "fold"]
     for p, q in zip(resumed.special_points, full.special_points):
         assert p.parameter == pytest.approx(q.parameter, abs=1e-9)
         assert p.arclength == pytest.approx(q.arclength, abs=1e-9)

@@ -286,9 +286,20 @@ def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict
     notes = []
     if "on_point" in accepted:
         kwargs["on_point"] = _point_saver(writer, progress, saved)
+    if "on_branch" in accepted:
+        def on_branch(branch, contact: bool) -> None:
+            writer.write_branch(branch, complete=True, contact=contact)
+
+        kwargs["on_branch"] = on_branch
     if resume:
         if "resume" in accepted:
-            kwargs["resume"] = writer.stored_branches()
+            stored = writer.stored_branches()
+            kwargs["resume"] = stored
+            kept = [n for n, (b, complete) in stored.items() if complete]
+            partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
+                       if not complete and len(b)]
+            progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
+                             f"{', '.join(partial) or 'no branch'}")
         else:
             notes.append("this version of ring_diagram cannot continue stored branches: the "
                          "diagram was computed again (the stored points were kept until "

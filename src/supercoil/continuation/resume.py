@@ -5,11 +5,10 @@ interrupted is continued by :func:`resume_branch` with the same extended
 system: the branch's own phase conditions (``phase_modes``, ``phase_state``:
 the gauge pins it was computed with, not new ones chosen at the last point),
 the last point re-corrected at its parameter value, the tangent oriented like
-the stored one, and the step of the last interval (or ``step``). The result
-is the whole branch, the stored points followed by the new ones (indices and
-arclength continued), as the uninterrupted run would have given it up to the
-step sizes after the interruption: with the same step sequence the points are
-the same (tested with constant steps).
+the stored one, and the step the interrupted run would have taken next
+(:func:`_next_step`, or ``step``). The result is the whole branch, the stored
+points followed by the new ones (indices and arclength continued), as the
+uninterrupted run gives it (tested: the same points to round-off).
 """
 
 from __future__ import annotations
@@ -65,6 +64,49 @@ def join(first: Branch, rest: Branch, offset: float) -> Branch:
                                **arrays)
 
 
+def _reduced(system: ExtendedSystem, full: np.ndarray) -> np.ndarray:
+    """A stored tangent ``[dq (n_dofs), dmu (m), dlambda]`` in the system's layout."""
+    n_dofs, m = system.problem.n_dofs, system.m
+    full = np.asarray(full, dtype=float)
+    return np.concatenate([full[:n_dofs][system.free], full[n_dofs:n_dofs + m],
+                           np.zeros(system.r), full[-1:]])
+
+
+def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOptions) -> float:
+    """The step the interrupted run would have taken next.
+
+    The last step's pseudo-arclength ``ds = W d . (x_k - x_{k-1})`` (``d`` the
+    predictor direction at point ``k - 1``) is exact; whether the run then grew
+    it depends on the corrector's iteration count, which is replayed (one
+    correction from point ``k - 1``), as the tracer does: ``growth * ds`` (at
+    most ``max_step``) after a fast correction, ``ds`` otherwise.
+    """
+    k = len(partial)
+    if k < 2:
+        return opts.initial_step
+
+    def packed(i):
+        return system.pack(partial.states[i], partial.multipliers[i],
+                           float(partial.parameter_values[i]))
+
+    x_prev, x_last = packed(-2), packed(-1)
+    d = _reduced(system, partial.tangents[-2])
+    if opts.predictor == "secant" and k >= 3:
+        d = x_prev - packed(-3)
+    d = d / system.norm(d)
+    row = system.weights * d
+    ds = float(row @ (x_last - x_prev))
+    if not ds > 0:
+        return opts.initial_step
+    setattr(system.problem, partial.parameter, float(partial.parameter_values[-2]))
+    system.problem.accept(np.asarray(partial.states[-2], dtype=float))
+    replay = correct(system, x_prev + ds * d, row, x_prev, ds, opts.tolerance,
+                     opts.max_corrector_iterations)
+    if replay.ok and replay.iterations <= opts.fast_iterations:
+        return min(ds * opts.growth, opts.max_step)
+    return ds
+
+
 def resume_branch(problem: ConstrainedEnergy, partial: Branch,
                   options: ContinuationOptions | None = None, *,
                   records: RecordFunction | None = None, events: tuple[UserEvent, ...] = (),
@@ -90,6 +132,10 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     system = ExtendedSystem(problem, partial.parameter, q, modes,
                             partial.phase_state if modes is not None else None,
                             opts.parameter_weight, opts.finite_difference_step)
+    if step is None:
+        step = _next_step(system, partial, opts)
+        setattr(problem, partial.parameter, lam)
+        problem.accept(q)
     before = head(partial, k - 1)
     offset = float(partial.arclength[-1])
 
@@ -107,19 +153,13 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
         return dataclasses.replace(partial, status=ContinuationStatus.START_FAILED,
                                    message=f"resume: the last stored point did not converge "
                                    f"again: {corr.message}")
-    n_dofs, m = problem.n_dofs, system.m
-    stored = np.asarray(partial.tangents[-1], dtype=float)
-    guess = np.concatenate([stored[:n_dofs][system.free], stored[n_dofs:n_dofs + m],
-                            np.zeros(system.r), stored[-1:]])
+    guess = _reduced(system, partial.tangents[-1])
     try:
         t0 = tangent(system, corr.x, system.weights * guess)
         tracer.add_point(corr.x, t0)
     except (SingularMatrixError, InertiaError) as exc:
         return dataclasses.replace(partial, status=ContinuationStatus.START_FAILED,
                                    message=f"resume: the last stored point is singular ({exc})")
-    if step is None:
-        step = (float(partial.arclength[-1] - partial.arclength[-2]) if k >= 2
-                else opts.initial_step)
     step = min(max(step, opts.min_step), opts.max_step)
     status, message = tracer.run(step)
     whole = join(before, tracer.branch(status, message), offset)

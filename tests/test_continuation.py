@@ -133,6 +133,43 @@ def test_bordered_solve_with_rank_one_hessian_terms_equals_the_assembled_one():
     assert folds[0][0] < BRATU_FOLD - 0.1  # the nonlocal softening term moves the fold
 
 
+@pytest.mark.parametrize("singular_scale", [1.0, 1e-10, 0.0])
+def test_band_bordered_solve_is_accurate_when_the_kkt_matrix_is_nearly_singular(singular_scale):
+    """Band LU + block elimination + refinement against B == dense solve of B.
+
+    K is banded and symmetric with its eigenvalue nearest zero moved to
+    about ``singular_scale`` (near a fold K is nearly singular while B is
+    regular); the solve must keep B's accuracy, not K's (when the band LU
+    finds an exactly zero pivot, ``factor`` returns None and BorderedFactor
+    uses SuperLU on B instead).
+    """
+    import scipy.sparse as sp
+
+    from supercoil.continuation import bordered
+
+    rng = np.random.default_rng(7)
+    n, band = 120, 3
+    A = np.zeros((n, n))
+    for k in range(band + 1):
+        d = rng.standard_normal(n - k)
+        A += np.diag(d, k) + (np.diag(d, -k) if k else 0)
+    values, vectors = np.linalg.eigh(A)
+    # move the eigenvalue nearest zero to singular_scale, then cut back to the band
+    i = int(np.argmin(np.abs(values)))
+    A = A + (singular_scale - values[i]) * np.outer(vectors[:, i], vectors[:, i])
+    A[np.abs(np.subtract.outer(np.arange(n), np.arange(n))) > band] = 0.0
+    c, r = rng.standard_normal(n), rng.standard_normal(n + 1)
+    B = np.block([[A, c[:, None]], [r[None, :]]])
+    rhs = rng.standard_normal(n + 1)
+    factor = bordered._BandBordered.factor(sp.csc_matrix(B))
+    exact = np.linalg.solve(B, rhs)
+    assert factor is not None or singular_scale == 0.0
+    if factor is not None:
+        z = factor.solve(rhs)
+        assert np.max(np.abs(B @ z - rhs)) < 1e-12 * np.max(np.abs(B)) * np.max(np.abs(z))
+        assert np.allclose(z, exact, rtol=1e-8, atol=1e-10 * np.max(np.abs(exact)))
+
+
 def test_secant_predictor_finds_the_same_fold():
     _, tangent = bratu_branch(16)
     _, secant = bratu_branch(16, predictor="secant")

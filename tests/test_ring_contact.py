@@ -126,8 +126,11 @@ def test_penalty_tends_to_exact_on_the_ring(supercoiled):
         assert res.converged, res.message
         errors.append(abs(problem.writhe_local(res.q) - wr_exact))
     # the penetration F/k falls tenfold per tenfold stiffness, and so does the error
+    # in the asymptotic regime: observed order in 1/k between 10x and 100x (measured
+    # 1.05). The base stiffness is outside that regime, and its state depends on
+    # rounding (3.1e-3 with one BLAS thread, 5.2e-3 with two): only the ordering there.
     assert errors[0] > errors[1] > errors[2]
-    assert errors[0] / errors[2] > 30
+    assert np.log10(errors[1] / errors[2]) > 0.8
 
 
 def test_below_michell_the_ring_stays_a_circle():

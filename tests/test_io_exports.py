@@ -115,6 +115,14 @@ def test_vtk_round_trip(tmp_path, closed):
         assert s[-1] == pytest.approx(1.0)
 
 
+def test_vtk_without_tube(tmp_path):
+    p = helix_open()
+    points, ids, scalars = read_vtk(write_vtk(tmp_path / "s.vtk", p, closed=False,
+                                              radius=None))
+    np.testing.assert_allclose(points, p, rtol=1e-11, atol=1e-13)
+    assert ids == list(range(len(p))) and set(scalars) == {"arc_length"}
+
+
 def test_xyz_round_trip(tmp_path):
     p = figure_eight_ish()
     comment, points = read_xyz(write_xyz(tmp_path / "s.xyz", p, comment="branch a\npoint 3"))

@@ -209,6 +209,10 @@ def test_run_bad_input_exit_2_and_nothing_touched(tmp_path, capsys):
     assert sorted(p.name for p in taken.iterdir()) == ["keep.txt"]
     line = one_line_error(capsys, cli(["run", str(study), "--out", str(taken), "--resume"]))
     assert "nothing to resume" in line
+    (taken / "result.h5").write_bytes(b"garbage")
+    line = one_line_error(capsys, cli(["run", str(study), "--out", str(taken), "--resume"]))
+    assert "--resume: " in line and "not a readable HDF5 result file" in line
+    assert (taken / "result.h5").read_bytes() == b"garbage"
     line = one_line_error(capsys, cli(["run", str(tmp_path / "nope.toml"), "--out",
                                        str(tmp_path / "o")]))
     assert "no such study file" in line

@@ -104,9 +104,9 @@ def export_command(
     if fmt == "pdb" and unit != "nm":
         fail(f"--format pdb: {path} is nondimensional; give --bp N to read the rod as N base "
              "pairs of DNA, or export xyz/vtk/obj")
-    if fmt in ("vtk", "obj") and radius is None:
-        fail(f"--format {fmt}: {path} has no tube diameter (a study without self-contact); "
-             "export xyz")
+    if fmt == "obj" and radius is None:
+        fail(f"--format obj: {path} has no tube diameter (a study without self-contact); "
+             "export vtk or xyz")
     b = data.branch(name)
     title = (f"supercoil {data.problem}: branch {name}, point {index}, {b.parameter} = "
              f"{float(b.parameter_values[index]):.10g}, lengths in {unit}")

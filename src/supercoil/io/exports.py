@@ -98,9 +98,10 @@ def resample(points, closed: bool, spacing: float) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------ VTK
-def write_vtk(path, points, *, closed: bool, radius: float, title: str = "supercoil state"
-              ) -> Path:
-    """Legacy ASCII VTK polydata (see the module docstring)."""
+def write_vtk(path, points, *, closed: bool, radius: float | None,
+              title: str = "supercoil state") -> Path:
+    """Legacy ASCII VTK polydata (see the module docstring); without ``radius`` (a rod
+    without a tube) the ``TubeRadius`` point data is left out."""
     p = _points(points)
     n = len(p)
     s = arc_length(p, closed)
@@ -110,8 +111,10 @@ def write_vtk(path, points, *, closed: bool, radius: float, title: str = "superc
              "DATASET POLYDATA", f"POINTS {n} double"]
     lines += [f"{x:.12g} {y:.12g} {z:.12g}" for x, y, z in p]
     lines += [f"LINES 1 {len(ids) + 1}", " ".join(map(str, [len(ids), *ids]))]
-    lines += [f"POINT_DATA {n}", "SCALARS TubeRadius double 1", "LOOKUP_TABLE default"]
-    lines += [f"{radius:.12g}"] * n
+    lines += [f"POINT_DATA {n}"]
+    if radius is not None:
+        lines += ["SCALARS TubeRadius double 1", "LOOKUP_TABLE default"]
+        lines += [f"{radius:.12g}"] * n
     lines += ["SCALARS arc_length double 1", "LOOKUP_TABLE default"]
     lines += [f"{v / length:.12g}" for v in s]
     return _write_text(path, "\n".join(lines) + "\n")

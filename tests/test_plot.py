@@ -270,3 +270,13 @@ def test_tweezers_configurations_are_open_tubes(tmp_path):
     assert (starts[:, 0].min() + starts[:, 0].max()) / 2 == pytest.approx(
         (xlim[0] + xlim[1]) / 2, abs=0.05 * (xlim[1] - xlim[0]))
     assert ylim[0] < starts[:, 1].min() and starts[:, 1].max() < ylim[1]
+
+
+def test_without_branch_files_no_configurations(ring, tmp_path, capsys):
+    (ring / "branches" / "loop_contact.npz").unlink()
+    (ring / "branches" / "circle.npz").unlink()
+    assert supported_kinds(load_result(ring)) == ("diagram", "contact-map")
+    out = tmp_path / "figs"
+    assert run(["plot", str(ring), "--out", str(out), "--kind", "configurations"]) == 2
+    assert "kinds it has: diagram, contact-map" in _error(capsys)
+    assert not out.exists()

@@ -231,7 +231,7 @@ def supported_kinds(result: ResultData) -> tuple[str, ...]:
     kinds = ["diagram"] if result.kind == "ring" else ["hat-curve"]
     if any(p.get("contact_points") is not None for b in result.branches for p in b.points):
         kinds.append("contact-map")
-    if any(b._states is not None for b in result.branches):
+    if any(b.has_states for b in result.branches if b.points):
         kinds.append("configurations")
     if result.kind == "tweezers" and all(
             "writhe" in p for b in result.branches for p in b.points):
@@ -258,7 +258,7 @@ def _specials(result: ResultData, keys: Sequence[str]) -> list[Mapping]:
 def configuration_picks(result: ResultData) -> list[tuple[str, int]]:
     """(branch, index) of the configurations drawn: the contact branches (else every
     branch with states) at a third, two thirds and their end."""
-    with_states = [b for b in result.branches if b._states is not None and b.points]
+    with_states = [b for b in result.branches if b.points and b.has_states]
     picked = [b for b in with_states if b.contact] or with_states
     out = []
     for b in picked:

@@ -42,14 +42,20 @@ class BranchData:
     _states: Callable[[], np.ndarray | None] | None = field(default=None, repr=False)
 
     def states(self) -> np.ndarray | None:
-        """Centrelines, shape ``(len(points), n_nodes, 3)``, or None when not stored."""
+        """Centrelines, shape ``(len(points), n_nodes, 3)``, or None when not stored
+        (read once, then kept)."""
         if self._states is None:
             return None
-        states = self._states()
-        if states is None:
-            return None
-        states = np.asarray(states, float)
-        return states.reshape(len(states), -1, 3)
+        cache = self.__dict__.setdefault("_cache", {})
+        if "states" not in cache:
+            states = self._states()
+            cache["states"] = (None if states is None else
+                               np.asarray(states, float).reshape(len(states), -1, 3))
+        return cache["states"]
+
+    @property
+    def has_states(self) -> bool:
+        return self.states() is not None
 
     def values(self, key: str) -> np.ndarray:
         """The number ``key`` at every point, shape ``(len(points),)`` (NaN where missing)."""

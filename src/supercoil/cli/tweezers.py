@@ -73,7 +73,8 @@ def tweezers(
         "--step", metavar="DT", help="With --protocol up-down: turns per quasi-static "
         "step.")] = 0.02,
     max_points: Annotated[int, typer.Option(
-        "--max-points", metavar="K", help="Largest number of points per branch.")] = 400,
+        "--max-points", metavar="K", help="Largest number of points per branch (a branch "
+        "stopped by it is incomplete: exit status 1).")] = 2000,
     force: Annotated[bool, typer.Option(
         "--force", help="Write into an existing non-empty --out DIR, overwriting this "
         "command's own files (other files are left alone).")] = False,

@@ -112,7 +112,7 @@ class TweezersOptions:
     n_nodes: int = 100
     free_max_step: float = 0.1
     contact_max_step: float = 0.5
-    max_points: int = 400
+    max_points: int = 2000
     segment_points: int = 30
     event_tolerance: float = 1e-8
     contact_event_tolerance: float = 1e-6
@@ -206,7 +206,7 @@ class TweezersResult:
     @property
     def ok(self) -> bool:
         return (all(b.ok for b in self.branches)
-                and not any(n.startswith("failed:") for n in self.notes))
+                and not any(n.startswith(("failed:", "incomplete:")) for n in self.notes))
 
     def branch(self, name: str) -> Branch:
         for b in self.branches:
@@ -477,7 +477,10 @@ def tweezers_branches(options: TweezersOptions,
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
     if probe is None or not onsets:
-        if probe is not None:
+        if free.status.name == "MAX_POINTS":
+            notes.append(f"incomplete: {free_name} stopped at "
+                         f"{free.parameter_values[-1]:.6g} turns: {free.message}")
+        elif probe is not None:
             notes.append(f"{free_name}: no contact found ({free.message})")
         branches.append(free)
         return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
@@ -518,8 +521,8 @@ def tweezers_branches(options: TweezersOptions,
     if not contact.ok:
         notes.append(f"failed: {contact_name}: {contact.message}")
     elif contact.parameter_values[-1] < opts.turns[1] - 1e-9:
-        notes.append(f"{contact_name} ended at {contact.parameter_values[-1]:.6g} turns: "
-                     f"{contact.message}")
+        notes.append(f"incomplete: {contact_name} ended at {contact.parameter_values[-1]:.6g} "
+                     f"turns, before {opts.turns[1]:g}: {contact.message}")
     pins[contact_name] = contact_pins
     return TweezersResult(opts, tuple(branches), frozenset({contact_name}), rod, cp, seconds,
                           tuple(notes), pins)

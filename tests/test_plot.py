@@ -280,3 +280,12 @@ def test_without_branch_files_no_configurations(ring, tmp_path, capsys):
     assert run(["plot", str(ring), "--out", str(out), "--kind", "configurations"]) == 2
     assert "kinds it has: diagram, contact-map" in _error(capsys)
     assert not out.exists()
+
+
+def test_a_damaged_branch_file_is_one_line(ring, tmp_path, capsys):
+    (ring / "branches" / "loop_contact.npz").write_bytes(b"PK\x03\x04 broken")
+    assert run(["plot", str(ring), "--out", str(tmp_path / "figs")]) == 2
+    assert "loop_contact.npz: cannot read the branch file" in _error(capsys)
+    assert run(["view", str(ring)]) == 2
+    assert "loop_contact.npz: cannot read the branch file" in _error(capsys)
+    assert not (ring / "viewer.html").exists() and not (tmp_path / "figs").exists()

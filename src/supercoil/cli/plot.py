@@ -69,9 +69,9 @@ def plot(
 
     try:
         data = load_result(result)
+        available = supported_kinds(data)  # reads the branch files
     except ResultError as exc:
         fail(str(exc))
-    available = supported_kinds(data)
     if not kinds:
         kinds = list(available)
     missing = [k for k in kinds if k not in available]

@@ -231,7 +231,8 @@ def supported_kinds(result: ResultData) -> tuple[str, ...]:
     kinds = ["diagram"] if result.kind == "ring" else ["hat-curve"]
     if any(p.get("contact_points") is not None for b in result.branches for p in b.points):
         kinds.append("contact-map")
-    if any(b.has_states for b in result.branches if b.points):
+    readable = [b.has_states for b in result.branches if b.points]  # reads every file
+    if any(readable):
         kinds.append("configurations")
     if result.kind == "tweezers" and all(
             "writhe" in p for b in result.branches for p in b.points):

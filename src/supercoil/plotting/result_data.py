@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import math
+import zipfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -291,11 +292,12 @@ def _npz_states(file: Path, keep: int, n_nodes: int | None) -> Callable[[], np.n
         if not file.is_file():
             return None
         try:
-            with np.load(file, allow_pickle=False) as archive:
+            # our own handle: np.load leaks its file when the archive is damaged
+            with open(file, "rb") as fh, np.load(fh, allow_pickle=False) as archive:
                 if "states" not in archive.files:
                     return None
                 states = np.asarray(archive["states"], float)
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, EOFError, KeyError, TypeError, zipfile.BadZipFile) as exc:
             raise ResultError(f"{file}: cannot read the branch file ({_one_line(exc)})") \
                 from None
         width = 3 * n_nodes if n_nodes else states.shape[-1]

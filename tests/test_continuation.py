@@ -362,3 +362,67 @@ def test_critical_modes_are_brought_back_to_the_gauge_pins_before_switching():
     pinned = _pinned(p, q, mode)
     # mode minus the rotation generator (0, 2, 0, 0) scaled to zero the pinned DOF
     assert np.allclose(pinned, [0.3, 0.0, -0.2, 0.1], atol=1e-15)
+
+
+class _Arctan:
+    """``E = x atan(x) - log(1 + x^2) / 2 - lambda x`` in each of two coordinates.
+
+    The equilibrium is ``x = tan(lambda)``; plain Newton on ``atan(x) = lambda``
+    diverges from ``|x - tan(lambda)| > 1.39`` (it overshoots ever further), the
+    textbook case for a damped Newton step.
+    """
+
+    n_constraints = 0
+
+    def __init__(self, lam: float = 0.0):
+        self.n_dofs = 2
+        self.fixed = np.zeros(0, dtype=np.int64)
+        self.mass = np.ones(2)
+        self.lam = lam
+
+    def energy(self, q):
+        return float(np.sum(q * np.arctan(q) - 0.5 * np.log1p(q**2) - self.lam * q))
+
+    def gradient(self, q):
+        return np.arctan(q) - self.lam
+
+    def hessian(self, q):
+        import scipy.sparse as sp
+
+        from supercoil.solvers.problem import HessianParts
+
+        return HessianParts(sp.diags(1.0 / (1.0 + q**2)).tocsr(), np.zeros((0, 2)), np.zeros(0))
+
+    def parameter_derivative(self, q, multipliers, name):
+        return -np.ones(2)
+
+    def constraints(self, q):
+        return np.zeros(0)
+
+    def constraint_jacobian(self, q):
+        import scipy.sparse as sp
+
+        return sp.csr_matrix((0, 2))
+
+    def constraint_hessian(self, q, multipliers):
+        import scipy.sparse as sp
+
+        return sp.csr_matrix((2, 2))
+
+    def accept(self, q):
+        pass
+
+
+def test_the_corrector_damps_steps_that_would_overshoot():
+    """From x = 3 at lambda = 0 (root x = 0) a full Newton step lands at -19 and
+    diverges; the damped corrector converges to the exact root (at fixed lambda)."""
+    from supercoil.continuation.corrector import correct
+
+    problem = _Arctan(0.0)
+    system = ExtendedSystem(problem, "lam", np.zeros(2))
+    x0 = system.pack(np.array([3.0, -3.0]), np.zeros(0), 0.0)
+    e_lam = np.zeros(system.size)
+    e_lam[-1] = 1.0
+    result = correct(system, x0, e_lam, x0, 0.0, 1e-12, 40)
+    assert result.ok, result.message
+    assert np.allclose(result.x[:2], 0.0, atol=1e-12) and result.x[-1] == 0.0

@@ -24,6 +24,8 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import SingularMatrixError
 from supercoil.solvers.newton import roundoff_floor
 
+BACKTRACKS = 4  # step halvings per corrector iteration (damped Newton)
+
 
 @dataclass(frozen=True)
 class Correction:
@@ -48,8 +50,8 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     bounded = hasattr(problem, "step_bound")
     previous = np.inf
     res = np.nan
+    F = system.residual(x)
     for it in range(max_iterations + 1):
-        F = system.residual(x)
         if not np.all(np.isfinite(F)):
             return Correction(None, False, it, np.inf, f"non-finite residual at iteration {it}")
         res = float(np.max(np.abs(F))) if F.size else 0.0
@@ -76,7 +78,18 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
             if alpha <= 1e-10:
                 return Correction(None, False, it, res, f"iteration {it}: the step guard "
                                   f"allows no step (fraction {alpha:.1e})")
-        x = x + alpha * dx
+        # Damped Newton: a step that raises max|F| is halved (at most
+        # BACKTRACKS times; the last trial is kept and the divergence test
+        # above judges it). The stiff contact barrier made full steps from the
+        # predictor overshoot: measured, most rejected contact-branch steps
+        # "diverged" at iteration 2.
+        for _ in range(BACKTRACKS + 1):
+            x_trial = x + alpha * dx
+            F = system.residual(x_trial)
+            if np.all(np.isfinite(F)) and (not F.size or np.max(np.abs(F)) < res):
+                break
+            alpha *= 0.5
+        x = x_trial
     return Correction(None, False, max_iterations, res, f"no convergence in {max_iterations} "
                       f"corrector iterations (residual {res:.2e} > {tolerance:.1e})")
 

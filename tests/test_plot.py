@@ -206,7 +206,7 @@ def test_a_contact_free_child_branch_ends_before_its_contact_onset(ring):
     assert len(result.branch("circle").points) == 7  # no parent: all points
 
 
-def _store(ring, path, *, summary: bool):
+def _store(ring, path, *, summary: bool, extra: dict | None = None):
     from supercoil.continuation import Branch
     from supercoil.io.store import ResultWriter
 
@@ -214,7 +214,8 @@ def _store(ring, path, *, summary: bool):
     attributes = {k: data[k] for k in ("twist_ratio", "length_over_diameter", "diameter",
                                        "n_nodes")}
     with ResultWriter.create(path, problem="ring_diagram", settings={},
-                             attributes={**attributes, "closed": True}) as writer:
+                             attributes={**attributes, "closed": True, **(extra or {})}) \
+            as writer:
         for entry in data["branches"]:
             writer.write_branch(Branch.load(ring / entry["file"]), contact=entry["contact"])
         if summary:
@@ -289,3 +290,9 @@ def test_a_damaged_branch_file_is_one_line(ring, tmp_path, capsys):
     assert run(["view", str(ring)]) == 2
     assert "loop_contact.npz: cannot read the branch file" in _error(capsys)
     assert not (ring / "viewer.html").exists() and not (tmp_path / "figs").exists()
+
+
+def test_a_dna_result_says_so_in_its_title(ring, tmp_path):
+    result = load_result(_store(ring, tmp_path / "dna.h5", summary=True,
+                                extra={"base_pairs": 600, "salt_mM": 150.0}))
+    assert result.title == "DNA ring of 600 bp in 150 mM salt, C/A = 0.6667, L/D = 40, N = 24"

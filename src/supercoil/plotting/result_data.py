@@ -257,12 +257,16 @@ def _from_payload(path: Path, data: dict, states: StatesFor | None) -> ResultDat
     diameter = _number(data.get("diameter", 1.0 / ld if ld > 0 else math.nan))
     if kind == "ring":
         title = "twisted ring"
-        labels = (("twist_ratio", "C/A", ".4g"), ("length_over_diameter", "L/D", "g"),
+        labels = (("twist_ratio", "C/A", ".4g"), ("length_over_diameter", "L/D", ".4g"),
                   ("n_nodes", "N", "d"))
+        if isinstance(data.get("base_pairs"), int | float):
+            title = f"DNA ring of {_number(data['base_pairs']):g} bp"
+            if isinstance(data.get("salt_mM"), int | float):
+                title += f" in {_number(data['salt_mM']):g} mM salt"
     else:
         title = "rod in magnetic tweezers"
         labels = (("force", "F L²/A", ".4g"), ("twist_ratio", "C/A", ".4g"),
-                  ("length_over_diameter", "L/D", "g"), ("n_nodes", "N", "d"))
+                  ("length_over_diameter", "L/D", ".4g"), ("n_nodes", "N", "d"))
     parts = [f"{label} = {_number(data[k]):{spec}}" if spec != "d" else f"{label} = {data[k]}"
              for k, label, spec in labels
              if k in data and data[k] is not None and math.isfinite(_number(data[k]))]

@@ -50,6 +50,12 @@ NUMBERS = (
     ("n_contact_points", "contact points"),
     ("n_contact_intervals", "contact intervals"),
     ("min_gap_over_diameter", "min gap / D"),
+    # the DNA preset's keys (DESIGN.md: suffixed, beside the nondimensional ones)
+    ("superhelical_density", "superhelical density σ"),
+    ("energy_kT", "energy (kT)"),
+    ("extension_nm", "extension (nm)"),
+    ("torque_pN_nm", "torque (pN·nm)"),
+    ("min_gap_nm", "min gap (nm)"),
 )
 _NOT_LISTED = {"branch", "index", "stable", "contact_points", "contact_intervals", "contacts",
                "centreline", "determinant_sign"}

@@ -105,9 +105,9 @@ def _isolated(result: ResultData, axes: Mapping, avoid: int) -> dict:
     xy = np.column_stack([xs, ys])
     span = np.ptp(xy, axis=0)
     xy = (xy - xy.min(axis=0)) / np.where(span > 0, span, 1.0)
-    d = np.linalg.norm(xy[:, None, :] - xy[None, :, :], axis=2)
-    np.fill_diagonal(d, np.inf)
-    nearest = d.min(axis=1)
+    from scipy.spatial import cKDTree
+
+    nearest = cKDTree(xy).query(xy, k=2)[0][:, 1]  # O(P log P): results can be long
     other = np.array([bi != avoid for bi, _ in keys])
     if other.any():
         nearest = np.where(other, nearest, -1.0)

@@ -452,6 +452,11 @@ def _complete(s: dict, kind: str, preset: str, source: str) -> None:
                          "tube diameter D = L/(L/D))")
     if problem["contact"] is None:
         del problem["contact"]
+    if kind == "ring_diagram":
+        try:
+            Study(source, "", s).diagram_options()
+        except ValueError as exc:
+            raise StudyError(f"{source}: {exc}") from None
 
 
 def _complete_tweezers(s: dict, preset: str, source: str) -> None:

@@ -238,3 +238,30 @@ def test_up_down_path_shows_hysteresis(small_run):
         if p["extension"] < 0.9 and lam[rising[0]] < p["turns"] < lam[-1]:
             on_branch = np.interp(p["turns"], lam[rising[0]:], ext[rising[0]:])
             assert p["extension"] == pytest.approx(on_branch, abs=2e-3)
+
+
+@pytest.mark.slow
+def test_long_rod_buckled_branch_is_the_localised_loop():
+    """A long rod under tension: the contact-free buckled states are Love's localised loop.
+
+    For an infinite rod under tension T and axial moment M, m = M / (2 sqrt(A T)) < 1,
+    the homoclinic (Coyne 1990; Champneys & Thompson 1996) has
+    cos(theta) = 1 - 2 (1 - m^2) sech^2(sqrt((1 - m^2) T / A) s), so the end shortening is
+    4 sqrt(1 - m^2) sqrt(A / T) and the writhe (tails along the axis) (2/pi) arccos(m).
+    At F L^2/A = 900 the loop's length scale is L/30: the clamps are far away.
+    """
+    tension = 900.0
+    opts = TweezersOptions(twist_ratio=1.0, length_over_diameter=None, tension=tension,
+                           turns=(0.0, 1.05 * critical_turns(1.0, tension)), n_nodes=200,
+                           max_points=70)
+    result = tweezers_branches(opts)
+    buckled = result.branch("buckled")
+    r = buckled.records
+    m = r["torque"] / (2 * np.sqrt(tension))
+    checked = 0
+    for i in np.flatnonzero((m > 0.4) & (m < 0.8)):
+        shortening = 4 * np.sqrt(1 - m[i] ** 2) / np.sqrt(tension)
+        assert 1 - r["extension"][i] == pytest.approx(shortening, rel=1e-2)
+        assert r["writhe"][i] == pytest.approx(2 / np.pi * np.arccos(m[i]), abs=3e-3)
+        checked += 1
+    assert checked >= 5

@@ -84,6 +84,9 @@ from supercoil.topology import writhe
 # Smallest arclength step on a contact branch (see ring_diagram.CONTACT_MIN_STEP).
 CONTACT_MIN_STEP = 1e-12
 SWITCH_AMPLITUDE = 2e-2  # first point of the buckled branch from the bifurcation (arclength)
+# tried in turn when the switch finds no point (the subcritical branch turns back sharply
+# under a large tension: measured at F L^2/A = 900, N = 120, 2e-2 diverged)
+SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1e-3)
 PIN_QUALITY = 0.5  # re-pick the azimuth pin below this (ClampedRodEnergy.pin_quality)
 TAIL_WRAP = 0.5  # |Tw + Wr - turns| above this: the rod wraps around a tail
 
@@ -453,11 +456,21 @@ def tweezers_branches(options: TweezersOptions,
         say(f"{free_name}: switched from the straight rod at {point.parameter:.6g} turns")
         start = time.perf_counter()
         direction = _rotated_mode(point.critical_modes[0])
-        rod.turns = point.parameter
-        set_pin(rod, rod, point.q + 1e-3 * direction)
-        first = switch_branch(rod, straight, point, free_opts, direction=direction,
-                              amplitude=SWITCH_AMPLITUDE, name=free_name, records=free_records,
-                              events=events)
+        for amplitude in SWITCH_AMPLITUDES:
+            rod.turns = point.parameter
+            set_pin(rod, rod, point.q + 1e-3 * direction)
+            first = switch_branch(rod, straight, point,
+                                  dataclasses.replace(free_opts, initial_step=amplitude),
+                                  direction=direction, amplitude=amplitude, name=free_name,
+                                  records=free_records, events=events)
+            if len(first):
+                break
+        if not len(first):
+            notes.append(f"failed: {free_name}: no point found off the straight rod at "
+                         f"{point.parameter:.6g} turns ({first.message})")
+            branches.append(first)
+            return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
+                                  tuple(notes), {"straight": ((0, ()),)})
     else:
         free_name = "clamped"
         say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")

@@ -48,7 +48,7 @@ def make_branch(k=7, n_dofs=12, m=4, name="alpha", seed=0, origin=True) -> Branc
                              for i, kind in ((1, "fold"), (4, "contact_onset"))),
         status=ContinuationStatus.MAX_POINTS, message="7 points computed (max_points)",
         records={"writhe": rng.normal(size=k), "n_contact_points": rng.integers(0, 3, size=k),
-                 "pair": rng.normal(size=(k, 2))},
+                 "pair": rng.normal(size=(k, 2)), "tail_wrapped": rng.random(k) > 0.5},
         phase_modes=rng.normal(size=(1, n_dofs)), phase_state=rng.normal(size=n_dofs))
 
 

@@ -382,7 +382,8 @@ class ResultWriter:
             if values.dtype.kind not in "biuf":
                 raise TypeError(f"branch {branch.name}: record {name!r} is not numeric "
                                 f"(dtype {values.dtype}); records must be numbers")
-            dtype = np.int64 if values.dtype.kind in "biu" else np.float64
+            dtype = {"b": np.bool_, "i": np.int64, "u": np.int64}.get(values.dtype.kind,
+                                                                      np.float64)
             ds = _resizable(records, name, (0, *values.shape[1:]), dtype)
             ds.dims[0].attach_scale(scales["point"])
         phase = np.asarray(branch.phase_modes, float)

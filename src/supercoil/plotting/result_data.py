@@ -129,14 +129,11 @@ _STORE_SUFFIXES = (".h5", ".hdf5", ".nc")
 
 def _from_store(path: Path) -> ResultData:
     """A result file of :func:`supercoil.load` (issue 6, item 2)."""
-    try:
-        from supercoil import load  # type: ignore[attr-defined]
-    except ImportError:
-        raise ResultError(f"{path}: result files (.h5/.nc) are not readable by this version "
-                          "yet; give the result folder with diagram.json") from None
+    from supercoil import load
+
     try:
         result = load(path)
-    except (OSError, ValueError, KeyError) as exc:
+    except (OSError, ValueError, KeyError, ImportError) as exc:
         raise ResultError(f"{path}: cannot read the result file ({_one_line(exc)})") from None
     return _from_loaded(path, result)
 

@@ -10,9 +10,9 @@ Steps grow after fast corrections and shrink after failures (no convergence,
 divergence, a singular matrix, or a tangent turned by more than
 ``max_turn_degrees``, the guard against jumping between branches). A step
 that crosses a parameter bound is replaced by a correction at exactly the
-bound. A problem's ``step_bound`` also vets the predictor step (a step that is
-not collision-free is retried shorter) and its ``admissible(q)`` every
-corrected point. At every accepted point the problem's ``accept(q)`` is called, then
+bound. A problem's ``step_bound`` also vets the predictor step (a predictor
+that is not collision-free is shortened to 90 % of the allowed fraction, the
+corrector covering the rest) and its ``admissible(q)`` every corrected point. At every accepted point the problem's ``accept(q)`` is called, then
 the stability (:mod:`supercoil.continuation.stability`), the caller's records
 and user events are evaluated, and the interval to the previous point is
 searched for folds, bifurcations and user events
@@ -200,14 +200,20 @@ class _Tracer:
             row = system.weights * d
             problem = system.problem
             q_k = system.q(x_k)
-            if hasattr(problem, "step_bound") and \
-                    problem.step_bound(q_k, system.q(x_k + ds * d) - q_k) < 1.0:
-                # the predictor would carry the state through an obstacle (self-contact)
-                corr, failure = None, "the predictor step is not collision-free"
-            else:
-                corr = correct(system, x_k + ds * d, row, x_k, ds, opts.tolerance,
-                               opts.max_corrector_iterations)
-                failure = None if corr.ok else corr.message
+            start = x_k + ds * d
+            if hasattr(problem, "step_bound"):
+                fraction = float(problem.step_bound(q_k, system.q(start) - q_k))
+                if fraction < 1.0:
+                    # The predictor would carry the state through an obstacle (or
+                    # too close to it for a barrier): it is shortened to 90 % of what
+                    # collision detection allows, and the corrector's guarded Newton
+                    # steps cover the rest of the arclength step. (Rejecting and
+                    # halving the step instead kept contact branches at steps of a
+                    # fifth of D.)
+                    start = x_k + 0.9 * fraction * ds * d
+            corr = correct(system, start, row, x_k, ds, opts.tolerance,
+                           opts.max_corrector_iterations)
+            failure = None if corr.ok else corr.message
             x_new = t_new = None
             if failure is None:
                 x_new = corr.x

@@ -244,3 +244,48 @@ def test_sparse_constrained_eigenvalues_equal_the_dense_oracle_with_contact(diag
     # the accuracy of the stiff KKT solves (measured 7e-6 with the barrier engaged)
     assert np.max(np.abs(J @ vectors)) < 1e-4 * np.max(np.abs(vectors))
     assert np.max(np.abs(sym.T @ (mass[:, None] * vectors))) < 1e-4
+
+
+def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, monkeypatch):
+    """Hand-made transitions between neighbouring points -> the kinds of DESIGN.md.
+
+    Counts (points, intervals) at six points: (1, 0) -> (2, 0) split (the new
+    contacts lie next to the old one), -> (2, 1) interval onset, -> (1, 1) release,
+    -> (2, 1) onset (a contact far from the others), -> (0, 0) release. Both
+    indicators of one transition located at the same place merge into one point.
+    """
+    import dataclasses
+
+    from supercoil.continuation import SpecialPoint
+    from supercoil.problems import ring_diagram as rd
+
+    base = diagram.branch("alpha_contact")
+    k = 6
+    arrays = {name: getattr(base, name)[:k] for name in (
+        "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+        "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")}
+    points = np.array([1, 2, 2, 1, 2, 0])
+    intervals = np.array([0, 0, 1, 1, 1, 0])
+    positions = [[(0.2, 0.6)], [(0.19, 0.6), (0.21, 0.61)], [(0.2, 0.6)] * 3,
+                 [(0.2, 0.6)] * 2, [(0.2, 0.6), (0.2, 0.6), (0.45, 0.9)], []]
+    monkeypatch.setattr(rd, "_positions", lambda problem, q, mu: np.array(
+        positions[int(np.flatnonzero(np.all(base.states[:k] == q, axis=1))[0])],
+        dtype=float).reshape(-1, 2))
+
+    def change(i, label, s):
+        return SpecialPoint(kind="contact_change", label=label, branch=base.name, index=i,
+                            parameter=float(base.parameter_values[i]), arclength=s,
+                            q=base.states[i], multipliers=base.multipliers[i],
+                            tangent=base.tangents[i], tolerance=1e-6)
+
+    s = arrays["arclength"]
+    specials = (change(0, "points>=2", s[0] + 1e-3), change(1, "intervals>=1", s[1] + 1e-3),
+                change(1, "points>=3", s[1] + 1e-3),  # same transition, merged
+                change(2, "points>=2", s[2] + 1e-3), change(3, "points>=2", s[3] + 1e-3),
+                change(4, "points>=1", s[4] + 1e-3))
+    branch = dataclasses.replace(base, special_points=specials,
+                                 records={"n_contact_points": points,
+                                          "n_contact_intervals": intervals}, **arrays)
+    kinds = [p.kind for p in rd.classify_contact_events(branch, problem=None).special_points]
+    assert kinds == ["contact_split", "contact_interval_onset", "contact_release",
+                     "contact_onset", "contact_release"]

@@ -265,3 +265,26 @@ def test_long_rod_buckled_branch_is_the_localised_loop():
         assert r["writhe"][i] == pytest.approx(2 / np.pi * np.arccos(m[i]), abs=3e-3)
         checked += 1
     assert checked >= 5
+
+
+def test_force_ramp_returns_to_its_start(small_run):
+    """At fixed turns the force ramp down and back up retraces the touching loop (no jump),
+    and the extension grows with the force (a stable state under a dead load)."""
+    from supercoil.problems.tweezers_protocol import quasistatic_path
+
+    path = quasistatic_path(small_run.options, "force-ramp", step=0.1, force_range=(4.0, 36.0),
+                            force_step=4.0)
+    assert path.ok, path.message
+    ramp = [p for p in path.points if p["ramp"] == "tension"]
+    assert all(p["stable"] for p in ramp) and all(p["turns"] == 1.6 for p in ramp)
+    assert [j for j in path.jumps if j["ramp"] == "tension"] == []
+    by_force = {}
+    for p in ramp:
+        by_force.setdefault(round(p["tension"], 9), []).append(p["extension"])
+    for values in by_force.values():  # reversible: each force visited twice, same state
+        assert max(values) - min(values) < 1e-6
+    forces = sorted(by_force)
+    ext = [by_force[f][0] for f in forces]
+    assert np.all(np.diff(ext) > 0)
+    assert all(p["tension"] == pytest.approx(p["load_potential"] / -p["extension"])
+               for p in ramp)

@@ -140,3 +140,21 @@ def test_dna_bad_input(tmp_path, capsys, args, words):
     status = run(["tweezers", "--turns", "0:1", "--out", str(tmp_path / "x")] + args)
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and len(err) == 1 and words in err[0]
+
+
+def test_force_ramp_cli_writes_force_extension(tmp_path):
+    out = tmp_path / "ramp"
+    status = run(["tweezers", "--twist-ratio", "1.3333333333333333", "--length-over-diameter",
+                  "20", "--tension", "20", "--turns", "0:1.6", "--nodes", "30", "--protocol",
+                  "force-ramp", "--step", "0.2", "--force-range", "10:30", "--force-step", "5",
+                  "--out", str(out)])
+    assert status == 0
+    data = json.loads((out / "branch.json").read_text())
+    assert {p["ramp"] for p in data["path"]} == {"turns", "tension"}
+    assert (out / "force_extension.png").stat().st_size > 1000
+
+
+def test_force_range_needs_force_ramp(tmp_path, capsys):
+    status = run(["tweezers", "--twist-ratio", "1", "--tension", "1", "--turns", "0:1",
+                  "--force-range", "0:2", "--out", str(tmp_path / "x")])
+    assert status == 2 and "force-ramp" in capsys.readouterr().err

@@ -23,7 +23,7 @@ from supercoil.cli._common import (
     warn,
 )
 
-PROTOCOLS = ("up", "up-down")  # force-ramp: issue 5, item 3, not implemented yet
+PROTOCOLS = ("up", "up-down", "force-ramp")
 OUTPUT_FILES = ("branch.json", "hat_curve.png", "torque.png", "writhe.png",
                 "configurations.png")
 
@@ -68,10 +68,18 @@ def tweezers(
     protocol: Annotated[str, typer.Option(
         "--protocol", metavar="P", help="up: the branches from START to STOP; up-down: "
         "also the quasi-static path of an experiment turning up to STOP and back (stable "
-        "states, jumps at folds). force-ramp is not implemented yet.")] = "up",
+        "states, jumps at folds); force-ramp: up to STOP, then the force ramped over "
+        "--force-range and back.")] = "up",
     step: Annotated[float, typer.Option(
-        "--step", metavar="DT", help="With --protocol up-down: turns per quasi-static "
-        "step.")] = 0.02,
+        "--step", metavar="DT", help="With --protocol up-down or force-ramp: turns per "
+        "quasi-static step.")] = 0.02,
+    force_range: Annotated[str | None, typer.Option(
+        "--force-range", metavar="LOW:HIGH", help="With --protocol force-ramp: the force "
+        "F L^2/A (pN with --dna) is ramped from --tension down to LOW, up to HIGH and back "
+        "(default 0:2F).", show_default=False)] = None,
+    force_step: Annotated[float | None, typer.Option(
+        "--force-step", metavar="DF", help="With --protocol force-ramp: force per step "
+        "(default 1/50 of the range).", show_default=False)] = None,
     max_points: Annotated[int, typer.Option(
         "--max-points", metavar="K", help="Largest number of points per branch (a branch "
         "stopped by it is incomplete: exit status 1).")] = 2000,
@@ -149,8 +157,18 @@ def tweezers(
     if protocol not in PROTOCOLS:
         fail(f"--protocol {protocol!r}: give up or up-down (force-ramp is not implemented "
              "yet)")
-    if protocol == "up-down" and tension is None:
-        fail("--protocol up-down needs --tension (load control, the tweezers experiment)")
+    if protocol != "up" and tension is None:
+        fail(f"--protocol {protocol} needs --tension (load control, the tweezers experiment)")
+    ramp = None
+    if protocol == "force-ramp":
+        ramp = _force_range(force_range, tension, preset)
+        if force_step is not None:
+            if not (math.isfinite(force_step) and force_step > 0):
+                fail(f"--force-step {force_step:g}: give a positive force step")
+            if preset is not None:
+                force_step = preset.force_from_pN(force_step)
+    elif force_range is not None or force_step is not None:
+        fail("--force-range and --force-step need --protocol force-ramp")
     if not (math.isfinite(step) and 0 < step <= stop - start):
         fail(f"--step {step:g}: give a positive number of turns up to STOP - START")
     if not 2 <= max_points <= 100_000:
@@ -180,11 +198,14 @@ def tweezers(
           f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
     result = tweezers_branches(options, progress=lambda line: warn(f"  {line}"))
     path = None
-    if protocol == "up-down":
+    if protocol != "up":
         from supercoil.problems.tweezers_protocol import quasistatic_path
 
-        warn(f"  path: quasi-static up to {stop:g} turns and back, steps of {step:g} turns")
-        path = quasistatic_path(options, "up-down", step=step)
+        what = ("and back" if protocol == "up-down" else
+                f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
+        warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
+        path = quasistatic_path(options, protocol, step=step, force_range=ramp,
+                                force_step=force_step)
     payload = write_tweezers(result, out, path, preset)
     if not payload["ok"] or (path is not None and not path.ok):
         if path is not None and not path.ok:
@@ -271,6 +292,24 @@ def write_tweezers(result, out: Path, path=None, preset=None) -> dict:
     for note in payload["notes"]:
         warn(f"note: {note}")
     return payload
+
+
+def _force_range(text, tension, preset) -> tuple[float, float]:
+    """``--force-range LOW:HIGH`` in F L^2/A (pN with --dna); default ``0:2F``."""
+    if text is None:
+        return 0.0, 2.0 * tension if tension > 0 else 1.0
+    words = text.split(":")
+    try:
+        if len(words) != 2:
+            raise ValueError
+        low, high = float(words[0]), float(words[1])
+    except ValueError:
+        fail(f"--force-range {text!r}: give LOW:HIGH, like 0:100")
+    if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high <= 1e6):
+        fail(f"--force-range {text!r}: need 0 <= LOW < HIGH <= 1e6")
+    if preset is not None:
+        low, high = preset.force_from_pN(low), preset.force_from_pN(high)
+    return low, high
 
 
 def _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp, force_pN,

@@ -61,6 +61,16 @@ def write_figures(payload: Mapping, configurations: Sequence[Mapping],
         fig = diagram_figure(_branches(payload, y), specials, title=title, x="turns", y=y)
         fig.savefig(folder / name, dpi=150)
         written.append(folder / name)
+    ramp = [p for p in payload.get("path") or [] if p.get("ramp") == "tension"]
+    if ramp:
+        rows = {"name": "force ramp", "tension": [p["tension"] for p in ramp],
+                "extension": [p["extension"] for p in ramp],
+                "stable": [p["stable"] for p in ramp], "color": "0.15"}
+        specials = [{**j, "tension": j["tension"]} for j in payload["special_points"]
+                    if j.get("ramp") == "tension"]
+        fig = diagram_figure([rows], specials, title=title, x="tension", y="extension")
+        fig.savefig(folder / "force_extension.png", dpi=150)
+        written.append(folder / "force_extension.png")
     if configurations:
         fig = configurations_figure(configurations, diameter=payload.get("diameter"),
                                     title=title, closed=False)

@@ -43,7 +43,8 @@ from supercoil.problems.tweezers import (
 from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.stability.analysis import analyse
 
-PROTOCOLS = ("up", "up-down")
+PROTOCOLS = ("up", "up-down", "force-ramp")
+SUBSTEPS = (1, 2, 4, 8)  # sub-steps tried when the minimisation at a new load fails
 
 
 @dataclass(frozen=True)
@@ -67,23 +68,56 @@ def _minimise(problem, rod, q, contact: bool):
     return res.q, res.multipliers, bool(res.converged), res.message
 
 
+def _schedule(options: TweezersOptions, protocol: str, step: float,
+              force_range: tuple[float, float] | None, force_step: float | None):
+    """``[(turns, tension, direction, ramp)]`` of the protocol (module doc)."""
+    start, stop = options.turns
+    n_up = max(1, math.ceil((stop - start) / step))
+    grid = list(np.linspace(start, stop, n_up + 1))
+    tension = float(options.tension)
+    out = [(t, tension, 1, "turns") for t in grid]
+    if protocol == "up-down":
+        out += [(t, tension, -1, "turns") for t in grid[-2::-1]]
+    elif protocol == "force-ramp":
+        low, high = force_range
+        df = force_step if force_step is not None else max(high - low, 1e-12) / 50
+        legs = ((tension, low, -1), (low, high, 1), (high, tension, -1))
+        for a, b, _ in legs:
+            if a == b:
+                continue
+            count = max(1, math.ceil(abs(b - a) / df))
+            out += [(stop, float(f), 1 if b > a else -1, "tension")
+                    for f in np.linspace(a, b, count + 1)[1:]]
+    return out
+
+
 def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: float = 0.02,
                      kick: float = 0.02, jump_distance: float | None = None,
-                     max_kicks: int = 6) -> PathResult:
-    """The quasi-static path of ``protocol`` (module doc); load control only."""
+                     max_kicks: int = 6, force_range: tuple[float, float] | None = None,
+                     force_step: float | None = None) -> PathResult:
+    """The quasi-static path of ``protocol`` (module doc); load control only.
+
+    ``up``: turns from start to stop; ``up-down``: and back; ``force-ramp``: up to
+    ``stop`` turns at the options' tension, then, at ``stop`` turns, the tension
+    ramped down to ``force_range[0]``, up to ``force_range[1]`` and back to the
+    options' tension in steps of ``force_step`` (default 1/50 of the range).
+    Each point has ``ramp`` (``turns`` or ``tension``) and ``direction`` (+1 the
+    ramped parameter increases, -1 it decreases).
+    """
     if protocol not in PROTOCOLS:
         raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
     if not options.load_control:
         raise ValueError("the quasi-static protocols need load control (a tension)")
     if not (math.isfinite(step) and step > 0):
         raise ValueError(f"step must be a positive number of turns, got {step!r}")
-    start, stop = options.turns
-    n_up = max(1, math.ceil((stop - start) / step))
-    grid = list(np.linspace(start, stop, n_up + 1))
-    directions = [1] * len(grid)
-    if protocol == "up-down":
-        grid += grid[-2::-1]
-        directions += [-1] * (len(grid) - len(directions))
+    if protocol == "force-ramp":
+        if force_range is None or len(force_range) != 2 or not (
+                0 <= force_range[0] < force_range[1] < math.inf):
+            raise ValueError(f"force_range must be (low, high) with 0 <= low < high, got "
+                             f"{force_range!r}")
+        if force_step is not None and not (math.isfinite(force_step) and force_step > 0):
+            raise ValueError(f"force_step must be positive, got {force_step!r}")
+    schedule = _schedule(options, protocol, step, force_range, force_step)
     rod, q = clamped_problem(options)
     D = options.diameter
     problem = ContactProblem(rod, ContactOptions(diameter=D)) if D is not None else rod
@@ -93,12 +127,23 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
     reach = D if D is not None else 0.02
     jump_distance = reach if jump_distance is None else jump_distance
     points, states, jumps = [], [], []
-    ok, message = True, f"{len(grid)} steps"
+    ok, message = True, f"{len(schedule)} steps"
     previous = None
-    for k, (turns, direction) in enumerate(zip(grid, directions)):
-        problem.turns = float(turns)
-        rod.accept(q)
-        q_new, mu, converged, why = _minimise(problem, rod, q, contact)
+    last = (float(schedule[0][0]), float(schedule[0][1]))
+    for k, (turns, tension, direction, ramp) in enumerate(schedule):
+        # minimise at the new load; when Newton fails, approach it in 2, 4, 8 sub-steps
+        for pieces in SUBSTEPS:
+            q_new, converged = q, True
+            for j in range(1, pieces + 1):
+                problem.turns = last[0] + (turns - last[0]) * j / pieces
+                rod.tension = last[1] + (tension - last[1]) * j / pieces
+                rod.accept(q_new)
+                q_new, mu, converged, why = _minimise(problem, rod, q_new, contact)
+                if not converged:
+                    break
+            if converged:
+                break
+        last = (float(turns), float(tension))
         report = analyse(problem, q_new, mu) if converged else None
         left = report.unstable_count if report is not None else -1
         kicks = 0
@@ -115,17 +160,19 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
             report = analyse(problem, q_new, mu) if converged else None
             kicks += 1
         if not converged:
-            ok, message = False, f"step {k} at {turns:.6g} turns did not converge: {why}"
+            ok, message = False, (f"step {k} at {turns:.6g} turns, F L^2/A = {tension:.6g} did "
+                                  f"not converge: {why}")
             break
         rod.accept(q_new)
         rec = dict(records(q_new, mu, float(turns)))
         rec.update(unstable_count=int(report.unstable_count), zero_modes=int(report.zero_modes),
                    stable=bool(report.unstable_count == 0 and report.zero_modes == 0),
-                   direction=int(direction), branch="path", index=len(points))
+                   direction=int(direction), ramp=ramp, branch="path", index=len(points))
         moved = float(np.max(np.linalg.norm((q_new - q).reshape(-1, 3), axis=1)))
         if previous is not None and moved > jump_distance:
             jumps.append({"kind": "jump", "branch": "path", "index": len(points) - 1,
-                          "turns": float(turns), "direction": int(direction),
+                          "turns": float(turns), "tension": float(tension), "ramp": ramp,
+                          "direction": int(direction),
                           "extension": previous["extension"],
                           "extension_after": rec["extension"],
                           "writhe": previous["writhe"], "writhe_after": rec["writhe"],

@@ -3,6 +3,15 @@ import os
 import numpy as np
 import pytest
 from hypothesis import settings
+from threadpoolctl import threadpool_limits
+
+# One BLAS thread for the whole session, as the CLI uses
+# (supercoil.cli.main._single_threaded_blas): results then do not depend on the
+# machine's core count (a penalty solve landed on another state with two threads
+# than with one) and the many small dense solves run faster on a loaded machine.
+# (numpy is already loaded by pytest's plugins here, so the environment variable
+# would come too late; threadpoolctl limits the loaded library.)
+_ONE_BLAS_THREAD = threadpool_limits(limits=1, user_api="blas")
 
 # CI runs the same hypothesis examples every time (a landing must not depend
 # on which random examples a run happens to draw); local runs keep exploring.

@@ -375,7 +375,10 @@ def test_hypothesis_derivatives_are_exact(x):
     sin2 = np.linalg.norm(np.cross(u, v)) ** 2 / (lengths[0] * lengths[1]) ** 2
     if sin2 > 1e-6:  # no fallback: the exact distance and its gradient
         assert d == pytest.approx(segment_distance(*x)[0], rel=1e-10)
-        np.testing.assert_allclose(g, fd_gradient(x12), atol=1e-6 * scale)
+        # a central difference of step h across a region boundary (the Hessian
+        # jumps there: C^1, not C^2) is off by up to h |H|; hypothesis found one
+        np.testing.assert_allclose(g, fd_gradient(x12),
+                                   atol=1e-6 * scale + 2e-6 * np.abs(hess).max())
 
 
 def test_crossing_returns_finite_zeros():

@@ -158,3 +158,16 @@ def test_force_range_needs_force_ramp(tmp_path, capsys):
     status = run(["tweezers", "--twist-ratio", "1", "--tension", "1", "--turns", "0:1",
                   "--force-range", "0:2", "--out", str(tmp_path / "x")])
     assert status == 2 and "force-ramp" in capsys.readouterr().err
+
+
+def test_displacement_control_cli(tmp_path):
+    out = tmp_path / "disp"
+    status = run(["tweezers", "--twist-ratio", "1.3333333333333333", "--end-distance", "0.7",
+                  "--turns", "0:0.6", "--nodes", "24", "--out", str(out)])
+    assert status == 0
+    data = json.loads((out / "branch.json").read_text())
+    assert data["control"] == "displacement" and data["branches"][0]["name"] == "clamped"
+    for p in data["points"]:
+        assert p["extension"] == pytest.approx(0.7, abs=1e-9) and p["load_potential"] == 0.0
+    assert data["points"][0]["tension"] < 0  # the clamped buckle is compressed at 0 turns
+    assert (out / "tension.png").exists() and not (out / "hat_curve.png").exists()

@@ -50,13 +50,22 @@ def write_figures(payload: Mapping, configurations: Sequence[Mapping],
                   folder: str | os.PathLike) -> list[Path]:
     """Write the PNG figures into ``folder``; returns the paths written.
 
+    Extension (load control) or the end's axial force (displacement control),
+    torque and writhe against turns; extension against force for a force ramp;
+    tube pictures.
+
     ``configurations``: ``{label, points (n, 3), contact_points, contact_intervals}``
     of the states to draw as tubes.
     """
     folder = Path(folder)
     written = []
     title = _title(payload)
-    for name, y in FIGURES.items():
+    figures = dict(FIGURES)
+    if payload.get("control") == "displacement":
+        # the extension is held: the end force against turns replaces the hat curve
+        del figures["hat_curve.png"]
+        figures["tension.png"] = "tension"
+    for name, y in figures.items():
         specials = [p for p in payload["special_points"] if y in p and "turns" in p]
         fig = diagram_figure(_branches(payload, y), specials, title=title, x="turns", y=y)
         fig.savefig(folder / name, dpi=150)

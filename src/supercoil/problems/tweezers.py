@@ -185,6 +185,12 @@ class TweezersResult:
     notes: tuple[str, ...] = ()
     # per branch: (first point index, pinned DOFs) at each choice of the azimuth pin
     pins: dict = field(default_factory=dict)
+    # contact-free branches cut at their first contact: complete whatever the run that
+    # went on beyond the contact (penetrating) ended with
+    cut_at_contact: frozenset[str] = frozenset()
+
+    def branch_ok(self, branch: Branch) -> bool:
+        return branch.ok or branch.name in self.cut_at_contact
 
     def pin_branch(self, name: str, index: int = 0):
         """Set the azimuth pin with which point ``index`` of branch ``name`` was computed.
@@ -208,7 +214,7 @@ class TweezersResult:
 
     @property
     def ok(self) -> bool:
-        return (all(b.ok for b in self.branches)
+        return (all(self.branch_ok(b) for b in self.branches)
                 and not any(n.startswith(("failed:", "incomplete:")) for n in self.notes))
 
     def branch(self, name: str) -> Branch:
@@ -538,5 +544,5 @@ def tweezers_branches(options: TweezersOptions,
                      f"turns, before {opts.turns[1]:g}: {contact.message}")
     pins[contact_name] = contact_pins
     return TweezersResult(opts, tuple(branches), frozenset({contact_name}), rod, cp, seconds,
-                          tuple(notes), pins)
+                          tuple(notes), pins, frozenset({free_name}))
 

@@ -63,7 +63,8 @@ def result_payload(result: TweezersResult) -> dict:
             "name": b.name, "parent": b.parent,
             "origin": None if b.origin is None else special_summary(b.origin),
             "contact": b.name in result.contact_branches, "parameter": b.parameter,
-            "n_points": len(b), "status": b.status.name, "ok": b.ok, "message": b.message,
+            "n_points": len(b), "status": b.status.name, "ok": result.branch_ok(b),
+            "message": b.message,
             "seconds": round(result.seconds.get(b.name, float("nan")), 3),
             "azimuth_pins": [{"from_index": i, "dofs": list(d)}
                              for i, d in result.pins.get(b.name, ())],

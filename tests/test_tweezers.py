@@ -272,8 +272,8 @@ def test_force_ramp_returns_to_its_start(small_run):
     and the extension grows with the force (a stable state under a dead load)."""
     from supercoil.problems.tweezers_protocol import quasistatic_path
 
-    path = quasistatic_path(small_run.options, "force-ramp", step=0.1, force_range=(4.0, 36.0),
-                            force_step=4.0)
+    path = quasistatic_path(small_run.options, "force-ramp", step=0.2, force_range=(4.0, 36.0),
+                            force_step=8.0)
     assert path.ok, path.message
     ramp = [p for p in path.points if p["ramp"] == "tension"]
     assert all(p["stable"] for p in ramp) and all(p["turns"] == 1.6 for p in ramp)

@@ -114,9 +114,11 @@ def tweezers(
     STOP. Displacement control (--end-distance): from the planar clamped
     buckle at 0 turns. Writes branch.json (points with turns, extension,
     torque, writhe, twist, energy, load_potential, unstable_count, zero_modes,
-    contact counts, min_gap_over_diameter; special_points), branches/*.npz,
-    hat_curve.png (extension against turns), torque.png, writhe.png and
-    configurations.png (tubes) into --out.
+    contact counts, min_gap_over_diameter; special_points; path for the
+    protocols), branches/*.npz, hat_curve.png (extension against turns; under
+    displacement control tension.png), torque.png, writhe.png,
+    configurations.png (tubes) and, for force-ramp, force_extension.png into
+    --out.
     """
     preset = None
     if dna:

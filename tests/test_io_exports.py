@@ -68,6 +68,7 @@ def read_xyz(path):
 def read_pdb(path):
     atoms, bonds = [], {}
     for line in path.read_text().splitlines():
+        assert len(line) <= 80, line
         if line.startswith("ATOM  "):
             assert len(line) == 78
             atoms.append((int(line[6:11]), float(line[30:38]), float(line[38:46]),
@@ -138,7 +139,10 @@ def test_pdb_one_bead_per_base_pair(tmp_path):
     # scale the polygon so its perimeter is exactly bp * rise
     perimeter = np.sum(np.linalg.norm(np.diff(np.vstack([ring, ring[:1]]), axis=0), axis=1))
     ring *= bp * rise / perimeter
-    beads, bonds = read_pdb(write_pdb(tmp_path / "s.pdb", ring, closed=True, title="x"))
+    beads, bonds = read_pdb(write_pdb(tmp_path / "s.pdb", ring, closed=True, title="x" * 150))
+    titles = [line for line in (tmp_path / "s.pdb").read_text().splitlines()
+              if line.startswith("TITLE")]
+    assert "".join(t[10:] for t in titles) == "x" * 150 and titles[1][8:10] == " 2"
     assert len(beads) == bp
     steps = np.linalg.norm(np.diff(np.vstack([beads, beads[:1]]), axis=0), axis=1)
     np.testing.assert_allclose(steps, 10 * rise, rtol=2e-3, atol=2e-3)  # Å, chords of arcs

@@ -143,10 +143,11 @@ def write_pdb(path, points_nm, *, closed: bool, rise_nm: float = 0.34, title: st
         raise ValueError(f"the molecule spans {np.max(angstrom) / 10:.0f} nm: PDB coordinates "
                          "hold at most 9999.999 Å (1 um); export xyz or vtk instead")
     lines = []
-    if title:
-        lines.append(f"TITLE     {' '.join(title.split())[:70]}")
-    lines.append("REMARK   1 coarse-grained DNA: one bead per base pair on the centreline "
-                 f"(rise {rise_nm:g} nm), supercoil")
+    words = " ".join(title.split())
+    for i in range(0, min(len(words), 4 * 69), 69):  # TITLE with continuation lines
+        lines.append("TITLE   " + (f"{i // 69 + 1:2d}" if i else "  ") + words[i:i + 69])
+    lines += ["REMARK   1 supercoil: coarse-grained DNA, one bead per base pair",
+              f"REMARK   1 on the centreline (rise {rise_nm:g} nm)"]
     for i, (x, y, z) in enumerate(angstrom):
         serial, residue = i + 1, (i + 1) % 10000
         lines.append(f"ATOM  {serial:5d}  P   DNA A{residue:4d}    {x:8.3f}{y:8.3f}{z:8.3f}"

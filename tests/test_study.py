@@ -251,6 +251,20 @@ def test_ring_study_stores_one_state(tmp_path, capsys):
     np.testing.assert_allclose(radii, 1 / (48 * math.sin(math.pi / 24)), rtol=1e-8)
 
 
+def test_force_replaces_the_run_files_only(tmp_path, capsys):
+    study = write_study(tmp_path, RING)
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    (out / "result.h5").write_bytes(b"old")
+    assert cli(["run", str(study), "--out", str(out), "--force", "--quiet"]) == 0
+    assert (out / "keep.txt").read_text() == "mine"
+    assert supercoil.load(out / "result.h5").status == "complete"
+    line = one_line_error(capsys, cli(["run", str(study), "--out", str(out), "--force",
+                                       "--resume"]))
+    assert "exclude each other" in line
+
+
 def run_diagram(tmp_path, name, progress=None, resume=False, text=RING_DIAGRAM):
     from supercoil.cli.run import run_study
 

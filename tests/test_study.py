@@ -251,6 +251,17 @@ def test_ring_study_stores_one_state(tmp_path, capsys):
     np.testing.assert_allclose(radii, 1 / (48 * math.sin(math.pi / 24)), rtol=1e-8)
 
 
+def test_json_to_standard_output(tmp_path, capsys):
+    study = write_study(tmp_path, RING)
+    out = tmp_path / "o"
+    assert cli(["run", str(study), "--out", str(out), "--json", "-"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed == json.loads((out / "ring.json").read_text())
+    line = one_line_error(capsys, cli(["run", str(study), "--out", str(tmp_path / "p"),
+                                       "--json", str(tmp_path / "none" / "x.json")]))
+    assert "does not exist" in line and not (tmp_path / "p").exists()
+
+
 def test_force_replaces_the_run_files_only(tmp_path, capsys):
     study = write_study(tmp_path, RING)
     out = tmp_path / "o"

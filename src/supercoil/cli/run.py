@@ -55,6 +55,9 @@ def run_command(
     force: Annotated[bool, typer.Option(
         "--force", help="Write into an existing non-empty DIR, replacing its result.h5, "
         "summary and figures (other files are left alone).")] = False,
+    json_path: Annotated[str | None, typer.Option(
+        "--json", metavar="PATH", help="Also write the JSON summary to PATH ('-' = standard "
+        "output, which silences the other output).", show_default=False)] = None,
     overrides: Annotated[list[str] | None, typer.Option(
         "--set", metavar="TABLE.KEY=VALUE", help="Override one key of the study (a TOML "
         "value), e.g. --set rod.nodes=48; repeatable.", show_default=False)] = None,
@@ -62,9 +65,12 @@ def run_command(
     """Run a study file: compute, save the result file as it goes, write the JSON summary
     and the figures. Ctrl-C stops it and keeps every point computed so far; --resume
     continues it."""
+    from supercoil.cli._common import check_json_target, write_json_or_fail
     from supercoil.cli.progress import Progress
     from supercoil.io.study import StudyError, load_study
 
+    quiet = quiet or json_path == "-"
+    check_json_target(json_path)
     try:
         spec = load_study(study, overrides or ())
     except StudyError as exc:
@@ -78,9 +84,13 @@ def run_command(
     if stored is not None and stored.status == "complete":
         if not quiet:
             print(f"nothing to resume: {result_path} is complete ({stored.message})")
+        if json_path is not None and stored.summary is not None:
+            write_json_or_fail(stored.summary, json_path)
         return
     with Progress(quiet=quiet) as progress:
         outcome = run_study(spec, out, resume=resume, progress=progress)
+    if json_path is not None and outcome.get("summary") is not None:
+        write_json_or_fail(outcome["summary"], json_path)
     for note in outcome.get("notes", ()):
         warn(f"note: {note}")
     if not quiet:

@@ -45,9 +45,10 @@ def export_command(
     force: Annotated[bool, typer.Option("--force", help="Overwrite an existing --out "
                                         "file.")] = False,
 ) -> None:
-    """Export one state (a branch point) of a result file for ParaView, molecular viewers or
-    3D tools: VTK polydata with the tube radius, XYZ, PDB-style coarse-grained DNA, OBJ
-    tube mesh."""
+    """Export one state of a result file: VTK, XYZ, PDB (DNA beads) or OBJ tube.
+
+    VTK polydata with the tube radius (ParaView), XYZ, PDB-style coarse-grained DNA
+    (one bead per base pair) or an OBJ tube mesh, in the result's units (nm for DNA)."""
     from supercoil.io.exports import SUFFIXES, export_state
     from supercoil.io.store import RESULT_NAME, ResultFileError, load
     from supercoil.units.dna import RISE_NM_PER_BP

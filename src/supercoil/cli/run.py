@@ -62,9 +62,10 @@ def run_command(
         "--set", metavar="TABLE.KEY=VALUE", help="Override one key of the study (a TOML "
         "value), e.g. --set rod.nodes=48; repeatable.", show_default=False)] = None,
 ) -> None:
-    """Run a study file: compute, save the result file as it goes, write the JSON summary
-    and the figures. Ctrl-C stops it and keeps every point computed so far; --resume
-    continues it."""
+    """Run a study file (TOML): result file, JSON summary and figures.
+
+    The result file (result.h5, read with supercoil.load) is saved as the run goes;
+    Ctrl-C stops it and keeps every point computed so far, --resume continues it."""
     from supercoil.cli._common import check_json_target, write_json_or_fail
     from supercoil.cli.progress import Progress
     from supercoil.io.study import StudyError, load_study

@@ -200,7 +200,7 @@ def test_options_validate():
 def test_link_writhe_lines_are_stable_up_to_the_located_bifurcation(diagram):
     """The figure's circle is heavy up to Michell's point (located), not to the last
     stable sample before it: the special point enters the polyline twice."""
-    from supercoil.cli.diagram_output import _through_special_points
+    from supercoil.plotting.figures import through_special_points
 
     payload = diagram.payload()
     rows = [p for p in payload["points"] if p["branch"] == "circle"]
@@ -208,7 +208,7 @@ def test_link_writhe_lines_are_stable_up_to_the_located_bifurcation(diagram):
             "excess_link": [r["excess_link"] for r in rows],
             "stable": [r["stable"] for r in rows]}
     specials = [p for p in payload["special_points"] if p["branch"] == "circle"]
-    out = _through_special_points(line, specials)
+    out = through_special_points(line, specials, ("writhe", "excess_link"))
     dlk, stable = np.array(out["excess_link"]), np.array(out["stable"])
     michell = 1.5 * np.sqrt(3)
     last_stable = dlk[stable].max()

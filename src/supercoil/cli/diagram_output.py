@@ -18,6 +18,7 @@ DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configur
 def write_diagram(diagram, out: Path, contact: str) -> dict:
     """Save ``diagram`` (a RingDiagram) into ``out``, print a summary; return the payload."""
     from supercoil.io.results import envelope, write_json
+    from supercoil.plotting.figures import through_special_points
     from supercoil.plotting.ring_diagram import (
         plot_configurations,
         plot_contact_map,
@@ -44,8 +45,8 @@ def write_diagram(diagram, out: Path, contact: str) -> dict:
                       "stable": [r["stable"] for r in rows],
                       "contact_points": [r["contact_points"] for r in rows],
                       "contact_intervals": [r["contact_intervals"] for r in rows]})
-    lines = [_through_special_points(b, [p for p in payload["special_points"]
-                                         if p["branch"] == b["name"]]) for b in shown]
+    lines = [through_special_points(b, payload["special_points"], ("writhe", "excess_link"))
+             for b in shown]
     plot_link_writhe(out / "link_writhe.png", branches=lines,
                      special_points=payload["special_points"], title=title)
     plot_contact_map(out / "contact_map.png",
@@ -74,28 +75,6 @@ def write_diagram(diagram, out: Path, contact: str) -> dict:
     for note in payload["notes"]:
         warn(f"note: {note}")
     return payload
-
-
-def _through_special_points(line: dict, specials: list[dict]) -> dict:
-    """The branch's polyline with its located special points inserted (ΔLk-Wr figure).
-
-    Each special point enters twice at its place (after point ``index``): with
-    the stability before it, then after it, so that a stable stretch is drawn
-    heavy up to the located point (a bifurcation of the circle, a fold), not
-    only up to the last stable sample.
-    """
-    k = len(line["writhe"])
-    rows = [(float(i), line["writhe"][i], line["excess_link"][i], line["stable"][i])
-            for i in range(k)]
-    for p in specials:
-        if "writhe" not in p or not 0 <= p["index"] < k:
-            continue
-        at = p["index"] + 0.5
-        rows.append((at, p["writhe"], p["excess_link"], p["count_before"] == 0))
-        rows.append((at + 1e-6, p["writhe"], p["excess_link"], p["count_after"] == 0))
-    rows.sort(key=lambda r: r[0])
-    return {"name": line["name"], "writhe": [r[1] for r in rows],
-            "excess_link": [r[2] for r in rows], "stable": [r[3] for r in rows]}
 
 
 def incomplete_message(payload: dict, out: Path) -> str | None:

@@ -251,6 +251,39 @@ def _branch_rows(result: ResultData, keys: Sequence[str]) -> list[dict]:
     return rows
 
 
+def through_special_points(row: Mapping, specials: Sequence[Mapping],
+                           keys: Sequence[str]) -> dict:
+    """``row`` (a branch's ``keys`` and ``stable`` per point) with its located special
+    points inserted where they lie (after point ``index``), each twice: with the
+    stability before it (``count_before == 0``), then after it. A stable stretch is
+    then drawn heavy up to the located point (the circle up to Michell's point), not
+    only up to the last stable sample. Special points without ``index``,
+    ``count_before``, ``count_after`` or one of ``keys`` are left out.
+    """
+    k = len(row["stable"])
+    entries = [(float(i), [row[key][i] for key in keys], bool(row["stable"][i]))
+               for i in range(k)]
+    for p in specials:
+        if p.get("branch", row.get("name")) != row.get("name"):
+            continue
+        try:
+            at = int(p["index"]) + 0.5
+            values = [float(p[key]) for key in keys]
+            before, after = int(p["count_before"]), int(p["count_after"])
+        except (KeyError, TypeError, ValueError):
+            continue
+        if not 0 <= at < k:
+            continue
+        entries.append((at, values, before == 0))
+        entries.append((at + 1e-6, values, after == 0))
+    entries.sort(key=lambda e: e[0])
+    out = dict(row)
+    for j, key in enumerate(keys):
+        out[key] = np.array([e[1][j] for e in entries], dtype=float)
+    out["stable"] = np.array([e[2] for e in entries], dtype=bool)
+    return out
+
+
 def _specials(result: ResultData, keys: Sequence[str]) -> list[Mapping]:
     return [p for p in result.special_points
             if all(isinstance(p.get(k), int | float) and math.isfinite(p[k]) for k in keys)]
@@ -276,13 +309,15 @@ def figure_of(result: ResultData, kind: str):
                          f"figure; kinds it has: {valid}")
     param = result.parameter
     if kind == "diagram":
-        rows = _branch_rows(result, ("writhe", param))
-        return diagram_figure(rows, _specials(result, ("writhe", param)), title=result.title,
-                              x="writhe", y=param)
+        keys = ("writhe", param)
+        specials = _specials(result, keys)
+        rows = [through_special_points(r, specials, keys) for r in _branch_rows(result, keys)]
+        return diagram_figure(rows, specials, title=result.title, x="writhe", y=param)
     if kind == "hat-curve":
-        rows = _branch_rows(result, ("turns", "extension"))
-        return hat_curve_figure(rows, _specials(result, ("turns", "extension")),
-                                title=result.title)
+        keys = ("turns", "extension")
+        specials = _specials(result, keys)
+        rows = [through_special_points(r, specials, keys) for r in _branch_rows(result, keys)]
+        return hat_curve_figure(rows, specials, title=result.title)
     if kind == "contact-map":
         x = "writhe" if result.kind == "ring" else "turns"
         rows = []

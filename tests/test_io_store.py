@@ -235,6 +235,23 @@ def test_unknown_branch_and_point_name_what_is_valid(tmp_path):
         result.centreline("alpha", 3)
 
 
+def test_a_file_being_written_can_be_read(tmp_path):
+    """The writer holds HDF5's file lock; another process still reads the flushed points."""
+    path = tmp_path / "r.h5"
+    branch = make_branch(seed=8)
+    script = (f"import supercoil; r = supercoil.load({str(path)!r}); "
+              "print(r.status, len(r.branch('alpha')))")
+    with new_writer(path) as writer:
+        writer.append(prefix(branch, 3))
+        reader = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                                timeout=60, check=False)
+        assert reader.stdout.split() == ["running", "3"], reader.stderr
+        writer.append(branch)
+        reader = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                                timeout=60, check=False)
+        assert reader.stdout.split() == ["running", "7"], reader.stderr
+
+
 WRITER = textwrap.dedent("""
     import sys, time
     sys.path.insert(0, {tests!r})

@@ -611,7 +611,15 @@ def _check(path: Path):
         handle = h5py.File(path, "r")
     except OSError as exc:
         reason = " ".join(str(exc).split())
-        raise ResultFileError(f"{path}: not a readable HDF5 result file ({reason})") from None
+        if "unable to lock file" not in reason:
+            raise ResultFileError(f"{path}: not a readable HDF5 result file ({reason})"
+                                  ) from None
+        # a run is writing it (it holds the lock): read what it has flushed so far
+        try:
+            handle = h5py.File(path, "r", locking=False)
+        except OSError:
+            raise ResultFileError(f"{path}: being written by a running process and not "
+                                  "readable at this moment; try again") from None
     try:
         if _text(handle.attrs.get("format", "")) != FORMAT:
             raise ResultFileError(f"{path}: an HDF5 file but not a supercoil result file "
@@ -630,6 +638,9 @@ def load(path: str | Path) -> Result:
     """Read the result file at ``path`` (written by ``supercoil run`` or a
     :class:`ResultWriter`) into a :class:`Result`.
 
+    A file that a run is still writing (status ``running``) is read without the
+    HDF5 file lock: the points flushed so far.
+
     Raises :class:`ResultFileError` (one line naming the file) if it is
     missing, not HDF5, not a supercoil result, of an unknown schema version,
     or damaged.
@@ -643,7 +654,8 @@ def load(path: str | Path) -> Result:
         raise
     except (OSError, KeyError, ValueError, TypeError, json.JSONDecodeError) as exc:
         reason = " ".join(str(exc).split()) or type(exc).__name__
-        raise ResultFileError(f"{path}: damaged result file ({reason})") from None
+        raise ResultFileError(f"{path}: damaged result file, or caught in the middle of a "
+                              f"write by a running process ({reason})") from None
 
 
 def _text(value) -> str:

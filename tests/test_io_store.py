@@ -252,6 +252,31 @@ def test_a_file_being_written_can_be_read(tmp_path):
         assert reader.stdout.split() == ["running", "7"], reader.stderr
 
 
+def test_a_second_writer_is_refused_while_a_run_writes(tmp_path):
+    path = tmp_path / "r.h5"
+    holder = textwrap.dedent(f"""
+        import sys, time
+        sys.path.insert(0, {os.path.dirname(__file__)!r})
+        from test_io_store import make_branch, new_writer
+        writer = new_writer({str(path)!r})
+        writer.append(make_branch())
+        print("ready", flush=True)
+        time.sleep(60)
+    """)
+    proc = subprocess.Popen([sys.executable, "-c", holder], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "ready"
+        for attempt in (lambda: ResultWriter.reopen(path),
+                        lambda: new_writer(path, overwrite=True)):
+            with pytest.raises(ResultFileError, match="another running process is writing it"):
+                attempt()
+        assert len(load(path).branch("alpha")) == 7  # still readable meanwhile
+    finally:
+        proc.kill()
+        proc.communicate()
+    ResultWriter.reopen(path).close()  # the lock went with the process
+
+
 WRITER = textwrap.dedent("""
     import sys, time
     sys.path.insert(0, {tests!r})

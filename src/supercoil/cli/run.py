@@ -88,8 +88,13 @@ def run_command(
         if json_path is not None and stored.summary is not None:
             write_json_or_fail(stored.summary, json_path)
         return
-    with Progress(quiet=quiet) as progress:
-        outcome = run_study(spec, out, resume=resume, progress=progress)
+    from supercoil.io.store import ResultFileError
+
+    try:
+        with Progress(quiet=quiet) as progress:
+            outcome = run_study(spec, out, resume=resume, progress=progress)
+    except ResultFileError as exc:  # the result file is locked by another run
+        fail(str(exc))
     if json_path is not None and outcome.get("summary") is not None:
         write_json_or_fail(outcome["summary"], json_path)
     for note in outcome.get("notes", ()):

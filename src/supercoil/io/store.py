@@ -170,11 +170,19 @@ class ResultWriter:
         and a timestamp are added). An existing file is refused
         (:class:`FileExistsError`) unless ``overwrite``.
         """
-        h5py = _h5py()
         path = Path(path)
-        if path.exists() and not overwrite:
-            raise FileExistsError(f"{path}: exists; give another path or allow overwriting")
-        handle = h5py.File(path, "w")
+        if path.exists():
+            if not overwrite:
+                raise FileExistsError(f"{path}: exists; give another path or allow "
+                                      "overwriting")
+            # HDF5 truncates before it takes the lock: make sure no run is writing the
+            # old file (its lock), then replace it by a new file
+            try:
+                _open_for_writing(path, "r+").close()
+            except OSError:
+                pass  # not an HDF5 file: nobody writes it
+            path.unlink()
+        handle = _open_for_writing(path, "w-")
         try:
             attrs = handle.attrs
             _set_text(attrs, "format", FORMAT)
@@ -206,8 +214,8 @@ class ResultWriter:
     def reopen(cls, path: str | Path) -> ResultWriter:
         """Open an existing result file to continue it (``--resume``); status -> running."""
         path = Path(path)
-        _check(path)  # one-line errors for missing, corrupt or foreign files
-        handle = _h5py().File(path, "r+")
+        _check(path).close()  # one-line errors for missing, corrupt or foreign files
+        handle = _open_for_writing(path, "r+")
         _set_text(handle.attrs, "status", "running")
         _set_text(handle.attrs, "updated", _now())
         handle.flush()
@@ -398,6 +406,17 @@ class ResultWriter:
         if branch.origin is not None:
             _write_special(group, "origin", branch.origin)
         return group
+
+
+def _open_for_writing(path: Path, mode: str):
+    try:
+        return _h5py().File(path, mode)
+    except OSError as exc:
+        reason = " ".join(str(exc).split())
+        if "unable to lock file" in reason:
+            raise ResultFileError(f"{path}: another running process is writing it (it holds "
+                                  "the file lock); wait for it to end or stop it") from None
+        raise
 
 
 def _continues(group, branch: Branch) -> bool:

@@ -288,3 +288,26 @@ def test_force_ramp_returns_to_its_start(small_run):
     assert np.all(np.diff(ext) > 0)
     assert all(p["tension"] == pytest.approx(p["load_potential"] / -p["extension"])
                for p in ramp)
+
+
+def test_continuation_in_force_locates_the_buckling_force():
+    """At 2 turns the straight rod, unloaded from above, buckles at the force F_c with
+    critical_moment(F_c) = 2 pi (C/A) turns (the same exact condition), order 2 in N."""
+    from scipy.optimize import brentq
+
+    from supercoil.problems.greenhill import critical_moment
+    from supercoil.problems.tweezers import straight_force_branch
+
+    turns, ratio = 2.0, 4 / 3
+    exact = brentq(lambda t: critical_moment(t) - 2 * np.pi * ratio * turns, 1e-3, 500.0)
+    values = []
+    for n in (24, 48, 96):
+        opts = TweezersOptions(twist_ratio=ratio, length_over_diameter=None, tension=1.0,
+                               n_nodes=n)
+        branch = straight_force_branch(opts, turns, (0.5 * exact, 1.5 * exact))
+        (point,) = branch.points_of_kind("bifurcation")
+        assert (point.count_before, point.count_after) == (0, 2)
+        values.append(point.parameter)
+    errors = np.abs(np.array(values) - exact) / exact
+    orders = np.log2(errors[:-1] / errors[1:])
+    assert np.all(np.abs(orders - 2) < 0.2), (errors, orders)

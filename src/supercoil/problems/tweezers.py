@@ -424,6 +424,29 @@ def straight_branch(options: TweezersOptions, problem: ClampedRodEnergy, q0: np.
                         records=records)
 
 
+def straight_force_branch(options: TweezersOptions, turns: float,
+                          force_range: tuple[float, float], records=None) -> Branch:
+    """The straight rod at fixed ``turns`` followed in the force (``tension``), high to low.
+
+    Continuation in the load parameter ``tension`` (F L^2/A) from ``force_range[1]``
+    down to ``force_range[0]``: the straight rod loses stability where the force
+    falls below the one at which ``turns`` is critical (located as a
+    ``bifurcation``; exact: ``critical_moment(F) = 2 pi (C/A) turns``).
+    """
+    low, high = (float(v) for v in force_range)
+    if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high):
+        raise ValueError(f"force_range must be (low, high) with 0 <= low < high, got "
+                         f"{force_range!r}")
+    opts = dataclasses.replace(options, tension=high, end_distance=None, turns=(0.0, 1.0))
+    problem, q0 = clamped_problem(opts)
+    problem.turns = float(turns)
+    cont = ContinuationOptions(initial_step=0.05, max_step=max(1.0, 0.05 * (high - low)),
+                               parameter_bounds=(low, high), max_points=options.max_points,
+                               direction=-1, event_tolerance=options.event_tolerance)
+    return continuation(problem, q0, parameter="tension", options=cont,
+                        name="straight_in_force", records=records)
+
+
 def tweezers_branches(options: TweezersOptions,
                       progress: Callable[[str], None] | None = None) -> TweezersResult:
     """Compute the branches (module docstring); numerical failures end up in statuses."""

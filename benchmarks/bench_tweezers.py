@@ -1,9 +1,14 @@
 """Benchmark of issue 5: the whole tweezers branch 0 -> 5 turns, N = 100, L/D = 33, C/A = 4/3,
 F L^2/A = 75 (the problem the issue quotes for PyElastica), timed for the whole command.
 
-Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers.py [--nodes N] [--stop T]``.
-Prints wall time, points per branch, folds, the last state's extension and writhe, and the
-largest KKT residual and overlap. PyElastica is not run (not implemented; see docs).
+Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers.py [--nodes N] [--stop T]
+[--pyelastica PYTHON [--pyelastica-steps K]]``.
+Prints wall time, points per branch, folds, the last state's extension and writhe and the
+closest approach. With ``--pyelastica PYTHON`` (an interpreter with PyElastica installed,
+``pip install pyelastica`` or ``pip install -e ".[pyelastica]"``) the same problem is run
+by :mod:`bench_tweezers_pyelastica` (explicit dynamics to rest, 1.1 million steps at N = 100;
+``--pyelastica-steps`` runs only that many and extrapolates the time) and the wall-time
+ratio and the agreement of extension and writhe are printed.
 """
 
 from __future__ import annotations
@@ -21,6 +26,8 @@ def main() -> None:
     parser.add_argument("--nodes", type=int, default=100)
     parser.add_argument("--stop", type=float, default=5.0)
     parser.add_argument("--max-points", type=int, default=3000)
+    parser.add_argument("--pyelastica", metavar="PYTHON", default=None)
+    parser.add_argument("--pyelastica-steps", type=int, default=0)
     args = parser.parse_args()
     import json
 
@@ -45,6 +52,25 @@ def main() -> None:
     print(f"last state: turns {last['turns']:.4f}, extension {last['extension']:.4f}, "
           f"writhe {last['writhe']:.4f}, unstable_count {last['unstable_count']}; "
           f"{folds} folds; min gap/D on contact branch {min(gaps) if gaps else float('nan'):.4f}")
+    if args.pyelastica:
+        peer = Path(__file__).with_name("bench_tweezers_pyelastica.py")
+        cmd = [args.pyelastica, str(peer), "--elements", str(args.nodes), "--turns",
+               str(args.stop), "--steps", str(args.pyelastica_steps)]
+        run = subprocess.run(cmd, check=False, capture_output=True, text=True)
+        if run.returncode != 0:
+            print("PyElastica run failed:", run.stderr.strip().splitlines()[-1:])
+            return
+        peer_result = json.loads(run.stdout.strip().splitlines()[-1])
+        full = peer_result["seconds_per_step"] * peer_result["total_steps"]
+        measured = "measured" if peer_result["steps"] == peer_result["total_steps"] else \
+            f"extrapolated from {peer_result['steps']} steps"
+        print(f"PyElastica: {full:.0f} s ({measured}) for {peer_result['total_steps']} steps; "
+              f"ratio {full / wall:.1f}")
+        if peer_result["steps"] == peer_result["total_steps"]:
+            print(f"  extension {peer_result['extension']:.4f} (supercoil {last['extension']:.4f}), "
+                  f"writhe {peer_result['writhe']:.4f} (supercoil {last['writhe']:.4f}), "
+                  f"overlap {100 * peer_result['overlap_over_diameter']:.2f} % of D, "
+                  f"largest speed {peer_result['largest_speed']:.2e}")
 
 
 if __name__ == "__main__":

@@ -133,3 +133,35 @@ def test_bad_input(bad):
         pts[0, 0] = 0.1
     with pytest.raises(ValueError):
         ClampedRodEnergy(rod, pts, np.inf if bad == "turns" else 0.0)
+
+
+def test_repin_follows_the_shape_and_leaves_straight_rods_unpinned():
+    """The pin is the larger azimuthal coordinate of the node farthest from the axis:
+    its quality (rotation on the pin over the largest nodal rotation) is >= 1/sqrt(2)."""
+    p, pts = make(n=30, pts=bent_rod(30, 0.1))
+    q = pts.ravel()
+    p.repin(q)
+    assert p.gauge_dofs.size == 1 and p.pin_quality(q) >= 1 / np.sqrt(2) - 1e-12
+    clamps = np.setdiff1d(p.fixed, p.gauge_dofs)
+    assert clamps.size == 10
+    node, coordinate = divmod(int(p.gauge_dofs[0]), 3)
+    # the same shape turned by 90 degrees about the axis: same node, other coordinate
+    x = pts.copy()
+    x[:, 0], x[:, 1] = -pts[:, 1], pts[:, 0].copy()
+    p.repin(x.ravel())
+    assert divmod(int(p.gauge_dofs[0]), 3) == (node, 1 - coordinate)
+    assert p.pin_quality(x.ravel()) >= 1 / np.sqrt(2) - 1e-12
+    assert np.array_equal(np.setdiff1d(p.fixed, p.gauge_dofs), clamps)
+    p.repin(straight_rod(30).ravel())
+    assert p.gauge_dofs.size == 0 and p.pin_quality(straight_rod(30).ravel()) == 1.0
+    assert np.array_equal(p.fixed, clamps)
+
+
+def test_accept_after_a_jump_restores_twist_from_the_writhe():
+    """Jumping straight to a far state rebuilds the frames: Tw = turns - Wr (double sum)."""
+    p, _pts = make(n=60, pts=bent_rod(60, 0.02))
+    for amp in (0.4, 0.05, 0.3):  # far apart: edges turn by more than 45 degrees
+        q = bent_rod(60, amp).ravel()
+        p.accept(q)
+        wr = writhe(q.reshape(-1, 3), closure="axis")
+        assert p.twist(q) + wr == pytest.approx(p.turns, abs=1e-10)

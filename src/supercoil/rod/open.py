@@ -15,7 +15,9 @@ interior vertices; the reference director of the first edge is the clamp
 director. With the rod closed by straight tails along the axis,
 ``turns = Tw + Wr`` (Fuller; fails when the rod wraps around a tail).
 Rotating the whole centreline about the axis is an exact symmetry; it is
-removed by fixing the azimuthal coordinate of the node farthest from the axis.
+removed by fixing the azimuthal coordinate of the node farthest from the axis,
+chosen at construction and re-picked for a new shape by :meth:`repin`
+(continuation in :mod:`supercoil.problems.tweezers` does so between runs).
 """
 
 from __future__ import annotations
@@ -153,7 +155,9 @@ class ClampedRodEnergy(RodEnergy):
         The rotation's component on the pinned coordinate over its largest
         nodal magnitude (1: the pin sits where the rotation moves the rod
         most, along the pinned coordinate; 0: no pin, or it does not see the
-        rotation). 1 also for a straight rod, which has no rotation to remove.
+        rotation). Right after :meth:`repin` it is at least ``1/sqrt(2)`` (the larger
+        of the two azimuthal components of the farthest node). 1 also for a straight
+        rod, which has no rotation to remove.
         """
         mode = np.cross(AXIS, np.asarray(q, dtype=float).reshape(-1, 3))
         largest = float(np.max(np.linalg.norm(mode, axis=1)))

@@ -108,14 +108,15 @@ def new_writer(path, **kw):
 def test_round_trip_whole_branches(tmp_path):
     path = tmp_path / "r.h5"
     branches = [make_branch(name="circle", origin=False, seed=1), make_branch(seed=2),
-                make_branch(k=1, name="single", seed=3), make_branch(k=0, name="empty", seed=4)]
+                make_branch(k=1, name="single", seed=3), make_branch(k=0, name="empty", seed=4),
+                make_branch(k=2, name=".odd/name 100%", seed=5)]
     with new_writer(path) as writer:
         for b in branches:
             writer.write_branch(b, contact=b.name == "alpha")
         writer.set_summary({"points": [{"branch": "alpha", "index": 0, "x": 1.5}], "ok": True})
         writer.set_status("complete", "done")
     result = supercoil.load(path)
-    assert result.branch_names == ("circle", "alpha", "single", "empty")
+    assert result.branch_names == ("circle", "alpha", "single", "empty", ".odd/name 100%")
     for b in branches:
         assert_branch_equal(b, result.branch(b.name))
     assert result.status == "complete" and result.message == "done"

@@ -10,7 +10,8 @@ Layout (``SCHEMA_VERSION`` "1.0")::
     /study                   the study file's text (TOML), when the run came from one
     /summary                 the JSON summary of the finished run (e.g. diagram.json's
                              payload, with the per-point contact lists)
-    /branches/<name>/        attrs: name, parent, parameter, status, message, n_points,
+    /branches/<key>/         the branch's name with % and / percent-encoded (and a leading .)
+                             attrs: name, parent, parameter, status, message, n_points,
                              n_special, complete, contact, order
         parameter_values     (k,)           resizable along the first axis ("point")
         states               (k, n_dofs)    full states (a ring: flat node coordinates)
@@ -240,13 +241,12 @@ class ResultWriter:
 
     def stored_branches(self) -> dict[str, tuple[Branch, bool]]:
         """name -> (branch as stored, whether its computation ended)."""
-        return {name: (_read_branch(self._file["branches"][name]),
-                       bool(self._file["branches"][name].attrs["complete"]))
-                for name in self.branch_names()}
+        groups = {name: self._file["branches"][_key(name)] for name in self.branch_names()}
+        return {name: (_read_branch(g), bool(g.attrs["complete"])) for name, g in groups.items()}
 
     def stored_points(self, name: str) -> int:
         """Number of points of branch ``name`` in the file (0 if absent)."""
-        group = self._file["branches"].get(name)
+        group = self._file["branches"].get(_key(name))
         return 0 if group is None else int(group.attrs["n_points"])
 
     def append(self, branch: Branch, *, contact: bool = False) -> int:
@@ -258,15 +258,16 @@ class ResultWriter:
         number of points now stored.
         """
         with _hold_interrupts():
-            group = self._file["branches"].get(branch.name)
+            key = _key(branch.name)
+            group = self._file["branches"].get(key)
             if group is not None and not _continues(group, branch):
                 # another run of the same name (a restarted or recomputed branch)
                 order = int(group.attrs["order"])
-                del self._file["branches"][branch.name]
-                group = self._new_group(self._file["branches"], branch.name, branch,
+                del self._file["branches"][key]
+                group = self._new_group(self._file["branches"], key, branch,
                                         complete=False, contact=contact, order=order)
             if group is None:
-                group = self._new_group(self._file["branches"], branch.name, branch,
+                group = self._new_group(self._file["branches"], key, branch,
                                         complete=False, contact=contact)
             stored = int(group.attrs["n_points"])
             k = len(branch)
@@ -293,10 +294,11 @@ class ResultWriter:
         """
         with _hold_interrupts():
             branches = self._file["branches"]
-            temporary = f".{branch.name}.new"
+            key = _key(branch.name)
+            temporary = f".{key}.new"
             if temporary in branches:
                 del branches[temporary]
-            old = branches.get(branch.name)
+            old = branches.get(key)
             order = int(old.attrs["order"]) if old is not None else None
             group = self._new_group(branches, temporary, branch, complete=complete,
                                     contact=contact, order=order)
@@ -307,20 +309,20 @@ class ResultWriter:
             group.attrs["n_special"] = len(branch.special_points)
             self._file.flush()
             if old is not None:
-                del branches[branch.name]
-            branches.move(temporary, branch.name)
+                del branches[key]
+            branches.move(temporary, key)
             self._touch()
 
     def mark_complete(self, name: str, complete: bool = True) -> None:
-        group = self._file["branches"][name]
+        group = self._file["branches"][_key(name)]
         group.attrs["complete"] = bool(complete)
         self._touch()
 
     def remove_branch(self, name: str) -> None:
         with _hold_interrupts():
             branches = self._file["branches"]
-            if name in branches:
-                del branches[name]
+            if _key(name) in branches:
+                del branches[_key(name)]
             self._touch()
 
     # -- the run -----------------------------------------------------------------------------
@@ -406,6 +408,15 @@ class ResultWriter:
         if branch.origin is not None:
             _write_special(group, "origin", branch.origin)
         return group
+
+
+def _key(name: str) -> str:
+    """The group name of branch ``name``: ``%`` and ``/`` percent-encoded, and a leading
+    ``.`` (groups starting with ``.`` are replacements being written)."""
+    key = str(name).replace("%", "%25").replace("/", "%2F")
+    if key.startswith("."):
+        key = "%2E" + key[1:]
+    return key or "%00"
 
 
 def _open_for_writing(path: Path, mode: str):

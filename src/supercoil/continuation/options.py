@@ -64,6 +64,14 @@ class ContinuationOptions:
       closed rod's material sliding off the circle, nearly null and otherwise
       unremoved, which makes Newton, the tangent and the count ill-posed).
       Sparse; nothing changes for problems without near-symmetries.
+    * ``regauge``: with ``near_symmetry_gauge``, when a step fails, pick the
+      pinned DOF afresh at the last point (the row becomes ``q_i = q_i(last
+      point)`` on the DOF where the sliding moves most there; its tangent is
+      recomputed) and retry the step once, instead of keeping the start's DOF
+      for the whole branch. Measured on the ring's contact branch: with the
+      start's pin the steps fell to zero at dLk 2.37 (N = 200); restarted there
+      with a fresh pin, the branch went on. (Re-picking at every point made
+      the tangent turn between gauges and stopped the branch earlier.)
     * ``finite_difference_step``: relative step of the central difference of
       the residual in the parameter when the problem has no
       ``parameter_derivative`` (error ``O(step^2)`` relative).
@@ -92,6 +100,7 @@ class ContinuationOptions:
     switch_below: float = 1e-3
     phase_conditions: bool = False
     near_symmetry_gauge: bool = True
+    regauge: bool = False
     finite_difference_step: float = 6e-6
 
     def __post_init__(self) -> None:

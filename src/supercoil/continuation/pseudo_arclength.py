@@ -182,12 +182,32 @@ class _Tracer:
             critical_eigenvalues=values, critical_modes=modes, located=ev.located,
             tolerance=opts.event_tolerance, records=self._records(x))
 
+    def _regauge(self) -> bool:
+        """Move the phase rows to the DOFs :func:`branch_phase_modes` picks at the last
+        point (re-anchored there) and recompute its tangent; False if they are the same."""
+        system = self.system
+        x = self.xs[-1]
+        q = system.q(x)
+        modes = branch_phase_modes(system.problem, q, self.opts)
+        if modes is None or modes.shape != system.phase_modes.shape or np.array_equal(
+                modes != 0, system.phase_modes != 0):
+            return False
+        old = (system.phase_modes, system.q_phase_full)
+        system.set_phase(modes, q)
+        try:
+            self.ts[-1] = tangent(system, x, system.weights * self.ts[-1])
+        except SingularMatrixError:
+            system.set_phase(*old)
+            return False
+        return True
+
     # -- the stepping loop ------------------------------------------------------------------
     def run(self, step: float) -> tuple[ContinuationStatus, str]:
         system, opts = self.system, self.opts
         low, high = opts.parameter_bounds
         cos_turn = math.cos(math.radians(opts.max_turn_degrees))
         ds = step
+        regauged = False
         while len(self.xs) < opts.max_points:
             if self.s[-1] >= opts.max_arclength:
                 return ContinuationStatus.MAX_ARCLENGTH, (
@@ -250,12 +270,17 @@ class _Tracer:
                     failure = f"landing on the bound {bound:.6g}: {landing.message}"
             if failure is not None:
                 log.debug("step %.3g rejected: %s", ds, failure)
+                if opts.regauge and system.r and not regauged and self._regauge():
+                    regauged = True  # retry the same step once with the moved gauge
+                    log.debug("gauge moved at point %d", len(self.xs) - 1)
+                    continue
                 if ds <= opts.min_step:
                     return ContinuationStatus.STEP_TOO_SMALL, (
                         f"stopped after {len(self.xs)} points at {system.parameter} = "
                         f"{x_k[-1]:.10g}: {failure} at the minimum step {opts.min_step:.1e}")
                 ds = max(ds * opts.shrink, opts.min_step)
                 continue
+            regauged = False
             try:
                 self.add_point(x_new, t_new)
             except (SingularMatrixError, InertiaError) as exc:

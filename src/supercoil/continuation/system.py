@@ -61,6 +61,16 @@ class ExtendedSystem:
                                        [parameter_weight**2]])
         self.fd_step = finite_difference_step
 
+    def set_phase(self, phase_modes: np.ndarray, q_phase: np.ndarray) -> None:
+        """New phase rows of the same number (a moved gauge); the layout of ``x`` is kept."""
+        phase_modes = np.atleast_2d(np.asarray(phase_modes, dtype=float))
+        if phase_modes.shape[0] != self.r:
+            raise ValueError(f"set_phase needs {self.r} rows, got {phase_modes.shape[0]}")
+        self.phase_modes = phase_modes
+        self.P = phase_modes[:, self.free] * self.mass[None, :]
+        self.q_phase_full = np.array(q_phase, dtype=float)
+        self.q_phase = self.q_phase_full[self.free]
+
     # -- layout -------------------------------------------------------------------------
     def pack(self, q: np.ndarray, multipliers: np.ndarray, lam: float,
              phase_multipliers: np.ndarray | None = None) -> np.ndarray:

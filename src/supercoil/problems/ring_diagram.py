@@ -548,7 +548,7 @@ def ring_diagram(options: DiagramOptions,
             max_step=opts.contact_max_step * D, max_points=opts.contact_max_points,
             parameter_bounds=(0.0, opts.max_excess_link), direction=direction,
             parameter_weight=D, tolerance=opts.contact_tolerance,
-            near_symmetry_gauge=opts.contact_gauge,
+            near_symmetry_gauge=opts.contact_gauge, regauge=True,
             event_tolerance=opts.contact_event_tolerance)
         if not 0.0 <= cp.excess_link <= opts.max_excess_link:
             notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "

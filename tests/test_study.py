@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import json
 import math
 from pathlib import Path
@@ -326,11 +325,8 @@ def test_interrupted_run_keeps_a_valid_file_and_resume_completes_it(tmp_path, ca
     for b in cut.branches:  # whatever was saved is a prefix of the uninterrupted run
         ref = reference.branch(b.name)
         np.testing.assert_allclose(b.states, ref.states[:len(b)], atol=1e-10)
-    from supercoil.problems.ring_diagram import ring_diagram
-
-    if "on_point" in inspect.signature(ring_diagram).parameters:
-        # saved point by point: the circle and the start of alpha_contact's run
-        assert cut.branch_names[:2] == ("circle", "alpha") and len(cut.branch("alpha")) > 0
+    # saved point by point: the circle and the start of alpha_contact's run
+    assert cut.branch_names[:2] == ("circle", "alpha") and len(cut.branch("alpha")) > 0
     # --resume: a settings mismatch is refused and leaves the file alone
     study = write_study(tmp_path)
     before = (out / "result.h5").read_bytes()

@@ -18,7 +18,6 @@ input (the study file, the folder, a result file that does not match).
 
 from __future__ import annotations
 
-import inspect
 import math
 from pathlib import Path
 from typing import Annotated
@@ -303,31 +302,21 @@ def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict
     from supercoil.problems.ring_diagram import ring_diagram
 
     options = spec.diagram_options()
-    accepted = inspect.signature(ring_diagram).parameters
-    kwargs = {"progress": progress.message}
     notes = []
-    if "on_point" in accepted:
-        kwargs["on_point"] = _point_saver(writer, progress, saved)
-    if "on_branch" in accepted:
-        def on_branch(branch, contact: bool) -> None:
-            writer.write_branch(branch, complete=True, contact=contact)
 
-        kwargs["on_branch"] = on_branch
+    def on_branch(branch, contact: bool) -> None:
+        writer.write_branch(branch, complete=True, contact=contact)
+
+    kwargs = {"progress": progress.message, "on_point": _point_saver(writer, progress, saved),
+              "on_branch": on_branch}
     if resume:
-        if "resume" in accepted:
-            stored = writer.stored_branches()
-            kwargs["resume"] = stored
-            kept = [n for n, (b, complete) in stored.items() if complete]
-            partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
-                       if not complete and len(b)]
-            progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
-                             f"{', '.join(partial) or 'no branch'}")
-        else:
-            notes.append("this version of ring_diagram cannot continue stored branches: the "
-                         "diagram was computed again (the stored points were kept until "
-                         "replaced)")
-            progress.message("resume: recomputing the diagram (ring_diagram cannot continue "
-                             "stored branches yet)")
+        stored = writer.stored_branches()
+        kwargs["resume"] = stored
+        kept = [n for n, (b, complete) in stored.items() if complete]
+        partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
+                   if not complete and len(b)]
+        progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
+                         f"{', '.join(partial) or 'no branch'}")
     s = spec.settings
     progress.message(f"ring diagram: C/A = {s['rod']['twist_ratio']:.6g}, L/D = "
                      f"{s['rod']['length_over_diameter']:.6g}, N = {s['rod']['nodes']}, modes "

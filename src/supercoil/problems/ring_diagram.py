@@ -99,7 +99,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -114,6 +114,7 @@ from supercoil.continuation import (
     continuation,
     switch_branch,
 )
+from supercoil.continuation.resume import resume_branch
 from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_branches import PRIMARY_NAMES, circle_branch, ring_records
 from supercoil.problems.ring_contact import validate_diameter
@@ -475,9 +476,26 @@ def truncate_after(branch: Branch, point: SpecialPoint, message: str) -> Branch:
 
 # ------------------------------------------------------------------------- the diagram
 def ring_diagram(options: DiagramOptions,
-                 progress: Callable[[str], None] | None = None) -> RingDiagram:
-    """Compute the diagram (module docstring); numerical failures end up in branch statuses."""
+                 progress: Callable[[str], None] | None = None, *,
+                 on_point: Callable[[Branch], None] | None = None,
+                 on_branch: Callable[[Branch, bool], None] | None = None,
+                 resume: Mapping[str, tuple[Branch, bool]] | None = None) -> RingDiagram:
+    """Compute the diagram (module docstring); numerical failures end up in branch statuses.
+
+    ``on_point(partial_branch)`` is called after each accepted point of the
+    primary and contact branches (not of the switch's short trial runs), and
+    ``on_branch(branch, contact)`` once per branch when it is final (the
+    circle with its records, a primary branch cut after its contact onset, a
+    contact branch with its events classified): e.g. to save them as they
+    come (``supercoil run``). ``resume`` maps branch names to ``(branch,
+    complete)`` of an interrupted run with the same options: complete primary
+    and contact branches are taken as they are, incomplete ones continued
+    from their last point (:func:`~supercoil.continuation.resume.resume_branch`);
+    the circle is computed again (its problem is needed; about a second).
+    """
     opts = options
+    stored = dict(resume or {})
+    final = on_branch or (lambda branch, contact: None)
     say = progress or (lambda message: None)
     seconds: dict[str, float] = {}
     notes: list[str] = []
@@ -497,6 +515,7 @@ def ring_diagram(options: DiagramOptions,
                      f"{int(np.ceil(problem.rod.length / D))}")
     circle_records = _contact_records(probe, ring_records(problem), free=True)
     circle = _with_records(circle, problem, circle_records)
+    final(circle, False)
     branches: list[Branch] = [circle]
     contact_names: set[str] = set()
     bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
@@ -513,17 +532,30 @@ def ring_diagram(options: DiagramOptions,
             initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
             max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
             event_tolerance=opts.event_tolerance)
-        free = _switch_off_circle(problem, circle, point, free_opts, name, probe, notes)
+        old, complete = stored.get(name, (None, False))
+        if complete:
+            free = old
+        elif old is not None and len(old):
+            free = resume_branch(problem, old, free_opts, on_point=on_point,
+                                 records=_contact_records(probe, ring_records(problem), True),
+                                 events=(onset_event(probe),))
+        else:
+            free = _switch_off_circle(problem, circle, point, free_opts, name, probe, notes,
+                                      on_point)
         onsets = [p for p in free.points_of_kind("contact_onset")
                   if p.index + 1 < len(free)]
         seconds[name] = time.perf_counter() - start
         if not onsets:
             notes.append(f"{name}: no contact found without contact ({free.message})")
+            final(free, False)
             branches.append(free)
             continue
         onset = onsets[0]
-        free = truncate_after(free, onset, f"stopped at the first contact (dLk = "
-                              f"{onset.parameter:.6g}); the contact-free run: {free.message}")
+        if not complete:
+            free = truncate_after(free, onset, f"stopped at the first contact (dLk = "
+                                  f"{onset.parameter:.6g}); the contact-free run: "
+                                  f"{free.message}")
+        final(free, False)
         branches.append(free)
         contact_name = f"{name}_contact"
         say(f"{contact_name}: from dLk = {onset.parameter:.4g}, with self-contact "
@@ -554,11 +586,20 @@ def ring_diagram(options: DiagramOptions,
             notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "
                          f"[0, {opts.max_excess_link:g}]: not computed")
             continue
-        contact = continuation(cp, free.states[k], parameter="excess_link",
-                               options=contact_opts, name=contact_name,
-                               records=_contact_records(cp, ring_records(cp), free=False),
-                               events=(contact_count_event(cp),))
-        contact = classify_contact_events(contact, cp)
+        old, complete = stored.get(contact_name, (None, False))
+        if complete:
+            contact = old
+        elif old is not None and len(old):
+            contact = resume_branch(cp, old, contact_opts, on_point=on_point,
+                                    records=_contact_records(cp, ring_records(cp), free=False),
+                                    events=(contact_count_event(cp),))
+        else:
+            contact = continuation(cp, free.states[k], parameter="excess_link",
+                                   options=contact_opts, name=contact_name,
+                                   records=_contact_records(cp, ring_records(cp), free=False),
+                                   events=(contact_count_event(cp),), on_point=on_point)
+        if not complete:
+            contact = classify_contact_events(contact, cp)
         if len(contact) and opts.contact_gauge:
             sliding = contact.records["sliding_residual"]
             notes.append(f"{contact_name}: the material sliding is held fixed (a gauge); the "
@@ -567,6 +608,7 @@ def ring_diagram(options: DiagramOptions,
                          f"{float(contact.parameter_values[int(np.argmax(sliding))]):.4g}): "
                          "an artefact of the polygon contact (see the docs of ring_diagram)")
         contact = dataclasses.replace(contact, parent=name, origin=onset)
+        final(contact, True)
         seconds[contact_name] = time.perf_counter() - start
         branches.append(contact)
         contact_names.add(contact_name)
@@ -576,7 +618,7 @@ def ring_diagram(options: DiagramOptions,
 
 def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
                        options: ContinuationOptions, name: str, probe: ContactProblem,
-                       notes: list[str]) -> Branch:
+                       notes: list[str], on_point=None) -> Branch:
     """The primary branch from ``point``, checked to leave the circle.
 
     Measured: the switch can fall back onto the circle (writhe ~1e-6 and the
@@ -603,7 +645,8 @@ def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
                              "circle")
             opts = dataclasses.replace(options, initial_step=amplitude)
             return switch_branch(problem, circle, point, opts, side=side, amplitude=amplitude,
-                                 name=name, records=records, events=(onset_event(probe),))
+                                 name=name, records=records, events=(onset_event(probe),),
+                                 on_point=on_point)
     raise AssertionError("unreachable")
 
 

@@ -753,8 +753,8 @@ def diagram_ring(
 # ------------------------------------------------------------- plot and view
 # (defined in their own modules; each imports matplotlib or the viewer lazily)
 
-from supercoil.cli import plot as _plot_command  # noqa: E402
-from supercoil.cli import view as _view_command  # noqa: E402
+from supercoil.cli import plot as _plot_command
+from supercoil.cli import view as _view_command
 
 _plot_command.register(app)
 _view_command.register(app)

@@ -110,7 +110,7 @@ def test_turns_equal_twist_plus_writhe_everywhere(small_run):
     for b in small_run.branches:
         r = b.records
         assert np.max(np.abs(r["twist"] + r["writhe"] - r["turns"])) < 1e-9, b.name
-        assert not np.any(r["tail_wrapped"])
+        assert not np.any(r["closure_failed"])
         # the torque of the reduced twist: 2 pi (C/A) Tw
         assert np.allclose(r["torque"], 2 * np.pi * (4 / 3) * r["twist"], rtol=1e-12)
 

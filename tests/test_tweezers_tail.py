@@ -6,7 +6,7 @@ family of shapes sweeps the middle of the rod once across the lower tail (the
 half-line of the axis below the first clamp); the twist, carried continuously by
 the reference frames, does not notice, while the double-sum writhe of the closed
 curve jumps by 2 (a crossing change of the closed curve). The records must keep
-|Tw + Wr - turns| at round-off before the crossing and flag ``tail_wrapped``
+|Tw + Wr - turns| at round-off before the crossing and flag ``closure_failed``
 (error 2) after it.
 """
 
@@ -44,7 +44,7 @@ def test_wrapping_a_tail_is_flagged():
         problem.accept(q)
         rec = records(q, mu, 0.3)
         (errors_before if m > 0 else errors_after).append(
-            (rec["closure_error"], rec["tail_wrapped"]))
+            (rec["closure_error"], rec["closure_failed"]))
     assert max(e for e, _ in errors_before) < 1e-9
     assert not any(flag for _, flag in errors_before)
     assert all(flag for _, flag in errors_after)

@@ -42,7 +42,8 @@ moment at the turned end, ``M L / A = 2 pi (C/A) Tw`` for the reduced twist),
 ``twist`` (excess twist from the reference frames, turns), ``writhe`` (the
 double sum of the rod closed by straight tails along the axis),
 ``closure_error`` = ``|Tw + Wr - turns|`` (Fuller's closure; above 1/2 the
-rod wraps around a tail: ``tail_wrapped``), ``energy`` (elastic only),
+rod has wrapped around a tail, or, without self-contact, passed through itself:
+``closure_failed``), ``energy`` (elastic only),
 ``load_potential`` (``-F z``, zero under displacement control),
 ``tension`` (the axial force: the dead load, or the reaction at the end
 under displacement control), ``n_contact_points``, ``n_contact_intervals``
@@ -88,7 +89,7 @@ SWITCH_AMPLITUDE = 2e-2  # first point of the buckled branch from the bifurcatio
 # under a large tension: measured at F L^2/A = 900, N = 120, 2e-2 diverged)
 SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1e-3)
 PIN_QUALITY = 0.5  # re-pick the azimuth pin below this (ClampedRodEnergy.pin_quality)
-TAIL_WRAP = 0.5  # |Tw + Wr - turns| above this: the rod wraps around a tail
+TAIL_WRAP = 0.5  # |Tw + Wr - turns| above this: the closure failed (a tail or a self-crossing)
 
 
 @dataclass(frozen=True)
@@ -287,7 +288,7 @@ def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
         error = abs(tw + wr - turns)
         out = {"turns": float(turns), "extension": rod.extension(q),
                "torque": 2 * math.pi * rod.rod.twist_ratio * tw, "twist": tw, "writhe": wr,
-               "closure_error": error, "tail_wrapped": bool(error > TAIL_WRAP),
+               "closure_error": error, "closure_failed": bool(error > TAIL_WRAP),
                "energy": rod.elastic_energy(q), "load_potential": rod.load_potential(q),
                "tension": axial_force(rod, multipliers)}
         if contact:

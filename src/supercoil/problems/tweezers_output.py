@@ -54,6 +54,19 @@ def result_points(result: TweezersResult) -> list[dict]:
     return out
 
 
+def _closure_notes(result: TweezersResult) -> list[str]:
+    """A note per branch on which turns = Tw + Wr fails (tail wrap or self-crossing)."""
+    notes = []
+    for b in result.branches:
+        failed = np.flatnonzero(np.asarray(b.records.get("closure_failed", []), dtype=bool))
+        if failed.size:
+            notes.append(f"{b.name}: turns = twist + writhe fails at {failed.size} points "
+                         f"(first at {b.parameter_values[failed[0]]:.6g} turns): the rod "
+                         "wrapped around a tail or, without self-contact, passed through "
+                         "itself; writhe there is not the axial closure's")
+    return notes
+
+
 def result_payload(result: TweezersResult) -> dict:
     """The ``branch.json`` payload (without the envelope of :mod:`supercoil.io.results`)."""
     opts = result.options
@@ -85,7 +98,7 @@ def result_payload(result: TweezersResult) -> dict:
         "branches": branches,
         "special_points": [special_summary(p) for p in result.special_points()],
         "points": result_points(result),
-        "notes": list(result.notes),
+        "notes": list(result.notes) + _closure_notes(result),
         "ok": result.ok,
     }
     return payload
@@ -100,7 +113,8 @@ TWEEZERS_CONVENTIONS = {
     "twist": "excess twist in turns, from the reference frames carried along the branch",
     "writhe": "double-sum writhe of the rod closed by straight tails along the axis from both "
     "ends; turns = twist + writhe (closure_error = |twist + writhe - turns|; above 1/2 the "
-    "rod wraps around a tail and the closure fails: tail_wrapped)",
+    "rod has wrapped around a tail or, without self-contact, passed through itself (the "
+    "writhe jumps by 2): closure_failed)",
     "energy": "elastic energy only (bending + twist), E L/A",
     "load_potential": "-F z of the dead load (F L^2/A times extension); 0 under displacement "
     "control",

@@ -19,8 +19,8 @@ LENGTH_OVER_DIAMETER = 122.0  # seed 001's DNA example
 # under a minute on two cores.
 N_NODES = 128
 MODES = (2, 3)
-MAX_EXCESS_LINK = 4.0
-CONTACT_MAX_POINTS = 60
+MAX_EXCESS_LINK = 3.5
+CONTACT_MAX_POINTS = 150
 DEFAULT_FOLDER = "supercoil-demo"
 
 

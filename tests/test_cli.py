@@ -1026,7 +1026,7 @@ def test_demo_writes_files_and_never_overwrites(runner, tmp_path, monkeypatch):
 
     # --force reuses the folder (the computation itself is stubbed: it ran above).
     calls = []
-    monkeypatch.setattr(demo_module, "run_demo", lambda folder: calls.append(folder) or True)
+    monkeypatch.setattr(demo_module, "run_demo", lambda folder, quiet=False: calls.append(folder) or True)
     (out / "notes.txt").write_text("mine")
     forced = invoke(runner, "demo", "--out", out, "--force")
     assert forced.exit_code == 0, forced.stderr

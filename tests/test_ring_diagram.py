@@ -152,14 +152,48 @@ def test_cli_writes_the_diagram(tmp_path, capsys):
     status = run(["diagram", "ring", "--twist-ratio", str(2 / 3), "--length-over-diameter",
                   "40", "--nodes", "40", "--modes", "2", "--max-excess-link", "1.5",
                   "--out", str(out)])
-    assert status in (0, 1)
     data = json.loads((out / "diagram.json").read_text())
+    assert status == (0 if data["ok"] else 1)
     for key in ("schema_version", "units", "conventions", "provenance", "points",
                 "branches", "special_points"):
         assert key in data
     for name in ("link_writhe.png", "contact_map.png", "configurations.png"):
         assert (out / name).stat().st_size > 1000
-    assert (out / "branches" / "circle.npz").exists()
+    for b in data["branches"]:
+        assert len(Branch.load(out / b["file"])) == b["n_points"]
+    assert not list((out / "branches").glob(".*"))  # no temporary file left
+
+
+def test_cli_interrupt_keeps_the_branches_saved_so_far(tmp_path, capsys, monkeypatch):
+    """Ctrl-C during alpha: the circle (final) and alpha up to its last 10-point save
+    are kept and load; exit 1, one line; no diagram.json."""
+    from supercoil.problems import ring_diagram as rd
+
+    original = rd.ring_diagram
+
+    def interrupted(options, progress=None, *, on_point=None, on_branch=None, resume=None):
+        count = [0]
+
+        def point(branch):
+            on_point(branch)
+            count[0] += 1
+            if count[0] == 25:
+                raise KeyboardInterrupt
+
+        return original(options, progress, on_point=point, on_branch=on_branch)
+
+    monkeypatch.setattr(rd, "ring_diagram", interrupted)
+    out = tmp_path / "d"
+    status = run(["diagram", "ring", "--twist-ratio", str(2 / 3), "--length-over-diameter",
+                  "40", "--nodes", "40", "--modes", "2", "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 1 and err[-1].startswith("interrupted: kept alpha.npz, circle.npz")
+    alpha = Branch.load(out / "branches" / "alpha.npz")
+    assert len(alpha) == 20
+    assert np.allclose(alpha.records["twist"] + alpha.records["writhe"],
+                       alpha.parameter_values, atol=1e-8)
+    assert len(Branch.load(out / "branches" / "circle.npz")) > 2
+    assert not (out / "diagram.json").exists()
 
 
 @pytest.mark.parametrize("args, words", [

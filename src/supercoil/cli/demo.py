@@ -66,17 +66,18 @@ def demo_options():
                           contact_max_points=CONTACT_MAX_POINTS)
 
 
-def run_demo(folder: Path) -> bool:
+def run_demo(folder: Path, quiet: bool = False) -> bool:
     """Compute the diagram, write it into ``folder`` and say where; True if every branch
-    ended as asked."""
-    from supercoil.cli.diagram_output import incomplete_message, write_diagram
-    from supercoil.problems.ring_diagram import ring_diagram
+    ended as asked (False after an interrupt too: what was saved is kept)."""
+    from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
 
     options = demo_options()
     print(f"supercoil demo: bifurcation diagram of a twisted ring with self-contact, "
           f"C/A = 2/3, L/D = {LENGTH_OVER_DIAMETER:g} (seed 001's DNA example), N = {N_NODES}, "
           f"modes {', '.join(map(str, MODES))}, dLk <= {MAX_EXCESS_LINK:g}", flush=True)
-    diagram = ring_diagram(options, progress=lambda line: warn(f"  {line}"))
+    diagram = compute_diagram(options, folder, quiet)
+    if diagram is None:
+        return False
     payload = write_diagram(diagram, folder, options.contact)
     message = incomplete_message(payload, folder)
     if message is not None:

@@ -8,11 +8,56 @@ No numerics: the branches are saved, the payload of
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from supercoil.cli._common import warn
 
 DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configurations.png")
+
+
+SAVE_EVERY = 10  # points between saves of a branch in progress
+
+
+def compute_diagram(options, out: Path, quiet: bool = False):
+    """Run :func:`ring_diagram` with a progress display, saving branches as they come.
+
+    Every branch is written to ``out/branches/<name>.npz`` when it is final,
+    and a branch in progress every ``SAVE_EVERY`` points (atomically: a
+    temporary file renamed), so an interrupt (Ctrl-C) loses at most that many
+    points. Returns the diagram, or None after an interrupt (the message says
+    what was kept).
+    """
+    from supercoil.cli.progress import Progress
+    from supercoil.problems.ring_diagram import ring_diagram
+
+    folder = out / "branches"
+    folder.mkdir(parents=True, exist_ok=True)
+
+    def save(branch) -> None:
+        target = folder / f"{branch.name}.npz"
+        temporary = folder / f".{branch.name}.partial.npz"
+        branch.save(temporary)
+        os.replace(temporary, target)
+
+    with Progress(quiet) as progress:
+        def on_point(branch) -> None:
+            k = len(branch)
+            step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
+            progress.point(branch.name, branch.parameter, float(branch.parameter_values[-1]),
+                           step, k)
+            if k % SAVE_EVERY == 0:
+                save(branch)
+
+        try:
+            return ring_diagram(options, progress=progress.message, on_point=on_point,
+                                on_branch=lambda branch, contact: save(branch))
+        except KeyboardInterrupt:
+            kept = sorted(p.name for p in folder.glob("*.npz") if not p.name.startswith("."))
+            warn(f"interrupted: kept {', '.join(kept) or 'no branch'} in {folder.resolve()} "
+                 f"(branches in progress up to their last {SAVE_EVERY}-point save); "
+                 "diagram.json and the figures were not written")
+            return None
 
 
 def write_diagram(diagram, out: Path, contact: str) -> dict:

@@ -619,6 +619,11 @@ def demo(
             "overwriting the demo's own files (other files are left alone).",
         ),
     ] = False,
+    quiet: Annotated[
+        bool,
+        typer.Option("--quiet", help="No progress display (by default a live line on a "
+                     "terminal, else a plain line every 10 points on standard error)."),
+    ] = False,
 ) -> None:
     """The bifurcation diagram of a DNA-like ring with self-contact (seed 001).
 
@@ -635,7 +640,7 @@ def demo(
     from supercoil.cli.demo import prepare_folder, run_demo
 
     folder = prepare_folder(out, force)
-    converged = run_demo(folder)
+    converged = run_demo(folder, quiet)
     if not converged:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
@@ -697,6 +702,11 @@ def diagram_ring(
         typer.Option("--force", help="Write into an existing non-empty --out DIR, "
                      "overwriting the diagram's own files (other files are left alone)."),
     ] = False,
+    quiet: Annotated[
+        bool,
+        typer.Option("--quiet", help="No progress display (by default a live line on a "
+                     "terminal, else a plain line every 10 points on standard error)."),
+    ] = False,
 ) -> None:
     """The ring's bifurcation diagram with self-contact (seed 001, Figures 1-4).
 
@@ -735,8 +745,8 @@ def diagram_ring(
     except OSError as exc:
         fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
              "writable location")
-    from supercoil.cli.diagram_output import incomplete_message, write_diagram
-    from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
+    from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
+    from supercoil.problems.ring_diagram import DiagramOptions
 
     try:
         options = DiagramOptions(twist_ratio, length_over_diameter, nodes,
@@ -745,7 +755,9 @@ def diagram_ring(
         fail(str(exc))
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "
           f"N = {nodes}, modes {', '.join(words)}, dLk <= {max_excess_link:g}", flush=True)
-    diagram = ring_diagram(options, progress=lambda line: warn(f"  {line}"))
+    diagram = compute_diagram(options, out, quiet)
+    if diagram is None:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
     payload = write_diagram(diagram, out, contact)
     message = incomplete_message(payload, out)
     if message is not None:

@@ -152,6 +152,35 @@ def test_appending_point_by_point_equals_the_whole_branch(tmp_path):
     assert [r["stable"] for r in rows] == list(branch.stable)
 
 
+def test_branches_without_constraints_round_trip(tmp_path):
+    """m = 0 (the generic continuation's toy problems): zero-width multipliers."""
+    branch = make_branch(k=7, m=0, seed=6)
+    path = tmp_path / "r.h5"
+    with new_writer(path) as writer:
+        for k in range(1, 8):
+            writer.append(prefix(branch, k))
+        writer.write_branch(dataclasses.replace(branch, name="whole"))
+    result = load(path)
+    assert_branch_equal(branch, result.branch("alpha"))
+    assert result.branch("whole").multipliers.shape == (7, 0)
+
+
+def test_appending_follows_a_moved_gauge(tmp_path):
+    """A branch that re-picks its phase row (ContinuationOptions.regauge) is stored with
+    the row its last point satisfies, so that a resume starts from it."""
+    branch = make_branch(k=6, seed=7)
+    moved = np.zeros_like(branch.phase_modes)
+    moved[0, 7] = 1.0
+    later = dataclasses.replace(branch, phase_modes=moved, phase_state=branch.states[-1])
+    path = tmp_path / "r.h5"
+    with new_writer(path) as writer:
+        writer.append(prefix(branch, 3))
+        writer.append(later)
+    stored = load(path).branch("alpha")
+    np.testing.assert_array_equal(stored.phase_modes, moved)
+    np.testing.assert_array_equal(stored.phase_state, branch.states[-1])
+
+
 def test_write_branch_replaces_a_partial_one_and_keeps_its_order(tmp_path):
     path = tmp_path / "r.h5"
     first, second = make_branch(name="circle", origin=False, seed=1), make_branch(seed=2)

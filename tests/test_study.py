@@ -418,22 +418,26 @@ def test_resume_branch_events_and_full_branch():
     full = run()
     saved = []
 
-    def stop(branch):
-        saved.append(branch)
-        if len(branch) == 20:
-            raise KeyboardInterrupt
-
-    with pytest.raises(KeyboardInterrupt):
-        run(on_point=stop)
-    resumed = resume_branch(Bratu(32, 1.0), saved[-1], opts, events=[user],
-                            records=lambda q, mu, lam: {"u_mid": q[16]})
-    np.testing.assert_allclose(resumed.states, full.states, atol=1e-10)
-    assert [(p.kind, p.index) for p in resumed.special_points] == \
-        [(p.kind, p.index) for p in full.special_points]
     assert [p.kind for p in full.special_points] == ["threshold", "fold"]
-    for p, q in zip(resumed.special_points, full.special_points):
-        assert p.parameter == pytest.approx(q.parameter, abs=1e-9)
-        assert p.arclength == pytest.approx(q.arclength, abs=1e-9)
+    fold = full.special_points[1]
+    # cut far from the events, and right after the fold was found (the point that
+    # closes its interval is the last one saved)
+    for cut in (20, fold.index + 2):
+        def stop(branch, cut=cut):
+            saved.append(branch)
+            if len(branch) == cut:
+                raise KeyboardInterrupt
+
+        with pytest.raises(KeyboardInterrupt):
+            run(on_point=stop)
+        resumed = resume_branch(Bratu(32, 1.0), saved[-1], opts, events=[user],
+                                records=lambda q, mu, lam: {"u_mid": q[16]})
+        np.testing.assert_allclose(resumed.states, full.states, atol=1e-10)
+        assert [(p.kind, p.index) for p in resumed.special_points] == \
+            [(p.kind, p.index) for p in full.special_points], cut
+        for p, q in zip(resumed.special_points, full.special_points):
+            assert p.parameter == pytest.approx(q.parameter, abs=1e-9)
+            assert p.arclength == pytest.approx(q.arclength, abs=1e-9)
     # a complete branch is returned as it is
     again = resume_branch(Bratu(32, 1.0), resumed, opts)
     assert len(again) == len(resumed)

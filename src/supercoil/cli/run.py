@@ -101,8 +101,11 @@ def run_command(
     if not quiet:
         print(f"wrote {', '.join(outcome['files'])} to {out.resolve()}")
     if outcome["status"] != "complete":
-        warn(f"{outcome['status']}: {outcome['message']} (saved in {result_path}; continue with "
-             f"'supercoil run {study} --out {out} --resume')")
+        # --resume continues interrupted branches; an incomplete run's branches all
+        # ended (a branch stopped early), and resuming would change nothing
+        hint = (f"; continue with 'supercoil run {study} --out {out} --resume'"
+                if outcome["status"] == "interrupted" else "")
+        warn(f"{outcome['status']}: {outcome['message']} (saved in {result_path}{hint})")
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 

@@ -319,9 +319,12 @@ def _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp, fo
     """``(preset, C/A, F L^2/A, L/D)`` of the --dna options; one-line errors otherwise."""
     from supercoil.units.dna import DNAPreset, tweezers_parameters
 
+    if end_distance is not None:
+        fail("--end-distance cannot be combined with --dna: DNA runs are under a force "
+             "(load control, --force-pN F); give --bp N --force-pN F [--salt-mM S | "
+             "--diameter-nm D] [--temperature-K T]")
     for option, value in (("--twist-ratio", twist_ratio), ("--tension", tension),
-                          ("--length-over-diameter", length_over_diameter),
-                          ("--end-distance", end_distance)):
+                          ("--length-over-diameter", length_over_diameter)):
         if value is not None:
             fail(f"{option} cannot be combined with --dna (the DNA preset sets it); give "
                  "--bp N --force-pN F [--salt-mM S | --diameter-nm D] [--temperature-K T]")

@@ -136,7 +136,11 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
         step = _next_step(system, partial, opts)
         setattr(problem, partial.parameter, lam)
         problem.accept(q)
-    before = head(partial, k - 1)
+    # the first k - 1 points, with every special point found so far: one between
+    # points k - 2 and k - 1 was located when point k - 1 was added, and the
+    # resumed run starts at point k - 1, so it would not search that interval again
+    before = dataclasses.replace(head(partial, k - 1), special_points=tuple(
+        p for p in partial.special_points if p.index + 1 < k))
     offset = float(partial.arclength[-1])
 
     def joined(branch: Branch) -> None:

@@ -278,6 +278,7 @@ class ResultWriter:
             for i in range(n_special, len(branch.special_points)):
                 _write_special(group["special_points"], f"{i:04d}", branch.special_points[i])
             group.attrs["n_special"] = len(branch.special_points)
+            _update_phase(group, branch)
             if _text(group.attrs["status"]) != branch.status.name:
                 _set_text(group.attrs, "status", branch.status.name)
             if _text(group.attrs["message"]) != branch.message:
@@ -467,9 +468,32 @@ def _scale(group, name: str, values: np.ndarray, resizable: bool = False):
 
 
 def _resizable(group, name: str, shape: tuple, dtype):
-    chunks = (_CHUNK_ROWS, *[max(1, s) for s in shape[1:]])
+    if 0 in shape[1:]:  # e.g. the multipliers of a problem without constraints
+        return group.create_dataset(name, shape=shape, maxshape=(None, *shape[1:]),
+                                    dtype=dtype)
+    chunks = (_CHUNK_ROWS, *shape[1:])
     return group.create_dataset(name, shape=shape, maxshape=(None, *shape[1:]),
                                 chunks=chunks, dtype=dtype)
+
+
+def _update_phase(group, branch: Branch) -> None:
+    """Rewrite the phase rows when the branch moved its gauge (``regauge``): a resume
+    must start from the gauge the last point satisfies."""
+    phase = np.asarray(branch.phase_modes, float)
+    state = np.asarray(branch.phase_state, float)
+    stored = group["phase_modes"]
+    if phase.size == 0 or (stored.shape == phase.shape
+                           and np.array_equal(stored[()], phase)
+                           and np.array_equal(group["phase_state"][()], state)):
+        return
+    if stored.shape != phase.shape:
+        return  # another number of rows: not a moved gauge; left as written
+    stored[...] = phase
+    if group["phase_state"].shape == state.shape:
+        group["phase_state"][...] = state
+    else:
+        del group["phase_state"]
+        group.create_dataset("phase_state", data=state)
 
 
 def _write_rows(group, branch: Branch, start: int, stop: int) -> None:

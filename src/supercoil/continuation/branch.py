@@ -62,6 +62,20 @@ class SpecialPoint:
     tolerance: float = float("nan")
     records: dict = field(default_factory=dict)
 
+    def entry(self, parameter_key: str) -> dict:
+        """The special point in a result file's ``special_points`` (DESIGN.md keys): the
+        parameter value under ``parameter_key`` (``excess_link``, ``turns``, ...), its
+        place on the branch, counts, localisation, and its records."""
+        out = {"kind": self.kind, "label": self.label, "branch": self.branch,
+               "index": int(self.index), parameter_key: float(self.parameter),
+               "arclength": float(self.arclength), "unstable_count": int(self.unstable_count),
+               "count_before": int(self.count_before), "count_after": int(self.count_after),
+               "located": bool(self.located), "tolerance": float(self.tolerance)}
+        for k, v in self.records.items():
+            if k != parameter_key:
+                out[k] = jsonable(v)
+        return out
+
     def summary(self) -> dict:
         """JSON-serialisable description (no states)."""
         out = {"kind": self.kind, "label": self.label, "branch": self.branch,
@@ -70,11 +84,12 @@ class SpecialPoint:
                "count_before": int(self.count_before), "count_after": int(self.count_after),
                "critical_eigenvalues": [float(v) for v in self.critical_eigenvalues],
                "located": bool(self.located), "tolerance": float(self.tolerance)}
-        out.update({k: _jsonable(v) for k, v in self.records.items()})
+        out.update({k: jsonable(v) for k, v in self.records.items()})
         return out
 
 
-def _jsonable(v):
+def jsonable(v):
+    """A numpy scalar or array as a plain Python number or (nested) list."""
     a = np.asarray(v)
     return a.item() if a.ndim == 0 else a.tolist()
 
@@ -146,7 +161,7 @@ class Branch:
                      "unstable_count": int(self.unstable_count[i]),
                      "zero_modes": int(self.zero_modes[i]),
                      "determinant_sign": int(self.determinant_sign[i])}
-            entry.update({k: _jsonable(v[i]) for k, v in self.records.items()})
+            entry.update({k: jsonable(v[i]) for k, v in self.records.items()})
             points.append(entry)
         return {"schema_version": SCHEMA_VERSION, "name": self.name, "parent": self.parent,
                 "origin": None if self.origin is None else self.origin.summary(),

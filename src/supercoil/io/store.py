@@ -53,7 +53,7 @@ from typing import Any, Self
 
 import numpy as np
 
-from supercoil.continuation.branch import Branch, SpecialPoint
+from supercoil.continuation.branch import Branch, SpecialPoint, jsonable
 from supercoil.continuation.options import ContinuationStatus
 from supercoil.io.results import CONVENTIONS, to_jsonable
 
@@ -636,7 +636,7 @@ class Result:
         for b in self.branches if branch is None else (self.branch(branch),):
             for i in range(len(b)):
                 entry = {"branch": b.name, "index": i, b.parameter: float(b.parameter_values[i])}
-                entry.update({k: _scalar(v[i]) for k, v in b.records.items()})
+                entry.update({k: jsonable(v[i]) for k, v in b.records.items()})
                 entry.update(unstable_count=int(b.unstable_count[i]),
                              zero_modes=int(b.zero_modes[i]),
                              determinant_sign=int(b.determinant_sign[i]),
@@ -646,11 +646,6 @@ class Result:
 
     def special_points(self) -> list[SpecialPoint]:
         return [p for b in self.branches for p in b.special_points]
-
-
-def _scalar(v):
-    a = np.asarray(v)
-    return a.item() if a.ndim == 0 else a.tolist()
 
 
 def _check(path: Path):
@@ -720,7 +715,7 @@ def _read(path: Path, handle) -> Result:
     attrs = handle.attrs
     reserved = {"format", "schema_version", "problem", "units", "status", "message",
                 "settings", "conventions", "provenance", "created", "updated"}
-    plain = {k: _text(v) if isinstance(v, (bytes, str)) else _scalar(v)
+    plain = {k: _text(v) if isinstance(v, (bytes, str)) else jsonable(v)
              for k, v in attrs.items() if k not in reserved}
     groups = [g for key, g in handle["branches"].items() if not key.startswith(".")]
     groups.sort(key=lambda g: int(g.attrs["order"]))

@@ -114,6 +114,7 @@ from supercoil.continuation import (
     continuation,
     switch_branch,
 )
+from supercoil.continuation.branch import jsonable
 from supercoil.continuation.resume import resume_branch
 from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_branches import PRIMARY_NAMES, circle_branch, ring_records
@@ -249,7 +250,7 @@ class RingDiagram:
             contact = b.name in self.contact_branches
             condition_e = link_writhe_slope_sign(b)
             for i in range(len(b)):
-                rec = {k: _scalar(v[i]) for k, v in b.records.items()}
+                rec = {k: jsonable(v[i]) for k, v in b.records.items()}
                 entry = {"branch": b.name, "index": i, **rec,
                          "unstable_count": int(b.unstable_count[i]),
                          "zero_modes": int(b.zero_modes[i]),
@@ -272,7 +273,7 @@ class RingDiagram:
         for b in self.branches:
             branches.append({
                 "name": b.name, "parent": b.parent,
-                "origin": None if b.origin is None else _special_summary(b.origin),
+                "origin": None if b.origin is None else b.origin.entry("excess_link"),
                 "contact": b.name in self.contact_branches,
                 "parameter": b.parameter, "n_points": len(b), "status": b.status.name,
                 "ok": b.ok, "message": b.message,
@@ -291,7 +292,7 @@ class RingDiagram:
             "michell_excess_link": {str(m): float(michell_excess_link(opts.twist_ratio, m))
                                     for m in opts.modes},
             "branches": branches,
-            "special_points": [_special_summary(p) for p in self.special_points()],
+            "special_points": [p.entry("excess_link") for p in self.special_points()],
             "points": self.points(),
             "notes": list(self.notes),
             "ok": self.ok,
@@ -319,23 +320,6 @@ def link_writhe_slope_sign(branch: Branch) -> np.ndarray:
     sign = np.sign(d_link) * np.sign(d_writhe)
     sign[np.abs(d_writhe) <= 1e-9 * max(scale, 1.0)] = 0
     return sign.astype(np.int64)
-
-
-def _scalar(v):
-    a = np.asarray(v)
-    return a.item() if a.ndim == 0 else a.tolist()
-
-
-def _special_summary(p: SpecialPoint) -> dict:
-    out = {"kind": p.kind, "label": p.label, "branch": p.branch, "index": int(p.index),
-           "excess_link": float(p.parameter), "arclength": float(p.arclength),
-           "unstable_count": int(p.unstable_count), "count_before": int(p.count_before),
-           "count_after": int(p.count_after), "located": bool(p.located),
-           "tolerance": float(p.tolerance)}
-    for k, v in p.records.items():
-        if k != "excess_link":
-            out[k] = _scalar(v)
-    return out
 
 
 # ----------------------------------------------------------------- records and events

@@ -11,24 +11,13 @@ import numpy as np
 
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import SpecialPoint
+from supercoil.continuation.branch import jsonable
 from supercoil.problems.tweezers import TweezersResult
 
 
-def _scalar(v):
-    a = np.asarray(v)
-    return a.item() if a.ndim == 0 else a.tolist()
-
-
 def special_summary(p: SpecialPoint) -> dict:
-    """JSON entry of a special point: kind, branch, turns, extension and its records."""
-    out = {"kind": p.kind, "label": p.label, "branch": p.branch, "index": int(p.index),
-           "turns": float(p.parameter), "arclength": float(p.arclength),
-           "unstable_count": int(p.unstable_count), "count_before": int(p.count_before),
-           "count_after": int(p.count_after), "located": bool(p.located)}
-    for k, v in p.records.items():
-        if k != "turns":
-            out[k] = _scalar(v)
-    return out
+    """JSON entry of a special point: kind, branch, turns and its records (extension...)."""
+    return p.entry("turns")
 
 
 def result_points(result: TweezersResult) -> list[dict]:
@@ -39,7 +28,7 @@ def result_points(result: TweezersResult) -> list[dict]:
         contact = b.name in result.contact_branches
         for i in range(len(b)):
             entry = {"branch": b.name, "index": i,
-                     **{k: _scalar(v[i]) for k, v in b.records.items()},
+                     **{k: jsonable(v[i]) for k, v in b.records.items()},
                      "unstable_count": int(b.unstable_count[i]),
                      "zero_modes": int(b.zero_modes[i]),
                      "determinant_sign": int(b.determinant_sign[i]),

@@ -540,3 +540,24 @@ def test_progress_live_shows_the_latest_numbers(capsys):
         assert task.description == "alpha"
         assert task.fields["numbers"] == "excess_link = 1.25, step 0.02, 7 points"
     assert "alpha: switched" in capsys.readouterr().out
+
+
+def test_interrupted_tweezers_run_keeps_its_points(tmp_path):
+    """Point by point for tweezers too: an interrupt inside the buckled branch leaves the
+    straight branch whole and a prefix of the buckled one (the uninterrupted run)."""
+    text = TWEEZERS.replace("length_over_diameter = 20\n", "").replace("nodes = 40",
+                                                                       "nodes = 24")
+    full_dir, _ = run_diagram(tmp_path, "full", text=text)
+    reference = supercoil.load(full_dir / "result.h5")
+    assert reference.branch_names == ("straight", "buckled")
+    k_straight = len(reference.branch("straight"))
+    out, outcome = run_diagram(tmp_path, "cut", text=text,
+                               progress=InterruptAt(k_straight + 12))
+    assert outcome["status"] == "interrupted"
+    cut = supercoil.load(out / "result.h5")
+    assert cut.branch_names == ("straight", "buckled")
+    assert 0 < len(cut.branch("buckled")) < len(reference.branch("buckled"))
+    for name in cut.branch_names:
+        b, ref = cut.branch(name), reference.branch(name)
+        np.testing.assert_allclose(b.states, ref.states[:len(b)], atol=1e-10)
+    assert len(cut.branch("straight")) == k_straight

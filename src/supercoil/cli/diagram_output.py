@@ -19,17 +19,17 @@ DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configur
 SAVE_EVERY = 10  # points between saves of a branch in progress
 
 
-def compute_diagram(options, out: Path, quiet: bool = False):
-    """Run :func:`ring_diagram` with a progress display, saving branches as they come.
+def run_saving(compute, out: Path, quiet: bool = False):
+    """Run ``compute(message, on_point, on_branch)`` with a progress display, saving
+    branches into ``out/branches`` as they come.
 
     Every branch is written to ``out/branches/<name>.npz`` when it is final,
     and a branch in progress every ``SAVE_EVERY`` points (atomically: a
     temporary file renamed), so an interrupt (Ctrl-C) loses at most that many
-    points. Returns the diagram, or None after an interrupt (the message says
-    what was kept).
+    points. Returns what ``compute`` returns, or None after an interrupt (the
+    message says what was kept).
     """
     from supercoil.cli.progress import Progress
-    from supercoil.problems.ring_diagram import ring_diagram
 
     folder = out / "branches"
     folder.mkdir(parents=True, exist_ok=True)
@@ -50,14 +50,21 @@ def compute_diagram(options, out: Path, quiet: bool = False):
                 save(branch)
 
         try:
-            return ring_diagram(options, progress=progress.message, on_point=on_point,
-                                on_branch=lambda branch, contact: save(branch))
+            return compute(progress.message, on_point, lambda branch, contact: save(branch))
         except KeyboardInterrupt:
             kept = sorted(p.name for p in folder.glob("*.npz") if not p.name.startswith("."))
             warn(f"interrupted: kept {', '.join(kept) or 'no branch'} in {folder.resolve()} "
-                 f"(branches in progress up to their last {SAVE_EVERY}-point save); "
-                 "diagram.json and the figures were not written")
+                 f"(branches in progress up to their last {SAVE_EVERY}-point save); the "
+                 "summary and the figures were not written")
             return None
+
+
+def compute_diagram(options, out: Path, quiet: bool = False):
+    """:func:`ring_diagram` through :func:`run_saving` (None after an interrupt)."""
+    from supercoil.problems.ring_diagram import ring_diagram
+
+    return run_saving(lambda message, on_point, on_branch: ring_diagram(
+        options, progress=message, on_point=on_point, on_branch=on_branch), out, quiet)
 
 
 def write_diagram(diagram, out: Path, contact: str) -> dict:

@@ -201,7 +201,7 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
         if spec.kind == "ring_diagram":
             outcome = _run_ring_diagram(spec, writer, progress, saved, resume)
         elif spec.kind == "tweezers":
-            outcome = _run_tweezers(spec, writer, progress, resume)
+            outcome = _run_tweezers(spec, writer, progress, resume, saved)
         else:
             outcome = _run_ring(spec, writer, progress)
     except KeyboardInterrupt:
@@ -382,7 +382,7 @@ def diagram_in_dna_units(payload: dict, preset, max_sigma: float) -> dict:
     return out
 
 
-def _run_tweezers(spec, writer, progress, resume: bool) -> dict:
+def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
     from supercoil.problems.tweezers import tweezers_branches
     from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
 
@@ -396,7 +396,10 @@ def _run_tweezers(spec, writer, progress, resume: bool) -> dict:
     progress.message(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
                      f"{options.length_over_diameter or 'no contact'}, N = {options.n_nodes}, "
                      f"turns {options.turns[0]:g} to {options.turns[1]:g}")
-    result = tweezers_branches(options, progress=progress.message)
+    result = tweezers_branches(
+        options, progress=progress.message, on_point=_point_saver(writer, progress, saved),
+        on_branch=lambda branch, contact: writer.write_branch(branch, complete=True,
+                                                              contact=contact))
     stored_names = set(writer.branch_names())
     for branch in result.branches:
         writer.write_branch(branch, complete=True, contact=branch.name in result.contact_branches)

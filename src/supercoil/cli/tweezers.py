@@ -105,6 +105,9 @@ def tweezers(
     temperature_K: Annotated[float | None, typer.Option(
         "--temperature-K", metavar="T", help="With --dna: temperature in K of the kT "
         "unit (default 298 K).", show_default=False)] = None,
+    quiet: Annotated[bool, typer.Option(
+        "--quiet", help="No progress display (by default a live line on a terminal, else a "
+        "plain line every 10 points on standard error).")] = False,
 ) -> None:
     """A rod clamped at both ends on the pulling axis, turned at one end.
 
@@ -198,7 +201,12 @@ def tweezers(
     print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
           f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
           f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
-    result = tweezers_branches(options, progress=lambda line: warn(f"  {line}"))
+    from supercoil.cli.diagram_output import run_saving
+
+    result = run_saving(lambda message, on_point, on_branch: tweezers_branches(
+        options, progress=message, on_point=on_point, on_branch=on_branch), out, quiet)
+    if result is None:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
     path = None
     if protocol != "up":
         from supercoil.problems.tweezers_protocol import quasistatic_path

@@ -360,7 +360,8 @@ def merge_branches(parts: list[Branch], name: str) -> Branch:
 def follow(problem, rod: ClampedRodEnergy, first: Branch, options: ContinuationOptions,
            name: str, records, events: tuple[UserEvent, ...] = (),
            stop: Callable[[Branch], bool] | None = None, max_points: int = 400,
-           segment_points: int = 30) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
+           segment_points: int = 30, on_point: Callable[[Branch], None] | None = None,
+           ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
     """Continue ``first`` (a computed run) in runs of ``segment_points``, re-pinning between.
 
     Each run starts at the last point of the previous one, in the direction
@@ -369,6 +370,8 @@ def follow(problem, rod: ClampedRodEnergy, first: Branch, options: ContinuationO
     a failure), when ``stop(run)`` is true, or at ``max_points``. Returns the
     merged branch and its pins: ``(first point index, pinned DOFs)`` per
     change (the pinned coordinate keeps its value from that point on).
+    ``on_point(merged_so_far)`` is called after each accepted point of the
+    later runs (``first``'s own points were reported by its caller).
     """
     parts = [first]
     pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
@@ -387,8 +390,12 @@ def follow(problem, rod: ClampedRodEnergy, first: Branch, options: ContinuationO
                              options.max_step))
         opts = dataclasses.replace(options, direction=direction, initial_step=step,
                                    max_points=min(segment_points, max_points - total + 1))
+        done = list(parts)
+        report = None if on_point is None else (
+            lambda partial, done=done: on_point(merge_branches([*done, partial], name)))
         run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
-                           options=opts, name=name, records=records, events=events)
+                           options=opts, name=name, records=records, events=events,
+                           on_point=report)
         parts.append(run)
         total += len(run) - 1
     merged = merge_branches(parts, name)
@@ -415,14 +422,14 @@ def _onset_stop(run: Branch) -> bool:
 
 # ----------------------------------------------------------------------------- branches
 def straight_branch(options: TweezersOptions, problem: ClampedRodEnergy, q0: np.ndarray,
-                    records) -> Branch:
+                    records, on_point=None) -> Branch:
     """The straight rod in turns (load control), with its bifurcations located."""
     opts = options
     cont = ContinuationOptions(initial_step=0.05, max_step=0.25,
                                parameter_bounds=opts.turns, max_points=opts.max_points,
                                event_tolerance=opts.event_tolerance)
     return continuation(problem, q0, parameter="turns", options=cont, name="straight",
-                        records=records)
+                        records=records, on_point=on_point)
 
 
 def straight_force_branch(options: TweezersOptions, turns: float,
@@ -449,9 +456,19 @@ def straight_force_branch(options: TweezersOptions, turns: float,
 
 
 def tweezers_branches(options: TweezersOptions,
-                      progress: Callable[[str], None] | None = None) -> TweezersResult:
-    """Compute the branches (module docstring); numerical failures end up in statuses."""
+                      progress: Callable[[str], None] | None = None, *,
+                      on_point: Callable[[Branch], None] | None = None,
+                      on_branch: Callable[[Branch, bool], None] | None = None,
+                      ) -> TweezersResult:
+    """Compute the branches (module docstring); numerical failures end up in statuses.
+
+    ``on_point(branch_so_far)`` is called after every accepted point (of the
+    runs that make a branch, merged), ``on_branch(branch, contact)`` once per
+    branch when it is final (the contact-free branch cut after its contact
+    onset): e.g. to save them as they come (``supercoil run``).
+    """
     opts = options
+    final = on_branch or (lambda branch, contact: None)
     say = progress or (lambda message: None)
     seconds: dict[str, float] = {}
     notes: list[str] = []
@@ -472,8 +489,9 @@ def tweezers_branches(options: TweezersOptions,
     start = time.perf_counter()
     if opts.load_control:
         say(f"straight rod in turns at F L^2/A = {opts.tension:g}")
-        straight = straight_branch(opts, rod, q0, free_records)
+        straight = straight_branch(opts, rod, q0, free_records, on_point=on_point)
         seconds["straight"] = time.perf_counter() - start
+        final(straight, False)
         branches.append(straight)
         bifurcations = straight.points_of_kind("bifurcation")
         if not bifurcations:
@@ -492,7 +510,7 @@ def tweezers_branches(options: TweezersOptions,
             first = switch_branch(rod, straight, point,
                                   dataclasses.replace(free_opts, initial_step=amplitude),
                                   direction=direction, amplitude=amplitude, name=free_name,
-                                  records=free_records, events=events)
+                                  records=free_records, events=events, on_point=on_point)
             if len(first):
                 break
         if not len(first):
@@ -512,10 +530,12 @@ def tweezers_branches(options: TweezersOptions,
             return TweezersResult(opts, (), frozenset(), rod, cp, seconds, tuple(notes))
         rod.accept(res.q)
         first = continuation(rod, res.q, res.multipliers, parameter="turns", options=free_opts,
-                             name=free_name, records=free_records, events=events)
+                             name=free_name, records=free_records, events=events,
+                             on_point=on_point)
     free, free_pins = follow(rod, rod, first, free_opts, free_name, free_records, events,
                   stop=_onset_stop if probe is not None else None,
-                  max_points=opts.max_points, segment_points=opts.segment_points)
+                  max_points=opts.max_points, segment_points=opts.segment_points,
+                  on_point=on_point)
     onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
@@ -525,12 +545,14 @@ def tweezers_branches(options: TweezersOptions,
                          f"{free.parameter_values[-1]:.6g} turns: {free.message}")
         elif probe is not None:
             notes.append(f"{free_name}: no contact found ({free.message})")
+        final(free, False)
         branches.append(free)
         return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
                               tuple(notes), pins)
     onset = onsets[0]
     free = truncate_after(free, onset, f"stopped at the first contact ({onset.parameter:.6g} "
                           f"turns); the contact-free run: {free.message}")
+    final(free, False)
     branches.append(free)
     contact_name = f"{free_name}_contact"
     say(f"{contact_name}: from {onset.parameter:.6g} turns, with self-contact (barrier)")
@@ -553,13 +575,14 @@ def tweezers_branches(options: TweezersOptions,
     contact_records = tweezers_records(cp, rod, True)
     contact_events = (contact_count_event(cp),)
     first = continuation(cp, q, parameter="turns", options=contact_opts, name=contact_name,
-                         records=contact_records, events=contact_events)
+                         records=contact_records, events=contact_events, on_point=on_point)
     contact, contact_pins = follow(cp, rod, first, contact_opts, contact_name, contact_records,
                      contact_events, max_points=opts.max_points,
-                     segment_points=opts.segment_points)
+                     segment_points=opts.segment_points, on_point=on_point)
     contact = classify_contact_events(contact, cp)
     contact = dataclasses.replace(contact, parent=free_name, origin=onset)
     seconds[contact_name] = time.perf_counter() - start
+    final(contact, True)
     branches.append(contact)
     if not contact.ok:
         notes.append(f"failed: {contact_name}: {contact.message}")

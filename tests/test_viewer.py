@@ -263,3 +263,21 @@ def test_tweezers_page_shows_the_open_rod(tmp_path):
     (branch,) = data["branches"]
     stored = Branch.load(folder / "branches" / "plectoneme.npz").states
     assert np.max(np.abs(np.array(branch["states"]) - stored)) <= 0.5e-5 + 1e-12
+
+
+def test_drawn_line_is_stable_up_to_the_located_bifurcation(tmp_path):
+    """The page's line (not the selectable points) holds the located special point twice,
+    stable before it and unstable after, as the PNG figures do."""
+    folder = write_ring_result(tmp_path / "ring")
+    stored = json.loads((folder / "diagram.json").read_text(encoding="utf-8"))
+    stored["special_points"][0].update(excess_link=1.8, index=3, count_before=0,
+                                       count_after=2)
+    (folder / "diagram.json").write_text(json.dumps(stored), encoding="utf-8")
+    assert run(["view", str(folder), "--out", str(tmp_path / "page.html")]) == 0
+    circle = _payload(tmp_path / "page.html")["branches"][0]
+    line = circle["line"]
+    assert len(circle["points"]) == 7 and len(line["y"]) == 9
+    stable_y = [y for y, s in zip(line["y"], line["stable"], strict=True) if s]
+    assert max(stable_y) == 1.8  # the last stable sample is at 1.5
+    i = line["y"].index(1.8)
+    assert line["stable"][i] and not line["stable"][i + 1] and line["y"][i + 1] == 1.8

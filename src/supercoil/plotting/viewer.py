@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from supercoil.plotting import style
+from supercoil.plotting.figures import through_special_points
 from supercoil.plotting.result_data import ResultData, stable_mask
 
 COORDINATE_DECIMALS = 5  # centreline coordinates in units of L: 1e-5 L on the screen
@@ -115,6 +116,10 @@ def _isolated(result: ResultData, axes: Mapping, avoid: int) -> dict:
     return {"branch": bi, "index": i}
 
 
+def _finite(values) -> list:
+    return [float(v) if np.isfinite(v) else None for v in np.asarray(values, dtype=float)]
+
+
 def viewer_payload(result: ResultData) -> dict:
     """The JSON data the page draws (numbers as stored, coordinates rounded to 1e-5 L)."""
     axes = AXES.get(result.kind, AXES["ring"])
@@ -128,11 +133,19 @@ def viewer_payload(result: ResultData) -> dict:
             centred = states - states.mean(axis=1, keepdims=True)
             extent = max(extent, float(np.linalg.norm(centred, axis=2).max(initial=0.0)))
             flat = np.round(states.reshape(len(states), -1), COORDINATE_DECIMALS).tolist()
+        keys = (axes["x"], axes["y"])
+        line = None
+        if b.points and all(k in p for p in b.points for k in keys):
+            drawn = through_special_points(
+                {"name": b.name, "stable": stable, **{k: b.values(k) for k in keys}},
+                result.special_points, keys)
+            line = {"x": _finite(drawn[keys[0]]), "y": _finite(drawn[keys[1]]),
+                    "stable": [bool(v) for v in drawn["stable"]]}
         branches.append({"name": b.name, "parent": b.parent, "contact": b.contact,
                          "color": style.branch_color(index),
                          "points": [_point(p, s) for p, s in zip(b.points, stable,
                                                                  strict=True)],
-                         "states": flat})
+                         "line": line, "states": flat})
     if not any(b["points"] for b in branches):
         raise ValueError(f"{result.path}: the result has no points to show")
     branches = [b for b in branches if b["points"]]

@@ -25,6 +25,7 @@ from supercoil.cli._common import (
     check_json_target,
     fail,
     parse_vector,
+    prepare_output_folder,
     raised_while_solving,
     require_finite,
     require_magnitude,
@@ -735,16 +736,7 @@ def diagram_ring(
              "commas, like 2,3 (2 = alpha, 3 = beta)")
     if contact not in DIAGRAM_TREATMENTS:
         fail(f"--contact {contact!r}: give one of {', '.join(DIAGRAM_TREATMENTS)}")
-    if out.exists() and not out.is_dir():
-        fail(f"--out {out}: is a file, not a folder; give a new folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        fail(f"--out {out}: folder exists and is not empty; give a new folder, or add --force "
-             "to overwrite the diagram's files in it")
-    try:
-        (out / "branches").mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
-             "writable location")
+    prepare_output_folder(out, force, "the diagram's files")
     from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
     from supercoil.problems.ring_diagram import DiagramOptions
 

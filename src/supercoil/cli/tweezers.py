@@ -17,6 +17,7 @@ import typer
 from supercoil.cli._common import (
     EXIT_NOT_CONVERGED,
     fail,
+    prepare_output_folder,
     require_magnitude,
     require_nodes,
     require_positive,
@@ -178,16 +179,7 @@ def tweezers(
         fail(f"--step {step:g}: give a positive number of turns up to STOP - START")
     if not 2 <= max_points <= 100_000:
         fail(f"--max-points {max_points}: give an integer from 2 to 100000")
-    if out.exists() and not out.is_dir():
-        fail(f"--out {out}: is a file, not a folder; give a new folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        fail(f"--out {out}: folder exists and is not empty; give a new folder, or add --force "
-             "to overwrite this command's files in it")
-    try:
-        (out / "branches").mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
-             "writable location")
+    prepare_output_folder(out, force, "this command's files")
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
     try:

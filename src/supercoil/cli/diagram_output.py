@@ -1,9 +1,11 @@
-"""Write a computed ring diagram into a folder (``supercoil diagram ring`` and ``demo``).
+"""Run and write branch computations of the CLI (``diagram ring``, ``demo``, ``tweezers``).
 
-No numerics: the branches are saved, the payload of
-:meth:`~supercoil.problems.ring_diagram.RingDiagram.payload` goes into
-``diagram.json`` (with the JSON envelope), and the three figures of
-:mod:`supercoil.plotting.ring_diagram` are drawn from it.
+No numerics: :func:`run_saving` runs a computation it is given with a
+progress display and saves its branches as they come; :func:`write_diagram`
+saves a ring diagram's branches, puts the payload of
+:meth:`~supercoil.problems.ring_diagram.RingDiagram.payload` into
+``diagram.json`` (with the JSON envelope) and draws the three figures of
+:mod:`supercoil.plotting.ring_diagram` from it.
 """
 
 from __future__ import annotations
@@ -14,8 +16,6 @@ from pathlib import Path
 from supercoil.cli._common import warn
 
 DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configurations.png")
-
-
 SAVE_EVERY = 10  # points between saves of a branch in progress
 
 

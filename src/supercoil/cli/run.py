@@ -388,9 +388,13 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
 
     options = spec.tweezers_options()
     notes = []
-    if resume:
-        notes.append("tweezers_branches cannot continue stored branches: the branches were "
-                     "computed again")
+    stored = writer.stored_branches() if resume else None
+    if stored is not None:
+        kept = [n for n, (b, complete) in stored.items() if complete]
+        partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
+                   if not complete and len(b)]
+        progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
+                         f"{', '.join(partial) or 'no branch'}")
     control = (f"F L^2/A = {options.tension:.6g}" if options.load_control
                else f"z/L = {options.end_distance:.6g}")
     progress.message(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
@@ -399,7 +403,8 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
     result = tweezers_branches(
         options, progress=progress.message, on_point=_point_saver(writer, progress, saved),
         on_branch=lambda branch, contact: writer.write_branch(branch, complete=True,
-                                                              contact=contact))
+                                                              contact=contact),
+        resume=stored)
     stored_names = set(writer.branch_names())
     for branch in result.branches:
         writer.write_branch(branch, complete=True, contact=branch.name in result.contact_branches)

@@ -55,7 +55,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -70,6 +70,7 @@ from supercoil.continuation import (
     continuation,
     switch_branch,
 )
+from supercoil.continuation.resume import resume_branch
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.ring_diagram import (
     classify_contact_events,
@@ -459,16 +460,37 @@ def tweezers_branches(options: TweezersOptions,
                       progress: Callable[[str], None] | None = None, *,
                       on_point: Callable[[Branch], None] | None = None,
                       on_branch: Callable[[Branch, bool], None] | None = None,
+                      resume: Mapping[str, tuple[Branch, bool]] | None = None,
                       ) -> TweezersResult:
     """Compute the branches (module docstring); numerical failures end up in statuses.
 
     ``on_point(branch_so_far)`` is called after every accepted point (of the
     runs that make a branch, merged), ``on_branch(branch, contact)`` once per
     branch when it is final (the contact-free branch cut after its contact
-    onset): e.g. to save them as they come (``supercoil run``).
+    onset): e.g. to save them as they come (``supercoil run``). ``resume`` maps
+    branch names to ``(branch, complete)`` of an interrupted run with the same
+    options: complete branches are taken as they are, an incomplete one with at
+    least two points is continued from its last point (the azimuth pin picked
+    there: the rotation about the axis is an exact symmetry, so any pin is a
+    gauge) by :func:`~supercoil.continuation.resume.resume_branch`, then in
+    segments as usual.
     """
     opts = options
     final = on_branch or (lambda branch, contact: None)
+    stored = dict(resume or {})
+
+    def resumed(problem, name, segment_opts, records, events):
+        """The stored branch ``name`` continued for one segment, or None (none stored)."""
+        old, complete = stored.get(name, (None, False))
+        if old is None or complete or len(old) < 2:
+            return None
+        q = old.states[-1]
+        problem.turns = float(old.parameter_values[-1])
+        problem.accept(q)
+        set_pin(problem, rod, q)
+        return resume_branch(problem, old, dataclasses.replace(
+            segment_opts, max_points=len(old) + segment_opts.max_points - 1),
+            records=records, events=events, on_point=on_point)
     say = progress or (lambda message: None)
     seconds: dict[str, float] = {}
     notes: list[str] = []
@@ -489,7 +511,9 @@ def tweezers_branches(options: TweezersOptions,
     start = time.perf_counter()
     if opts.load_control:
         say(f"straight rod in turns at F L^2/A = {opts.tension:g}")
-        straight = straight_branch(opts, rod, q0, free_records, on_point=on_point)
+        old, complete = stored.get("straight", (None, False))
+        straight = (old if complete else
+                    straight_branch(opts, rod, q0, free_records, on_point=on_point))
         seconds["straight"] = time.perf_counter() - start
         final(straight, False)
         branches.append(straight)
@@ -501,10 +525,16 @@ def tweezers_branches(options: TweezersOptions,
                                   tuple(notes))
         point = bifurcations[0]
         free_name = "buckled"
-        say(f"{free_name}: switched from the straight rod at {point.parameter:.6g} turns")
         start = time.perf_counter()
+        free_complete = stored.get(free_name, (None, False))[1]
+        first = resumed(rod, free_name, free_opts, free_records, events)
+        if first is not None:
+            say(f"{free_name}: continued from point {len(stored[free_name][0]) - 1}")
         direction = _rotated_mode(point.critical_modes[0])
-        for amplitude in SWITCH_AMPLITUDES:
+        for amplitude in SWITCH_AMPLITUDES if first is None and not free_complete else ():
+            if amplitude == SWITCH_AMPLITUDES[0]:
+                say(f"{free_name}: switched from the straight rod at {point.parameter:.6g} "
+                    "turns")
             rod.turns = point.parameter
             set_pin(rod, rod, point.q + 1e-3 * direction)
             first = switch_branch(rod, straight, point,
@@ -513,7 +543,7 @@ def tweezers_branches(options: TweezersOptions,
                                   records=free_records, events=events, on_point=on_point)
             if len(first):
                 break
-        if not len(first):
+        if not free_complete and not len(first):
             notes.append(f"failed: {free_name}: no point found off the straight rod at "
                          f"{point.parameter:.6g} turns ({first.message})")
             branches.append(first)
@@ -522,6 +552,9 @@ def tweezers_branches(options: TweezersOptions,
     else:
         free_name = "clamped"
         say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")
+        free_complete = stored.get(free_name, (None, False))[1]
+        first = resumed(rod, free_name, free_opts, free_records, events)
+    if not opts.load_control and first is None and not free_complete:
         set_pin(rod, rod, q0)
         res = newton(rod, q0, NewtonOptions(mode="stationary"))
         if not res.converged:
@@ -532,10 +565,14 @@ def tweezers_branches(options: TweezersOptions,
         first = continuation(rod, res.q, res.multipliers, parameter="turns", options=free_opts,
                              name=free_name, records=free_records, events=events,
                              on_point=on_point)
-    free, free_pins = follow(rod, rod, first, free_opts, free_name, free_records, events,
-                  stop=_onset_stop if probe is not None else None,
-                  max_points=opts.max_points, segment_points=opts.segment_points,
-                  on_point=on_point)
+    old, free_complete = stored.get(free_name, (None, False))
+    if free_complete:
+        free, free_pins = old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
+    else:
+        free, free_pins = follow(rod, rod, first, free_opts, free_name, free_records, events,
+                                 stop=_onset_stop if probe is not None else None,
+                                 max_points=opts.max_points,
+                                 segment_points=opts.segment_points, on_point=on_point)
     onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
@@ -550,8 +587,10 @@ def tweezers_branches(options: TweezersOptions,
         return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
                               tuple(notes), pins)
     onset = onsets[0]
-    free = truncate_after(free, onset, f"stopped at the first contact ({onset.parameter:.6g} "
-                          f"turns); the contact-free run: {free.message}")
+    if not free_complete:
+        free = truncate_after(free, onset, f"stopped at the first contact "
+                              f"({onset.parameter:.6g} turns); the contact-free run: "
+                              f"{free.message}")
     final(free, False)
     branches.append(free)
     contact_name = f"{free_name}_contact"
@@ -574,12 +613,22 @@ def tweezers_branches(options: TweezersOptions,
         event_tolerance=opts.contact_event_tolerance)
     contact_records = tweezers_records(cp, rod, True)
     contact_events = (contact_count_event(cp),)
-    first = continuation(cp, q, parameter="turns", options=contact_opts, name=contact_name,
-                         records=contact_records, events=contact_events, on_point=on_point)
-    contact, contact_pins = follow(cp, rod, first, contact_opts, contact_name, contact_records,
-                     contact_events, max_points=opts.max_points,
-                     segment_points=opts.segment_points, on_point=on_point)
-    contact = classify_contact_events(contact, cp)
+    old, contact_complete = stored.get(contact_name, (None, False))
+    if contact_complete:
+        contact, contact_pins = old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
+    else:
+        first = resumed(cp, contact_name, contact_opts, contact_records, contact_events)
+        if first is not None:
+            say(f"{contact_name}: continued from point {len(old) - 1}")
+        else:
+            first = continuation(cp, q, parameter="turns", options=contact_opts,
+                                 name=contact_name, records=contact_records,
+                                 events=contact_events, on_point=on_point)
+        contact, contact_pins = follow(cp, rod, first, contact_opts, contact_name,
+                                       contact_records, contact_events,
+                                       max_points=opts.max_points,
+                                       segment_points=opts.segment_points, on_point=on_point)
+        contact = classify_contact_events(contact, cp)
     contact = dataclasses.replace(contact, parent=free_name, origin=onset)
     seconds[contact_name] = time.perf_counter() - start
     final(contact, True)

@@ -16,7 +16,10 @@ from pathlib import Path
 from supercoil.cli._common import warn
 
 DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configurations.png")
-SAVE_EVERY = 10  # points between saves of a branch in progress
+# Points between saves of a branch in progress: a save rewrites the branch (53 ms
+# for 126 points at N = 128, measured), so saving every point would cost as much
+# as computing it on long branches; 'supercoil run' appends every point instead.
+SAVE_EVERY = 10
 
 
 def run_saving(compute, out: Path, quiet: bool = False):

@@ -301,6 +301,30 @@ def _point_saver(writer, progress, saved: dict, contact_names=()):
     return on_point
 
 
+def _stored_for_resume(writer, progress) -> dict:
+    """The stored branches (name -> (branch, complete)), announced on ``progress``."""
+    stored = writer.stored_branches()
+    kept = [n for n, (b, complete) in stored.items() if complete]
+    partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
+               if not complete and len(b)]
+    progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
+                     f"{', '.join(partial) or 'no branch'}")
+    return stored
+
+
+def _outcome(ok: bool, payload: dict, summary: dict, notes: list) -> dict:
+    """Status, message, summary and notes of a branch computation's run."""
+    if ok:
+        status, message = "complete", f"{len(payload['branches'])} branches computed"
+    else:
+        failed = [b["name"] for b in payload["branches"] if not b["ok"]]
+        status = "incomplete"
+        message = (f"branch(es) {', '.join(failed)} stopped early" if failed else
+                   "a step failed (see notes)")
+    return {"status": status, "message": message, "summary": summary,
+            "notes": notes + list(payload["notes"])}
+
+
 def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict:
     from supercoil.problems.ring_diagram import ring_diagram
 
@@ -313,13 +337,7 @@ def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict
     kwargs = {"progress": progress.message, "on_point": _point_saver(writer, progress, saved),
               "on_branch": on_branch}
     if resume:
-        stored = writer.stored_branches()
-        kwargs["resume"] = stored
-        kept = [n for n, (b, complete) in stored.items() if complete]
-        partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
-                   if not complete and len(b)]
-        progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
-                         f"{', '.join(partial) or 'no branch'}")
+        kwargs["resume"] = _stored_for_resume(writer, progress)
     s = spec.settings
     progress.message(f"ring diagram: C/A = {s['rod']['twist_ratio']:.6g}, L/D = "
                      f"{s['rod']['length_over_diameter']:.6g}, N = {s['rod']['nodes']}, modes "
@@ -336,15 +354,7 @@ def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict
     if preset is not None:
         payload = diagram_in_dna_units(payload, preset, s["problem"]["max_superhelical_density"])
     summary = _envelope(spec, payload, options.tolerances)
-    failed = [b["name"] for b in payload["branches"] if not b["ok"]]
-    if diagram.ok:
-        status, message = "complete", f"{len(diagram.branches)} branches computed"
-    else:
-        status = "incomplete"
-        message = (f"branch(es) {', '.join(failed)} stopped early" if failed else
-                   "a step failed (see notes)")
-    return {"status": status, "message": message, "summary": summary,
-            "notes": notes + list(payload["notes"])}
+    return _outcome(diagram.ok, payload, summary, notes)
 
 
 def diagram_in_dna_units(payload: dict, preset, max_sigma: float) -> dict:
@@ -388,13 +398,7 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
 
     options = spec.tweezers_options()
     notes = []
-    stored = writer.stored_branches() if resume else None
-    if stored is not None:
-        kept = [n for n, (b, complete) in stored.items() if complete]
-        partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
-                   if not complete and len(b)]
-        progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
-                         f"{', '.join(partial) or 'no branch'}")
+    stored = _stored_for_resume(writer, progress) if resume else None
     control = (f"F L^2/A = {options.tension:.6g}" if options.load_control
                else f"z/L = {options.end_distance:.6g}")
     progress.message(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
@@ -423,15 +427,7 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
                        relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
     summary = _envelope(spec, payload, options.tolerances)
     summary["conventions"].update(TWEEZERS_CONVENTIONS)
-    failed = [b["name"] for b in payload["branches"] if not b["ok"]]
-    if result.ok:
-        status, message = "complete", f"{len(result.branches)} branches computed"
-    else:
-        status = "incomplete"
-        message = (f"branch(es) {', '.join(failed)} stopped early" if failed else
-                   "a step failed (see notes)")
-    return {"status": status, "message": message, "summary": summary,
-            "notes": notes + list(payload["notes"])}
+    return _outcome(result.ok, payload, summary, notes)
 
 
 def _run_ring(spec, writer, progress) -> dict:

@@ -209,11 +209,17 @@ class DiagramOptions:
 
     @property
     def tolerances(self) -> dict:
-        return {"corrector_residual": ContinuationOptions.tolerance,
-                "zero_modes": ContinuationOptions.zero_tolerance,
-                "event_arclength": self.event_tolerance,
-                "contact_event_arclength": self.contact_event_tolerance,
-                "contact_corrector_residual": self.contact_tolerance}
+        return branch_tolerances(self)
+
+
+def branch_tolerances(options) -> dict:
+    """The provenance ``tolerances`` of options with ``event_tolerance``,
+    ``contact_event_tolerance`` and ``contact_tolerance`` (ring diagram, tweezers)."""
+    return {"corrector_residual": ContinuationOptions.tolerance,
+            "zero_modes": ContinuationOptions.zero_tolerance,
+            "event_arclength": options.event_tolerance,
+            "contact_event_arclength": options.contact_event_tolerance,
+            "contact_corrector_residual": options.contact_tolerance}
 
 
 @dataclass(frozen=True)

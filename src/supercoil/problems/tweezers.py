@@ -73,6 +73,7 @@ from supercoil.continuation import (
 from supercoil.continuation.resume import resume_branch
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.ring_diagram import (
+    branch_tolerances,
     classify_contact_events,
     contact_count_event,
     onset_event,
@@ -167,11 +168,7 @@ class TweezersOptions:
 
     @property
     def tolerances(self) -> dict:
-        return {"corrector_residual": ContinuationOptions.tolerance,
-                "zero_modes": ContinuationOptions.zero_tolerance,
-                "event_arclength": self.event_tolerance,
-                "contact_event_arclength": self.contact_event_tolerance,
-                "contact_corrector_residual": self.contact_tolerance}
+        return branch_tolerances(self)
 
 
 @dataclass(frozen=True)

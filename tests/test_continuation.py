@@ -17,6 +17,7 @@ from scipy.optimize import fsolve
 from test_continuation_toys import (
     BRATU_FOLD,
     Bratu,
+    CircleOfEquilibria,
     DiagonalQuartic,
     LoadedSphere,
     bratu_midpoint_exact,
@@ -426,3 +427,30 @@ def test_the_corrector_damps_steps_that_would_overshoot():
     result = correct(system, x0, e_lam, x0, 0.0, 1e-12, 40)
     assert result.ok, result.message
     assert np.allclose(result.x[:2], 0.0, atol=1e-12) and result.x[-1] == 0.0
+
+
+@pytest.mark.parametrize("max_step", [0.05, 0.3])
+def test_a_closed_branch_stops_after_one_lap_with_both_folds_located(max_step):
+    # Oracle: the equilibria are the circle x0^2 + lambda^2 = 1 (folds at lambda = +-1,
+    # where the count changes by one); the run must stop once round, not at max_points.
+    p = CircleOfEquilibria(lam=0.0)
+    opts = ContinuationOptions(initial_step=0.05, max_step=max_step, max_points=2000)
+    branch = continuation(p, np.array([1.0, 0.0, 0.0]), parameter="lam", options=opts)
+    assert branch.status is ContinuationStatus.CLOSED_LOOP, branch.message
+    assert branch.ok
+    lap = branch.arclength[-1]
+    assert 2 * np.pi - 2 * max_step <= lap <= 2 * np.pi + 2 * max_step
+    assert len(branch) < 1000
+    q0, lam = branch.states[:, 0], branch.parameter_values
+    assert np.max(np.abs(q0**2 + lam**2 - 1)) < 1e-9
+    folds = sorted(sp.parameter for sp in branch.special_points if sp.kind == "fold")
+    assert len(folds) == 2
+    assert folds == pytest.approx([-1.0, 1.0], abs=1e-8)
+    assert not [sp for sp in branch.special_points if sp.kind == "bifurcation"]
+    np.testing.assert_array_equal(branch.unstable_count, (q0 < 0).astype(int))
+
+
+def test_an_open_branch_is_not_taken_for_a_closed_one():
+    # Bratu round its fold and back down passes near no earlier point with the same tangent.
+    _p, branch = bratu_branch(40, lam0=1.0, low=0.5)
+    assert branch.status is ContinuationStatus.PARAMETER_BOUND, branch.message

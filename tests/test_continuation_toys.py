@@ -200,3 +200,51 @@ class LoadedSphere:
 
     def accept(self, q):
         pass
+
+
+class CircleOfEquilibria:
+    """``E = x_0^3 / 3 + (lambda^2 - 1) x_0 + sum_{i>=1} d_i x_i^2 / 2``.
+
+    Its equilibria are the circle ``x_0^2 + lambda^2 = 1`` (the other ``x_i = 0``): a
+    closed branch with folds at ``lambda = +-1``, stable (``d_i > 0``) where ``x_0 > 0``.
+    """
+
+    n_constraints = 0
+
+    def __init__(self, d=(1.0, 2.0), lam: float = 0.0):
+        self.d = np.concatenate([[0.0], np.asarray(d, dtype=float)])
+        self.n_dofs = self.d.size
+        self.fixed = np.zeros(0, dtype=np.int64)
+        self.mass = np.ones(self.n_dofs)
+        self.lam = lam
+
+    def energy(self, q):
+        return float(q[0] ** 3 / 3 + (self.lam**2 - 1) * q[0] + 0.5 * np.sum(self.d * q**2))
+
+    def gradient(self, q):
+        g = self.d * q
+        g[0] = q[0] ** 2 + self.lam**2 - 1
+        return g
+
+    def hessian(self, q):
+        diag = self.d.copy()
+        diag[0] = 2 * q[0]
+        return HessianParts(sp.diags(diag, format="csr"), *_no_rank_one(self.n_dofs))
+
+    def parameter_derivative(self, q, multipliers, name):
+        assert name == "lam"
+        g = np.zeros(self.n_dofs)
+        g[0] = 2 * self.lam
+        return g
+
+    def constraints(self, q):
+        return np.zeros(0)
+
+    def constraint_jacobian(self, q):
+        return sp.csr_matrix((0, self.n_dofs))
+
+    def constraint_hessian(self, q, multipliers):
+        return sp.csr_matrix((self.n_dofs, self.n_dofs))
+
+    def accept(self, q):
+        pass

@@ -15,11 +15,12 @@ class ContinuationStatus(enum.Enum):
     MAX_ARCLENGTH = "maximum arclength reached"
     STEP_TOO_SMALL = "the corrector failed at the minimum step"
     START_FAILED = "the starting point did not converge"
+    CLOSED_LOOP = "the branch closed on itself (it came back to one of its points)"
 
     @property
     def ok(self) -> bool:
         return self in (ContinuationStatus.PARAMETER_BOUND, ContinuationStatus.MAX_POINTS,
-                        ContinuationStatus.MAX_ARCLENGTH)
+                        ContinuationStatus.MAX_ARCLENGTH, ContinuationStatus.CLOSED_LOOP)
 
 
 @dataclass(frozen=True)
@@ -72,6 +73,14 @@ class ContinuationOptions:
       start's pin the steps fell to zero at dLk 2.37 (N = 200); restarted there
       with a fresh pin, the branch went on. (Re-picking at every point made
       the tangent turn between gauges and stopped the branch earlier.)
+    * ``detect_closed_loops``: stop with ``CLOSED_LOOP`` when the branch comes
+      back to one of its own points: the last step's chord passes within
+      ``closed_loop_tolerance`` times its length of an earlier point (at least
+      three points back), the tangents there agree within 15 degrees and the
+      unstable counts are equal. A solution curve through a regular point is
+      unique, so the branch would only retrace itself (isolas, loops left
+      over by the discretisation); without the check the run circles until
+      ``max_points``.
     * ``finite_difference_step``: relative step of the central difference of
       the residual in the parameter when the problem has no
       ``parameter_derivative`` (error ``O(step^2)`` relative).
@@ -101,6 +110,8 @@ class ContinuationOptions:
     phase_conditions: bool = False
     near_symmetry_gauge: bool = True
     regauge: bool = False
+    detect_closed_loops: bool = True
+    closed_loop_tolerance: float = 0.1
     finite_difference_step: float = 6e-6
 
     def __post_init__(self) -> None:
@@ -111,7 +122,7 @@ class ContinuationOptions:
 
         for name in ("initial_step", "min_step", "max_step", "tolerance", "parameter_weight",
                      "zero_tolerance", "event_tolerance", "switch_below", "max_arclength",
-                     "finite_difference_step", "max_turn_degrees"):
+                     "finite_difference_step", "max_turn_degrees", "closed_loop_tolerance"):
             positive(name)
         if not self.min_step <= self.initial_step <= self.max_step:
             raise ValueError(f"need min_step <= initial_step <= max_step, got {self.min_step}, "

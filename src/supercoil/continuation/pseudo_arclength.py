@@ -201,6 +201,31 @@ class _Tracer:
             return False
         return True
 
+    def _returned_to(self) -> int | None:
+        """Index of an earlier point the last step passed through (see
+        ``ContinuationOptions.detect_closed_loops``), or None."""
+        k = len(self.xs) - 1
+        if k < 4:
+            return None
+        system, opts = self.system, self.opts
+        a, b = self.xs[-2], self.xs[-1]
+        chord = b - a
+        length = system.norm(chord)
+        if length == 0.0:
+            return None
+        earlier = np.array(self.xs[:k - 2])
+        w = system.weights
+        u = np.clip(((earlier - a) * w) @ chord / length**2, 0.0, 1.0)
+        gaps = np.sqrt(np.einsum("ij,ij->i", (a + u[:, None] * chord - earlier) ** 2,
+                                 np.broadcast_to(w, earlier.shape)))
+        cos_limit = math.cos(math.radians(15.0))
+        count = self.stabs[-1].unstable_count
+        for j in np.flatnonzero(gaps <= opts.closed_loop_tolerance * length):
+            if (self.ts[j] @ (w * self.ts[-1]) >= cos_limit
+                    and self.stabs[j].unstable_count == count):
+                return int(j)
+        return None
+
     # -- the stepping loop ------------------------------------------------------------------
     def run(self, step: float) -> tuple[ContinuationStatus, str]:
         system, opts = self.system, self.opts
@@ -291,6 +316,13 @@ class _Tracer:
             if bound is not None:
                 return ContinuationStatus.PARAMETER_BOUND, (
                     f"reached {system.parameter} = {bound:.10g} after {len(self.xs)} points")
+            if opts.detect_closed_loops:
+                j = self._returned_to()
+                if j is not None:
+                    return ContinuationStatus.CLOSED_LOOP, (
+                        f"the branch closed on itself: after {len(self.xs)} points it came "
+                        f"back to point {j} ({system.parameter} = {self.xs[j][-1]:.6g}; "
+                        f"arclength {self.s[-1] - self.s[j]:.4g} per lap)")
             if corr is not None and corr.iterations <= opts.fast_iterations:
                 ds = min(ds * opts.growth, opts.max_step)
         return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"

@@ -1193,3 +1193,21 @@ def test_ring_dna_bad_input_is_one_line_and_exit_2(runner, capsys, args, words):
     status, out, err = run_main(capsys, "ring", *args)
     assert_one_line(status, out, err, 2, *words)
     assert out == ""
+
+
+def test_twist_ratio_may_be_written_as_a_fraction(runner):
+    # Papers quote C/A = 2/3: the fraction and its decimal give the same ring.
+    as_fraction = json_out(invoke(runner, "ring", "--twist-ratio", "2/3", "--excess-link",
+                                  "0.5", "--nodes", "24", "--json", "-"))
+    as_decimal = json_out(invoke(runner, "ring", "--twist-ratio", repr(2 / 3), "--excess-link",
+                                 "0.5", "--nodes", "24", "--json", "-"))
+    assert as_fraction["twist_ratio"] == 2 / 3
+    assert as_fraction["energy"] == as_decimal["energy"]
+
+
+@pytest.mark.parametrize("bad, words", [("2/0", ("divides by zero",)),
+                                        ("2/x", ("fraction like 2/3",)),
+                                        ("1/2/3", ("fraction like 2/3",))])
+def test_a_malformed_twist_ratio_is_a_one_line_error(capsys, bad, words):
+    status, out, err = run_main(capsys, "ring", "--twist-ratio", bad, "--excess-link", "0.5")
+    assert_one_line(status, out, err, 2, "--twist-ratio", *words)

@@ -97,6 +97,27 @@ def require_nodes(option: str, value: int) -> None:
         )
 
 
+def parse_ratio(text: str) -> float:
+    """A number written as a decimal (``0.6667``) or a fraction (``2/3``), as papers
+    quote twist ratios; a typer ``parser``. Other text raises ``ValueError``, which the
+    command line reports as an invalid value of the option."""
+    if isinstance(text, (int, float)):
+        return float(text)
+    words = str(text).split("/")
+    try:
+        if len(words) == 1:
+            return float(words[0])
+        if len(words) == 2:
+            numerator, denominator = float(words[0]), float(words[1])
+            if denominator == 0:
+                raise ValueError(f"{text!r} divides by zero")
+            return numerator / denominator
+    except ValueError as exc:
+        if "divides" in str(exc):
+            raise
+    raise ValueError(f"{text!r} is not a number or a fraction like 2/3")
+
+
 def parse_vector(option: str, text: str) -> tuple[float, float, float]:
     """Three finite numbers separated by commas or spaces, not all zero."""
     words = text.replace(",", " ").split()

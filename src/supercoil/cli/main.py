@@ -24,6 +24,7 @@ from supercoil.cli._common import (
     MAX_MAGNITUDE_TEXT,
     check_json_target,
     fail,
+    parse_ratio,
     parse_vector,
     prepare_output_folder,
     raised_while_solving,
@@ -244,6 +245,7 @@ def ring(
         typer.Option(
             "--twist-ratio",
             metavar="C/A",
+            parser=parse_ratio,
             help="Twist stiffness over bending stiffness, 0 < C/A <= 1e6 (dimensionless; "
             "1/(1 + Poisson ratio) for an isotropic elastic rod; "
             f"{TWIST_PERSISTENCE_NM:g}/{BENDING_PERSISTENCE_NM:g} = "
@@ -661,7 +663,8 @@ DIAGRAM_TREATMENTS = ("barrier", "penalty")  # supercoil.problems.ring_diagram's
 def diagram_ring(
     twist_ratio: Annotated[
         float,
-        typer.Option("--twist-ratio", metavar="C/A", help="Twist stiffness over bending "
+        typer.Option("--twist-ratio", metavar="C/A", parser=parse_ratio,
+                     help="Twist stiffness over bending "
                      "stiffness, 0 < C/A <= 1e6 (2/3 in seed 001's DNA example).",
                      show_default=False),
     ],

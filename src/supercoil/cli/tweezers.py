@@ -17,6 +17,7 @@ import typer
 from supercoil.cli._common import (
     EXIT_NOT_CONVERGED,
     fail,
+    parse_ratio,
     prepare_output_folder,
     require_magnitude,
     require_nodes,
@@ -52,7 +53,7 @@ def tweezers(
         "figures; an existing non-empty DIR is refused unless --force.",
         show_default=False)],
     twist_ratio: Annotated[float | None, typer.Option(
-        "--twist-ratio", metavar="C/A", help="Twist stiffness over bending stiffness, "
+        "--twist-ratio", metavar="C/A", parser=parse_ratio, help="Twist stiffness over bending stiffness, "
         "0 < C/A <= 1e6 (4/3 in the benchmark); not with --dna.", show_default=False)] = None,
     length_over_diameter: Annotated[float | None, typer.Option(
         "--length-over-diameter", metavar="L/D", help="Rod length over tube diameter, "

@@ -1,0 +1,171 @@
+"""Symmetry group of a closed curve (seed 001: D_m on primary branches, C_2 on
+secondary ones, none on the tertiary branch).
+
+A rotation ``R`` about an axis through the centroid maps a closed curve onto
+itself in one of two ways (Domokos 1995; Coleman & Swigon 2000):
+
+* preserving the orientation along the curve: ``x(s + L/m) = R x(s)``, an
+  ``m``-fold axis (``R`` a rotation by ``2 pi k / m``), the cyclic group ``C_m``;
+* reversing it: ``x(c - s) = R x(s)`` for some ``c``, a two-fold axis through
+  the two points ``s = c/2`` and ``s = c/2 + L/2`` of the curve.
+
+An ``m``-fold axis with ``m`` reversing two-fold axes perpendicular to it is
+the dihedral group ``D_m`` (order ``2m``); a single reversing two-fold axis is
+``C_2`` (order 2); none at all is ``C_1``. The circle has every rotation:
+``O(2)``.
+
+The curve is sampled at ``n`` nodes equally spaced in arclength (a discrete
+rod: inextensible, uniform edges). Shifts by fractions of a node spacing use
+the curve's trigonometric (Fourier) interpolant, so that axes need not pass
+through nodes: the symmetry of the sampled smooth curve is found, whatever the
+mesh's phase. For each candidate map the best rotation is Kabsch's (the
+proper orthogonal Procrustes fit, Kabsch 1976), and the map's *residual* is
+the RMS distance ``sqrt(mean |x(s) - R^T y(s)|^2)`` of the fit, in the
+curve's length units; a symmetry holds when its residual is below the
+caller's ``tolerance``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+MAX_ORDER = 6
+_GENERIC_SHIFT = 0.3819660112501051  # 1/phi^2 of the length: no rational order
+
+
+def shifted(points: np.ndarray, shift: np.ndarray | float) -> np.ndarray:
+    """``x(s + shift)`` of the closed curve sampled at ``s_i = i`` (node spacings).
+
+    ``points`` ``(n, 3)``; ``shift`` a float or an array ``(k,)`` of shifts, giving
+    ``(n, 3)`` or ``(k, n, 3)``: the trigonometric interpolant evaluated at the
+    shifted nodes (the Nyquist term of an even ``n`` kept real).
+    """
+    x = np.asarray(points, dtype=float)
+    n = x.shape[0]
+    k = np.fft.fftfreq(n, 1.0 / n)
+    spectrum = np.fft.fft(x, axis=0)
+    sigma = np.atleast_1d(np.asarray(shift, dtype=float))
+    phase = np.exp(2j * np.pi * np.outer(sigma, k) / n)
+    if n % 2 == 0:
+        phase[:, n // 2] = np.cos(np.pi * sigma)
+    out = np.real(np.fft.ifft(phase[:, :, None] * spectrum[None], axis=1))
+    return out[0] if np.ndim(shift) == 0 else out
+
+
+def _fit_residuals(x: np.ndarray, ys: np.ndarray, direct: bool = False) -> np.ndarray:
+    """RMS residual of the best proper rotation taking each ``ys[c]`` onto ``x`` (both
+    centred), ``(k,)``. By default from the singular values ``s`` of ``x^T y``:
+    ``(|x|^2 + |y|^2 - 2 (s_1 + s_2 + d s_3)) / n`` with ``d`` the sign of its
+    determinant, which cancels down to about ``sqrt(eps) |x|``; ``direct`` applies
+    the rotation and measures the distances instead (exact to round-off)."""
+    xc = x - x.mean(axis=0)
+    yc = ys - ys.mean(axis=1, keepdims=True)
+    cov = np.einsum("ia,cib->cab", xc, yc)
+    if direct:
+        u, _sv, vt = np.linalg.svd(cov)
+        d = np.sign(np.linalg.det(u @ vt))
+        d[d == 0] = 1.0
+        u[:, :, 2] *= d[:, None]
+        rotation = u @ vt  # x ~ y R^T per row: R = U diag(1, 1, d) V^T
+        fitted = np.einsum("cib,cab->cia", yc, rotation)
+        return np.sqrt(np.mean(np.sum((xc[None] - fitted) ** 2, axis=2), axis=1))
+    sv = np.linalg.svd(cov, compute_uv=False)
+    sign = np.sign(np.linalg.det(cov))
+    sign[sign == 0] = 1.0
+    trace = sv[:, 0] + sv[:, 1] + sign * sv[:, 2]
+    total = np.sum(xc**2) + np.sum(yc**2, axis=(1, 2)) - 2.0 * trace
+    return np.sqrt(np.maximum(total, 0.0) / x.shape[0])
+
+
+def cyclic_residual(points: np.ndarray, order: float) -> float:
+    """Residual of ``x(s + L/order) = R x(s)`` (an ``order``-fold axis), in length units."""
+    x = np.asarray(points, dtype=float)
+    return float(_fit_residuals(x, shifted(x, x.shape[0] / order)[None], direct=True)[0])
+
+
+def reversal_residuals(points: np.ndarray, c: np.ndarray, direct: bool = False) -> np.ndarray:
+    """Residuals of ``x(c - s) = R x(s)`` (a reversing two-fold axis) for each ``c``
+    (in node spacings), ``(k,)``; ``direct`` as in :func:`_fit_residuals`."""
+    x = np.asarray(points, dtype=float)
+    reversed_ = x[(-np.arange(x.shape[0])) % x.shape[0]]  # x(-s)
+    return _fit_residuals(x, shifted(reversed_, np.asarray(c, dtype=float)), direct)
+
+
+def reversal_axes(points: np.ndarray, tolerance: float) -> list[tuple[float, float]]:
+    """The reversing two-fold axes: ``(c, residual)`` for each ``c`` in ``[0, n)`` (node
+    spacings) where ``x(c - s) = R x(s)`` holds within ``tolerance``; each axis once."""
+    x = np.asarray(points, dtype=float)
+    n = x.shape[0]
+    grid = np.arange(2 * n) * 0.5
+    values = reversal_residuals(x, grid)
+    axes: list[tuple[float, float]] = []
+    left, right = np.roll(values, 1), np.roll(values, -1)
+    # each local minimum on the half-node grid is refined (an axis rarely falls on it)
+    candidates = np.flatnonzero((values <= left) & (values <= right))
+    for i in candidates:
+        c0 = grid[i]
+        # The mean square is smooth (quadratic) at its minimum, the RMS a V; the
+        # offset from c0 is the variable, as Brent's tolerance is relative to it.
+        result = minimize_scalar(
+            lambda dc, c0=c0: float(reversal_residuals(x, [c0 + dc], True)[0]) ** 2,
+            bounds=(-0.5, 0.5), method="bounded", options={"xatol": 1e-10})
+        c, value = float(c0 + result.x) % n, float(min(np.sqrt(result.fun), values[i]))
+        if value > tolerance:
+            continue
+        if any(min(abs(c - a), n - abs(c - a)) < 0.25 for a, _ in axes):
+            continue
+        axes.append((c, value))
+    return sorted(axes)
+
+
+@dataclass(frozen=True)
+class CurveSymmetry:
+    """The symmetry group of a closed curve (module docstring).
+
+    ``group``: ``"O(2)"``, ``"D<m>"``, ``"C<m>"`` or ``"C1"``; ``order`` the
+    largest ``m`` of an orientation-preserving ``m``-fold axis (1 if none;
+    ``0`` for the circle's continuum); ``two_fold_axes`` the number of
+    reversing two-fold axes; ``residual`` the largest residual among the maps
+    that make up the group (0 for ``C1``).
+    """
+
+    group: str
+    order: int
+    two_fold_axes: int
+    residual: float
+
+
+def curve_symmetry(points: np.ndarray, tolerance: float,
+                   max_order: int = MAX_ORDER) -> CurveSymmetry:
+    """The symmetry group of the closed curve ``points`` ``(n, 3)`` (module docstring).
+
+    ``tolerance``: largest residual (length units) of a map counted as a symmetry;
+    orders ``2 .. max_order`` are tried for orientation-preserving axes.
+    """
+    x = np.asarray(points, dtype=float)
+    if x.ndim != 2 or x.shape[1] != 3 or x.shape[0] < 4:
+        raise ValueError(f"points must be (n >= 4, 3), got shape {x.shape}")
+    if not tolerance > 0:
+        raise ValueError(f"tolerance must be positive, got {tolerance!r}")
+    generic = cyclic_residual(x, 1.0 / _GENERIC_SHIFT)
+    if generic <= tolerance:
+        return CurveSymmetry("O(2)", 0, 0, generic)
+    order, worst = 1, 0.0
+    for m in range(max_order, 1, -1):
+        if x.shape[0] < 2 * m:
+            continue
+        value = cyclic_residual(x, m)
+        if value <= tolerance:
+            order, worst = m, value
+            break
+    axes = reversal_axes(x, tolerance)
+    if axes:
+        worst = max(worst, max(r for _, r in axes))
+    if order >= 2:
+        return CurveSymmetry(f"D{order}" if axes else f"C{order}", order, len(axes), worst)
+    if axes:
+        return CurveSymmetry("C2", 1, len(axes), worst)
+    return CurveSymmetry("C1", 1, 0, 0.0)

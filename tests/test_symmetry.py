@@ -1,0 +1,80 @@
+"""Symmetry groups of closed curves (geometry.symmetry) against curves built with a known group.
+
+Oracles: a circle is O(2); r(s) = 1 + a cos(m s) with z = b sin(m s) has D_m (an m-fold axis
+along z, m reversing two-fold axes); perturbations that keep only a reversing axis (C_2), only
+the m-fold axis (C_3) or nothing (C_1). Each curve is rotated at random and sampled from a
+random starting point, so that no axis passes through a node.
+"""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from supercoil.geometry.symmetry import curve_symmetry, cyclic_residual, reversal_axes, shifted
+
+TOL = 1e-8
+
+
+def sampled(radius, height, n=96, seed=0):
+    rng = np.random.default_rng(seed)
+    s = 2 * np.pi * (np.arange(n) + rng.uniform()) / n
+    r = radius(s)
+    x = np.stack([r * np.cos(s), r * np.sin(s), height(s)], axis=1)
+    return Rotation.random(random_state=seed).apply(x) + rng.normal(size=3)
+
+
+def test_shift_by_whole_nodes_is_a_roll_and_fractional_shifts_are_exact_for_trig_curves():
+    x = sampled(lambda s: 1 + 0.2 * np.cos(3 * s), lambda s: 0.1 * np.sin(3 * s), n=48)
+    np.testing.assert_allclose(shifted(x, 5.0), np.roll(x, -5, axis=0), atol=1e-12)
+    s = 2 * np.pi * np.arange(48) / 48
+    y = np.stack([np.cos(s), np.sin(2 * s), np.cos(3 * s)], axis=1)
+    t = 2 * np.pi * 0.37 / 48
+    exact = np.stack([np.cos(s + t), np.sin(2 * (s + t)), np.cos(3 * (s + t))], axis=1)
+    np.testing.assert_allclose(shifted(y, 0.37), exact, atol=1e-12)
+
+
+@pytest.mark.parametrize("radius, height, group, axes", [
+    (lambda s: np.ones_like(s), lambda s: 0 * s, "O(2)", 0),
+    (lambda s: 1 + 0.2 * np.cos(2 * s), lambda s: 0.15 * np.sin(2 * s), "D2", 2),
+    (lambda s: 1 + 0.2 * np.cos(3 * s), lambda s: 0.15 * np.sin(3 * s), "D3", 3),
+    (lambda s: 1 + 0.1 * np.cos(4 * s), lambda s: 0.1 * np.sin(4 * s), "D4", 4),
+    # a cos 2s bump keeps the axis through s = 0 and breaks the three-fold one
+    (lambda s: 1 + 0.2 * np.cos(3 * s) + 0.05 * np.cos(2 * s), lambda s: 0.15 * np.sin(3 * s),
+     "C2", 1),
+    # an even height breaks every reversing axis and keeps the three-fold one
+    (lambda s: 1 + 0.2 * np.cos(3 * s), lambda s: 0.15 * np.sin(3 * s) + 0.05 * np.cos(3 * s),
+     "C3", 0),
+    (lambda s: 1 + 0.2 * np.cos(3 * s) + 0.05 * np.cos(2 * s) + 0.04 * np.sin(5 * s),
+     lambda s: 0.15 * np.sin(3 * s) + 0.03 * np.cos(s), "C1", 0),
+])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_groups_of_curves_built_with_a_known_symmetry(radius, height, group, axes, seed):
+    x = sampled(radius, height, seed=seed)
+    result = curve_symmetry(x, TOL)
+    assert result.group == group
+    assert result.two_fold_axes == axes
+    assert result.residual <= TOL
+
+
+def test_reversal_axes_are_spaced_by_a_third_of_the_curve_for_d3():
+    n = 90
+    x = sampled(lambda s: 1 + 0.2 * np.cos(3 * s), lambda s: 0.15 * np.sin(3 * s), n=n, seed=3)
+    cs = [c for c, _ in reversal_axes(x, TOL)]
+    assert len(cs) == 3
+    gaps = np.diff(sorted(cs + [min(cs) + n]))
+    np.testing.assert_allclose(gaps, n / 3, atol=1e-4)
+
+
+def test_a_broken_symmetry_has_a_residual_of_the_size_of_the_perturbation():
+    for eps in (1e-2, 1e-3, 1e-4):
+        x = sampled(lambda s, e=eps: 1 + 0.2 * np.cos(3 * s) + e * np.cos(2 * s),
+                    lambda s: 0.15 * np.sin(3 * s))
+        r = cyclic_residual(x, 3)
+        assert 0.3 * eps < r < 3 * eps
+
+
+def test_bad_input_is_refused():
+    with pytest.raises(ValueError, match="points"):
+        curve_symmetry(np.zeros((3, 3)), 1e-6)
+    with pytest.raises(ValueError, match="tolerance"):
+        curve_symmetry(np.random.default_rng(0).normal(size=(10, 3)), 0.0)

@@ -22,6 +22,10 @@ DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configur
 SAVE_EVERY = 10
 
 
+# seed 001, Figure 2: primary branches solid, secondary long dashes, tertiary short dashes
+GENERATION_STYLES = {0: "-", 1: "-", 2: (0, (6, 3)), 3: (0, (2, 2))}
+
+
 def run_saving(compute, out: Path, quiet: bool = False):
     """Run ``compute(message, on_point, on_branch)`` with a progress display, saving
     branches into ``out/branches`` as they come.
@@ -95,7 +99,8 @@ def write_diagram(diagram, out: Path, contact: str) -> dict:
         rows = by_branch[b["name"]]
         if not b["contact"] and b["parent"] is not None and rows:
             rows = rows[:-1]  # the last contact-free point lies beyond the contact onset
-        shown.append({"name": b["name"], "writhe": [r["writhe"] for r in rows],
+        shown.append({"name": b["name"], "linestyle": GENERATION_STYLES.get(b["generation"], "-"),
+                      "writhe": [r["writhe"] for r in rows],
                       "excess_link": [r["excess_link"] for r in rows],
                       "stable": [r["stable"] for r in rows],
                       "contact_points": [r["contact_points"] for r in rows],

@@ -701,6 +701,12 @@ def diagram_ring(
                      "contact branches: barrier (default; never penetrates) or penalty "
                      "(exact and augmented are not continued yet)."),
     ] = "barrier",
+    branch_depth: Annotated[
+        int,
+        typer.Option("--branch-depth", metavar="K", help="1: the primary branches; 2: also "
+                     "the secondary branches switched from their bifurcation points; 3: also "
+                     "the tertiary ones (seed 001, Figure 2)."),
+    ] = 1,
     force: Annotated[
         bool,
         typer.Option("--force", help="Write into an existing non-empty --out DIR, "
@@ -739,13 +745,17 @@ def diagram_ring(
              "commas, like 2,3 (2 = alpha, 3 = beta)")
     if contact not in DIAGRAM_TREATMENTS:
         fail(f"--contact {contact!r}: give one of {', '.join(DIAGRAM_TREATMENTS)}")
+    if branch_depth not in (1, 2, 3):
+        fail(f"--branch-depth {branch_depth}: give 1 (primary branches), 2 (and secondary) "
+             "or 3 (and tertiary)")
     prepare_output_folder(out, force, "the diagram's files")
     from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
     from supercoil.problems.ring_diagram import DiagramOptions
 
     try:
         options = DiagramOptions(twist_ratio, length_over_diameter, nodes,
-                                 tuple(int(w) for w in words), max_excess_link, contact)
+                                 tuple(int(w) for w in words), max_excess_link, contact,
+                                 branch_depth=branch_depth)
     except ValueError as exc:
         fail(str(exc))
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "

@@ -39,7 +39,8 @@ def _label(key: str) -> str:
 def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
                    title: str, x: str = "writhe", y: str = "excess_link",
                    legend_title: str | None = None):
-    """``y`` against ``x``. ``branches``: ``{name, <x> (k,), <y> (k,), stable (k,)}``;
+    """``y`` against ``x``. ``branches``: ``{name, <x> (k,), <y> (k,), stable (k,)}`` and
+    optionally ``color`` and ``linestyle`` (a matplotlib dash pattern);
     ``special_points``: ``{kind, <x>, <y>}``. Stable parts heavy, unstable thin."""
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
@@ -54,10 +55,11 @@ def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping
             ys = np.asarray(b[y], float)
             stable = np.asarray(b["stable"], bool)
             color = b.get("color") or style.branch_color(index)
-            ax.plot(xs, ys, "-", lw=style.UNSTABLE_WIDTH, color=color)
+            ls = b.get("linestyle", "-")  # secondary / tertiary branches dashed (seed 001)
+            ax.plot(xs, ys, ls=ls, lw=style.UNSTABLE_WIDTH, color=color)
             # a stable stretch includes the segments joining two stable points
-            ax.plot(xs, np.where(stable, ys, np.nan), "-", lw=style.STABLE_WIDTH, color=color)
-            handles.append(Line2D([], [], color=color, lw=2.0, label=b["name"]))
+            ax.plot(xs, np.where(stable, ys, np.nan), ls=ls, lw=style.STABLE_WIDTH, color=color)
+            handles.append(Line2D([], [], color=color, lw=2.0, ls=ls, label=b["name"]))
         seen: set[str] = set()
         for p in special_points:
             marker, color = style.special_marker(p["kind"])

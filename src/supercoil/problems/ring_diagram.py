@@ -116,9 +116,11 @@ from supercoil.continuation import (
 )
 from supercoil.continuation.branch import jsonable
 from supercoil.continuation.resume import resume_branch
+from supercoil.geometry.symmetry import curve_symmetry
 from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_branches import PRIMARY_NAMES, circle_branch, ring_records
 from supercoil.problems.ring_contact import validate_diameter
+from supercoil.problems.ring_secondary import generation_of, secondary_branches
 from supercoil.solvers.problem import free_dofs
 
 MAX_LEVEL = 8  # contact-count indicators n - k + 1/2 for k = 1 .. MAX_LEVEL
@@ -133,6 +135,9 @@ SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1.5e-2)  # tried in turn, see _swit
 SWITCH_TRIAL_POINTS = 4
 # energy treatments whose equilibria are plain stationary points of E + sum psi
 CONTINUATION_TREATMENTS = ("barrier", "penalty")
+# a map of the centreline is a symmetry when its RMS misfit is below this fraction of D
+# (seed 001's symmetry classes; the polygon contact's ripple breaks them at about 1e-2 D)
+SYMMETRY_TOLERANCE = 0.05
 CONTACT_KINDS = ("contact_onset", "contact_release", "contact_split", "contact_interval_onset")
 
 
@@ -158,6 +163,11 @@ class DiagramOptions:
     ``contact_gauge``: pin the material sliding on contact branches
     (``ContinuationOptions.near_symmetry_gauge``; module docstring, "Material
     sliding"). Without it the branch does not pass the contact onset.
+    ``branch_depth``: 1 computes the primary branches only, 2 adds the
+    secondary branches switched from their bifurcation points, 3 the tertiary
+    ones too (:mod:`supercoil.problems.ring_secondary`), each half-branch at
+    most ``secondary_max_points`` points and ``secondary_max_branches``
+    half-branches in all.
     """
 
     twist_ratio: float
@@ -174,6 +184,9 @@ class DiagramOptions:
     contact_event_tolerance: float = 1e-6
     contact_tolerance: float = 1e-8
     contact_gauge: bool = True
+    branch_depth: int = 1
+    secondary_max_points: int = 40
+    secondary_max_branches: int = 12
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.twist_ratio) and self.twist_ratio > 0):
@@ -198,9 +211,15 @@ class DiagramOptions:
                      "contact_event_tolerance", "contact_tolerance"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
-        for name in ("free_max_points", "contact_max_points"):
+        for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
             if getattr(self, name) < 2:
                 raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
+        if self.branch_depth not in (1, 2, 3):
+            raise ValueError(f"branch_depth must be 1 (primary branches), 2 (and secondary) "
+                             f"or 3 (and tertiary), got {self.branch_depth!r}")
+        if self.secondary_max_branches < 0:
+            raise ValueError(f"secondary_max_branches must be >= 0, got "
+                             f"{self.secondary_max_branches!r}")
 
     @property
     def diameter(self) -> float:
@@ -232,6 +251,12 @@ class RingDiagram:
     seconds: dict[str, float] = field(default_factory=dict)  # wall time per branch
     notes: tuple[str, ...] = ()
     contact_problem: ContactProblem | None = None  # for contact lists of stored states
+    generations: dict[str, int] = field(default_factory=dict)  # secondary (2), tertiary (3)
+
+    def generation(self, branch: Branch) -> int:
+        """0 the circle, 1 a primary branch (with or without contact), 2 secondary, 3
+        tertiary (:mod:`supercoil.problems.ring_secondary`)."""
+        return generation_of(branch.name, branch.parent, self.generations)
 
     @property
     def ok(self) -> bool:
@@ -252,17 +277,22 @@ class RingDiagram:
         """One record per branch point (DESIGN.md keys), contact lists included."""
         out = []
         cp = self.contact_problem
+        tolerance = SYMMETRY_TOLERANCE * self.options.diameter
         for b in self.branches:
             contact = b.name in self.contact_branches
             condition_e = link_writhe_slope_sign(b)
             for i in range(len(b)):
                 rec = {k: jsonable(v[i]) for k, v in b.records.items()}
+                symmetry = curve_symmetry(b.states[i].reshape(-1, 3), tolerance)
                 entry = {"branch": b.name, "index": i, **rec,
                          "unstable_count": int(b.unstable_count[i]),
                          "zero_modes": int(b.zero_modes[i]),
                          "determinant_sign": int(b.determinant_sign[i]),
                          "condition_e": int(condition_e[i]),
-                         "stable": bool(b.stable[i])}
+                         "stable": bool(b.stable[i]),
+                         "symmetry": symmetry.group,
+                         "symmetry_residual_over_diameter":
+                             symmetry.residual / self.options.diameter}
                 if contact and cp is not None:
                     summary = contact_summary(cp, b.states[i], b.multipliers[i])
                     entry["contact_points"] = summary["contact_points"]
@@ -281,6 +311,7 @@ class RingDiagram:
                 "name": b.name, "parent": b.parent,
                 "origin": None if b.origin is None else b.origin.entry("excess_link"),
                 "contact": b.name in self.contact_branches,
+                "generation": self.generation(b),
                 "parameter": b.parameter, "n_points": len(b), "status": b.status.name,
                 "ok": b.ok, "message": b.message,
                 "seconds": round(self.seconds.get(b.name, float("nan")), 3),
@@ -602,8 +633,14 @@ def ring_diagram(options: DiagramOptions,
         seconds[contact_name] = time.perf_counter() - start
         branches.append(contact)
         contact_names.add(contact_name)
-    return RingDiagram(opts, tuple(branches), frozenset(contact_names), seconds, tuple(notes),
-                       cp)
+    diagram = RingDiagram(opts, tuple(branches), frozenset(contact_names), seconds,
+                          tuple(notes), cp)
+    if opts.branch_depth >= 2:
+        diagram = secondary_branches(diagram, opts.branch_depth,
+                                     max_points=opts.secondary_max_points,
+                                     max_branches=opts.secondary_max_branches, progress=say,
+                                     on_point=on_point, on_branch=final)
+    return diagram
 
 
 def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,

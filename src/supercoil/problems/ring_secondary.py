@@ -1,0 +1,182 @@
+"""Secondary and tertiary branches of the ring diagram (seed 001, Figures 2 and 3).
+
+Seed 001 follows, beside the primary branch beta, the *secondary* branches
+beta_I ... beta_IV that bifurcate from it and a *tertiary* branch beta*_II
+that bifurcates from beta_II; configurations on the secondary branches have
+a single two-fold axis (C_2), the tertiary one none. :func:`secondary_branches`
+does this for a computed :class:`~supercoil.problems.ring_diagram.RingDiagram`:
+at every located ``bifurcation`` special point of a branch of generation
+``g < depth`` (the primary branches, with and without contact, are generation
+1; the circle's own bifurcations are the primary branches themselves), it
+switches onto the bifurcating branch along the critical mode
+(:func:`~supercoil.continuation.switch_branch`), on each side of it, and
+follows that half-branch with self-contact (the contact problem of the
+diagram: its barrier is inactive, and the equilibria those of the rod alone,
+while no pair is within its reach) with the contact branches' options.
+
+Names. The bifurcation points of one primary family (``beta`` and
+``beta_contact``, in that order along the branch) are numbered I, II, ...;
+the half-branch on side ``+`` of the k-th is ``beta_<k>+`` (``beta_I+``,
+``beta_II-``), and a tertiary branch from the j-th bifurcation point of
+``beta_II-`` is ``beta_II-_<j>+``. ``parent`` is the branch the bifurcation
+point lies on and ``origin`` that point.
+
+A half-branch whose start fails at every amplitude in ``AMPLITUDES`` (times
+D) is not kept; a note says so (at a bifurcation point inside a contact the
+predictor along one side of the critical mode can push a pair into contact at
+once, which collision detection refuses). Whether a half-branch is new is not
+decided here: the switch starts on the hyperplane orthogonal to the parent's
+tangent, so it cannot fall back at its first point; the per-point symmetry
+(:meth:`RingDiagram.points`, ``symmetry``) tells the branches apart.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+
+from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, switch_branch
+from supercoil.problems.ring_branches import PRIMARY_NAMES, ring_records
+
+AMPLITUDES = (0.05, 0.2, 0.5)  # first step off the bifurcation point, in units of D
+MAX_DEPTH = 3  # generations: 1 primary, 2 secondary, 3 tertiary
+
+
+def roman(k: int) -> str:
+    """1 -> I, 4 -> IV, 12 -> XII (k >= 1)."""
+    if k < 1:
+        raise ValueError(f"roman numerals start at 1, got {k}")
+    out = []
+    for value, letters in ((1000, "M"), (900, "CM"), (500, "D"), (400, "CD"), (100, "C"),
+                           (90, "XC"), (50, "L"), (40, "XL"), (10, "X"), (9, "IX"),
+                           (5, "V"), (4, "IV"), (1, "I")):
+        while k >= value:
+            out.append(letters)
+            k -= value
+    return "".join(out)
+
+
+def family_bifurcations(branches: list[Branch], family: list[str]) -> list[SpecialPoint]:
+    """The located bifurcation points of the branches named in ``family``, in order."""
+    out = []
+    by_name = {b.name: b for b in branches}
+    for name in family:
+        branch = by_name.get(name)
+        if branch is None:
+            continue
+        out += [p for p in branch.special_points if p.kind == "bifurcation" and p.located]
+    return out
+
+
+def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
+                       max_branches: int = 16,
+                       progress: Callable[[str], None] | None = None,
+                       on_point: Callable[[Branch], None] | None = None,
+                       on_branch: Callable[[Branch, bool], None] | None = None):
+    """``diagram`` with the branches of generations 2 .. ``depth`` added (module doc).
+
+    ``depth`` 2 adds the secondary branches, 3 the tertiary ones too (1 adds
+    nothing). ``max_points`` bounds each half-branch, ``max_branches`` the
+    number of half-branches added. ``on_point`` / ``on_branch`` as in
+    :func:`~supercoil.problems.ring_diagram.ring_diagram` (every new branch is a
+    contact branch). Returns a new ``RingDiagram``.
+    """
+    from supercoil.problems.ring_diagram import (
+        CONTACT_MIN_STEP,
+        _contact_records,
+        classify_contact_events,
+        contact_count_event,
+    )
+
+    if not 1 <= depth <= MAX_DEPTH:
+        raise ValueError(f"depth must be 1 (primary only), 2 (secondary) or 3 (tertiary), "
+                         f"got {depth!r}")
+    if max_points < 2 or max_branches < 0:
+        raise ValueError("max_points must be >= 2 and max_branches >= 0")
+    say = progress or (lambda message: None)
+    final = on_branch or (lambda branch, contact: None)
+    opts = diagram.options
+    cp = diagram.contact_problem
+    branches = list(diagram.branches)
+    contact_names = set(diagram.contact_branches)
+    generations = dict(diagram.generations)
+    seconds = dict(diagram.seconds)
+    notes = list(diagram.notes)
+    if depth == 1 or cp is None:
+        return diagram
+    D = opts.diameter
+    base = ContinuationOptions(
+        min_step=CONTACT_MIN_STEP, max_step=opts.contact_max_step * D, max_points=max_points,
+        parameter_bounds=(0.0, opts.max_excess_link), parameter_weight=D,
+        tolerance=opts.contact_tolerance, near_symmetry_gauge=opts.contact_gauge,
+        regauge=True, event_tolerance=opts.contact_event_tolerance,
+        initial_step=AMPLITUDES[0] * D)
+    records = _contact_records(cp, ring_records(cp), free=False)
+    added = 0
+    # families: name stem -> branches of that family, one generation at a time
+    families = []
+    for mode in opts.modes:
+        stem = PRIMARY_NAMES.get(mode, f"mode{mode}")
+        families.append((stem, [stem, f"{stem}_contact"]))
+    for generation in range(2, depth + 1):
+        next_families = []
+        for stem, family in families:
+            for k, point in enumerate(family_bifurcations(branches, family), start=1):
+                parent = next(b for b in branches if b.name == point.branch)
+                for side, sign in ((1, "+"), (-1, "-")):
+                    if added >= max_branches:
+                        notes.append(f"secondary branches: stopped at max_branches = "
+                                     f"{max_branches}")
+                        return _with(diagram, branches, contact_names, generations, seconds,
+                                     notes)
+                    name = f"{stem}_{roman(k)}{sign}"
+                    say(f"{name}: switched from {parent.name} at dLk = "
+                        f"{point.parameter:.4g}, side {sign}")
+                    start = time.perf_counter()
+                    branch = _switch(cp, parent, point, base, side, name, records,
+                                     contact_count_event(cp), on_point, D)
+                    if branch is None:
+                        notes.append(f"{name}: the switch from {parent.name} at dLk = "
+                                     f"{point.parameter:.5g} found no point on side {sign} "
+                                     f"(amplitudes {', '.join(f'{a:g}' for a in AMPLITUDES)} D)")
+                        continue
+                    branch = classify_contact_events(branch, cp)
+                    branch = dataclasses.replace(branch, parent=parent.name, origin=point)
+                    final(branch, True)
+                    seconds[name] = time.perf_counter() - start
+                    branches.append(branch)
+                    contact_names.add(name)
+                    generations[name] = generation
+                    added += 1
+                    next_families.append((name, [name]))
+        families = next_families
+    return _with(diagram, branches, contact_names, generations, seconds, notes)
+
+
+def _switch(cp, parent: Branch, point: SpecialPoint, base: ContinuationOptions, side: int,
+            name: str, records, event, on_point, D: float) -> Branch | None:
+    """The half-branch on ``side`` (the first amplitude whose start succeeds), or None."""
+    for amplitude in AMPLITUDES:
+        opts = dataclasses.replace(base, initial_step=min(amplitude * D, base.max_step))
+        branch = switch_branch(cp, parent, point, opts, side=side, amplitude=amplitude * D,
+                               name=name, records=records, events=(event,),
+                               on_point=on_point)
+        if len(branch) >= 2:
+            return branch
+    return None
+
+
+def _with(diagram, branches, contact_names, generations, seconds, notes):
+    return dataclasses.replace(diagram, branches=tuple(branches),
+                               contact_branches=frozenset(contact_names),
+                               generations=dict(generations), seconds=dict(seconds),
+                               notes=tuple(notes))
+
+
+def generation_of(name: str, parent: str | None, known: dict[str, int]) -> int:
+    """0 for the circle, 1 for a primary branch (with or without contact), else ``known``."""
+    if name in known:
+        return known[name]
+    return 0 if parent is None else 1
+

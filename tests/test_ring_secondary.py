@@ -1,0 +1,86 @@
+"""Secondary branches of the ring diagram (seed 001, Figures 2 and 3).
+
+Oracles: the primary branch of mode 3 has D_3 symmetry (seed 001; Domokos 1995); the
+branches switched from its bifurcation points have C_2 symmetry, a single two-fold axis
+(seed 001, caption of Figure 3: "those on the secondary branches beta_I - beta_IV have C_2
+symmetry"); every switched branch passes the consistency checker (stored stability equal
+to the recomputed inertia, special points between their neighbours, Lk = Tw + Wr, no
+penetration) and starts at its origin.
+"""
+
+import numpy as np
+import pytest
+
+from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.continuation import consistency_check
+from supercoil.problems.ring_branches import twisted_circle_problem
+from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
+from supercoil.problems.ring_secondary import roman, secondary_branches
+
+OPTIONS = DiagramOptions(2 / 3, 40.0, n_nodes=48, modes=(3,), max_excess_link=3.0,
+                         free_max_points=60, contact_max_points=80, branch_depth=2,
+                         secondary_max_points=20)
+
+
+@pytest.fixture(scope="module")
+def diagram():
+    return ring_diagram(OPTIONS)
+
+
+def _secondary(diagram):
+    return [b for b in diagram.branches if diagram.generation(b) == 2]
+
+
+def test_secondary_branches_start_at_a_bifurcation_point_of_beta(diagram):
+    secondary = _secondary(diagram)
+    assert secondary, diagram.notes
+    for b in secondary:
+        assert b.name.startswith("beta_I")
+        assert b.parent in ("beta", "beta_contact")
+        assert b.origin.kind == "bifurcation" and b.origin.branch == b.parent
+        assert b.name in diagram.contact_branches
+        # the first point lies one switching amplitude (a fraction of D) from the origin
+        first = b.states[0] - b.origin.q
+        assert 0 < np.sqrt(np.mean(first**2)) < OPTIONS.diameter
+
+
+def test_primary_is_d3_and_secondary_branches_are_c2(diagram):
+    points = diagram.points()
+    beta = [p["symmetry"] for p in points if p["branch"] == "beta"]
+    assert beta[0] in ("O(2)", "D3") and set(beta[1:]) == {"D3"}
+    for b in _secondary(diagram):
+        groups = {p["symmetry"] for p in points if p["branch"] == b.name}
+        assert groups == {"C2"}, (b.name, groups)
+
+
+def test_secondary_branches_are_consistent(diagram):
+    base, _ = twisted_circle_problem(OPTIONS.twist_ratio, 0.0, OPTIONS.n_nodes, "angle")
+    cp = ContactProblem(base, ContactOptions(diameter=OPTIONS.diameter))
+    for b in _secondary(diagram):
+        report = consistency_check(b, cp, residual_tolerance=1e-8)
+        # as for the contact branches (test_ring_diagram): the KKT residual holds the
+        # sliding gauge's force, recorded per point as sliding_residual
+        problems = [p for p in report.problems if "KKT residual" not in p]
+        assert not problems, (b.name, problems)
+        assert np.max(b.records["link_error"]) < 1e-9
+        assert np.min(b.records["min_gap_over_diameter"]) > 1.0 - 1e-4
+
+
+def test_payload_names_generations(diagram):
+    payload = diagram.payload()
+    generation = {b["name"]: b["generation"] for b in payload["branches"]}
+    assert generation["circle"] == 0
+    assert generation["beta"] == generation["beta_contact"] == 1
+    assert all(generation[b.name] == 2 for b in _secondary(diagram))
+    point = payload["points"][0]
+    assert point["symmetry"] == "O(2)" and point["symmetry_residual_over_diameter"] < 0.05
+
+
+def test_depth_one_adds_nothing_and_bad_depths_are_refused(diagram):
+    primary_only = [b for b in diagram.branches if diagram.generation(b) < 2]
+    assert len(primary_only) == 3
+    with pytest.raises(ValueError, match="branch_depth"):
+        DiagramOptions(2 / 3, 40.0, branch_depth=4)
+    with pytest.raises(ValueError, match="depth"):
+        secondary_branches(diagram, depth=0)
+    assert [roman(k) for k in (1, 2, 3, 4, 9, 14)] == ["I", "II", "III", "IV", "IX", "XIV"]

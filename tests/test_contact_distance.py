@@ -10,7 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.optimize import lsq_linear
@@ -361,6 +361,7 @@ def test_gradient_is_continuous_across_region_boundary(boundary, kinds):
 
 @settings(max_examples=60, deadline=None)
 @given(arrays(np.float64, (4, 3), elements=finite))
+@example(np.array([[0.125, 0, 0], [0, 0, 0], [0, 1, 0], [0, 2, 0]], dtype=float))
 def test_hypothesis_derivatives_are_exact(x):
     x12 = x.ravel()
     d, g, hess, kind = derivatives(x12)
@@ -376,9 +377,13 @@ def test_hypothesis_derivatives_are_exact(x):
     if sin2 > 1e-6:  # no fallback: the exact distance and its gradient
         assert d == pytest.approx(segment_distance(*x)[0], rel=1e-10)
         # a central difference of step h across a region boundary (the Hessian
-        # jumps there: C^1, not C^2) is off by up to h |H|; hypothesis found one
+        # jumps there: C^1, not C^2) is off by up to h |H| with H the Hessian on
+        # the *other* side, which is not the one returned: at the corner of two
+        # perpendicular segments (p1 - q0 of length 1, |p| = 1/8) the edge-type
+        # side has |H| ~ 1/|p|^2 = 64 while the corner's is ~1 (hypothesis found it).
+        # scale^2 bounds both (the jax oracle above checks the gradient to 1e-9).
         np.testing.assert_allclose(g, fd_gradient(x12),
-                                   atol=1e-6 * scale + 2e-6 * np.abs(hess).max())
+                                   atol=1e-6 * scale + 2e-6 * max(np.abs(hess).max(), scale**2))
 
 
 def test_crossing_returns_finite_zeros():

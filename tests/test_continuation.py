@@ -454,3 +454,33 @@ def test_an_open_branch_is_not_taken_for_a_closed_one():
     # Bratu round its fold and back down passes near no earlier point with the same tangent.
     _p, branch = bratu_branch(40, lam0=1.0, low=0.5)
     assert branch.status is ContinuationStatus.PARAMETER_BOUND, branch.message
+
+
+class _NoisyQuartic(DiagonalQuartic):
+    """The diagonal problem with a gradient noise of 1e-9 (a deterministic function of q),
+    a stand-in for round-off above the corrector's estimate of its floor."""
+
+    def gradient(self, q):
+        seed = int.from_bytes(np.asarray(q, dtype=float).tobytes()[-8:], "little")
+        noise = np.random.default_rng(seed).uniform(-1e-9, 1e-9, size=q.size)
+        return super().gradient(q) + noise
+
+
+@pytest.mark.parametrize("tolerance, converges", [(1e-11, True), (1e-13, False)])
+def test_the_corrector_accepts_a_residual_at_round_off_only_near_the_tolerance(
+        tolerance, converges):
+    # Oracle: the solution is q = 0 (d_i > lambda); the noise keeps max|F| near 1e-9, so
+    # Newton stalls there with steps of 1e-9 / 1e4, negligible: accepted when the noise
+    # is within 1e3 tolerances, a failure otherwise.
+    from supercoil.continuation.corrector import correct
+
+    p = _NoisyQuartic([1e4, 2e4, 3e4], lam=0.0)
+    system = ExtendedSystem(p, "lam", np.zeros(3))
+    e_lam = np.zeros(system.size)
+    e_lam[-1] = 1.0
+    x0 = system.pack(np.array([1e-3, -2e-3, 5e-4]), np.zeros(0), 0.0)
+    result = correct(system, x0, e_lam, x0, 0.0, tolerance, 30)
+    assert result.ok is converges, result.message
+    if converges:
+        assert np.max(np.abs(system.q(result.x))) < 1e-12
+        assert "round-off" in result.message or result.residual <= tolerance

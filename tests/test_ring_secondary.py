@@ -84,3 +84,31 @@ def test_depth_one_adds_nothing_and_bad_depths_are_refused(diagram):
     with pytest.raises(ValueError, match="depth"):
         secondary_branches(diagram, depth=0)
     assert [roman(k) for k in (1, 2, 3, 4, 9, 14)] == ["I", "II", "III", "IV", "IX", "XIV"]
+
+
+def test_the_integral_gauge_keeps_beta_d3_where_a_pinned_node_breaks_it():
+    """N = 40 is not a multiple of 3, so no node pin is symmetric: pinned at one node the
+    beta branch leaves D_3 (and reaches contact elsewhere), while the integral phase
+    condition keeps it D_3 and its contact onset agrees with N = 48 (a multiple of 3)."""
+    from supercoil.geometry.symmetry import cyclic_residual
+
+    def beta(n, gauge):
+        opts = DiagramOptions(2 / 3, 40.0, n_nodes=n, modes=(3,), max_excess_link=3.0,
+                              free_max_points=60, contact_max_points=2, gauge=gauge)
+        return ring_diagram(opts).branch("beta")
+
+    def worst_three_fold(branch):
+        wr = branch.records["writhe"]
+        return max(cyclic_residual(q.reshape(-1, 3), 3) for q, w in zip(branch.states, wr)
+                   if w < 1.5) / OPTIONS.diameter
+
+    onset = {}
+    for n, gauge in ((48, "node"), (40, "integral"), (40, "node")):
+        branch = beta(n, gauge)
+        onset[n, gauge] = branch.points_of_kind("contact_onset")[0].parameter
+        if gauge == "integral":
+            assert worst_three_fold(branch) < 0.05
+        elif n == 40:
+            assert worst_three_fold(branch) > 0.2
+    assert abs(onset[40, "integral"] - onset[48, "node"]) < 0.01
+    assert abs(onset[40, "node"] - onset[48, "node"]) > 0.05

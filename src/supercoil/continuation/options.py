@@ -65,10 +65,21 @@ class ContinuationOptions:
       closed rod's material sliding off the circle, nearly null and otherwise
       unremoved, which makes Newton, the tangent and the count ill-posed).
       Sparse; nothing changes for problems without near-symmetries.
+    * ``gauge``: how ``near_symmetry_gauge`` pins each approximate symmetry.
+      ``"node"``: one DOF, the row ``q_i = q_i(start)`` (sparse; its reaction is a
+      force on one node, which breaks the state's symmetries: measured on the
+      ring's beta branch at N = 128, the D_3 configurations lost their symmetry
+      without contact). ``"integral"``: the phase condition
+      ``<M g, q - q_start> = 0`` with ``g`` the unit mode at the start (Doedel's
+      integral phase condition; one dense row, which the bordered solve handles
+      by SuperLU instead of the band LU): its reaction is spread along the
+      mode, so a state invariant under a symmetry of the rod stays invariant.
     * ``regauge``: with ``near_symmetry_gauge``, when a step fails, pick the
       pinned DOF afresh at the last point (the row becomes ``q_i = q_i(last
-      point)`` on the DOF where the sliding moves most there; its tangent is
-      recomputed) and retry the step once, instead of keeping the start's DOF
+      point)`` on the DOF where the sliding moves most there, or the integral
+      condition re-anchored there), correct the last point in the new gauge at
+      its parameter value (added as a point when it moved) and retry the step
+      once, instead of keeping the start's DOF
       for the whole branch. Measured on the ring's contact branch: with the
       start's pin the steps fell to zero at dLk 2.37 (N = 200); restarted there
       with a fresh pin, the branch went on. (Re-picking at every point made
@@ -109,6 +120,7 @@ class ContinuationOptions:
     switch_below: float = 1e-3
     phase_conditions: bool = False
     near_symmetry_gauge: bool = True
+    gauge: str = "node"
     regauge: bool = False
     detect_closed_loops: bool = True
     closed_loop_tolerance: float = 0.1
@@ -141,6 +153,8 @@ class ContinuationOptions:
             raise ValueError("fast_iterations must be >= 0 and max_corrector_iterations >= 1")
         if self.direction not in (1, -1):
             raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
+        if self.gauge not in ("node", "integral"):
+            raise ValueError(f"gauge must be 'node' or 'integral', got {self.gauge!r}")
         if self.predictor not in ("tangent", "secant"):
             raise ValueError(f"predictor must be 'tangent' or 'secant', got {self.predictor!r}")
         if self.n_modes < 1:

@@ -43,7 +43,7 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, SingularMatrixError
 from supercoil.solvers.newton import least_squares_multipliers
 from supercoil.solvers.problem import ConstrainedEnergy
-from supercoil.stability.analysis import near_symmetry_gauge
+from supercoil.stability.analysis import goldstone_modes, near_symmetry_gauge
 
 log = logging.getLogger(__name__)
 
@@ -57,19 +57,24 @@ def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
     """Phase-condition modes of a branch started at ``q`` (None when there are none).
 
     ``phase_conditions``: the symmetry modes (:func:`phase_modes`).
-    ``near_symmetry_gauge``: one unit row per approximate symmetry that is
-    not a combination of the exact ones at ``q`` (a closed rod's material
-    sliding off the circle), on the DOF of
-    :func:`~supercoil.stability.analysis.near_symmetry_gauge`: the row
-    ``q_i = q_i(start)`` keeps Newton and the tangent off the nearly
-    singular direction; its multiplier is the small force that the
+    ``near_symmetry_gauge``: one row per approximate symmetry that is not a
+    combination of the exact ones at ``q`` (a closed rod's material sliding
+    off the circle): with ``gauge="node"`` a unit row on the DOF of
+    :func:`~supercoil.stability.analysis.near_symmetry_gauge` (``q_i =
+    q_i(start)``), with ``gauge="integral"`` the mode itself (the condition
+    ``<M g, q - q_start> = 0``). Either keeps Newton and the tangent off the
+    nearly singular direction; its multiplier is the small force that the
     discretisation's ripple exerts along the sliding, which the stored
     points' residual (without it) shows.
     """
     rows = []
     if options.phase_conditions:
         rows.append(phase_modes(problem, q))
-    if options.near_symmetry_gauge:
+    if options.near_symmetry_gauge and options.gauge == "integral":
+        modes = goldstone_modes(problem, q)
+        if modes.size:
+            rows.append(modes / np.linalg.norm(modes, axis=1, keepdims=True))
+    elif options.near_symmetry_gauge:
         dofs = near_symmetry_gauge(problem, q)
         gauge = np.zeros((dofs.size, problem.n_dofs))
         gauge[np.arange(dofs.size), dofs] = 1.0 / np.asarray(problem.mass, float)[dofs]
@@ -183,22 +188,45 @@ class _Tracer:
             tolerance=opts.event_tolerance, records=self._records(x))
 
     def _regauge(self) -> bool:
-        """Move the phase rows to the DOFs :func:`branch_phase_modes` picks at the last
-        point (re-anchored there) and recompute its tangent; False if they are the same."""
-        system = self.system
+        """Move the phase rows to those :func:`branch_phase_modes` gives at the last point
+        (re-anchored there), correct that point in the new gauge at its parameter value
+        and recompute its tangent; False (gauge unchanged) if the rows are the same or
+        the correction fails.
+
+        The last point is an equilibrium of the old gauge: the new row's reaction
+        differs (the discretisation's force along the sliding moves from one
+        node or mode to another), so the state moves a little. A moved point is
+        added to the branch (at the same parameter value); a step from the
+        uncorrected one could not converge, however short."""
+        system, opts = self.system, self.opts
         x = self.xs[-1]
         q = system.q(x)
-        modes = branch_phase_modes(system.problem, q, self.opts)
-        if modes is None or modes.shape != system.phase_modes.shape or np.array_equal(
-                modes != 0, system.phase_modes != 0):
+        modes = branch_phase_modes(system.problem, q, opts)
+        if modes is None or modes.shape != system.phase_modes.shape:
+            return False
+        if opts.gauge == "node" and np.array_equal(modes != 0, system.phase_modes != 0):
+            return False
+        if opts.gauge == "integral" and np.allclose(modes, system.phase_modes, rtol=0,
+                                                    atol=1e-12):
             return False
         old = (system.phase_modes, system.q_phase_full)
         system.set_phase(modes, q)
+        e_lam = np.zeros(system.size)
+        e_lam[-1] = 1.0
+        corr = correct(system, x, e_lam, x, 0.0, opts.tolerance,
+                       4 * opts.max_corrector_iterations)
         try:
-            self.ts[-1] = tangent(system, x, system.weights * self.ts[-1])
+            if not corr.ok:
+                raise SingularMatrixError(corr.message)
+            t = tangent(system, corr.x, system.weights * self.ts[-1])
         except SingularMatrixError:
             system.set_phase(*old)
+            system.set_parameter(x[-1])
             return False
+        if system.norm(corr.x - x) > 0.0:
+            self.add_point(corr.x, t)
+        else:
+            self.ts[-1] = t
         return True
 
     def _returned_to(self) -> int | None:
@@ -295,10 +323,16 @@ class _Tracer:
                     failure = f"landing on the bound {bound:.6g}: {landing.message}"
             if failure is not None:
                 log.debug("step %.3g rejected: %s", ds, failure)
-                if opts.regauge and system.r and not regauged and self._regauge():
-                    regauged = True  # retry the same step once with the moved gauge
-                    log.debug("gauge moved at point %d", len(self.xs) - 1)
-                    continue
+                if opts.regauge and system.r and not regauged:
+                    try:
+                        moved = self._regauge()
+                    except (SingularMatrixError, InertiaError) as exc:
+                        return ContinuationStatus.STEP_TOO_SMALL, (
+                            f"stability at the point corrected in a moved gauge failed: {exc}")
+                    if moved:
+                        regauged = True  # retry the same step once with the moved gauge
+                        log.debug("gauge moved at point %d", len(self.xs) - 1)
+                        continue
                 if ds <= opts.min_step:
                     return ContinuationStatus.STEP_TOO_SMALL, (
                         f"stopped after {len(self.xs)} points at {system.parameter} = "

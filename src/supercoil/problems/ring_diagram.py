@@ -184,6 +184,7 @@ class DiagramOptions:
     contact_event_tolerance: float = 1e-6
     contact_tolerance: float = 1e-8
     contact_gauge: bool = True
+    gauge: str = "node"
     branch_depth: int = 1
     secondary_max_points: int = 40
     secondary_max_branches: int = 12
@@ -214,6 +215,8 @@ class DiagramOptions:
         for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
             if getattr(self, name) < 2:
                 raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
+        if self.gauge not in ("node", "integral"):
+            raise ValueError(f"gauge must be 'node' or 'integral', got {self.gauge!r}")
         if self.branch_depth not in (1, 2, 3):
             raise ValueError(f"branch_depth must be 1 (primary branches), 2 (and secondary) "
                              f"or 3 (and tertiary), got {self.branch_depth!r}")
@@ -552,7 +555,7 @@ def ring_diagram(options: DiagramOptions,
         free_opts = ContinuationOptions(
             initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
             max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
-            event_tolerance=opts.event_tolerance)
+            event_tolerance=opts.event_tolerance, gauge=opts.gauge)
         old, complete = stored.get(name, (None, False))
         if complete:
             free = old
@@ -601,7 +604,7 @@ def ring_diagram(options: DiagramOptions,
             max_step=opts.contact_max_step * D, max_points=opts.contact_max_points,
             parameter_bounds=(0.0, opts.max_excess_link), direction=direction,
             parameter_weight=D, tolerance=opts.contact_tolerance,
-            near_symmetry_gauge=opts.contact_gauge, regauge=True,
+            near_symmetry_gauge=opts.contact_gauge, gauge=opts.gauge, regauge=True,
             event_tolerance=opts.contact_event_tolerance)
         if not 0.0 <= cp.excess_link <= opts.max_excess_link:
             notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "

@@ -248,3 +248,75 @@ def test_phase_ripple_order(curve):
     assert 3.8 < order_spline < 4.2
     assert 1.9 < order_chord < 2.1
     assert spline[-1] < 1e-4 * chord[-1]
+
+
+# ------------------------------------------------- ContactProblem(curve="spline")
+def _crossed_spline(treatment, **kw):
+    from contact_toys import CrossedRods
+
+    from supercoil.contact.problem import ContactOptions, ContactProblem
+
+    toy = CrossedRods(load=2.0)
+    options = ContactOptions(diameter=0.05, treatment=treatment, curve="spline", **kw)
+    return toy, ContactProblem(toy, options)
+
+
+def test_contact_curve_option_is_validated():
+    from supercoil.contact.problem import ContactOptions
+
+    assert ContactOptions(diameter=0.1).curve == "polygon"
+    with pytest.raises(ValueError, match="contact curve must be one of polygon, spline"):
+        ContactOptions(diameter=0.1, curve="bezier")
+
+
+@pytest.mark.parametrize("treatment", ["exact", "penalty", "barrier"])
+def test_spline_contact_force_equals_load(treatment):
+    """Oracle: rod B rests on rod A, the contact carries the whole load."""
+    from supercoil.contact.report import contact_summary
+    from supercoil.contact.solve import solve_contact
+    from supercoil.solvers.newton import NewtonOptions
+
+    toy, problem = _crossed_spline(treatment)
+    res = solve_contact(problem, toy.points.ravel(), NewtonOptions(max_iterations=200))
+    assert res.converged, res.message
+    summary = contact_summary(problem, res.q, res.multipliers)
+    force_scale = toy.rod.length**2 / toy.rod.bending_stiffness
+    total = sum(c["force"] for c in summary["contacts"])
+    np.testing.assert_allclose(total / force_scale, toy.load, rtol=1e-6)
+    d_min = summary["min_gap_over_diameter"]
+    if treatment == "barrier":
+        assert 1.0 < d_min < 1.0 + problem.options.barrier_activation
+    elif treatment == "exact":
+        assert abs(d_min - 1.0) <= problem.options.penetration_tolerance
+
+
+def test_spline_contact_energy_derivatives_match_finite_differences():
+    toy, problem = _crossed_spline("penalty", stiffness=50.0)
+    q = toy.points.ravel().copy()
+    rng = np.random.default_rng(3)
+    q[3 * toy.n:] += 1e-3 * rng.standard_normal(3 * toy.n)
+    q[3 * toy.n + 2 :: 3] -= 0.25 - 0.045  # B into A: pairs penetrate
+    q[3 * toy.n + 2 :: 3] += 0.02 * np.linspace(-1, 1, toy.n) ** 2  # and B curved
+    assert problem.contact_energy(q) > 0
+    g = problem.gradient(q)
+    H = problem.hessian(q).dense()
+    eps = 1e-7
+    for k in range(0, 6 * toy.n, 5):
+        e = np.zeros_like(q)
+        e[k] = eps
+        fd = (problem.energy(q + e) - problem.energy(q - e)) / (2 * eps)
+        assert abs(fd - g[k]) <= 1e-5 * max(1.0, abs(g[k]))
+        fd_h = (problem.gradient(q + e) - problem.gradient(q - e)) / (2 * eps)
+        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-4, atol=1e-4)
+
+
+def test_spline_barrier_step_guard_keeps_the_spline_gap():
+    toy, problem = _crossed_spline("barrier")
+    q = toy.points.ravel().copy()
+    q[3 * toy.n + 2 :: 3] += 0.03 * np.linspace(-1, 1, toy.n) ** 2
+    dq = np.zeros_like(q)
+    dq[3 * toy.n + 2 :: 3] = -0.5  # straight through A
+    bound = problem.step_bound(q, dq)
+    assert 0.0 < bound < 1.0
+    assert problem.min_distance(q + bound * dq) > problem.diameter
+    assert problem.min_distance(q + bound * dq, polygon=True) > 0.5 * problem.diameter

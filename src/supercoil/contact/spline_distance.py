@@ -93,6 +93,7 @@ gradient and Hessian are returned as zeros (crossing pieces), as in
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -107,6 +108,7 @@ __all__ = [
     "chord_pieces",
     "piece_distance",
     "piece_distance_derivatives",
+    "piece_distance_of_nodes",
     "sag_bound",
 ]
 
@@ -132,7 +134,7 @@ class CurvePieces:
     stencil: np.ndarray
     control: np.ndarray
 
-    @property
+    @cached_property
     def coefficients(self) -> np.ndarray:
         """``(k, 4, 4)``: weight of stencil node ``l`` on ``u^p`` is ``[i, l, p]``."""
         return np.einsum("ijl,jp->ilp", self.control, BSPLINE_BASIS)
@@ -151,38 +153,35 @@ class CurvePieces:
 
 
 def bspline_pieces(segments: np.ndarray, closed: bool) -> CurvePieces:
-    """The uniform cubic B-spline pieces of consecutive segments ``(k, 2)`` (node indices).
+    """The uniform cubic B-spline pieces of the segments ``(k, 2)`` (node indices).
 
-    Segment ``i`` runs from ``segments[i, 0]`` to ``segments[i, 1] =
-    segments[i + 1, 0]``. Closed: the control points of piece ``i`` are the
-    nodes ``(a_{i-1}, a_i, b_i, b_{i+1})`` cyclically. Open: the missing
-    control points at the ends are ghosts by reflection (module docstring).
+    Segment ``i`` runs from ``segments[i, 0]`` to ``segments[i, 1]``; it is
+    joined to segment ``i + 1`` when ``segments[i + 1, 0] == segments[i, 1]``
+    (and the last to the first when ``closed``). The control points of piece
+    ``i`` are the nodes ``(a_{i-1}, a_i, b_i, b_{i+1})``; at a free end (no
+    joined neighbour: the ends of an open rod, or of each strand of a set of
+    strands) the missing one is a ghost by reflection (module docstring).
     """
     seg = np.asarray(segments, dtype=np.int64)
     k = len(seg)
-    if seg.ndim != 2 or seg.shape[1] != 2 or k < (3 if closed else 1):
-        raise ValueError(f"segments must have shape (k, 2) with k >= {3 if closed else 1}, "
-                         f"got {seg.shape}")
+    if seg.ndim != 2 or seg.shape[1] != 2 or k < 1:
+        raise ValueError(f"segments must have shape (k, 2) with k >= 1, got {seg.shape}")
     stencil = np.empty((k, 4), dtype=np.int64)
     control = np.zeros((k, 4, 4))
     eye = np.eye(4)
     for i in range(k):
         a, b = seg[i]
-        if closed or 0 < i < k - 1:
-            stencil[i] = (seg[(i - 1) % k, 0], a, b, seg[(i + 1) % k, 1])
-            control[i] = eye
-            continue
-        before = seg[i - 1, 0] if i > 0 else None
-        after = seg[i + 1, 1] if i < k - 1 else None
+        prev = (i - 1) % k if (closed or i > 0) else None
+        succ = (i + 1) % k if (closed or i < k - 1) else None
+        before = seg[prev, 0] if prev is not None and seg[prev, 1] == a and prev != i else None
+        after = seg[succ, 1] if succ is not None and seg[succ, 0] == b and succ != i else None
         stencil[i] = (a, b, before if before is not None else a,
                       after if after is not None else b)
-        # control points in terms of (a, b, before, after); a missing one is a ghost
-        rows = np.zeros((4, 4))
-        rows[0] = eye[2] if before is not None else 2 * eye[0] - eye[1]
-        rows[1] = eye[0]
-        rows[2] = eye[1]
-        rows[3] = eye[3] if after is not None else 2 * eye[1] - eye[0]
-        control[i] = rows
+        # control points in terms of the stencil (a, b, before, after)
+        control[i, 0] = eye[2] if before is not None else 2 * eye[0] - eye[1]
+        control[i, 1] = eye[0]
+        control[i, 2] = eye[1]
+        control[i, 3] = eye[3] if after is not None else 2 * eye[1] - eye[0]
     return CurvePieces(stencil, control)
 
 

@@ -320,3 +320,18 @@ def test_spline_barrier_step_guard_keeps_the_spline_gap():
     assert 0.0 < bound < 1.0
     assert problem.min_distance(q + bound * dq) > problem.diameter
     assert problem.min_distance(q + bound * dq, polygon=True) > 0.5 * problem.diameter
+
+
+def test_drivers_accept_and_validate_the_contact_curve():
+    from supercoil.cli._common import CONTACT_CURVES
+    from supercoil.contact.problem import CURVES
+    from supercoil.problems.ring_diagram import DiagramOptions
+    from supercoil.problems.tweezers import TweezersOptions
+
+    assert CONTACT_CURVES == CURVES  # the CLI's copy (cheap at start-up) is the same
+    assert DiagramOptions(2 / 3, 122.0).contact_curve == "polygon"
+    assert TweezersOptions(4 / 3, 33.0, tension=75.0).contact_curve == "polygon"
+    with pytest.raises(ValueError, match="contact_curve"):
+        DiagramOptions(2 / 3, 122.0, contact_curve="bezier")
+    with pytest.raises(ValueError, match="contact_curve"):
+        TweezersOptions(4 / 3, 33.0, tension=75.0, contact_curve="bezier")

@@ -18,6 +18,7 @@ import typer
 
 from supercoil import __version__
 from supercoil.cli._common import (
+    CONTACT_CURVES,
     EXIT_BAD_INPUT,
     EXIT_NOT_CONVERGED,
     MAX_MAGNITUDE,
@@ -698,6 +699,12 @@ def diagram_ring(
                      "contact branches: barrier (default; never penetrates) or penalty "
                      "(exact and augmented are not continued yet)."),
     ] = "barrier",
+    contact_curve: Annotated[
+        str,
+        typer.Option("--contact-curve", metavar="CURVE", help="Curve whose self-distance is "
+                     "the contact distance: polygon (the segments, default) or spline (the "
+                     "cubic B-spline of the nodes; keeps the material sliding symmetry)."),
+    ] = "polygon",
     force: Annotated[
         bool,
         typer.Option("--force", help="Write into an existing non-empty --out DIR, "
@@ -736,13 +743,16 @@ def diagram_ring(
              "commas, like 2,3 (2 = alpha, 3 = beta)")
     if contact not in DIAGRAM_TREATMENTS:
         fail(f"--contact {contact!r}: give one of {', '.join(DIAGRAM_TREATMENTS)}")
+    if contact_curve not in CONTACT_CURVES:
+        fail(f"--contact-curve {contact_curve!r}: give one of {', '.join(CONTACT_CURVES)}")
     prepare_output_folder(out, force, "the diagram's files")
     from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
     from supercoil.problems.ring_diagram import DiagramOptions
 
     try:
         options = DiagramOptions(twist_ratio, length_over_diameter, nodes,
-                                 tuple(int(w) for w in words), max_excess_link, contact)
+                                 tuple(int(w) for w in words), max_excess_link, contact,
+                                 contact_curve=contact_curve)
     except ValueError as exc:
         fail(str(exc))
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "

@@ -104,7 +104,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from supercoil.contact.problem import DEFAULT_TREATMENT, ContactOptions, ContactProblem
+from supercoil.contact.problem import CURVES, DEFAULT_TREATMENT, ContactOptions, ContactProblem
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import (
     Branch,
@@ -158,6 +158,9 @@ class DiagramOptions:
     ``contact_gauge``: pin the material sliding on contact branches
     (``ContinuationOptions.near_symmetry_gauge``; module docstring, "Material
     sliding"). Without it the branch does not pass the contact onset.
+    ``contact_curve``: ``"polygon"`` or ``"spline"``, the curve whose
+    self-distance is the contact distance (``ContactOptions.curve``; the
+    contact onset of the contact-free branches is measured on it too).
     """
 
     twist_ratio: float
@@ -174,6 +177,7 @@ class DiagramOptions:
     contact_event_tolerance: float = 1e-6
     contact_tolerance: float = 1e-8
     contact_gauge: bool = True
+    contact_curve: str = "polygon"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.twist_ratio) and self.twist_ratio > 0):
@@ -198,6 +202,9 @@ class DiagramOptions:
                      "contact_event_tolerance", "contact_tolerance"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+        if self.contact_curve not in CURVES:
+            raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got "
+                             f"{self.contact_curve!r}")
         for name in ("free_max_points", "contact_max_points"):
             if getattr(self, name) < 2:
                 raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
@@ -293,6 +300,7 @@ class RingDiagram:
             "length_over_diameter": opts.length_over_diameter,
             "diameter": opts.diameter,
             "n_nodes": opts.n_nodes,
+            "contact_curve": opts.contact_curve,
             "modes": list(opts.modes),
             "max_excess_link": opts.max_excess_link,
             "michell_excess_link": {str(m): float(michell_excess_link(opts.twist_ratio, m))
@@ -496,8 +504,10 @@ def ring_diagram(options: DiagramOptions,
     circle, problem = circle_branch(opts.twist_ratio, opts.n_nodes, circle_top)
     seconds["circle"] = time.perf_counter() - start
     D = opts.diameter * problem.rod.length
-    contact_options = ContactOptions(diameter=D, treatment=opts.contact)
-    probe = ContactProblem(problem, ContactOptions(diameter=D, treatment="barrier"))
+    contact_options = ContactOptions(diameter=D, treatment=opts.contact,
+                                     curve=opts.contact_curve)
+    probe = ContactProblem(problem, ContactOptions(diameter=D, treatment="barrier",
+                                                   curve=opts.contact_curve))
     cp = ContactProblem(problem, contact_options)
     if problem.rod.edge_length > D:
         notes.append(f"segments ({problem.rod.edge_length:.3g} L) are longer than the tube "
@@ -596,7 +606,8 @@ def ring_diagram(options: DiagramOptions,
                          f"sliding force it holds, max |KKT residual| without the gauge, is at "
                          f"most {float(np.max(sliding)):.2e} (at dLk = "
                          f"{float(contact.parameter_values[int(np.argmax(sliding))]):.4g}): "
-                         "an artefact of the polygon contact (see the docs of ring_diagram)")
+                         f"an artefact of the {opts.contact_curve} contact (see the docs of "
+                         "ring_diagram)")
         contact = dataclasses.replace(contact, parent=name, origin=onset)
         final(contact, True)
         seconds[contact_name] = time.perf_counter() - start

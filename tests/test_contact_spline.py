@@ -335,3 +335,28 @@ def test_drivers_accept_and_validate_the_contact_curve():
         DiagramOptions(2 / 3, 122.0, contact_curve="bezier")
     with pytest.raises(ValueError, match="contact_curve"):
         TweezersOptions(4 / 3, 33.0, tension=75.0, contact_curve="bezier")
+
+
+def test_local_minimum_pairs_count_a_contact_once():
+    """A strand crossing another near a piece junction: every pair of pieces
+    around the crossing sees the same closest point (the neighbours through the
+    shared end of their pieces); exactly one pair, the closest, is not a shadow."""
+    from supercoil.contact.spline_distance import local_minimum_pairs
+
+    n = 12
+    u = np.arange(n) * 0.1
+    p = np.stack([u, np.zeros(n), 0.02 * u**2], 1)  # strand along x, curved
+    x0 = 0.1 * 5 + 0.1 * 0.03  # just past the start of piece 5
+    q = np.stack([np.full(n, x0), u - 0.55, 0.3 - 0.03 * (u - 0.55) ** 2], 1)
+    pts = np.concatenate([p, q])
+    seg = np.stack([np.arange(n - 1), np.arange(1, n)], 1)
+    a, b = bspline_pieces(seg, False), bspline_pieces(seg + n, False)
+    pieces = CurvePieces(np.concatenate([a.stencil, b.stencil]),
+                         np.concatenate([a.control, b.control]),
+                         np.concatenate([a.joined_ends(), b.joined_ends()]))
+    pairs = np.array([(i, n - 1 + j) for i in range(3, 8) for j in range(3, 8)])
+    d, s, t = piece_distance(pts, pieces, pairs)
+    kept = local_minimum_pairs(pts, pieces, pairs, s, t)
+    assert kept.sum() == 1
+    assert d[kept][0] == d.min()
+    assert 0.0 < s[kept][0] < 1.0 and 0.0 < t[kept][0] < 1.0

@@ -79,6 +79,7 @@ from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach
 from supercoil.contact.distance import segment_distance, segment_distance_derivatives
 from supercoil.contact.spline_distance import (
     bspline_pieces,
+    local_minimum_pairs,
     piece_distance,
     piece_distance_derivatives,
     sag_bound,
@@ -110,7 +111,17 @@ class ContactOptions:
     barrier acts on gaps below ``barrier_activation * D``. ``curve``: the
     centreline whose self-distance is the contact distance, ``"polygon"``
     (segment pairs) or ``"spline"`` (the uniform cubic B-spline of the nodes;
-    see the module docstring).
+    see the module docstring). ``count_local_minima`` (spline only,
+    experimental): sum the potential only over pairs whose closest points are
+    a local minimum of the distance between the whole curves, dropping the
+    *shadows* of a contact seen by the neighbouring pairs through their shared
+    piece ends (``spline_distance.local_minimum_pairs``). The plain sum counts
+    a point contact once inside a piece pair and up to four times at a piece
+    junction, a ripple of period h of its own; dropping the shadows removes
+    it, but the energy then jumps where a local minimum is born inside the
+    barrier's reach (line contacts). Measured in docs/benchmarks.md ("Spline
+    contact"): it helps point contacts (the ring), it stalls line contacts
+    (tweezers).
     """
 
     diameter: float
@@ -124,6 +135,7 @@ class ContactOptions:
     max_outer_iterations: int = 50
     force_tolerance: float = 1e-8
     curve: str = "polygon"
+    count_local_minima: bool = False
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.diameter) and self.diameter > 0):
@@ -142,6 +154,8 @@ class ContactOptions:
                 raise ValueError(f"{name} must be positive, got {value!r}")
         if self.max_outer_iterations < 1:
             raise ValueError("max_outer_iterations must be >= 1")
+        if self.count_local_minima and self.curve != "spline":
+            raise ValueError("count_local_minima needs curve='spline'")
         if self.curve not in CURVES:
             raise ValueError(f"contact curve must be one of {', '.join(CURVES)} (the polygon's "
                              f"segments or the cubic B-spline of the nodes); got {self.curve!r}")
@@ -283,7 +297,8 @@ class ContactProblem:
         i, j = pairs[:, 0], pairs[:, 1]
         return segment_distance(a[i], b[i], a[j], b[j])
 
-    def pair_state(self, q: np.ndarray, cutoff: float, polygon: bool = False) -> PairState:
+    def pair_state(self, q: np.ndarray, cutoff: float, polygon: bool = False,
+                   shadows: bool = False) -> PairState:
         """Pairs (beyond the exclusion) whose distance is at most ``cutoff``.
 
         The distance is that of the contact curve (``options.curve``), or of the
@@ -308,6 +323,10 @@ class ContactProblem:
             i, j = cand[:, 0], cand[:, 1]
             d, s, t = segment_distance(a[i], b[i], a[j], b[j])
         keep = d <= cutoff
+        if spline and self.options.count_local_minima and not shadows and keep.any():
+            keep[keep] = local_minimum_pairs(np.asarray(q, dtype=float).reshape(-1, 3),
+                                             self.pieces, cand[keep],
+                                             s[keep], t[keep])
         return PairState(cand[keep], d[keep], s[keep], t[keep])
 
     def min_distance(self, q: np.ndarray, polygon: bool = False) -> float:
@@ -569,7 +588,7 @@ class ContactProblem:
                                                threshold)
         if self.spline and self.treatment == "barrier":
             # the barrier's gap is the spline's: keep it above a tenth of its value
-            st = self.pair_state(q, reach)
+            st = self.pair_state(q, reach, shadows=True)
             if len(st.pairs):
                 nodes = self.pieces.stencil[st.pairs].reshape(-1, 8)
                 pieces = (self.pieces.control[st.pairs], self.pieces.coefficients[st.pairs])

@@ -106,6 +106,7 @@ __all__ = [
     "CurvePieces",
     "bspline_pieces",
     "chord_pieces",
+    "local_minimum_pairs",
     "piece_distance",
     "piece_distance_derivatives",
     "piece_distance_of_nodes",
@@ -133,6 +134,12 @@ class CurvePieces:
 
     stencil: np.ndarray
     control: np.ndarray
+    # (k, 2): whether the piece continues into a neighbour at u = 0 and at u = 1
+    joined: np.ndarray | None = None
+
+    def joined_ends(self) -> np.ndarray:
+        return (np.zeros((len(self.stencil), 2), dtype=bool) if self.joined is None
+                else np.asarray(self.joined, dtype=bool))
 
     @cached_property
     def coefficients(self) -> np.ndarray:
@@ -168,6 +175,7 @@ def bspline_pieces(segments: np.ndarray, closed: bool) -> CurvePieces:
         raise ValueError(f"segments must have shape (k, 2) with k >= 1, got {seg.shape}")
     stencil = np.empty((k, 4), dtype=np.int64)
     control = np.zeros((k, 4, 4))
+    joined = np.zeros((k, 2), dtype=bool)
     eye = np.eye(4)
     for i in range(k):
         a, b = seg[i]
@@ -182,7 +190,8 @@ def bspline_pieces(segments: np.ndarray, closed: bool) -> CurvePieces:
         control[i, 1] = eye[0]
         control[i, 2] = eye[1]
         control[i, 3] = eye[3] if after is not None else 2 * eye[1] - eye[0]
-    return CurvePieces(stencil, control)
+        joined[i] = (before is not None, after is not None)
+    return CurvePieces(stencil, control, joined)
 
 
 def chord_pieces(segments: np.ndarray) -> CurvePieces:
@@ -464,6 +473,49 @@ def _distance_kernel(nodes, coef, d, s, t, kinds):
 
 
 @njit()
+def _shadow_kernel(nodes, coef, joined, s, t, shadow):
+    """Whether each pair's minimiser lies on a side where its piece continues into
+    the next one with the distance still falling (see :func:`local_minimum_pairs`)."""
+    ap = np.empty((4, 3))
+    aq = np.empty((4, 3))
+    p = np.empty(3)
+    p1 = np.empty(3)
+    p2 = np.empty(3)
+    q = np.empty(3)
+    q1 = np.empty(3)
+    q2 = np.empty(3)
+    for i in range(nodes.shape[0]):
+        _power_coefficients(nodes[i, :4], coef[i, 0], ap)
+        _power_coefficients(nodes[i, 4:], coef[i, 1], aq)
+        _point(ap, s[i], p, p1, p2)
+        _point(aq, t[i], q, q1, q2)
+        hs = 0.0
+        ht = 0.0
+        rr = 0.0
+        lp = 0.0
+        lq = 0.0
+        for x in range(3):
+            r = p[x] - q[x]
+            hs += r * p1[x]
+            ht -= r * q1[x]
+            rr += r * r
+            lp += p1[x] * p1[x]
+            lq += q1[x] * q1[x]
+        tol_s = 1e-10 * np.sqrt(rr * lp)
+        tol_t = 1e-10 * np.sqrt(rr * lq)
+        out = False
+        if s[i] >= 1.0 and joined[i, 0, 1]:
+            out = out or hs < tol_s
+        if s[i] <= 0.0 and joined[i, 0, 0]:
+            out = out or hs > tol_s
+        if t[i] >= 1.0 and joined[i, 1, 1]:
+            out = out or ht < tol_t
+        if t[i] <= 0.0 and joined[i, 1, 0]:
+            out = out or ht > tol_t
+        shadow[i] = out
+
+
+@njit()
 def _derivative_kernel(nodes, coef, parallel_tolerance, d_out, s_out, t_out, grad, hess, kinds):
     ap = np.empty((4, 3))
     aq = np.empty((4, 3))
@@ -604,6 +656,28 @@ def piece_distance(points: npt.ArrayLike, pieces: CurvePieces, pairs: npt.ArrayL
     """
     nodes, coef, _ = _pair_arrays(points, pieces, pairs)
     return piece_distance_of_nodes(nodes, coef)
+
+
+def local_minimum_pairs(points: npt.ArrayLike, pieces: CurvePieces, pairs: npt.ArrayLike,
+                        s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``(m,)`` bool: whether pair ``(i, j)``'s minimiser ``(s, t)`` is a local minimum of
+    the distance between the whole curves, not a *shadow* of a neighbouring pair.
+
+    A minimiser on a side of the square where the piece continues into its
+    neighbour (``u = 1`` with the distance still falling into the next piece,
+    or ``u = 0`` with it falling into the previous one) is the end of a piece
+    that a neighbouring pair sees closer: the same contact counted twice.
+    Keeping only the other pairs counts each local minimum of the curve
+    distance once (a minimum exactly at a junction belongs to the piece that
+    starts there, up to a relative tolerance of 1e-10 on the slope).
+    """
+    nodes, coef, _ = _pair_arrays(points, pieces, pairs)
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    joined = np.ascontiguousarray(pieces.joined_ends()[pairs])  # (m, 2, 2)
+    shadow = np.empty(len(pairs), dtype=np.bool_)
+    _shadow_kernel(nodes, coef, joined, np.ascontiguousarray(s, dtype=np.float64),
+                   np.ascontiguousarray(t, dtype=np.float64), shadow)
+    return ~shadow
 
 
 def piece_distance_of_nodes(nodes: np.ndarray, coef: np.ndarray

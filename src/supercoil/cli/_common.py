@@ -23,6 +23,7 @@ EXIT_BAD_INPUT = 2
 # these the run either exhausts memory (N = 1e9 asked for 24 GB before being
 # killed) or overflows (dLk = 1e300), so the command refuses them up front.
 MAX_NODES = 100_000
+CONTACT_CURVES = ("polygon", "spline")  # supercoil.contact.problem.CURVES (cheap at start-up)
 MIN_NODES = 8
 MAX_MAGNITUDE = 1e6  # |excess link| in turns, twist ratio C/A
 MAX_MAGNITUDE_TEXT = "1e6"

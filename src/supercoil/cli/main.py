@@ -18,6 +18,7 @@ import typer
 
 from supercoil import __version__
 from supercoil.cli._common import (
+    CONTACT_CURVES,
     EXIT_BAD_INPUT,
     EXIT_NOT_CONVERGED,
     MAX_MAGNITUDE,
@@ -707,6 +708,13 @@ def diagram_ring(
                      "the secondary branches switched from their bifurcation points; 3: also "
                      "the tertiary ones (seed 001, Figure 2)."),
     ] = 1,
+    contact_curve: Annotated[
+        str,
+        typer.Option("--contact-curve", metavar="CURVE", help="Curve whose self-distance is "
+                     "the contact distance: polygon (the segments, default) or spline (the "
+                     "cubic B-spline of the nodes, experimental: it removes the chords' sag "
+                     "ripple, not the pair-counting one; docs/benchmarks.md)."),
+    ] = "polygon",
     force: Annotated[
         bool,
         typer.Option("--force", help="Write into an existing non-empty --out DIR, "
@@ -748,6 +756,8 @@ def diagram_ring(
     if branch_depth not in (1, 2, 3):
         fail(f"--branch-depth {branch_depth}: give 1 (primary branches), 2 (and secondary) "
              "or 3 (and tertiary)")
+    if contact_curve not in CONTACT_CURVES:
+        fail(f"--contact-curve {contact_curve!r}: give one of {', '.join(CONTACT_CURVES)}")
     prepare_output_folder(out, force, "the diagram's files")
     from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
     from supercoil.problems.ring_diagram import DiagramOptions
@@ -755,7 +765,7 @@ def diagram_ring(
     try:
         options = DiagramOptions(twist_ratio, length_over_diameter, nodes,
                                  tuple(int(w) for w in words), max_excess_link, contact,
-                                 branch_depth=branch_depth)
+                                 branch_depth=branch_depth, contact_curve=contact_curve)
     except ValueError as exc:
         fail(str(exc))
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "

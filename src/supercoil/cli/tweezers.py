@@ -15,6 +15,7 @@ from typing import Annotated
 import typer
 
 from supercoil.cli._common import (
+    CONTACT_CURVES,
     EXIT_NOT_CONVERGED,
     fail,
     parse_ratio,
@@ -85,6 +86,11 @@ def tweezers(
     max_points: Annotated[int, typer.Option(
         "--max-points", metavar="K", help="Largest number of points per branch (a branch "
         "stopped by it is incomplete: exit status 1).")] = 2000,
+    contact_curve: Annotated[str, typer.Option(
+        "--contact-curve", metavar="CURVE", help="Curve whose self-distance is the contact "
+        "distance: polygon (the segments, default) or spline (the cubic B-spline of the "
+        "nodes, experimental: it removes the chords' sag ripple, not the pair-counting "
+        "one; docs/benchmarks.md).")] = "polygon",
     force: Annotated[bool, typer.Option(
         "--force", help="Write into an existing non-empty --out DIR, overwriting this "
         "command's own files (other files are left alone).")] = False,
@@ -180,6 +186,8 @@ def tweezers(
         fail(f"--step {step:g}: give a positive number of turns up to STOP - START")
     if not 2 <= max_points <= 100_000:
         fail(f"--max-points {max_points}: give an integer from 2 to 100000")
+    if contact_curve not in CONTACT_CURVES:
+        fail(f"--contact-curve {contact_curve!r}: give one of {', '.join(CONTACT_CURVES)}")
     prepare_output_folder(out, force, "this command's files")
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
@@ -187,7 +195,8 @@ def tweezers(
         options = TweezersOptions(twist_ratio=twist_ratio,
                                   length_over_diameter=length_over_diameter, tension=tension,
                                   end_distance=end_distance, turns=(start, stop),
-                                  n_nodes=nodes, max_points=max_points)
+                                  n_nodes=nodes, max_points=max_points,
+                                  contact_curve=contact_curve)
     except ValueError as exc:
         fail(str(exc))
     control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")

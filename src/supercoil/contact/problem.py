@@ -5,7 +5,8 @@ condition that two points of the centreline farther apart along the rod than
 the neighbour exclusion stay at least the tube diameter ``D`` apart. The
 centreline is a polygon, so the condition is imposed on every pair of its
 segments, with the exact segment–segment distance ``d`` (smooth per distance
-type, :mod:`supercoil.contact.distance`) and the gap ``g = d - D``:
+type, :mod:`supercoil.contact.distance`) or the distance of the B-spline
+pieces of those segments (below, "Contact curve"), and the gap ``g = d - D``:
 
 * ``penalty``, ``augmented``, ``barrier``: ``E + sum_pairs psi(g)``
   (:mod:`supercoil.contact.potentials`);
@@ -14,6 +15,36 @@ type, :mod:`supercoil.contact.distance`) and the gap ``g = d - D``:
   forces (:mod:`supercoil.contact.solve` runs the active-set loop). Inactive
   pairs that penetrate during the search meet the penalty, which vanishes at
   a solution (no inactive pair penetrates there).
+
+Contact curve (``ContactOptions.curve``). ``"polygon"`` measures ``d``
+between the segments. ``"spline"`` measures it between the pieces of the
+uniform cubic B-spline whose control points are the nodes
+(:mod:`supercoil.contact.spline_distance`; piece ``i`` belongs to segment
+``i`` and depends on nodes ``i-1 .. i+2``, ghost end nodes by reflection on
+open rods), so a pair's distance has 24 DOFs instead of 12. A chord sags
+inside the curve by up to ``h^2 kappa / 8`` and not at all at the nodes, so
+the polygon's contact energy ripples with period ``h`` as the material slides
+along a contact; the B-spline's distance does not depend on the sampling
+phase up to ``O(h^4)`` (its shift ``(h^2/6) x''`` is the same at every phase).
+Reported positions ``s1, s2`` are the spline parameters mapped to arc length
+like the segments' parameters. The broad phase runs on the segments with the
+cutoff widened by twice the largest sag bound (a piece lies within
+``max |second difference| / 6`` of its chord), so it misses no pair.
+
+Two guards stay on the polygon whatever the curve, and they are still the
+right guards: the rod's topology *is* the polygon's. Its linking number is
+``Tw + Wr`` with the writhe of the polygon (the energy carries it through
+the reference twist, and :meth:`ContactProblem.admissible` compares it with
+the polygon's double sum), and the knot type is the polygon's. A strand can
+only change those by passing a segment through another, which the polygon
+collision detection of :meth:`ContactProblem.step_bound` forbids (no segment
+pair may approach below ``min(0.9 d0, max(0.1 d0, D/2))``). Near contact the
+spline and the polygon differ by at most twice the sag bound, about
+``h^2 kappa / 3``, far below ``D/2`` on any resolved rod, so this guard does
+not limit the steps of a spline contact. The barrier additionally needs its
+own gap to stay positive: with the spline, a second conservative advancement
+on the spline pieces (``first_time_of_approach_pieces``) keeps every spline
+gap above a tenth of its value.
 
 The wrapper speaks the :class:`~supercoil.solvers.problem.ConstrainedEnergy`
 protocol, so Newton, the inertia count and the eigenvalues see the contact
@@ -44,12 +75,20 @@ import scipy.sparse as sp
 
 from supercoil.contact import potentials
 from supercoil.contact.broadphase import candidate_pairs
-from supercoil.contact.ccd import first_time_of_approach
+from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
 from supercoil.contact.distance import segment_distance, segment_distance_derivatives
+from supercoil.contact.spline_distance import (
+    bspline_pieces,
+    local_minimum_pairs,
+    piece_distance,
+    piece_distance_derivatives,
+    sag_bound,
+)
 from supercoil.solvers.problem import HessianParts
 from supercoil.topology import writhe
 
 TREATMENTS = ("barrier", "augmented", "penalty", "exact")
+CURVES = ("polygon", "spline")  # the curve whose self-distance is the contact distance
 LINK_CHECK_MAX_NODES = 2000  # see ContactProblem.admissible
 DEFAULT_TREATMENT = "barrier"
 
@@ -69,7 +108,20 @@ class ContactOptions:
     penetration ``F / k`` to carry a force ``F`` (with the default ``k`` a few
     per cent of D for DNA-like L/D at N = 100, falling like ``h^3``): states
     beyond it are flagged, not returned silently. ``barrier_activation``: the
-    barrier acts on gaps below ``barrier_activation * D``.
+    barrier acts on gaps below ``barrier_activation * D``. ``curve``: the
+    centreline whose self-distance is the contact distance, ``"polygon"``
+    (segment pairs) or ``"spline"`` (the uniform cubic B-spline of the nodes;
+    see the module docstring). ``count_local_minima`` (spline only,
+    experimental): sum the potential only over pairs whose closest points are
+    a local minimum of the distance between the whole curves, dropping the
+    *shadows* of a contact seen by the neighbouring pairs through their shared
+    piece ends (``spline_distance.local_minimum_pairs``). The plain sum counts
+    a point contact once inside a piece pair and up to four times at a piece
+    junction, a ripple of period h of its own; dropping the shadows removes
+    it, but the energy then jumps where a local minimum is born inside the
+    barrier's reach (line contacts). Measured in docs/benchmarks.md ("Spline
+    contact"): it helps point contacts (the ring), it stalls line contacts
+    (tweezers).
     """
 
     diameter: float
@@ -82,6 +134,8 @@ class ContactOptions:
     barrier_activation: float = 1e-2
     max_outer_iterations: int = 50
     force_tolerance: float = 1e-8
+    curve: str = "polygon"
+    count_local_minima: bool = False
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.diameter) and self.diameter > 0):
@@ -100,6 +154,11 @@ class ContactOptions:
                 raise ValueError(f"{name} must be positive, got {value!r}")
         if self.max_outer_iterations < 1:
             raise ValueError("max_outer_iterations must be >= 1")
+        if self.count_local_minima and self.curve != "spline":
+            raise ValueError("count_local_minima needs curve='spline'")
+        if self.curve not in CURVES:
+            raise ValueError(f"contact curve must be one of {', '.join(CURVES)} (the polygon's "
+                             f"segments or the cubic B-spline of the nodes); got {self.curve!r}")
 
     @property
     def tolerance(self) -> float:
@@ -146,6 +205,8 @@ class ContactProblem:
         self.s_end = (k + offset + 1.0) * h
         self.period = rod.length if self.closed else None
         self.exclusion = options.exclusion_length
+        self.spline = options.curve == "spline"
+        self.pieces = bspline_pieces(self.segments, self.closed) if self.spline else None
         self.n_dofs = base.n_dofs
         self.fixed = base.fixed
         self.mass = base.mass
@@ -227,26 +288,55 @@ class ContactProblem:
         x = np.asarray(q, dtype=float).reshape(-1, 3)
         return x[self.segments[:, 0]], x[self.segments[:, 1]]
 
-    def pair_state(self, q: np.ndarray, cutoff: float) -> PairState:
-        """Pairs (beyond the exclusion) whose segment distance is at most ``cutoff``."""
+    def pair_distances(self, q: np.ndarray, pairs: np.ndarray):
+        """``(d, s, t)`` ``(m,)`` of pairs ``(m, 2)`` on the contact curve (exact minima)."""
+        pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+        if self.spline:
+            return piece_distance(np.asarray(q, dtype=float).reshape(-1, 3), self.pieces, pairs)
         a, b = self._endpoints(q)
-        cand = candidate_pairs(a, b, self.s_start, self.s_end, cutoff, self.exclusion,
+        i, j = pairs[:, 0], pairs[:, 1]
+        return segment_distance(a[i], b[i], a[j], b[j])
+
+    def pair_state(self, q: np.ndarray, cutoff: float, polygon: bool = False,
+                   shadows: bool = False) -> PairState:
+        """Pairs (beyond the exclusion) whose distance is at most ``cutoff``.
+
+        The distance is that of the contact curve (``options.curve``), or of the
+        polygon's segments when ``polygon``. The broad phase runs on the
+        segments; for the spline its cutoff is widened by twice the largest
+        distance of a piece from its chord (``spline_distance.sag_bound``).
+        """
+        a, b = self._endpoints(q)
+        spline = self.spline and not polygon
+        reach = cutoff
+        if spline:
+            reach += 2.0 * float(np.max(sag_bound(np.asarray(q, dtype=float).reshape(-1, 3),
+                                                  self.pieces)))
+        cand = candidate_pairs(a, b, self.s_start, self.s_end, reach, self.exclusion,
                                period=self.period)
         if len(cand) == 0:
             empty = np.zeros(0)
             return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)
-        i, j = cand[:, 0], cand[:, 1]
-        d, s, t = segment_distance(a[i], b[i], a[j], b[j])
+        if spline:
+            d, s, t = self.pair_distances(q, cand)
+        else:
+            i, j = cand[:, 0], cand[:, 1]
+            d, s, t = segment_distance(a[i], b[i], a[j], b[j])
         keep = d <= cutoff
+        if spline and self.options.count_local_minima and not shadows and keep.any():
+            keep[keep] = local_minimum_pairs(np.asarray(q, dtype=float).reshape(-1, 3),
+                                             self.pieces, cand[keep],
+                                             s[keep], t[keep])
         return PairState(cand[keep], d[keep], s[keep], t[keep])
 
-    def min_distance(self, q: np.ndarray) -> float:
-        """Smallest centreline distance over non-neighbour segment pairs (``inf`` if none)."""
+    def min_distance(self, q: np.ndarray, polygon: bool = False) -> float:
+        """Smallest distance over non-neighbour pairs (``inf`` if none), on the contact
+        curve or, with ``polygon``, between the segments."""
         cutoff = 2.0 * self.diameter
         a, b = self._endpoints(q)
         span = float(np.max(np.ptp(np.concatenate([a, b]), axis=0)))
         while True:
-            st = self.pair_state(q, cutoff)
+            st = self.pair_state(q, cutoff, polygon)
             if len(st.pairs):
                 return float(st.distance.min())
             if cutoff > 2 * span + self.diameter:
@@ -315,6 +405,11 @@ class ContactProblem:
 
     def _compute_pair_derivatives(self, q: np.ndarray, pairs: np.ndarray):
         x = np.asarray(q, dtype=float).reshape(-1, 3)
+        if self.spline:
+            d, _s, _t, grad, hess, _kind, nodes = piece_distance_derivatives(x, self.pieces,
+                                                                            pairs)
+            dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(len(pairs), 24)
+            return d, grad, hess, dofs
         nodes = self._pair_nodes(pairs)
         d, grad, hess, _kind = segment_distance_derivatives(
             x[nodes[:, 0]], x[nodes[:, 1]], x[nodes[:, 2]], x[nodes[:, 3]])
@@ -361,8 +456,9 @@ class ContactProblem:
             second = np.where(touching, self.stiffness, second)
         local = (second[:, None, None] * grad[:, :, None] * grad[:, None, :]
                  + first[:, None, None] * hess)
-        rows = np.repeat(dofs, 12, axis=1).ravel()
-        cols = np.tile(dofs, (1, 12)).ravel()
+        w = dofs.shape[1]
+        rows = np.repeat(dofs, w, axis=1).ravel()
+        cols = np.tile(dofs, (1, w)).ravel()
         return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))
 
     def hessian(self, q: np.ndarray) -> HessianParts:
@@ -389,9 +485,7 @@ class ContactProblem:
             c = np.concatenate([c, [float(t @ (x[k] - xk))]])
         if len(self.active) == 0:
             return c
-        a, b = self._endpoints(q)
-        i, j = self.active[:, 0], self.active[:, 1]
-        d, _, _ = segment_distance(a[i], b[i], a[j], b[j])
+        d, _, _ = self.pair_distances(q, self.active)
         return np.concatenate([c, d - self.diameter])
 
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
@@ -405,7 +499,7 @@ class ContactProblem:
             return J
         _d, grad, _hess, dofs = self._pair_derivatives(q, self.active)
         m = len(self.active)
-        rows = np.repeat(np.arange(m), 12)
+        rows = np.repeat(np.arange(m), dofs.shape[1])
         Jc = sp.csr_matrix((grad.ravel(), (rows, dofs.ravel())), shape=(m, self.n_dofs))
         return sp.vstack([J, Jc]).tocsr()
 
@@ -417,8 +511,9 @@ class ContactProblem:
             return H
         _d, _grad, hess, dofs = self._pair_derivatives(q, self.active)
         local = lam[m0:, None, None] * hess
-        rows = np.repeat(dofs, 12, axis=1).ravel()
-        cols = np.tile(dofs, (1, 12)).ravel()
+        w = dofs.shape[1]
+        rows = np.repeat(dofs, w, axis=1).ravel()
+        cols = np.tile(dofs, (1, w)).ravel()
         n = self.n_dofs
         return (H + sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))).tocsr()
 
@@ -450,7 +545,7 @@ class ContactProblem:
                 return True
         ok = abs(self.base.writhe_local(q) - writhe(x)) < 0.5
         if ok:
-            self.__dict__["_verified"] = (x.copy(), self.min_distance(q))
+            self.__dict__["_verified"] = (x.copy(), self.min_distance(q, polygon=True))
         return ok
 
     def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:
@@ -479,15 +574,27 @@ class ContactProblem:
         # pairs that may come within reach: relative motion at most twice the
         # largest node displacement; the barrier's threshold sits above D, so
         # a margin (2.5 rather than 2) keeps every pair that could reach it
-        st = self.pair_state(q, self.diameter + 2.5 * cap * largest)
-        if len(st.pairs) == 0:
-            return cap
-        d0, D = st.distance, self.diameter
-        if self.treatment == "barrier":
-            threshold = D + 0.1 * np.maximum(d0 - D, 0.0)
-        else:
-            threshold = np.minimum(0.9 * d0, np.maximum(0.1 * d0, 0.5 * D))
-        t_hit, _k = first_time_of_approach(x0, cap * dx, self._pair_nodes(st.pairs), threshold)
+        reach = self.diameter + 2.5 * cap * largest
+        D = self.diameter
+        st = self.pair_state(q, reach, polygon=True)
+        t_hit = 1.0
+        if len(st.pairs):
+            d0 = st.distance
+            if self.treatment == "barrier" and not self.spline:
+                threshold = D + 0.1 * np.maximum(d0 - D, 0.0)
+            else:
+                threshold = np.minimum(0.9 * d0, np.maximum(0.1 * d0, 0.5 * D))
+            t_hit, _k = first_time_of_approach(x0, cap * dx, self._pair_nodes(st.pairs),
+                                               threshold)
+        if self.spline and self.treatment == "barrier":
+            # the barrier's gap is the spline's: keep it above a tenth of its value
+            st = self.pair_state(q, reach, shadows=True)
+            if len(st.pairs):
+                nodes = self.pieces.stencil[st.pairs].reshape(-1, 8)
+                pieces = (self.pieces.control[st.pairs], self.pieces.coefficients[st.pairs])
+                t_spline, _k = first_time_of_approach_pieces(
+                    x0[nodes], cap * dx[nodes], pieces, D + 0.1 * np.maximum(st.distance - D, 0.0))
+                t_hit = min(t_hit, t_spline)
         return cap * float(t_hit)
 
     # ------------------------------------------------------------ forces
@@ -503,9 +610,7 @@ class ContactProblem:
                 np.asarray(multipliers, dtype=float)[m0:]
             if len(self.active) == 0:
                 return self.pair_state(q, 0.0), np.zeros(0)
-            a, b = self._endpoints(q)
-            i, j = self.active[:, 0], self.active[:, 1]
-            d, s, t = segment_distance(a[i], b[i], a[j], b[j])
+            d, s, t = self.pair_distances(q, self.active)
             return PairState(self.active.copy(), d, s, t), -lam
         st = self.pair_state(q, self._cutoff())
         if len(st.pairs) == 0:

@@ -34,7 +34,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil.contact import potentials
-from supercoil.contact.distance import segment_distance
 from supercoil.contact.problem import ContactProblem
 from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.solvers.problem import free_dofs
@@ -325,7 +324,7 @@ def _independent_pairs(problem: ContactProblem, q, pairs, force, rtol: float = 1
     index = np.full(problem.n_dofs, -1)
     index[local] = np.arange(len(local))
     G = np.zeros((len(local), len(pairs)))
-    cols = np.repeat(np.arange(len(pairs))[:, None], 12, axis=1)
+    cols = np.repeat(np.arange(len(pairs))[:, None], dofs.shape[1], axis=1)
     inside = index[dofs] >= 0
     np.add.at(G, (index[dofs][inside], cols[inside]), grad[inside])
     # the rod's own constraints come first: contact gradients are judged
@@ -346,7 +345,6 @@ def _independent_pairs(problem: ContactProblem, q, pairs, force, rtol: float = 1
 
 
 def _params(problem, q, pairs):
-    """``(pairs, s, t)``: closest parameters of segment pairs at ``q``."""
-    a, b = problem._endpoints(q)
-    _d, s, t = segment_distance(a[pairs[:, 0]], b[pairs[:, 0]], a[pairs[:, 1]], b[pairs[:, 1]])
+    """``(pairs, s, t)``: closest parameters of the pairs at ``q`` on the contact curve."""
+    _d, s, t = problem.pair_distances(q, pairs)
     return pairs, s, t

@@ -91,7 +91,10 @@ it falls from 0.032 (N = 48) to about 0.006 (N = 96) at ``dLk`` 1.35, but is
 0.43 and 0.55 at ``dLk`` 1.9). A contact formulation that keeps the
 sliding symmetry (distances between smooth interpolants of the nodes, not
 between segments) is the fix; until then the xfail test in
-tests/test_ring_diagram.py records the defect.
+tests/test_ring_diagram.py records the defect. ``contact_curve="spline"``
+(B-spline pieces) removes the chords' sag ripple but a sum over piece pairs
+still counts a contact a varying number of times across piece junctions:
+measured in docs/benchmarks.md ("Spline contact").
 """
 
 from __future__ import annotations
@@ -104,7 +107,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from supercoil.contact.problem import DEFAULT_TREATMENT, ContactOptions, ContactProblem
+from supercoil.contact.problem import CURVES, DEFAULT_TREATMENT, ContactOptions, ContactProblem
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import (
     Branch,
@@ -168,6 +171,9 @@ class DiagramOptions:
     ones too (:mod:`supercoil.problems.ring_secondary`), each half-branch at
     most ``secondary_max_points`` points and ``secondary_max_branches``
     half-branches in all.
+    ``contact_curve``: ``"polygon"`` or ``"spline"``, the curve whose
+    self-distance is the contact distance (``ContactOptions.curve``; the
+    contact onset of the contact-free branches is measured on it too).
     """
 
     twist_ratio: float
@@ -188,6 +194,7 @@ class DiagramOptions:
     branch_depth: int = 1
     secondary_max_points: int = 40
     secondary_max_branches: int = 12
+    contact_curve: str = "polygon"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.twist_ratio) and self.twist_ratio > 0):
@@ -212,6 +219,9 @@ class DiagramOptions:
                      "contact_event_tolerance", "contact_tolerance"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+        if self.contact_curve not in CURVES:
+            raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got "
+                             f"{self.contact_curve!r}")
         for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
             if getattr(self, name) < 2:
                 raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
@@ -327,6 +337,7 @@ class RingDiagram:
             "length_over_diameter": opts.length_over_diameter,
             "diameter": opts.diameter,
             "n_nodes": opts.n_nodes,
+            "contact_curve": opts.contact_curve,
             "modes": list(opts.modes),
             "max_excess_link": opts.max_excess_link,
             "michell_excess_link": {str(m): float(michell_excess_link(opts.twist_ratio, m))
@@ -530,8 +541,10 @@ def ring_diagram(options: DiagramOptions,
     circle, problem = circle_branch(opts.twist_ratio, opts.n_nodes, circle_top)
     seconds["circle"] = time.perf_counter() - start
     D = opts.diameter * problem.rod.length
-    contact_options = ContactOptions(diameter=D, treatment=opts.contact)
-    probe = ContactProblem(problem, ContactOptions(diameter=D, treatment="barrier"))
+    contact_options = ContactOptions(diameter=D, treatment=opts.contact,
+                                     curve=opts.contact_curve)
+    probe = ContactProblem(problem, ContactOptions(diameter=D, treatment="barrier",
+                                                   curve=opts.contact_curve))
     cp = ContactProblem(problem, contact_options)
     if problem.rod.edge_length > D:
         notes.append(f"segments ({problem.rod.edge_length:.3g} L) are longer than the tube "
@@ -630,7 +643,8 @@ def ring_diagram(options: DiagramOptions,
                          f"sliding force it holds, max |KKT residual| without the gauge, is at "
                          f"most {float(np.max(sliding)):.2e} (at dLk = "
                          f"{float(contact.parameter_values[int(np.argmax(sliding))]):.4g}): "
-                         "an artefact of the polygon contact (see the docs of ring_diagram)")
+                         f"an artefact of the {opts.contact_curve} contact (see the docs of "
+                         "ring_diagram)")
         contact = dataclasses.replace(contact, parent=name, origin=onset)
         final(contact, True)
         seconds[contact_name] = time.perf_counter() - start

@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.problem import CURVES, ContactOptions, ContactProblem
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import (
     Branch,
@@ -108,6 +108,7 @@ class TweezersOptions:
     contact (units of D); ``max_points`` bounds each branch;
     ``segment_points`` the points per continuation run between pin checks.
     Tolerances as in :class:`~supercoil.problems.ring_diagram.DiagramOptions`.
+    ``contact_curve``: ``"polygon"`` or ``"spline"`` (``ContactOptions.curve``).
     """
 
     twist_ratio: float
@@ -123,6 +124,7 @@ class TweezersOptions:
     event_tolerance: float = 1e-8
     contact_event_tolerance: float = 1e-6
     contact_tolerance: float = 1e-8
+    contact_curve: str = "polygon"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.twist_ratio, (int, float)) and math.isfinite(self.twist_ratio)
@@ -157,6 +159,9 @@ class TweezersOptions:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
         if self.max_points < 2 or self.segment_points < 2:
             raise ValueError("max_points and segment_points must be >= 2")
+        if self.contact_curve not in CURVES:
+            raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got "
+                             f"{self.contact_curve!r}")
 
     @property
     def load_control(self) -> bool:
@@ -493,8 +498,10 @@ def tweezers_branches(options: TweezersOptions,
     notes: list[str] = []
     rod, q0 = clamped_problem(opts)
     D = opts.diameter
-    probe = ContactProblem(rod, ContactOptions(diameter=D)) if D is not None else None
-    cp = ContactProblem(rod, ContactOptions(diameter=D)) if D is not None else None
+    contact_options = (ContactOptions(diameter=D, curve=opts.contact_curve)
+                       if D is not None else None)
+    probe = ContactProblem(rod, contact_options) if D is not None else None
+    cp = ContactProblem(rod, contact_options) if D is not None else None
     if D is not None and rod.rod.edge_length > D:
         notes.append(f"segments ({rod.rod.edge_length:.3g} L) are longer than the tube "
                      f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "

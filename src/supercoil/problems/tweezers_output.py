@@ -83,6 +83,7 @@ def result_payload(result: TweezersResult) -> dict:
         "end_distance": opts.end_distance,
         "turns_range": list(opts.turns),
         "n_nodes": opts.n_nodes,
+        "contact_curve": opts.contact_curve,
         "greenhill_turns": result.greenhill_turns,
         "branches": branches,
         "special_points": [special_summary(p) for p in result.special_points()],

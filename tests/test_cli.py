@@ -1018,6 +1018,10 @@ def test_demo_writes_files_and_never_overwrites(runner, tmp_path, monkeypatch):
     onset = next(p for p in data["special_points"]
                  if p["branch"] == "alpha" and p["kind"] == "contact_onset")
     assert 0.8 < onset["writhe"] < 1.0 and onset["excess_link"] < circle[0]
+    # seed 001: the primary branch of mode m has D_m symmetry (off the circle)
+    for name, group in (("alpha", "D2"), ("beta", "D3")):
+        groups = {p["symmetry"] for p in data["points"] if p["branch"] == name}
+        assert groups <= {group, "O(2)"} and group in groups, (name, groups)
 
     before = {p: p.read_bytes() for p in out.rglob('*') if p.is_file()}
     second = invoke(runner, "demo", "--out", out)

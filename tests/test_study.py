@@ -66,6 +66,10 @@ def test_diagram_options_follow_the_study():
                        ).diagram_options()
     assert opts == DiagramOptions(0.6667, 20.0, 24, (2,), 4.0, "barrier", free_max_points=40,
                                   contact_max_points=8, contact_gauge=False)
+    deeper = parse_study(RING_DIAGRAM, overrides=["continuation.branch_depth=3",
+                                                  'continuation.gauge="integral"']
+                         ).diagram_options()
+    assert (deeper.branch_depth, deeper.gauge, deeper.secondary_max_points) == (3, "integral", 40)
 
 
 @pytest.mark.parametrize("edit, words", [
@@ -93,6 +97,9 @@ def test_diagram_options_follow_the_study():
     (("twist_ratio = 0.6667", ""), ["[rod] twist_ratio is missing"]),
     (("[problem]", "[problem]\nkind2 = 1"), ["unknown key [problem] kind2"]),
     (("nodes = 24", "nodes = = 24"), ["not valid TOML"]),
+    (("contact_max_points = 8", "branch_depth = 4"),
+     ["[continuation] branch_depth must be 1 (primary branches), 2 (and secondary)"]),
+    (("contact_max_points = 8", 'gauge = "nodes"'), ['gauge must be "node" or "integral"']),
 ])
 def test_bad_keys_and_types_are_one_line_errors(edit, words):
     old, new = edit

@@ -10,7 +10,8 @@ A study has six tables (``[study]`` and ``[continuation]`` optional)::
                      (under "dna" C/A and L/D follow from the preset: not given)
     [problem]        kind = "ring_diagram", "ring" or "tweezers", and its keys (below)
     [continuation]   ring_diagram and tweezers: the step, length and tolerance options
-                     of DiagramOptions / TweezersOptions (free_max_step, ...)
+                     of DiagramOptions / TweezersOptions (free_max_step, ...); for
+                     ring_diagram also gauge, branch_depth, secondary_max_points
     [outputs]        figures (PNG, default true), json (the JSON summary, true)
 
 ``[problem]`` keys: ``ring_diagram``: ``modes`` (list of Michell modes >= 2),
@@ -201,6 +202,12 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
                                   kinds=("ring_diagram", "tweezers"), convert=float),
         "contact_gauge": _Key("true or false", lambda v: isinstance(v, bool), True,
                               kinds=("ring_diagram",)),
+        "gauge": _Key('"node" or "integral"', _choice(("node", "integral")), "node",
+                      kinds=("ring_diagram",)),
+        "branch_depth": _Key("1 (primary branches), 2 (and secondary) or 3 (and tertiary)",
+                             _count(1, 3), 1, kinds=("ring_diagram",)),
+        "secondary_max_points": _Key("an integer >= 2 (points per secondary half-branch)",
+                                     _count(2, 100_000), 40, kinds=("ring_diagram",)),
     },
     "outputs": {
         "figures": _Key("true or false", lambda v: isinstance(v, bool), True),

@@ -101,7 +101,25 @@ def bratu_midpoint_exact(lam: float, upper: bool) -> float:
     return 2 * np.log(np.cosh(theta / 4))
 
 
-class DiagonalQuartic:
+class _Unconstrained:
+    """The constraint half of the protocol for toys without constraints."""
+
+    n_constraints = 0
+
+    def constraints(self, q):
+        return np.zeros(0)
+
+    def constraint_jacobian(self, q):
+        return sp.csr_matrix((0, self.n_dofs))
+
+    def constraint_hessian(self, q, multipliers):
+        return sp.csr_matrix((self.n_dofs, self.n_dofs))
+
+    def accept(self, q):
+        pass
+
+
+class DiagonalQuartic(_Unconstrained):
     """``E = sum_i (d_i - lambda) x_i^2 / 2 + (sum_i x_i^2)^2 / 4``.
 
     The trivial branch ``x = 0`` has unstable count ``#{d_i < lambda}``; pitchforks
@@ -109,8 +127,6 @@ class DiagonalQuartic:
     ``d_i`` give an O(k) symmetry (eigenvalues crossing together). ``rotation_pairs``
     lists coordinate pairs rotated by the declared symmetry modes.
     """
-
-    n_constraints = 0
 
     def __init__(self, d, lam: float = 0.0, rotation_pairs=()):
         self.d = np.asarray(d, dtype=float)
@@ -132,18 +148,6 @@ class DiagonalQuartic:
         diag = self.d - self.lam + (q @ q)
         return HessianParts(sp.csr_matrix(np.diag(diag) + 2 * np.outer(q, q)),
                             *_no_rank_one(self.n_dofs))
-
-    def constraints(self, q):
-        return np.zeros(0)
-
-    def constraint_jacobian(self, q):
-        return sp.csr_matrix((0, self.n_dofs))
-
-    def constraint_hessian(self, q, multipliers):
-        return sp.csr_matrix((self.n_dofs, self.n_dofs))
-
-    def accept(self, q):
-        pass
 
     def step_bound(self, q, dq):
         """Collision-guard stand-in: no step moves a coordinate by more than ``max_move``."""
@@ -202,14 +206,12 @@ class LoadedSphere:
         pass
 
 
-class CircleOfEquilibria:
+class CircleOfEquilibria(_Unconstrained):
     """``E = x_0^3 / 3 + (lambda^2 - 1) x_0 + sum_{i>=1} d_i x_i^2 / 2``.
 
     Its equilibria are the circle ``x_0^2 + lambda^2 = 1`` (the other ``x_i = 0``): a
     closed branch with folds at ``lambda = +-1``, stable (``d_i > 0``) where ``x_0 > 0``.
     """
-
-    n_constraints = 0
 
     def __init__(self, d=(1.0, 2.0), lam: float = 0.0):
         self.d = np.concatenate([[0.0], np.asarray(d, dtype=float)])
@@ -236,15 +238,3 @@ class CircleOfEquilibria:
         g = np.zeros(self.n_dofs)
         g[0] = 2 * self.lam
         return g
-
-    def constraints(self, q):
-        return np.zeros(0)
-
-    def constraint_jacobian(self, q):
-        return sp.csr_matrix((0, self.n_dofs))
-
-    def constraint_hessian(self, q, multipliers):
-        return sp.csr_matrix((self.n_dofs, self.n_dofs))
-
-    def accept(self, q):
-        pass

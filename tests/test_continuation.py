@@ -19,6 +19,7 @@ from test_continuation_toys import (
     Bratu,
     CircleOfEquilibria,
     DiagonalQuartic,
+    Helix,
     LoadedSphere,
     bratu_midpoint_exact,
 )
@@ -454,6 +455,14 @@ def test_an_open_branch_is_not_taken_for_a_closed_one():
     # Bratu round its fold and back down passes near no earlier point with the same tangent.
     _p, branch = bratu_branch(40, lam0=1.0, low=0.5)
     assert branch.status is ContinuationStatus.PARAMETER_BOUND, branch.message
+    # A helix of small pitch (2 pi eps = 0.025 in lambda) passes within a tenth of a step
+    # of its earlier points with the same tangent every turn; it must reach its bound.
+    p = Helix(eps=0.004)
+    opts = ContinuationOptions(initial_step=0.05, max_step=0.3, max_points=4000,
+                               parameter_bounds=(0.0, 0.3))
+    branch = continuation(p, np.array([1.0, 0.0]), parameter="lam", options=opts)
+    assert branch.status is ContinuationStatus.PARAMETER_BOUND, branch.message
+    assert branch.parameter_values[-1] == 0.3
 
 
 class _NoisyQuartic(DiagonalQuartic):

@@ -238,3 +238,33 @@ class CircleOfEquilibria(_Unconstrained):
         g = np.zeros(self.n_dofs)
         g[0] = 2 * self.lam
         return g
+
+
+class Helix(_Unconstrained):
+    """``E = |q - c(lambda)|^2 / 2`` with ``c = (cos(lambda/eps), sin(lambda/eps))``: the
+    equilibria ``q = c(lambda)`` form a helix of pitch ``2 pi eps`` in ``(q, lambda)``, an
+    open branch without folds that passes near its own earlier points every turn."""
+
+    def __init__(self, eps: float, lam: float = 0.0):
+        self.eps = eps
+        self.n_dofs = 2
+        self.fixed = np.zeros(0, dtype=np.int64)
+        self.mass = np.ones(2)
+        self.lam = lam
+
+    def _c(self):
+        return np.array([np.cos(self.lam / self.eps), np.sin(self.lam / self.eps)])
+
+    def energy(self, q):
+        return float(0.5 * np.sum((q - self._c()) ** 2))
+
+    def gradient(self, q):
+        return q - self._c()
+
+    def hessian(self, q):
+        return HessianParts(sp.identity(2, format="csr"), *_no_rank_one(2))
+
+    def parameter_derivative(self, q, multipliers, name):
+        assert name == "lam"
+        phase = self.lam / self.eps
+        return np.array([np.sin(phase), -np.cos(phase)]) / self.eps

@@ -15,7 +15,7 @@ from supercoil.contact.problem import ContactOptions, ContactProblem
 from supercoil.continuation import consistency_check
 from supercoil.problems.ring_branches import twisted_circle_problem
 from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
-from supercoil.problems.ring_secondary import roman, secondary_branches
+from supercoil.problems.ring_secondary import AMPLITUDES, roman, secondary_branches
 
 OPTIONS = DiagramOptions(2 / 3, 40.0, n_nodes=48, modes=(3,), max_excess_link=3.0,
                          free_max_points=60, contact_max_points=80, branch_depth=2,
@@ -39,9 +39,15 @@ def test_secondary_branches_start_at_a_bifurcation_point_of_beta(diagram):
         assert b.parent in ("beta", "beta_contact")
         assert b.origin.kind == "bifurcation" and b.origin.branch == b.parent
         assert b.name in diagram.contact_branches
-        # the first point lies one switching amplitude (a fraction of D) from the origin
-        first = b.states[0] - b.origin.q
-        assert 0 < np.sqrt(np.mean(first**2)) < OPTIONS.diameter
+        # the first point lies on the hyperplane one switching amplitude (AMPLITUDES, in
+        # units of D) from the origin along the critical mode: its distance in the
+        # arclength metric is at least that amplitude and of its size
+        base, _ = twisted_circle_problem(OPTIONS.twist_ratio, 0.0, OPTIONS.n_nodes, "angle")
+        dq = b.states[0] - b.origin.q
+        dlk = b.parameter_values[0] - b.origin.parameter
+        distance = np.sqrt(np.sum(base.mass * dq**2) + (OPTIONS.diameter * dlk) ** 2)
+        assert any(a * OPTIONS.diameter * (1 - 1e-6) <= distance <= 3 * a * OPTIONS.diameter
+                   for a in AMPLITUDES), distance
 
 
 def test_primary_is_d3_and_secondary_branches_are_c2(diagram):
@@ -79,6 +85,7 @@ def test_payload_names_generations(diagram):
 def test_depth_one_adds_nothing_and_bad_depths_are_refused(diagram):
     primary_only = [b for b in diagram.branches if diagram.generation(b) < 2]
     assert len(primary_only) == 3
+    assert secondary_branches(diagram, depth=1) is diagram
     with pytest.raises(ValueError, match="branch_depth"):
         DiagramOptions(2 / 3, 40.0, branch_depth=4)
     with pytest.raises(ValueError, match="depth"):

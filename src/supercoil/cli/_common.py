@@ -105,18 +105,17 @@ def parse_ratio(text: str) -> float:
     if isinstance(text, (int, float)):
         return float(text)
     words = str(text).split("/")
+    if len(words) > 2:
+        raise ValueError(f"{text!r} is not a number or a fraction like 2/3")
     try:
-        if len(words) == 1:
-            return float(words[0])
-        if len(words) == 2:
-            numerator, denominator = float(words[0]), float(words[1])
-            if denominator == 0:
-                raise ValueError(f"{text!r} divides by zero")
-            return numerator / denominator
-    except ValueError as exc:
-        if "divides" in str(exc):
-            raise
-    raise ValueError(f"{text!r} is not a number or a fraction like 2/3")
+        values = [float(word) for word in words]
+    except ValueError:
+        raise ValueError(f"{text!r} is not a number or a fraction like 2/3") from None
+    if len(values) == 1:
+        return values[0]
+    if values[1] == 0:
+        raise ValueError(f"{text!r} divides by zero")
+    return values[0] / values[1]
 
 
 def parse_vector(option: str, text: str) -> tuple[float, float, float]:

@@ -53,6 +53,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     x = np.array(x_start, dtype=float)
     bounded = hasattr(problem, "step_bound")
     previous = np.inf
+    x_previous = x
     res = np.nan
     F = system.residual(x)
     for it in range(max_iterations + 1):
@@ -65,23 +66,34 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
                               f"{res:.2e})")
         if it == max_iterations:
             break
+        rising = it >= 2 and res > previous
+        if rising and res > ROUNDOFF_RESIDUALS * tolerance:
+            return Correction(None, False, it, res, f"corrector diverging at iteration {it} "
+                              f"(residual {res:.2e} > {previous:.2e})")
         try:
             factor = bordered_factor(system, x, row, H)
             dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
         except SingularMatrixError as exc:
             return Correction(None, False, it, res, f"iteration {it}: {exc}")
-        # A residual near the tolerance that rose again while Newton would move the
-        # point by a negligible step is round-off (the contact barrier's stiffness
-        # puts that floor above the estimate of roundoff_floor: measured, the
-        # residual rose from 8e-8 to 3e-7 against a tolerance of 1e-8 and the step
-        # "diverged").
-        if it >= 2 and res > previous and res <= ROUNDOFF_RESIDUALS * tolerance and \
-                system.norm(dx) <= NEGLIGIBLE_STEP * max(1.0, system.norm(x)):
-            return Correction(x, True, it, res, f"converged in {it} iterations to round-off "
-                              f"(residual {res:.2e}, Newton step {system.norm(dx):.1e})")
-        if it >= 2 and res > previous:
+        if rising:
+            # A residual near the tolerance that rose again while Newton would move
+            # the point (multipliers included) by a negligible step is round-off: the
+            # contact barrier's stiffness puts that floor above roundoff_floor's
+            # estimate (measured: the residual rose from 8e-8 to 3e-7 against a
+            # tolerance of 1e-8, and the step "diverged"). The previous, lower
+            # iterate is returned.
+            multipliers = x[system.n:-1]
+            d_multipliers = float(np.max(np.abs(dx[system.n:-1]), initial=0.0))
+            if (system.norm(dx) <= NEGLIGIBLE_STEP * max(1.0, system.norm(x)) and
+                    d_multipliers <= NEGLIGIBLE_STEP * (1.0 + float(
+                        np.max(np.abs(multipliers), initial=0.0)))):
+                return Correction(x_previous, True, it - 1, previous,
+                                  f"converged in {it - 1} iterations to round-off (residual "
+                                  f"{previous:.2e}; the next rose to {res:.2e} with a Newton "
+                                  f"step of {system.norm(dx):.1e})")
             return Correction(None, False, it, res, f"corrector diverging at iteration {it} "
                               f"(residual {res:.2e} > {previous:.2e})")
+        x_previous = x
         previous = res
         alpha = 1.0
         if bounded:

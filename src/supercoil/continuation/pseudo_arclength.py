@@ -50,6 +50,7 @@ log = logging.getLogger(__name__)
 RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
 PointCallback = Callable[[Branch], None]
 PARTIAL_MESSAGE = "in progress: the branch so far (its computation has not ended)"
+CLOSURE_TOLERANCE = 1e-6  # a closed branch passes through its earlier point to this (relative)
 
 
 def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
@@ -124,18 +125,22 @@ class _Tracer:
         self.system.set_parameter(x[-1])
         return dict(self.records_fn(self.system.q(x), self.system.multipliers(x), float(x[-1])))
 
-    def add_point(self, x: np.ndarray, t: np.ndarray) -> None:
+    def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True) -> None:
+        """Keep ``x``: stability, records and user values first (an exception leaves the
+        branch as it was), then the point, then the events since the previous one."""
         system = self.system
         system.set_parameter(x[-1])
         system.problem.accept(system.q(x))
+        stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes)
+        records = self._records(x)
+        user = [user_values(ev, system, x) for ev in self.events]
         self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))
         self.xs.append(x)
         self.ts.append(t)
-        self.stabs.append(point_stability(system, x, self.opts.zero_tolerance,
-                                          self.opts.n_modes))
-        self.recs.append(self._records(x))
-        self.user.append([user_values(ev, system, x) for ev in self.events])
-        if len(self.xs) >= 2:
+        self.stabs.append(stability)
+        self.recs.append(records)
+        self.user.append(user)
+        if len(self.xs) >= 2 and search_events:
             self._search_events()
         if self.on_point is not None:
             self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
@@ -223,10 +228,12 @@ class _Tracer:
             system.set_phase(*old)
             system.set_parameter(x[-1])
             return False
-        if system.norm(corr.x - x) > 0.0:
-            self.add_point(corr.x, t)
+        if system.norm(corr.x - x) > opts.min_step:
+            # the same equilibrium up to the gauge's slide: no events between the two
+            # (their counts and values come from different gauges)
+            self.add_point(corr.x, t, search_events=False)
         else:
-            self.ts[-1] = t
+            self.xs[-1], self.ts[-1] = corr.x, t
         return True
 
     def _returned_to(self) -> int | None:
@@ -250,9 +257,25 @@ class _Tracer:
         count = self.stabs[-1].unstable_count
         for j in np.flatnonzero(gaps <= opts.closed_loop_tolerance * length):
             if (self.ts[j] @ (w * self.ts[-1]) >= cos_limit
-                    and self.stabs[j].unstable_count == count):
+                    and self.stabs[j].unstable_count == count and self._closes_at(a, chord,
+                                                                                u[j], j)):
                 return int(j)
         return None
+
+    def _closes_at(self, a: np.ndarray, chord: np.ndarray, u: float, j: int) -> bool:
+        """Whether the branch really passes through point ``j``: the point of the last
+        chord nearest to it, corrected on the hyperplane through it orthogonal to its
+        tangent, must land on it (a branch that only passes near it, e.g. a helix of
+        small pitch, lands elsewhere on that hyperplane)."""
+        system, opts = self.system, self.opts
+        x_j = self.xs[j]
+        corr = correct(system, a + u * chord, system.weights * self.ts[j], x_j, 0.0,
+                       opts.tolerance, opts.max_corrector_iterations)
+        system.set_parameter(self.xs[-1][-1])
+        if not corr.ok:
+            return False
+        scale = max(1.0, system.norm(x_j))
+        return system.norm(corr.x - x_j) <= CLOSURE_TOLERANCE * scale
 
     # -- the stepping loop ------------------------------------------------------------------
     def run(self, step: float) -> tuple[ContinuationStatus, str]:

@@ -112,7 +112,7 @@ def reversal_axes(points: np.ndarray, tolerance: float) -> list[tuple[float, flo
         result = minimize_scalar(
             lambda dc, c0=c0: float(reversal_residuals(x, [c0 + dc], True)[0]) ** 2,
             bounds=(-0.5, 0.5), method="bounded", options={"xatol": 1e-10})
-        c, value = float(c0 + result.x) % n, float(min(np.sqrt(result.fun), values[i]))
+        c, value = float(c0 + result.x) % n, float(np.sqrt(result.fun))
         if value > tolerance:
             continue
         if any(min(abs(c - a), n - abs(c - a)) < 0.25 for a, _ in axes):

@@ -26,8 +26,13 @@ D) is not kept; a note says so (at a bifurcation point inside a contact the
 predictor along one side of the critical mode can push a pair into contact at
 once, which collision detection refuses). Whether a half-branch is new is not
 decided here: the switch starts on the hyperplane orthogonal to the parent's
-tangent, so it cannot fall back at its first point; the per-point symmetry
-(:meth:`RingDiagram.points`, ``symmetry``) tells the branches apart.
+tangent, so it cannot fall back at its first point. The per-point symmetry
+(:meth:`RingDiagram.points`, ``symmetry``) tells the branches apart once they
+have left the bifurcation point by more than the symmetry tolerance (0.05 D):
+closer to it a secondary point still carries its parent's label.
+
+``supercoil run --resume`` continues the primary branches of an interrupted
+study; its secondary branches are computed again.
 """
 
 from __future__ import annotations

@@ -51,6 +51,7 @@ from supercoil.topology import writhe
 
 TREATMENTS = ("barrier", "augmented", "penalty", "exact")
 LINK_CHECK_MAX_NODES = 2000  # see ContactProblem.admissible
+_PAIR_MEMO = 8  # pair states remembered, see ContactProblem.pair_state
 DEFAULT_TREATMENT = "barrier"
 
 
@@ -156,8 +157,6 @@ class ContactProblem:
         self._slide_pin: tuple[int, np.ndarray, np.ndarray] | None = None
         # see stability_view()
         self.stability_mode = False
-        self._cache_key: bytes | None = None
-        self._cache: PairState | None = None
 
     def __getattr__(self, name):  # forward rod-specific queries to the wrapped energy
         if name == "base":
@@ -167,12 +166,11 @@ class ContactProblem:
     def __setattr__(self, name, value):
         # Load parameters live on the rod (``excess_link``, ``turns``,
         # ``tension``): a continuation that sets them on this wrapper must
-        # reach the rod, and the cached pair data are then stale.
+        # reach the rod (the remembered pair states depend on q only).
         own = self.__dict__
         if "base" in own and name not in own and name not in type(self).__dict__ \
                 and hasattr(own["base"], name):
             setattr(own["base"], name, value)
-            own["_cache_key"] = None
             return
         object.__setattr__(self, name, value)
 
@@ -228,7 +226,27 @@ class ContactProblem:
         return x[self.segments[:, 0]], x[self.segments[:, 1]]
 
     def pair_state(self, q: np.ndarray, cutoff: float) -> PairState:
-        """Pairs (beyond the exclusion) whose segment distance is at most ``cutoff``."""
+        """Pairs (beyond the exclusion) whose segment distance is at most ``cutoff``.
+
+        A pure function of ``(q, cutoff)`` (the segments, arc lengths and
+        exclusion are fixed at construction), remembered for the last
+        ``_PAIR_MEMO`` arguments: one continuation point asks for the same
+        state about fifty times (residual, finite-difference parameter
+        derivative, Hessian, records, stability), and setting a load
+        parameter does not change it. Callers must not modify the arrays.
+        """
+        key = (np.ascontiguousarray(q, dtype=np.float64).tobytes(), float(cutoff),
+               float(self.exclusion))
+        memo = self.__dict__.setdefault("_pair_memo", {})
+        found = memo.get(key)
+        if found is None:
+            found = self._compute_pair_state(q, cutoff)
+            if len(memo) >= _PAIR_MEMO:
+                del memo[next(iter(memo))]
+            memo[key] = found
+        return found
+
+    def _compute_pair_state(self, q: np.ndarray, cutoff: float) -> PairState:
         a, b = self._endpoints(q)
         cand = candidate_pairs(a, b, self.s_start, self.s_end, cutoff, self.exclusion,
                                period=self.period)
@@ -266,15 +284,12 @@ class ContactProblem:
         return D
 
     def _state(self, q: np.ndarray) -> PairState:
-        key = np.asarray(q, dtype=float).tobytes()
-        if key != self._cache_key:
-            self._cache = self.pair_state(q, self._cutoff())
-            self._cache_key = key
-        return self._cache
+        return self.pair_state(q, self._cutoff())
 
     def invalidate(self) -> None:
-        """Forget cached pair data (after multipliers or the active set change)."""
-        self._cache_key = None
+        """Forget the remembered pair states (they are keyed by state and cutoff, so
+        this only frees them; the multipliers and active set change the cutoff)."""
+        self.__dict__.pop("_pair_memo", None)
 
     def _multipliers_of(self, pairs: np.ndarray) -> np.ndarray:
         get = self.pair_multipliers.get

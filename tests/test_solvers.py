@@ -58,6 +58,35 @@ def test_kkt_inertia_determinant_and_solve_match_dense(seed):
     assert np.allclose(K @ factor.solve(rhs), rhs, atol=1e-9 * np.abs(rhs).max() * np.linalg.cond(K))
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
+    """The Ruiz scaling on entry arrays (fast path) against diag(d) @ A @ diag(d) of
+    scipy.sparse (the previous code), permuted: the same entries, the same bits."""
+    from supercoil.solvers.band import equilibrated_entries
+    from supercoil.solvers.kkt import kkt_order
+
+    rng = np.random.default_rng(300 + seed)
+    n, m = int(rng.integers(20, 120)), int(rng.integers(1, 15))
+    H, J = random_kkt(rng, n, m, rank_one=0)
+    S = H.sparse.multiply(10.0 ** rng.uniform(-4, 4, n)[:, None]).tocsr()
+    S = (S + S.T).tocsr()  # rows of very different sizes, as bending against constraints
+    K = sp.bmat([[S, J.T], [J, None]], format="csr")
+    K.eliminate_zeros()
+    order = kkt_order(S, J)
+    rows, cols, values = equilibrated_entries(K, order)
+    d = np.ones(n + m)
+    for _ in range(8):
+        scaled = sp.diags(d) @ K @ sp.diags(d)
+        row_max = abs(scaled).max(axis=1).toarray().ravel()
+        d = d / np.sqrt(np.where(row_max > 0, row_max, 1.0))
+    reference = (sp.diags(d) @ K @ sp.diags(d)).tocsr()[order][:, order].tocoo()
+    mine = sp.coo_matrix((values, (rows, cols)), shape=K.shape).tocsr()
+    reference = reference.tocsr()
+    assert np.array_equal(mine.indptr, reference.indptr)
+    assert np.array_equal(mine.indices, reference.indices)
+    assert np.array_equal(mine.data, reference.data)
+
+
 @pytest.mark.parametrize("excess_link", [0.0, 1.0, 3.0, 4.5])
 def test_kkt_inertia_on_the_ring_equals_dense(excess_link):
     from supercoil.solvers.newton import _hessian, least_squares_multipliers

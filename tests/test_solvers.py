@@ -87,6 +87,44 @@ def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
     assert np.array_equal(mine.data, reference.data)
 
 
+def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
+    """kkt_order remembers orderings by pattern (fast path); _kkt_order computes them.
+    Same pattern with other values: the same ordering; an entry of J^T J that cancels
+    exactly (scipy drops it, the pattern changes): the memo must not be used."""
+    from supercoil.solvers import kkt
+
+    rng = np.random.default_rng(5)
+    n = 40
+    S = sp.csr_matrix(random_band(rng, n, 1) + 4.0 * np.eye(n))
+    rows = [(0, 25, 1.0, 1.0), (1, 25, 1.0, -1.0)]  # J^T J entry (0, 25) cancels for (+, -)
+    for k in range(2, 12):
+        a, b = rng.choice(np.arange(2, n), size=2, replace=False)
+        rows.append((a, b, rng.standard_normal(), rng.standard_normal()))
+
+    def jacobian(sign):
+        J = np.zeros((len(rows), n))
+        for k, (a, b, u, v) in enumerate(rows):
+            J[k, a], J[k, b] = u, v
+        J[0, 0] = J[1, 0] = 1.0
+        J[0, 25], J[1, 25] = 1.0, sign  # sign = -1: the (0, 25) entry of J^T J is 0
+        return sp.csr_matrix(J)
+
+    kkt._ORDER_MEMO.clear()
+    plain = kkt.kkt_order(S, jacobian(0.5))
+    assert np.array_equal(plain, kkt._kkt_order(S, jacobian(0.5)))
+    assert len(kkt._ORDER_MEMO) == 1
+    again = kkt.kkt_order(S, jacobian(0.7))  # same pattern, remembered
+    assert np.array_equal(again, kkt._kkt_order(S, jacobian(0.7)))
+    (memo,) = kkt._ORDER_MEMO.values()
+    assert memo.certifies(jacobian(0.7)) and not memo.certifies(jacobian(-1.0))
+    cancelled = kkt.kkt_order(S, jacobian(-1.0))
+    assert np.array_equal(cancelled, kkt._kkt_order(S, jacobian(-1.0)))
+    for seed in range(5):  # random KKT patterns, each asked twice
+        H, J = random_kkt(np.random.default_rng(400 + seed), 60, 8, rank_one=0)
+        for _ in range(2):
+            assert np.array_equal(kkt.kkt_order(H.sparse, J), kkt._kkt_order(H.sparse, J))
+
+
 @pytest.mark.parametrize("excess_link", [0.0, 1.0, 3.0, 4.5])
 def test_kkt_inertia_on_the_ring_equals_dense(excess_link):
     from supercoil.solvers.newton import _hessian, least_squares_multipliers

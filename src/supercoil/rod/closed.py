@@ -161,6 +161,8 @@ class RodEnergy(abc.ABC):
         self._frame_data = np.stack([directors[p], tangents[p], directors[nx], tangents[nx]],
                                     axis=1)
         self._phi_cache: tuple[bytes, float] | None = None
+        # gradient pieces of one state that the load parameters do not change
+        self._gradient_cache: tuple[bytes, np.ndarray, float, np.ndarray] | None = None
 
     def _frames(self) -> np.ndarray:
         """Per-vertex reference data ``(n_vertices, 4, 3)``: u_prev, t_prev, u_next, t_next."""
@@ -213,12 +215,25 @@ class RodEnergy(abc.ABC):
         return self._pattern.scatter_vector(self._twist_terms(q, 1)[1]) / (2 * np.pi)
 
     def gradient(self, q: np.ndarray) -> np.ndarray:
-        stencils = self._stencils(q)
-        g = self._pattern.scatter_vector(self._bending[1](stencils, self._bend_weight))
-        phi, twist_local = self._twist_terms(q, 1)
+        """Bending gradient plus ``k Tw / 2pi`` times ``grad(Phi)``.
+
+        The bending gradient, ``Phi`` and ``grad(Phi)`` of the last ``q`` are
+        kept (until the frames change): continuation evaluates the gradient at
+        one state for several values of a load parameter (its
+        finite-difference parameter derivative), which only changes ``Tw``.
+        """
+        key = _key(q)
+        cached = self._gradient_cache
+        if cached is not None and cached[0] == key:
+            _, g, phi, twist_gradient = cached
+        else:
+            stencils = self._stencils(q)
+            g = self._pattern.scatter_vector(self._bending[1](stencils, self._bend_weight))
+            phi, twist_local = self._twist_terms(q, 1)
+            twist_gradient = self._pattern.scatter_vector(twist_local)
+            self._gradient_cache = (key, g, phi, twist_gradient)
         tw = self.twist_offset() + phi / (2 * np.pi)
-        return g + (self._twist_coefficient * tw / (2 * np.pi)) * self._pattern.scatter_vector(
-            twist_local)
+        return g + (self._twist_coefficient * tw / (2 * np.pi)) * twist_gradient
 
     def hessian(self, q: np.ndarray) -> HessianParts:
         """Banded part (bending + ``k Tw`` times the twist Hessian) plus ``k g g^T``.
@@ -246,6 +261,17 @@ class RodEnergy(abc.ABC):
         return (np.sum(e * e, axis=1) - h * h) / (2 * h)
 
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
+        """Jacobian of :meth:`constraints`, ``(m, n_dofs)``; the last one is returned
+        again (the same object: callers must not modify it) for the same ``q``."""
+        key = _key(q)
+        cached = self.__dict__.get("_jacobian_cache")
+        if cached is not None and cached[0] == key and cached[1] is self._constrained:
+            return cached[2]
+        J = self._constraint_jacobian(q)
+        self._jacobian_cache = (key, self._constrained, J)
+        return J
+
+    def _constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
         m = self.n_constraints
         e = self._edge_vectors(q)[self._constrained] / self.rod.edge_length
         nodes = self.edge_nodes[self._constrained]

@@ -182,15 +182,47 @@ def _kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
     return items[np.argsort(keys, kind="stable")]
 
 
-class _OrderedLU:
-    """SuperLU with partial pivoting of a symmetrically reordered matrix."""
+def _kkt_entries(S: sp.csr_matrix, J: sp.csr_matrix):
+    """Stored entries ``(rows, columns, values)`` of ``[[S, J^T], [J, 0]]``.
 
-    def __init__(self, K: sp.spmatrix, order: np.ndarray):
+    The entries ``scipy.sparse.bmat`` stores (explicit zeros of ``S`` and
+    ``J`` included, no duplicates for canonical blocks), without building it.
+    """
+    n, m = S.shape[0], J.shape[0]
+    s_rows = np.repeat(np.arange(n), np.diff(S.indptr))
+    if not m:
+        return s_rows, S.indices.astype(np.int64), S.data
+    j_rows = np.repeat(np.arange(m), np.diff(J.indptr)) + n
+    return (np.concatenate([s_rows, J.indices, j_rows]),
+            np.concatenate([S.indices, j_rows, J.indices]),
+            np.concatenate([S.data, J.data, J.data]))
+
+
+class _OrderedLU:
+    """SuperLU with partial pivoting of a symmetrically reordered matrix.
+
+    Built from the matrix's entries: the permuted matrix is formed directly in
+    the canonical CSC form (sorted, as splu makes it) that ``K[order][:,
+    order]`` gave, so SuperLU factorises the same arrays.
+    """
+
+    def __init__(self, size: int, rows: np.ndarray, cols: np.ndarray, values: np.ndarray,
+                 order: np.ndarray):
         self.order = order
-        self.lu = splu(K[order][:, order].tocsc(), permc_spec="NATURAL")
-        self.U = self.lu.U
+        position = np.empty(size, dtype=np.int64)
+        position[order] = np.arange(size)
+        prow, pcol = position[rows], position[cols]
+        by_column = np.lexsort((prow, pcol))
+        indptr = np.zeros(size + 1, dtype=np.int64)
+        np.cumsum(np.bincount(pcol, minlength=size), out=indptr[1:])
+        Kp = sp.csc_matrix((values[by_column], prow[by_column], indptr), shape=(size, size))
+        self.lu = splu(Kp, permc_spec="NATURAL")
         self.perm_r = self.lu.perm_r
         self.perm_c = self.lu.perm_c
+
+    @property
+    def U(self):
+        return self.lu.U
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         rhs = np.asarray(rhs, dtype=float)
@@ -223,12 +255,11 @@ class KKTFactor:
         self.m = J.shape[0]
         self._S = S
         self._J = J
-        K = sp.bmat([[S, J.T], [J, None]], format="csr") if self.m else S.tocsr()
-        self._K = K
+        self._entries = _kkt_entries(S, J)
         # A banded ordering keeps the partial-pivoting LU within twice the band.
         self._order = kkt_order(S, J) if order is None else order
         try:
-            self._lu = _OrderedLU(K, self._order)
+            self._lu = _OrderedLU(n + self.m, *self._entries, self._order)
         except RuntimeError as exc:  # "Factor is exactly singular"
             raise SingularMatrixError(f"KKT matrix is singular ({exc})") from None
         r = len(hessian.coefficients)
@@ -256,7 +287,9 @@ class KKTFactor:
     def reduced_negative_count(self) -> int:
         """Negative eigenvalues of ``H`` restricted to ``ker J`` (exact inertia)."""
         if self._reduced_neg is None:
-            neg = kkt_negative_count(self._K, self.m, self._order)
+            rows, cols, values = self._entries
+            K = sp.csr_matrix((values, (rows, cols)), shape=(self.n + self.m,) * 2)
+            neg = kkt_negative_count(K, self.m, self._order)
             if len(self._w):
                 neg += self._woodbury_correction
             self._reduced_neg = neg - self.m

@@ -153,6 +153,54 @@ def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
     assert np.array_equal(factor._lu.perm_r, lu.perm_r)
 
 
+def _same_csr(mine, reference):
+    reference = reference.tocsr()
+    return (mine.shape == reference.shape and np.array_equal(mine.indptr, reference.indptr)
+            and np.array_equal(mine.indices, reference.indices)
+            and np.array_equal(mine.data, reference.data)
+            and np.array_equal(np.signbit(mine.data), np.signbit(reference.data)))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_pattern_sums_and_restrictions_equal_scipy_bit_for_bit(seed):
+    """solvers.patterns (index maps remembered per pattern) against scipy's A + B and
+    A[keep][:, keep]: cancelling entries dropped, explicit zeros and -0.0 as scipy has
+    them, the same stored order; every call twice (the second from the memo)."""
+    from supercoil.solvers.patterns import csr_add, csr_restrict
+
+    rng = np.random.default_rng(600 + seed)
+    n = int(rng.integers(5, 80))
+    A = sp.random(n, n, density=0.15, random_state=seed, format="csr")
+    B = sp.random(n, n, density=0.1, random_state=seed + 50, format="csr")
+    A.data[::6] = 0.0
+    B.data[1::7] = -0.0
+    both = A.multiply(B != 0).tocsr()  # entries of B that cancel entries of A exactly
+    C = (B - both).tocsr()
+    C.sort_indices()
+    for first, second in ((A, B), (A, C), (B, A), (A, sp.csr_matrix((n, n)))):
+        for _ in range(2):
+            assert _same_csr(csr_add(first, second), first + second)
+    keep = np.flatnonzero(rng.random(n) < 0.7)
+    for matrix in (A, B, A + B):
+        for _ in range(2):
+            assert _same_csr(csr_restrict(matrix.tocsr(), keep), matrix.tocsr()[keep][:, keep])
+    shuffled = rng.permutation(keep)  # not sorted: scipy's own path
+    assert _same_csr(csr_restrict(A, shuffled), A[shuffled][:, shuffled])
+
+
+def test_rod_constraint_curvature_equals_the_coo_assembly():
+    """The rod's constraint Hessian filled into its remembered pattern (fast path)
+    against the COO assembly it replaced, zero multipliers (-0.0 entries) included."""
+    p, _ = twisted_circle_problem(2 / 3, 1.0, 40)
+    rows, cols = p._constraint_hessian_entries()
+    rng = np.random.default_rng(3)
+    for mu in (rng.standard_normal(p.n_constraints), np.zeros(p.n_constraints)):
+        w = np.repeat(mu / p.rod.edge_length, 3)
+        reference = sp.csr_matrix((np.concatenate([w, w, -w, -w]), (rows, cols)),
+                                  shape=(p.n_dofs, p.n_dofs))
+        assert _same_csr(p.constraint_hessian(None, mu), reference)
+
+
 @pytest.mark.parametrize("excess_link", [0.0, 1.0, 3.0, 4.5])
 def test_kkt_inertia_on_the_ring_equals_dense(excess_link):
     from supercoil.solvers.newton import _hessian, least_squares_multipliers

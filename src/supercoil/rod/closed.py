@@ -282,15 +282,45 @@ class RodEnergy(abc.ABC):
         data = np.concatenate([-e, e], axis=1).ravel()
         return sp.csr_matrix((data, (rows, cols)), shape=(m, self.n_dofs))
 
-    def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
-        w = np.repeat(np.asarray(multipliers) / self.rod.edge_length, 3)
+    def _constraint_hessian_entries(self):
+        """``(rows, cols)`` of the constraint curvature's COO entries (see below)."""
         nodes = self.edge_nodes[self._constrained]
         a = 3 * nodes[:, :1] + np.arange(3)
         b = 3 * nodes[:, 1:] + np.arange(3)
-        rows = np.concatenate([a, b, a, b]).ravel()
-        cols = np.concatenate([a, b, b, a]).ravel()
+        return np.concatenate([a, b, a, b]).ravel(), np.concatenate([a, b, b, a]).ravel()
+
+    def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
+        """``sum_j mu_j hess c_j``: ``+-mu_j / h`` on the blocks of edge ``j``'s two nodes.
+
+        The CSR pattern of these entries is fixed by the constrained edges and is
+        built once: an entry gets at most two terms (a node's diagonal from its two
+        edges, summed in either order to the same value), so filling it directly
+        gives the matrix that ``csr_matrix((data, (rows, cols)))`` gives.
+        """
+        w = np.repeat(np.asarray(multipliers) / self.rod.edge_length, 3)
         data = np.concatenate([w, w, -w, -w])
-        return sp.csr_matrix((data, (rows, cols)), shape=(self.n_dofs, self.n_dofs))
+        pattern = self.__dict__.get("_curvature_pattern")
+        if pattern is None or pattern[0] is not self._constrained:
+            rows, cols = self._constraint_hessian_entries()
+            key = rows * self.n_dofs + cols
+            order = np.argsort(key, kind="stable")
+            slots, first_at, counts = np.unique(key[order], return_index=True,
+                                                return_counts=True)
+            if counts.max(initial=0) > 2:
+                raise AssertionError("an edge-length curvature entry with more than two terms")
+            first = order[first_at]
+            second = np.where(counts == 2, order[np.minimum(first_at + 1, order.size - 1)], -1)
+            indptr = np.zeros(self.n_dofs + 1, dtype=np.int32)
+            np.cumsum(np.bincount(slots // self.n_dofs, minlength=self.n_dofs), out=indptr[1:])
+            pattern = (self._constrained, first, second, (slots % self.n_dofs).astype(np.int32),
+                       indptr)
+            self._curvature_pattern = pattern
+        _, first, second, indices, indptr = pattern
+        values = data[first]
+        double = second >= 0
+        values[double] = values[double] + data[second[double]]
+        return sp.csr_matrix((values, indices.copy(), indptr.copy()),
+                             shape=(self.n_dofs, self.n_dofs))
 
     def accept(self, q: np.ndarray) -> None:
         """Carry the reference directors to the new tangents (time-parallel transport)."""

@@ -197,11 +197,12 @@ def test_permuted_bordered_matrix_equals_bmat_and_fancy_indexing(seed):
                  [sp.csr_matrix(row[None, :]), sp.csr_matrix([[corner]])]], format="csc")
     reference = B[order][:, order].tocsr()
     reference.sort_indices()
-    mine, (k_rows, k_cols, k_values) = _permuted_bordered(H, J, column, row, corner, order)
-    for attribute in ("indptr", "indices", "data"):
-        assert np.array_equal(getattr(mine, attribute), getattr(reference, attribute))
     K = reference[:n + m, :n + m].tocoo()
-    assert sorted(zip(K.row, K.col, K.data)) == sorted(zip(k_rows, k_cols, k_values))
+    for _ in range(2):  # the second call takes the remembered layout
+        mine, (k_rows, k_cols, k_values) = _permuted_bordered(H, J, column, row, corner, order)
+        for attribute in ("indptr", "indices", "data"):
+            assert np.array_equal(getattr(mine, attribute), getattr(reference, attribute))
+        assert sorted(zip(K.row, K.col, K.data)) == sorted(zip(k_rows, k_cols, k_values))
 
 
 def test_secant_predictor_finds_the_same_fold():

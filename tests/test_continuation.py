@@ -313,6 +313,45 @@ def test_the_corrector_respects_the_problems_step_bound():
     assert np.allclose(np.sum(new.states**2, axis=1), new.parameter_values - 1.0, atol=1e-9)
 
 
+def test_branch_runs_merged_once_then_extended_equal_the_merge_of_all_runs(tmp_path):
+    """The tweezers' follow() reports merge(merge(runs so far), partial run) (fast path)
+    instead of merge(runs so far + partial run): the same branch, bit for bit; and a
+    branch saved uncompressed (in-progress saves) loads as the compressed one."""
+    from supercoil.problems.tweezers import merge_branches
+
+    p = Bratu(16, 3.0)
+    user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[8] - 1.0})
+    opts = ContinuationOptions(parameter_bounds=(0.0, 4.0), max_step=0.3, max_points=6)
+    runs = [continuation(p, np.zeros(17), parameter="lam", events=[user], options=opts,
+                         records=lambda q, mu, lam: {"u_mid": q[8]})]
+    for _ in range(3):
+        last = runs[-1]
+        p.lam = float(last.parameter_values[-1])
+        runs.append(continuation(p, last.states[-1], last.multipliers[-1], parameter="lam",
+                                 events=[user], options=opts,
+                                 records=lambda q, mu, lam: {"u_mid": q[8]}))
+    assert sum(len(b.special_points) for b in runs) >= 2
+    for k in range(1, len(runs)):
+        reference = merge_branches(runs[:k + 1], "merged")
+        fast = merge_branches([merge_branches(runs[:k], "merged"), runs[k]], "merged")
+        for f in dataclasses.fields(Branch):
+            a, c = getattr(reference, f.name), getattr(fast, f.name)
+            if isinstance(a, np.ndarray):
+                assert np.array_equal(a, c), f.name
+            elif f.name == "records":
+                assert all(np.array_equal(a[r], c[r]) for r in a)
+            elif f.name == "special_points":
+                assert [(s.index, s.arclength, s.branch, s.parameter) for s in a] == \
+                    [(s.index, s.arclength, s.branch, s.parameter) for s in c]
+            else:
+                assert a == c, f.name
+    merged = merge_branches(runs, "merged")
+    packed = Branch.load(merged.save(tmp_path / "packed.npz"))
+    plain = Branch.load(merged.save(tmp_path / "plain.npz", compressed=False))
+    assert np.array_equal(packed.states, plain.states)
+    assert packed.summary() == plain.summary()
+
+
 def test_save_load_round_trip_and_the_checker_catches_corruption(tmp_path):
     p = Bratu(16, 3.0)
     user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[8] - 1.0})

@@ -52,6 +52,10 @@ from supercoil.topology import writhe
 TREATMENTS = ("barrier", "augmented", "penalty", "exact")
 LINK_CHECK_MAX_NODES = 2000  # see ContactProblem.admissible
 _PAIR_MEMO = 8  # pair states remembered, see ContactProblem.pair_state
+# Verlet list of ContactProblem._candidates: broad phase reach beyond the asked
+# cutoff, and the largest cutoff (in units of D) served from it.
+_VERLET_MARGIN = 1.0
+_VERLET_CUTOFF = 2.0
 DEFAULT_TREATMENT = "barrier"
 
 
@@ -246,10 +250,40 @@ class ContactProblem:
             memo[key] = found
         return found
 
+    def _candidates(self, q: np.ndarray, cutoff: float) -> np.ndarray:
+        """Segment pairs among which every pair within ``cutoff`` at ``q`` is.
+
+        A Verlet neighbour list: the broad phase is run at ``cutoff +
+        _VERLET_MARGIN D`` and its pairs kept with the state ``x_ref``; while
+        no node has moved by ``delta`` with ``cutoff + 2 delta`` beyond that
+        reach, they still hold every pair within ``cutoff`` (a segment
+        distance changes by at most twice the largest node displacement), and
+        the exact distances computed on them give the same pairs as a new
+        broad phase. Cutoffs above ``_VERLET_CUTOFF D`` (a closest-approach
+        search) bypass the list.
+        """
+        a, b = self._endpoints(q)
+        if cutoff > _VERLET_CUTOFF * self.diameter:
+            return candidate_pairs(a, b, self.s_start, self.s_end, cutoff, self.exclusion,
+                                   period=self.period)
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        reference = self.__dict__.get("_verlet")
+        if reference is not None:
+            x_ref, reach, exclusion, pairs = reference
+            if x_ref.shape == x.shape and exclusion == self.exclusion:
+                moved = float(np.sqrt(np.max(np.sum((x - x_ref) ** 2, axis=1))))
+                slack = 1e-9 * max(1.0, float(np.max(np.abs(x))), reach)
+                if cutoff + 2.0 * moved + slack <= reach:
+                    return pairs
+        reach = cutoff + _VERLET_MARGIN * self.diameter
+        pairs = candidate_pairs(a, b, self.s_start, self.s_end, reach, self.exclusion,
+                                period=self.period)
+        self.__dict__["_verlet"] = (x.copy(), reach, self.exclusion, pairs)
+        return pairs
+
     def _compute_pair_state(self, q: np.ndarray, cutoff: float) -> PairState:
         a, b = self._endpoints(q)
-        cand = candidate_pairs(a, b, self.s_start, self.s_end, cutoff, self.exclusion,
-                               period=self.period)
+        cand = self._candidates(q, cutoff)
         if len(cand) == 0:
             empty = np.zeros(0)
             return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)

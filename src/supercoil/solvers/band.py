@@ -137,17 +137,27 @@ def _block_inertia(blocks: np.ndarray, n: int, s: int) -> tuple[int, int, int]:
             keep = np.argsort(np.abs(values))[: _MAX_CARRIED * s]
             small = np.zeros_like(small)
             small[keep] = True
-        big = ~small
-        neg += int(np.sum(values[big] < 0))
-        pos += int(np.sum(values[big] > 0))
         nxt = min(stop + s, n)
         k = start // s
         coupling = np.zeros((pending.shape[0], nxt - stop))
         coupling[carried:] = blocks[k, :stop - start, s:s + nxt - stop]
         projected = vectors.T @ coupling
+        r = int(np.count_nonzero(small))
+        if r == 0:
+            # the usual block: every direction eliminated (the same products as
+            # below, without selecting all of them)
+            neg += int(np.count_nonzero(values < 0))
+            pos += int(np.count_nonzero(values > 0))
+            schur = blocks[k + 1, :nxt - stop, :nxt - stop] - projected.T @ (
+                projected / values[:, None])
+            pending, carried = 0.5 * (schur + schur.T), 0
+            start, stop = stop, nxt
+            continue
+        big = ~small
+        neg += int(np.sum(values[big] < 0))
+        pos += int(np.sum(values[big] > 0))
         schur = blocks[k + 1, :nxt - stop, :nxt - stop] - projected[big].T @ (
             projected[big] / values[big][:, None])
-        r = int(np.count_nonzero(small))
         grown = np.zeros((r + nxt - stop, r + nxt - stop))
         grown[:r, :r] = np.diag(values[small])
         grown[:r, r:] = projected[small]

@@ -285,3 +285,40 @@ def test_a_state_that_changed_the_linking_number_is_refused():
     gap = problem.writhe_local(swapped.ravel()) - writhe(swapped)
     assert abs(abs(gap) - 2.0) < 0.1
     assert not problem.admissible(swapped.ravel())
+
+
+def test_pair_states_from_the_verlet_list_equal_a_new_broad_phase():
+    """pair_state serves cutoffs up to 2 D from a neighbour list kept since the last
+    broad phase (fast path); against the broad phase run at each state (the previous
+    code): the same pairs, distances and feet, bit for bit, through small moves (list
+    reused), large ones (list rebuilt) and the cutoffs the solvers ask for."""
+    from supercoil.contact.broadphase import candidate_pairs
+    from supercoil.contact.distance import segment_distance
+    from supercoil.problems.ring import twisted_circle_problem
+
+    rod, q = twisted_circle_problem(2 / 3, 0.0, 80)
+    x0 = q.reshape(-1, 3).copy()
+    x0[:, 1] *= 0.06  # a flattened ring: the two long sides face each other
+    D = 0.02
+    problem = ContactProblem(rod, ContactOptions(diameter=D))
+    rng = np.random.default_rng(11)
+    x = x0.copy()
+    reused = 0
+    for step in range(60):
+        scale = D * (0.02 if step % 7 else 0.6)  # mostly small moves, now and then a jump
+        x = x + scale * rng.standard_normal(x.shape)
+        state = x.ravel()
+        for cutoff in (D, 1.01 * D, D + 0.3 * D * rng.random(), 2.0 * D, 3.0 * D):
+            before = problem.__dict__.get("_verlet")
+            fast = problem.pair_state(state, cutoff)
+            reused += problem.__dict__.get("_verlet") is before
+            a, b = problem._endpoints(state)
+            cand = candidate_pairs(a, b, problem.s_start, problem.s_end, cutoff,
+                                   problem.exclusion, period=problem.period)
+            i, j = cand[:, 0], cand[:, 1]
+            d, s, t = segment_distance(a[i], b[i], a[j], b[j])
+            keep = d <= cutoff
+            assert np.array_equal(fast.pairs, cand[keep])
+            for mine, reference in ((fast.distance, d), (fast.s, s), (fast.t, t)):
+                assert np.array_equal(mine, reference[keep])
+    assert reused > 100  # the list did serve most states

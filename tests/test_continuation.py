@@ -172,6 +172,41 @@ def test_band_bordered_solve_is_accurate_when_the_kkt_matrix_is_nearly_singular(
         assert np.allclose(z, exact, rtol=1e-8, atol=1e-10 * np.max(np.abs(exact)))
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_permuted_bordered_matrix_equals_bmat_and_fancy_indexing(seed):
+    """The bordered matrix assembled on entry arrays (fast path) against scipy's bmat
+    and fancy indexing (the previous code): the same stored entries (explicit zeros
+    of H and J kept, zeros of the dense border dropped), bit for bit."""
+    import scipy.sparse as sp
+
+    from supercoil.continuation.bordered import _permuted_bordered
+    from supercoil.solvers.kkt import kkt_order
+
+    rng = np.random.default_rng(seed)
+    n, m = 50, 12
+    H = sp.random(n, n, density=0.1, random_state=seed, format="csr")
+    H = (H + H.T + sp.identity(n)).tocsr()
+    H.data[::7] = 0.0  # explicit zeros stay stored
+    J = sp.random(m, n, density=0.08, random_state=seed + 1, format="csr")
+    J.data[::5] = 0.0
+    column = rng.standard_normal(n + m)
+    column[::3] = 0.0
+    row = rng.standard_normal(n + m)
+    row[1::4] = -0.0
+    corner = 0.0 if seed % 2 else 1.5
+    order = np.concatenate([kkt_order(H, J), [n + m]])
+    B = sp.bmat([[sp.bmat([[H, J.T], [J, None]]), sp.csr_matrix(column[:, None])],
+                 [sp.csr_matrix(row[None, :]), sp.csr_matrix([[corner]])]], format="csc")
+    reference = B[order][:, order].tocsr()
+    reference.sort_indices()
+    K = reference[:n + m, :n + m].tocoo()
+    for _ in range(2):  # the second call takes the remembered layout
+        mine, (k_rows, k_cols, k_values) = _permuted_bordered(H, J, column, row, corner, order)
+        for attribute in ("indptr", "indices", "data"):
+            assert np.array_equal(getattr(mine, attribute), getattr(reference, attribute))
+        assert sorted(zip(K.row, K.col, K.data)) == sorted(zip(k_rows, k_cols, k_values))
+
+
 def test_secant_predictor_finds_the_same_fold():
     _, tangent = bratu_branch(16)
     _, secant = bratu_branch(16, predictor="secant")
@@ -278,6 +313,45 @@ def test_the_corrector_respects_the_problems_step_bound():
     new = switch_branch(p, b, b.points_of_kind("bifurcation")[0], opts)
     assert new.ok and p.step_bound_calls > 0
     assert np.allclose(np.sum(new.states**2, axis=1), new.parameter_values - 1.0, atol=1e-9)
+
+
+def test_branch_runs_merged_once_then_extended_equal_the_merge_of_all_runs(tmp_path):
+    """The tweezers' follow() reports merge(merge(runs so far), partial run) (fast path)
+    instead of merge(runs so far + partial run): the same branch, bit for bit; and a
+    branch saved uncompressed (in-progress saves) loads as the compressed one."""
+    from supercoil.problems.tweezers import merge_branches
+
+    p = Bratu(16, 3.0)
+    user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[8] - 1.0})
+    opts = ContinuationOptions(parameter_bounds=(0.0, 4.0), max_step=0.3, max_points=6)
+    runs = [continuation(p, np.zeros(17), parameter="lam", events=[user], options=opts,
+                         records=lambda q, mu, lam: {"u_mid": q[8]})]
+    for _ in range(3):
+        last = runs[-1]
+        p.lam = float(last.parameter_values[-1])
+        runs.append(continuation(p, last.states[-1], last.multipliers[-1], parameter="lam",
+                                 events=[user], options=opts,
+                                 records=lambda q, mu, lam: {"u_mid": q[8]}))
+    assert sum(len(b.special_points) for b in runs) >= 2
+    for k in range(1, len(runs)):
+        reference = merge_branches(runs[:k + 1], "merged")
+        fast = merge_branches([merge_branches(runs[:k], "merged"), runs[k]], "merged")
+        for f in dataclasses.fields(Branch):
+            a, c = getattr(reference, f.name), getattr(fast, f.name)
+            if isinstance(a, np.ndarray):
+                assert np.array_equal(a, c), f.name
+            elif f.name == "records":
+                assert all(np.array_equal(a[r], c[r]) for r in a)
+            elif f.name == "special_points":
+                assert [(s.index, s.arclength, s.branch, s.parameter) for s in a] == \
+                    [(s.index, s.arclength, s.branch, s.parameter) for s in c]
+            else:
+                assert a == c, f.name
+    merged = merge_branches(runs, "merged")
+    packed = Branch.load(merged.save(tmp_path / "packed.npz"))
+    plain = Branch.load(merged.save(tmp_path / "plain.npz", compressed=False))
+    assert np.array_equal(packed.states, plain.states)
+    assert packed.summary() == plain.summary()
 
 
 def test_save_load_round_trip_and_the_checker_catches_corruption(tmp_path):

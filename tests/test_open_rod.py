@@ -52,6 +52,29 @@ def test_gradient_and_hessian_match_finite_differences(rng):
         assert np.max(np.abs(H.matvec(d) - fdh)) <= 1e-7 * np.max(np.abs(fdh))
 
 
+def test_remembered_gradient_pieces_and_jacobian_equal_fresh_ones(rng):
+    """The gradient keeps the pieces of the last state that the load does not change,
+    and the Jacobian the last matrix (fast paths): against a fresh problem for each
+    (turns, tension) and after the frames moved (accept), bit for bit."""
+    pts = bent_rod(30, 0.05)
+    p, _ = make(pts=pts)
+    q = pts.ravel() + 1e-4 * rng.standard_normal(90)
+    for turns, tension in ((0.8, 5.0), (1.7, 5.0), (1.7, -2.0), (0.8, 5.0)):
+        p.turns, p.tension = turns, tension
+        fresh, _ = make(turns=turns, tension=tension, pts=pts)
+        assert np.array_equal(p.gradient(q), fresh.gradient(q))
+        assert (p.constraint_jacobian(q) != fresh.constraint_jacobian(q)).nnz == 0
+    q2 = q + 1e-4 * rng.standard_normal(90)
+    p.accept(q2)  # new reference frames: the twist pieces must be recomputed
+    fresh, _ = make(turns=0.8, tension=5.0, pts=pts)
+    fresh.accept(q2)
+    for state in (q2, q):
+        assert np.array_equal(p.gradient(state), fresh.gradient(state))
+    assert p.constraint_jacobian(q) is p.constraint_jacobian(q)
+    p.set_constrained_edges(np.arange(2, 20))  # another constraint set: another Jacobian
+    assert p.constraint_jacobian(q).shape == (18, 90)
+
+
 def test_straight_twisted_rod_energy_is_exact():
     p, pts = make(n=40, turns=1.3, tension=0.0)
     assert p.energy(pts.ravel()) == pytest.approx(2 * np.pi**2 * 0.7 * 1.3**2, rel=1e-13)

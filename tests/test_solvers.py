@@ -58,6 +58,149 @@ def test_kkt_inertia_determinant_and_solve_match_dense(seed):
     assert np.allclose(K @ factor.solve(rhs), rhs, atol=1e-9 * np.abs(rhs).max() * np.linalg.cond(K))
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
+    """The Ruiz scaling on entry arrays (fast path) against diag(d) @ A @ diag(d) of
+    scipy.sparse (the previous code), permuted: the same entries, the same bits."""
+    from supercoil.solvers.band import equilibrated_entries
+    from supercoil.solvers.kkt import kkt_order
+
+    rng = np.random.default_rng(300 + seed)
+    n, m = int(rng.integers(20, 120)), int(rng.integers(1, 15))
+    H, J = random_kkt(rng, n, m, rank_one=0)
+    S = H.sparse.multiply(10.0 ** rng.uniform(-4, 4, n)[:, None]).tocsr()
+    S = (S + S.T).tocsr()  # rows of very different sizes, as bending against constraints
+    K = sp.bmat([[S, J.T], [J, None]], format="csr")
+    K.eliminate_zeros()
+    order = kkt_order(S, J)
+    rows, cols, values = equilibrated_entries(K, order)
+    d = np.ones(n + m)
+    for _ in range(8):
+        scaled = sp.diags(d) @ K @ sp.diags(d)
+        row_max = abs(scaled).max(axis=1).toarray().ravel()
+        d = d / np.sqrt(np.where(row_max > 0, row_max, 1.0))
+    reference = (sp.diags(d) @ K @ sp.diags(d)).tocsr()[order][:, order].tocoo()
+    mine = sp.coo_matrix((values, (rows, cols)), shape=K.shape).tocsr()
+    reference = reference.tocsr()
+    assert np.array_equal(mine.indptr, reference.indptr)
+    assert np.array_equal(mine.indices, reference.indices)
+    assert np.array_equal(mine.data, reference.data)
+
+
+def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
+    """kkt_order remembers orderings by pattern (fast path); _kkt_order computes them.
+    Same pattern with other values: the same ordering; an entry of J^T J that cancels
+    exactly (scipy drops it, the pattern changes): the memo must not be used."""
+    from supercoil.solvers import kkt
+
+    rng = np.random.default_rng(5)
+    n = 40
+    S = sp.csr_matrix(random_band(rng, n, 1) + 4.0 * np.eye(n))
+    rows = [(0, 25, 1.0, 1.0), (1, 25, 1.0, -1.0)]  # J^T J entry (0, 25) cancels for (+, -)
+    for k in range(2, 12):
+        a, b = rng.choice(np.arange(2, n), size=2, replace=False)
+        rows.append((a, b, rng.standard_normal(), rng.standard_normal()))
+
+    def jacobian(sign):
+        J = np.zeros((len(rows), n))
+        for k, (a, b, u, v) in enumerate(rows):
+            J[k, a], J[k, b] = u, v
+        J[0, 0] = J[1, 0] = 1.0
+        J[0, 25], J[1, 25] = 1.0, sign  # sign = -1: the (0, 25) entry of J^T J is 0
+        return sp.csr_matrix(J)
+
+    kkt._ORDER_MEMO.clear()
+    plain = kkt.kkt_order(S, jacobian(0.5))
+    assert np.array_equal(plain, kkt._kkt_order(S, jacobian(0.5)))
+    assert len(kkt._ORDER_MEMO) == 1
+    again = kkt.kkt_order(S, jacobian(0.7))  # same pattern, remembered
+    assert np.array_equal(again, kkt._kkt_order(S, jacobian(0.7)))
+    (memo,) = kkt._ORDER_MEMO.values()
+    assert memo.certifies(jacobian(0.7)) and not memo.certifies(jacobian(-1.0))
+    cancelled = kkt.kkt_order(S, jacobian(-1.0))
+    assert np.array_equal(cancelled, kkt._kkt_order(S, jacobian(-1.0)))
+    for seed in range(5):  # random KKT patterns, each asked twice
+        H, J = random_kkt(np.random.default_rng(400 + seed), 60, 8, rank_one=0)
+        for _ in range(2):
+            assert np.array_equal(kkt.kkt_order(H.sparse, J), kkt._kkt_order(H.sparse, J))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
+    """KKTFactor forms the permuted KKT matrix from entry arrays (fast path); the
+    previous code factorised bmat(...)[order][:, order]: same LU, same solves, bit
+    for bit (explicit zeros of H and J kept)."""
+    from scipy.sparse.linalg import splu
+
+    from supercoil.solvers.kkt import kkt_order
+
+    rng = np.random.default_rng(500 + seed)
+    n, m = int(rng.integers(30, 90)), int(rng.integers(1, 12))
+    H, J = random_kkt(rng, n, m, rank_one=0)
+    S = H.sparse.tocsr()
+    S.data[::9] = 0.0
+    J = J.tocsr()
+    J.data[::4] = 0.0
+    factor = KKTFactor(HessianParts(S), J)
+    order = kkt_order(S, J)
+    lu = splu(sp.bmat([[S, J.T], [J, None]], format="csr")[order][:, order].tocsc(),
+              permc_spec="NATURAL")
+    rhs = rng.standard_normal(n + m)
+    reference = np.empty(n + m)
+    reference[order] = lu.solve(rhs[order])
+    assert np.array_equal(factor.solve(rhs), reference)
+    assert np.array_equal(factor._lu.U.diagonal(), lu.U.diagonal())
+    assert np.array_equal(factor._lu.perm_r, lu.perm_r)
+
+
+def _same_csr(mine, reference):
+    reference = reference.tocsr()
+    return (mine.shape == reference.shape and np.array_equal(mine.indptr, reference.indptr)
+            and np.array_equal(mine.indices, reference.indices)
+            and np.array_equal(mine.data, reference.data)
+            and np.array_equal(np.signbit(mine.data), np.signbit(reference.data)))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_pattern_sums_and_restrictions_equal_scipy_bit_for_bit(seed):
+    """solvers.patterns (index maps remembered per pattern) against scipy's A + B and
+    A[keep][:, keep]: cancelling entries dropped, explicit zeros and -0.0 as scipy has
+    them, the same stored order; every call twice (the second from the memo)."""
+    from supercoil.solvers.patterns import csr_add, csr_restrict
+
+    rng = np.random.default_rng(600 + seed)
+    n = int(rng.integers(5, 80))
+    A = sp.random(n, n, density=0.15, random_state=seed, format="csr")
+    B = sp.random(n, n, density=0.1, random_state=seed + 50, format="csr")
+    A.data[::6] = 0.0
+    B.data[1::7] = -0.0
+    both = A.multiply(B != 0).tocsr()  # entries of B that cancel entries of A exactly
+    C = (B - both).tocsr()
+    C.sort_indices()
+    for first, second in ((A, B), (A, C), (B, A), (A, sp.csr_matrix((n, n)))):
+        for _ in range(2):
+            assert _same_csr(csr_add(first, second), first + second)
+    keep = np.flatnonzero(rng.random(n) < 0.7)
+    for matrix in (A, B, A + B):
+        for _ in range(2):
+            assert _same_csr(csr_restrict(matrix.tocsr(), keep), matrix.tocsr()[keep][:, keep])
+    shuffled = rng.permutation(keep)  # not sorted: scipy's own path
+    assert _same_csr(csr_restrict(A, shuffled), A[shuffled][:, shuffled])
+
+
+def test_rod_constraint_curvature_equals_the_coo_assembly():
+    """The rod's constraint Hessian filled into its remembered pattern (fast path)
+    against the COO assembly it replaced, zero multipliers (-0.0 entries) included."""
+    p, _ = twisted_circle_problem(2 / 3, 1.0, 40)
+    rows, cols = p._constraint_hessian_entries()
+    rng = np.random.default_rng(3)
+    for mu in (rng.standard_normal(p.n_constraints), np.zeros(p.n_constraints)):
+        w = np.repeat(mu / p.rod.edge_length, 3)
+        reference = sp.csr_matrix((np.concatenate([w, w, -w, -w]), (rows, cols)),
+                                  shape=(p.n_dofs, p.n_dofs))
+        assert _same_csr(p.constraint_hessian(None, mu), reference)
+
+
 @pytest.mark.parametrize("excess_link", [0.0, 1.0, 3.0, 4.5])
 def test_kkt_inertia_on_the_ring_equals_dense(excess_link):
     from supercoil.solvers.newton import _hessian, least_squares_multipliers

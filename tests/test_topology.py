@@ -343,6 +343,23 @@ def test_numba_kernel_matches_numpy_reference_on_a_long_curve() -> None:
         )
 
 
+@pytest.mark.parametrize("n", [3, 4, 50, 101, 1200])
+@pytest.mark.parametrize("closed", [True, False])
+def test_serial_writhe_rows_equal_the_parallel_ones_bit_for_bit(n: int, closed: bool) -> None:
+    # writhe() sums small polygons on one thread (_SERIAL_BELOW); the rows must not change
+    from supercoil.topology.writhe import (
+        _components,
+        _extended,
+        _self_half_angle_rows,
+        _self_half_angle_rows_serial,
+    )
+
+    points = random_walk(np.random.default_rng(n), n)
+    nx, ny, nz = _components(_extended(points, closed))
+    assert np.array_equal(_self_half_angle_rows_serial(nx, ny, nz, closed),
+                          _self_half_angle_rows(nx, ny, nz, closed))
+
+
 def nearly_crossing_quadrilateral(eps: float) -> np.ndarray:
     """Closed (4, 3) polygon whose edges 0 and 2 pass each other at height ``eps/2``: Wr ≈ sign(eps)."""
     return np.array([[1.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, eps], [-1.0, 1.0, 0.0]])

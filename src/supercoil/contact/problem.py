@@ -90,6 +90,11 @@ from supercoil.topology import writhe
 TREATMENTS = ("barrier", "augmented", "penalty", "exact")
 CURVES = ("polygon", "spline")  # the curve whose self-distance is the contact distance
 LINK_CHECK_MAX_NODES = 2000  # see ContactProblem.admissible
+_PAIR_MEMO = 8  # pair states remembered, see ContactProblem.pair_state
+# Verlet list of ContactProblem._candidates: broad phase reach beyond the asked
+# cutoff, and the largest cutoff (in units of D) served from it.
+_VERLET_MARGIN = 1.0
+_VERLET_CUTOFF = 2.0
 DEFAULT_TREATMENT = "barrier"
 
 
@@ -217,8 +222,6 @@ class ContactProblem:
         self._slide_pin: tuple[int, np.ndarray, np.ndarray] | None = None
         # see stability_view()
         self.stability_mode = False
-        self._cache_key: bytes | None = None
-        self._cache: PairState | None = None
 
     def __getattr__(self, name):  # forward rod-specific queries to the wrapped energy
         if name == "base":
@@ -228,12 +231,11 @@ class ContactProblem:
     def __setattr__(self, name, value):
         # Load parameters live on the rod (``excess_link``, ``turns``,
         # ``tension``): a continuation that sets them on this wrapper must
-        # reach the rod, and the cached pair data are then stale.
+        # reach the rod (the remembered pair states depend on q only).
         own = self.__dict__
         if "base" in own and name not in own and name not in type(self).__dict__ \
                 and hasattr(own["base"], name):
             setattr(own["base"], name, value)
-            own["_cache_key"] = None
             return
         object.__setattr__(self, name, value)
 
@@ -305,15 +307,65 @@ class ContactProblem:
         polygon's segments when ``polygon``. The broad phase runs on the
         segments; for the spline its cutoff is widened by twice the largest
         distance of a piece from its chord (``spline_distance.sag_bound``).
+
+        A pure function of its arguments (the segments, pieces, arc lengths and
+        exclusion are fixed at construction), remembered for the last
+        ``_PAIR_MEMO`` arguments: one continuation point asks for the same
+        state about fifty times (residual, finite-difference parameter
+        derivative, Hessian, records, stability), and setting a load
+        parameter does not change it. Callers must not modify the arrays.
         """
+        key = (np.ascontiguousarray(q, dtype=np.float64).tobytes(), float(cutoff),
+               float(self.exclusion), bool(polygon), bool(shadows))
+        memo = self.__dict__.setdefault("_pair_memo", {})
+        found = memo.get(key)
+        if found is None:
+            found = self._compute_pair_state(q, cutoff, polygon, shadows)
+            if len(memo) >= _PAIR_MEMO:
+                del memo[next(iter(memo))]
+            memo[key] = found
+        return found
+
+    def _candidates(self, q: np.ndarray, cutoff: float) -> np.ndarray:
+        """Segment pairs among which every pair within ``cutoff`` at ``q`` is.
+
+        A Verlet neighbour list: the broad phase is run at ``cutoff +
+        _VERLET_MARGIN D`` and its pairs kept with the state ``x_ref``; while
+        no node has moved by ``delta`` with ``cutoff + 2 delta`` beyond that
+        reach, they still hold every pair within ``cutoff`` (a segment
+        distance changes by at most twice the largest node displacement), and
+        the exact distances computed on them give the same pairs as a new
+        broad phase. Cutoffs above ``_VERLET_CUTOFF D`` (a closest-approach
+        search) bypass the list.
+        """
+        a, b = self._endpoints(q)
+        if cutoff > _VERLET_CUTOFF * self.diameter:
+            return candidate_pairs(a, b, self.s_start, self.s_end, cutoff, self.exclusion,
+                                   period=self.period)
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        reference = self.__dict__.get("_verlet")
+        if reference is not None:
+            x_ref, reach, exclusion, pairs = reference
+            if x_ref.shape == x.shape and exclusion == self.exclusion:
+                moved = float(np.sqrt(np.max(np.sum((x - x_ref) ** 2, axis=1))))
+                slack = 1e-9 * max(1.0, float(np.max(np.abs(x))), reach)
+                if cutoff + 2.0 * moved + slack <= reach:
+                    return pairs
+        reach = cutoff + _VERLET_MARGIN * self.diameter
+        pairs = candidate_pairs(a, b, self.s_start, self.s_end, reach, self.exclusion,
+                                period=self.period)
+        self.__dict__["_verlet"] = (x.copy(), reach, self.exclusion, pairs)
+        return pairs
+
+    def _compute_pair_state(self, q: np.ndarray, cutoff: float, polygon: bool,
+                            shadows: bool) -> PairState:
         a, b = self._endpoints(q)
         spline = self.spline and not polygon
         reach = cutoff
         if spline:
             reach += 2.0 * float(np.max(sag_bound(np.asarray(q, dtype=float).reshape(-1, 3),
                                                   self.pieces)))
-        cand = candidate_pairs(a, b, self.s_start, self.s_end, reach, self.exclusion,
-                               period=self.period)
+        cand = self._candidates(q, reach)
         if len(cand) == 0:
             empty = np.zeros(0)
             return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)
@@ -356,15 +408,12 @@ class ContactProblem:
         return D
 
     def _state(self, q: np.ndarray) -> PairState:
-        key = np.asarray(q, dtype=float).tobytes()
-        if key != self._cache_key:
-            self._cache = self.pair_state(q, self._cutoff())
-            self._cache_key = key
-        return self._cache
+        return self.pair_state(q, self._cutoff())
 
     def invalidate(self) -> None:
-        """Forget cached pair data (after multipliers or the active set change)."""
-        self._cache_key = None
+        """Forget the remembered pair states (they are keyed by state and cutoff, so
+        this only frees them; the multipliers and active set change the cutoff)."""
+        self.__dict__.pop("_pair_memo", None)
 
     def _multipliers_of(self, pairs: np.ndarray) -> np.ndarray:
         get = self.pair_multipliers.get

@@ -55,7 +55,7 @@ class _BandBordered:
         self._c, self._r, self._s = c, r, s
         self._Kc = self._k_solve(c)
         self._fallback = None
-        self._b_max = float(abs(B).max())
+        self._b_max = float(np.max(np.abs(B.data), initial=0.0))
 
     @classmethod
     def factor(cls, B: sp.csc_matrix):
@@ -64,20 +64,26 @@ class _BandBordered:
         if n < 2:
             return None
         K = B[:n, :n].tocoo()
-        if K.nnz == 0:
+        column = B[:n, n].toarray().ravel()
+        row = B[n, :n].toarray().ravel()
+        return cls.from_parts(B, K.row, K.col, K.data, column, row, float(B[n, n]))
+
+    @classmethod
+    def from_parts(cls, B, k_rows: np.ndarray, k_cols: np.ndarray, k_values: np.ndarray,
+                   column: np.ndarray, row: np.ndarray, corner: float):
+        """:meth:`factor` from ``K``'s stored entries (no duplicates) and the border."""
+        n = B.shape[0] - 1
+        if n < 2 or k_values.size == 0:
             return None
-        kl = int(max(0, np.max(K.row - K.col)))
-        ku = int(max(0, np.max(K.col - K.row)))
+        kl = int(max(0, np.max(k_rows - k_cols)))
+        ku = int(max(0, np.max(k_cols - k_rows)))
         if kl + ku + 1 > n // 4:
             return None
         ab = np.zeros((2 * kl + ku + 1, n))
-        np.add.at(ab, (kl + ku + K.row - K.col, K.col), K.data)
+        ab[kl + ku + k_rows - k_cols, k_cols] = k_values
         lub, piv, info = lapack.dgbtrf(ab, kl, ku)
         if info != 0:
             return None
-        column = B[:n, n].toarray().ravel()
-        row = B[n, :n].toarray().ravel()
-        corner = float(B[n, n])
         out = cls(B, lub, piv, kl, ku, column, row, 0.0)
         s = corner - row @ out._Kc
         scale = abs(corner) + np.linalg.norm(row) * np.linalg.norm(out._Kc)
@@ -115,10 +121,73 @@ class _BandBordered:
             previous = norm
             z = z + self._once(res)
         try:
-            self._fallback = splu(self._B, permc_spec="NATURAL")
+            self._fallback = splu(self._B.tocsc(), permc_spec="NATURAL")
         except RuntimeError as exc:
             raise SingularMatrixError(f"bordered matrix is singular ({exc})") from None
         return self._fallback.solve(rhs)
+
+
+def _stored(values: np.ndarray) -> np.ndarray:
+    """``values`` as a sparse matrix built from them stores them: zeros (and -0.0) dropped."""
+    return np.where(values != 0.0, values, 0.0)
+
+
+def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
+                       border_row: np.ndarray, corner: float, order: np.ndarray):
+    """``P B P^T`` as CSR, and the stored entries of its leading block ``P K P^T``.
+
+    ``B = [[S, J^T, column], [J, 0], [border_row, corner]]``; the stored
+    entries are those of ``scipy.sparse.bmat`` of the blocks (explicit zeros
+    of ``S`` and ``J`` kept, zeros of the dense border dropped), so that the
+    refinement's products ``B z`` sum the same terms in the same order (by
+    column within each row) as with the matrix ``bmat`` and fancy indexing
+    built before (5 times slower). The sorting permutation is remembered per
+    pattern (:data:`_LAYOUTS`): along a branch a few patterns repeat.
+    """
+    n, m = S.shape[0], J.shape[0]
+    size = n + m + 1
+    col_at = np.flatnonzero(column)
+    row_at = np.flatnonzero(border_row)
+    key = (n, m, S.indptr.tobytes(), S.indices.tobytes(), J.indptr.tobytes(),
+           J.indices.tobytes(), col_at.tobytes(), row_at.tobytes(), corner != 0.0,
+           np.asarray(order).tobytes())
+    layout = _LAYOUTS.get(key)
+    if layout is None:
+        layout = _bordered_layout(S, J, col_at, row_at, corner != 0.0, order)
+        if len(_LAYOUTS) >= _LAYOUT_MEMO:
+            del _LAYOUTS[next(iter(_LAYOUTS))]
+        _LAYOUTS[key] = layout
+    by_row, pcol, indptr, inner, inner_rows, inner_cols = layout
+    values = np.concatenate([S.data, J.data, J.data, column[col_at], border_row[row_at],
+                             [corner] if corner != 0.0 else []])[by_row]
+    Bp = sp.csr_matrix((values, pcol.copy(), indptr.copy()), shape=(size, size))
+    return Bp, (inner_rows, inner_cols, values[inner])
+
+
+def _bordered_layout(S, J, col_at, row_at, has_corner, order):
+    """Sorting permutation and permuted indices of :func:`_permuted_bordered`'s entries."""
+    n, m = S.shape[0], J.shape[0]
+    size = n + m + 1
+    s_rows = np.repeat(np.arange(n), np.diff(S.indptr))
+    j_rows = np.repeat(np.arange(m), np.diff(J.indptr)) + n
+    last = np.full(int(has_corner), size - 1)
+    rows = np.concatenate([s_rows, J.indices, j_rows, col_at, np.full(row_at.size, size - 1),
+                           last])
+    cols = np.concatenate([S.indices, j_rows, J.indices, np.full(col_at.size, size - 1), row_at,
+                           last])
+    position = np.empty(size, dtype=np.int64)
+    position[order] = np.arange(size)
+    prow, pcol = position[rows], position[cols]
+    by_row = np.lexsort((pcol, prow))
+    prow, pcol = prow[by_row], pcol[by_row]
+    indptr = np.zeros(size + 1, dtype=np.int64)
+    np.cumsum(np.bincount(prow, minlength=size), out=indptr[1:])
+    inner = np.flatnonzero((prow < size - 1) & (pcol < size - 1))
+    return by_row, pcol, indptr, inner, prow[inner], pcol[inner]
+
+
+_LAYOUTS: dict[tuple, tuple] = {}
+_LAYOUT_MEMO = 16
 
 
 class BorderedFactor:
@@ -142,23 +211,23 @@ class BorderedFactor:
         row = np.asarray(row, dtype=float)
         if column.shape != (size - 1,) or row.shape != (size,):
             raise ValueError(f"border column and row must have lengths {size - 1}, {size}")
-        K = sp.bmat([[S, J.T], [J, None]], format="csr") if m else S
-        scale_k = float(abs(K).max()) if K.nnz else 1.0
+        k_data = np.concatenate([S.data, J.data]) if m else S.data
+        scale_k = float(np.max(np.abs(k_data))) if k_data.size else 1.0
         scale_row = float(np.max(np.abs(row)))
         if not np.isfinite(scale_row) or scale_row == 0.0:
             raise SingularMatrixError("the border row is zero or not finite")
         self.row_scale = scale_k / scale_row if scale_k > 0 else 1.0
         corner = row[-1] * self.row_scale
-        B = sp.bmat([[K, sp.csr_matrix(column[:, None])],
-                     [sp.csr_matrix(self.row_scale * row[None, :-1]), sp.csr_matrix([[corner]])]],
-                    format="csc")
         self.kkt_order = kkt_order(S, J) if order is None else order
         self.order = np.concatenate([self.kkt_order, [size - 1]])
-        Bp = B[self.order][:, self.order].tocsc()
-        self._lu = _BandBordered.factor(Bp)
+        Bp, k_entries = _permuted_bordered(S, J, column, self.row_scale * row[:-1], corner,
+                                           self.order)
+        self._lu = _BandBordered.from_parts(Bp, *k_entries, _stored(column)[self.kkt_order],
+                                            _stored(self.row_scale * row[:-1])[self.kkt_order],
+                                            float(_stored(np.array([corner]))[0]))
         if self._lu is None:
             try:
-                self._lu = splu(Bp, permc_spec="NATURAL")
+                self._lu = splu(Bp.tocsc(), permc_spec="NATURAL")
             except RuntimeError as exc:  # "Factor is exactly singular"
                 raise SingularMatrixError(f"bordered matrix is singular ({exc})") from None
         self.size = size

@@ -15,7 +15,7 @@ step. The tangent at ``x`` solves ``[[K, F_lambda], [b^T]] z = e_last``:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -38,6 +38,8 @@ class Correction:
     iterations: int
     residual: float
     message: str
+    # the Hessian at ``x`` (converged), for a tangent or inertia there before any accept
+    hessian: object = field(default=None, repr=False, compare=False)
 
 
 def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
@@ -63,7 +65,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
         H = system.hessian(x)
         if res <= tolerance or res <= roundoff_floor(H, system.q(x)):
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
-                              f"{res:.2e})")
+                              f"{res:.2e})", H)
         if it == max_iterations:
             break
         rising = it >= 2 and res > previous
@@ -119,9 +121,14 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
                       f"corrector iterations (residual {res:.2e} > {tolerance:.1e})")
 
 
-def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray) -> np.ndarray:
-    """Unit tangent (arclength metric) at ``x``, oriented so that ``row . t > 0``."""
-    factor = bordered_factor(system, x, row)
+def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
+            hessian=None) -> np.ndarray:
+    """Unit tangent (arclength metric) at ``x``, oriented so that ``row . t > 0``.
+
+    ``hessian``: ``system.hessian(x)`` if already known (a converged
+    :class:`Correction`'s, the problem not accepted since).
+    """
+    factor = bordered_factor(system, x, row, hessian)
     e_last = np.zeros(system.size)
     e_last[-1] = 1.0
     z = factor.solve(e_last)

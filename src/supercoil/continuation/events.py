@@ -64,6 +64,9 @@ class Segment:
         self.max_iterations = max_iterations
         self.zero_tolerance = zero_tolerance
         self._points: dict[float, np.ndarray] = {0.0: x_a, 1.0: x_b}
+        # Hessians at the re-corrected trial points (never accepted, so they stay
+        # valid): their tangents and counts need no new one
+        self._hessians: dict[float, object] = {}
 
     def point(self, u: float) -> np.ndarray:
         u = float(u)
@@ -73,17 +76,20 @@ class Segment:
             if not corr.ok:
                 raise LocationFailed(f"trial correction at u = {u:.6g} failed: {corr.message}")
             self._points[u] = corr.x
+            self._hessians[u] = corr.hessian
         return self._points[u]
 
     def tangent(self, u: float) -> np.ndarray:
         try:
-            return tangent(self.system, self.point(u), self.row)
+            x = self.point(u)
+            return tangent(self.system, x, self.row, self._hessians.get(float(u)))
         except SingularMatrixError as exc:
             raise LocationFailed(str(exc)) from None
 
     def count(self, u: float) -> int:
         try:
-            return inertia(self.system, self.point(u), self.zero_tolerance)[0]
+            x = self.point(u)
+            return inertia(self.system, x, self.zero_tolerance, self._hessians.get(float(u)))[0]
         except (SingularMatrixError, InertiaError) as exc:
             raise LocationFailed(str(exc)) from None
 

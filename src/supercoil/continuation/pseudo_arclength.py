@@ -314,7 +314,7 @@ class _Tracer:
             if failure is None:
                 x_new = corr.x
                 try:
-                    t_new = tangent(system, x_new, system.weights * t_k)
+                    t_new = tangent(system, x_new, system.weights * t_k, corr.hessian)
                 except SingularMatrixError as exc:
                     failure = f"tangent: {exc}"
             if failure is None and hasattr(problem, "admissible") and \
@@ -455,7 +455,7 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
         return tracer.branch(ContinuationStatus.START_FAILED,
                              f"the starting point did not converge: {corr.message}")
     try:
-        t0 = opts.direction * tangent(system, corr.x, e_lam)
+        t0 = opts.direction * tangent(system, corr.x, e_lam, corr.hessian)
         tracer.add_point(corr.x, t0)
     except (SingularMatrixError, InertiaError) as exc:
         return tracer.branch(ContinuationStatus.START_FAILED,

@@ -83,10 +83,11 @@ def count_gauge(system: ExtendedSystem, x: np.ndarray) -> np.ndarray:
     return np.searchsorted(system.free, dofs)
 
 
-def _count_system(system: ExtendedSystem, x: np.ndarray):
-    """``(H, J)`` of the count at ``x``: the system's, less the near-symmetry gauge."""
+def _count_system(system: ExtendedSystem, x: np.ndarray, hessian=None):
+    """``(H, J)`` of the count at ``x``: the system's, less the near-symmetry gauge
+    (``hessian``: ``system.hessian(x)`` if already known)."""
     J = system.jacobian(x)
-    H = system.hessian(x)
+    H = system.hessian(x) if hessian is None else hessian
     drop = count_gauge(system, x)
     if drop.size:
         keep = np.setdiff1d(np.arange(system.n), drop)
@@ -95,8 +96,8 @@ def _count_system(system: ExtendedSystem, x: np.ndarray):
     return H, J
 
 
-def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None = None
-            ) -> tuple[int, int]:
+def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None = None,
+            hessian=None) -> tuple[int, int]:
     """``(negative count, determinant sign)`` of the constrained Hessian at ``x``.
 
     Near-symmetry directions are removed from the count as in
@@ -104,9 +105,9 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     ``zero_tolerance``, an exactly singular Hessian (a special point located
     exactly) is handled: the count is then that of the eigenvalues below
     ``-zero_tolerance / 2`` (the inertia of ``H + M zero_tolerance / 2``) and
-    the determinant sign is 0.
+    the determinant sign is 0. ``hessian``: ``system.hessian(x)`` if already known.
     """
-    H, J = _count_system(system, x)
+    H, J = _count_system(system, x, hessian)
     try:
         factor = KKTFactor(H, J)
         negative = factor.reduced_negative_count

@@ -60,6 +60,8 @@ class ExtendedSystem:
         self.weights = np.concatenate([mass, np.zeros(self.m + self.r),
                                        [parameter_weight**2]])
         self.fd_step = finite_difference_step
+        self._jacobian_source = self._jacobian_free = None
+        self._phase_rows: tuple[np.ndarray, sp.csr_matrix] | None = None
 
     def set_phase(self, phase_modes: np.ndarray, q_phase: np.ndarray) -> None:
         """New phase rows of the same number (a moved gauge); the layout of ``x`` is kept."""
@@ -106,11 +108,21 @@ class ExtendedSystem:
     def set_parameter(self, lam: float) -> None:
         setattr(self.problem, self.parameter, float(lam))
 
+    def _free_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
+        """``constraint_jacobian(q)`` on the free DOFs; the restriction is redone only
+        when the problem returns another matrix object (a problem that keeps its
+        Jacobian for the same ``q`` saves the column slicing, 0.1 ms at N = 100)."""
+        J = self.problem.constraint_jacobian(q)
+        if J is not self._jacobian_source:
+            self._jacobian_source = J
+            self._jacobian_free = J[:, self.free]
+        return self._jacobian_free
+
     def _kkt_residual(self, q: np.ndarray, mu: np.ndarray) -> np.ndarray:
         p = self.problem
         g = p.gradient(q)[self.free]
         if self.m:
-            g = g + p.constraint_jacobian(q)[:, self.free].T @ mu
+            g = g + self._free_jacobian(q).T @ mu
             return np.concatenate([g, p.constraints(q)])
         return g
 
@@ -135,9 +147,11 @@ class ExtendedSystem:
         self.set_parameter(x[-1])
         rows = []
         if self.m:
-            rows.append(sp.csr_matrix(self.problem.constraint_jacobian(self.q(x))[:, self.free]))
+            rows.append(sp.csr_matrix(self._free_jacobian(self.q(x))))
         if self.r:
-            rows.append(sp.csr_matrix(self.P))
+            if self._phase_rows is None or self._phase_rows[0] is not self.P:
+                self._phase_rows = (self.P, sp.csr_matrix(self.P))
+            rows.append(self._phase_rows[1])
         if not rows:
             return sp.csr_matrix((0, self.n))
         return sp.vstack(rows, format="csr")

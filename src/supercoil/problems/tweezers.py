@@ -393,9 +393,11 @@ def follow(problem, rod: ClampedRodEnergy, first: Branch, options: ContinuationO
                              options.max_step))
         opts = dataclasses.replace(options, direction=direction, initial_step=step,
                                    max_points=min(segment_points, max_points - total + 1))
-        done = list(parts)
+        # the runs so far merged once: merging them again at every point of the new
+        # run made reporting quadratic in the branch length (same merged branch)
+        done = merge_branches(parts, name) if on_point is not None else None
         report = None if on_point is None else (
-            lambda partial, done=done: on_point(merge_branches([*done, partial], name)))
+            lambda partial, done=done: on_point(merge_branches([done, partial], name)))
         run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
                            options=opts, name=name, records=records, events=events,
                            on_point=report)

@@ -161,6 +161,8 @@ class RodEnergy(abc.ABC):
         self._frame_data = np.stack([directors[p], tangents[p], directors[nx], tangents[nx]],
                                     axis=1)
         self._phi_cache: tuple[bytes, float] | None = None
+        # gradient pieces of one state that the load parameters do not change
+        self._gradient_cache: tuple[bytes, np.ndarray, float, np.ndarray] | None = None
 
     def _frames(self) -> np.ndarray:
         """Per-vertex reference data ``(n_vertices, 4, 3)``: u_prev, t_prev, u_next, t_next."""
@@ -213,12 +215,25 @@ class RodEnergy(abc.ABC):
         return self._pattern.scatter_vector(self._twist_terms(q, 1)[1]) / (2 * np.pi)
 
     def gradient(self, q: np.ndarray) -> np.ndarray:
-        stencils = self._stencils(q)
-        g = self._pattern.scatter_vector(self._bending[1](stencils, self._bend_weight))
-        phi, twist_local = self._twist_terms(q, 1)
+        """Bending gradient plus ``k Tw / 2pi`` times ``grad(Phi)``.
+
+        The bending gradient, ``Phi`` and ``grad(Phi)`` of the last ``q`` are
+        kept (until the frames change): continuation evaluates the gradient at
+        one state for several values of a load parameter (its
+        finite-difference parameter derivative), which only changes ``Tw``.
+        """
+        key = _key(q)
+        cached = self._gradient_cache
+        if cached is not None and cached[0] == key:
+            _, g, phi, twist_gradient = cached
+        else:
+            stencils = self._stencils(q)
+            g = self._pattern.scatter_vector(self._bending[1](stencils, self._bend_weight))
+            phi, twist_local = self._twist_terms(q, 1)
+            twist_gradient = self._pattern.scatter_vector(twist_local)
+            self._gradient_cache = (key, g, phi, twist_gradient)
         tw = self.twist_offset() + phi / (2 * np.pi)
-        return g + (self._twist_coefficient * tw / (2 * np.pi)) * self._pattern.scatter_vector(
-            twist_local)
+        return g + (self._twist_coefficient * tw / (2 * np.pi)) * twist_gradient
 
     def hessian(self, q: np.ndarray) -> HessianParts:
         """Banded part (bending + ``k Tw`` times the twist Hessian) plus ``k g g^T``.
@@ -246,6 +261,17 @@ class RodEnergy(abc.ABC):
         return (np.sum(e * e, axis=1) - h * h) / (2 * h)
 
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
+        """Jacobian of :meth:`constraints`, ``(m, n_dofs)``; the last one is returned
+        again (the same object: callers must not modify it) for the same ``q``."""
+        key = _key(q)
+        cached = self.__dict__.get("_jacobian_cache")
+        if cached is not None and cached[0] == key and cached[1] is self._constrained:
+            return cached[2]
+        J = self._constraint_jacobian(q)
+        self._jacobian_cache = (key, self._constrained, J)
+        return J
+
+    def _constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
         m = self.n_constraints
         e = self._edge_vectors(q)[self._constrained] / self.rod.edge_length
         nodes = self.edge_nodes[self._constrained]
@@ -256,15 +282,45 @@ class RodEnergy(abc.ABC):
         data = np.concatenate([-e, e], axis=1).ravel()
         return sp.csr_matrix((data, (rows, cols)), shape=(m, self.n_dofs))
 
-    def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
-        w = np.repeat(np.asarray(multipliers) / self.rod.edge_length, 3)
+    def _constraint_hessian_entries(self):
+        """``(rows, cols)`` of the constraint curvature's COO entries (see below)."""
         nodes = self.edge_nodes[self._constrained]
         a = 3 * nodes[:, :1] + np.arange(3)
         b = 3 * nodes[:, 1:] + np.arange(3)
-        rows = np.concatenate([a, b, a, b]).ravel()
-        cols = np.concatenate([a, b, b, a]).ravel()
+        return np.concatenate([a, b, a, b]).ravel(), np.concatenate([a, b, b, a]).ravel()
+
+    def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
+        """``sum_j mu_j hess c_j``: ``+-mu_j / h`` on the blocks of edge ``j``'s two nodes.
+
+        The CSR pattern of these entries is fixed by the constrained edges and is
+        built once: an entry gets at most two terms (a node's diagonal from its two
+        edges, summed in either order to the same value), so filling it directly
+        gives the matrix that ``csr_matrix((data, (rows, cols)))`` gives.
+        """
+        w = np.repeat(np.asarray(multipliers) / self.rod.edge_length, 3)
         data = np.concatenate([w, w, -w, -w])
-        return sp.csr_matrix((data, (rows, cols)), shape=(self.n_dofs, self.n_dofs))
+        pattern = self.__dict__.get("_curvature_pattern")
+        if pattern is None or pattern[0] is not self._constrained:
+            rows, cols = self._constraint_hessian_entries()
+            key = rows * self.n_dofs + cols
+            order = np.argsort(key, kind="stable")
+            slots, first_at, counts = np.unique(key[order], return_index=True,
+                                                return_counts=True)
+            if counts.max(initial=0) > 2:
+                raise AssertionError("an edge-length curvature entry with more than two terms")
+            first = order[first_at]
+            second = np.where(counts == 2, order[np.minimum(first_at + 1, order.size - 1)], -1)
+            indptr = np.zeros(self.n_dofs + 1, dtype=np.int32)
+            np.cumsum(np.bincount(slots // self.n_dofs, minlength=self.n_dofs), out=indptr[1:])
+            pattern = (self._constrained, first, second, (slots % self.n_dofs).astype(np.int32),
+                       indptr)
+            self._curvature_pattern = pattern
+        _, first, second, indices, indptr = pattern
+        values = data[first]
+        double = second >= 0
+        values[double] = values[double] + data[second[double]]
+        return sp.csr_matrix((values, indices.copy(), indptr.copy()),
+                             shape=(self.n_dofs, self.n_dofs))
 
     def accept(self, q: np.ndarray) -> None:
         """Carry the reference directors to the new tangents (time-parallel transport)."""

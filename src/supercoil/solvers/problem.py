@@ -12,6 +12,8 @@ from typing import Protocol
 import numpy as np
 import scipy.sparse as sp
 
+from supercoil.solvers.patterns import csr_add, csr_restrict
+
 
 @dataclass(frozen=True)
 class HessianParts:
@@ -29,10 +31,10 @@ class HessianParts:
 
     def restrict(self, free: np.ndarray) -> HessianParts:
         vectors = self.vectors[:, free] if self.vectors.size else np.zeros((0, free.size))
-        return HessianParts(self.sparse[free][:, free].tocsr(), vectors, self.coefficients)
+        return HessianParts(csr_restrict(self.sparse, free), vectors, self.coefficients)
 
     def plus_sparse(self, other: sp.spmatrix) -> HessianParts:
-        return HessianParts((self.sparse + other).tocsr(), self.vectors, self.coefficients)
+        return HessianParts(csr_add(self.sparse, other), self.vectors, self.coefficients)
 
     def dense(self) -> np.ndarray:
         full = self.sparse.toarray()

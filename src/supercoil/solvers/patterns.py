@@ -1,0 +1,94 @@
+"""Sums and restrictions of CSR matrices whose patterns repeat, without scipy's overhead.
+
+Along a branch the Hessian is assembled many times per point on the same few
+sparsity patterns (rod + contact + constraint curvature, restricted to the
+free DOFs). scipy.sparse spends most of such a call on checks and index-dtype
+bookkeeping (measured at N = 100: 60 µs per sum and 80 µs per restriction for
+microseconds of arithmetic). These functions return the same matrices, entry
+for entry and in the same stored order, from index maps computed once per
+pattern:
+
+* :func:`csr_add` is ``A + B`` of scipy for canonical CSR operands (sorted,
+  no duplicates): the union pattern, ``a + b`` where both are stored, ``a``
+  or ``b`` alone elsewhere, and every entry that comes out zero dropped (as
+  scipy's merge does);
+* :func:`csr_restrict` is ``A[keep][:, keep]`` for sorted unique ``keep``:
+  the kept entries of each kept row in their stored order, explicit zeros
+  included.
+
+Anything else (other formats, unsorted or duplicate indices) goes to scipy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+_MEMO_SIZE = 16
+_ADD_MEMO: dict[tuple, tuple] = {}
+_RESTRICT_MEMO: dict[tuple, tuple] = {}
+
+
+def _remember(memo: dict, key: tuple, value: tuple) -> None:
+    if len(memo) >= _MEMO_SIZE:
+        del memo[next(iter(memo))]
+    memo[key] = value
+
+
+def _pattern_key(A: sp.csr_matrix) -> tuple:
+    return (A.shape, A.indptr.tobytes(), A.indices.tobytes())
+
+
+def _is_canonical_csr(A) -> bool:
+    return getattr(A, "format", None) == "csr" and A.has_canonical_format
+
+
+def csr_add(A: sp.csr_matrix, B: sp.spmatrix) -> sp.csr_matrix:
+    """``(A + B).tocsr()`` (see module doc)."""
+    if not (_is_canonical_csr(A) and _is_canonical_csr(B)) or A.shape != B.shape \
+            or A.dtype != np.float64 or B.dtype != np.float64:
+        return (A + B).tocsr()
+    key = (_pattern_key(A), _pattern_key(B))
+    maps = _ADD_MEMO.get(key)
+    if maps is None:
+        n_rows, n_cols = A.shape
+        key_a = np.repeat(np.arange(n_rows, dtype=np.int64), np.diff(A.indptr)) * n_cols \
+            + A.indices
+        key_b = np.repeat(np.arange(n_rows, dtype=np.int64), np.diff(B.indptr)) * n_cols \
+            + B.indices
+        union = np.union1d(key_a, key_b)
+        maps = (np.searchsorted(union, key_a), np.searchsorted(union, key_b),
+                union // n_cols, (union % n_cols).astype(A.indices.dtype), union.size)
+        _remember(_ADD_MEMO, key, maps)
+    in_a, in_b, rows, cols, size = maps
+    data = np.zeros(size)
+    data[in_a] = A.data
+    data[in_b] += B.data
+    stored = data != 0.0
+    indptr = np.zeros(A.shape[0] + 1, dtype=A.indptr.dtype)
+    np.cumsum(np.bincount(rows[stored], minlength=A.shape[0]), out=indptr[1:])
+    return sp.csr_matrix((data[stored], cols[stored], indptr), shape=A.shape)
+
+
+def csr_restrict(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
+    """``A[keep][:, keep]`` as CSR (see module doc)."""
+    keep = np.asarray(keep)
+    if getattr(A, "format", None) != "csr" or keep.ndim != 1 or A.shape[0] != A.shape[1] \
+            or (keep.size > 1 and not np.all(np.diff(keep) > 0)) \
+            or (keep.size and (keep[0] < 0 or keep[-1] >= A.shape[0])):
+        return A[keep][:, keep].tocsr()
+    key = (_pattern_key(A), keep.tobytes())
+    maps = _RESTRICT_MEMO.get(key)
+    if maps is None:
+        n = A.shape[0]
+        new = np.full(n, -1, dtype=np.int64)
+        new[keep] = np.arange(keep.size)
+        rows = np.repeat(np.arange(n), np.diff(A.indptr))
+        selected = np.flatnonzero((new[rows] >= 0) & (new[A.indices] >= 0))
+        indptr = np.zeros(keep.size + 1, dtype=A.indptr.dtype)
+        np.cumsum(np.bincount(new[rows[selected]], minlength=keep.size), out=indptr[1:])
+        maps = (selected, new[A.indices[selected]].astype(A.indices.dtype), indptr)
+        _remember(_RESTRICT_MEMO, key, maps)
+    selected, indices, indptr = maps
+    return sp.csr_matrix((A.data[selected], indices.copy(), indptr.copy()),
+                         shape=(keep.size, keep.size))

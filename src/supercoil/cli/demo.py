@@ -14,18 +14,19 @@ from supercoil.cli._common import fail, warn
 
 TWIST_RATIO = 2.0 / 3.0  # C/A of DNA (seed 001)
 LENGTH_OVER_DIAMETER = 122.0  # seed 001's DNA example
-# 120 nodes: segments (L/120 = 1.02 D) about the tube diameter, the coarsest mesh
-# that resolves contact lines, and a multiple of 4 and 3, so that the mesh has the
-# D_2 and D_3 symmetries of the alpha and beta branches (at N = 128 the pinned
-# sliding gauge broke beta's D_3 before contact). dLk <= 3: one and two contact
-# points on alpha, three on beta (seed 001); further up, beta's contact branch
-# stalls (at dLk 3.09 here, docs/model.md) and alpha reaches contact intervals
-# (supercoil diagram ring --max-excess-link 3.5). The point budget keeps the demo
-# under a minute on two cores.
-N_NODES = 120
+# 132 nodes: segments (L/132 = 0.92 D) shorter than the tube diameter, as contact
+# lines need, and a multiple of 4 and 3, so that the mesh has the D_2 and D_3
+# symmetries of the alpha and beta branches (at N = 128 the pinned sliding gauge
+# broke beta's D_3 before contact, which came at dLk 1.51 instead of 1.40).
+# dLk <= 3: one and two contact points on alpha, three on beta (seed 001); further
+# up, beta's contact branch stalls (at dLk 3.09 at N = 120, docs/model.md) and
+# alpha reaches contact intervals (supercoil diagram ring --max-excess-link 3.5).
+# alpha's contact branch needs about 220 points to dLk 3 (its folds near 2.3-2.7);
+# the demo takes about 25 s on two cores.
+N_NODES = 132
 MODES = (2, 3)
 MAX_EXCESS_LINK = 3.0
-CONTACT_MAX_POINTS = 150
+CONTACT_MAX_POINTS = 300
 DEFAULT_FOLDER = "supercoil-demo"
 
 

@@ -119,3 +119,20 @@ def test_the_integral_gauge_keeps_beta_d3_where_a_pinned_node_breaks_it():
             assert worst_three_fold(branch) > 0.2
     assert abs(onset[40, "integral"] - onset[48, "node"]) < 0.01
     assert abs(onset[40, "node"] - onset[48, "node"]) > 0.05
+
+
+def test_secondary_branches_are_dashed_in_the_diagram_and_in_supercoil_plot(diagram, tmp_path,
+                                                                           capsys):
+    """diagram.json keeps each branch's generation; the figures draw generation 2 dashed
+    (seed 001, Figure 2) both when written and when redrawn from the file."""
+    from supercoil.cli.diagram_output import write_diagram
+    from supercoil.plotting.figures import _branch_rows
+    from supercoil.plotting.result_data import load_result
+    from supercoil.plotting.style import GENERATION_STYLES
+
+    write_diagram(diagram, tmp_path, OPTIONS.contact)
+    rows = {r["name"]: r for r in _branch_rows(load_result(tmp_path / "diagram.json"),
+                                                ("writhe", "excess_link"))}
+    assert rows["beta"]["linestyle"] == "-" and rows["circle"]["linestyle"] == "-"
+    for b in _secondary(diagram):
+        assert rows[b.name]["linestyle"] == GENERATION_STYLES[2] != "-"

@@ -24,10 +24,6 @@ DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configur
 SAVE_EVERY = 10
 
 
-# seed 001, Figure 2: primary branches solid, secondary long dashes, tertiary short dashes
-GENERATION_STYLES = {0: "-", 1: "-", 2: (0, (6, 3)), 3: (0, (2, 2))}
-
-
 def run_saving(compute, out: Path, quiet: bool = False):
     """Run ``compute(message, on_point, on_branch)`` with a progress display, saving
     branches into ``out/branches`` as they come.
@@ -87,6 +83,7 @@ def write_diagram(diagram, out: Path, contact: str) -> dict:
         plot_contact_map,
         plot_link_writhe,
     )
+    from supercoil.plotting.style import generation_style
 
     options = diagram.options
     (out / "branches").mkdir(parents=True, exist_ok=True)
@@ -103,7 +100,7 @@ def write_diagram(diagram, out: Path, contact: str) -> dict:
         rows = by_branch[b["name"]]
         if not b["contact"] and b["parent"] is not None and rows:
             rows = rows[:-1]  # the last contact-free point lies beyond the contact onset
-        shown.append({"name": b["name"], "linestyle": GENERATION_STYLES.get(b["generation"], "-"),
+        shown.append({"name": b["name"], "linestyle": generation_style(b["generation"]),
                       "writhe": [r["writhe"] for r in rows],
                       "excess_link": [r["excess_link"] for r in rows],
                       "stable": [r["stable"] for r in rows],

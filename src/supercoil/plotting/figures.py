@@ -246,7 +246,8 @@ def _branch_rows(result: ResultData, keys: Sequence[str]) -> list[dict]:
     rows = []
     for index, b in enumerate(result.branches):
         row = {"name": b.name, "stable": stable_mask(b.points),
-               "color": style.branch_color(index)}
+               "color": style.branch_color(index),
+               "linestyle": style.generation_style(b.generation)}
         for key in keys:
             row[key] = b.values(key)
         rows.append(row)

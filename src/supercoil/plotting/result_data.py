@@ -41,6 +41,7 @@ class BranchData:
     contact: bool
     points: tuple[Mapping, ...]
     _states: Callable[[], np.ndarray | None] | None = field(default=None, repr=False)
+    generation: int = 1  # ring diagram: 0 circle, 1 primary, 2 secondary, 3 tertiary
 
     def states(self) -> np.ndarray | None:
         """Centrelines, shape ``(len(points), n_nodes, 3)``, or None when not stored
@@ -249,7 +250,11 @@ def _from_payload(path: Path, data: dict, states: StatesFor | None) -> ResultDat
             loader = _inline_states(rows)
         else:
             loader = None
-        branches.append(BranchData(name, entry.get("parent"), contact, tuple(rows), loader))
+        generation = entry.get("generation")
+        if not isinstance(generation, int):
+            generation = 0 if entry.get("parent") is None else 1
+        branches.append(BranchData(name, entry.get("parent"), contact, tuple(rows), loader,
+                                   generation))
     ld = _number(data.get("length_over_diameter"))
     diameter = _number(data.get("diameter", 1.0 / ld if ld > 0 else math.nan))
     if kind == "ring":

@@ -116,3 +116,13 @@ def viewer_style() -> dict:
             "other": {"shape": "star", "color": OTHER_MARKER[1]},
             "contact_color": CONTACT_COLOR, "tube_color": TUBE_COLOR,
             "stable_width": STABLE_WIDTH, "unstable_width": UNSTABLE_WIDTH}
+
+
+# seed 001, Figure 2: primary branches solid, secondary long dashes, tertiary short
+# dashes (the ring diagram's ``generation``: 0 circle, 1 primary, 2, 3)
+GENERATION_STYLES = {0: "-", 1: "-", 2: (0, (6, 3)), 3: (0, (2, 2))}
+
+
+def generation_style(generation: int):
+    """The matplotlib line style of a branch of ``generation``."""
+    return GENERATION_STYLES.get(int(generation), "-")

@@ -200,6 +200,8 @@ def test_cli_interrupt_keeps_the_branches_saved_so_far(tmp_path, capsys, monkeyp
     (["--length-over-diameter", "3"], "too small"),
     (["--modes", "1"], "--modes"),
     (["--modes", "alpha"], "--modes"),
+    (["--contact-max-points", "1"], "--contact-max-points"),
+    (["--branch-depth", "4"], "--branch-depth"),
 ])
 def test_cli_refuses_bad_input(tmp_path, capsys, args, words):
     base = {"--twist-ratio": "1", "--length-over-diameter": "100", "--modes": "2",

@@ -702,6 +702,11 @@ def diagram_ring(
                      "contact branches: barrier (default; never penetrates) or penalty "
                      "(exact and augmented are not continued yet)."),
     ] = "barrier",
+    contact_max_points: Annotated[
+        int,
+        typer.Option("--contact-max-points", metavar="K", help="Most points of each contact "
+                     "branch (alpha to dLk 6 at N = 200 takes about 380)."),
+    ] = 150,
     branch_depth: Annotated[
         int,
         typer.Option("--branch-depth", metavar="K", help="1: the primary branches; 2: also "
@@ -756,6 +761,8 @@ def diagram_ring(
     if branch_depth not in (1, 2, 3):
         fail(f"--branch-depth {branch_depth}: give 1 (primary branches), 2 (and secondary) "
              "or 3 (and tertiary)")
+    if not 2 <= contact_max_points <= 100_000:
+        fail(f"--contact-max-points {contact_max_points}: give an integer from 2 to 100000")
     if contact_curve not in CONTACT_CURVES:
         fail(f"--contact-curve {contact_curve!r}: give one of {', '.join(CONTACT_CURVES)}")
     prepare_output_folder(out, force, "the diagram's files")
@@ -765,7 +772,8 @@ def diagram_ring(
     try:
         options = DiagramOptions(twist_ratio, length_over_diameter, nodes,
                                  tuple(int(w) for w in words), max_excess_link, contact,
-                                 branch_depth=branch_depth, contact_curve=contact_curve)
+                                 branch_depth=branch_depth, contact_curve=contact_curve,
+                                 contact_max_points=contact_max_points)
     except ValueError as exc:
         fail(str(exc))
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "

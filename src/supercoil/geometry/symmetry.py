@@ -103,8 +103,12 @@ def reversal_axes(points: np.ndarray, tolerance: float) -> list[tuple[float, flo
     values = reversal_residuals(x, grid)
     axes: list[tuple[float, float]] = []
     left, right = np.roll(values, 1), np.roll(values, -1)
-    # each local minimum on the half-node grid is refined (an axis rarely falls on it)
-    candidates = np.flatnonzero((values <= left) & (values <= right))
+    # A local minimum on the half-node grid is refined (an axis rarely falls on it)
+    # when it can hide a zero: near an axis the residual is a V, k |c - c*|, and the
+    # grid point nearest c* (within 1/4) has at most half the value of its farther
+    # neighbour (at least 1/2 away); 3/4 leaves room for the V's curvature.
+    candidates = np.flatnonzero((values <= left) & (values <= right) &
+                                (values <= 0.75 * np.maximum(left, right) + tolerance))
     for i in candidates:
         c0 = grid[i]
         # The mean square is smooth (quadratic) at its minimum, the RMS a V; the

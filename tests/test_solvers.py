@@ -345,3 +345,26 @@ def test_stationary_mode_converges_to_the_saddle_it_starts_next_to():
     res = newton(DoubleWell(), np.array([1e-3, 0.1]),
                  NewtonOptions(mode="stationary", tolerance=1e-12, max_iterations=200))
     assert res.converged and abs(res.q[0]) < 1e-8
+
+
+def test_permutation_parity_by_pointer_jumping_equals_cycle_walking():
+    """kkt._permutation_parity (vectorised, fast path) against walking the cycles."""
+    from supercoil.solvers.kkt import _permutation_parity
+
+    def walked(perm):
+        seen = np.zeros(perm.size, dtype=bool)
+        parity = 1
+        for start in range(perm.size):
+            length, j = 0, start
+            while not seen[j]:
+                seen[j], j, length = True, perm[j], length + 1
+            if length and length % 2 == 0:
+                parity = -parity
+        return parity
+
+    rng = np.random.default_rng(8)
+    for n in [*range(0, 12), 63, 64, 65, 387, 1000]:
+        for _ in range(5):
+            perm = rng.permutation(n)
+            assert _permutation_parity(perm) == walked(perm)
+    assert _permutation_parity(np.array([1, 0, 2])) == -1  # one transposition

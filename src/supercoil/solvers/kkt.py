@@ -29,6 +29,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from supercoil.solvers.band import bandwidth_order, symmetric_inertia
+from supercoil.solvers.patterns import PatternMemo
 from supercoil.solvers.problem import HessianParts
 
 
@@ -106,14 +107,12 @@ def kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
            np.packbits(S.data != 0).tobytes(), J.indptr.tobytes(), J.indices.tobytes(),
            np.packbits(J.data != 0).tobytes())
     memo = _ORDER_MEMO.get(key)
-    if memo is not None and memo.certifies(J):
-        return memo.order.copy()
+    if memo is not None and memo[0].certifies(J):
+        return memo[0].order.copy()
     order = _kkt_order(S, J)
     memo = _OrderMemo.of(J, order)
     if memo is not None and memo.certifies(J):
-        if len(_ORDER_MEMO) >= _ORDER_MEMO_SIZE:
-            del _ORDER_MEMO[next(iter(_ORDER_MEMO))]
-        _ORDER_MEMO[key] = memo
+        _ORDER_MEMO.put(key, (memo, memo.order, memo._first, memo._second, memo._group))
     return order
 
 
@@ -160,8 +159,8 @@ class _OrderMemo:
         return bool(np.all(np.abs(total) > 1e-8 * size))
 
 
-_ORDER_MEMO: dict[tuple, _OrderMemo] = {}
-_ORDER_MEMO_SIZE = 32
+# values (memo, its arrays): the arrays only count towards the memory bound
+_ORDER_MEMO = PatternMemo(max_entries=32)
 
 
 def _kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:

@@ -141,6 +141,14 @@ def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
     S.data[::9] = 0.0
     J = J.tocsr()
     J.data[::4] = 0.0
+    if seed == 3:  # every entry stored as two halves (not canonical): bmat sums them
+        coo = S.tocoo()
+        rows = np.concatenate([coo.row, coo.row])
+        by_row = np.argsort(rows, kind="stable")
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
+        S = sp.csr_matrix((np.concatenate([coo.data, coo.data])[by_row] / 2,
+                           np.concatenate([coo.col, coo.col])[by_row], indptr), shape=S.shape)
+        assert not S.has_canonical_format
     factor = KKTFactor(HessianParts(S), J)
     order = kkt_order(S, J)
     lu = splu(sp.bmat([[S, J.T], [J, None]], format="csr")[order][:, order].tocsc(),

@@ -27,7 +27,7 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 from scipy.sparse.linalg import splu
 
-from supercoil.solvers.kkt import SingularMatrixError, kkt_order
+from supercoil.solvers.kkt import SingularMatrixError, canonical, kkt_order
 from supercoil.solvers.patterns import PatternMemo
 from supercoil.solvers.problem import HessianParts
 
@@ -145,6 +145,7 @@ def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
     built before (5 times slower). The sorting permutation is remembered per
     pattern (:data:`_LAYOUTS`): along a branch a few patterns repeat.
     """
+    S, J = canonical(S), canonical(J)
     n, m = S.shape[0], J.shape[0]
     size = n + m + 1
     col_at = np.flatnonzero(column)

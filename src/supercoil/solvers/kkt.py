@@ -182,12 +182,22 @@ def _kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
     return items[np.argsort(keys, kind="stable")]
 
 
+def canonical(M: sp.csr_matrix) -> sp.csr_matrix:
+    """``M``, or a copy with sorted indices and duplicates summed (as bmat would)."""
+    if M.has_canonical_format:
+        return M
+    M = M.copy()
+    M.sum_duplicates()
+    return M
+
+
 def _kkt_entries(S: sp.csr_matrix, J: sp.csr_matrix):
     """Stored entries ``(rows, columns, values)`` of ``[[S, J^T], [J, 0]]``.
 
     The entries ``scipy.sparse.bmat`` stores (explicit zeros of ``S`` and
-    ``J`` included, no duplicates for canonical blocks), without building it.
+    ``J`` included, duplicates summed), without building it.
     """
+    S, J = canonical(S), canonical(J)
     n, m = S.shape[0], J.shape[0]
     s_rows = np.repeat(np.arange(n), np.diff(S.indptr))
     if not m:

@@ -115,7 +115,7 @@ def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
     assert len(kkt._ORDER_MEMO) == 1
     again = kkt.kkt_order(S, jacobian(0.7))  # same pattern, remembered
     assert np.array_equal(again, kkt._kkt_order(S, jacobian(0.7)))
-    (memo,) = kkt._ORDER_MEMO.values()
+    ((memo, *_arrays),) = kkt._ORDER_MEMO.values()
     assert memo.certifies(jacobian(0.7)) and not memo.certifies(jacobian(-1.0))
     cancelled = kkt.kkt_order(S, jacobian(-1.0))
     assert np.array_equal(cancelled, kkt._kkt_order(S, jacobian(-1.0)))
@@ -141,6 +141,14 @@ def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
     S.data[::9] = 0.0
     J = J.tocsr()
     J.data[::4] = 0.0
+    if seed == 3:  # every entry stored as two halves (not canonical): bmat sums them
+        coo = S.tocoo()
+        rows = np.concatenate([coo.row, coo.row])
+        by_row = np.argsort(rows, kind="stable")
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
+        S = sp.csr_matrix((np.concatenate([coo.data, coo.data])[by_row] / 2,
+                           np.concatenate([coo.col, coo.col])[by_row], indptr), shape=S.shape)
+        assert not S.has_canonical_format
     factor = KKTFactor(HessianParts(S), J)
     order = kkt_order(S, J)
     lu = splu(sp.bmat([[S, J.T], [J, None]], format="csr")[order][:, order].tocsc(),
@@ -345,3 +353,40 @@ def test_stationary_mode_converges_to_the_saddle_it_starts_next_to():
     res = newton(DoubleWell(), np.array([1e-3, 0.1]),
                  NewtonOptions(mode="stationary", tolerance=1e-12, max_iterations=200))
     assert res.converged and abs(res.q[0]) < 1e-8
+
+
+def test_permutation_parity_by_pointer_jumping_equals_cycle_walking():
+    """kkt._permutation_parity (vectorised, fast path) against walking the cycles."""
+    from supercoil.solvers.kkt import _permutation_parity
+
+    def walked(perm):
+        seen = np.zeros(perm.size, dtype=bool)
+        parity = 1
+        for start in range(perm.size):
+            length, j = 0, start
+            while not seen[j]:
+                seen[j], j, length = True, perm[j], length + 1
+            if length and length % 2 == 0:
+                parity = -parity
+        return parity
+
+    rng = np.random.default_rng(8)
+    for n in [*range(0, 12), 63, 64, 65, 387, 1000]:
+        for _ in range(5):
+            perm = rng.permutation(n)
+            assert _permutation_parity(perm) == walked(perm)
+    assert _permutation_parity(np.array([1, 0, 2])) == -1  # one transposition
+
+
+def test_pattern_memo_keeps_the_newest_entries_within_its_bounds():
+    from supercoil.solvers.patterns import PatternMemo
+
+    memo = PatternMemo(max_entries=3, max_bytes=10_000)
+    for k in range(5):
+        memo.put((k,), (np.zeros(100),))  # 800 bytes each
+    assert len(memo) == 3 and memo.get((0,)) is None and memo.get((4,)) is not None
+    memo.put(("big",), (np.zeros(1000),))  # 8000 bytes: the older ones make room
+    assert memo.get(("big",)) is not None and memo.get((2,)) is None
+    assert memo._total <= memo.max_bytes
+    memo.put(("huge",), (np.zeros(2000),))  # larger than the bound: not kept
+    assert memo.get(("huge",)) is None and memo.get(("big",)) is not None

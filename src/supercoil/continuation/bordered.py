@@ -27,7 +27,8 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 from scipy.sparse.linalg import splu
 
-from supercoil.solvers.kkt import SingularMatrixError, kkt_order
+from supercoil.solvers.kkt import SingularMatrixError, canonical, kkt_order
+from supercoil.solvers.patterns import PatternMemo
 from supercoil.solvers.problem import HessianParts
 
 
@@ -144,6 +145,7 @@ def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
     built before (5 times slower). The sorting permutation is remembered per
     pattern (:data:`_LAYOUTS`): along a branch a few patterns repeat.
     """
+    S, J = canonical(S), canonical(J)
     n, m = S.shape[0], J.shape[0]
     size = n + m + 1
     col_at = np.flatnonzero(column)
@@ -154,9 +156,7 @@ def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
     layout = _LAYOUTS.get(key)
     if layout is None:
         layout = _bordered_layout(S, J, col_at, row_at, corner != 0.0, order)
-        if len(_LAYOUTS) >= _LAYOUT_MEMO:
-            del _LAYOUTS[next(iter(_LAYOUTS))]
-        _LAYOUTS[key] = layout
+        _LAYOUTS.put(key, layout)
     by_row, pcol, indptr, inner, inner_rows, inner_cols = layout
     values = np.concatenate([S.data, J.data, J.data, column[col_at], border_row[row_at],
                              [corner] if corner != 0.0 else []])[by_row]
@@ -186,8 +186,7 @@ def _bordered_layout(S, J, col_at, row_at, has_corner, order):
     return by_row, pcol, indptr, inner, prow[inner], pcol[inner]
 
 
-_LAYOUTS: dict[tuple, tuple] = {}
-_LAYOUT_MEMO = 16
+_LAYOUTS = PatternMemo()
 
 
 class BorderedFactor:

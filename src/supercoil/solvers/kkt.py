@@ -29,6 +29,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from supercoil.solvers.band import bandwidth_order, symmetric_inertia
+from supercoil.solvers.patterns import PatternMemo
 from supercoil.solvers.problem import HessianParts
 
 
@@ -41,22 +42,23 @@ class InertiaError(RuntimeError):
 
 
 def _permutation_parity(perm: np.ndarray) -> int:
-    """+1 for an even permutation, -1 for an odd one."""
-    perm = np.asarray(perm)
-    seen = np.zeros(perm.size, dtype=bool)
-    parity = 1
-    for start in range(perm.size):
-        if seen[start]:
-            continue
-        length = 0
-        j = start
-        while not seen[j]:
-            seen[j] = True
-            j = perm[j]
-            length += 1
-        if length % 2 == 0:
-            parity = -parity
-    return parity
+    """+1 for an even permutation, -1 for an odd one: ``(-1)^(n - cycles)``.
+
+    Cycles are counted by pointer jumping (each index learns the smallest
+    index of its cycle in ``log2 n`` vectorised rounds); a loop over the
+    indices took 0.17 ms per call at n = 400, twice per inertia count.
+    """
+    perm = np.asarray(perm, dtype=np.int64)
+    n = perm.size
+    smallest = np.arange(n)
+    jump = perm.copy()
+    covered = 1  # each index has seen the next `covered` indices of its cycle
+    while covered < n:
+        np.minimum(smallest, smallest[jump], out=smallest)
+        jump = jump[jump]
+        covered *= 2
+    cycles = int(np.count_nonzero(smallest == np.arange(n)))
+    return -1 if (n - cycles) % 2 else 1
 
 
 def _woodbury_negatives(solve, U: np.ndarray, w: np.ndarray):
@@ -105,14 +107,12 @@ def kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
            np.packbits(S.data != 0).tobytes(), J.indptr.tobytes(), J.indices.tobytes(),
            np.packbits(J.data != 0).tobytes())
     memo = _ORDER_MEMO.get(key)
-    if memo is not None and memo.certifies(J):
-        return memo.order.copy()
+    if memo is not None and memo[0].certifies(J):
+        return memo[0].order.copy()
     order = _kkt_order(S, J)
     memo = _OrderMemo.of(J, order)
     if memo is not None and memo.certifies(J):
-        if len(_ORDER_MEMO) >= _ORDER_MEMO_SIZE:
-            del _ORDER_MEMO[next(iter(_ORDER_MEMO))]
-        _ORDER_MEMO[key] = memo
+        _ORDER_MEMO.put(key, (memo, memo.order, memo._first, memo._second, memo._group))
     return order
 
 
@@ -159,8 +159,8 @@ class _OrderMemo:
         return bool(np.all(np.abs(total) > 1e-8 * size))
 
 
-_ORDER_MEMO: dict[tuple, _OrderMemo] = {}
-_ORDER_MEMO_SIZE = 32
+# values (memo, its arrays): the arrays only count towards the memory bound
+_ORDER_MEMO = PatternMemo(max_entries=32)
 
 
 def _kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
@@ -182,12 +182,22 @@ def _kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
     return items[np.argsort(keys, kind="stable")]
 
 
+def canonical(M: sp.csr_matrix) -> sp.csr_matrix:
+    """``M``, or a copy with sorted indices and duplicates summed (as bmat would)."""
+    if M.has_canonical_format:
+        return M
+    M = M.copy()
+    M.sum_duplicates()
+    return M
+
+
 def _kkt_entries(S: sp.csr_matrix, J: sp.csr_matrix):
     """Stored entries ``(rows, columns, values)`` of ``[[S, J^T], [J, 0]]``.
 
     The entries ``scipy.sparse.bmat`` stores (explicit zeros of ``S`` and
-    ``J`` included, no duplicates for canonical blocks), without building it.
+    ``J`` included, duplicates summed), without building it.
     """
+    S, J = canonical(S), canonical(J)
     n, m = S.shape[0], J.shape[0]
     s_rows = np.repeat(np.arange(n), np.diff(S.indptr))
     if not m:

@@ -24,15 +24,57 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-_MEMO_SIZE = 16
-_ADD_MEMO: dict[tuple, tuple] = {}
-_RESTRICT_MEMO: dict[tuple, tuple] = {}
+class PatternMemo:
+    """A small first-in-first-out memo of per-pattern index maps, bounded in size.
+
+    Keys and values are tuples of bytes, arrays and numbers; the oldest entries
+    are dropped beyond ``max_entries`` or ``max_bytes`` (keys and values
+    together), so that large problems (N = 10 000: tens of MB per pattern) keep
+    one or two patterns rather than exhausting memory.
+    """
+
+    def __init__(self, max_entries: int = 16, max_bytes: int = 64 * 2**20):
+        self.max_entries, self.max_bytes = max_entries, max_bytes
+        self._items: dict[tuple, tuple] = {}
+        self._sizes: dict[tuple, int] = {}
+        self._total = 0
+
+    @staticmethod
+    def _size(item) -> int:
+        if isinstance(item, tuple):
+            return sum(PatternMemo._size(part) for part in item)
+        return int(getattr(item, "nbytes", len(item) if isinstance(item, bytes) else 8))
+
+    def get(self, key: tuple):
+        return self._items.get(key)
+
+    def put(self, key: tuple, value: tuple) -> None:
+        size = self._size(key) + self._size(value)
+        if size > self.max_bytes:
+            return
+        while self._items and (len(self._items) >= self.max_entries
+                               or self._total + size > self.max_bytes):
+            oldest = next(iter(self._items))
+            del self._items[oldest]
+            self._total -= self._sizes.pop(oldest)
+        self._items[key] = value
+        self._sizes[key] = size
+        self._total += size
+
+    def clear(self) -> None:
+        self._items.clear()
+        self._sizes.clear()
+        self._total = 0
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def values(self):
+        return self._items.values()
 
 
-def _remember(memo: dict, key: tuple, value: tuple) -> None:
-    if len(memo) >= _MEMO_SIZE:
-        del memo[next(iter(memo))]
-    memo[key] = value
+_ADD_MEMO = PatternMemo()
+_RESTRICT_MEMO = PatternMemo()
 
 
 def _pattern_key(A: sp.csr_matrix) -> tuple:
@@ -59,7 +101,7 @@ def csr_add(A: sp.csr_matrix, B: sp.spmatrix) -> sp.csr_matrix:
         union = np.union1d(key_a, key_b)
         maps = (np.searchsorted(union, key_a), np.searchsorted(union, key_b),
                 union // n_cols, (union % n_cols).astype(A.indices.dtype), union.size)
-        _remember(_ADD_MEMO, key, maps)
+        _ADD_MEMO.put(key, maps)
     in_a, in_b, rows, cols, size = maps
     data = np.zeros(size)
     data[in_a] = A.data
@@ -73,7 +115,7 @@ def csr_add(A: sp.csr_matrix, B: sp.spmatrix) -> sp.csr_matrix:
 def csr_restrict(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
     """``A[keep][:, keep]`` as CSR (see module doc)."""
     keep = np.asarray(keep)
-    if getattr(A, "format", None) != "csr" or keep.ndim != 1 or A.shape[0] != A.shape[1] \
+    if getattr(A, "format", None) != "csr" or keep.ndim != 1 or keep.dtype.kind not in "iu" or A.shape[0] != A.shape[1] \
             or (keep.size > 1 and not np.all(np.diff(keep) > 0)) \
             or (keep.size and (keep[0] < 0 or keep[-1] >= A.shape[0])):
         return A[keep][:, keep].tocsr()
@@ -88,7 +130,7 @@ def csr_restrict(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
         indptr = np.zeros(keep.size + 1, dtype=A.indptr.dtype)
         np.cumsum(np.bincount(new[rows[selected]], minlength=keep.size), out=indptr[1:])
         maps = (selected, new[A.indices[selected]].astype(A.indices.dtype), indptr)
-        _remember(_RESTRICT_MEMO, key, maps)
+        _RESTRICT_MEMO.put(key, maps)
     selected, indices, indptr = maps
     return sp.csr_matrix((A.data[selected], indices.copy(), indptr.copy()),
                          shape=(keep.size, keep.size))

@@ -28,16 +28,13 @@ import time
 
 import numpy as np
 
-PROBLEM = dict(twist_ratio=1.3333, length_over_diameter=33, tension=75, turns=(0, 5))
+PROBLEM = {"twist_ratio": 1.3333, "length_over_diameter": 33, "tension": 75, "turns": (0, 5)}
 
 
 def breakdown(n_nodes: int, max_points: int) -> None:
-    import supercoil.continuation.bordered as bordered
-    import supercoil.continuation.events as events
-    import supercoil.continuation.pseudo_arclength as pa
-    import supercoil.continuation.stability as stability
-    import supercoil.continuation.system as system
     import supercoil.contact.problem as contact
+    import supercoil.continuation.pseudo_arclength as pa
+    from supercoil.continuation import bordered, events, stability, system
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
     spent = collections.defaultdict(float)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+
 class PatternMemo:
     """A small first-in-first-out memo of per-pattern index maps, bounded in size.
 

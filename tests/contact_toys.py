@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from test_continuation_toys import Unconstrained
 
 from supercoil.solvers.problem import HessianParts
 
@@ -18,7 +19,7 @@ class _ToyRod:
     bending_stiffness: float = 1.0
 
 
-class CrossedRods:
+class CrossedRods(Unconstrained):
     """Rod A (fixed, along x at z = 0) and rod B (along y, above A) pushed down by ``load``.
 
     B's nodes move only in z (x, y fixed), with a stiff bending spring
@@ -83,14 +84,3 @@ class CrossedRods:
         return HessianParts((self.K * (self._D2.T @ self._D2)
                              + sp.diags(self.anchor / self.n * self._anchor())).tocsr())
 
-    def constraints(self, q):
-        return np.zeros(0)
-
-    def constraint_jacobian(self, q):
-        return sp.csr_matrix((0, self.n_dofs))
-
-    def constraint_hessian(self, q, multipliers):
-        return sp.csr_matrix((self.n_dofs, self.n_dofs))
-
-    def accept(self, q):
-        pass

@@ -12,7 +12,25 @@ def _no_rank_one(n):
     return np.zeros((0, n)), np.zeros(0)
 
 
-class Bratu:
+class Unconstrained:
+    """The constraint half of the protocol for toys without constraints."""
+
+    n_constraints = 0
+
+    def constraints(self, q):
+        return np.zeros(0)
+
+    def constraint_jacobian(self, q):
+        return sp.csr_matrix((0, self.n_dofs))
+
+    def constraint_hessian(self, q, multipliers):
+        return sp.csr_matrix((self.n_dofs, self.n_dofs))
+
+    def accept(self, q):
+        pass
+
+
+class Bratu(Unconstrained):
     """-u'' = lambda e^u on (0, 1), u(0) = u(1) = 0, by finite differences (energy form).
 
     ``E = sum_i (u_{i+1} - u_i)^2 / (2h) - lambda h sum_{interior} e^{u_i}``, DOFs
@@ -21,7 +39,6 @@ class Bratu:
     rank-one term (``rank_one=True``) or assembled into the sparse part.
     """
 
-    n_constraints = 0
 
     def __init__(self, n_intervals: int, lam: float = 0.0, nonlocal_: float = 0.0,
                  rank_one: bool = True):
@@ -72,15 +89,6 @@ class Bratu:
         assert name == "lam"
         return -self.h * self._interior() * np.exp(q)
 
-    def constraints(self, q):
-        return np.zeros(0)
-
-    def constraint_jacobian(self, q):
-        return sp.csr_matrix((0, self.n_dofs))
-
-    def constraint_hessian(self, q, multipliers):
-        return sp.csr_matrix((self.n_dofs, self.n_dofs))
-
     def accept(self, q):
         self.accepted.append(np.array(q))
 
@@ -101,25 +109,7 @@ def bratu_midpoint_exact(lam: float, upper: bool) -> float:
     return 2 * np.log(np.cosh(theta / 4))
 
 
-class _Unconstrained:
-    """The constraint half of the protocol for toys without constraints."""
-
-    n_constraints = 0
-
-    def constraints(self, q):
-        return np.zeros(0)
-
-    def constraint_jacobian(self, q):
-        return sp.csr_matrix((0, self.n_dofs))
-
-    def constraint_hessian(self, q, multipliers):
-        return sp.csr_matrix((self.n_dofs, self.n_dofs))
-
-    def accept(self, q):
-        pass
-
-
-class DiagonalQuartic(_Unconstrained):
+class DiagonalQuartic(Unconstrained):
     """``E = sum_i (d_i - lambda) x_i^2 / 2 + (sum_i x_i^2)^2 / 4``.
 
     The trivial branch ``x = 0`` has unstable count ``#{d_i < lambda}``; pitchforks
@@ -206,7 +196,7 @@ class LoadedSphere:
         pass
 
 
-class CircleOfEquilibria(_Unconstrained):
+class CircleOfEquilibria(Unconstrained):
     """``E = x_0^3 / 3 + (lambda^2 - 1) x_0 + sum_{i>=1} d_i x_i^2 / 2``.
 
     Its equilibria are the circle ``x_0^2 + lambda^2 = 1`` (the other ``x_i = 0``): a
@@ -240,7 +230,7 @@ class CircleOfEquilibria(_Unconstrained):
         return g
 
 
-class Helix(_Unconstrained):
+class Helix(Unconstrained):
     """``E = |q - c(lambda)|^2 / 2`` with ``c = (cos(lambda/eps), sin(lambda/eps))``: the
     equilibria ``q = c(lambda)`` form a helix of pitch ``2 pi eps`` in ``(q, lambda)``, an
     open branch without folds that passes near its own earlier points every turn."""

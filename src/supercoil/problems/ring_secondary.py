@@ -44,7 +44,7 @@ from collections.abc import Callable
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, switch_branch
 from supercoil.problems.ring_branches import PRIMARY_NAMES, ring_records
 
-AMPLITUDES = (0.05, 0.2, 0.5)  # first step off the bifurcation point, in units of D
+AMPLITUDES = (0.05, 0.01, 0.002, 0.2, 0.5)  # first step off the bifurcation point, units of D
 MAX_DEPTH = 3  # generations: 1 primary, 2 secondary, 3 tertiary
 
 

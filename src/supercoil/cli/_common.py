@@ -102,8 +102,6 @@ def parse_ratio(text: str) -> float:
     """A number written as a decimal (``0.6667``) or a fraction (``2/3``), as papers
     quote twist ratios; a typer ``parser``. Other text raises ``ValueError``, which the
     command line reports as an invalid value of the option."""
-    if isinstance(text, (int, float)):
-        return float(text)
     words = str(text).split("/")
     if len(words) > 2:
         raise ValueError(f"{text!r} is not a number or a fraction like 2/3")

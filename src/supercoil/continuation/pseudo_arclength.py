@@ -248,18 +248,29 @@ class _Tracer:
         length = system.norm(chord)
         if length == 0.0:
             return None
-        earlier = np.array(self.xs[:k - 2])
+        reach = opts.closed_loop_tolerance * length
+        # The metric weighs the parameter by w (its last weight is w^2), so a point whose
+        # parameter lies farther than reach / w from the chord's is not within reach:
+        # only the others are stacked (this runs at every point).
+        lam = np.array([x[-1] for x in self.xs[:k - 2]])
+        low, high = sorted((a[-1], b[-1]))
+        off = np.maximum(np.maximum(low - lam, lam - high), 0.0)
+        near = np.flatnonzero(off * np.sqrt(system.weights[-1]) <= reach)
+        if near.size == 0:
+            return None
+        earlier = np.array([self.xs[j] for j in near])
         w = system.weights
         u = np.clip(((earlier - a) * w) @ chord / length**2, 0.0, 1.0)
         gaps = np.sqrt(np.einsum("ij,ij->i", (a + u[:, None] * chord - earlier) ** 2,
                                  np.broadcast_to(w, earlier.shape)))
         cos_limit = math.cos(math.radians(15.0))
         count = self.stabs[-1].unstable_count
-        for j in np.flatnonzero(gaps <= opts.closed_loop_tolerance * length):
+        for i in np.flatnonzero(gaps <= reach):
+            j = int(near[i])
             if (self.ts[j] @ (w * self.ts[-1]) >= cos_limit
                     and self.stabs[j].unstable_count == count and self._closes_at(a, chord,
-                                                                                u[j], j)):
-                return int(j)
+                                                                                u[i], j)):
+                return j
         return None
 
     def _closes_at(self, a: np.ndarray, chord: np.ndarray, u: float, j: int) -> bool:

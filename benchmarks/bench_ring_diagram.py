@@ -28,6 +28,7 @@ def main(argv=None) -> int:
     parser.add_argument("--nodes", type=int, default=200)
     parser.add_argument("--max-excess-link", type=float, default=6.0)
     parser.add_argument("--contact-max-points", type=int, default=400)
+    parser.add_argument("--contact-formulation", default="pairs", choices=("pairs", "integral"))
     parser.add_argument("--profile", action="store_true")
     args = parser.parse_args(argv)
 
@@ -37,7 +38,8 @@ def main(argv=None) -> int:
                                 contact_max_points=5))
     options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                              max_excess_link=args.max_excess_link,
-                             contact_max_points=args.contact_max_points)
+                             contact_max_points=args.contact_max_points,
+                             contact_formulation=args.contact_formulation)
     profile = cProfile.Profile() if args.profile else None
     start = time.perf_counter()
     if profile:
@@ -46,7 +48,8 @@ def main(argv=None) -> int:
     if profile:
         profile.disable()
     total = time.perf_counter() - start
-    print(f"C/A = 2/3, L/D = 122, N = {args.nodes}, mode 2, dLk <= {args.max_excess_link:g}")
+    print(f"C/A = 2/3, L/D = 122, N = {args.nodes}, mode 2, dLk <= {args.max_excess_link:g}, "
+          f"{args.contact_formulation} contact")
     print("| branch | points | seconds | s/point | dLk range | max writhe | status |")
     print("|---|---|---|---|---|---|---|")
     for b in diagram.branches:
@@ -55,6 +58,10 @@ def main(argv=None) -> int:
         print(f"| {b.name} | {len(b)} | {sec:.2f} | {sec / max(len(b), 1):.3f} | "
               f"{lam.min():.3f} .. {lam.max():.3f} | {float(b.records['writhe'].max()):.3f} | "
               f"{b.status.name} |")
+    kinds: dict[str, int] = {}
+    for p in diagram.special_points():
+        kinds[p.kind] = kinds.get(p.kind, 0) + 1
+    print("special points:", ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
     print(f"total {total:.2f} s")
     if profile:
         pstats.Stats(profile).sort_stats("cumulative").print_stats(30)

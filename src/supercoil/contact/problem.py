@@ -77,6 +77,14 @@ from supercoil.contact import potentials
 from supercoil.contact.broadphase import candidate_pairs
 from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
 from supercoil.contact.distance import segment_distance, segment_distance_derivatives
+from supercoil.contact.integral import (
+    default_samples,
+    first_time_of_approach_samples,
+    integral_terms,
+    polygon_weights,
+    sample_points,
+    spline_weights,
+)
 from supercoil.contact.spline_distance import (
     bspline_pieces,
     local_minimum_pairs,
@@ -89,6 +97,7 @@ from supercoil.topology import writhe
 
 TREATMENTS = ("barrier", "augmented", "penalty", "exact")
 CURVES = ("polygon", "spline")  # the curve whose self-distance is the contact distance
+FORMULATIONS = ("pairs", "integral")  # how the potential is summed, see ContactOptions
 LINK_CHECK_MAX_NODES = 2000  # see ContactProblem.admissible
 _PAIR_MEMO = 8  # pair states remembered, see ContactProblem.pair_state
 # Verlet list of ContactProblem._candidates: broad phase reach beyond the asked
@@ -129,7 +138,13 @@ class ContactOptions:
     it, but the energy then jumps where a local minimum is born inside the
     barrier's reach (line contacts). Measured in docs/benchmarks.md ("Spline
     contact"): it helps point contacts (the ring), it stalls line contacts
-    (tweezers).
+    (tweezers). ``formulation``: ``"pairs"`` sums the potential of the
+    closest distance of every segment (piece) pair; ``"integral"``
+    integrates it over both strands (:mod:`supercoil.contact.integral`), so
+    that a contact counts once wherever it lies relative to the nodes
+    (barrier and penalty only). ``samples_per_segment``: quadrature points per
+    segment of the integral, default
+    :func:`~supercoil.contact.integral.default_samples`.
     """
 
     diameter: float
@@ -144,6 +159,8 @@ class ContactOptions:
     force_tolerance: float = 1e-8
     curve: str = "polygon"
     count_local_minima: bool = False
+    formulation: str = "pairs"
+    samples_per_segment: int | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.diameter) and self.diameter > 0):
@@ -164,6 +181,20 @@ class ContactOptions:
             raise ValueError("max_outer_iterations must be >= 1")
         if self.count_local_minima and self.curve != "spline":
             raise ValueError("count_local_minima needs curve='spline'")
+        if self.formulation not in FORMULATIONS:
+            raise ValueError(f"contact formulation must be one of {', '.join(FORMULATIONS)} "
+                             f"(a sum over segment pairs or a double integral over the "
+                             f"strands); got {self.formulation!r}")
+        if self.formulation == "integral" and self.treatment not in ("barrier", "penalty"):
+            raise ValueError(f"the integral contact formulation takes the barrier or the "
+                             f"penalty treatment, not {self.treatment!r}")
+        if self.formulation == "integral" and self.count_local_minima:
+            raise ValueError("count_local_minima belongs to the pairs formulation")
+        if self.samples_per_segment is not None and not (
+                isinstance(self.samples_per_segment, (int, np.integer))
+                and self.samples_per_segment >= 1):
+            raise ValueError(f"samples_per_segment must be an integer >= 1, got "
+                             f"{self.samples_per_segment!r}")
         if self.curve not in CURVES:
             raise ValueError(f"contact curve must be one of {', '.join(CURVES)} (the polygon's "
                              f"segments or the cubic B-spline of the nodes); got {self.curve!r}")
@@ -215,6 +246,17 @@ class ContactProblem:
         self.exclusion = options.exclusion_length
         self.spline = options.curve == "spline"
         self.pieces = bspline_pieces(self.segments, self.closed) if self.spline else None
+        self.integral = options.formulation == "integral"
+        if self.integral:
+            self.samples = (options.samples_per_segment if options.samples_per_segment
+                            else default_samples(h, self.diameter,
+                                                 options.barrier_activation * self.diameter))
+            if self.spline:
+                self.sample_stencil = np.ascontiguousarray(self.pieces.stencil)
+                self.sample_weights = spline_weights(self.pieces.coefficients, self.samples)
+            else:
+                self.sample_stencil = np.ascontiguousarray(self.segments)
+                self.sample_weights = polygon_weights(len(self.segments), self.samples)
         self.n_dofs = base.n_dofs
         self.fixed = base.fixed
         self.mass = base.mass
@@ -468,8 +510,27 @@ class ContactProblem:
         dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(len(pairs), 12)
         return d, grad, hess, dofs
 
+    def _integral(self, q: np.ndarray, order: int):
+        """:func:`~supercoil.contact.integral.integral_terms` of the pairs within reach
+        at ``q``; the last call is remembered, and serves lower orders too."""
+        st = self._state(q)
+        key = np.ascontiguousarray(q, dtype=np.float64).tobytes()
+        cached = self.__dict__.get("_integral_cache")
+        if cached is not None and cached[0] == key and cached[1] >= order \
+                and cached[2] == self.stiffness:
+            return st, cached[3]
+        opts = self.options
+        terms = integral_terms(np.asarray(q, dtype=float).reshape(-1, 3), self.sample_stencil,
+                               self.sample_weights, st.pairs, self.diameter, self.treatment,
+                               self.stiffness, opts.barrier_activation * self.diameter,
+                               self.edge_length, order)
+        self.__dict__["_integral_cache"] = (key, order, self.stiffness, terms)
+        return st, terms
+
     # ------------------------------------------------------------ energy
     def contact_energy(self, q: np.ndarray) -> float:
+        if self.integral:
+            return float(np.sum(self._integral(q, 0)[1][0]))
         st = self._state(q)
         if len(st.pairs) == 0:
             return 0.0
@@ -481,6 +542,10 @@ class ContactProblem:
 
     def gradient(self, q: np.ndarray) -> np.ndarray:
         g = self.base.gradient(q)
+        if self.integral:
+            _st, (_e, grad, _h, _f, _p, dofs) = self._integral(q, 1)
+            np.add.at(g, dofs.ravel(), grad[: len(dofs)].ravel())
+            return g
         st = self._state(q)
         if len(st.pairs):
             d, grad, _hess, dofs = self._pair_derivatives(q, st.pairs)
@@ -491,6 +556,18 @@ class ContactProblem:
     def contact_hessian(self, q: np.ndarray) -> sp.csr_matrix:
         one_sided = self.stability_mode and self.treatment in ("penalty", "augmented")
         D = self.diameter
+        if self.integral:
+            # a sample pair touching without force (penalty) weighs nothing here: the
+            # one-sided closing stiffness of the pairs formulation is not added
+            _st, (_e, _g, local, _f, _p, dofs) = self._integral(q, 2)
+            local = local[: len(dofs)]
+            n = self.n_dofs
+            if len(dofs) == 0:
+                return sp.csr_matrix((n, n))
+            w = dofs.shape[1]
+            rows = np.repeat(dofs, w, axis=1).ravel()
+            cols = np.tile(dofs, (1, w)).ravel()
+            return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))
         if one_sided:
             st = self.pair_state(q, max(self._cutoff(), D * (1 + self.options.tolerance)))
         else:
@@ -632,13 +709,27 @@ class ContactProblem:
         t_hit = 1.0
         if len(st.pairs):
             d0 = st.distance
-            if self.treatment == "barrier" and not self.spline:
+            if self.treatment == "barrier" and not self.spline and not self.integral:
                 threshold = D + 0.1 * np.maximum(d0 - D, 0.0)
             else:
                 threshold = np.minimum(0.9 * d0, np.maximum(0.1 * d0, 0.5 * D))
             t_hit, _k = first_time_of_approach(x0, cap * dx, self._pair_nodes(st.pairs),
                                                threshold)
-        if self.spline and self.treatment == "barrier":
+        if self.integral and self.treatment == "barrier":
+            # the barrier's gaps are those of the sample points: none may fall below
+            # a tenth of the smallest one now (sliding brings other sample pairs
+            # into line, and their gaps may fall to that of the contact)
+            st = self.pair_state(q, reach, shadows=True) if self.spline else st
+            if len(st.pairs):
+                points = sample_points(x0, self.sample_stencil, self.sample_weights)
+                pi, pj = points[st.pairs[:, 0]], points[st.pairs[:, 1]]
+                gap = float(np.sqrt(np.min(np.sum(
+                    (pi[:, :, None, :] - pj[:, None, :, :]) ** 2, axis=-1)))) - D
+                t_samples = first_time_of_approach_samples(
+                    x0, cap * dx, self.sample_stencil, self.sample_weights, st.pairs,
+                    D + 0.1 * max(gap, 0.0))
+                t_hit = min(t_hit, t_samples)
+        elif self.spline and self.treatment == "barrier":
             # the barrier's gap is the spline's: keep it above a tenth of its value
             st = self.pair_state(q, reach, shadows=True)
             if len(st.pairs):
@@ -664,6 +755,12 @@ class ContactProblem:
                 return self.pair_state(q, 0.0), np.zeros(0)
             d, s, t = self.pair_distances(q, self.active)
             return PairState(self.active.copy(), d, s, t), -lam
+        if self.integral:
+            # per pair: the integrated force and its force-weighted sample positions
+            st, (_e, _g, _h, force, param, _dofs) = self._integral(q, 1)
+            keep = force > 0
+            return (PairState(st.pairs[keep], st.distance[keep], param[keep, 0],
+                              param[keep, 1]), force[keep])
         st = self.pair_state(q, self._cutoff())
         if len(st.pairs) == 0:
             return st, np.zeros(0)

@@ -107,7 +107,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from supercoil.contact.problem import CURVES, DEFAULT_TREATMENT, ContactOptions, ContactProblem
+from supercoil.contact.problem import (
+    CURVES,
+    DEFAULT_TREATMENT,
+    FORMULATIONS,
+    ContactOptions,
+    ContactProblem,
+)
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import (
     Branch,
@@ -174,6 +180,8 @@ class DiagramOptions:
     ``contact_curve``: ``"polygon"`` or ``"spline"``, the curve whose
     self-distance is the contact distance (``ContactOptions.curve``; the
     contact onset of the contact-free branches is measured on it too).
+    ``contact_formulation``: ``"pairs"`` or ``"integral"``
+    (``ContactOptions.formulation``).
     """
 
     twist_ratio: float
@@ -195,6 +203,7 @@ class DiagramOptions:
     secondary_max_points: int = 40
     secondary_max_branches: int = 12
     contact_curve: str = "polygon"
+    contact_formulation: str = "pairs"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.twist_ratio) and self.twist_ratio > 0):
@@ -222,6 +231,9 @@ class DiagramOptions:
         if self.contact_curve not in CURVES:
             raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got "
                              f"{self.contact_curve!r}")
+        if self.contact_formulation not in FORMULATIONS:
+            raise ValueError(f"contact_formulation must be one of {', '.join(FORMULATIONS)}, "
+                             f"got {self.contact_formulation!r}")
         for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
             if getattr(self, name) < 2:
                 raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
@@ -338,6 +350,7 @@ class RingDiagram:
             "diameter": opts.diameter,
             "n_nodes": opts.n_nodes,
             "contact_curve": opts.contact_curve,
+            "contact_formulation": opts.contact_formulation,
             "modes": list(opts.modes),
             "max_excess_link": opts.max_excess_link,
             "michell_excess_link": {str(m): float(michell_excess_link(opts.twist_ratio, m))
@@ -542,7 +555,8 @@ def ring_diagram(options: DiagramOptions,
     seconds["circle"] = time.perf_counter() - start
     D = opts.diameter * problem.rod.length
     contact_options = ContactOptions(diameter=D, treatment=opts.contact,
-                                     curve=opts.contact_curve)
+                                     curve=opts.contact_curve,
+                                     formulation=opts.contact_formulation)
     probe = ContactProblem(problem, ContactOptions(diameter=D, treatment="barrier",
                                                    curve=opts.contact_curve))
     cp = ContactProblem(problem, contact_options)

@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from supercoil.contact.problem import CURVES, ContactOptions, ContactProblem
+from supercoil.contact.problem import CURVES, FORMULATIONS, ContactOptions, ContactProblem
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import (
     Branch,
@@ -109,6 +109,8 @@ class TweezersOptions:
     ``segment_points`` the points per continuation run between pin checks.
     Tolerances as in :class:`~supercoil.problems.ring_diagram.DiagramOptions`.
     ``contact_curve``: ``"polygon"`` or ``"spline"`` (``ContactOptions.curve``).
+    ``contact_formulation``: ``"pairs"`` or ``"integral"``
+    (``ContactOptions.formulation``).
     """
 
     twist_ratio: float
@@ -125,6 +127,7 @@ class TweezersOptions:
     contact_event_tolerance: float = 1e-6
     contact_tolerance: float = 1e-8
     contact_curve: str = "polygon"
+    contact_formulation: str = "pairs"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.twist_ratio, (int, float)) and math.isfinite(self.twist_ratio)
@@ -162,6 +165,9 @@ class TweezersOptions:
         if self.contact_curve not in CURVES:
             raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got "
                              f"{self.contact_curve!r}")
+        if self.contact_formulation not in FORMULATIONS:
+            raise ValueError(f"contact_formulation must be one of {', '.join(FORMULATIONS)}, "
+                             f"got {self.contact_formulation!r}")
 
     @property
     def load_control(self) -> bool:
@@ -500,7 +506,8 @@ def tweezers_branches(options: TweezersOptions,
     notes: list[str] = []
     rod, q0 = clamped_problem(opts)
     D = opts.diameter
-    contact_options = (ContactOptions(diameter=D, curve=opts.contact_curve)
+    contact_options = (ContactOptions(diameter=D, curve=opts.contact_curve,
+                                      formulation=opts.contact_formulation)
                        if D is not None else None)
     probe = ContactProblem(rod, contact_options) if D is not None else None
     cp = ContactProblem(rod, contact_options) if D is not None else None

@@ -84,6 +84,7 @@ def result_payload(result: TweezersResult) -> dict:
         "turns_range": list(opts.turns),
         "n_nodes": opts.n_nodes,
         "contact_curve": opts.contact_curve,
+        "contact_formulation": opts.contact_formulation,
         "greenhill_turns": result.greenhill_turns,
         "branches": branches,
         "special_points": [special_summary(p) for p in result.special_points()],

@@ -120,7 +120,8 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
     schedule = _schedule(options, protocol, step, force_range, force_step)
     rod, q = clamped_problem(options)
     D = options.diameter
-    problem = (ContactProblem(rod, ContactOptions(diameter=D, curve=options.contact_curve))
+    problem = (ContactProblem(rod, ContactOptions(diameter=D, curve=options.contact_curve,
+                                                  formulation=options.contact_formulation))
                if D is not None else rod)
     contact = D is not None
     records = tweezers_records(problem, rod, contact,

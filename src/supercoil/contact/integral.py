@@ -1,0 +1,287 @@
+"""Contact energy as a double integral over the two touching strands.
+
+The pair formulation (:mod:`supercoil.contact.problem`, ``formulation =
+"pairs"``) sums the potential of the closest distance of every segment pair.
+A contact point then counts once when it lies inside a segment pair and twice
+(four times) when it lies at a node of one (both) strands, where the two pairs
+sharing that node see the same closest points: as the material slides along a
+contact its energy jumps by up to a factor of four with period ``h``. Those
+jumps are the sawtooth, the artefact folds and the stalls of the contact
+branches (docs/model.md, "Contact energy").
+
+The integral formulation counts every stretch of contact once by
+construction:
+
+    E_c = 1 / (2 D g_hat) ∫∫ psi(|r(s) - r(t)| - D) ds dt,
+
+over pairs of points farther apart along the rod than the neighbour
+exclusion, ``psi`` the scalar potential of the gap
+(:mod:`supercoil.contact.potentials`: the barrier or the penalty) and ``r``
+the contact curve (the polygon, or the cubic B-spline of the nodes). It is a
+functional of the curve alone: it does not depend on where the nodes sit
+along it, up to the quadrature error. This is the interaction-potential
+approach of beam contact (Grill, Meier & Wall, "A computational model for
+molecular interactions between curved slender fibers undergoing large 3D
+deformations with a focus on electrostatic, van der Waals and repulsive
+steric forces", IJNME 2020), with the steric potential replaced by the
+barrier. The normalisation ``1 / (2 D g_hat)`` makes a point contact weigh
+about one pair term: two strands crossing at a right angle at the gap ``g``
+interact over an area of about ``2 pi D (g_hat - g)`` of the ``(s, t)``
+plane, where ``psi`` is non-zero.
+
+Quadrature: the midpoint rule with ``q`` points per segment (``u_a = (a +
+1/2) / q``), weight ``(h / q)^2`` per pair of points. Each sample point is a
+fixed linear combination of at most four nodes (two on the polygon, the
+B-spline piece's four on the spline), so the discrete energy is a smooth
+function of the nodes wherever every sample gap is positive: no closest-point
+search, no distance regions, exact gradient and Hessian by the chain rule,
+
+    grad = sum psi'(g) c ⊗ n,
+    Hess = sum c c^T ⊗ (psi''(g) n n^T + psi'(g) / d (I - n n^T)),
+
+``n`` the unit vector between the two sample points, ``c`` their stencil
+weights (the second strand's negated). The quadrature resolves a point
+contact when its spacing ``h / q`` is small against the width ``sqrt(2 D
+g_hat)`` of the region where ``psi`` acts (:func:`default_samples`).
+
+The barrier only sees the sample points: the segments between them may come
+slightly closer than ``D``; by at most about ``(h / 2q)^2 / D`` for crossing
+strands (reported as ``min_gap_over_diameter``, measured in the tests).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from supercoil._numba import njit
+
+POTENTIALS = {"barrier": 0, "penalty": 1}
+# quadrature spacing over the width sqrt(2 D g_hat) of a point contact's region
+SPACING_OVER_WIDTH = 0.25
+MIN_SAMPLES = 2
+
+
+def default_samples(edge_length: float, diameter: float, activation: float) -> int:
+    """Points per segment so that their spacing is ``SPACING_OVER_WIDTH sqrt(2 D g_hat)``.
+
+    ``activation`` is ``g_hat`` (a length). At least ``MIN_SAMPLES``.
+    """
+    width = math.sqrt(2.0 * diameter * activation)
+    return max(MIN_SAMPLES, int(math.ceil(edge_length / (SPACING_OVER_WIDTH * width))))
+
+
+def sample_parameters(samples: int) -> np.ndarray:
+    """Midpoint-rule parameters ``(a + 1/2) / q`` ``(q,)`` along a segment."""
+    return (np.arange(samples) + 0.5) / samples
+
+
+def polygon_weights(n_segments: int, samples: int) -> np.ndarray:
+    """``(k, q, 2)`` weights of a segment's two end nodes at its sample points."""
+    u = sample_parameters(samples)
+    w = np.stack([1.0 - u, u], axis=1)
+    return np.ascontiguousarray(np.broadcast_to(w, (n_segments, samples, 2)))
+
+
+def spline_weights(coefficients: np.ndarray, samples: int) -> np.ndarray:
+    """``(k, q, 4)`` weights of a B-spline piece's stencil nodes at its sample points.
+
+    ``coefficients`` ``(k, 4, 4)``: weight of stencil node ``l`` on ``u^p``
+    (:attr:`supercoil.contact.spline_distance.CurvePieces.coefficients`).
+    """
+    u = sample_parameters(samples)
+    powers = u[:, None] ** np.arange(4)[None, :]  # (q, 4)
+    return np.ascontiguousarray(np.einsum("ilp,ap->ial", coefficients, powers))
+
+
+@njit()
+def _psi(kind, g, stiffness, activation):
+    """``(psi, psi', psi'')`` of the gap (:mod:`supercoil.contact.potentials`).
+
+    ``kind`` 0: the IPC barrier ``-kappa (g - g_hat)^2 log(g / g_hat)`` on ``0 < g
+    < g_hat``, ``inf`` for ``g <= 0``; 1: the penalty ``k/2 min(g, 0)^2``.
+    (A barrier that vanishes with all its derivatives at ``g_hat`` was tried:
+    steeper near ``g_hat``, it rippled 5-10 times more at 16-32 points per
+    segment than this C² one.)
+    """
+    if kind == 0:
+        if g <= 0.0:
+            return np.inf, 0.0, 0.0
+        if g >= activation:
+            return 0.0, 0.0, 0.0
+        diff = g - activation
+        log = math.log(g / activation)
+        value = -stiffness * diff * diff * log
+        first = -stiffness * (2.0 * diff * log + diff * diff / g)
+        second = -stiffness * (2.0 * log + 4.0 * diff / g - diff * diff / (g * g))
+        return value, first, second
+    if g >= 0.0:
+        return 0.0, 0.0, 0.0
+    return 0.5 * stiffness * g * g, stiffness * g, stiffness
+
+
+@njit()
+def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, activation,
+                     scale, order, energy_out, grad, hess, force, param):
+    """Per-pair terms of the double integral (see the module docstring).
+
+    ``order`` 0: energy only; 1: and gradients; 2: and Hessians. Per pair ``p``:
+    ``energy_out[p]``, ``grad[p]`` ``(2 w 3,)``, ``hess[p]`` ``(2 w 3, 2 w 3)``
+    over the stencil nodes of both segments (``w`` per segment), ``force[p]`` the
+    integrated normal force ``-sum psi' * scale`` and ``param[p]`` the
+    force-weighted mean sample parameters on both segments.
+    """
+    m = pairs.shape[0]
+    q = weights.shape[1]
+    w = weights.shape[2]
+    cutoff = diameter + activation if kind == 0 else diameter
+    pi = np.empty((q, 3))
+    pj = np.empty((q, 3))
+    c = np.empty(2 * w)
+    h3 = np.empty((3, 3))
+    u = np.empty(q)
+    for a in range(q):
+        u[a] = (a + 0.5) / q
+    for p in range(m):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        for a in range(q):
+            for k in range(3):
+                si = 0.0
+                sj = 0.0
+                for l in range(w):
+                    si += weights[i, a, l] * x[stencil[i, l], k]
+                    sj += weights[j, a, l] * x[stencil[j, l], k]
+                pi[a, k] = si
+                pj[a, k] = sj
+        e = 0.0
+        f_sum = 0.0
+        ui = 0.0
+        uj = 0.0
+        for a in range(q):
+            for b in range(q):
+                d0 = pi[a, 0] - pj[b, 0]
+                d1 = pi[a, 1] - pj[b, 1]
+                d2 = pi[a, 2] - pj[b, 2]
+                d = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                if d >= cutoff:
+                    continue
+                value, first, second = _psi(kind, d - diameter, stiffness, activation)
+                e += value
+                if order == 0 or value == np.inf:
+                    continue
+                first *= scale
+                f_sum -= first
+                ui -= first * u[a]
+                uj -= first * u[b]
+                n0 = d0 / d
+                n1 = d1 / d
+                n2 = d2 / d
+                for l in range(w):
+                    c[l] = weights[i, a, l]
+                    c[w + l] = -weights[j, b, l]
+                for l in range(2 * w):
+                    grad[p, 3 * l] += first * c[l] * n0
+                    grad[p, 3 * l + 1] += first * c[l] * n1
+                    grad[p, 3 * l + 2] += first * c[l] * n2
+                if order < 2:
+                    continue
+                second *= scale
+                tang = first / d
+                nv = (n0, n1, n2)
+                for r in range(3):
+                    for s in range(3):
+                        h3[r, s] = (second - tang) * nv[r] * nv[s]
+                    h3[r, r] += tang
+                for l1 in range(2 * w):
+                    if c[l1] == 0.0:
+                        continue
+                    for l2 in range(2 * w):
+                        cc = c[l1] * c[l2]
+                        if cc == 0.0:
+                            continue
+                        for r in range(3):
+                            for s in range(3):
+                                hess[p, 3 * l1 + r, 3 * l2 + s] += cc * h3[r, s]
+        energy_out[p] = e * scale
+        force[p] = f_sum
+        if f_sum > 0.0:
+            param[p, 0] = ui / f_sum
+            param[p, 1] = uj / f_sum
+        else:
+            param[p, 0] = 0.5
+            param[p, 1] = 0.5
+
+
+def integral_terms(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray, pairs: np.ndarray,
+                   diameter: float, potential: str, stiffness: float, activation: float,
+                   edge_length: float, order: int = 2):
+    """Terms of the double-integral contact energy for segment pairs ``pairs`` ``(m, 2)``.
+
+    ``x`` ``(n, 3)`` nodes; ``stencil`` ``(k, w)`` node indices and ``weights``
+    ``(k, q, w)`` their weights at each segment's ``q`` sample points.
+    ``activation`` is the barrier's ``g_hat`` (a length; it also sets the
+    normalisation ``1 / (2 D g_hat)`` of both potentials). Returns ``(energy
+    (m,), gradient (m, 6w), Hessian (m, 6w, 6w), force (m,), parameters (m,
+    2), dofs (m, 6w))``; the gradient and Hessian are zero when ``order`` is
+    below 1 and 2. ``energy`` is ``inf`` for a pair with a sample gap ``<= 0``
+    (barrier).
+    """
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    m = len(pairs)
+    q, w = weights.shape[1], weights.shape[2]
+    samples_weight = (edge_length / q) ** 2 / (2.0 * diameter * activation)
+    energy = np.zeros(m)
+    # the kernel writes the gradient (Hessian) only when order >= 1 (2)
+    grad = np.zeros((m if order >= 1 else 1, 6 * w))
+    hess = np.zeros((m if order >= 2 else 1, 6 * w, 6 * w))
+    force = np.zeros(m)
+    param = np.zeros((m, 2))
+    if m:
+        _integral_kernel(np.ascontiguousarray(x, dtype=np.float64), stencil, weights, pairs,
+                         float(diameter), POTENTIALS[potential], float(stiffness),
+                         float(activation), samples_weight, int(order), energy, grad, hess,
+                         force, param)
+    nodes = np.concatenate([stencil[pairs[:, 0]], stencil[pairs[:, 1]]], axis=1)
+    dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(m, 6 * w)
+    return energy, grad, hess, force, param, dofs
+
+
+def sample_points(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``(k, q, 3)`` sample points of every segment (or piece)."""
+    return np.einsum("kal,klx->kax", weights, np.asarray(x, dtype=float)[stencil])
+
+
+def first_time_of_approach_samples(x0: np.ndarray, dx: np.ndarray, stencil: np.ndarray,
+                                   weights: np.ndarray, pairs: np.ndarray,
+                                   threshold: float) -> float:
+    """Earliest ``tau`` in ``[0, 1]`` at which two sample points of ``pairs`` come
+    within ``threshold`` of each other, the nodes moving as ``x0 + tau dx``.
+
+    Sample points are linear in the nodes, so each pair of them moves on a
+    straight line relative to the other and ``|r0 + tau v|^2 = threshold^2`` is
+    a quadratic in ``tau``: the time is exact (no conservative advancement,
+    which crawls when strands slide along each other at small gaps). Returns
+    1.0 when no pair gets that close, 0.0 when one already is.
+    """
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if len(pairs) == 0:
+        return 1.0
+    p0 = sample_points(x0, stencil, weights)
+    v = sample_points(dx, stencil, weights)
+    r0 = p0[pairs[:, 0]][:, :, None, :] - p0[pairs[:, 1]][:, None, :, :]  # (m, q, q, 3)
+    rv = v[pairs[:, 0]][:, :, None, :] - v[pairs[:, 1]][:, None, :, :]
+    a = np.sum(rv * rv, axis=-1)
+    b = 2.0 * np.sum(r0 * rv, axis=-1)
+    c = np.sum(r0 * r0, axis=-1) - threshold * threshold
+    if np.any(c <= 0.0):
+        return 0.0
+    disc = b * b - 4.0 * a * c
+    hit = (a > 0.0) & (b < 0.0) & (disc >= 0.0)
+    if not hit.any():
+        return 1.0
+    root = np.sqrt(disc[hit])
+    # smaller root of a tau^2 + b tau + c, in the stable form 2c / (-b + sqrt(disc))
+    tau = 2.0 * c[hit] / (-b[hit] + root)
+    return float(min(1.0, np.min(tau)))

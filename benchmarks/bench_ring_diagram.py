@@ -3,7 +3,8 @@
 Run from the repository root:
 
     python benchmarks/bench_ring_diagram.py [--nodes 200] [--max-excess-link 6]
-        [--contact-max-points 400] [--profile]
+        [--contact-max-points 400] [--contact-formulation pairs|integral]
+        [--contact-curve polygon|spline] [--profile]
 
 Times :func:`supercoil.problems.ring_diagram.ring_diagram` for C/A = 2/3,
 L/D = 122 (seed 001's DNA example), mode 2 only (the circle, alpha without
@@ -29,6 +30,7 @@ def main(argv=None) -> int:
     parser.add_argument("--max-excess-link", type=float, default=6.0)
     parser.add_argument("--contact-max-points", type=int, default=400)
     parser.add_argument("--contact-formulation", default="pairs", choices=("pairs", "integral"))
+    parser.add_argument("--contact-curve", default="polygon", choices=("polygon", "spline"))
     parser.add_argument("--profile", action="store_true")
     args = parser.parse_args(argv)
 
@@ -39,7 +41,8 @@ def main(argv=None) -> int:
     options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                              max_excess_link=args.max_excess_link,
                              contact_max_points=args.contact_max_points,
-                             contact_formulation=args.contact_formulation)
+                             contact_formulation=args.contact_formulation,
+                             contact_curve=args.contact_curve)
     profile = cProfile.Profile() if args.profile else None
     start = time.perf_counter()
     if profile:
@@ -49,7 +52,7 @@ def main(argv=None) -> int:
         profile.disable()
     total = time.perf_counter() - start
     print(f"C/A = 2/3, L/D = 122, N = {args.nodes}, mode 2, dLk <= {args.max_excess_link:g}, "
-          f"{args.contact_formulation} contact")
+          f"{args.contact_formulation} contact on the {args.contact_curve}")
     print("| branch | points | seconds | s/point | dLk range | max writhe | status |")
     print("|---|---|---|---|---|---|---|")
     for b in diagram.branches:

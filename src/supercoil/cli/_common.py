@@ -24,6 +24,11 @@ EXIT_BAD_INPUT = 2
 # killed) or overflows (dLk = 1e300), so the command refuses them up front.
 MAX_NODES = 100_000
 CONTACT_CURVES = ("polygon", "spline")  # supercoil.contact.problem.CURVES (cheap at start-up)
+CONTACT_FORMULATIONS = ("pairs", "integral")  # supercoil.contact.problem.FORMULATIONS
+FORMULATION_HELP = ("How the contact potential is summed: pairs (over segment pairs, default) "
+                    "or integral (a double integral over the strands, which counts a contact "
+                    "once wherever it lies; experimental, best with --contact-curve spline; "
+                    "docs/benchmarks.md).")
 MIN_NODES = 8
 MAX_MAGNITUDE = 1e6  # |excess link| in turns, twist ratio C/A
 MAX_MAGNITUDE_TEXT = "1e6"

@@ -19,8 +19,10 @@ import typer
 from supercoil import __version__
 from supercoil.cli._common import (
     CONTACT_CURVES,
+    CONTACT_FORMULATIONS,
     EXIT_BAD_INPUT,
     EXIT_NOT_CONVERGED,
+    FORMULATION_HELP,
     MAX_MAGNITUDE,
     MAX_MAGNITUDE_TEXT,
     check_json_target,
@@ -720,6 +722,9 @@ def diagram_ring(
                      "cubic B-spline of the nodes, experimental: it removes the chords' sag "
                      "ripple, not the pair-counting one; docs/benchmarks.md)."),
     ] = "polygon",
+    contact_formulation: Annotated[
+        str, typer.Option("--contact-formulation", metavar="FORM", help=FORMULATION_HELP),
+    ] = "pairs",
     force: Annotated[
         bool,
         typer.Option("--force", help="Write into an existing non-empty --out DIR, "
@@ -765,6 +770,9 @@ def diagram_ring(
         fail(f"--contact-max-points {contact_max_points}: give an integer from 2 to 100000")
     if contact_curve not in CONTACT_CURVES:
         fail(f"--contact-curve {contact_curve!r}: give one of {', '.join(CONTACT_CURVES)}")
+    if contact_formulation not in CONTACT_FORMULATIONS:
+        fail(f"--contact-formulation {contact_formulation!r}: give one of "
+             f"{', '.join(CONTACT_FORMULATIONS)}")
     prepare_output_folder(out, force, "the diagram's files")
     from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
     from supercoil.problems.ring_diagram import DiagramOptions
@@ -773,6 +781,7 @@ def diagram_ring(
         options = DiagramOptions(twist_ratio, length_over_diameter, nodes,
                                  tuple(int(w) for w in words), max_excess_link, contact,
                                  branch_depth=branch_depth, contact_curve=contact_curve,
+                                 contact_formulation=contact_formulation,
                                  contact_max_points=contact_max_points)
     except ValueError as exc:
         fail(str(exc))

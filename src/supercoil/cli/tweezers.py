@@ -16,7 +16,9 @@ import typer
 
 from supercoil.cli._common import (
     CONTACT_CURVES,
+    CONTACT_FORMULATIONS,
     EXIT_NOT_CONVERGED,
+    FORMULATION_HELP,
     fail,
     parse_ratio,
     prepare_output_folder,
@@ -91,6 +93,8 @@ def tweezers(
         "distance: polygon (the segments, default) or spline (the cubic B-spline of the "
         "nodes, experimental: it removes the chords' sag ripple, not the pair-counting "
         "one; docs/benchmarks.md).")] = "polygon",
+    contact_formulation: Annotated[str, typer.Option(
+        "--contact-formulation", metavar="FORM", help=FORMULATION_HELP)] = "pairs",
     force: Annotated[bool, typer.Option(
         "--force", help="Write into an existing non-empty --out DIR, overwriting this "
         "command's own files (other files are left alone).")] = False,
@@ -188,6 +192,9 @@ def tweezers(
         fail(f"--max-points {max_points}: give an integer from 2 to 100000")
     if contact_curve not in CONTACT_CURVES:
         fail(f"--contact-curve {contact_curve!r}: give one of {', '.join(CONTACT_CURVES)}")
+    if contact_formulation not in CONTACT_FORMULATIONS:
+        fail(f"--contact-formulation {contact_formulation!r}: give one of "
+             f"{', '.join(CONTACT_FORMULATIONS)}")
     prepare_output_folder(out, force, "this command's files")
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
@@ -196,7 +203,8 @@ def tweezers(
                                   length_over_diameter=length_over_diameter, tension=tension,
                                   end_distance=end_distance, turns=(start, stop),
                                   n_nodes=nodes, max_points=max_points,
-                                  contact_curve=contact_curve)
+                                  contact_curve=contact_curve,
+                                  contact_formulation=contact_formulation)
     except ValueError as exc:
         fail(str(exc))
     control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")

@@ -791,6 +791,11 @@ def _bad_files(tmp_path: Path) -> dict[str, Path]:
         (["writhe", "{tmp}/two.txt", "--axis", "1,0,0"], ["--axis", "'closed'"]),
         (["writhe", "{tmp}/two.txt", "--closure", "chord", "--axis", "1,0,0"], ["'chord'"]),
         (["demo", "--out", "{tmp}/two.txt"], ["--out", "file"]),
+        (
+            ["diagram", "ring", "--twist-ratio", "2/3", "--length-over-diameter", "40",
+             "--contact-formulation", "sum", "--out", "{tmp}/d"],
+            ["--contact-formulation", "pairs, integral"],
+        ),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(runner, tmp_path, args, words):

@@ -9,6 +9,7 @@ their neighbours and stored stability equals the recomputed inertia
 input with exit status 2 and one line.
 """
 
+import dataclasses
 import json
 
 import numpy as np
@@ -325,3 +326,22 @@ def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, m
     kinds = [p.kind for p in rd.classify_contact_events(branch, problem=None).special_points]
     assert kinds == ["contact_split", "contact_interval_onset", "contact_release",
                      "contact_onset", "contact_release"]
+
+
+def test_integral_contact_on_the_spline_gives_a_consistent_branch():
+    """The double-integral contact (ContactOptions.formulation) through the whole diagram:
+    the same checks as the pair sum's branch (stored stability = inertia, Lk = Tw + Wr,
+    no penetration), and the branch reaches the asked excess link."""
+    options = dataclasses.replace(OPTIONS, contact_formulation="integral", contact_curve="spline")
+    diagram = ring_diagram(options)
+    contact = diagram.branch("alpha_contact")
+    assert contact.parameter_values.max() == pytest.approx(options.max_excess_link)
+    assert np.all(contact.records["min_gap_over_diameter"] >= 1.0 - 1e-9)
+    lk = contact.records["twist"] + contact.records["writhe"]
+    assert np.allclose(lk, contact.parameter_values, atol=1e-8)
+    cp = ContactProblem(_problem(), ContactOptions(diameter=options.diameter,
+                                                   formulation="integral", curve="spline"))
+    report = consistency_check(contact, cp, residual_tolerance=1e-8)
+    problems = [p for p in report.problems if "KKT residual" not in p
+                and "outside the branch's parameter range" not in p]
+    assert not problems, problems

@@ -67,6 +67,8 @@ def test_files_and_stored_states(folder):
     (["--length-over-diameter", "2", "--tension", "1"], "--length-over-diameter"),
     (["--protocol", "sideways", "--tension", "1"], "--protocol"),
     (["--nodes", "5", "--tension", "1"], "--nodes"),
+    (["--contact-formulation", "sum", "--tension", "1"], "--contact-formulation"),
+    (["--contact-curve", "bezier", "--tension", "1"], "--contact-curve"),
 ])
 def test_bad_input_is_one_line_exit_2(tmp_path, capsys, args, words):
     base = ["tweezers", "--twist-ratio", "1", "--out", str(tmp_path / "x")]

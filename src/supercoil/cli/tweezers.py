@@ -18,7 +18,6 @@ from supercoil.cli._common import (
     CONTACT_CURVES,
     CONTACT_FORMULATIONS,
     EXIT_NOT_CONVERGED,
-    FORMULATION_HELP,
     fail,
     parse_ratio,
     prepare_output_folder,
@@ -90,11 +89,13 @@ def tweezers(
         "stopped by it is incomplete: exit status 1).")] = 2000,
     contact_curve: Annotated[str, typer.Option(
         "--contact-curve", metavar="CURVE", help="Curve whose self-distance is the contact "
-        "distance: polygon (the segments, default) or spline (the cubic B-spline of the "
-        "nodes, experimental: it removes the chords' sag ripple, not the pair-counting "
-        "one; docs/benchmarks.md).")] = "polygon",
+        "distance: spline (the cubic B-spline of the nodes, default) or polygon (the "
+        "segments, whose sag ripples with period h; docs/benchmarks.md).")] = "spline",
     contact_formulation: Annotated[str, typer.Option(
-        "--contact-formulation", metavar="FORM", help=FORMULATION_HELP)] = "pairs",
+        "--contact-formulation", metavar="FORM", help="How the contact potential is summed: "
+        "integral (a double integral over the strands, which counts a contact once wherever "
+        "it lies; default) or pairs (over segment pairs: a sawtooth of fold pairs along the "
+        "plectoneme; docs/benchmarks.md).")] = "integral",
     force: Annotated[bool, typer.Option(
         "--force", help="Write into an existing non-empty --out DIR, overwriting this "
         "command's own files (other files are left alone).")] = False,

@@ -108,9 +108,13 @@ class TweezersOptions:
     contact (units of D); ``max_points`` bounds each branch;
     ``segment_points`` the points per continuation run between pin checks.
     Tolerances as in :class:`~supercoil.problems.ring_diagram.DiagramOptions`.
-    ``contact_curve``: ``"polygon"`` or ``"spline"`` (``ContactOptions.curve``).
-    ``contact_formulation``: ``"pairs"`` or ``"integral"``
-    (``ContactOptions.formulation``).
+    ``contact_curve``: ``"spline"`` (default) or ``"polygon"``
+    (``ContactOptions.curve``); ``contact_formulation``: ``"integral"``
+    (default) or ``"pairs"`` (``ContactOptions.formulation``). The default,
+    the double integral over the B-spline, counts a contact once wherever it
+    lies relative to the nodes: the pair sum on the polygon made a sawtooth
+    of fold pairs along the plectoneme (35 folds from 0 to 5 turns at N =
+    100 against 3; docs/benchmarks.md, "Integral contact").
     """
 
     twist_ratio: float
@@ -126,8 +130,8 @@ class TweezersOptions:
     event_tolerance: float = 1e-8
     contact_event_tolerance: float = 1e-6
     contact_tolerance: float = 1e-8
-    contact_curve: str = "polygon"
-    contact_formulation: str = "pairs"
+    contact_curve: str = "spline"
+    contact_formulation: str = "integral"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.twist_ratio, (int, float)) and math.isfinite(self.twist_ratio)

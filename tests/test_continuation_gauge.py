@@ -70,6 +70,25 @@ def test_k_bordered_band_solve_equals_the_dense_solve(seed, singular_scale):
     assert _relative_error(z, np.linalg.solve(B, rhs)) < 1e-10
 
 
+def test_k_bordered_solve_with_borders_of_very_different_scales_stays_on_the_band():
+    """A scaled arclength border (1e8) next to O(1) auxiliary ones, K nearly singular:
+    a single norm bound for the Schur complement rejected such regular cases."""
+    rng = np.random.default_rng(5)
+    n = 150
+    K = _banded(rng, n, 3, 1e-9)
+    rows, cols = np.nonzero(K)
+    C = rng.standard_normal((n, 3)) * np.array([1e8, 1.0, 1e-3])
+    R = rng.standard_normal((n, 3)) * np.array([1e8, 1e-3, 1.0])
+    D = np.diag([1e8, -1.0, -1.0])
+    E = np.block([[K, C], [R.T, D]])
+    factor = _BandBordered.from_parts(sp.csr_matrix(E), rows, cols, K[rows, cols], C, R, D)
+    assert factor is not None
+    rhs = rng.standard_normal(n + 3)
+    z = factor.solve(rhs)
+    assert factor._fallback is None
+    assert _relative_error(z, np.linalg.solve(E, rhs)) < 1e-10
+
+
 def _kkt_with_dense_rows(rng, n=240, m=8, r=2, singular_scale=None):
     """A banded Hessian (rank-one term included), ``m`` local constraints and ``r``
     dense rows; returns ``(H, J, dense K)``."""

@@ -55,8 +55,11 @@ class _BandBordered:
     ``[[K, U], [V^T, -I]]`` the first block row is ``(K + U V^T) x``.
     :meth:`from_parts` returns None (the caller falls back to SuperLU on
     ``B``) when the band is wide, a pivot of ``K`` is exactly zero, or
-    ``Sigma`` is numerically singular (its smallest singular value below
-    ``1e-13 (|D| + |R| |K^-1 C|)``); :meth:`solve` falls back on its own when
+    ``Sigma`` is numerically singular (the smallest singular value of
+    ``Sigma`` equilibrated by the bounds ``|D_ij| + |R_i| |K^-1 C_j|`` of its
+    entries below ``1e-13``; the borders' scales differ by orders of
+    magnitude, so one norm bound for all of them rejected regular ``Sigma``
+    at N = 200); :meth:`solve` falls back on its own when
     refinement stalls. Measured at N = 200 on a contact branch (n = 796,
     half-bandwidth 40, one border): the band LU itself 0.9 ms against 6-9 ms
     for SuperLU's factorisation of ``B``; a whole :class:`BorderedFactor`
@@ -110,11 +113,19 @@ class _BandBordered:
             return None
         out = cls(B, lub, piv, kl, ku, C, R, D)
         schur = D - R.T @ out._KC
-        scale = np.linalg.norm(D, 2) + np.linalg.norm(R, 2) * np.linalg.norm(out._KC, 2)
         if not np.all(np.isfinite(schur)):
             return None
-        smallest = np.linalg.svd(schur, compute_uv=False)[-1]
-        if smallest <= 1e-13 * max(scale, 1e-300):
+        # |Sigma_ij| before cancellation is at most |D_ij| + |R_i| |K^-1 C_j|: Sigma is
+        # equilibrated by those bounds (rows, then columns), which makes the rounding
+        # error of every entry at most ~eps, and is numerically singular when its
+        # smallest singular value falls below 1e-13 (for k = 1: |s| <= 1e-13 bound)
+        bound = np.abs(D) + np.outer(np.linalg.norm(R, axis=0), np.linalg.norm(out._KC, axis=0))
+        rows = np.max(bound, axis=1)
+        rows[rows == 0.0] = 1.0
+        columns = np.max(bound / rows[:, None], axis=0)
+        columns[columns == 0.0] = 1.0
+        scaled = schur / rows[:, None] / columns[None, :]
+        if np.linalg.svd(scaled, compute_uv=False)[-1] <= 1e-13:
             return None
         out._schur = lu_factor(schur)
         return out

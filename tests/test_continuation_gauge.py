@@ -140,6 +140,32 @@ def test_pinned_kkt_factor_has_the_inertia_and_determinant_sign_of_the_dense_mat
     assert _relative_error(factor.solve(rhs), np.linalg.solve(K, rhs)) < 1e-10
 
 
+def test_a_pin_that_misses_the_null_mode_falls_back_to_the_unpinned_factors():
+    """``H`` singular along ``e_0`` and the dense row largest elsewhere: ``K_pin`` is
+    singular, ``K`` is not; both factors fall back and stay exact."""
+    rng = np.random.default_rng(3)
+    n = 120
+    diagonal = 1.0 + rng.random(n)
+    diagonal[0] = 0.0
+    diagonal[5:9] = -1.0
+    dense = rng.uniform(0.5, 1.0, (1, n))
+    dense[0, 0] = 0.1  # regularises K, but the pin goes to the largest entry
+    H = HessianParts(sp.diags(diagonal, format="csr"), np.zeros((0, n)), np.zeros(0))
+    J = sp.csr_matrix(dense)
+    assert kkt.PinnedRows.of(J).pins[0] != 0
+    K = np.block([[np.diag(diagonal), dense.T], [dense, np.zeros((1, 1))]])
+    values = np.linalg.eigvalsh(K)
+    factor = kkt.KKTFactor(H, J)
+    assert factor.negative_count == int(np.sum(values < 0))
+    assert not factor._pinned
+    assert factor.determinant_sign == int(np.sign(np.prod(np.sign(values))))
+    column, row = rng.standard_normal(n + 1), rng.standard_normal(n + 2)
+    B = np.block([[K, column[:, None]], [row[None, :]]])
+    rhs = rng.standard_normal(n + 2)
+    z = BorderedFactor(H, J, column, row).solve(rhs)
+    assert _relative_error(z, np.linalg.solve(B, rhs)) < 1e-10
+
+
 def test_dense_rows_follow_the_documented_rule():
     n = 400
     J = sp.lil_matrix((4, n))

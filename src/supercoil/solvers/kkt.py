@@ -347,6 +347,8 @@ class KKTFactor:
     ``J`` are pinned and their remainder taken by Woodbury's identity
     (module doc), so the sparse factorisation and the banded inertia see
     ``K_pin``; :attr:`order` is then :func:`kkt_order` of ``K_pin``'s pattern.
+    Where ``K_pin`` is singular but ``K`` is not (the mode a dense row removes
+    vanishes on its pinned DOF), ``K`` itself is factorised, as without pins.
     """
 
     def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix | None = None,
@@ -359,10 +361,25 @@ class KKTFactor:
         J = sp.csr_matrix((0, n)) if jacobian is None else sp.csr_matrix(jacobian)
         self.n = n
         self.m = J.shape[0]
-        size = n + self.m
         self._S = S
         self._J = J
+        self._hessian = hessian
         pinned = PinnedRows.of(J) if self.m else None
+        if pinned is not None:
+            try:
+                self._factor(pinned, order)
+                if np.all(np.isfinite(self._small)):
+                    return
+            except SingularMatrixError:
+                pass
+            order = None  # an order of the pinned pattern
+        self._factor(None, order)
+
+    def _factor(self, pinned: PinnedRows | None, order: np.ndarray | None) -> None:
+        """Factorise ``K_pin`` (or ``K`` when ``pinned`` is None) and the low-rank terms."""
+        S, J, hessian = self._S, self._J, self._hessian
+        n, size = self.n, self.n + self.m
+        self._pinned = pinned is not None
         J_factored = J if pinned is None else pinned.sparse
         self._entries = _kkt_entries(S, J_factored)
         # A banded ordering keeps the partial-pivoting LU within twice the band.
@@ -412,7 +429,13 @@ class KKTFactor:
         if self._reduced_neg is None:
             rows, cols, values = self._entries
             K = sp.csr_matrix((values, (rows, cols)), shape=(self.n + self.m,) * 2)
-            neg = kkt_negative_count(K, self.m, self._order)
+            try:
+                neg = kkt_negative_count(K, self.m, self._order)
+            except InertiaError:
+                if not self._pinned:
+                    raise
+                self._factor(None, None)
+                return self.reduced_negative_count
             if self._has_low_rank:
                 neg += self._woodbury_correction
             self._reduced_neg = neg - self.m

@@ -124,27 +124,40 @@ class PinnedRows:
         rows = dense_rows(J)
         if rows.size == 0:
             return None
-        dense = J[rows].toarray()
+        r, n = rows.size, J.shape[1]
+        dense = np.zeros((r, n))
+        for j, row in enumerate(rows):
+            a, b = J.indptr[row], J.indptr[row + 1]
+            dense[j, J.indices[a:b]] = J.data[a:b]
         work = dense.copy()
-        pins = np.zeros(rows.size, dtype=np.int64)
-        for j in range(rows.size):
+        pins = np.zeros(r, dtype=np.int64)
+        for j in range(r):
             pins[j] = int(np.argmax(np.abs(work[j])))
             pivot = work[j, pins[j]]
             if pivot == 0.0 or abs(pivot) <= 1e-12 * np.max(np.abs(dense[j])):
                 return None
             work[j + 1:] -= np.outer(work[j + 1:, pins[j]] / pivot, work[j])
-        values = dense[np.arange(rows.size), pins]
+        values = dense[np.arange(r), pins]
         delta = dense.copy()
-        delta[np.arange(rows.size), pins] = 0.0
-        keep = np.ones(J.shape[0], dtype=bool)
-        keep[rows] = False
-        row_of = np.repeat(np.arange(J.shape[0]), np.diff(J.indptr))
-        kept = keep[row_of]
-        sparse = sp.csr_matrix(
-            (np.concatenate([J.data[kept], values]),
-             (np.concatenate([row_of[kept], rows]), np.concatenate([J.indices[kept], pins]))),
-            shape=J.shape)
-        sparse.sum_duplicates()
+        delta[np.arange(r), pins] = 0.0
+        # the CSR arrays of J with each dense row cut to its pin (canonical: one entry)
+        counts = np.diff(J.indptr)
+        new_counts = counts.copy()
+        new_counts[rows] = 1
+        indptr = np.zeros(J.shape[0] + 1, dtype=J.indptr.dtype)
+        np.cumsum(new_counts, out=indptr[1:])
+        row_of = np.repeat(np.arange(J.shape[0]), counts)
+        kept = np.ones(J.shape[0], dtype=bool)
+        kept[rows] = False
+        kept = kept[row_of]
+        entries = np.flatnonzero(kept)
+        at = indptr[row_of[entries]] + entries - J.indptr[row_of[entries]]
+        indices = np.empty(indptr[-1], dtype=J.indices.dtype)
+        data = np.empty(indptr[-1])
+        indices[at], data[at] = J.indices[entries], J.data[entries]
+        indices[indptr[rows]], data[indptr[rows]] = pins, values
+        sparse = sp.csr_matrix((data, indices, indptr), shape=J.shape)
+        sparse.has_canonical_format = True
         return cls(sparse, rows, pins, delta)
 
     def low_rank(self, n: int, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -6,7 +6,7 @@ Run from the repository root:
 
 Computes the ring's mode-2 diagram of :mod:`benchmarks.bench_ring_diagram`
 (C/A = 2/3, L/D = 122, dLk <= 6; the circle, alpha, alpha with contact) three
-times in one process, after a warm-up at N = 48: with ``gauge="node"``, with
+times in one process, after a short warm-up of both gauges at the same N: with ``gauge="node"``, with
 ``gauge="integral"`` (its dense phase row pinned and carried as extra borders,
 :mod:`supercoil.continuation.bordered`), and with ``gauge="integral"`` and the
 row left in the sparse matrix (``kkt.DENSE_ROW_MIN_ENTRIES`` raised: the path
@@ -51,16 +51,22 @@ def main(argv=None) -> int:
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
     from supercoil.solvers import kkt
 
-    ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=48, modes=(2,), max_excess_link=2.0,
-                                contact_max_points=5, gauge="integral"))
-    runs = (("node", "node", None), ("integral", "integral, pinned", None),
-            ("integral", "integral, dense row", 10**9))
+    for gauge in ("node", "integral"):  # numba caches and pattern memos, at this N
+        ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
+                                    max_excess_link=2.0, free_max_points=4,
+                                    contact_max_points=2, gauge=gauge))
+    if hasattr(kkt, "PinnedRows"):
+        runs = (("node", "node", None), ("integral", "integral, pinned", None),
+                ("integral", "integral, dense row", 10**9))
+    else:  # a checkout from before pinning (e.g. PYTHONPATH=<older checkout>/src)
+        runs = (("node", "node", None), ("integral", "integral, dense row", None))
     print(f"C/A = 2/3, L/D = 122, N = {args.nodes}, mode 2, dLk <= {args.max_excess_link:g}, "
           f"contact branch <= {args.contact_max_points} points")
     rows, per_call = [], []
-    limit = kkt.DENSE_ROW_MIN_ENTRIES
+    limit = getattr(kkt, "DENSE_ROW_MIN_ENTRIES", None)
     for gauge, label, min_entries in runs:
-        kkt.DENSE_ROW_MIN_ENTRIES = limit if min_entries is None else min_entries
+        if min_entries is not None:
+            kkt.DENSE_ROW_MIN_ENTRIES = min_entries
         options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                                  max_excess_link=args.max_excess_link,
                                  contact_max_points=args.contact_max_points, gauge=gauge)
@@ -74,7 +80,8 @@ def main(argv=None) -> int:
         finally:
             for module, name, original in saved:
                 setattr(module, name, original)
-            kkt.DENSE_ROW_MIN_ENTRIES = limit
+            if limit is not None:
+                kkt.DENSE_ROW_MIN_ENTRIES = limit
         factor_ms = 1e3 * totals["bordered_factor"][0] / max(totals["bordered_factor"][1], 1)
         inertia_ms = 1e3 * totals["inertia"][0] / max(totals["inertia"][1], 1)
         per_call.append(f"| {label} | {factor_ms:.2f} ({totals['bordered_factor'][1]}) | "

@@ -125,9 +125,12 @@ class _BandBordered:
         columns = np.max(bound / rows[:, None], axis=0)
         columns[columns == 0.0] = 1.0
         scaled = schur / rows[:, None] / columns[None, :]
-        if np.linalg.svd(scaled, compute_uv=False)[-1] <= 1e-13:
+        if schur.shape[0] == 1:  # one border: y = (g - r^T u) / s, as LAPACK would not
+            if abs(scaled[0, 0]) <= 1e-13:
+                return None
+        elif np.linalg.svd(scaled, compute_uv=False)[-1] <= 1e-13:
             return None
-        out._schur = lu_factor(schur)
+        out._schur = schur if schur.shape[0] == 1 else lu_factor(schur, check_finite=False)
         return out
 
     def _k_solve(self, f):
@@ -142,7 +145,10 @@ class _BandBordered:
         g = np.zeros((self._C.shape[1],) + rhs.shape[1:])
         g[:k_true] = rhs[n:]
         u = self._k_solve(f)
-        y = lu_solve(self._schur, g - self._R.T @ u)
+        if self._C.shape[1] == 1:
+            y = (g - self._R.T @ u) / self._schur[0, 0]
+        else:
+            y = lu_solve(self._schur, g - self._R.T @ u, check_finite=False)
         x = u - self._KC @ y
         return np.concatenate([x, y[:k_true]])
 

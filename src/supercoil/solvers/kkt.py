@@ -72,14 +72,13 @@ def _permutation_parity(perm: np.ndarray) -> int:
     return -1 if (n - cycles) % 2 else 1
 
 
-def _woodbury_negatives(solve, U: np.ndarray, w_inverse: np.ndarray):
+def _woodbury_negatives(solve, U: np.ndarray, w_inverse: np.ndarray, w_negatives: int):
     """Return (H^-1 U, small, correction) for ``H + U W U^T``, ``w_inverse = W^-1``
-    symmetric ``(k, k)``: ``small = W^-1 + U^T H^-1 U`` and the correction
-    ``neg(-small) - neg(-W^-1)`` of the negative count (module doc)."""
+    symmetric ``(k, k)`` with ``w_negatives = neg(-W^-1)``: ``small = W^-1 + U^T H^-1 U``
+    and the correction ``neg(-small) - neg(-W^-1)`` of the negative count (module doc)."""
     HU = solve(U)
     small = w_inverse + U.T @ HU
-    correction = (int(np.sum(np.linalg.eigvalsh(-small) < 0))
-                  - int(np.sum(np.linalg.eigvalsh(-w_inverse) < 0)))
+    correction = int(np.sum(np.linalg.eigvalsh(-small) < 0)) - w_negatives
     return HU, small, correction
 
 
@@ -92,12 +91,12 @@ DENSE_ROW_FRACTION = 0.1
 
 def dense_rows(J: sp.spmatrix) -> np.ndarray:
     """Indices of the dense rows of the constraint Jacobian ``J`` ``(m, n)`` (rule above)."""
-    J = sp.csr_matrix(J)
-    if J.shape[0] == 0:
+    J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)
+    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
+    if J.shape[0] == 0 or np.max(np.diff(J.indptr)) <= limit:  # stored >= nonzero
         return np.zeros(0, dtype=np.int64)
     row_of = np.repeat(np.arange(J.shape[0]), np.diff(J.indptr))
     counts = np.bincount(row_of[J.data != 0], minlength=J.shape[0])
-    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
     return np.flatnonzero(counts > limit)
 
 
@@ -120,7 +119,11 @@ class PinnedRows:
     @classmethod
     def of(cls, J: sp.spmatrix) -> PinnedRows | None:
         """The split of ``J``, or None when it has no dense rows (or they are dependent)."""
-        J = canonical(sp.csr_matrix(J))
+        J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)
+        rows = dense_rows(J)
+        if rows.size == 0:
+            return None
+        J = canonical(J)
         rows = dense_rows(J)
         if rows.size == 0:
             return None
@@ -407,7 +410,8 @@ class KKTFactor:
         if r:
             columns[0][:n] = hessian.vectors.T
         w_inverse = np.diag(1.0 / w) if r else np.zeros((0, 0))
-        # sign of det W (module doc): prod sign(w), times (-1)^r for [[0, I], [I, 0]]
+        w_negatives = int(np.sum(-1.0 / w < 0)) if r else 0
+        # sign of det W (module doc): prod sign(w), times (-1)^k for [[0, I], [I, 0]]
         self._w_sign = int(np.prod(np.sign(w))) if r else 1
         if pinned is not None:
             E, Delta, gamma = pinned.low_rank(n, size)
@@ -418,11 +422,12 @@ class KKTFactor:
             w_inverse = np.block([[w_inverse, np.zeros((r, 2 * k))],
                                   [np.zeros((2 * k, r)), swap]])
             self._w_sign *= (-1) ** k
-        self._U = np.hstack(columns)
+            w_negatives += k  # -[[0, I], [I, 0]] has k eigenvalues -1 and k eigenvalues 1
+        self._U = np.hstack(columns) if len(columns) > 1 else columns[0]
         self._has_low_rank = self._U.shape[1] > 0
         if self._has_low_rank:
             self._KU, self._small, self._woodbury_correction = _woodbury_negatives(
-                self._lu.solve, self._U, w_inverse)
+                self._lu.solve, self._U, w_inverse, w_negatives)
         self._reduced_neg: int | None = None
 
     @property

@@ -18,62 +18,88 @@ The rank-one terms of ``H = S + U diag(w) U^T`` (see
 matrix: with ``B = B_S + V diag(w) V^T`` (``V = [U; 0]``) the Woodbury identity
 ``B^-1 = B_S^-1 - B_S^-1 V (diag(1/w) + V^T B_S^-1 V)^-1 V^T B_S^-1`` gives
 the solves.
+
+Dense constraint rows (an integral phase condition) are pinned to one DOF in
+the banded block and their remainder becomes extra borders (``k = 1 + 2r``
+in all, :class:`BorderedFactor`), so that the band LU of :class:`_BandBordered`
+still applies.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.linalg import lapack
+from scipy.linalg import lapack, lu_factor, lu_solve
 from scipy.sparse.linalg import splu
 
-from supercoil.solvers.kkt import SingularMatrixError, canonical, kkt_order
+from supercoil.solvers.kkt import PinnedRows, SingularMatrixError, canonical, kkt_order
 from supercoil.solvers.patterns import PatternMemo
 from supercoil.solvers.problem import HessianParts
 
 
 class _BandBordered:
-    """Solves with ``B = [[K, c], [r^T, d]]`` (``K`` banded) by LAPACK's band LU of ``K``.
+    """Solves with ``B`` through the ``k``-bordered ``E = [[K, C], [R^T, D]]`` (``K`` banded).
 
-    Block elimination ``K u = f``, ``y = (g - r^T u) / s``, ``x = u - K^-1 c y``
-    with ``s = d - r^T K^-1 c``, then iterative refinement against ``B``
-    itself (its sparse product), so that the accuracy is that of ``B``, not
-    of the nearly singular ``K`` near a fold (Govaerts 2000, ch. 3, on why
-    plain block elimination is not enough there). :meth:`factor` returns
-    None (the caller falls back to SuperLU on ``B``) when the band is wide,
-    a pivot of ``K`` is exactly zero, or ``s`` is negligible; :meth:`solve`
-    falls back on its own when refinement stalls. Measured at N = 200 on a
-    contact branch (n = 796, half-bandwidth 40): the band LU itself 0.9 ms
-    against 6-9 ms for SuperLU's factorisation of ``B``; a whole
-    :class:`BorderedFactor` (assembly of ``B`` included) 2.9 ms against 8.4 ms.
+    ``K`` ``(n, n)`` is factorised by LAPACK's band LU; ``C``, ``R`` are
+    ``(n, k)`` and ``D`` ``(k, k)``. Block elimination (Govaerts 2000, ch. 3)
+
+        K u = f,   Sigma = D - R^T K^-1 C   ((k, k), LU),
+        Sigma y = g - R^T u,   x = u - (K^-1 C) y,
+
+    then iterative refinement against ``B`` itself (its sparse product), so
+    that the accuracy is that of ``B``, not of the nearly singular ``K`` near
+    a fold (Govaerts, ch. 3, on why plain block elimination is not enough
+    there). ``B`` ``(n + k_true)`` holds the first ``k_true`` borders of
+    ``E``; the others are auxiliary unknowns with a zero right-hand side that
+    carry a low-rank part of ``B``'s leading block: with
+    ``[[K, U], [V^T, -I]]`` the first block row is ``(K + U V^T) x``.
+    :meth:`from_parts` returns None (the caller falls back to SuperLU on
+    ``B``) when the band is wide, a pivot of ``K`` is exactly zero, or
+    ``Sigma`` is numerically singular (the smallest singular value of
+    ``Sigma`` equilibrated by the bounds ``|D_ij| + |R_i| |K^-1 C_j|`` of its
+    entries below ``1e-13``; the borders' scales differ by orders of
+    magnitude, so one norm bound for all of them rejected regular ``Sigma``
+    at N = 200); :meth:`solve` falls back on its own when
+    refinement stalls. Measured at N = 200 on a contact branch (n = 796,
+    half-bandwidth 40, one border): the band LU itself 0.9 ms against 6-9 ms
+    for SuperLU's factorisation of ``B``; a whole :class:`BorderedFactor`
+    (assembly of ``B`` included) 2.9 ms against 8.4 ms.
     """
 
     MAX_REFINEMENTS = 4
 
-    def __init__(self, B, lub, piv, kl, ku, c, r, s):
+    def __init__(self, B, lub, piv, kl, ku, C, R, D):
         self._B = B
         self._lub, self._piv, self._kl, self._ku = lub, piv, kl, ku
-        self._c, self._r, self._s = c, r, s
-        self._Kc = self._k_solve(c)
+        self._C, self._R, self._D = C, R, D
+        self._n = C.shape[0]
+        self._k_true = B.shape[0] - self._n
+        self._KC = self._k_solve(C)
+        self._schur = None
         self._fallback = None
         self._b_max = float(np.max(np.abs(B.data), initial=0.0))
 
     @classmethod
     def factor(cls, B: sp.csc_matrix):
+        """One border: ``B = [[K, c], [r^T, d]]`` with ``K`` its leading ``(n - 1)`` block."""
         size = B.shape[0]
         n = size - 1
         if n < 2:
             return None
         K = B[:n, :n].tocoo()
-        column = B[:n, n].toarray().ravel()
-        row = B[n, :n].toarray().ravel()
-        return cls.from_parts(B, K.row, K.col, K.data, column, row, float(B[n, n]))
+        column = B[:n, n].toarray()
+        row = B[n, :n].toarray().T
+        return cls.from_parts(B, K.row, K.col, K.data, column, row, B[n:, n:].toarray())
 
     @classmethod
     def from_parts(cls, B, k_rows: np.ndarray, k_cols: np.ndarray, k_values: np.ndarray,
-                   column: np.ndarray, row: np.ndarray, corner: float):
-        """:meth:`factor` from ``K``'s stored entries (no duplicates) and the border."""
-        n = B.shape[0] - 1
+                   C: np.ndarray, R: np.ndarray, D: np.ndarray):
+        """Factor of ``E`` from ``K``'s stored entries (no duplicates) and the borders
+        ``C``, ``R`` ``(n, k)``, ``D`` ``(k, k)`` (class doc)."""
+        C = np.ascontiguousarray(np.asarray(C, dtype=float).reshape(C.shape[0], -1))
+        R = np.asarray(R, dtype=float).reshape(C.shape)
+        D = np.asarray(D, dtype=float).reshape(C.shape[1], C.shape[1])
+        n = C.shape[0]
         if n < 2 or k_values.size == 0:
             return None
         kl = int(max(0, np.max(k_rows - k_cols)))
@@ -85,12 +111,26 @@ class _BandBordered:
         lub, piv, info = lapack.dgbtrf(ab, kl, ku)
         if info != 0:
             return None
-        out = cls(B, lub, piv, kl, ku, column, row, 0.0)
-        s = corner - row @ out._Kc
-        scale = abs(corner) + np.linalg.norm(row) * np.linalg.norm(out._Kc)
-        if not np.isfinite(s) or abs(s) <= 1e-13 * max(scale, 1e-300):
+        out = cls(B, lub, piv, kl, ku, C, R, D)
+        schur = D - R.T @ out._KC
+        if not np.all(np.isfinite(schur)):
             return None
-        out._s = s
+        # |Sigma_ij| before cancellation is at most |D_ij| + |R_i| |K^-1 C_j|: Sigma is
+        # equilibrated by those bounds (rows, then columns), which makes the rounding
+        # error of every entry at most ~eps, and is numerically singular when its
+        # smallest singular value falls below 1e-13 (for k = 1: |s| <= 1e-13 bound)
+        bound = np.abs(D) + np.outer(np.linalg.norm(R, axis=0), np.linalg.norm(out._KC, axis=0))
+        rows = np.max(bound, axis=1)
+        rows[rows == 0.0] = 1.0
+        columns = np.max(bound / rows[:, None], axis=0)
+        columns[columns == 0.0] = 1.0
+        scaled = schur / rows[:, None] / columns[None, :]
+        if schur.shape[0] == 1:  # one border: y = (g - r^T u) / s, as LAPACK would not
+            if abs(scaled[0, 0]) <= 1e-13:
+                return None
+        elif np.linalg.svd(scaled, compute_uv=False)[-1] <= 1e-13:
+            return None
+        out._schur = schur if schur.shape[0] == 1 else lu_factor(schur, check_finite=False)
         return out
 
     def _k_solve(self, f):
@@ -98,11 +138,19 @@ class _BandBordered:
         return x
 
     def _once(self, rhs):
-        f, g = rhs[:-1], rhs[-1]
+        """One block elimination for ``B``'s right-hand side ``(n + k_true[, p])``;
+        the auxiliary borders get zero, and only ``B``'s unknowns are returned."""
+        n, k_true = self._n, self._k_true
+        f = rhs[:n]
+        g = np.zeros((self._C.shape[1],) + rhs.shape[1:])
+        g[:k_true] = rhs[n:]
         u = self._k_solve(f)
-        y = (g - self._r @ u) / self._s
-        x = u - (np.multiply.outer(self._Kc, y) if rhs.ndim > 1 else self._Kc * y)
-        return np.concatenate([x, np.atleast_1d(y)[None] if rhs.ndim > 1 else [y]])
+        if self._C.shape[1] == 1:
+            y = (g - self._R.T @ u) / self._schur[0, 0]
+        else:
+            y = lu_solve(self._schur, g - self._R.T @ u, check_finite=False)
+        x = u - self._KC @ y
+        return np.concatenate([x, y[:k_true]])
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         if self._fallback is not None:
@@ -195,7 +243,17 @@ class BorderedFactor:
     ``hessian`` is on the ``n`` free DOFs, ``jacobian`` ``(m, n)``, ``column``
     (``F_lambda``) has length ``n + m`` and ``row`` (the arclength row, corner
     entry ``b_lambda`` last) ``n + m + 1``.
-    ``order`` reuses a :func:`kkt_order` of the same pattern.
+    ``order`` reuses a :func:`kkt_order` of the same pattern (of the pinned
+    ``J`` when it has dense rows).
+
+    Dense rows of ``J`` (:func:`~supercoil.solvers.kkt.dense_rows`: an
+    integral phase condition, Doedel's ``<M g, q - q_0> = 0``) would make the
+    band as wide as the matrix and send the factorisation to SuperLU. Each is
+    pinned instead (:class:`~supercoil.solvers.kkt.PinnedRows`): the banded
+    block is ``K_pin``, the KKT matrix with the row replaced by its entry on
+    one DOF (as regular as with a node gauge), and the rest of the row and of
+    its column, ``E Delta^T + Delta E^T``, goes into ``2r`` auxiliary borders
+    of :class:`_BandBordered`; refinement is against the true ``B``.
     Raises :class:`~supercoil.solvers.kkt.SingularMatrixError` when ``B`` is singular.
     """
 
@@ -217,13 +275,28 @@ class BorderedFactor:
             raise SingularMatrixError("the border row is zero or not finite")
         self.row_scale = scale_k / scale_row if scale_k > 0 else 1.0
         corner = row[-1] * self.row_scale
-        self.kkt_order = kkt_order(S, J) if order is None else order
+        pinned = PinnedRows.of(J) if m else None
+        J_banded = J if pinned is None else pinned.sparse
+        self.kkt_order = kkt_order(S, J_banded) if order is None else order
         self.order = np.concatenate([self.kkt_order, [size - 1]])
-        Bp, k_entries = _permuted_bordered(S, J, column, self.row_scale * row[:-1], corner,
-                                           self.order)
-        self._lu = _BandBordered.from_parts(Bp, *k_entries, _stored(column)[self.kkt_order],
-                                            _stored(self.row_scale * row[:-1])[self.kkt_order],
-                                            float(_stored(np.array([corner]))[0]))
+        border_row = self.row_scale * row[:-1]
+        Bp, k_entries = _permuted_bordered(S, J, column, border_row, corner, self.order)
+        C = _stored(column)[self.kkt_order][:, None]
+        R = _stored(border_row)[self.kkt_order][:, None]
+        D = _stored(np.array([[corner]]))
+        if pinned is not None:
+            # K_pin banded, the rest of the dense rows and columns as 2r auxiliary
+            # borders (class doc): [[K_pin, c, root E, Delta / root], [r^T, d, 0, 0],
+            # [Delta^T / root, 0, -I, 0], [root E^T, 0, 0, -I]]
+            _, k_entries = _permuted_bordered(S, J_banded, column, border_row, corner,
+                                              self.order)
+            E, Delta, gamma = pinned.low_rank(n, size - 1)
+            E, Delta, root = E[self.kkt_order], Delta[self.kkt_order], np.sqrt(gamma)
+            C = np.hstack([C, E * root, Delta / root])
+            R = np.hstack([R, Delta / root, E * root])
+            k = 2 * pinned.rows.size
+            D = np.block([[D, np.zeros((1, k))], [np.zeros((k, 1)), -np.eye(k)]])
+        self._lu = _BandBordered.from_parts(Bp, *k_entries, C, R, D)
         if self._lu is None:
             try:
                 self._lu = splu(Bp.tocsc(), permc_spec="NATURAL")

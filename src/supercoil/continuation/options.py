@@ -57,8 +57,8 @@ class ContinuationOptions:
     * ``phase_conditions``: add ``<M s_k, q - q_start> = 0`` for each symmetry
       mode ``s_k`` of ``problem.symmetry_modes(q_start)`` (with a Lagrange
       unknown each), to follow branches whose continuous symmetry is not pinned
-      by the problem (e.g. an O(2) orbit after branch switching). Dense rows:
-      for small problems; rod problems pin gauge DOFs instead.
+      by the problem (e.g. an O(2) orbit after branch switching). Dense rows,
+      taken as extra borders like the integral gauge's (``gauge`` below).
     * ``near_symmetry_gauge``: pin one DOF (as a phase row ``q_i = q_i(start)``)
       against each approximate symmetry of the problem that is not a
       combination of its exact ones at the start (``near_symmetry_modes``: a
@@ -71,9 +71,11 @@ class ContinuationOptions:
       ring's beta branch at N = 128, the D_3 configurations lost their symmetry
       without contact). ``"integral"``: the phase condition
       ``<M g, q - q_start> = 0`` with ``g`` the unit mode at the start (Doedel's
-      integral phase condition; one dense row, which the bordered solve handles
-      by SuperLU instead of the band LU): its reaction is spread along the
-      mode, so a state invariant under a symmetry of the rod stays invariant.
+      integral phase condition; one dense row, which the linear algebra pins to
+      one DOF and carries as extra borders, so it keeps the band LU and the
+      banded inertia: :func:`~supercoil.solvers.kkt.dense_rows`): its reaction
+      is spread along the mode, so a state invariant under a symmetry of the
+      rod stays invariant.
     * ``regauge``: with ``near_symmetry_gauge``, when a step fails, pick the
       pinned DOF afresh at the last point (the row becomes ``q_i = q_i(last
       point)`` on the DOF where the sliding moves most there, or the integral

@@ -18,8 +18,19 @@ additivity (:mod:`supercoil.solvers.band`). Since
 ``neg(K) = neg(Z^T H Z) + m`` (Gould 1985) for ``m`` independent constraints,
 at least ``m`` must be found (checked).
 With the rank-one terms, from the two Schur complements of
-``[[K_S, U], [U^T, -W^-1]]``:
+``[[K_S, U], [U^T, -W^-1]]`` (Haynsworth's inertia additivity, both ways):
 ``neg(K_S + U W U^T) = neg(K_S) + neg(-W^-1 - U^T K_S^-1 U) - neg(-W^-1)``.
+
+Dense constraint rows (:func:`dense_rows`: Doedel's integral phase condition
+``<M g, q - q_0> = 0``, whose row is a whole symmetry mode) would make the
+banded ordering as wide as the matrix. Each is replaced in the factorised
+matrix by a *pin*, its own entry on one DOF (:func:`pin_dense_rows`), which
+keeps ``K_pin`` banded and as regular as with a node gauge; the rest of the
+row and of its column is the symmetric rank-``2r`` term
+``K = K_pin + E Delta^T + Delta E^T = K_pin + U W U^T``, ``U = [E, Delta]``,
+``W = [[0, I], [I, 0]]`` (``E`` the unit columns of the pinned rows'
+multipliers, ``Delta`` the dense rows less their pins), taken by the formula
+above like the rank-one terms of ``H``.
 """
 
 from __future__ import annotations
@@ -61,12 +72,110 @@ def _permutation_parity(perm: np.ndarray) -> int:
     return -1 if (n - cycles) % 2 else 1
 
 
-def _woodbury_negatives(solve, U: np.ndarray, w: np.ndarray):
-    """Return (H^-1 U, small, correction) for ``H + U diag(w) U^T``."""
+def _woodbury_negatives(solve, U: np.ndarray, w_inverse: np.ndarray, w_negatives: int):
+    """Return (H^-1 U, small, correction) for ``H + U W U^T``, ``w_inverse = W^-1``
+    symmetric ``(k, k)`` with ``w_negatives = neg(-W^-1)``: ``small = W^-1 + U^T H^-1 U``
+    and the correction ``neg(-small) - neg(-W^-1)`` of the negative count (module doc)."""
     HU = solve(U)
-    small = np.diag(1.0 / w) + U.T @ HU
-    correction = int(np.sum(np.linalg.eigvalsh(-small) < 0)) - int(np.sum(-1.0 / w < 0))
+    small = w_inverse + U.T @ HU
+    correction = int(np.sum(np.linalg.eigvalsh(-small) < 0)) - w_negatives
     return HU, small, correction
+
+
+# A constraint row is dense when it stores more than max(DENSE_ROW_MIN_ENTRIES,
+# DENSE_ROW_FRACTION * n) nonzeros: an integral phase condition (all of a mode's
+# DOFs) is, a contact constraint (12 DOFs) or a node gauge (1 DOF) is not.
+DENSE_ROW_MIN_ENTRIES = 32
+DENSE_ROW_FRACTION = 0.1
+
+
+def dense_rows(J: sp.spmatrix) -> np.ndarray:
+    """Indices of the dense rows of the constraint Jacobian ``J`` ``(m, n)`` (rule above)."""
+    J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)
+    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
+    if J.shape[0] == 0 or np.max(np.diff(J.indptr)) <= limit:  # stored >= nonzero
+        return np.zeros(0, dtype=np.int64)
+    row_of = np.repeat(np.arange(J.shape[0]), np.diff(J.indptr))
+    counts = np.bincount(row_of[J.data != 0], minlength=J.shape[0])
+    return np.flatnonzero(counts > limit)
+
+
+class PinnedRows:
+    """Dense rows of ``J`` split into pins and the rest (see module doc).
+
+    ``rows`` ``(r,)`` are the dense rows, ``pins`` ``(r,)`` the DOF pinned by
+    each, chosen by Gaussian elimination with partial pivoting on the dense
+    rows (each pin the largest remaining entry of its row), so that the
+    ``(r, r)`` block ``J[rows][:, pins]`` is regular and pinning those DOFs
+    removes the modes the rows hold. ``sparse`` is ``J`` with each dense row
+    replaced by its entry at its pin (CSR, canonical); ``delta`` ``(r, n)``
+    the dense rows with that entry zeroed, so ``J = sparse + I[:, rows] delta``.
+    """
+
+    def __init__(self, sparse: sp.csr_matrix, rows: np.ndarray, pins: np.ndarray,
+                 delta: np.ndarray):
+        self.sparse, self.rows, self.pins, self.delta = sparse, rows, pins, delta
+
+    @classmethod
+    def of(cls, J: sp.spmatrix) -> PinnedRows | None:
+        """The split of ``J``, or None when it has no dense rows (or they are dependent)."""
+        J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)
+        rows = dense_rows(J)
+        if rows.size == 0:
+            return None
+        J = canonical(J)
+        rows = dense_rows(J)
+        if rows.size == 0:
+            return None
+        r, n = rows.size, J.shape[1]
+        dense = np.zeros((r, n))
+        for j, row in enumerate(rows):
+            a, b = J.indptr[row], J.indptr[row + 1]
+            dense[j, J.indices[a:b]] = J.data[a:b]
+        work = dense.copy()
+        pins = np.zeros(r, dtype=np.int64)
+        for j in range(r):
+            pins[j] = int(np.argmax(np.abs(work[j])))
+            pivot = work[j, pins[j]]
+            if pivot == 0.0 or abs(pivot) <= 1e-12 * np.max(np.abs(dense[j])):
+                return None
+            work[j + 1:] -= np.outer(work[j + 1:, pins[j]] / pivot, work[j])
+        values = dense[np.arange(r), pins]
+        delta = dense.copy()
+        delta[np.arange(r), pins] = 0.0
+        # the CSR arrays of J with each dense row cut to its pin (canonical: one entry)
+        counts = np.diff(J.indptr)
+        new_counts = counts.copy()
+        new_counts[rows] = 1
+        indptr = np.zeros(J.shape[0] + 1, dtype=J.indptr.dtype)
+        np.cumsum(new_counts, out=indptr[1:])
+        row_of = np.repeat(np.arange(J.shape[0]), counts)
+        kept = np.ones(J.shape[0], dtype=bool)
+        kept[rows] = False
+        kept = kept[row_of]
+        entries = np.flatnonzero(kept)
+        at = indptr[row_of[entries]] + entries - J.indptr[row_of[entries]]
+        indices = np.empty(indptr[-1], dtype=J.indices.dtype)
+        data = np.empty(indptr[-1])
+        indices[at], data[at] = J.indices[entries], J.data[entries]
+        indices[indptr[rows]], data[indptr[rows]] = pins, values
+        sparse = sp.csr_matrix((data, indices, indptr), shape=J.shape)
+        sparse.has_canonical_format = True
+        return cls(sparse, rows, pins, delta)
+
+    def low_rank(self, n: int, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(E, Delta, gamma)`` of ``K = K_pin + E Delta^T + Delta E^T`` on a KKT matrix of
+        ``size`` unknowns with ``n`` DOFs first: ``E`` ``(size, r)`` unit columns at the
+        pinned rows' multipliers, ``Delta`` ``(size, r)`` the rest of the rows on the DOFs,
+        ``gamma`` ``(r,)`` their largest entries (for balancing)."""
+        r = self.rows.size
+        E = np.zeros((size, r))
+        E[n + self.rows, np.arange(r)] = 1.0
+        Delta = np.zeros((size, r))
+        Delta[:self.delta.shape[1]] = self.delta.T
+        gamma = np.max(np.abs(self.delta), axis=1)
+        gamma[gamma == 0.0] = 1.0
+        return E, Delta, gamma
 
 
 def kkt_negative_count(K: sp.spmatrix, n_constraints: int = 0,
@@ -250,7 +359,12 @@ class KKTFactor:
     ``(n,)``) are for shift-invert eigenvalue computations; ``order`` reuses
     the :func:`kkt_order` of an earlier factor of the same pattern
     (:attr:`order`). The inertia is
-    computed on first use of :attr:`reduced_negative_count`.
+    computed on first use of :attr:`reduced_negative_count`. Dense rows of
+    ``J`` are pinned and their remainder taken by Woodbury's identity
+    (module doc), so the sparse factorisation and the banded inertia see
+    ``K_pin``; :attr:`order` is then :func:`kkt_order` of ``K_pin``'s pattern.
+    Where ``K_pin`` is singular but ``K`` is not (the mode a dense row removes
+    vanishes on its pinned DOF), ``K`` itself is factorised, as without pins.
     """
 
     def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix | None = None,
@@ -265,21 +379,55 @@ class KKTFactor:
         self.m = J.shape[0]
         self._S = S
         self._J = J
-        self._entries = _kkt_entries(S, J)
+        self._hessian = hessian
+        pinned = PinnedRows.of(J) if self.m else None
+        if pinned is not None:
+            try:
+                self._factor(pinned, order)
+                if np.all(np.isfinite(self._small)):
+                    return
+            except SingularMatrixError:
+                pass
+            order = None  # an order of the pinned pattern
+        self._factor(None, order)
+
+    def _factor(self, pinned: PinnedRows | None, order: np.ndarray | None) -> None:
+        """Factorise ``K_pin`` (or ``K`` when ``pinned`` is None) and the low-rank terms."""
+        S, J, hessian = self._S, self._J, self._hessian
+        n, size = self.n, self.n + self.m
+        self._pinned = pinned is not None
+        J_factored = J if pinned is None else pinned.sparse
+        self._entries = _kkt_entries(S, J_factored)
         # A banded ordering keeps the partial-pivoting LU within twice the band.
-        self._order = kkt_order(S, J) if order is None else order
+        self._order = kkt_order(S, J_factored) if order is None else order
         try:
-            self._lu = _OrderedLU(n + self.m, *self._entries, self._order)
+            self._lu = _OrderedLU(size, *self._entries, self._order)
         except RuntimeError as exc:  # "Factor is exactly singular"
             raise SingularMatrixError(f"KKT matrix is singular ({exc})") from None
         r = len(hessian.coefficients)
-        self._U = np.zeros((n + self.m, r))
+        w = np.asarray(hessian.coefficients, dtype=float)
+        columns = [np.zeros((size, r))]
         if r:
-            self._U[:n] = hessian.vectors.T
-        self._w = np.asarray(hessian.coefficients, dtype=float)
-        if r:
+            columns[0][:n] = hessian.vectors.T
+        w_inverse = np.diag(1.0 / w) if r else np.zeros((0, 0))
+        w_negatives = int(np.sum(-1.0 / w < 0)) if r else 0
+        # sign of det W (module doc): prod sign(w), times (-1)^k for [[0, I], [I, 0]]
+        self._w_sign = int(np.prod(np.sign(w))) if r else 1
+        if pinned is not None:
+            E, Delta, gamma = pinned.low_rank(n, size)
+            root = np.sqrt(gamma)
+            columns += [E * root, Delta / root]  # balanced: E D^T = (E root)(D / root)^T
+            k = pinned.rows.size
+            swap = np.block([[np.zeros((k, k)), np.eye(k)], [np.eye(k), np.zeros((k, k))]])
+            w_inverse = np.block([[w_inverse, np.zeros((r, 2 * k))],
+                                  [np.zeros((2 * k, r)), swap]])
+            self._w_sign *= (-1) ** k
+            w_negatives += k  # -[[0, I], [I, 0]] has k eigenvalues -1 and k eigenvalues 1
+        self._U = np.hstack(columns) if len(columns) > 1 else columns[0]
+        self._has_low_rank = self._U.shape[1] > 0
+        if self._has_low_rank:
             self._KU, self._small, self._woodbury_correction = _woodbury_negatives(
-                self._lu.solve, self._U, self._w)
+                self._lu.solve, self._U, w_inverse, w_negatives)
         self._reduced_neg: int | None = None
 
     @property
@@ -289,7 +437,7 @@ class KKTFactor:
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve ``K z = rhs`` for the full matrix (rank-one terms included)."""
         z = self._lu.solve(np.asarray(rhs, dtype=float))
-        if len(self._w):
+        if self._has_low_rank:
             z = z - self._KU @ np.linalg.solve(self._small, self._U.T @ z)
         return z
 
@@ -299,8 +447,14 @@ class KKTFactor:
         if self._reduced_neg is None:
             rows, cols, values = self._entries
             K = sp.csr_matrix((values, (rows, cols)), shape=(self.n + self.m,) * 2)
-            neg = kkt_negative_count(K, self.m, self._order)
-            if len(self._w):
+            try:
+                neg = kkt_negative_count(K, self.m, self._order)
+            except InertiaError:
+                if not self._pinned:
+                    raise
+                self._factor(None, None)
+                return self.reduced_negative_count
+            if self._has_low_rank:
                 neg += self._woodbury_correction
             self._reduced_neg = neg - self.m
         return self._reduced_neg
@@ -316,7 +470,8 @@ class KKTFactor:
         diag = self._lu.U.diagonal()
         sign = int(np.prod(np.sign(diag)))
         sign *= _permutation_parity(self._lu.perm_r) * _permutation_parity(self._lu.perm_c)
-        if len(self._w):
-            sign *= int(np.prod(np.sign(self._w)) * np.sign(np.linalg.det(self._small)))
+        if self._has_low_rank:
+            # det(K_S + U W U^T) = det(K_S) det(W) det(W^-1 + U^T K_S^-1 U)
+            sign *= self._w_sign * int(np.sign(np.linalg.det(self._small)))
         return sign
 

@@ -86,6 +86,16 @@ class ContinuationOptions:
       start's pin the steps fell to zero at dLk 2.37 (N = 200); restarted there
       with a fresh pin, the branch went on. (Re-picking at every point made
       the tangent turn between gauges and stopped the branch earlier.)
+    * ``rephase``: with ``gauge="integral"``, re-anchor the phase condition at
+      every accepted point: the next step solves ``<M g_k, q - q_k> = 0`` with
+      ``g_k`` the mode at the last point ``q_k`` (AUTO's convention: Doedel's
+      integral phase condition relative to the previous solution), and the
+      last point's tangent is recomputed in that gauge. A condition anchored at
+      the branch start degrades as the state and its sliding mode move away
+      from it: measured on the ring's α contact branch (integral contact on
+      the spline, N = 200), the start's condition turned the branch back on
+      itself at ΔLk 2.247; re-anchored at every point it went on through
+      seed 001's sequence of contacts to ΔLk 3.4 (docs/benchmarks.md).
     * ``detect_closed_loops``: stop with ``CLOSED_LOOP`` when the branch comes
       back to one of its own points: the last step's chord passes within
       ``closed_loop_tolerance`` times its length of an earlier point (at least
@@ -124,6 +134,7 @@ class ContinuationOptions:
     near_symmetry_gauge: bool = True
     gauge: str = "node"
     regauge: bool = False
+    rephase: bool = False
     detect_closed_loops: bool = True
     closed_loop_tolerance: float = 0.1
     finite_difference_step: float = 6e-6
@@ -157,6 +168,9 @@ class ContinuationOptions:
             raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
         if self.gauge not in ("node", "integral"):
             raise ValueError(f"gauge must be 'node' or 'integral', got {self.gauge!r}")
+        if self.rephase and self.gauge != "integral":
+            raise ValueError("rephase re-anchors the integral phase condition: it needs "
+                             f"gauge='integral', got gauge={self.gauge!r}")
         if self.predictor not in ("tangent", "secant"):
             raise ValueError(f"predictor must be 'tangent' or 'secant', got {self.predictor!r}")
         if self.n_modes < 1:

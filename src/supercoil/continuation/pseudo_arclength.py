@@ -234,7 +234,24 @@ class _Tracer:
             self.add_point(corr.x, t, search_events=False)
         else:
             self.xs[-1], self.ts[-1] = corr.x, t
+        if opts.rephase:
+            self._rephase()
         return True
+
+    def _rephase(self) -> None:
+        """Re-anchor the integral phase condition at the last point (``ContinuationOptions.rephase``).
+
+        The point satisfies the new condition (``q - q_k = 0``); only its tangent
+        is recomputed, oriented along the old one.
+        """
+        system = self.system
+        x = self.xs[-1]
+        q = system.q(x)
+        modes = branch_phase_modes(system.problem, q, self.opts)
+        if modes is None or modes.shape != system.phase_modes.shape:
+            return
+        system.set_phase(modes, q)
+        self.ts[-1] = tangent(system, x, system.weights * self.ts[-1])
 
     def _returned_to(self) -> int | None:
         """Index of an earlier point the last step passed through (see
@@ -376,6 +393,8 @@ class _Tracer:
             regauged = False
             try:
                 self.add_point(x_new, t_new)
+                if opts.rephase and system.r:
+                    self._rephase()
             except (SingularMatrixError, InertiaError) as exc:
                 return ContinuationStatus.STEP_TOO_SMALL, (
                     f"stability at point {len(self.xs)} failed: {exc}")

@@ -582,7 +582,8 @@ def ring_diagram(options: DiagramOptions,
         free_opts = ContinuationOptions(
             initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
             max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
-            event_tolerance=opts.event_tolerance, gauge=opts.gauge)
+            event_tolerance=opts.event_tolerance, gauge=opts.gauge,
+            rephase=opts.gauge == "integral")
         old, complete = stored.get(name, (None, False))
         if complete:
             free = old
@@ -632,6 +633,7 @@ def ring_diagram(options: DiagramOptions,
             parameter_bounds=(0.0, opts.max_excess_link), direction=direction,
             parameter_weight=D, tolerance=opts.contact_tolerance,
             near_symmetry_gauge=opts.contact_gauge, gauge=opts.gauge, regauge=True,
+            rephase=opts.gauge == "integral",
             event_tolerance=opts.contact_event_tolerance)
         if not 0.0 <= cp.excess_link <= opts.max_excess_link:
             notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "

@@ -115,7 +115,7 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
         min_step=CONTACT_MIN_STEP, max_step=opts.contact_max_step * D, max_points=max_points,
         parameter_bounds=(0.0, opts.max_excess_link), parameter_weight=D,
         tolerance=opts.contact_tolerance, near_symmetry_gauge=opts.contact_gauge,
-        gauge=opts.gauge,
+        gauge=opts.gauge, rephase=opts.gauge == "integral",
         regauge=True, event_tolerance=opts.contact_event_tolerance,
         initial_step=AMPLITUDES[0] * D)
     records = _contact_records(cp, ring_records(cp), free=False)

@@ -4,7 +4,7 @@ Run from the repository root:
 
     python benchmarks/bench_ring_diagram.py [--nodes 200] [--max-excess-link 6]
         [--contact-max-points 400] [--contact-formulation pairs|integral]
-        [--contact-curve polygon|spline] [--profile]
+        [--contact-curve polygon|spline] [--gauge node|integral] [--profile]
 
 Times :func:`supercoil.problems.ring_diagram.ring_diagram` for C/A = 2/3,
 L/D = 122 (seed 001's DNA example), mode 2 only (the circle, alpha without
@@ -31,6 +31,7 @@ def main(argv=None) -> int:
     parser.add_argument("--contact-max-points", type=int, default=400)
     parser.add_argument("--contact-formulation", default="pairs", choices=("pairs", "integral"))
     parser.add_argument("--contact-curve", default="polygon", choices=("polygon", "spline"))
+    parser.add_argument("--gauge", default="node", choices=("node", "integral"))
     parser.add_argument("--profile", action="store_true")
     args = parser.parse_args(argv)
 
@@ -42,7 +43,7 @@ def main(argv=None) -> int:
                              max_excess_link=args.max_excess_link,
                              contact_max_points=args.contact_max_points,
                              contact_formulation=args.contact_formulation,
-                             contact_curve=args.contact_curve)
+                             contact_curve=args.contact_curve, gauge=args.gauge)
     profile = cProfile.Profile() if args.profile else None
     start = time.perf_counter()
     if profile:
@@ -52,7 +53,7 @@ def main(argv=None) -> int:
         profile.disable()
     total = time.perf_counter() - start
     print(f"C/A = 2/3, L/D = 122, N = {args.nodes}, mode 2, dLk <= {args.max_excess_link:g}, "
-          f"{args.contact_formulation} contact on the {args.contact_curve}")
+          f"{args.contact_formulation} contact on the {args.contact_curve}, {args.gauge} gauge")
     print("| branch | points | seconds | s/point | dLk range | max writhe | status |")
     print("|---|---|---|---|---|---|---|")
     for b in diagram.branches:

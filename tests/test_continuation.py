@@ -575,3 +575,47 @@ def test_the_corrector_accepts_a_residual_at_round_off_only_near_the_tolerance(
     if converges:
         assert np.max(np.abs(system.q(result.x))) < 1e-12
         assert "round-off" in result.message or result.residual <= tolerance
+
+
+class _StubSegment:
+    """A segment whose count steps from 2 to 1 at ``u = 0.37`` and whose trial
+    corrections fail at the listed parameters (as the corrector can at a contact
+    onset); the nearest eigenvalue does not change sign (a contact-type change)."""
+
+    def __init__(self, failing):
+        self.failing = set(failing)
+        self.d = np.ones(3)
+        self.length = 1.0
+        self.x_b = np.ones(3)
+
+    def point(self, u):
+        from supercoil.continuation.events import LocationFailed
+        if float(u) in self.failing:
+            raise LocationFailed(f"trial correction at u = {u} failed")
+        return np.full(3, float(u))
+
+    def count(self, u):
+        self.point(u)
+        return 2 if u < 0.37 else 1
+
+    def nearest_eigenvalue(self, u):
+        return -300.0
+
+    def tangent(self, u):
+        return self.d
+
+
+def test_count_change_is_located_past_a_failed_trial_point():
+    from supercoil.continuation.events import locate_count_change
+
+    clean = locate_count_change(_StubSegment(()), 1e-9, 1e-3)
+    assert clean.located and abs(clean.u - 0.37) < 1e-8
+    # the first bisection points (0.5, then 0.25) fail: 0.3 / 0.7 of the bracket are tried
+    hurdles = locate_count_change(_StubSegment((0.5, 0.25)), 1e-9, 1e-3)
+    assert hurdles.located and abs(hurdles.u - 0.37) < 1e-8
+    assert (hurdles.count_before, hurdles.count_after) == (2, 1)
+    # the reported point is one that was corrected (the first with the new count)
+    assert hurdles.u >= 0.37
+    # every trial of a bracket failing is still reported as not located
+    hopeless = locate_count_change(_StubSegment((0.5, 0.3, 0.7)), 1e-9, 1e-3)
+    assert not hopeless.located

@@ -40,7 +40,7 @@ def test_branches_and_contact_onset(diagram):
     first = alpha.special_points[0]
     assert first.kind == "contact_onset"
     # at the located onset the closest approach is D, within the event tolerance
-    probe = ContactProblem(_problem(), ContactOptions(diameter=OPTIONS.diameter))
+    probe = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
     gap = probe.min_distance(first.q) / OPTIONS.diameter
     slope = abs(alpha.records["min_gap_over_diameter"][first.index + 1]
                 - alpha.records["min_gap_over_diameter"][first.index]) / (
@@ -86,7 +86,7 @@ def test_branches_are_consistent(diagram):
     points' parameter range (it is located between its neighbours in arclength).
     """
     base = _problem()
-    cp = ContactProblem(base, ContactOptions(diameter=OPTIONS.diameter))
+    cp = ContactProblem(base, OPTIONS.contact_options(OPTIONS.diameter))
     for b in diagram.branches:
         contact = b.name in diagram.contact_branches
         report = consistency_check(b, cp if contact else base, residual_tolerance=1e-8)
@@ -101,7 +101,7 @@ def test_sliding_residual_is_the_unpinned_kkt_residual(diagram):
     from supercoil.continuation.system import ExtendedSystem
 
     contact = diagram.branch("alpha_contact")
-    cp = ContactProblem(_problem(), ContactOptions(diameter=OPTIONS.diameter))
+    cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
     system = ExtendedSystem(cp, "excess_link", contact.states[0])
     for i in range(len(contact)):
         cp.excess_link = float(contact.parameter_values[i])
@@ -119,7 +119,7 @@ def test_sliding_residual_is_the_unpinned_kkt_residual(diagram):
                    "the rod (ring_diagram's docs, 'Material sliding')")
 def test_contact_branch_states_are_equilibria_without_the_gauge(diagram):
     base = _problem()
-    cp = ContactProblem(base, ContactOptions(diameter=OPTIONS.diameter))
+    cp = ContactProblem(base, OPTIONS.contact_options(OPTIONS.diameter))
     report = consistency_check(diagram.branch("alpha_contact"), cp, residual_tolerance=1e-6)
     assert not [p for p in report.problems if "KKT residual" in p]
 
@@ -265,7 +265,7 @@ def test_sparse_constrained_eigenvalues_equal_the_dense_oracle_with_contact(diag
 
     contact = diagram.branch("alpha_contact")
     i = len(contact) - 1
-    cp = ContactProblem(_problem(), ContactOptions(diameter=OPTIONS.diameter))
+    cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
     cp.excess_link = float(contact.parameter_values[i])
     cp.accept(contact.states[i])
     dofs, H, J, mass, sym = _eigen_system(cp, contact.states[i], contact.multipliers[i])

@@ -11,7 +11,7 @@ penetration) and starts at its origin.
 import numpy as np
 import pytest
 
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import consistency_check
 from supercoil.problems.ring_branches import twisted_circle_problem
 from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
@@ -66,7 +66,7 @@ def test_primary_is_d3_and_secondary_branches_are_c2(diagram):
 
 def test_secondary_branches_are_consistent(diagram):
     base, _ = twisted_circle_problem(OPTIONS.twist_ratio, 0.0, OPTIONS.n_nodes, "angle")
-    cp = ContactProblem(base, ContactOptions(diameter=OPTIONS.diameter))
+    cp = ContactProblem(base, OPTIONS.contact_options(OPTIONS.diameter))
     for b in _secondary(diagram):
         report = consistency_check(b, cp, residual_tolerance=1e-8)
         # as for the contact branches (test_ring_diagram): the KKT residual holds the

@@ -125,32 +125,50 @@ def locate_fold(segment: Segment, xtol: float) -> Located:
         return Located("fold", "fold", 1.0, segment.x_b, None, False)
 
 
+# where a bisection tries its trial point in the bracket, in order: a trial correction
+# can fail (the corrector stagnating at the contact barrier's round-off, measured at a
+# contact onset) while a neighbouring one succeeds
+_TRIAL_FRACTIONS = (0.5, 0.3, 0.7)
+
+
+def _bisect_count(segment: Segment, lo: float, hi: float, c_lo: int, c_hi: int,
+                  width: float) -> tuple[float, float, int]:
+    """Narrow ``[lo, hi]`` (counts ``c_lo != c_hi``) to ``width`` by bisection on the count."""
+    while hi - lo > width:
+        for fraction in _TRIAL_FRACTIONS:
+            mid = lo + fraction * (hi - lo)
+            try:
+                c_mid = segment.count(mid)
+                break
+            except LocationFailed:
+                if fraction == _TRIAL_FRACTIONS[-1]:
+                    raise
+        if c_mid == c_lo:
+            lo = mid
+        else:
+            hi, c_hi = mid, c_mid
+    return lo, hi, c_hi
+
+
 def locate_count_change(segment: Segment, xtol: float, switch_below: float) -> Located | None:
-    """Where the unstable count changes on the segment (None if the raw inertia does not)."""
+    """Where the unstable count changes on the segment (None if the raw inertia does not).
+
+    Bisection on the count to ``switch_below``, then Brent's method on the eigenvalue
+    nearest zero (or bisection to ``xtol`` when it does not change sign there). A trial
+    point whose correction fails is replaced by one at 0.3 or 0.7 of the bracket.
+    """
     try:
         lo, hi = 0.0, 1.0
         c_lo, c_hi = segment.count(lo), segment.count(hi)
         if c_lo == c_hi:
             return None
-        while hi - lo > max(switch_below, xtol):
-            mid = 0.5 * (lo + hi)
-            c_mid = segment.count(mid)
-            if c_mid == c_lo:
-                lo = mid
-            else:
-                hi, c_hi = mid, c_mid
+        lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, max(switch_below, xtol))
         f_lo, f_hi = segment.nearest_eigenvalue(lo), segment.nearest_eigenvalue(hi)
         if np.isfinite(f_lo) and np.isfinite(f_hi) and f_lo * f_hi < 0:
             u = _brent(segment.nearest_eigenvalue, lo, hi, xtol)
         else:
-            while hi - lo > xtol:
-                mid = 0.5 * (lo + hi)
-                c_mid = segment.count(mid)
-                if c_mid == c_lo:
-                    lo = mid
-                else:
-                    hi, c_hi = mid, c_mid
-            u = 0.5 * (lo + hi)
+            lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, xtol)
+            u = hi  # the first point found with the new count (already corrected)
         x = segment.point(u)
         try:
             t = segment.tangent(u)

@@ -255,6 +255,11 @@ class DiagramOptions:
     def tolerances(self) -> dict:
         return branch_tolerances(self)
 
+    def contact_options(self, diameter: float) -> ContactOptions:
+        """The :class:`ContactOptions` of the contact branches, tube ``diameter`` (a length)."""
+        return ContactOptions(diameter=diameter, treatment=self.contact, curve=self.contact_curve,
+                              formulation=self.contact_formulation)
+
 
 def branch_tolerances(options) -> dict:
     """The provenance ``tolerances`` of options with ``event_tolerance``,
@@ -554,9 +559,7 @@ def ring_diagram(options: DiagramOptions,
     circle, problem = circle_branch(opts.twist_ratio, opts.n_nodes, circle_top)
     seconds["circle"] = time.perf_counter() - start
     D = opts.diameter * problem.rod.length
-    contact_options = ContactOptions(diameter=D, treatment=opts.contact,
-                                     curve=opts.contact_curve,
-                                     formulation=opts.contact_formulation)
+    contact_options = opts.contact_options(D)
     probe = ContactProblem(problem, ContactOptions(diameter=D, treatment="barrier",
                                                    curve=opts.contact_curve))
     cp = ContactProblem(problem, contact_options)

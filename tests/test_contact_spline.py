@@ -328,9 +328,17 @@ def test_drivers_accept_and_validate_the_contact_curve():
     from supercoil.problems.ring_diagram import DiagramOptions
     from supercoil.problems.tweezers import TweezersOptions
 
+    from supercoil.cli._common import CONTACT_FORMULATIONS
+    from supercoil.contact.problem import FORMULATIONS
+
     assert CONTACT_CURVES == CURVES  # the CLI's copy (cheap at start-up) is the same
-    assert DiagramOptions(2 / 3, 122.0).contact_curve == "polygon"
-    assert TweezersOptions(4 / 3, 33.0, tension=75.0).contact_curve == "polygon"
+    assert CONTACT_FORMULATIONS == FORMULATIONS
+    ring = DiagramOptions(2 / 3, 122.0)
+    assert (ring.contact_curve, ring.contact_formulation) == ("polygon", "pairs")
+    tweezers = TweezersOptions(4 / 3, 33.0, tension=75.0)
+    assert (tweezers.contact_curve, tweezers.contact_formulation) == ("spline", "integral")
+    with pytest.raises(ValueError, match="contact_formulation"):
+        TweezersOptions(4 / 3, 33.0, tension=75.0, contact_formulation="sum")
     with pytest.raises(ValueError, match="contact_curve"):
         DiagramOptions(2 / 3, 122.0, contact_curve="bezier")
     with pytest.raises(ValueError, match="contact_curve"):

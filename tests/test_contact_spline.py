@@ -323,13 +323,10 @@ def test_spline_barrier_step_guard_keeps_the_spline_gap():
 
 
 def test_drivers_accept_and_validate_the_contact_curve():
-    from supercoil.cli._common import CONTACT_CURVES
-    from supercoil.contact.problem import CURVES
+    from supercoil.cli._common import CONTACT_CURVES, CONTACT_FORMULATIONS
+    from supercoil.contact.problem import CURVES, FORMULATIONS
     from supercoil.problems.ring_diagram import DiagramOptions
     from supercoil.problems.tweezers import TweezersOptions
-
-    from supercoil.cli._common import CONTACT_FORMULATIONS
-    from supercoil.contact.problem import FORMULATIONS
 
     assert CONTACT_CURVES == CURVES  # the CLI's copy (cheap at start-up) is the same
     assert CONTACT_FORMULATIONS == FORMULATIONS

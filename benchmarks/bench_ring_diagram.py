@@ -4,7 +4,7 @@ Run from the repository root:
 
     python benchmarks/bench_ring_diagram.py [--nodes 200] [--max-excess-link 6]
         [--contact-max-points 400] [--contact-formulation pairs|integral]
-        [--contact-curve polygon|spline] [--gauge node|integral] [--profile]
+        [--contact-curve polygon|spline|quintic] [--gauge node|integral] [--profile]
 
 Times :func:`supercoil.problems.ring_diagram.ring_diagram` for C/A = 2/3,
 L/D = 122 (seed 001's DNA example), mode 2 only (the circle, alpha without
@@ -30,7 +30,7 @@ def main(argv=None) -> int:
     parser.add_argument("--max-excess-link", type=float, default=6.0)
     parser.add_argument("--contact-max-points", type=int, default=400)
     parser.add_argument("--contact-formulation", default="pairs", choices=("pairs", "integral"))
-    parser.add_argument("--contact-curve", default="polygon", choices=("polygon", "spline"))
+    parser.add_argument("--contact-curve", default="polygon", choices=("polygon", "spline", "quintic"))
     parser.add_argument("--gauge", default="node", choices=("node", "integral"))
     parser.add_argument("--profile", action="store_true")
     args = parser.parse_args(argv)

@@ -22,6 +22,7 @@ from supercoil.contact.integral import (
     first_time_of_approach_samples,
     integral_terms,
     polygon_weights,
+    quintic_samples,
     sample_parameters,
     spline_weights,
 )
@@ -272,3 +273,101 @@ def test_barrier_derivatives_and_smoothness():
     v = barrier(near, 1.0, G_HAT)[0]
     assert np.log(v[0] / v[1]) / np.log(2.0) == pytest.approx(5.0, abs=0.05)
     assert barrier([0.0], 1.0, G_HAT)[0][0] == np.inf
+
+
+# ------------------------------------------------------------------ quintic B-spline
+def _quintic(x_strands):
+    """Stencil and weights of the quintic pieces of open strands (one per array)."""
+    stencils, weights, offset = [], [], 0
+    for x in x_strands:
+        n = len(x)
+        seg = np.stack([np.arange(n - 1), np.arange(1, n)], 1) + offset
+        s, w = quintic_samples(seg, False, 32)
+        stencils.append(s)
+        weights.append(w)
+        offset += n
+    return np.concatenate(stencils), np.concatenate(weights)
+
+
+def test_quintic_pieces_reproduce_lines_and_shift_circles_by_h2_over_4r():
+    # a line, ends included (the ghosts reflect it onto itself): samples on the chords
+    x = np.stack([np.linspace(0, 3, 7), 0.5 * np.linspace(0, 3, 7), np.zeros(7)], 1)
+    stencil, weights = _quintic([x])
+    u = sample_parameters(32)
+    expected = x[:-1, None, :] + u[None, :, None] * (x[1:] - x[:-1])[:, None, :]
+    np.testing.assert_allclose(np.einsum("kal,klx->kax", weights, x[stencil]), expected,
+                               atol=1e-14)
+    # a closed circle of radius R sampled at spacing h: the uniform B-spline of degree p
+    # lies inside by (p + 1) h^2 / (24 R) + O(h^4) (1/6 for cubic pieces, 1/4 for quintic)
+    radius = 1.0
+    shifts = []
+    for n in (40, 80):
+        phi = 2 * np.pi * np.arange(n) / n
+        ring = np.stack([np.cos(phi), np.sin(phi), np.zeros(n)], 1)
+        seg = np.stack([np.arange(n), (np.arange(n) + 1) % n], 1)
+        s, w = quintic_samples(seg, True, 8)
+        assert np.allclose(w.sum(axis=2), 1.0)  # a partition of unity
+        pts = np.einsum("kal,klx->kax", w, ring[s])
+        h = 2 * np.sin(np.pi / n) * radius
+        shifts.append((radius - np.linalg.norm(pts, axis=-1).mean()) / (h * h / (4 * radius)))
+    assert abs(shifts[-1] - 1) < 0.01 and abs(shifts[-1] - 1) < abs(shifts[0] - 1)
+
+
+def test_quintic_removes_the_cubic_phase_ripple_of_tight_strands():
+    # strands of radius 3 D, h = 0.6 D, crossing at 3 degrees: the cubic B-spline's shape
+    # depends on the nodes' phase at O(h^4 kappa^3), which the barrier amplifies by 1/g
+    # (force ripple 1.2e-2 whatever the samples); the quintic's at O(h^6 kappa^5)
+    h, radius = 0.6, 3.0
+    cubic, quintic = [], []
+    for phase in np.linspace(0, 1, 10, endpoint=False):
+        a, b = _arcs(phase, 0.05, 0.005, radius=radius, n=16, h=h, spline=True)
+        x, stencil, pieces, pairs = _two_strands(a, b, True)
+        weights = spline_weights(pieces.coefficients, 32)
+        cubic.append(integral_terms(x, stencil, weights, pairs, D, "barrier", 1.0, G_HAT, h,
+                                    order=1)[3].sum())
+        b[:, 2] += 2 * (h * h / (4 * radius) - h * h / (6 * radius))  # the quintic's shift
+        x = np.concatenate([a, b])
+        stencil, weights = _quintic([a, b])
+        quintic.append(integral_terms(x, stencil, weights, pairs, D, "barrier", 1.0, G_HAT, h,
+                                      order=1)[3].sum())
+    ripple = [np.ptp(f) / np.mean(f) for f in (cubic, quintic)]
+    assert ripple[0] > 5e-3  # measured 1.2e-2
+    assert ripple[1] < 5e-4  # measured 5e-5
+
+
+def test_quintic_kernel_derivatives_match_finite_differences():
+    # the quintic pieces lie h^2 / 4R = 0.00625 inside each arc: a gap of 0.0015 between them
+    a, b = _arcs(0.5, 1.1, 0.0015 - 2 * 0.00625, radius=40.0, n=7)
+    x = np.concatenate([a, b])
+    n = len(a)
+    seg = np.stack([np.arange(n - 1), np.arange(1, n)], 1)
+    s1, w1 = quintic_samples(seg, False, 8)
+    s2, w2 = quintic_samples(seg + n, False, 8)
+    stencil, weights = np.concatenate([s1, s2]), np.concatenate([w1, w2])
+    pairs = np.array([[i, n - 1 + j] for i in range(2, 4) for j in range(2, 4)])
+
+    def gradient(flat):
+        _e, g, _h, _f, _p, dofs = integral_terms(flat.reshape(-1, 3), stencil, weights, pairs,
+                                                 D, "barrier", 1.0, G_HAT, 1.0, order=1)
+        out = np.zeros(flat.size)
+        np.add.at(out, dofs.ravel(), g.ravel())
+        return out
+
+    flat = x.ravel()
+    energy = integral_terms(x, stencil, weights, pairs, D, "barrier", 1.0, G_HAT, 1.0)
+    assert energy[0].sum() > 0
+    H = np.zeros((flat.size, flat.size))
+    for p in range(len(pairs)):
+        np.add.at(H, (energy[5][p][:, None], energy[5][p][None, :]), energy[2][p])
+    eps = 1e-7
+    for k in range(0, flat.size, 2):
+        e = np.zeros(flat.size)
+        e[k] = eps
+        fd_h = (gradient(flat + e) - gradient(flat - e)) / (2 * eps)
+        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-5, atol=1e-5 * np.abs(H).max())
+
+
+def test_quintic_needs_the_integral_formulation():
+    with pytest.raises(ValueError, match="quintic"):
+        ContactOptions(diameter=0.1, curve="quintic")
+    ContactOptions(diameter=0.1, curve="quintic", formulation="integral")

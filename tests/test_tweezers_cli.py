@@ -69,6 +69,8 @@ def test_files_and_stored_states(folder):
     (["--nodes", "5", "--tension", "1"], "--nodes"),
     (["--contact-formulation", "sum", "--tension", "1"], "--contact-formulation"),
     (["--contact-curve", "bezier", "--tension", "1"], "--contact-curve"),
+    (["--contact-curve", "quintic", "--contact-formulation", "pairs", "--tension", "1"],
+     "quintic"),
 ])
 def test_bad_input_is_one_line_exit_2(tmp_path, capsys, args, words):
     base = ["tweezers", "--twist-ratio", "1", "--out", str(tmp_path / "x")]

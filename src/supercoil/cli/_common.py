@@ -23,7 +23,7 @@ EXIT_BAD_INPUT = 2
 # these the run either exhausts memory (N = 1e9 asked for 24 GB before being
 # killed) or overflows (dLk = 1e300), so the command refuses them up front.
 MAX_NODES = 100_000
-CONTACT_CURVES = ("polygon", "spline")  # supercoil.contact.problem.CURVES (cheap at start-up)
+CONTACT_CURVES = ("polygon", "spline", "quintic")  # supercoil.contact.problem.CURVES
 CONTACT_FORMULATIONS = ("pairs", "integral")  # supercoil.contact.problem.FORMULATIONS
 FORMULATION_HELP = ("How the contact potential is summed: pairs (over segment pairs, default) "
                     "or integral (a double integral over the strands, which counts a contact "

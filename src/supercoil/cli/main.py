@@ -718,9 +718,9 @@ def diagram_ring(
     contact_curve: Annotated[
         str,
         typer.Option("--contact-curve", metavar="CURVE", help="Curve whose self-distance is "
-                     "the contact distance: polygon (the segments, default) or spline (the "
-                     "cubic B-spline of the nodes, experimental: it removes the chords' sag "
-                     "ripple, not the pair-counting one; docs/benchmarks.md)."),
+                     "the contact distance: polygon (the segments, default), spline (the "
+                     "cubic B-spline of the nodes: no sag ripple) or quintic (the quintic "
+                     "B-spline, with --contact-formulation integral only; docs/benchmarks.md)."),
     ] = "polygon",
     contact_formulation: Annotated[
         str, typer.Option("--contact-formulation", metavar="FORM", help=FORMULATION_HELP),

@@ -89,8 +89,9 @@ def tweezers(
         "stopped by it is incomplete: exit status 1).")] = 2000,
     contact_curve: Annotated[str, typer.Option(
         "--contact-curve", metavar="CURVE", help="Curve whose self-distance is the contact "
-        "distance: spline (the cubic B-spline of the nodes, default) or polygon (the "
-        "segments, whose sag ripples with period h; docs/benchmarks.md).")] = "spline",
+        "distance: spline (the cubic B-spline of the nodes, default), quintic (the quintic "
+        "B-spline, integral formulation only) or polygon (the segments, whose sag ripples "
+        "with period h; docs/benchmarks.md).")] = "spline",
     contact_formulation: Annotated[str, typer.Option(
         "--contact-formulation", metavar="FORM", help="How the contact potential is summed: "
         "integral (a double integral over the strands, which counts a contact once wherever "

@@ -78,10 +78,13 @@ from supercoil.contact.broadphase import candidate_pairs
 from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
 from supercoil.contact.distance import segment_distance, segment_distance_derivatives
 from supercoil.contact.integral import (
+    chord_deviation,
+    closest_samples,
     default_samples,
     first_time_of_approach_samples,
     integral_terms,
     polygon_weights,
+    quintic_samples,
     sample_points,
     spline_weights,
 )
@@ -96,7 +99,8 @@ from supercoil.solvers.problem import HessianParts
 from supercoil.topology import writhe
 
 TREATMENTS = ("barrier", "augmented", "penalty", "exact")
-CURVES = ("polygon", "spline")  # the curve whose self-distance is the contact distance
+# the curve whose self-distance is the contact distance (quintic: integral formulation only)
+CURVES = ("polygon", "spline", "quintic")
 FORMULATIONS = ("pairs", "integral")  # how the potential is summed, see ContactOptions
 LINK_CHECK_MAX_NODES = 2000  # see ContactProblem.admissible
 _PAIR_MEMO = 8  # pair states remembered, see ContactProblem.pair_state
@@ -197,7 +201,11 @@ class ContactOptions:
                              f"{self.samples_per_segment!r}")
         if self.curve not in CURVES:
             raise ValueError(f"contact curve must be one of {', '.join(CURVES)} (the polygon's "
-                             f"segments or the cubic B-spline of the nodes); got {self.curve!r}")
+                             f"segments, the cubic or the quintic B-spline of the nodes); got "
+                             f"{self.curve!r}")
+        if self.curve == "quintic" and self.formulation != "integral":
+            raise ValueError("the quintic contact curve needs formulation='integral' (its "
+                             "distance is only sampled)")
 
     @property
     def tolerance(self) -> float:
@@ -251,7 +259,10 @@ class ContactProblem:
             self.samples = (options.samples_per_segment if options.samples_per_segment
                             else default_samples(h, self.diameter,
                                                  options.barrier_activation * self.diameter))
-            if self.spline:
+            if options.curve == "quintic":
+                self.sample_stencil, self.sample_weights = quintic_samples(
+                    self.segments, self.closed, self.samples)
+            elif self.spline:
                 self.sample_stencil = np.ascontiguousarray(self.pieces.stencil)
                 self.sample_weights = spline_weights(self.pieces.coefficients, self.samples)
             else:
@@ -402,8 +413,26 @@ class ContactProblem:
         self.__dict__["_verlet"] = (x.copy(), reach, self.exclusion, pairs)
         return pairs
 
+    def _sample_pair_state(self, q: np.ndarray, cutoff: float) -> PairState:
+        """Pairs whose closest *sample points* are within ``cutoff`` (integral formulation:
+        the energy sees the curve only there). The broad phase runs on the segments, its
+        cutoff widened by twice the samples' largest distance from their chords."""
+        a, b = self._endpoints(q)
+        points = sample_points(q.reshape(-1, 3) if np.ndim(q) == 1 else q,
+                               self.sample_stencil, self.sample_weights)
+        reach = cutoff + 2.0 * float(np.max(chord_deviation(points, a, b), initial=0.0))
+        cand = self._candidates(q, reach)
+        if len(cand) == 0:
+            empty = np.zeros(0)
+            return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)
+        d, s, t = closest_samples(points, cand)
+        keep = d <= cutoff
+        return PairState(cand[keep], d[keep], s[keep], t[keep])
+
     def _compute_pair_state(self, q: np.ndarray, cutoff: float, polygon: bool,
                             shadows: bool) -> PairState:
+        if self.integral and not polygon:
+            return self._sample_pair_state(np.asarray(q, dtype=float), cutoff)
         a, b = self._endpoints(q)
         spline = self.spline and not polygon
         reach = cutoff
@@ -719,12 +748,9 @@ class ContactProblem:
             # the barrier's gaps are those of the sample points: none may fall below
             # a tenth of the smallest one now (sliding brings other sample pairs
             # into line, and their gaps may fall to that of the contact)
-            st = self.pair_state(q, reach, shadows=True) if self.spline else st
+            st = self.pair_state(q, reach)
             if len(st.pairs):
-                points = sample_points(x0, self.sample_stencil, self.sample_weights)
-                pi, pj = points[st.pairs[:, 0]], points[st.pairs[:, 1]]
-                gap = float(np.sqrt(np.min(np.sum(
-                    (pi[:, :, None, :] - pj[:, None, :, :]) ** 2, axis=-1)))) - D
+                gap = float(np.min(st.distance)) - D  # the closest sample points'
                 t_samples = first_time_of_approach_samples(
                     x0, cap * dx, self.sample_stencil, self.sample_weights, st.pairs,
                     D + 0.1 * max(gap, 0.0))

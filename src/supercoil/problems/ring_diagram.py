@@ -177,7 +177,7 @@ class DiagramOptions:
     ones too (:mod:`supercoil.problems.ring_secondary`), each half-branch at
     most ``secondary_max_points`` points and ``secondary_max_branches``
     half-branches in all.
-    ``contact_curve``: ``"polygon"`` or ``"spline"``, the curve whose
+    ``contact_curve``: ``"polygon"``, ``"spline"`` or ``"quintic"``, the curve whose
     self-distance is the contact distance (``ContactOptions.curve``; the
     contact onset of the contact-free branches is measured on it too).
     ``contact_formulation``: ``"pairs"`` or ``"integral"``
@@ -234,6 +234,9 @@ class DiagramOptions:
         if self.contact_formulation not in FORMULATIONS:
             raise ValueError(f"contact_formulation must be one of {', '.join(FORMULATIONS)}, "
                              f"got {self.contact_formulation!r}")
+        if self.contact_curve == "quintic" and self.contact_formulation != "integral":
+            raise ValueError("contact_curve 'quintic' needs contact_formulation 'integral' "
+                             f"(got {self.contact_formulation!r})")
         for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
             if getattr(self, name) < 2:
                 raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
@@ -560,8 +563,8 @@ def ring_diagram(options: DiagramOptions,
     seconds["circle"] = time.perf_counter() - start
     D = opts.diameter * problem.rod.length
     contact_options = opts.contact_options(D)
-    probe = ContactProblem(problem, ContactOptions(diameter=D, treatment="barrier",
-                                                   curve=opts.contact_curve))
+    # the onset is measured on the contact's own curve (and samples, for the integral)
+    probe = ContactProblem(problem, dataclasses.replace(contact_options, treatment="barrier"))
     cp = ContactProblem(problem, contact_options)
     if problem.rod.edge_length > D:
         notes.append(f"segments ({problem.rod.edge_length:.3g} L) are longer than the tube "

@@ -172,6 +172,9 @@ class TweezersOptions:
         if self.contact_formulation not in FORMULATIONS:
             raise ValueError(f"contact_formulation must be one of {', '.join(FORMULATIONS)}, "
                              f"got {self.contact_formulation!r}")
+        if self.contact_curve == "quintic" and self.contact_formulation != "integral":
+            raise ValueError("contact_curve 'quintic' needs contact_formulation 'integral' "
+                             f"(got {self.contact_formulation!r})")
 
     @property
     def load_control(self) -> bool:

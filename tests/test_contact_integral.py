@@ -80,6 +80,36 @@ def _arcs(phase: float, theta: float, gap: float, radius: float = 40.0, n: int =
     return a, b
 
 
+def _check_kernel_derivatives(x, stencil, weights, pairs, every=1):
+    """Finite differences of the kernel's energy and gradient against its gradient and
+    Hessian (assembled from the per-pair blocks) at the nodes ``x``."""
+    def terms(flat, order):
+        return integral_terms(flat.reshape(-1, 3), stencil, weights, pairs, D, "barrier", 1.0,
+                              G_HAT, 1.0, order=order)
+
+    def gradient(flat):
+        _e, g, _h, _f, _p, dofs = terms(flat, 1)
+        out = np.zeros(flat.size)
+        np.add.at(out, dofs.ravel(), g.ravel())
+        return out
+
+    flat = x.ravel()
+    energy, _g, hess, _f, _p, dofs = terms(flat, 2)
+    assert energy.sum() > 0
+    H = np.zeros((flat.size, flat.size))
+    for p in range(len(pairs)):
+        np.add.at(H, (dofs[p][:, None], dofs[p][None, :]), hess[p])
+    g = gradient(flat)
+    eps = 1e-7
+    for k in range(0, flat.size, every):
+        e = np.zeros(flat.size)
+        e[k] = eps
+        fd = (terms(flat + e, 0)[0].sum() - terms(flat - e, 0)[0].sum()) / (2 * eps)
+        assert abs(fd - g[k]) <= 1e-6 * max(1.0, np.abs(g).max())
+        fd_h = (gradient(flat + e) - gradient(flat - e)) / (2 * eps)
+        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-5, atol=1e-5 * np.abs(H).max())
+
+
 @pytest.mark.parametrize("spline", [False, True])
 def test_kernel_derivatives_match_finite_differences(spline):
     rng = np.random.default_rng(7)
@@ -88,35 +118,7 @@ def test_kernel_derivatives_match_finite_differences(spline):
     x, stencil, pieces, _ = _two_strands(a, b, spline)
     x = x + 1e-4 * rng.standard_normal(x.shape)
     pairs = np.array([[i, 5 + j] for i in range(1, 4) for j in range(1, 4)])
-    weights = _weights(stencil, pieces, 8)
-
-    def energy(flat):
-        return integral_terms(flat.reshape(-1, 3), stencil, weights, pairs, D, "barrier", 1.0,
-                              G_HAT, 1.0, order=0)[0].sum()
-
-    def gradient(flat):
-        _e, g, _h, _f, _p, dofs = integral_terms(flat.reshape(-1, 3), stencil, weights, pairs,
-                                                 D, "barrier", 1.0, G_HAT, 1.0, order=1)
-        out = np.zeros(flat.size)
-        np.add.at(out, dofs.ravel(), g.ravel())
-        return out
-
-    flat = x.ravel()
-    assert energy(flat) > 0
-    _e, _g, hess, _f, _p, dofs = integral_terms(x, stencil, weights, pairs, D, "barrier", 1.0,
-                                                G_HAT, 1.0, order=2)
-    H = np.zeros((flat.size, flat.size))
-    for p in range(len(pairs)):
-        np.add.at(H, (dofs[p][:, None], dofs[p][None, :]), hess[p])
-    g = gradient(flat)
-    eps = 1e-7
-    for k in range(flat.size):
-        e = np.zeros(flat.size)
-        e[k] = eps
-        fd = (energy(flat + e) - energy(flat - e)) / (2 * eps)
-        assert abs(fd - g[k]) <= 1e-6 * max(1.0, np.abs(g).max())
-        fd_h = (gradient(flat + e) - gradient(flat - e)) / (2 * eps)
-        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-5, atol=1e-5 * np.abs(H).max())
+    _check_kernel_derivatives(x, stencil, _weights(stencil, pieces, 8), pairs)
 
 
 def test_kernel_equals_a_plain_double_loop():
@@ -345,26 +347,7 @@ def test_quintic_kernel_derivatives_match_finite_differences():
     s2, w2 = quintic_samples(seg + n, False, 8)
     stencil, weights = np.concatenate([s1, s2]), np.concatenate([w1, w2])
     pairs = np.array([[i, n - 1 + j] for i in range(2, 4) for j in range(2, 4)])
-
-    def gradient(flat):
-        _e, g, _h, _f, _p, dofs = integral_terms(flat.reshape(-1, 3), stencil, weights, pairs,
-                                                 D, "barrier", 1.0, G_HAT, 1.0, order=1)
-        out = np.zeros(flat.size)
-        np.add.at(out, dofs.ravel(), g.ravel())
-        return out
-
-    flat = x.ravel()
-    energy = integral_terms(x, stencil, weights, pairs, D, "barrier", 1.0, G_HAT, 1.0)
-    assert energy[0].sum() > 0
-    H = np.zeros((flat.size, flat.size))
-    for p in range(len(pairs)):
-        np.add.at(H, (energy[5][p][:, None], energy[5][p][None, :]), energy[2][p])
-    eps = 1e-7
-    for k in range(0, flat.size, 2):
-        e = np.zeros(flat.size)
-        e[k] = eps
-        fd_h = (gradient(flat + e) - gradient(flat - e)) / (2 * eps)
-        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-5, atol=1e-5 * np.abs(H).max())
+    _check_kernel_derivatives(x, stencil, weights, pairs, every=2)
 
 
 def test_quintic_needs_the_integral_formulation():

@@ -114,6 +114,19 @@ _VERLET_CUTOFF = 2.0
 DEFAULT_TREATMENT = "barrier"
 
 
+def validate_contact_choice(curve: str, formulation: str) -> None:
+    """The drivers' check of ``contact_curve`` and ``contact_formulation`` (their key names
+    in the messages); raises ValueError."""
+    if curve not in CURVES:
+        raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got {curve!r}")
+    if formulation not in FORMULATIONS:
+        raise ValueError(f"contact_formulation must be one of {', '.join(FORMULATIONS)}, "
+                         f"got {formulation!r}")
+    if curve == "quintic" and formulation != "integral":
+        raise ValueError(f"contact_curve 'quintic' needs contact_formulation 'integral' "
+                         f"(got {formulation!r})")
+
+
 @dataclass(frozen=True)
 class ContactOptions:
     """How self-contact is imposed; validated on construction.

@@ -108,11 +108,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from supercoil.contact.problem import (
-    CURVES,
     DEFAULT_TREATMENT,
-    FORMULATIONS,
     ContactOptions,
     ContactProblem,
+    validate_contact_choice,
 )
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import (
@@ -228,15 +227,7 @@ class DiagramOptions:
                      "contact_event_tolerance", "contact_tolerance"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
-        if self.contact_curve not in CURVES:
-            raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got "
-                             f"{self.contact_curve!r}")
-        if self.contact_formulation not in FORMULATIONS:
-            raise ValueError(f"contact_formulation must be one of {', '.join(FORMULATIONS)}, "
-                             f"got {self.contact_formulation!r}")
-        if self.contact_curve == "quintic" and self.contact_formulation != "integral":
-            raise ValueError("contact_curve 'quintic' needs contact_formulation 'integral' "
-                             f"(got {self.contact_formulation!r})")
+        validate_contact_choice(self.contact_curve, self.contact_formulation)
         for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
             if getattr(self, name) < 2:
                 raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")

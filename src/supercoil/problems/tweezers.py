@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from supercoil.contact.problem import CURVES, FORMULATIONS, ContactOptions, ContactProblem
+from supercoil.contact.problem import ContactOptions, ContactProblem, validate_contact_choice
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import (
     Branch,
@@ -166,15 +166,7 @@ class TweezersOptions:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
         if self.max_points < 2 or self.segment_points < 2:
             raise ValueError("max_points and segment_points must be >= 2")
-        if self.contact_curve not in CURVES:
-            raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got "
-                             f"{self.contact_curve!r}")
-        if self.contact_formulation not in FORMULATIONS:
-            raise ValueError(f"contact_formulation must be one of {', '.join(FORMULATIONS)}, "
-                             f"got {self.contact_formulation!r}")
-        if self.contact_curve == "quintic" and self.contact_formulation != "integral":
-            raise ValueError("contact_curve 'quintic' needs contact_formulation 'integral' "
-                             f"(got {self.contact_formulation!r})")
+        validate_contact_choice(self.contact_curve, self.contact_formulation)
 
     @property
     def load_control(self) -> bool:

@@ -17,7 +17,8 @@ construction:
 over pairs of points farther apart along the rod than the neighbour
 exclusion, ``psi`` the scalar potential of the gap (a barrier that is C⁴
 where it vanishes, see ``_psi``, or the penalty) and ``r``
-the contact curve (the polygon, or the cubic B-spline of the nodes). It is a
+the contact curve (the polygon, or the cubic or quintic B-spline of the
+nodes). It is a
 functional of the curve alone: it does not depend on where the nodes sit
 along it, up to the quadrature error. This is the interaction-potential
 approach of beam contact (Grill, Meier & Wall, "A computational model for
@@ -31,8 +32,8 @@ plane, where ``psi`` is non-zero.
 
 Quadrature: the midpoint rule with ``q`` points per segment (``u_a = (a +
 1/2) / q``), weight ``(h / q)^2`` per pair of points. Each sample point is a
-fixed linear combination of at most four nodes (two on the polygon, the
-B-spline piece's four on the spline), so the discrete energy is a smooth
+fixed linear combination of at most six nodes (two on the polygon, four on
+the cubic B-spline, six on the quintic), so the discrete energy is a smooth
 function of the nodes wherever every sample gap is positive: no closest-point
 search, no distance regions, exact gradient and Hessian by the chain rule,
 
@@ -44,9 +45,12 @@ weights (the second strand's negated). The quadrature resolves a point
 contact when its spacing ``h / q`` is small against the width ``sqrt(2 D
 g_hat)`` of the region where ``psi`` acts (:func:`default_samples`).
 
-The barrier only sees the sample points: the segments between them may come
-slightly closer than ``D``; by at most about ``(h / 2q)^2 / D`` for crossing
-strands (reported as ``min_gap_over_diameter``, measured in the tests).
+The barrier only sees the sample points, and so do the formulation's pair
+states and the reported ``min_gap_over_diameter``: between samples the curve
+may come closer than ``D``, by at most about ``(h / 2q)^2 / D`` for crossing
+strands (3e-4 D at h = 0.6 D with the default 18 samples). The polygon's
+collision guard (segments stay ``D / 2`` apart) keeps the topology whatever
+the curve.
 """
 
 from __future__ import annotations

@@ -144,24 +144,25 @@ class ContactOptions:
     beyond it are flagged, not returned silently. ``barrier_activation``: the
     barrier acts on gaps below ``barrier_activation * D``. ``curve``: the
     centreline whose self-distance is the contact distance, ``"polygon"``
-    (segment pairs) or ``"spline"`` (the uniform cubic B-spline of the nodes;
-    see the module docstring). ``count_local_minima`` (spline only,
-    experimental): sum the potential only over pairs whose closest points are
-    a local minimum of the distance between the whole curves, dropping the
-    *shadows* of a contact seen by the neighbouring pairs through their shared
-    piece ends (``spline_distance.local_minimum_pairs``). The plain sum counts
-    a point contact once inside a piece pair and up to four times at a piece
-    junction, a ripple of period h of its own; dropping the shadows removes
-    it, but the energy then jumps where a local minimum is born inside the
-    barrier's reach (line contacts). Measured in docs/benchmarks.md ("Spline
-    contact"): it helps point contacts (the ring), it stalls line contacts
-    (tweezers). ``formulation``: ``"pairs"`` sums the potential of the
-    closest distance of every segment (piece) pair; ``"integral"``
-    integrates it over both strands (:mod:`supercoil.contact.integral`), so
-    that a contact counts once wherever it lies relative to the nodes
-    (barrier and penalty only). ``samples_per_segment``: quadrature points per
-    segment of the integral, default
-    :func:`~supercoil.contact.integral.default_samples`.
+    (segment pairs), ``"spline"`` (the uniform cubic B-spline of the nodes;
+    see the module docstring) or ``"quintic"`` (the quintic B-spline,
+    integral formulation only: :func:`~supercoil.contact.integral.quintic_samples`).
+    ``count_local_minima`` (spline only, experimental): sum the potential only
+    over pairs whose closest points are a local minimum of the distance between
+    the whole curves, dropping the *shadows* of a contact seen by the
+    neighbouring pairs through their shared piece ends
+    (``spline_distance.local_minimum_pairs``). The plain sum counts a point
+    contact once inside a piece pair and up to four times at a piece junction,
+    a ripple of period h of its own; dropping the shadows removes it, but the
+    energy then jumps where a local minimum is born inside the barrier's reach
+    (line contacts). Measured in docs/benchmarks.md ("Spline contact"): it
+    helps point contacts (the ring), it stalls line contacts (tweezers).
+    ``formulation``: ``"pairs"`` sums the potential of the closest distance of
+    every segment (piece) pair; ``"integral"`` integrates it over both strands
+    (:mod:`supercoil.contact.integral`), so that a contact counts once wherever
+    it lies relative to the nodes (barrier and penalty only).
+    ``samples_per_segment``: quadrature points per segment of the integral,
+    default :func:`~supercoil.contact.integral.default_samples`.
     """
 
     diameter: float

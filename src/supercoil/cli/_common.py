@@ -41,6 +41,15 @@ def fail(message: str) -> NoReturn:
     raise typer.Exit(EXIT_BAD_INPUT)
 
 
+def check_contact_choice(curve: str, formulation: str) -> None:
+    """``--contact-curve`` and ``--contact-formulation``: a one-line error (exit 2) unless valid."""
+    if curve not in CONTACT_CURVES:
+        fail(f"--contact-curve {curve!r}: give one of {', '.join(CONTACT_CURVES)}")
+    if formulation not in CONTACT_FORMULATIONS:
+        fail(f"--contact-formulation {formulation!r}: give one of "
+             f"{', '.join(CONTACT_FORMULATIONS)}")
+
+
 def warn(message: str) -> None:
     """One line on standard error (for a computed but unconverged result)."""
     print(" ".join(str(message).split()), file=sys.stderr, flush=True)

@@ -18,13 +18,12 @@ import typer
 
 from supercoil import __version__
 from supercoil.cli._common import (
-    CONTACT_CURVES,
-    CONTACT_FORMULATIONS,
     EXIT_BAD_INPUT,
     EXIT_NOT_CONVERGED,
     FORMULATION_HELP,
     MAX_MAGNITUDE,
     MAX_MAGNITUDE_TEXT,
+    check_contact_choice,
     check_json_target,
     fail,
     parse_ratio,
@@ -768,11 +767,7 @@ def diagram_ring(
              "or 3 (and tertiary)")
     if not 2 <= contact_max_points <= 100_000:
         fail(f"--contact-max-points {contact_max_points}: give an integer from 2 to 100000")
-    if contact_curve not in CONTACT_CURVES:
-        fail(f"--contact-curve {contact_curve!r}: give one of {', '.join(CONTACT_CURVES)}")
-    if contact_formulation not in CONTACT_FORMULATIONS:
-        fail(f"--contact-formulation {contact_formulation!r}: give one of "
-             f"{', '.join(CONTACT_FORMULATIONS)}")
+    check_contact_choice(contact_curve, contact_formulation)
     prepare_output_folder(out, force, "the diagram's files")
     from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
     from supercoil.problems.ring_diagram import DiagramOptions

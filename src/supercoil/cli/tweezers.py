@@ -15,9 +15,8 @@ from typing import Annotated
 import typer
 
 from supercoil.cli._common import (
-    CONTACT_CURVES,
-    CONTACT_FORMULATIONS,
     EXIT_NOT_CONVERGED,
+    check_contact_choice,
     fail,
     parse_ratio,
     prepare_output_folder,
@@ -192,11 +191,7 @@ def tweezers(
         fail(f"--step {step:g}: give a positive number of turns up to STOP - START")
     if not 2 <= max_points <= 100_000:
         fail(f"--max-points {max_points}: give an integer from 2 to 100000")
-    if contact_curve not in CONTACT_CURVES:
-        fail(f"--contact-curve {contact_curve!r}: give one of {', '.join(CONTACT_CURVES)}")
-    if contact_formulation not in CONTACT_FORMULATIONS:
-        fail(f"--contact-formulation {contact_formulation!r}: give one of "
-             f"{', '.join(CONTACT_FORMULATIONS)}")
+    check_contact_choice(contact_curve, contact_formulation)
     prepare_output_folder(out, force, "this command's files")
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 

@@ -619,3 +619,41 @@ def test_count_change_is_located_past_a_failed_trial_point():
     # every trial of a bracket failing is still reported as not located
     hopeless = locate_count_change(_StubSegment((0.5, 0.3, 0.7)), 1e-9, 1e-3)
     assert not hopeless.located
+
+
+def test_two_count_changes_in_one_segment_are_each_located():
+    """Pitchforks at lambda = 1.0 and 1.1 fall between two points of the trivial branch
+    (steps of 0.3): both are located (to the event tolerance), one after the other."""
+    d = np.array([1.0, 1.1, 3.0, 4.0, 5.0])
+    p = DiagonalQuartic(d)
+    b = continuation(p, np.zeros(5), parameter="lam",
+                     options=ContinuationOptions(parameter_bounds=(0.0, 2.0), max_step=0.3))
+    lam = b.parameter_values
+    assert not np.any((lam > 1.0) & (lam < 1.1))  # one segment holds both changes
+    points = b.points_of_kind("bifurcation")
+    assert [(pt.count_before, pt.count_after) for pt in points] == [(0, 1), (1, 2)]
+    assert np.allclose([pt.parameter for pt in points], d[:2], atol=1e-9, rtol=0)
+    for i, pt in enumerate(points):
+        assert abs(abs(pt.critical_modes[0, i]) - 1.0) < 1e-8
+    assert_consistent(b, p)
+
+
+def test_a_nearly_double_eigenvalue_crossing_is_one_event_at_a_branch_point():
+    """d_0 = 1 and d_1 = 1.0005 (a double eigenvalue split by 5e-4, as an E mode of a D_m
+    ring by the mesh): the count changes by 2 within one segment and the two eigenvalues
+    cross as a cluster, so one event is reported at an accepted point of the branch with
+    two critical modes (e_0, e_1), and its tolerance covers the distance to the crossing
+    of the pair's mean eigenvalue, lambda = 1.00025 (exact: the branch is x = 0)."""
+    d = np.array([1.0, 1.0005, 3.0, 4.0, 5.0])
+    p = DiagonalQuartic(d)
+    b = continuation(p, np.zeros(5), parameter="lam",
+                     options=ContinuationOptions(parameter_bounds=(0.0, 2.0), max_step=0.3))
+    (pt,) = b.points_of_kind("bifurcation")
+    assert (pt.count_before, pt.count_after) == (0, 2)
+    assert pt.parameter in set(b.parameter_values)  # an accepted point, not a trial
+    assert abs(pt.parameter - 1.00025) <= pt.tolerance * (1 + 1e-9)
+    assert pt.tolerance < 0.3  # within one step
+    modes = pt.critical_modes
+    assert modes.shape == (2, 5)
+    assert np.allclose(np.abs(modes[:, :2]), np.eye(2), atol=1e-10)
+    assert_consistent(b, p)

@@ -17,9 +17,12 @@ from supercoil.problems.ring_branches import twisted_circle_problem
 from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 from supercoil.problems.ring_secondary import AMPLITUDES, roman, secondary_branches
 
+# The integral contact on the B-spline: the pair sum's beta_contact leaves D_3 at N = 96
+# (docs/benchmarks.md, "Integral contact"), so its secondary branches depend on the mesh.
 OPTIONS = DiagramOptions(2 / 3, 40.0, n_nodes=48, modes=(3,), max_excess_link=3.0,
                          free_max_points=60, contact_max_points=80, branch_depth=2,
-                         secondary_max_points=20)
+                         secondary_max_points=20, contact_formulation="integral",
+                         contact_curve="spline")
 
 
 @pytest.fixture(scope="module")
@@ -48,6 +51,30 @@ def test_secondary_branches_start_at_a_bifurcation_point_of_beta(diagram):
         distance = np.sqrt(np.sum(base.mass * dq**2) + (OPTIONS.diameter * dlk) ** 2)
         assert any(a * OPTIONS.diameter * (1 - 1e-6) <= distance <= 3 * a * OPTIONS.diameter
                    for a in AMPLITUDES), distance
+
+
+def test_beta_bifurcates_at_its_three_point_contact_onset_and_is_stable_after_it(diagram):
+    """Seed 001, Figure 2: B_1, where beta's three points of contact appear, is a
+    bifurcation point of beta, and beta is stable from B_1 on (the heavy interval from
+    B_1 to P). In the barrier model the E mode of D_3 (a double eigenvalue) crosses zero
+    just past the onset: one event, count 2 -> 0, two critical modes. The secondary
+    branches that start there are unstable (seed 001: no configuration on them is)."""
+    beta = diagram.branch("beta_contact")
+    (onset,) = [p for p in beta.points_of_kind("contact_onset")]
+    (b1,) = beta.points_of_kind("bifurcation")
+    assert (b1.count_before, b1.count_after) == (2, 0)
+    assert b1.critical_modes.shape[0] == 2
+    values = np.sort(np.abs(b1.critical_eigenvalues))
+    assert values[1] - values[0] <= 0.1 * values.mean()  # a (split) double eigenvalue
+    assert abs(b1.parameter - onset.parameter) < 2e-3
+    assert onset.label.endswith("points 0->3, intervals 0->0")
+    after = beta.arclength > b1.arclength
+    assert np.all(beta.unstable_count[after] == 0)
+    assert beta.parameter_values[-1] == pytest.approx(OPTIONS.max_excess_link)
+    secondary = _secondary(diagram)
+    assert {b.origin.parameter for b in secondary} == {b1.parameter}
+    for b in secondary:
+        assert np.all(b.unstable_count >= 1), (b.name, b.unstable_count)
 
 
 def test_primary_is_d3_and_secondary_branches_are_c2(diagram):

@@ -10,8 +10,9 @@ Checks, from the stored data and the problem alone:
 * every special point lies between its neighbours (``arclength[index] <=
   s <= arclength[index + 1]``), is an equilibrium, and is what its kind says:
   a fold has ``dlambda/ds`` of opposite signs at its neighbours and a
-  parameter value at or beyond both; a bifurcation has different stored
-  counts at its neighbours, equal to its ``count_before`` / ``count_after``.
+  parameter value at or beyond both; a bifurcation changes the count, and the
+  bifurcations between two points, in order, chain the stored counts of those
+  points through their ``count_before`` / ``count_after``.
 
 ``problem.accept(q)`` is called at every checked point (so that a problem
 with a reference state follows the branch); the problem is left at the last one.
@@ -103,8 +104,15 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
                 problems.append(f"{where}: the fold lies between its neighbours' parameter "
                                 "values (it must be an extremum)")
         elif p.kind == "bifurcation":
-            before, after = branch.unstable_count[i], branch.unstable_count[i + 1]
-            if before == after:
+            # the bifurcation points of one segment, in order, chain its neighbours' counts
+            chain = sorted((b for b in branch.special_points
+                            if b.kind == "bifurcation" and b.index == i),
+                           key=lambda b: b.arclength)
+            before = (branch.unstable_count[i] if chain[0] is p
+                      else chain[chain.index(p) - 1].count_after)
+            after = (branch.unstable_count[i + 1] if chain[-1] is p
+                     else chain[chain.index(p) + 1].count_before)
+            if p.count_before == p.count_after:
                 problems.append(f"{where}: the unstable count does not change across it")
             if (p.count_before, p.count_after) != (before, after):
                 problems.append(f"{where}: counts {p.count_before} -> {p.count_after} differ "

@@ -93,8 +93,12 @@ class Segment:
         except (SingularMatrixError, InertiaError) as exc:
             raise LocationFailed(str(exc)) from None
 
+    def system_eigenpairs(self, u: float, n_wanted: int) -> tuple[np.ndarray, np.ndarray]:
+        """Eigenpairs of the constrained Hessian nearest zero at ``u`` (``eigenpairs``)."""
+        return eigenpairs(self.system, self.point(u), n_wanted)
+
     def nearest_eigenvalue(self, u: float) -> float:
-        values, _ = eigenpairs(self.system, self.point(u), 4)
+        values, _ = self.system_eigenpairs(u, 4)
         return float(values[np.argmin(np.abs(values))]) if values.size else float("nan")
 
 
@@ -110,6 +114,8 @@ class Located:
     located: bool
     count_before: int = -1
     count_after: int = -1
+    accuracy: float | None = None  # arclength; None: the run's event_tolerance
+    resume: float | None = None  # where to search for a further count change
 
 
 def _brent(f, lo: float, hi: float, xtol: float) -> float:
@@ -150,25 +156,76 @@ def _bisect_count(segment: Segment, lo: float, hi: float, c_lo: int, c_hi: int,
     return lo, hi, c_hi
 
 
-def locate_count_change(segment: Segment, xtol: float, switch_below: float) -> Located | None:
-    """Where the unstable count changes on the segment (None if the raw inertia does not).
+# A count change by k > 1 over one segment is one event, a multiple eigenvalue
+# crossing zero, when at both ends of the segment the k eigenvalues nearest zero have
+# one sign each and differ from their mean by at most this fraction of it: a double
+# eigenvalue of a symmetric state (an E mode of D_m), split a little by the
+# discretisation's or the gauge's small asymmetry.
+CLUSTER_SPREAD = 0.1
+
+
+def _crossing_cluster(segment: Segment, k: int) -> tuple[float, float] | None:
+    """Means of the ``k`` eigenvalues nearest zero at both ends if they cross as a cluster."""
+    means = []
+    for u in (0.0, 1.0):
+        values, _ = segment.system_eigenpairs(u, k + 2)
+        if values.size < k:
+            return None
+        cluster = values[np.argsort(np.abs(values))[:k]]
+        mean = float(np.mean(cluster))
+        if (np.any(np.sign(cluster) != np.sign(mean))
+                or np.max(np.abs(cluster - mean)) > CLUSTER_SPREAD * abs(mean)):
+            return None
+        means.append(mean)
+    return (means[0], means[1]) if means[0] * means[1] < 0 else None
+
+
+def locate_count_change(segment: Segment, xtol: float, switch_below: float,
+                        start: float = 0.0) -> Located | None:
+    """Where the unstable count first changes on the segment after ``start`` (a fraction;
+    None if the raw inertia does not change from there to the end).
 
     Bisection on the count to ``switch_below``, then Brent's method on the eigenvalue
     nearest zero (or bisection to ``xtol`` when it does not change sign there). A trial
     point whose correction fails is replaced by one at 0.3 or 0.7 of the bracket.
+
+    When the count changes by ``k > 1`` over the segment but the bisection finds
+    a smaller change first, and the ``k`` eigenvalues cross as a cluster
+    (:data:`CLUSTER_SPREAD`), the crossing is one event and is not bisected: near
+    it the branches that bifurcate there pass within the segment's length of the
+    parent, and a trial point re-corrected on the segment's hyperplane can land on
+    one of them (measured on the ring's beta branch at its three-point contact
+    onset: trial points of C_2 symmetry between D_3 ends, with the count of
+    neither). The event is put at the end of the segment nearer the zero of the
+    linear interpolant of the cluster's mean eigenvalue, an accepted point of the
+    parent branch, with ``accuracy`` the arclength to that zero; its special
+    point carries the ``k`` critical modes.
+
+    ``Located.resume`` is the first corrected point past the change (with the new
+    count): a further change on the segment is searched from there.
     """
     try:
-        lo, hi = 0.0, 1.0
+        lo, hi = float(start), 1.0
         c_lo, c_hi = segment.count(lo), segment.count(hi)
         if c_lo == c_hi:
             return None
-        lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, max(switch_below, xtol))
+        lo, hi, c_first = _bisect_count(segment, lo, hi, c_lo, c_hi, max(switch_below, xtol))
+        if c_first != c_hi and start == 0.0:
+            means = _crossing_cluster(segment, abs(c_hi - c_lo))
+            if means is not None:
+                u_zero = means[0] / (means[0] - means[1])
+                u = 0.0 if u_zero <= 0.5 else 1.0
+                return Located("bifurcation", "bifurcation", u, segment.point(u),
+                               segment.tangent(u), True, c_lo, c_hi,
+                               accuracy=abs(u_zero - u) * segment.length)
+        c_hi = c_first
         f_lo, f_hi = segment.nearest_eigenvalue(lo), segment.nearest_eigenvalue(hi)
         if np.isfinite(f_lo) and np.isfinite(f_hi) and f_lo * f_hi < 0:
             u = _brent(segment.nearest_eigenvalue, lo, hi, xtol)
         else:
             lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, xtol)
             u = hi  # the first point found with the new count (already corrected)
+        resume = hi
         x = segment.point(u)
         try:
             t = segment.tangent(u)
@@ -176,7 +233,7 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float) -> L
             # [K, F_lambda] has a two-dimensional kernel at a bifurcation point: the
             # bordered matrix may be exactly singular there; use the secant instead
             t = segment.d / segment.length
-        return Located("bifurcation", "bifurcation", u, x, t, True, c_lo, c_hi)
+        return Located("bifurcation", "bifurcation", u, x, t, True, c_lo, c_hi, resume=resume)
     except LocationFailed:
         return Located("bifurcation", "bifurcation", 1.0, segment.x_b, None, False)
 

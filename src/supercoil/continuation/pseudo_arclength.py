@@ -158,9 +158,16 @@ class _Tracer:
             found.append(locate_fold(segment, xtol))
         jump = self.stabs[k + 1].unstable_count - self.stabs[k].unstable_count
         if opts.detect_bifurcations and jump != 0 and not (fold and abs(jump) == 1):
-            located = locate_count_change(segment, xtol, opts.switch_below)
-            if located is not None:
+            # each change of the count on the segment, one after the other
+            start = 0.0
+            for _ in range(abs(jump) + 2):
+                located = locate_count_change(segment, xtol, opts.switch_below, start)
+                if located is None:
+                    break
                 found.append(located)
+                if located.resume is None or located.resume >= 1.0:
+                    break
+                start = located.resume
         for event, before, after in zip(self.events, self.user[k], self.user[k + 1]):
             for label in before:
                 if label in after and before[label] * after[label] < 0:
@@ -190,7 +197,9 @@ class _Tracer:
             count_after=ev.count_after if ev.kind == "bifurcation" else
             self.stabs[k + 1].unstable_count,
             critical_eigenvalues=values, critical_modes=modes, located=ev.located,
-            tolerance=opts.event_tolerance, records=self._records(x))
+            tolerance=(opts.event_tolerance if ev.accuracy is None
+                       else max(ev.accuracy, opts.event_tolerance)),
+            records=self._records(x))
 
     def _regauge(self) -> bool:
         """Move the phase rows to those :func:`branch_phase_modes` gives at the last point

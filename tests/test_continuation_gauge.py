@@ -286,3 +286,39 @@ def test_rephase_anchors_the_integral_condition_at_the_previous_point():
     wa = np.interp(lam, a.parameter_values[:8][::-1], a.records["writhe"][:8][::-1])
     wb = np.interp(lam, b.parameter_values[:8][::-1], b.records["writhe"][:8][::-1])
     np.testing.assert_allclose(wa, wb, atol=1e-5)  # measured 3e-7 (interpolation included)
+
+
+class _NearlySymmetric(DiagonalQuartic):
+    """DiagonalQuartic whose rotation in the (x_0, x_1) plane is declared an approximate
+    symmetry (as a closed rod's material sliding): ``goldstone_modes`` returns it."""
+
+    def near_symmetry_modes(self, q):
+        mode = np.zeros((1, self.n_dofs))
+        mode[0, 0], mode[0, 1] = -q[1], q[0]
+        return mode
+
+
+def test_a_tangent_recomputed_in_a_new_gauge_is_oriented_without_the_slide():
+    """``_Tracer._orientation``: the old tangent minus its M-orthogonal projection on the
+    approximate-symmetry modes. Oracle: a tangent whose slide part points against the old
+    one but whose remaining part agrees with it (what a moved gauge produces: measured on
+    the ring's alpha branch, where the plain product turned the branch back) is oriented
+    along the old one; the row is M-orthogonal to the slide and leaves a slide-free
+    tangent as it was."""
+    from supercoil.continuation.pseudo_arclength import _Tracer
+    from supercoil.continuation.system import ExtendedSystem
+
+    problem = _NearlySymmetric(np.array([1.0, 1.0 + 1e-6, 3.0, 4.0]))
+    q = np.array([0.6, 0.8, 0.0, 0.0])
+    system = ExtendedSystem(problem, "lam", q)
+    tracer = _Tracer(system, ContinuationOptions(), "toy", None, None, None, ())
+    x = system.pack(q, np.zeros(0), 2.0)
+    slide = np.concatenate([[-0.8, 0.6, 0.0, 0.0], [0.0]])  # the rotation at q
+    body = np.array([0.0, 0.0, 0.3, 0.1, 0.05])  # dlambda > 0
+    t_old = body + 5.0 * slide
+    t_new = body - 5.0 * slide
+    assert t_new @ (system.weights * t_old) < 0  # the plain product flips it
+    row = tracer._orientation(x, t_old)
+    assert t_new @ row > 0
+    assert abs(row[:4] @ slide[:4]) < 1e-12
+    np.testing.assert_allclose(tracer._orientation(x, body), system.weights * body, atol=1e-15)

@@ -232,7 +232,7 @@ class _Tracer:
         try:
             if not corr.ok:
                 raise SingularMatrixError(corr.message)
-            t = tangent(system, corr.x, system.weights * self.ts[-1])
+            t = tangent(system, corr.x, self._orientation(corr.x, self.ts[-1]))
         except SingularMatrixError:
             system.set_phase(*old)
             system.set_parameter(x[-1])
@@ -260,7 +260,28 @@ class _Tracer:
         if modes is None or modes.shape != system.phase_modes.shape:
             return
         system.set_phase(modes, q)
-        self.ts[-1] = tangent(system, x, system.weights * self.ts[-1])
+        self.ts[-1] = tangent(system, x, self._orientation(x, self.ts[-1]))
+
+    def _orientation(self, x: np.ndarray, t_old: np.ndarray) -> np.ndarray:
+        """The row that orients a tangent recomputed in a new gauge: ``W t_old`` with the
+        approximate-symmetry motions (:func:`goldstone_modes` at ``x``) projected out of
+        its state part (M-orthogonally).
+
+        Each gauge adds to the tangent the slide that keeps its own condition, so
+        the two tangents can disagree along the slide while they agree on the
+        rest: measured on the ring's alpha branch (N = 200, integral contact, node
+        gauge, dLk 4.069), the plain product oriented the new tangent with dLk
+        decreasing, and the branch turned back at a spurious fold, then snaked.
+        """
+        system = self.system
+        v = np.array(t_old, dtype=float)
+        modes = goldstone_modes(system.problem, system.q(x))
+        if modes.size:
+            g = modes[:, system.free]
+            mass = system.weights[:system.n]
+            gram = (g * mass) @ g.T
+            v[:system.n] -= g.T @ np.linalg.solve(gram, (g * mass) @ v[:system.n])
+        return system.weights * v
 
     def _returned_to(self) -> int | None:
         """Index of an earlier point the last step passed through (see

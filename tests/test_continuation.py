@@ -661,3 +661,40 @@ def test_segment_warm_start_locates_the_same_fold_as_the_chord_start_in_fewer_it
     assert abs(located["warm"].u - located["chord"].u) * length < 2e-10
     assert abs(located["warm"].x[-1] - fold.parameter) < 1e-10
     assert iterations["warm"] < iterations["chord"]
+
+
+def test_quadratic_predictor_term_is_the_curvature_of_a_circle():
+    """On the unit circle x(s) = (cos s, sin s) the term is ds^2/2 x''(s) to first order
+    in the last step (the difference quotient of the tangents)."""
+    from supercoil.continuation.pseudo_arclength import quadratic_term
+
+    class Plane:
+        weights = np.ones(2)
+
+        def norm(self, v):
+            return float(np.sqrt(v @ v))
+
+    s0, h, ds = 0.3, 1e-3, 0.05
+    t_previous = np.array([-np.sin(s0 - h), np.cos(s0 - h)])
+    t_last = np.array([-np.sin(s0), np.cos(s0)])
+    term = quadratic_term(Plane(), t_previous, t_last, h, ds)
+    exact = 0.5 * ds**2 * -np.array([np.cos(s0), np.sin(s0)])
+    assert np.linalg.norm(term - exact) < 0.5 * ds**2 * h
+    # predictor error: O(ds^3) against the tangent predictor's O(ds^2)
+    x0, x1 = np.array([np.cos(s0), np.sin(s0)]), np.array([np.cos(s0 + ds), np.sin(s0 + ds)])
+    assert np.linalg.norm(x0 + ds * t_last + term - x1) < 0.2 * ds**3
+    assert np.linalg.norm(x0 + ds * t_last - x1) > 0.4 * ds**2
+    # no term after a step of no length, or one larger than half the step
+    assert not np.any(quadratic_term(Plane(), t_previous, t_last, 0.0, ds))
+    assert not np.any(quadratic_term(Plane(), -t_last, t_last, 1e-3, ds))
+
+
+def test_quadratic_predictor_follows_bratu_through_the_same_fold():
+    """The same fold (Moore-Spence oracle of the tangent run) with the quadratic predictor."""
+    _, tangent_run = bratu_branch(16)
+    _, quadratic_run = bratu_branch(16, predictor="quadratic")
+    (fold_t,) = tangent_run.points_of_kind("fold")
+    (fold_q,) = quadratic_run.points_of_kind("fold")
+    assert fold_q.located and fold_q.parameter == pytest.approx(fold_t.parameter, abs=1e-10)
+    assert quadratic_run.status is tangent_run.status
+    assert quadratic_run.parameter_values[-1] == pytest.approx(tangent_run.parameter_values[-1])

@@ -162,11 +162,11 @@ def test_branches_are_consistent(small_run):
         assert not left, (b.name, left)
 
 
-def test_contact_step_growth_keeps_the_branch(small_run):
-    """Oracle for ``contact_fast_iterations`` (the contact branch's steps grow after up to
-    5 Newton iterations): the old rule (3) gives the same special points, within the
-    contact event tolerance, the same end state and the same counts, with more points."""
-    old = tweezers_branches(dataclasses.replace(small_run.options, contact_fast_iterations=3))
+def test_contact_predictor_keeps_the_branch(small_run):
+    """Oracle for the contact branch's quadratic predictor (``contact_predictor``): the
+    tangent predictor gives the same special points, within the contact event
+    tolerance, the same end state and the same counts, with more points."""
+    old = tweezers_branches(dataclasses.replace(small_run.options, contact_predictor="tangent"))
     new_branch, old_branch = small_run.branch("buckled_contact"), old.branch("buckled_contact")
     assert len(new_branch) < len(old_branch)
     new_specials, old_specials = new_branch.special_points, old_branch.special_points
@@ -200,8 +200,7 @@ def test_records_function_matches_straight_state():
 @pytest.mark.parametrize("kwargs", [
     {"tension": None}, {"tension": 1.0, "end_distance": 0.5}, {"tension": -1.0},
     {"turns": (2.0, 1.0)}, {"twist_ratio": 0.0}, {"length_over_diameter": 2.0},
-    {"tension": None, "end_distance": 1.0}, {"n_nodes": 5}, {"contact_fast_iterations": -1},
-    {"contact_fast_iterations": 4.5}])
+    {"tension": None, "end_distance": 1.0}, {"n_nodes": 5}, {"contact_predictor": "cubic"}])
 def test_bad_options(kwargs):
     base = {"twist_ratio": 1.0, "length_over_diameter": 30.0, "tension": 1.0}
     base.update(kwargs)

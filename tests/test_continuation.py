@@ -698,3 +698,44 @@ def test_quadratic_predictor_follows_bratu_through_the_same_fold():
     assert fold_q.located and fold_q.parameter == pytest.approx(fold_t.parameter, abs=1e-10)
     assert quadratic_run.status is tangent_run.status
     assert quadratic_run.parameter_values[-1] == pytest.approx(tangent_run.parameter_values[-1])
+
+
+def test_user_event_bracket_from_corrected_points_gives_the_same_root():
+    """Oracle for the narrowed bracket of :func:`locate_user_event`: two indicators of one
+    transition are located where Brent's method on the whole segment puts them, and the
+    second costs a few corrections, not a whole localisation."""
+    from supercoil.continuation import events
+    from supercoil.continuation.events import Segment, _brent, locate_user_event, user_values
+
+    p, b = bratu_branch(16)
+    k = 3
+    system = ExtendedSystem(p, "lam", b.states[k])
+    x_a = system.pack(b.states[k], b.multipliers[k], b.parameter_values[k])
+    x_b = system.pack(b.states[k + 1], b.multipliers[k + 1], b.parameter_values[k + 1])
+    middle = 0.5 * (b.states[k][8] + b.states[k + 1][8])
+    # step functions, as the contact counts' indicators are (Brent's method bisects)
+    event = UserEvent("threshold", lambda q, mu, lam: {
+        "first": 0.5 if q[8] > middle else -0.5, "second": -0.5 if q[8] > middle else 0.5})
+    segment = Segment(system, x_a, x_b, 1e-12, 10, 1e-6)
+    xtol = 1e-6 / segment.length
+    reference = Segment(system, x_a, x_b, 1e-12, 10, 1e-6)
+    exact = _brent(lambda u: user_values(event, system, reference.point(u))["first"], 0.0, 1.0,
+                   xtol)
+    calls = []
+    real_correct = events.correct
+
+    def counting(*args):
+        calls.append(1)
+        return real_correct(*args)
+
+    events.correct = counting
+    try:
+        first = locate_user_event(segment, event, "first", xtol)
+        n_first = len(calls)
+        second = locate_user_event(segment, event, "second", xtol)
+        n_second = len(calls) - n_first
+    finally:
+        events.correct = real_correct
+    assert first.located and second.located
+    assert abs(first.u - exact) <= 2 * xtol and abs(second.u - exact) <= 2 * xtol
+    assert n_first >= 10 and n_second <= 2

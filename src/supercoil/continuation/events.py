@@ -68,6 +68,11 @@ class Segment:
         # valid): their tangents and counts need no new one
         self._hessians: dict[float, object] = {}
 
+    @property
+    def corrected(self) -> list[float]:
+        """Fractions ``u`` of the points corrected so far (the ends included)."""
+        return list(self._points)
+
     def start(self, u: float) -> np.ndarray:
         """Corrector start at ``u``: the chord between the corrected points nearest to
         ``u`` on either side (it lies on the hyperplane of ``u``, as any point of a
@@ -204,11 +209,31 @@ def user_values(event: UserEvent, system: ExtendedSystem, x: np.ndarray) -> dict
 
 
 def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: float) -> Located:
+    """Root of the event's value ``label`` on the segment (Brent's method).
+
+    The bracket is first narrowed to the tightest pair of points already
+    corrected on the segment (by earlier localisations) between which the
+    value changes sign: two indicators of one transition (a contact point
+    turning into an interval changes two counts) then cost one localisation
+    and a few evaluations, not two.
+    """
+    values: dict[float, float] = {}
+
     def value(u):
-        return user_values(event, segment.system, segment.point(u))[label]
+        u = float(u)
+        if u not in values:
+            values[u] = user_values(event, segment.system, segment.point(u))[label]
+        return values[u]
 
     try:
-        u = _brent(value, 0.0, 1.0, xtol)
+        lo, hi = 0.0, 1.0
+        known = sorted(segment.corrected)
+        signs = [value(u) for u in known]
+        for (a, f_a), (b, f_b) in zip(zip(known, signs), zip(known[1:], signs[1:])):
+            if f_a * f_b < 0:
+                lo, hi = a, b
+                break
+        u = _brent(value, lo, hi, xtol)
         return Located(event.kind, label, u, segment.point(u), segment.tangent(u), True)
     except (LocationFailed, ValueError):
         return Located(event.kind, label, 1.0, segment.x_b, None, False)

@@ -621,23 +621,26 @@ def test_count_change_is_located_past_a_failed_trial_point():
     assert not hopeless.located
 
 
-def test_segment_warm_start_locates_the_same_fold_as_the_chord_start_in_fewer_iterations():
+def test_segment_warm_start_locates_the_same_user_event_in_fewer_iterations():
     """Oracle for :meth:`Segment.start`: trial corrections started on the segment's own
-    chord (the old start) locate Bratu's fold at the same place; the warm start,
-    between the nearest corrected trial points, needs fewer corrector iterations."""
+    chord (the old start) locate a user event with a step-function indicator (as the
+    contact counts' are) at the same place; the warm start, between the nearest
+    corrected trial points, needs fewer corrector iterations."""
     from supercoil.continuation import corrector, events
-    from supercoil.continuation.events import Segment, locate_fold
+    from supercoil.continuation.events import Segment, locate_user_event
 
     class ChordSegment(Segment):
         def start(self, u):
             return self.x_a + u * self.d
 
     p, b = bratu_branch(32)
-    (fold,) = b.points_of_kind("fold")
-    k = fold.index
+    k = 3
     system = ExtendedSystem(p, "lam", b.states[k])
     x_a = system.pack(b.states[k], b.multipliers[k], b.parameter_values[k])
     x_b = system.pack(b.states[k + 1], b.multipliers[k + 1], b.parameter_values[k + 1])
+    middle = 0.3 * b.states[k][16] + 0.7 * b.states[k + 1][16]
+    event = UserEvent("threshold", lambda q, mu, lam: {"u_mid": 0.5 if q[16] > middle
+                                                       else -0.5})
     iterations = {}
     located = {}
     real_correct = corrector.correct
@@ -652,15 +655,15 @@ def test_segment_warm_start_locates_the_same_fold_as_the_chord_start_in_fewer_it
         events.correct = counting
         try:
             segment = cls(system, x_a, x_b, 1e-12, 10, 1e-6)
-            located[name] = locate_fold(segment, 1e-10 / segment.length)
+            located[name] = locate_user_event(segment, event, "u_mid", 1e-8 / segment.length)
         finally:
             events.correct = real_correct
         iterations[name] = sum(counted)
     assert located["chord"].located and located["warm"].located
     length = system.norm(x_b - x_a)
-    assert abs(located["warm"].u - located["chord"].u) * length < 2e-10
-    assert abs(located["warm"].x[-1] - fold.parameter) < 1e-10
-    assert iterations["warm"] < iterations["chord"]
+    assert abs(located["warm"].u - located["chord"].u) * length < 2e-8
+    assert abs(system.q(located["warm"].x)[16] - middle) < 1e-6
+    assert iterations["warm"] < 0.7 * iterations["chord"]
 
 
 def test_quadratic_predictor_term_is_the_curvature_of_a_circle():

@@ -74,14 +74,19 @@ class Segment:
         return list(self._points)
 
     def start(self, u: float) -> np.ndarray:
-        """Corrector start at ``u``: the chord between the corrected points nearest to
-        ``u`` on either side (it lies on the hyperplane of ``u``, as any point of a
+        """Warm corrector start at ``u``: the chord between the corrected points nearest
+        to ``u`` on either side (it lies on the hyperplane of ``u``, as any point of a
         chord between two of them does).
 
         As a bracket shrinks, this chord is within ``O(width^2)`` of the branch, so
         the corrector needs one or two iterations instead of the four or five from
         the segment's own chord (measured on the tweezers' contact branch, where
-        Brent's method on a contact count's indicator bisects 10-14 times).
+        Brent's method on a contact count's indicator bisects 10-14 times). Used
+        for user events (:func:`locate_user_event`); folds and bifurcations keep the
+        segment's chord: a bifurcation point moved within the tolerance turns the
+        critical mode of a double eigenvalue (the circle's), and the switched branch
+        with it (measured: the ring's beta branch then lost a bifurcation point at
+        a contact release 1e-4 away).
         """
         known = np.array(sorted(self._points))
         above = min(max(int(np.searchsorted(known, u)), 1), known.size - 1)
@@ -89,10 +94,13 @@ class Segment:
         x_lo, x_hi = self._points[lo], self._points[hi]
         return x_lo + (u - lo) / (hi - lo) * (x_hi - x_lo)
 
-    def point(self, u: float) -> np.ndarray:
+    def point(self, u: float, warm: bool = False) -> np.ndarray:
+        """The branch's point at ``u``, corrected from the segment's chord or, with
+        ``warm``, from :meth:`start`."""
         u = float(u)
         if u not in self._points:
-            corr = correct(self.system, self.start(u), self.row, self.x_a, u,
+            start = self.start(u) if warm else self.x_a + u * self.d
+            corr = correct(self.system, start, self.row, self.x_a, u,
                            self.tolerance, self.max_iterations)
             if not corr.ok:
                 raise LocationFailed(f"trial correction at u = {u:.6g} failed: {corr.message}")
@@ -222,7 +230,7 @@ def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: floa
     def value(u):
         u = float(u)
         if u not in values:
-            values[u] = user_values(event, segment.system, segment.point(u))[label]
+            values[u] = user_values(event, segment.system, segment.point(u, warm=True))[label]
         return values[u]
 
     try:

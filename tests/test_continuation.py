@@ -657,3 +657,126 @@ def test_a_nearly_double_eigenvalue_crossing_is_one_event_at_a_branch_point():
     assert modes.shape == (2, 5)
     assert np.allclose(np.abs(modes[:, :2]), np.eye(2), atol=1e-10)
     assert_consistent(b, p)
+
+
+def test_segment_warm_start_locates_the_same_user_event_in_fewer_iterations():
+    """Oracle for :meth:`Segment.start`: trial corrections started on the segment's own
+    chord (the old start) locate a user event with a step-function indicator (as the
+    contact counts' are) at the same place; the warm start, between the nearest
+    corrected trial points, needs fewer corrector iterations."""
+    from supercoil.continuation import corrector, events
+    from supercoil.continuation.events import Segment, locate_user_event
+
+    class ChordSegment(Segment):
+        def start(self, u):
+            return self.x_a + u * self.d
+
+    p, b = bratu_branch(32)
+    k = 3
+    system = ExtendedSystem(p, "lam", b.states[k])
+    x_a = system.pack(b.states[k], b.multipliers[k], b.parameter_values[k])
+    x_b = system.pack(b.states[k + 1], b.multipliers[k + 1], b.parameter_values[k + 1])
+    middle = 0.3 * b.states[k][16] + 0.7 * b.states[k + 1][16]
+    event = UserEvent("threshold", lambda q, mu, lam: {"u_mid": 0.5 if q[16] > middle
+                                                       else -0.5})
+    iterations = {}
+    located = {}
+    real_correct = corrector.correct
+    for name, cls in (("chord", ChordSegment), ("warm", Segment)):
+        counted = []
+
+        def counting(*args, counted=counted):
+            corr = real_correct(*args)
+            counted.append(corr.iterations)
+            return corr
+
+        events.correct = counting
+        try:
+            segment = cls(system, x_a, x_b, 1e-12, 10, 1e-6)
+            located[name] = locate_user_event(segment, event, "u_mid", 1e-8 / segment.length)
+        finally:
+            events.correct = real_correct
+        iterations[name] = sum(counted)
+    assert located["chord"].located and located["warm"].located
+    length = system.norm(x_b - x_a)
+    assert abs(located["warm"].u - located["chord"].u) * length < 2e-8
+    assert abs(system.q(located["warm"].x)[16] - middle) < 1e-6
+    assert iterations["warm"] < 0.7 * iterations["chord"]
+
+
+def test_quadratic_predictor_term_is_the_curvature_of_a_circle():
+    """On the unit circle x(s) = (cos s, sin s) the term is ds^2/2 x''(s) to first order
+    in the last step (the difference quotient of the tangents)."""
+    from supercoil.continuation.pseudo_arclength import quadratic_term
+
+    class Plane:
+        weights = np.ones(2)
+
+        def norm(self, v):
+            return float(np.sqrt(v @ v))
+
+    s0, h, ds = 0.3, 1e-3, 0.05
+    t_previous = np.array([-np.sin(s0 - h), np.cos(s0 - h)])
+    t_last = np.array([-np.sin(s0), np.cos(s0)])
+    term = quadratic_term(Plane(), t_previous, t_last, h, ds)
+    exact = 0.5 * ds**2 * -np.array([np.cos(s0), np.sin(s0)])
+    assert np.linalg.norm(term - exact) < 0.5 * ds**2 * h
+    # predictor error: O(ds^3) against the tangent predictor's O(ds^2)
+    x0, x1 = np.array([np.cos(s0), np.sin(s0)]), np.array([np.cos(s0 + ds), np.sin(s0 + ds)])
+    assert np.linalg.norm(x0 + ds * t_last + term - x1) < 0.2 * ds**3
+    assert np.linalg.norm(x0 + ds * t_last - x1) > 0.4 * ds**2
+    # no term after a step of no length, or one larger than half the step
+    assert not np.any(quadratic_term(Plane(), t_previous, t_last, 0.0, ds))
+    assert not np.any(quadratic_term(Plane(), -t_last, t_last, 1e-3, ds))
+
+
+def test_quadratic_predictor_follows_bratu_through_the_same_fold():
+    """The same fold (Moore-Spence oracle of the tangent run) with the quadratic predictor."""
+    _, tangent_run = bratu_branch(16)
+    _, quadratic_run = bratu_branch(16, predictor="quadratic")
+    (fold_t,) = tangent_run.points_of_kind("fold")
+    (fold_q,) = quadratic_run.points_of_kind("fold")
+    assert fold_q.located and fold_q.parameter == pytest.approx(fold_t.parameter, abs=1e-10)
+    assert quadratic_run.status is tangent_run.status
+    assert quadratic_run.parameter_values[-1] == pytest.approx(tangent_run.parameter_values[-1])
+
+
+def test_user_event_bracket_from_corrected_points_gives_the_same_root():
+    """Oracle for the narrowed bracket of :func:`locate_user_event`: two indicators of one
+    transition are located where Brent's method on the whole segment puts them, and the
+    second costs a few corrections, not a whole localisation."""
+    from supercoil.continuation import events
+    from supercoil.continuation.events import Segment, _brent, locate_user_event, user_values
+
+    p, b = bratu_branch(16)
+    k = 3
+    system = ExtendedSystem(p, "lam", b.states[k])
+    x_a = system.pack(b.states[k], b.multipliers[k], b.parameter_values[k])
+    x_b = system.pack(b.states[k + 1], b.multipliers[k + 1], b.parameter_values[k + 1])
+    middle = 0.5 * (b.states[k][8] + b.states[k + 1][8])
+    # step functions, as the contact counts' indicators are (Brent's method bisects)
+    event = UserEvent("threshold", lambda q, mu, lam: {
+        "first": 0.5 if q[8] > middle else -0.5, "second": -0.5 if q[8] > middle else 0.5})
+    segment = Segment(system, x_a, x_b, 1e-12, 10, 1e-6)
+    xtol = 1e-6 / segment.length
+    reference = Segment(system, x_a, x_b, 1e-12, 10, 1e-6)
+    exact = _brent(lambda u: user_values(event, system, reference.point(u))["first"], 0.0, 1.0,
+                   xtol)
+    calls = []
+    real_correct = events.correct
+
+    def counting(*args):
+        calls.append(1)
+        return real_correct(*args)
+
+    events.correct = counting
+    try:
+        first = locate_user_event(segment, event, "first", xtol)
+        n_first = len(calls)
+        second = locate_user_event(segment, event, "second", xtol)
+        n_second = len(calls) - n_first
+    finally:
+        events.correct = real_correct
+    assert first.located and second.located
+    assert abs(first.u - exact) <= 2 * xtol and abs(second.u - exact) <= 2 * xtol
+    assert n_first >= 10 and n_second <= 2

@@ -406,7 +406,8 @@ def test_resume_branch_reproduces_the_uninterrupted_ring_branch():
     assert "resumed after point 4" in resumed.message
 
 
-def test_resume_branch_events_and_full_branch():
+@pytest.mark.parametrize("predictor", ["tangent", "quadratic"])
+def test_resume_branch_events_and_full_branch(predictor):
     import sys
 
     sys.path.insert(0, str(Path(__file__).parent))
@@ -415,7 +416,7 @@ def test_resume_branch_events_and_full_branch():
     from supercoil.continuation import UserEvent
 
     opts = ContinuationOptions(parameter_bounds=(1.0, 4.0), initial_step=0.02, max_step=0.1,
-                               max_points=60)
+                               max_points=60, predictor=predictor)
     user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[16] - 1.0})
 
     def run(**kw):

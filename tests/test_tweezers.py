@@ -1,5 +1,6 @@
 """The tweezers problem: Greenhill with tension, the buckled branch, contact, invariants."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -161,6 +162,30 @@ def test_branches_are_consistent(small_run):
         assert not left, (b.name, left)
 
 
+def test_contact_predictor_keeps_the_branch(small_run):
+    """Oracle for the contact branch's quadratic predictor (``contact_predictor``): the
+    tangent predictor gives the same special points, within the contact event
+    tolerance, the same end state and the same counts, with more points."""
+    old = tweezers_branches(dataclasses.replace(small_run.options, contact_predictor="tangent"))
+    new_branch, old_branch = small_run.branch("buckled_contact"), old.branch("buckled_contact")
+    assert len(new_branch) < len(old_branch)
+    new_specials, old_specials = new_branch.special_points, old_branch.special_points
+    assert [p.kind for p in new_specials] == [p.kind for p in old_specials]
+    for p, o in zip(new_specials, old_specials, strict=True):
+        assert p.parameter == pytest.approx(o.parameter, abs=1e-5), p.kind
+        assert p.unstable_count == o.unstable_count
+    for key in ("extension", "writhe", "torque", "energy"):
+        assert new_branch.records[key][-1] == pytest.approx(old_branch.records[key][-1],
+                                                            abs=1e-8), key
+    # the count at every new point is the old branch's at the two old points nearest in
+    # arclength (the same start), wherever those agree (away from the count's changes)
+    old_s = old_branch.arclength
+    for s, count in zip(new_branch.arclength, new_branch.unstable_count):
+        near = np.argsort(np.abs(old_s - s))[:2]
+        if old_branch.unstable_count[near[0]] == old_branch.unstable_count[near[1]]:
+            assert count == old_branch.unstable_count[near[0]], s
+
+
 def test_records_function_matches_straight_state():
     opts = TweezersOptions(twist_ratio=1.5, length_over_diameter=None, tension=3.0,
                            turns=(0.0, 1.0), n_nodes=20)
@@ -175,7 +200,7 @@ def test_records_function_matches_straight_state():
 @pytest.mark.parametrize("kwargs", [
     {"tension": None}, {"tension": 1.0, "end_distance": 0.5}, {"tension": -1.0},
     {"turns": (2.0, 1.0)}, {"twist_ratio": 0.0}, {"length_over_diameter": 2.0},
-    {"tension": None, "end_distance": 1.0}, {"n_nodes": 5}])
+    {"tension": None, "end_distance": 1.0}, {"n_nodes": 5}, {"contact_predictor": "cubic"}])
 def test_bad_options(kwargs):
     base = {"twist_ratio": 1.0, "length_over_diameter": 30.0, "tension": 1.0}
     base.update(kwargs)

@@ -97,6 +97,23 @@ def phase_modes(problem: ConstrainedEnergy, q: np.ndarray, relative: float = 1e-
     return modes[norms > relative * scale]
 
 
+def quadratic_term(system: ExtendedSystem, t_previous: np.ndarray, t_last: np.ndarray,
+                   last_step: float, ds: float) -> np.ndarray:
+    """``ds^2 / 2 * kappa``, the second-order term of the ``"quadratic"`` predictor.
+
+    ``kappa = (t_last - t_previous) / last_step`` estimates the branch's
+    curvature ``d^2x/ds^2`` from the unit tangents at the last two points,
+    ``last_step`` apart in arclength (a difference quotient, first order in
+    the step). Zero when the last step has no length or when the term exceeds
+    ``ds / 2`` (the tangents turned by more than the quadratic model of one
+    step can follow, e.g. a tangent recomputed in a moved gauge).
+    """
+    if not last_step > 0:
+        return np.zeros_like(t_last)
+    term = 0.5 * ds**2 * (t_last - t_previous) / last_step
+    return term if system.norm(term) <= 0.5 * ds else np.zeros_like(t_last)
+
+
 class _Tracer:
     """Follows one branch from a corrected point and tangent; collects points and events."""
 
@@ -117,6 +134,15 @@ class _Tracer:
         self.recs: list[dict] = []
         self.user: list[list[dict]] = []
         self.specials: list[SpecialPoint] = []
+        # (tangent, step) of the point before the first one, for the quadratic
+        # predictor of a resumed branch (set by resume_branch)
+        self.before: tuple[np.ndarray, float] | None = None
+
+    def _previous_tangent(self) -> tuple[np.ndarray, float] | None:
+        """The tangent at the point before the last and the arclength between the two."""
+        if len(self.xs) >= 2:
+            return self.ts[-2], self.s[-1] - self.s[-2]
+        return self.before if len(self.xs) == 1 else None
 
     # -- per point ------------------------------------------------------------------------
     def _records(self, x):
@@ -355,6 +381,10 @@ class _Tracer:
             problem = system.problem
             q_k = system.q(x_k)
             start = x_k + ds * d
+            if opts.predictor == "quadratic":
+                previous = self._previous_tangent()
+                if previous is not None:
+                    start = start + quadratic_term(system, previous[0], t_k, previous[1], ds)
             if hasattr(problem, "step_bound"):
                 fraction = float(problem.step_bound(q_k, system.q(start) - q_k))
                 if fraction < 1.0:

@@ -21,7 +21,12 @@ from supercoil.continuation.branch import Branch
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
-from supercoil.continuation.pseudo_arclength import PointCallback, RecordFunction, _Tracer
+from supercoil.continuation.pseudo_arclength import (
+    PointCallback,
+    RecordFunction,
+    _Tracer,
+    quadratic_term,
+)
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
@@ -100,7 +105,12 @@ def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOption
         return opts.initial_step
     setattr(system.problem, partial.parameter, float(partial.parameter_values[-2]))
     system.problem.accept(np.asarray(partial.states[-2], dtype=float))
-    replay = correct(system, x_prev + ds * d, row, x_prev, ds, opts.tolerance,
+    start = x_prev + ds * d
+    if opts.predictor == "quadratic" and k >= 3:
+        start = start + quadratic_term(system, _reduced(system, partial.tangents[-3]),
+                                       _reduced(system, partial.tangents[-2]),
+                                       float(partial.arclength[-2] - partial.arclength[-3]), ds)
+    replay = correct(system, start, row, x_prev, ds, opts.tolerance,
                      opts.max_corrector_iterations)
     if replay.ok and replay.iterations <= opts.fast_iterations:
         return min(ds * opts.growth, opts.max_step)
@@ -149,6 +159,9 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     tracer = _Tracer(system, dataclasses.replace(opts, max_points=opts.max_points - (k - 1)),
                      partial.name, partial.parent, partial.origin, records, events,
                      None if on_point is None else joined)
+    if k >= 2:
+        tracer.before = (_reduced(system, partial.tangents[-2]),
+                         float(partial.arclength[-1] - partial.arclength[-2]))
     x0 = system.pack(q, partial.multipliers[-1], lam)
     e_lam = np.zeros(system.size)
     e_lam[-1] = 1.0

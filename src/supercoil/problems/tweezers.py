@@ -107,6 +107,14 @@ class TweezersOptions:
     arclength step without contact (units of L); ``contact_max_step``: with
     contact (units of D); ``max_points`` bounds each branch;
     ``segment_points`` the points per continuation run between pin checks.
+    ``contact_predictor``: the predictor of the contact branch
+    (``ContinuationOptions.predictor``). ``"quadratic"`` adds the curvature
+    of the branch from the last two tangents: the barrier's stiffness makes
+    the corrector's first residual large (5-80) even for short steps, and
+    with the tangent predictor the steps stayed at a tenth of
+    ``contact_max_step`` (289 points from 0 to 5 turns at N = 100, L/D = 33,
+    F L^2/A = 75; 93 with ``"quadratic"``, the same events and end state;
+    docs/benchmarks.md, "Session 6").
     Tolerances as in :class:`~supercoil.problems.ring_diagram.DiagramOptions`.
     ``contact_curve``: ``"spline"`` (default) or ``"polygon"``
     (``ContactOptions.curve``); ``contact_formulation``: ``"integral"``
@@ -127,6 +135,7 @@ class TweezersOptions:
     contact_max_step: float = 0.5
     max_points: int = 2000
     segment_points: int = 30
+    contact_predictor: str = "quadratic"
     event_tolerance: float = 1e-8
     contact_event_tolerance: float = 1e-6
     contact_tolerance: float = 1e-8
@@ -166,6 +175,9 @@ class TweezersOptions:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
         if self.max_points < 2 or self.segment_points < 2:
             raise ValueError("max_points and segment_points must be >= 2")
+        if self.contact_predictor not in ("tangent", "secant", "quadratic"):
+            raise ValueError(f"contact_predictor must be 'tangent', 'secant' or 'quadratic', "
+                             f"got {self.contact_predictor!r}")
         validate_contact_choice(self.contact_curve, self.contact_formulation)
 
     @property
@@ -622,7 +634,8 @@ def tweezers_branches(options: TweezersOptions,
         max_step=opts.contact_max_step * D, max_points=opts.segment_points,
         parameter_bounds=opts.turns, direction=1 if free.tangents[k, -1] >= 0 else -1,
         parameter_weight=D, tolerance=opts.contact_tolerance,
-        event_tolerance=opts.contact_event_tolerance)
+        event_tolerance=opts.contact_event_tolerance,
+        predictor=opts.contact_predictor)
     contact_records = tweezers_records(cp, rod, True)
     contact_events = (contact_count_event(cp),)
     old, contact_complete = stored.get(contact_name, (None, False))

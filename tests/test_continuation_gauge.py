@@ -262,10 +262,12 @@ def test_rephase_anchors_the_integral_condition_at_the_previous_point():
     contact = ContactProblem(base, ContactOptions(diameter=options.diameter))
     for name, problem in (("alpha", base), ("alpha_contact", contact)):
         branch = diagram.branch(name)
-        free = free_dofs(problem)
-        mass = np.asarray(problem.mass, dtype=float)[free]
         checked = 0
         for k in range(2, len(branch)):
+            # the rigid pins of the step from k - 1 to k (RingDiagram.pins)
+            diagram.pin_branch(name, k - 1, True, problem)
+            free = free_dofs(problem)
+            mass = np.asarray(problem.mass, dtype=float)[free]
             q0, q1 = branch.states[k - 1], branch.states[k]
             problem.excess_link = float(branch.parameter_values[k - 1])
             modes = goldstone_modes(problem, q0)

@@ -89,7 +89,8 @@ def test_branches_are_consistent(diagram):
     cp = ContactProblem(base, OPTIONS.contact_options(OPTIONS.diameter))
     for b in diagram.branches:
         contact = b.name in diagram.contact_branches
-        report = consistency_check(b, cp if contact else base, residual_tolerance=1e-8)
+        report = consistency_check(b, cp if contact else base, residual_tolerance=1e-8,
+                                   pin=lambda i, seg, b=b: diagram.pin_branch(b.name, i, seg, cp))
         problems = [p for p in report.problems if not contact or (
             "KKT residual" not in p and "outside the branch's parameter range" not in p)]
         assert not problems, (b.name, problems)
@@ -102,8 +103,10 @@ def test_sliding_residual_is_the_unpinned_kkt_residual(diagram):
 
     contact = diagram.branch("alpha_contact")
     cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
-    system = ExtendedSystem(cp, "excess_link", contact.states[0])
     for i in range(len(contact)):
+        # the rigid pins point i was computed with (RingDiagram.pins)
+        diagram.pin_branch("alpha_contact", i, False, cp)
+        system = ExtendedSystem(cp, "excess_link", contact.states[i])
         cp.excess_link = float(contact.parameter_values[i])
         cp.accept(contact.states[i])
         x = system.pack(contact.states[i], contact.multipliers[i], contact.parameter_values[i])
@@ -120,7 +123,8 @@ def test_sliding_residual_is_the_unpinned_kkt_residual(diagram):
 def test_contact_branch_states_are_equilibria_without_the_gauge(diagram):
     base = _problem()
     cp = ContactProblem(base, OPTIONS.contact_options(OPTIONS.diameter))
-    report = consistency_check(diagram.branch("alpha_contact"), cp, residual_tolerance=1e-6)
+    report = consistency_check(diagram.branch("alpha_contact"), cp, residual_tolerance=1e-6,
+                               pin=lambda i, s: diagram.pin_branch("alpha_contact", i, s, cp))
     assert not [p for p in report.problems if "KKT residual" in p]
 
 
@@ -341,7 +345,49 @@ def test_integral_contact_on_the_spline_gives_a_consistent_branch():
     assert np.allclose(lk, contact.parameter_values, atol=1e-8)
     cp = ContactProblem(_problem(), ContactOptions(diameter=options.diameter,
                                                    formulation="integral", curve="spline"))
-    report = consistency_check(contact, cp, residual_tolerance=1e-8)
+    report = consistency_check(contact, cp, residual_tolerance=1e-8,
+                               pin=lambda i, s: diagram.pin_branch("alpha_contact", i, s, cp))
     problems = [p for p in report.problems if "KKT residual" not in p
                 and "outside the branch's parameter range" not in p]
     assert not problems, problems
+
+
+def test_contact_branch_counts_do_not_depend_on_the_rigid_pins(diagram):
+    """The rigid pins are re-picked between runs of a contact branch (RingDiagram.pins):
+    the ring's construction pins lose their grip along this branch (quality below 0.5).
+    Oracle: the unstable count stored at every point equals the count of negative
+    eigenvalues of the constrained Hessian with the rigid motions and the sliding
+    projected out instead of pinned (stability.analysis: no pins at all). (At L/D = 122,
+    N = 200 the construction pins gave a spurious count and fold pairs from dLk 3.40:
+    benchmarks/bench_ring_diagram.py, docs/benchmarks.md.)"""
+    from supercoil.problems.ring_diagram import PIN_QUALITY
+    from supercoil.stability.analysis import _eigen_system, dense_constrained_eigenpairs
+
+    contact = diagram.branch("alpha_contact")
+    cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
+    construction = cp.base.fixed.copy()
+    assert min(cp.base.pin_quality(q) for q in contact.states) < PIN_QUALITY
+    for i, q in enumerate(contact.states):
+        cp.excess_link = float(contact.parameter_values[i])
+        cp.accept(q)
+        _dofs, H, J, mass, sym = _eigen_system(cp, q, contact.multipliers[i])
+        values, _ = dense_constrained_eigenpairs(H, J, mass, sym)
+        assert int(np.sum(values < -1e-6)) == contact.unstable_count[i], i
+    np.testing.assert_array_equal(cp.base.fixed, construction)
+
+
+def test_repin_picks_the_best_rigid_pins_and_keeps_the_state():
+    from supercoil.rod.closed import rigid_pins, rotation_pin_determinant
+
+    rod, q = twisted_circle_problem(OPTIONS.twist_ratio, 0.0, OPTIONS.n_nodes, "angle")
+    rng = np.random.default_rng(3)
+    q = q + 2.0 * rng.standard_normal(q.size) * OPTIONS.diameter
+    assert rod.pin_quality(q) < 1.0  # the circle's pins on a perturbed state
+    rod.repin(q)
+    assert rod.pin_quality(q) == 1.0
+    assert np.array_equal(rod.fixed, rigid_pins(q.reshape(-1, 3)))
+    assert np.array_equal(rod.gauge_dofs, rod.fixed) and list(rod.fixed[:3]) == [0, 1, 2]
+    # the determinant: zero when a pinned coordinate does not see the rotations
+    points = q.reshape(-1, 3)
+    assert rotation_pin_determinant(points, rod.fixed) > 0
+    assert rotation_pin_determinant(points, np.array([0, 1, 2, 3, 4])) == 0.0

@@ -95,7 +95,8 @@ def test_secondary_branches_are_consistent(diagram):
     base, _ = twisted_circle_problem(OPTIONS.twist_ratio, 0.0, OPTIONS.n_nodes, "angle")
     cp = ContactProblem(base, OPTIONS.contact_options(OPTIONS.diameter))
     for b in _secondary(diagram):
-        report = consistency_check(b, cp, residual_tolerance=1e-8)
+        report = consistency_check(b, cp, residual_tolerance=1e-8,
+                                   pin=lambda i, s, b=b: diagram.pin_branch(b.name, i, s, cp))
         # as for the contact branches (test_ring_diagram): the KKT residual holds the
         # sliding gauge's force, recorded per point as sliding_residual
         problems = [p for p in report.problems if "KKT residual" not in p]

@@ -20,6 +20,7 @@ with a reference state follows the branch); the problem is left at the last one.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,8 +43,16 @@ class ConsistencyReport:
 
 def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
                       residual_tolerance: float = 1e-7, zero_tolerance: float = 1e-6,
-                      points: np.ndarray | None = None) -> ConsistencyReport:
-    """Check ``branch`` against ``problem`` (see module doc); ``points``: indices to recheck."""
+                      points: np.ndarray | None = None,
+                      pin: Callable[[int, bool], None] | None = None) -> ConsistencyReport:
+    """Check ``branch`` against ``problem`` (see module doc); ``points``: indices to recheck.
+
+    ``pin(i, segment)``, if given, is called before point ``i`` (``segment``
+    False) or a special point between points ``i`` and ``i + 1`` (True) is
+    checked: it sets the problem's pinned DOFs (``fixed``) to those that point
+    or segment was computed with (a branch continued in runs with its symmetry
+    pins re-picked between them, :mod:`supercoil.problems.segments`).
+    """
     problems: list[str] = []
     k = len(branch)
     for name in ("states", "multipliers", "unstable_count", "zero_modes", "determinant_sign",
@@ -61,12 +70,23 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
     def x_of(q, mu, lam):
         return system.pack(q, mu, lam)
 
+    def repin(i: int, segment: bool) -> None:
+        nonlocal system
+        if pin is None:
+            return
+        fixed = np.array(problem.fixed, copy=True)
+        pin(i, segment)
+        if not np.array_equal(fixed, problem.fixed):
+            system = ExtendedSystem(problem, branch.parameter, branch.states[i], phase,
+                                    branch.phase_state if phase is not None else None)
+
     def residual(x):
         F = system.residual(x)
         return float(np.max(np.abs(F[:system.n + system.m]))) if F.size else 0.0
 
     indices = np.arange(k) if points is None else np.asarray(points, dtype=np.int64)
     for i in indices:
+        repin(int(i), False)
         x = x_of(branch.states[i], branch.multipliers[i], branch.parameter_values[i])
         system.set_parameter(x[-1])
         problem.accept(branch.states[i])
@@ -93,6 +113,7 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
         if not branch.arclength[i] <= p.arclength <= branch.arclength[i + 1]:
             problems.append(f"{where}: arclength {p.arclength:.6g} not between its neighbours "
                             f"{branch.arclength[i]:.6g} and {branch.arclength[i + 1]:.6g}")
+        repin(i, True)
         res = residual(x_of(p.q, p.multipliers, p.parameter))
         if not res <= residual_tolerance:
             problems.append(f"{where}: KKT residual {res:.2e}")

@@ -187,26 +187,33 @@ def _bisect_count(segment: Segment, lo: float, hi: float, c_lo: int, c_hi: int,
 
 # A count change by k > 1 over one segment is one event, a multiple eigenvalue
 # crossing zero, when at both ends of the segment the k eigenvalues nearest zero have
-# one sign each and differ from their mean by at most this fraction of it: a double
+# one sign each and differ from their mean by at most CLUSTER_SPREAD of it: a double
 # eigenvalue of a symmetric state (an E mode of D_m), split a little by the
-# discretisation's or the gauge's small asymmetry.
+# discretisation's or the gauge's small asymmetry. A spread below EXACT_SPREAD is an
+# exact multiple eigenvalue (a continuous symmetry, the circle's O(2)): its crossing is
+# one point, which bisection locates.
 CLUSTER_SPREAD = 0.1
+EXACT_SPREAD = 1e-6
 
 
 def _crossing_cluster(segment: Segment, k: int) -> tuple[float, float] | None:
-    """Means of the ``k`` eigenvalues nearest zero at both ends if they cross as a cluster."""
-    means = []
+    """Means of the ``k`` eigenvalues nearest zero at both ends if they cross as a split
+    cluster (above), else None."""
+    means, spreads = [], []
     for u in (0.0, 1.0):
         values, _ = segment.system_eigenpairs(u, k + 2)
         if values.size < k:
             return None
         cluster = values[np.argsort(np.abs(values))[:k]]
         mean = float(np.mean(cluster))
-        if (np.any(np.sign(cluster) != np.sign(mean))
-                or np.max(np.abs(cluster - mean)) > CLUSTER_SPREAD * abs(mean)):
+        spread = float(np.max(np.abs(cluster - mean))) / abs(mean) if mean else np.inf
+        if np.any(np.sign(cluster) != np.sign(mean)) or spread > CLUSTER_SPREAD:
             return None
         means.append(mean)
-    return (means[0], means[1]) if means[0] * means[1] < 0 else None
+        spreads.append(spread)
+    if means[0] * means[1] >= 0 or max(spreads) <= EXACT_SPREAD:
+        return None
+    return means[0], means[1]
 
 
 def locate_count_change(segment: Segment, xtol: float, switch_below: float,
@@ -218,10 +225,9 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
     nearest zero (or bisection to ``xtol`` when it does not change sign there). A trial
     point whose correction fails is replaced by one at 0.3 or 0.7 of the bracket.
 
-    When the count changes by ``k > 1`` over the segment but the bisection finds
-    a smaller change first, and the ``k`` eigenvalues cross as a cluster
-    (:data:`CLUSTER_SPREAD`), the crossing is one event and is not bisected: near
-    it the branches that bifurcate there pass within the segment's length of the
+    When the count changes by ``k > 1`` over the segment and the ``k``
+    eigenvalues cross as a split cluster (:data:`CLUSTER_SPREAD`), the crossing
+    is one event and is not bisected: near it the branches that bifurcate there pass within the segment's length of the
     parent, and a trial point re-corrected on the segment's hyperplane can land on
     one of them (measured on the ring's beta branch at its three-point contact
     onset: trial points of C_2 symmetry between D_3 ends, with the count of
@@ -238,8 +244,7 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
         c_lo, c_hi = segment.count(lo), segment.count(hi)
         if c_lo == c_hi:
             return None
-        lo, hi, c_first = _bisect_count(segment, lo, hi, c_lo, c_hi, max(switch_below, xtol))
-        if c_first != c_hi and start == 0.0:
+        if abs(c_hi - c_lo) > 1 and start == 0.0:
             means = _crossing_cluster(segment, abs(c_hi - c_lo))
             if means is not None:
                 u_zero = means[0] / (means[0] - means[1])
@@ -247,7 +252,7 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
                 return Located("bifurcation", "bifurcation", u, segment.point(u),
                                segment.tangent(u), True, c_lo, c_hi,
                                accuracy=abs(u_zero - u) * segment.length)
-        c_hi = c_first
+        lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, max(switch_below, xtol))
         f_lo, f_hi = segment.nearest_eigenvalue(lo), segment.nearest_eigenvalue(hi)
         if np.isfinite(f_lo) and np.isfinite(f_hi) and f_lo * f_hi < 0:
             u = _brent(segment.nearest_eigenvalue, lo, hi, xtol)

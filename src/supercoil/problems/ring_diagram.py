@@ -129,6 +129,7 @@ from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_branches import PRIMARY_NAMES, circle_branch, ring_records
 from supercoil.problems.ring_contact import validate_diameter
 from supercoil.problems.ring_secondary import generation_of, secondary_branches
+from supercoil.problems.segments import follow, set_pin
 from supercoil.solvers.problem import free_dofs
 
 MAX_LEVEL = 8  # contact-count indicators n - k + 1/2 for k = 1 .. MAX_LEVEL
@@ -138,6 +139,10 @@ SPLIT_DISTANCE = 0.1  # s/L, see the module docstring
 # (the barrier stiffness grows from zero like 6 kappa (g_hat - g) / g_hat):
 # about 1e-8 L at N = 60, L/D = 122, so steps far below D are needed there.
 CONTACT_MIN_STEP = 1e-12
+# Contact branches run in segments of this many points; between them the rigid pins are
+# re-picked where their quality (ClosedRodEnergy.pin_quality) fell below PIN_QUALITY.
+CONTACT_SEGMENT_POINTS = 40
+PIN_QUALITY = 0.5
 SWITCH_AMPLITUDE = 2e-3  # first point of a primary branch from its bifurcation (arclength)
 SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1.5e-2)  # tried in turn, see _switch_off_circle
 SWITCH_TRIAL_POINTS = 4
@@ -276,6 +281,28 @@ class RingDiagram:
     notes: tuple[str, ...] = ()
     contact_problem: ContactProblem | None = None  # for contact lists of stored states
     generations: dict[str, int] = field(default_factory=dict)  # secondary (2), tertiary (3)
+    # contact branches: (first point index, the six rigid pins) at each choice of pins
+    pins: dict[str, tuple[tuple[int, tuple[int, ...]], ...]] = field(default_factory=dict)
+
+    def pin_branch(self, name: str, index: int, segment: bool = False,
+                   problem: ContactProblem | None = None) -> None:
+        """Set the rigid pins of ``problem`` (default: the diagram's contact problem; a
+        ContactProblem on a ring) to those point ``index`` of branch ``name`` was computed
+        with (``segment``: those of the step from ``index`` to ``index + 1``; a run's
+        first point is its predecessor's last, computed with the older pins), e.g. as
+        ``consistency_check(..., pin=lambda i, s: diagram.pin_branch(name, i, s, cp))``.
+        Branches without recorded pins leave the problem as it is."""
+        target = self.contact_problem if problem is None else problem
+        choices = self.pins.get(name)
+        if not choices or target is None:
+            return
+        dofs = choices[0][1]
+        for start, chosen in choices:
+            if start < index or start == index and (segment or start == 0):
+                dofs = chosen
+        rod = target.base
+        rod.fixed = rod.gauge_dofs = np.array(dofs, dtype=np.int64)
+        target.fixed = rod.fixed
 
     def generation(self, branch: Branch) -> int:
         """0 the circle, 1 a primary branch (with or without contact), 2 secondary, 3
@@ -566,6 +593,7 @@ def ring_diagram(options: DiagramOptions,
     final(circle, False)
     branches: list[Branch] = [circle]
     contact_names: set[str] = set()
+    pins: dict[str, tuple[tuple[int, tuple[int, ...]], ...]] = {}
     bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
     for mode in opts.modes:
         name = PRIMARY_NAMES.get(mode, f"mode{mode}")
@@ -639,16 +667,12 @@ def ring_diagram(options: DiagramOptions,
         old, complete = stored.get(contact_name, (None, False))
         if complete:
             contact = old
-        elif old is not None and len(old):
-            contact = resume_branch(cp, old, contact_opts, on_point=on_point,
-                                    records=_contact_records(cp, ring_records(cp), free=False),
-                                    events=(contact_count_event(cp),))
+            saved = (cp.base.fixed, cp.base.gauge_dofs, cp.fixed)
+            pins[contact_name] = tuple(replayed_pins(cp, old.states))
+            cp.base.fixed, cp.base.gauge_dofs, cp.fixed = saved
         else:
-            contact = continuation(cp, free.states[k], parameter="excess_link",
-                                   options=contact_opts, name=contact_name,
-                                   records=_contact_records(cp, ring_records(cp), free=False),
-                                   events=(contact_count_event(cp),), on_point=on_point)
-        if not complete:
+            contact, pins[contact_name] = _contact_branch(cp, free.states[k], old,
+                                                          contact_opts, contact_name, on_point)
             contact = classify_contact_events(contact, cp)
         if len(contact) and opts.contact_gauge:
             sliding = contact.records["sliding_residual"]
@@ -664,13 +688,66 @@ def ring_diagram(options: DiagramOptions,
         branches.append(contact)
         contact_names.add(contact_name)
     diagram = RingDiagram(opts, tuple(branches), frozenset(contact_names), seconds,
-                          tuple(notes), cp)
+                          tuple(notes), cp, pins=pins)
     if opts.branch_depth >= 2:
         diagram = secondary_branches(diagram, opts.branch_depth,
                                      max_points=opts.secondary_max_points,
                                      max_branches=opts.secondary_max_branches, progress=say,
                                      on_point=on_point, on_branch=final)
     return diagram
+
+
+def replayed_pins(cp: ContactProblem, states: np.ndarray
+                  ) -> list[tuple[int, tuple[int, ...]]]:
+    """The rigid pins of a contact branch computed by :func:`_contact_branch` without
+    interruption, from its states: picked at its first point, then re-picked at every
+    run boundary (every ``CONTACT_SEGMENT_POINTS - 1`` points) where their quality had
+    fallen below ``PIN_QUALITY``. Leaves ``cp`` pinned as at the last state."""
+    rod = cp.base
+    set_pin(cp, rod, states[0])
+    pins = [(0, tuple(int(d) for d in rod.fixed))]
+    for b in range(CONTACT_SEGMENT_POINTS - 1, len(states) - 1, CONTACT_SEGMENT_POINTS - 1):
+        if rod.pin_quality(states[b]) < PIN_QUALITY:
+            set_pin(cp, rod, states[b])
+            pins.append((b, tuple(int(d) for d in rod.fixed)))
+    return pins
+
+
+def _contact_branch(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
+                    options: ContinuationOptions, name: str, on_point=None
+                    ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
+    """A contact branch from ``q_start`` (or ``old``, an interrupted one, continued) in runs
+    of ``CONTACT_SEGMENT_POINTS``, the rigid pins re-picked between runs (module doc,
+    "Rigid pins"), and its pins (:attr:`RingDiagram.pins`); the ring's construction pins
+    are restored afterwards."""
+    rod = cp.base
+    saved = (rod.fixed, rod.gauge_dofs, cp.fixed)
+    records = _contact_records(cp, ring_records(cp), free=False)
+    events = (contact_count_event(cp),)
+    first_opts = dataclasses.replace(options, max_points=min(CONTACT_SEGMENT_POINTS,
+                                                             options.max_points))
+    try:
+        if old is not None and len(old):
+            # the pins the interrupted run had; a resumed run's later boundaries
+            # are counted from the point it resumed at
+            earlier = replayed_pins(cp, old.states)
+            first = (resume_branch(cp, old, first_opts, on_point=on_point, records=records,
+                                   events=events)
+                     if len(old) < CONTACT_SEGMENT_POINTS else old)
+        else:
+            set_pin(cp, rod, q_start)
+            earlier = [(0, tuple(int(d) for d in rod.fixed))]
+            first = continuation(cp, q_start, parameter="excess_link", options=first_opts,
+                                 name=name, records=records, events=events,
+                                 on_point=on_point)
+        branch, later = follow(cp, rod, first, options, name, records, events,
+                               max_points=options.max_points,
+                               segment_points=CONTACT_SEGMENT_POINTS, on_point=on_point,
+                               quality=PIN_QUALITY)
+    finally:
+        rod.fixed, rod.gauge_dofs, cp.fixed = saved
+    # follow reports the rod's gauge_dofs, which are all six pins for a ring
+    return branch, tuple(earlier) + tuple((i, d) for i, d in later if i > 0)
 
 
 def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,

@@ -66,7 +66,6 @@ from supercoil.continuation import (
     Branch,
     ContinuationOptions,
     SpecialPoint,
-    UserEvent,
     continuation,
     switch_branch,
 )
@@ -79,6 +78,7 @@ from supercoil.problems.ring_diagram import (
     onset_event,
     truncate_after,
 )
+from supercoil.problems.segments import follow, merge_branches, set_pin  # noqa: F401 (API)
 from supercoil.rod.closed import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 from supercoil.solvers.newton import NewtonOptions, newton
@@ -334,98 +334,6 @@ def axial_force(rod: ClampedRodEnergy, multipliers: np.ndarray) -> float:
     return float(mu[rod.n_constraints - 1]) if mu.size >= rod.n_constraints else float("nan")
 
 
-# ------------------------------------------------------------------ segmented continuation
-def set_pin(problem, rod: ClampedRodEnergy, q: np.ndarray) -> None:
-    """Re-pick the azimuth pin for ``q`` on the rod and on its contact wrapper (``problem``).
-
-    A straight ``q`` gets no pin (its rotation is trivial and pinning a DOF
-    would remove one of its two buckling directions).
-    """
-    rod.repin(q)
-    if problem is not rod:
-        problem.fixed = rod.fixed
-
-
-def merge_branches(parts: list[Branch], name: str) -> Branch:
-    """One branch from consecutive runs (each starts at the last point of the previous)."""
-    first = parts[0]
-    arrays = {k: [getattr(first, k)] for k in (
-        "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
-        "determinant_sign", "nearest_eigenvalue", "tangents")}
-    arclength = [first.arclength]
-    records = {k: [v] for k, v in first.records.items()}
-    specials = list(first.special_points)
-    offset, s0 = len(first), float(first.arclength[-1]) if len(first) else 0.0
-    for part in parts[1:]:
-        if len(part) < 2:
-            continue
-        for k, values in arrays.items():
-            values.append(getattr(part, k)[1:])
-        arclength.append(part.arclength[1:] + s0)
-        for k, values in records.items():
-            values.append(part.records[k][1:])
-        specials += [dataclasses.replace(p, index=p.index + offset - 1,
-                                         arclength=p.arclength + s0) for p in part.special_points]
-        offset += len(part) - 1
-        s0 += float(part.arclength[-1])
-    last = parts[-1]
-    merged = {k: np.concatenate(v) for k, v in arrays.items()}
-    return dataclasses.replace(
-        first, name=name, arclength=np.concatenate(arclength),
-        records={k: np.concatenate(v) for k, v in records.items()},
-        special_points=tuple(dataclasses.replace(p, branch=name) for p in specials),
-        status=last.status, message=last.message, **merged)
-
-
-def follow(problem, rod: ClampedRodEnergy, first: Branch, options: ContinuationOptions,
-           name: str, records, events: tuple[UserEvent, ...] = (),
-           stop: Callable[[Branch], bool] | None = None, max_points: int = 400,
-           segment_points: int = 30, on_point: Callable[[Branch], None] | None = None,
-           ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
-    """Continue ``first`` (a computed run) in runs of ``segment_points``, re-pinning between.
-
-    Each run starts at the last point of the previous one, in the direction
-    its tangent had; the azimuth pin is re-picked there when its quality
-    fell below :data:`PIN_QUALITY`. Stops when a run ends early (a bound,
-    a failure), when ``stop(run)`` is true, or at ``max_points``. Returns the
-    merged branch and its pins: ``(first point index, pinned DOFs)`` per
-    change (the pinned coordinate keeps its value from that point on).
-    ``on_point(merged_so_far)`` is called after each accepted point of the
-    later runs (``first``'s own points were reported by its caller).
-    """
-    parts = [first]
-    pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
-    total = len(first)
-    run = first
-    while run.ok and len(run) >= 2 and total < max_points and not (stop and stop(run)) \
-            and run.status.name == "MAX_POINTS":
-        q = run.states[-1]
-        setattr(problem, run.parameter, float(run.parameter_values[-1]))
-        problem.accept(q)
-        if rod.pin_quality(q) < PIN_QUALITY:
-            set_pin(problem, rod, q)
-            pins.append((total - 1, tuple(int(d) for d in rod.gauge_dofs)))
-        direction = 1 if run.tangents[-1, -1] >= 0 else -1
-        step = float(np.clip(run.arclength[-1] - run.arclength[-2], options.min_step,
-                             options.max_step))
-        opts = dataclasses.replace(options, direction=direction, initial_step=step,
-                                   max_points=min(segment_points, max_points - total + 1))
-        # the runs so far merged once: merging them again at every point of the new
-        # run made reporting quadratic in the branch length (same merged branch)
-        done = merge_branches(parts, name) if on_point is not None else None
-        report = None if on_point is None else (
-            lambda partial, done=done: on_point(merge_branches([done, partial], name)))
-        run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
-                           options=opts, name=name, records=records, events=events,
-                           on_point=report)
-        parts.append(run)
-        total += len(run) - 1
-    merged = merge_branches(parts, name)
-    if merged.ok and total >= max_points and merged.status.name == "MAX_POINTS":
-        merged = dataclasses.replace(merged, message=f"{total} points computed (max_points)")
-    return merged, tuple(pins)
-
-
 def _rotated_mode(mode: np.ndarray) -> np.ndarray:
     """The critical mode turned about the axis so the node it moves most moves along +x."""
     v = mode.reshape(-1, 3).copy()
@@ -596,7 +504,8 @@ def tweezers_branches(options: TweezersOptions,
         free, free_pins = follow(rod, rod, first, free_opts, free_name, free_records, events,
                                  stop=_onset_stop if probe is not None else None,
                                  max_points=opts.max_points,
-                                 segment_points=opts.segment_points, on_point=on_point)
+                                 segment_points=opts.segment_points, on_point=on_point,
+                                 quality=PIN_QUALITY)
     onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
@@ -652,7 +561,8 @@ def tweezers_branches(options: TweezersOptions,
         contact, contact_pins = follow(cp, rod, first, contact_opts, contact_name,
                                        contact_records, contact_events,
                                        max_points=opts.max_points,
-                                       segment_points=opts.segment_points, on_point=on_point)
+                                       segment_points=opts.segment_points, on_point=on_point,
+                                       quality=PIN_QUALITY)
         contact = classify_contact_events(contact, cp)
     contact = dataclasses.replace(contact, parent=free_name, origin=onset)
     seconds[contact_name] = time.perf_counter() - start

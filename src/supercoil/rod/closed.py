@@ -374,6 +374,28 @@ class ClosedRodEnergy(RodEnergy):
     def twist_offset(self) -> float:
         return self.excess_link - self.reference_link
 
+    def repin(self, q: np.ndarray) -> None:
+        """Re-pick the six rigid-motion pins (:func:`rigid_pins`) for the state ``q``.
+
+        The pins chosen on the circle remove rotations less and less well as
+        the ring folds into a plectoneme (:meth:`pin_quality` fell to 0.1 on
+        the alpha branch at L/D = 122): the pinned Hessian then keeps a nearly
+        null rotation, whose eigenvalue the gauge's small force can push
+        through zero, and a continuation folds back and forth there (measured:
+        the branch snaked from dLk 3.40, N = 200). Call this between
+        continuation runs: the pinned coordinates keep their values at ``q``.
+        """
+        self.fixed = rigid_pins(np.asarray(q, dtype=float).reshape(-1, 3))
+        self.gauge_dofs = self.fixed
+
+    def pin_quality(self, q: np.ndarray) -> float:
+        """:func:`rotation_pin_determinant` of the current pins at ``q`` over that of the
+        pins :func:`rigid_pins` would choose there, in ``[0, 1]`` (1 right after
+        :meth:`repin`)."""
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        best = rotation_pin_determinant(x, rigid_pins(x))
+        return min(1.0, rotation_pin_determinant(x, self.fixed) / best) if best > 0 else 0.0
+
     # An accepted state whose edges turned by more than this (degrees) from the
     # last one is a jump (a stored state), not a step: see accept.
     jump_turn_degrees = 45.0
@@ -469,16 +491,38 @@ class ClosedRodEnergy(RodEnergy):
         return np.cos(theta)[:, None] * u + np.sin(theta)[:, None] * v
 
 
+def rotation_pin_determinant(points: np.ndarray, pins: np.ndarray) -> float:
+    """``|det|`` of the response of the pinned coordinates beyond node 0 to infinitesimal
+    rotations about node 0: ``rows (r_i x e_k)`` for each pinned DOF ``3 i + k``.
+
+    Zero when the pins do not remove some rotation; it scales as ``|r|^3``.
+    """
+    x = np.asarray(points, dtype=float).reshape(-1, 3)
+    rows = []
+    for dof in np.asarray(pins, dtype=np.int64):
+        node, k = divmod(int(dof), 3)
+        if node == 0:
+            continue
+        e = np.zeros(3)
+        e[k] = 1.0
+        rows.append(np.cross(x[node] - x[0], e))
+    if len(rows) != 3:
+        return 0.0
+    return float(abs(np.linalg.det(np.array(rows))))
+
+
 def rigid_pins(points: np.ndarray) -> np.ndarray:
     """Six DOF indices whose fixing removes the rigid motions of a free body.
 
     Node 0 is fixed (translations); three coordinates of two far nodes are
     chosen to maximise ``|det|`` of their response to infinitesimal rotations
-    about node 0 (so rotations are removed as well as the geometry allows).
+    about node 0 (:func:`rotation_pin_determinant`; so rotations are removed
+    as well as the geometry allows).
     At an equilibrium the rigid motions are null vectors of the Hessian, so
     fixing these DOFs restricts the Hessian to a complement of the rigid modes
     and leaves its inertia unchanged.
     """
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
     candidates = []
     for node in (n // 3, (2 * n) // 3, n // 2, n // 6):

@@ -1,0 +1,123 @@
+"""Continuation in runs, the symmetry pins re-picked between them.
+
+A problem that removes a continuous symmetry by fixing some DOFs (the
+rigid motions of a ring, the rotation of a clamped rod about its axis) keeps
+those pins for a whole continuation run, and pins chosen at the start can
+lose their grip as the shape changes: the pinned Hessian then has a nearly
+null symmetry mode, Newton and the unstable count degrade. :func:`follow`
+continues a branch in runs, re-picking the pins between runs where the rod's
+``pin_quality`` fell below a threshold, and merges the runs into one branch.
+The pinned coordinates keep their values at the state where they are
+picked, so that state stays a state of the problem.
+
+The rod protocol (:class:`PinnedRod`): ``fixed`` and ``gauge_dofs`` (the
+pins), ``repin(q)`` and ``pin_quality(q)`` in ``[0, 1]``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Protocol
+
+import numpy as np
+
+from supercoil.continuation import Branch, ContinuationOptions, UserEvent, continuation
+
+
+class PinnedRod(Protocol):
+    fixed: np.ndarray
+    gauge_dofs: np.ndarray
+
+    def repin(self, q: np.ndarray) -> None: ...
+
+    def pin_quality(self, q: np.ndarray) -> float: ...
+
+
+def set_pin(problem, rod: PinnedRod, q: np.ndarray) -> None:
+    """Re-pick the rod's symmetry pins for ``q`` (``rod.repin``), on the rod and on its
+    contact wrapper (``problem``, whose ``fixed`` copies the rod's)."""
+    rod.repin(q)
+    if problem is not rod:
+        problem.fixed = rod.fixed
+
+
+def merge_branches(parts: list[Branch], name: str) -> Branch:
+    """One branch from consecutive runs (each starts at the last point of the previous)."""
+    first = parts[0]
+    arrays = {k: [getattr(first, k)] for k in (
+        "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+        "determinant_sign", "nearest_eigenvalue", "tangents")}
+    arclength = [first.arclength]
+    records = {k: [v] for k, v in first.records.items()}
+    specials = list(first.special_points)
+    offset, s0 = len(first), float(first.arclength[-1]) if len(first) else 0.0
+    for part in parts[1:]:
+        if len(part) < 2:
+            continue
+        for k, values in arrays.items():
+            values.append(getattr(part, k)[1:])
+        arclength.append(part.arclength[1:] + s0)
+        for k, values in records.items():
+            values.append(part.records[k][1:])
+        specials += [dataclasses.replace(p, index=p.index + offset - 1,
+                                         arclength=p.arclength + s0) for p in part.special_points]
+        offset += len(part) - 1
+        s0 += float(part.arclength[-1])
+    last = parts[-1]
+    merged = {k: np.concatenate(v) for k, v in arrays.items()}
+    return dataclasses.replace(
+        first, name=name, arclength=np.concatenate(arclength),
+        records={k: np.concatenate(v) for k, v in records.items()},
+        special_points=tuple(dataclasses.replace(p, branch=name) for p in specials),
+        status=last.status, message=last.message, **merged)
+
+
+def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
+           name: str, records, events: tuple[UserEvent, ...] = (),
+           stop: Callable[[Branch], bool] | None = None, max_points: int = 400,
+           segment_points: int = 30, on_point: Callable[[Branch], None] | None = None,
+           quality: float = 0.5,
+           ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
+    """Continue ``first`` (a computed run) in runs of ``segment_points``, re-pinning between.
+
+    Each run starts at the last point of the previous one, in the direction
+    its tangent had; the pins are re-picked there when ``rod.pin_quality``
+    fell below ``quality``. Stops when a run ends early (a bound,
+    a failure), when ``stop(run)`` is true, or at ``max_points``. Returns the
+    merged branch and its pins: ``(first point index, pinned DOFs)`` per
+    change (the pinned coordinate keeps its value from that point on).
+    ``on_point(merged_so_far)`` is called after each accepted point of the
+    later runs (``first``'s own points were reported by its caller).
+    """
+    parts = [first]
+    pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
+    total = len(first)
+    run = first
+    while run.ok and len(run) >= 2 and total < max_points and not (stop and stop(run)) \
+            and run.status.name == "MAX_POINTS":
+        q = run.states[-1]
+        setattr(problem, run.parameter, float(run.parameter_values[-1]))
+        problem.accept(q)
+        if rod.pin_quality(q) < quality:
+            set_pin(problem, rod, q)
+            pins.append((total - 1, tuple(int(d) for d in rod.gauge_dofs)))
+        direction = 1 if run.tangents[-1, -1] >= 0 else -1
+        step = float(np.clip(run.arclength[-1] - run.arclength[-2], options.min_step,
+                             options.max_step))
+        opts = dataclasses.replace(options, direction=direction, initial_step=step,
+                                   max_points=min(segment_points, max_points - total + 1))
+        # the runs so far merged once: merging them again at every point of the new
+        # run made reporting quadratic in the branch length (same merged branch)
+        done = merge_branches(parts, name) if on_point is not None else None
+        report = None if on_point is None else (
+            lambda partial, done=done: on_point(merge_branches([done, partial], name)))
+        run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
+                           options=opts, name=name, records=records, events=events,
+                           on_point=report)
+        parts.append(run)
+        total += len(run) - 1
+    merged = merge_branches(parts, name)
+    if merged.ok and total >= max_points and merged.status.name == "MAX_POINTS":
+        merged = dataclasses.replace(merged, message=f"{total} points computed (max_points)")
+    return merged, tuple(pins)

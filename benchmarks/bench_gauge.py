@@ -54,7 +54,9 @@ def main(argv=None) -> int:
     for gauge in ("node", "integral"):  # numba caches and pattern memos, at this N
         ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                                     max_excess_link=2.0, free_max_points=4,
-                                    contact_max_points=2, gauge=gauge))
+                                    contact_max_points=2, gauge=gauge,
+                                    contact_formulation="pairs", contact_curve="polygon",
+                                    contact_predictor="tangent"))
     if hasattr(kkt, "PinnedRows"):
         runs = (("node", "node", None), ("integral", "integral, pinned", None),
                 ("integral", "integral, dense row", 10**9))
@@ -69,7 +71,10 @@ def main(argv=None) -> int:
             kkt.DENSE_ROW_MIN_ENTRIES = min_entries
         options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                                  max_excess_link=args.max_excess_link,
-                                 contact_max_points=args.contact_max_points, gauge=gauge)
+                                 contact_max_points=args.contact_max_points, gauge=gauge,
+                                 # the contact of the recorded measurement (session 5)
+                                 contact_formulation="pairs", contact_curve="polygon",
+                                 contact_predictor="tangent")
         totals = defaultdict(lambda: [0.0, 0])
         saved = [(corrector, "bordered_factor", _timed(corrector, "bordered_factor", totals))]
         inertia = _timed(stability, "inertia", totals)

@@ -3,13 +3,15 @@
 Run from the repository root:
 
     python benchmarks/bench_ring_diagram.py [--nodes 200] [--max-excess-link 6]
-        [--contact-max-points 400] [--contact-formulation pairs|integral]
-        [--contact-curve polygon|spline|quintic] [--gauge node|integral] [--profile]
+        [--contact-max-points 400] [--contact-formulation integral|pairs]
+        [--contact-curve spline|polygon|quintic] [--gauge integral|node]
+        [--predictor quadratic|tangent|secant] [--profile]
 
 Times :func:`supercoil.problems.ring_diagram.ring_diagram` for C/A = 2/3,
 L/D = 122 (seed 001's DNA example), mode 2 only (the circle, alpha without
 contact to its first contact, alpha with barrier contact up to
-``--max-excess-link``) after one warm-up run at N = 48 (numba caches). It
+``--max-excess-link``; defaults: those of ``DiagramOptions``) after one warm-up
+run at N = 48 (numba caches). It
 prints the wall time per branch, the points, the excess link and writhe
 reached, and the time per contact-branch point; with ``--profile`` the
 top of a cProfile by cumulative time. Target (issue 4): the whole alpha
@@ -29,9 +31,13 @@ def main(argv=None) -> int:
     parser.add_argument("--nodes", type=int, default=200)
     parser.add_argument("--max-excess-link", type=float, default=6.0)
     parser.add_argument("--contact-max-points", type=int, default=400)
-    parser.add_argument("--contact-formulation", default="pairs", choices=("pairs", "integral"))
-    parser.add_argument("--contact-curve", default="polygon", choices=("polygon", "spline", "quintic"))
-    parser.add_argument("--gauge", default="node", choices=("node", "integral"))
+    parser.add_argument("--contact-formulation", default="integral",
+                        choices=("integral", "pairs"))
+    parser.add_argument("--contact-curve", default="spline",
+                        choices=("spline", "polygon", "quintic"))
+    parser.add_argument("--gauge", default="integral", choices=("integral", "node"))
+    parser.add_argument("--predictor", default="quadratic",
+                        choices=("quadratic", "tangent", "secant"))
     parser.add_argument("--profile", action="store_true")
     args = parser.parse_args(argv)
 
@@ -43,7 +49,8 @@ def main(argv=None) -> int:
                              max_excess_link=args.max_excess_link,
                              contact_max_points=args.contact_max_points,
                              contact_formulation=args.contact_formulation,
-                             contact_curve=args.contact_curve, gauge=args.gauge)
+                             contact_curve=args.contact_curve, gauge=args.gauge,
+                             contact_predictor=args.predictor)
     profile = cProfile.Profile() if args.profile else None
     start = time.perf_counter()
     if profile:
@@ -53,7 +60,8 @@ def main(argv=None) -> int:
         profile.disable()
     total = time.perf_counter() - start
     print(f"C/A = 2/3, L/D = 122, N = {args.nodes}, mode 2, dLk <= {args.max_excess_link:g}, "
-          f"{args.contact_formulation} contact on the {args.contact_curve}, {args.gauge} gauge")
+          f"{args.contact_formulation} contact on the {args.contact_curve}, {args.gauge} gauge, "
+          f"{args.predictor} predictor")
     print("| branch | points | seconds | s/point | dLk range | max writhe | status |")
     print("|---|---|---|---|---|---|---|")
     for b in diagram.branches:

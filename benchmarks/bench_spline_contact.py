@@ -30,10 +30,12 @@ def main(argv=None) -> int:
 
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
-    extra = {} if args.curve == "polygon" else {"contact_curve": args.curve}
+    # the pair sum with the node gauge and the tangent predictor, as measured (session 4)
     options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                              max_excess_link=args.max_excess_link,
-                             contact_max_points=args.contact_max_points, **extra)
+                             contact_max_points=args.contact_max_points,
+                             contact_curve=args.curve, contact_formulation="pairs",
+                             gauge="node", contact_predictor="tangent")
     start = time.perf_counter()
     diagram = ring_diagram(options, progress=lambda m: print(m, flush=True))
     total = time.perf_counter() - start

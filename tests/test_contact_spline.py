@@ -331,7 +331,9 @@ def test_drivers_accept_and_validate_the_contact_curve():
     assert CONTACT_CURVES == CURVES  # the CLI's copy (cheap at start-up) is the same
     assert CONTACT_FORMULATIONS == FORMULATIONS
     ring = DiagramOptions(2 / 3, 122.0)
-    assert (ring.contact_curve, ring.contact_formulation) == ("polygon", "pairs")
+    assert (ring.contact_curve, ring.contact_formulation) == ("spline", "integral")
+    with pytest.raises(ValueError, match="contact_predictor"):
+        DiagramOptions(2 / 3, 122.0, contact_predictor="cubic")
     tweezers = TweezersOptions(4 / 3, 33.0, tension=75.0)
     assert (tweezers.contact_curve, tweezers.contact_formulation) == ("spline", "integral")
     with pytest.raises(ValueError, match="contact_formulation"):

@@ -118,8 +118,9 @@ def test_sliding_residual_is_the_unpinned_kkt_residual(diagram):
 
 
 @pytest.mark.xfail(strict=True, reason="contact branches are equilibria only with the "
-                   "material sliding pinned: the polygon contact pushes the material along "
-                   "the rod (ring_diagram's docs, 'Material sliding')")
+                   "material sliding held by the gauge: the discrete contact (the integral on "
+                   "the spline too, far less than the pair sum on the polygon) pushes the "
+                   "material along the rod (ring_diagram's docs, 'Material sliding')")
 def test_contact_branch_states_are_equilibria_without_the_gauge(diagram):
     base = _problem()
     cp = ContactProblem(base, OPTIONS.contact_options(OPTIONS.diameter))

@@ -88,7 +88,7 @@ def test_primary_is_d3_and_secondary_branches_are_c2(diagram):
         first_c2 = groups.index("C2")
         assert set(groups[:first_c2]) <= {"D3"} and set(groups[first_c2:]) == {"C2"}, (
             b.name, groups)
-        assert first_c2 <= len(groups) // 4, (b.name, groups)
+        assert first_c2 <= len(groups) // 2, (b.name, groups)  # C2 on most of the branch
 
 
 def test_secondary_branches_are_consistent(diagram):

@@ -25,9 +25,10 @@ EXIT_BAD_INPUT = 2
 MAX_NODES = 100_000
 CONTACT_CURVES = ("polygon", "spline", "quintic")  # supercoil.contact.problem.CURVES
 CONTACT_FORMULATIONS = ("pairs", "integral")  # supercoil.contact.problem.FORMULATIONS
-FORMULATION_HELP = ("How the contact potential is summed: pairs (over segment pairs, default) "
-                    "or integral (a double integral over the strands, which counts a contact "
-                    "once wherever it lies; experimental, best with --contact-curve spline; "
+FORMULATION_HELP = ("How the contact potential is summed: integral (default: a double "
+                    "integral over the strands, which counts a contact once wherever it lies; "
+                    "best with --contact-curve spline) or pairs (over segment pairs, the "
+                    "earlier default, whose count of one contact depends on the mesh; "
                     "docs/benchmarks.md).")
 MIN_NODES = 8
 MAX_MAGNITUDE = 1e6  # |excess link| in turns, twist ratio C/A

@@ -717,13 +717,13 @@ def diagram_ring(
     contact_curve: Annotated[
         str,
         typer.Option("--contact-curve", metavar="CURVE", help="Curve whose self-distance is "
-                     "the contact distance: polygon (the segments, default), spline (the "
-                     "cubic B-spline of the nodes: no sag ripple) or quintic (the quintic "
-                     "B-spline, with --contact-formulation integral only; docs/benchmarks.md)."),
-    ] = "polygon",
+                     "the contact distance: spline (the cubic B-spline of the nodes, default), "
+                     "polygon (the segments) or quintic (the quintic B-spline, with "
+                     "--contact-formulation integral only; docs/benchmarks.md)."),
+    ] = "spline",
     contact_formulation: Annotated[
         str, typer.Option("--contact-formulation", metavar="FORM", help=FORMULATION_HELP),
-    ] = "pairs",
+    ] = "integral",
     force: Annotated[
         bool,
         typer.Option("--force", help="Write into an existing non-empty --out DIR, "

@@ -202,7 +202,7 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
                                   kinds=("ring_diagram", "tweezers"), convert=float),
         "contact_gauge": _Key("true or false", lambda v: isinstance(v, bool), True,
                               kinds=("ring_diagram",)),
-        "gauge": _Key('"node" or "integral"', _choice(("node", "integral")), "node",
+        "gauge": _Key('"node" or "integral"', _choice(("node", "integral")), "integral",
                       kinds=("ring_diagram",)),
         "branch_depth": _Key("1 (primary branches), 2 (and secondary) or 3 (and tertiary)",
                              _count(1, 3), 1, kinds=("ring_diagram",)),

@@ -94,7 +94,24 @@ between segments) is the fix; until then the xfail test in
 tests/test_ring_diagram.py records the defect. ``contact_curve="spline"``
 (B-spline pieces) removes the chords' sag ripple but a sum over piece pairs
 still counts a contact a varying number of times across piece junctions:
-measured in docs/benchmarks.md ("Spline contact").
+measured in docs/benchmarks.md ("Spline contact"). The default, the double
+integral on the spline (``contact_formulation="integral"``), keeps the sliding
+force below about 3e-3 on alpha up to ``dLk`` 6 (N = 200), against up to 27 with
+the pair sum; the gauge is still needed.
+
+Rigid pins on contact branches. The ring removes its rigid motions by fixing
+six DOFs (``ClosedRodEnergy.fixed``, chosen on the circle). As alpha folds into
+a plectoneme those pins lose their grip (``pin_quality``, the determinant of
+their response to rotations against the best choice, fell to 0.1): the pinned
+Hessian keeps a nearly null rotation whose eigenvalue the gauge's small force
+pushes through zero, and the branch folded back and forth there (measured:
+L/D = 122, N = 200, from ``dLk`` 3.40). Contact branches therefore run in
+segments of ``CONTACT_SEGMENT_POINTS`` points (:mod:`supercoil.problems.segments`):
+the pins are picked at the branch's start and re-picked at a segment boundary
+where their quality fell below ``PIN_QUALITY``; the pinned coordinates keep
+their values there. :attr:`RingDiagram.pins` records them
+(:meth:`RingDiagram.pin_branch` sets them for checking a point), a resumed
+branch replays them, and the ring's own pins are restored afterwards.
 """
 
 from __future__ import annotations
@@ -185,7 +202,16 @@ class DiagramOptions:
     self-distance is the contact distance (``ContactOptions.curve``; the
     contact onset of the contact-free branches is measured on it too).
     ``contact_formulation``: ``"pairs"`` or ``"integral"``
-    (``ContactOptions.formulation``).
+    (``ContactOptions.formulation``). ``contact_predictor``: the predictor of the
+    contact branches (``ContinuationOptions.predictor``).
+
+    Defaults: the double-integral contact on the cubic B-spline, the integral
+    phase condition as the sliding gauge, the quadratic predictor. Measured at
+    C/A = 2/3, L/D = 122, N = 200 (docs/benchmarks.md, "Ring diagram, session 6"):
+    alpha reaches dLk 6 with the three folds of seed 001's Figure 1 only; the
+    pair sum on the polygon reaches it through artefact folds (and its beta
+    branch leaves D_3 under refinement), the node gauge failed to restart a run
+    at dLk 3.50.
     """
 
     twist_ratio: float
@@ -202,12 +228,13 @@ class DiagramOptions:
     contact_event_tolerance: float = 1e-6
     contact_tolerance: float = 1e-8
     contact_gauge: bool = True
-    gauge: str = "node"
+    gauge: str = "integral"
     branch_depth: int = 1
     secondary_max_points: int = 40
     secondary_max_branches: int = 12
-    contact_curve: str = "polygon"
-    contact_formulation: str = "pairs"
+    contact_curve: str = "spline"
+    contact_formulation: str = "integral"
+    contact_predictor: str = "quadratic"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.twist_ratio) and self.twist_ratio > 0):
@@ -236,6 +263,9 @@ class DiagramOptions:
         for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
             if getattr(self, name) < 2:
                 raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
+        if self.contact_predictor not in ("tangent", "secant", "quadratic"):
+            raise ValueError(f"contact_predictor must be 'tangent', 'secant' or 'quadratic', "
+                             f"got {self.contact_predictor!r}")
         if self.gauge not in ("node", "integral"):
             raise ValueError(f"gauge must be 'node' or 'integral', got {self.gauge!r}")
         if self.branch_depth not in (1, 2, 3):
@@ -658,7 +688,7 @@ def ring_diagram(options: DiagramOptions,
             parameter_bounds=(0.0, opts.max_excess_link), direction=direction,
             parameter_weight=D, tolerance=opts.contact_tolerance,
             near_symmetry_gauge=opts.contact_gauge, gauge=opts.gauge, regauge=True,
-            rephase=opts.gauge == "integral",
+            rephase=opts.gauge == "integral", predictor=opts.contact_predictor,
             event_tolerance=opts.contact_event_tolerance)
         if not 0.0 <= cp.excess_link <= opts.max_excess_link:
             notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "

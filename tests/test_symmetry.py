@@ -78,3 +78,35 @@ def test_bad_input_is_refused():
         curve_symmetry(np.zeros((3, 3)), 1e-6)
     with pytest.raises(ValueError, match="tolerance"):
         curve_symmetry(np.random.default_rng(0).normal(size=(10, 3)), 0.0)
+
+
+def test_the_axis_invariant_combination_of_an_e_mode_keeps_that_axis():
+    """A D_3 curve and the pair of radial modes cos 2s, sin 2s (an E representation of
+    D_3): the combination axis_invariant_combination picks is mapped onto itself by the
+    two-fold axis (exactly), while each mode alone is not; the other axes map it to
+    different combinations (the three C_2 branches are images of each other)."""
+    from supercoil.geometry.symmetry import (
+        axis_invariant_combination,
+        reversal_axes,
+        reversal_image,
+    )
+
+    n = 48
+    s = 2 * np.pi * np.arange(n) / n
+    ripple = 1 + 0.1 * np.cos(3 * s)
+    x = np.c_[np.cos(s) * ripple, np.sin(s) * ripple, 0.2 * np.sin(3 * s)]
+    axes = reversal_axes(x, 1e-9)
+    assert len(axes) == 3
+    radial = np.c_[np.cos(s), np.sin(s), 0 * s]
+    modes = np.stack([radial * np.cos(2 * s)[:, None], radial * np.sin(2 * s)[:, None]])
+    for c, _ in axes:
+        a = axis_invariant_combination(x, c, modes)
+        v = np.tensordot(a, modes, 1)
+        assert np.sum(v * v) == pytest.approx(1.0)
+        np.testing.assert_allclose(reversal_image(x, c, v[None])[0], v, atol=1e-12)
+    for mode in modes:
+        image = reversal_image(x, axes[0][0], mode[None])[0]
+        assert np.linalg.norm(image - mode) > 0.1 * np.linalg.norm(mode)
+    a0 = axis_invariant_combination(x, axes[0][0], modes)
+    a1 = axis_invariant_combination(x, axes[1][0], modes)
+    assert abs(abs(a0 @ a1) / (np.linalg.norm(a0) * np.linalg.norm(a1)) - 1) > 0.1

@@ -173,3 +173,47 @@ def curve_symmetry(points: np.ndarray, tolerance: float,
     if axes:
         return CurveSymmetry("C2", 1, len(axes), worst)
     return CurveSymmetry("C1", 1, 0, 0.0)
+
+
+def reversal_rotation(points: np.ndarray, c: float) -> np.ndarray:
+    """The proper rotation ``R`` (3, 3) of the reversing two-fold axis ``c`` (node
+    spacings): ``x(s) - xbar = R (x(c - s) - xbar)`` in the least-squares sense (Kabsch)."""
+    x = np.asarray(points, dtype=float)
+    y = shifted(x[(-np.arange(x.shape[0])) % x.shape[0]], float(c))  # x(c - s)
+    xc, yc = x - x.mean(axis=0), y - y.mean(axis=0)
+    u, _sv, vt = np.linalg.svd(xc.T @ yc)
+    d = np.sign(np.linalg.det(u @ vt)) or 1.0
+    return u @ np.diag([1.0, 1.0, d]) @ vt
+
+
+def reversal_image(points: np.ndarray, c: float, modes: np.ndarray) -> np.ndarray:
+    """Displacement fields ``modes`` (k, n, 3) mapped by the two-fold axis ``c`` of the curve
+    ``points``: ``(g v)(s) = R v(c - s)`` (:func:`reversal_rotation`), ``(k, n, 3)``. A mode
+    with ``g v = v`` keeps that axis (the curve moved along it stays symmetric about it)."""
+    x = np.asarray(points, dtype=float)
+    v = np.asarray(modes, dtype=float)
+    rotation = reversal_rotation(x, c)
+    n = x.shape[0]
+    out = np.empty_like(v)
+    for k in range(v.shape[0]):
+        out[k] = shifted(v[k][(-np.arange(n)) % n], float(c)) @ rotation.T
+    return out
+
+
+def axis_invariant_combination(points: np.ndarray, c: float, modes: np.ndarray,
+                               mass: np.ndarray | None = None) -> np.ndarray:
+    """The unit combination ``sum_i a_i v_i`` of ``modes`` (k, n, 3) nearest to invariant
+    under the two-fold axis ``c`` (:func:`reversal_image`): the eigenvector of the
+    symmetrised matrix ``<v_i, g v_j>`` (weights ``mass`` per node) with the eigenvalue
+    nearest +1. Returns ``a`` (k,). At a bifurcation of a D_m state through a double
+    eigenvalue (an E mode), the direction that keeps one of its two-fold axes is the one
+    along which the C_2 branch starts (seed 001's secondary branches)."""
+    v = np.asarray(modes, dtype=float)
+    w = np.ones(v.shape[1]) if mass is None else np.asarray(mass, dtype=float)
+    image = reversal_image(points, c, v)
+    gram = np.einsum("ina,n,jna->ij", v, w, v)
+    action = np.einsum("ina,n,jna->ij", v, w, image)
+    # the generalised problem action a = mu gram a, symmetrised (g is an isometry)
+    values, vectors = np.linalg.eig(np.linalg.solve(gram, 0.5 * (action + action.T)))
+    a = np.real(vectors[:, int(np.argmin(np.abs(np.real(values) - 1.0)))])
+    return a / np.sqrt(a @ gram @ a)

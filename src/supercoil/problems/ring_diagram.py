@@ -145,7 +145,11 @@ from supercoil.geometry.symmetry import curve_symmetry
 from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_branches import PRIMARY_NAMES, circle_branch, ring_records
 from supercoil.problems.ring_contact import validate_diameter
-from supercoil.problems.ring_secondary import generation_of, secondary_branches
+from supercoil.problems.ring_secondary import (
+    SYMMETRY_TOLERANCE,
+    generation_of,
+    secondary_branches,
+)
 from supercoil.problems.segments import follow, set_pin
 from supercoil.solvers.problem import free_dofs
 
@@ -165,9 +169,6 @@ SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1.5e-2)  # tried in turn, see _swit
 SWITCH_TRIAL_POINTS = 4
 # energy treatments whose equilibria are plain stationary points of E + sum psi
 CONTINUATION_TREATMENTS = ("barrier", "penalty")
-# a map of the centreline is a symmetry when its RMS misfit is below this fraction of D
-# (seed 001's symmetry classes; the polygon contact's ripple breaks them at about 1e-2 D)
-SYMMETRY_TOLERANCE = 0.05
 CONTACT_KINDS = ("contact_onset", "contact_release", "contact_split", "contact_interval_onset")
 
 

@@ -41,11 +41,17 @@ import dataclasses
 import time
 from collections.abc import Callable
 
+import numpy as np
+
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, switch_branch
+from supercoil.geometry.symmetry import axis_invariant_combination, reversal_axes
 from supercoil.problems.ring_branches import PRIMARY_NAMES, ring_records
 
 AMPLITUDES = (0.05, 0.01, 0.002, 0.2, 0.5)  # first step off the bifurcation point, units of D
 MAX_DEPTH = 3  # generations: 1 primary, 2 secondary, 3 tertiary
+# a map of the centreline is a symmetry when its RMS misfit is below this fraction of D
+# (seed 001's symmetry classes; the polygon contact's ripple breaks them at about 1e-2 D)
+SYMMETRY_TOLERANCE = 0.05
 
 
 def roman(k: int) -> str:
@@ -160,14 +166,36 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
     return _with(diagram, branches, contact_names, generations, seconds, notes)
 
 
+def switch_direction(cp, point: SpecialPoint, diameter: float) -> np.ndarray | None:
+    """For a bifurcation point with several critical modes (a double eigenvalue of a
+    symmetric state: an E mode of D_m), the combination of them that keeps a two-fold
+    axis of the state (:func:`~supercoil.geometry.symmetry.axis_invariant_combination`),
+    a full DOF vector; None for a simple eigenvalue or a state without such an axis
+    (the first critical mode is then used). Any other direction in the plane of an E
+    mode breaks every two-fold axis, and the switch from it fell back (measured at
+    L/D 122, N 204: beta_I+ continued as a D_3 branch with beta's count)."""
+    modes = np.asarray(point.critical_modes, dtype=float)
+    if modes.shape[0] < 2:
+        return None
+    x = np.asarray(point.q, dtype=float).reshape(-1, 3)
+    axes = reversal_axes(x, SYMMETRY_TOLERANCE * diameter)
+    if not axes:
+        return None
+    mass = np.asarray(cp.mass, dtype=float).reshape(-1, 3)[:, 0]
+    fields = modes.reshape(modes.shape[0], -1, 3)
+    a = axis_invariant_combination(x, axes[0][0], fields, mass)
+    return (a @ modes.reshape(modes.shape[0], -1)).ravel()
+
+
 def _switch(cp, parent: Branch, point: SpecialPoint, base: ContinuationOptions, side: int,
             name: str, records, event, on_point, D: float) -> Branch | None:
     """The half-branch on ``side`` (the first amplitude whose start succeeds), or None."""
+    direction = switch_direction(cp, point, D)
     for amplitude in AMPLITUDES:
         opts = dataclasses.replace(base, initial_step=min(amplitude * D, base.max_step))
         branch = switch_branch(cp, parent, point, opts, side=side, amplitude=amplitude * D,
                                name=name, records=records, events=(event,),
-                               on_point=on_point)
+                               on_point=on_point, direction=direction)
         if len(branch) >= 2:
             return branch
     return None

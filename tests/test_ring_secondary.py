@@ -67,6 +67,7 @@ def test_beta_bifurcates_at_its_three_point_contact_onset_and_is_stable_after_it
     values = np.sort(np.abs(b1.critical_eigenvalues))
     assert values[1] - values[0] <= 0.1 * values.mean()  # a (split) double eigenvalue
     assert abs(b1.parameter - onset.parameter) < 2e-3
+    assert b1.label == "bifurcation at contact_onset (within the barrier's reach)"
     assert onset.label.endswith("points 0->3, intervals 0->0")
     after = beta.arclength > b1.arclength
     assert np.all(beta.unstable_count[after] == 0)

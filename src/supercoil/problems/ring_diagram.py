@@ -562,7 +562,36 @@ def classify_contact_events(branch: Branch, problem: ContactProblem) -> Branch:
         label = (f"{p.label}: points {int(n_points[i])}->{int(n_points[i + 1])}, intervals "
                  f"{int(n_intervals[i])}->{int(n_intervals[i + 1])}")
         out.append(dataclasses.replace(p, kind=kind, label=label))
-    return dataclasses.replace(branch, special_points=tuple(out))
+    return dataclasses.replace(branch, special_points=tuple(_mark_contact_bifurcations(
+        out, problem)))
+
+
+def _mark_contact_bifurcations(points: list[SpecialPoint], problem: ContactProblem | None
+                               ) -> list[SpecialPoint]:
+    """Label bifurcation points that lie within the barrier's reach of a contact event.
+
+    DESIGN.md: a change of the unstable count at a contact event is not a
+    bifurcation of the rod with hard contact. The barrier smooths the event
+    over a layer of about ``barrier_activation * D``, where a count change is a
+    bifurcation of the smoothed problem (a simple eigenvalue crossing zero
+    without a fold always is), and it can be one of the rod too (seed 001's B_1:
+    beta's three contact points appear and the C_2 branches start). So the kind
+    stays ``bifurcation`` and the label says ``at <contact event>``, for the
+    reader to weigh; distance measured in arclength.
+    """
+    if problem is None or problem.treatment != "barrier":
+        return points
+    reach = problem.options.barrier_activation * problem.diameter
+    contact = [p for p in points if p.kind in CONTACT_KINDS]
+    out = []
+    for p in points:
+        near = [c for c in contact if abs(c.arclength - p.arclength) <= reach]
+        if p.kind == "bifurcation" and near:
+            nearest = min(near, key=lambda c: abs(c.arclength - p.arclength))
+            p = dataclasses.replace(p, label=f"bifurcation at {nearest.kind} (within the "
+                                    f"barrier's reach)")
+        out.append(p)
+    return out
 
 
 def truncate_after(branch: Branch, point: SpecialPoint, message: str) -> Branch:

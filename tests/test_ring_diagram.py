@@ -147,6 +147,12 @@ def test_payload_keys_and_branch_files(diagram, tmp_path):
         assert {"name", "parent", "origin"} <= set(b)
     for p in payload["special_points"]:
         assert {"kind", "branch", "excess_link", "writhe"} <= set(p)
+    assert (payload["contact_formulation"], payload["contact_curve"], payload["sliding_gauge"],
+            payload["contact_predictor"]) == ("integral", "spline", "integral", "quadratic")
+    pins = payload["rigid_pins"]["alpha_contact"]
+    assert pins[0]["from_point"] == 0 and len(pins[0]["dofs"]) == 6
+    assert [tuple(p["dofs"]) for p in pins] == [d for _, d in diagram.pins["alpha_contact"]]
+    json.dumps(payload["rigid_pins"])  # plain data
     contact = diagram.branch("alpha_contact")
     loaded = Branch.load(contact.save(tmp_path / "c.npz"))
     assert np.array_equal(loaded.states, contact.states)

@@ -408,6 +408,10 @@ class RingDiagram:
             "n_nodes": opts.n_nodes,
             "contact_curve": opts.contact_curve,
             "contact_formulation": opts.contact_formulation,
+            "sliding_gauge": opts.gauge,
+            "contact_predictor": opts.contact_predictor,
+            "rigid_pins": {name: [{"from_point": i, "dofs": list(d)} for i, d in choices]
+                           for name, choices in self.pins.items()},
             "modes": list(opts.modes),
             "max_excess_link": opts.max_excess_link,
             "michell_excess_link": {str(m): float(michell_excess_link(opts.twist_ratio, m))

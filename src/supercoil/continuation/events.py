@@ -12,7 +12,9 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
   explain (a fold changes it by exactly one). Bisection on the exact inertia
   count (seed 000; pairs of eigenvalues crossing together are seen, unlike
   with the determinant's sign) down to ``switch_below``, then Brent's method
-  on the signed eigenvalue nearest zero to ``event_tolerance``;
+  on the signed eigenvalue nearest zero to ``event_tolerance``; each change
+  on a segment in turn, a split double eigenvalue as one event
+  (:func:`locate_count_change`);
 * a **user event** is a sign change of one of the named scalars returned by a
   :class:`UserEvent`'s function, located by Brent's method (bisection
   safeguarded: discontinuous indicators are bracketed as well).
@@ -227,14 +229,15 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
 
     When the count changes by ``k > 1`` over the segment and the ``k``
     eigenvalues cross as a split cluster (:data:`CLUSTER_SPREAD`), the crossing
-    is one event and is not bisected: near it the branches that bifurcate there pass within the segment's length of the
-    parent, and a trial point re-corrected on the segment's hyperplane can land on
-    one of them (measured on the ring's beta branch at its three-point contact
-    onset: trial points of C_2 symmetry between D_3 ends, with the count of
-    neither). The event is put at the end of the segment nearer the zero of the
-    linear interpolant of the cluster's mean eigenvalue, an accepted point of the
-    parent branch, with ``accuracy`` the arclength to that zero; its special
-    point carries the ``k`` critical modes.
+    is one event and is not bisected: near it the branches that bifurcate there
+    pass within the segment's length of the parent, and a trial point
+    re-corrected on the segment's hyperplane can land on one of them (measured
+    on the ring's beta branch at its three-point contact onset: trial points of
+    C_2 symmetry between D_3 ends, with the count of neither). The event is put
+    at the end of the segment nearer the zero of the linear interpolant of the
+    cluster's mean eigenvalue, an accepted point of the parent branch, with
+    ``accuracy`` the arclength to that zero; its special point carries the
+    ``k`` critical modes.
 
     ``Located.resume`` is the first corrected point past the change (with the new
     count): a further change on the segment is searched from there.

@@ -253,7 +253,7 @@ def test_rephase_anchors_the_integral_condition_at_the_previous_point():
     from supercoil.problems.ring_branches import twisted_circle_problem
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
     from supercoil.solvers.problem import free_dofs
-    from supercoil.stability.analysis import goldstone_modes
+    from supercoil.stability.analysis import sliding_phase_modes
 
     options = DiagramOptions(2 / 3, 40.0, n_nodes=48, modes=(2,), max_excess_link=2.0,
                              free_max_points=60, contact_max_points=25, gauge="integral")
@@ -270,7 +270,7 @@ def test_rephase_anchors_the_integral_condition_at_the_previous_point():
             mass = np.asarray(problem.mass, dtype=float)[free]
             q0, q1 = branch.states[k - 1], branch.states[k]
             problem.excess_link = float(branch.parameter_values[k - 1])
-            modes = goldstone_modes(problem, q0)
+            modes = sliding_phase_modes(problem, q0)
             if modes.size == 0:
                 continue
             g = modes[0, free] / np.linalg.norm(modes[0])

@@ -360,20 +360,21 @@ def test_integral_contact_on_the_spline_gives_a_consistent_branch():
 
 
 def test_contact_branch_counts_do_not_depend_on_the_rigid_pins(diagram):
-    """The rigid pins are re-picked between runs of a contact branch (RingDiagram.pins):
-    the ring's construction pins lose their grip along this branch (quality below 0.5).
+    """The rigid pins are picked at the start of a contact branch and re-picked between
+    its runs where they lose their grip (RingDiagram.pins).
     Oracle: the unstable count stored at every point equals the count of negative
     eigenvalues of the constrained Hessian with the rigid motions and the sliding
     projected out instead of pinned (stability.analysis: no pins at all). (At L/D = 122,
     N = 200 the construction pins gave a spurious count and fold pairs from dLk 3.40:
     benchmarks/bench_ring_diagram.py, docs/benchmarks.md.)"""
-    from supercoil.problems.ring_diagram import PIN_QUALITY
+    from supercoil.rod.closed import rigid_pins
     from supercoil.stability.analysis import _eigen_system, dense_constrained_eigenpairs
 
     contact = diagram.branch("alpha_contact")
     cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
     construction = cp.base.fixed.copy()
-    assert min(cp.base.pin_quality(q) for q in contact.states) < PIN_QUALITY
+    first = diagram.pins["alpha_contact"][0]
+    assert first == (0, tuple(int(d) for d in rigid_pins(contact.states[0].reshape(-1, 3))))
     for i, q in enumerate(contact.states):
         cp.excess_link = float(contact.parameter_values[i])
         cp.accept(q)

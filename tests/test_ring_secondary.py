@@ -170,3 +170,29 @@ def test_secondary_branches_are_dashed_in_the_diagram_and_in_supercoil_plot(diag
     assert rows["beta"]["linestyle"] == "-" and rows["circle"]["linestyle"] == "-"
     for b in _secondary(diagram):
         assert rows[b.name]["linestyle"] == GENERATION_STYLES[2] != "-"
+
+
+def test_beta_at_seed_001s_parameters_is_stable_from_b1_to_p():
+    """Seed 001, Figure 2 (C/A = 2/3, L/D = 122): "condition theta holds only for the
+    configurations in the heavily drawn interval of branch beta that runs from the
+    bifurcation point B_1 to the bifurcation point P". Oracle: on beta_contact (N = 132,
+    a multiple of 3) the unstable count is 0 exactly between two located bifurcation
+    points, B_1 at the three-point contact onset (count 2 -> 0) and P (0 -> 2), both
+    through a double eigenvalue (an E mode of D_3), and beta keeps D_3 throughout (the
+    integral phase condition's reaction has no net torque: sliding_phase_modes)."""
+    options = DiagramOptions(2 / 3, 122.0, n_nodes=132, modes=(3,), max_excess_link=5.3,
+                             contact_max_points=120)
+    diagram = ring_diagram(options)
+    beta = diagram.branch("beta_contact")
+    b1, p = beta.points_of_kind("bifurcation")
+    assert (b1.count_before, b1.count_after, p.count_before, p.count_after) == (2, 0, 0, 2)
+    for point in (b1, p):
+        values = np.abs(point.critical_eigenvalues)
+        assert values.size == 2 and abs(values[1] - values[0]) <= 1e-3 * values.max()
+    (onset,) = beta.points_of_kind("contact_onset")
+    assert abs(b1.parameter - onset.parameter) < 1e-3 and 5.0 < p.parameter < 5.2
+    between = (beta.arclength > b1.arclength) & (beta.arclength < p.arclength)
+    assert between.sum() > 10 and np.all(beta.unstable_count[between] == 0)
+    assert np.all(beta.unstable_count[beta.arclength > p.arclength] >= 2)
+    points = [q for q in diagram.points() if q["branch"] == "beta_contact"]
+    assert {q["symmetry"] for q in points} == {"D3"}

@@ -43,7 +43,11 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, SingularMatrixError
 from supercoil.solvers.newton import least_squares_multipliers
 from supercoil.solvers.problem import ConstrainedEnergy
-from supercoil.stability.analysis import goldstone_modes, near_symmetry_gauge
+from supercoil.stability.analysis import (
+    goldstone_modes,
+    near_symmetry_gauge,
+    sliding_phase_modes,
+)
 
 log = logging.getLogger(__name__)
 
@@ -62,8 +66,9 @@ def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
     combination of the exact ones at ``q`` (a closed rod's material sliding
     off the circle): with ``gauge="node"`` a unit row on the DOF of
     :func:`~supercoil.stability.analysis.near_symmetry_gauge` (``q_i =
-    q_i(start)``), with ``gauge="integral"`` the mode itself (the condition
-    ``<M g, q - q_start> = 0``). Either keeps Newton and the tangent off the
+    q_i(start)``), with ``gauge="integral"`` the mode itself, M-orthogonal to
+    the exact symmetries (:func:`~supercoil.stability.analysis.sliding_phase_modes`;
+    the condition ``<M g, q - q_start> = 0``). Either keeps Newton and the tangent off the
     nearly singular direction; its multiplier is the small force that the
     discretisation's ripple exerts along the sliding, which the stored
     points' residual (without it) shows.
@@ -72,7 +77,7 @@ def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
     if options.phase_conditions:
         rows.append(phase_modes(problem, q))
     if options.near_symmetry_gauge and options.gauge == "integral":
-        modes = goldstone_modes(problem, q)
+        modes = sliding_phase_modes(problem, q)
         if modes.size:
             rows.append(modes / np.linalg.norm(modes, axis=1, keepdims=True))
     elif options.near_symmetry_gauge:

@@ -93,6 +93,32 @@ def goldstone_modes(problem: ConstrainedEnergy, q: np.ndarray,
     return np.array(out).reshape(-1, problem.n_dofs)
 
 
+def sliding_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
+                        relative: float = 1e-6) -> np.ndarray:
+    """The approximate-symmetry motions M-orthogonal to the exact ones, ``(r, n_dofs)``.
+
+    Each ``near_symmetry_modes`` vector ``s`` minus its M-orthogonal projection on
+    the ``symmetry_modes`` (a closed rod's sliding less the rigid motion it
+    contains). As the row of an integral phase condition its reaction ``nu M g``
+    has no net force or torque, so the rigid pins carry none and a symmetric
+    state stays symmetric; :func:`goldstone_modes` (the rigid motion fitted on
+    the pins) made the reaction depend on where the pins are: measured on the
+    ring's beta branch (L/D 122, N = 204) it broke D_3 slowly, and the
+    bifurcation at dLk 5.149 (seed 001's P) unfolded into a fold.
+    """
+    near = _modes(problem, q, "near_symmetry_modes")
+    if near.size == 0:
+        return np.zeros((0, problem.n_dofs))
+    basis = _symmetry_basis(problem, q, np.arange(problem.n_dofs), near=False)
+    mass = problem.mass
+    out = []
+    for s in near:
+        g = s - basis @ (basis.T @ (mass * s))
+        if np.sqrt(g @ (mass * g)) > relative * np.sqrt(s @ (mass * s)):
+            out.append(g)
+    return np.array(out).reshape(-1, problem.n_dofs)
+
+
 def near_symmetry_gauge(problem: ConstrainedEnergy, q: np.ndarray,
                         exclude: np.ndarray | None = None) -> np.ndarray:
     """DOFs whose pinning removes the approximate symmetries from the count (sorted).

@@ -185,17 +185,24 @@ class _Tracer:
         xtol = opts.event_tolerance / segment.length
         found = []
         fold = (opts.detect_folds and self.ts[k][-1] * self.ts[k + 1][-1] < 0)
+        fold_u = None
         if fold:
             found.append(locate_fold(segment, xtol))
+            fold_u = found[-1].u if found[-1].located else None
         jump = self.stabs[k + 1].unstable_count - self.stabs[k].unstable_count
         if opts.detect_bifurcations and jump != 0 and not (fold and abs(jump) == 1):
-            # each change of the count on the segment, one after the other
+            # each change of the count on the segment, one after the other; a change by
+            # one where the fold is, is the fold's own (its eigenvalue crosses there)
             start = 0.0
             for _ in range(abs(jump) + 2):
                 located = locate_count_change(segment, xtol, opts.switch_below, start)
                 if located is None:
                     break
-                found.append(located)
+                at_fold = (fold_u is not None and located.located
+                           and abs(located.count_after - located.count_before) == 1
+                           and abs(located.u - fold_u) <= max(opts.switch_below, 100 * xtol))
+                if not at_fold:
+                    found.append(located)
                 if located.resume is None or located.resume >= 1.0:
                     break
                 start = located.resume

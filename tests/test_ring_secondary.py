@@ -198,3 +198,29 @@ def test_beta_at_seed_001s_parameters_is_stable_from_b1_to_p():
     assert np.all(beta.unstable_count[beta.arclength > p.arclength] >= 2)
     points = [q for q in diagram.points() if q["branch"] == "beta_contact"]
     assert {q["symmetry"] for q in points} == {"D3"}
+
+
+def test_a_switch_that_keeps_the_parents_symmetry_fell_back():
+    """ring_secondary.fell_back: after a switch at a double eigenvalue (two critical modes)
+    a branch whose every point keeps the D_3 of the bifurcation point (or has the circle's
+    O(2)) is the parent's family; one C_2 point makes it new; a simple eigenvalue is never
+    judged (its branch may keep the symmetry)."""
+    from types import SimpleNamespace
+
+    from supercoil.problems.ring_secondary import fell_back
+
+    n = 48
+    s = 2 * np.pi * np.arange(n) / n
+
+    def curve(three, two):
+        r = 1 + three * np.cos(3 * s) + two * np.cos(2 * s)
+        return np.c_[np.cos(s) * r, np.sin(s) * r, three * 2 * np.sin(3 * s)].ravel() / (2 * np.pi)
+
+    point = SimpleNamespace(q=curve(0.1, 0.0), critical_modes=np.zeros((2, 3 * n)))
+    d3 = [curve(0.1 + 0.01 * k, 0.0) for k in range(4)]
+    diameter = 0.02
+    assert fell_back(SimpleNamespace(states=np.array(d3 + [curve(0.0, 0.0)])), point, diameter)
+    assert not fell_back(SimpleNamespace(states=np.array(d3 + [curve(0.1, 0.05)])), point,
+                         diameter)
+    simple = SimpleNamespace(q=point.q, critical_modes=np.zeros((1, 3 * n)))
+    assert not fell_back(SimpleNamespace(states=np.array(d3)), simple, diameter)

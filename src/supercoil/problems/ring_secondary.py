@@ -44,7 +44,11 @@ from collections.abc import Callable
 import numpy as np
 
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, switch_branch
-from supercoil.geometry.symmetry import axis_invariant_combination, reversal_axes
+from supercoil.geometry.symmetry import (
+    axis_invariant_combination,
+    curve_symmetry,
+    reversal_axes,
+)
 from supercoil.problems.ring_branches import PRIMARY_NAMES, ring_records
 
 AMPLITUDES = (0.05, 0.01, 0.002, 0.2, 0.5)  # first step off the bifurcation point, units of D
@@ -123,7 +127,7 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
         tolerance=opts.contact_tolerance, near_symmetry_gauge=opts.contact_gauge,
         gauge=opts.gauge, rephase=opts.gauge == "integral",
         regauge=True, event_tolerance=opts.contact_event_tolerance,
-        initial_step=AMPLITUDES[0] * D)
+        initial_step=AMPLITUDES[0] * D, predictor=opts.contact_predictor)
     records = _contact_records(cp, ring_records(cp), free=False)
     added = 0
     # families: name stem -> branches of that family, one generation at a time
@@ -153,6 +157,12 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
                                      f"{point.parameter:.5g} found no point on side {sign} "
                                      f"(amplitudes {', '.join(f'{a:g}' for a in AMPLITUDES)} D)")
                         continue
+                    if fell_back(branch, point, D):
+                        notes.append(f"{name}: the switch from {parent.name} at dLk = "
+                                     f"{point.parameter:.5g} on side {sign} kept the "
+                                     f"symmetry of {parent.name} at every point: it fell "
+                                     "back onto that family, not kept")
+                        continue
                     branch = classify_contact_events(branch, cp)
                     branch = dataclasses.replace(branch, parent=parent.name, origin=point)
                     final(branch, True)
@@ -164,6 +174,21 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
                     next_families.append((name, [name]))
         families = next_families
     return _with(diagram, branches, contact_names, generations, seconds, notes)
+
+
+def fell_back(branch: Branch, point: SpecialPoint, diameter: float) -> bool:
+    """True when ``branch``, switched at a multiple eigenvalue (several critical
+    modes: a symmetry-breaking bifurcation), keeps the symmetry group of the state at
+    ``point`` (or the circle's, which contains it) at every one of its points: it is
+    the parent's family, not a new branch
+    (measured at L/D 122, N = 132: one side of B_1 ran back along beta without
+    contact to the circle, D_3 at every point, with beta's count)."""
+    if np.asarray(point.critical_modes).shape[0] < 2:
+        return False
+    tolerance = SYMMETRY_TOLERANCE * diameter
+    group = curve_symmetry(np.asarray(point.q).reshape(-1, 3), tolerance).group
+    return all(curve_symmetry(q.reshape(-1, 3), tolerance).group in (group, "O(2)")
+               for q in branch.states)
 
 
 def switch_direction(cp, point: SpecialPoint, diameter: float) -> np.ndarray | None:

@@ -439,7 +439,7 @@ class ContactProblem:
         if len(cand) == 0:
             empty = np.zeros(0)
             return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)
-        d, s, t = closest_samples(points, cand)
+        d, s, t = closest_samples(points, cand, cutoff)
         keep = d <= cutoff
         return PairState(cand[keep], d[keep], s[keep], t[keep])
 

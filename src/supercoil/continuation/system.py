@@ -25,6 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil.solvers.newton import _hessian
+from supercoil.solvers.patterns import csr_columns
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 
@@ -115,7 +116,7 @@ class ExtendedSystem:
         J = self.problem.constraint_jacobian(q)
         if J is not self._jacobian_source:
             self._jacobian_source = J
-            self._jacobian_free = J[:, self.free]
+            self._jacobian_free = csr_columns(J, self.free)
         return self._jacobian_free
 
     def _kkt_residual(self, q: np.ndarray, mu: np.ndarray) -> np.ndarray:

@@ -127,10 +127,17 @@ def test_depth_one_adds_nothing_and_bad_depths_are_refused(diagram):
     assert [roman(k) for k in (1, 2, 3, 4, 9, 14)] == ["I", "II", "III", "IV", "IX", "XIV"]
 
 
-def test_the_integral_gauge_keeps_beta_d3_where_a_pinned_node_breaks_it():
-    """N = 40 is not a multiple of 3, so no node pin is symmetric: pinned at one node the
-    beta branch leaves D_3 (and reaches contact elsewhere), while the integral phase
-    condition keeps it D_3 and its contact onset agrees with N = 48 (a multiple of 3)."""
+def test_beta_keeps_d3_at_n40_with_either_gauge():
+    """N = 40 is not a multiple of 3, so no node pin is symmetric; the beta branch
+    stays D_3 all the same with the integral phase condition and with a pinned node,
+    and its contact onset agrees with N = 48 (a multiple of 3).
+
+    With the central difference of the residual in the excess link (before the
+    analytic ``ClosedRodEnergy.parameter_derivative``) the node-pinned branch left
+    D_3 (0.63 D) and reached contact at dLk 1.877 instead of 1.788: the difference's
+    noise, not the pin's asymmetric reaction (measured 5e-6 D, as the integral
+    gauge's), broke the symmetry.
+    """
     from supercoil.geometry.symmetry import cyclic_residual
 
     def beta(n, gauge):
@@ -147,12 +154,10 @@ def test_the_integral_gauge_keeps_beta_d3_where_a_pinned_node_breaks_it():
     for n, gauge in ((48, "node"), (40, "integral"), (40, "node")):
         branch = beta(n, gauge)
         onset[n, gauge] = branch.points_of_kind("contact_onset")[0].parameter
-        if gauge == "integral":
+        if n == 40:
             assert worst_three_fold(branch) < 0.05
-        elif n == 40:
-            assert worst_three_fold(branch) > 0.2
     assert abs(onset[40, "integral"] - onset[48, "node"]) < 0.01
-    assert abs(onset[40, "node"] - onset[48, "node"]) > 0.05
+    assert abs(onset[40, "node"] - onset[48, "node"]) < 0.01
 
 
 def test_secondary_branches_are_dashed_in_the_diagram_and_in_supercoil_plot(diagram, tmp_path,

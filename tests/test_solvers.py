@@ -174,7 +174,7 @@ def test_pattern_sums_and_restrictions_equal_scipy_bit_for_bit(seed):
     """solvers.patterns (index maps remembered per pattern) against scipy's A + B and
     A[keep][:, keep]: cancelling entries dropped, explicit zeros and -0.0 as scipy has
     them, the same stored order; every call twice (the second from the memo)."""
-    from supercoil.solvers.patterns import csr_add, csr_restrict
+    from supercoil.solvers.patterns import csr_add, csr_columns, csr_restrict
 
     rng = np.random.default_rng(600 + seed)
     n = int(rng.integers(5, 80))
@@ -194,6 +194,24 @@ def test_pattern_sums_and_restrictions_equal_scipy_bit_for_bit(seed):
             assert _same_csr(csr_restrict(matrix.tocsr(), keep), matrix.tocsr()[keep][:, keep])
     shuffled = rng.permutation(keep)  # not sorted: scipy's own path
     assert _same_csr(csr_restrict(A, shuffled), A[shuffled][:, shuffled])
+    wide = sp.random(n // 2 + 1, n, density=0.2, random_state=seed + 9, format="csr")
+    wide.data[::5] = 0.0
+    for matrix in (wide, A):
+        for _ in range(2):
+            assert _same_csr(csr_columns(matrix, keep), matrix[:, keep].tocsr())
+        assert _same_csr(csr_columns(matrix, shuffled), matrix[:, shuffled].tocsr())
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_sorted_union_equals_numpy_union1d(seed):
+    from supercoil.solvers.patterns import sorted_union
+
+    rng = np.random.default_rng(seed)
+    for size_a, size_b in ((0, 0), (0, 7), (5, 0), (300, 500)):
+        a = rng.integers(0, 400, size_a)
+        b = rng.integers(0, 400, size_b)
+        got, expected = sorted_union(a, b), np.union1d(a, b)
+        assert got.dtype == expected.dtype and np.array_equal(got, expected)
 
 
 def test_rod_constraint_curvature_equals_the_coo_assembly():

@@ -271,9 +271,61 @@ def integral_terms(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray, pair
     return energy, grad, hess, force, param, dofs
 
 
+@njit()
+def _sample_points_kernel(x, stencil, weights, out):
+    k, q, w = weights.shape
+    for i in range(k):
+        for a in range(q):
+            for c in range(3):
+                total = 0.0
+                for l in range(w):
+                    total += weights[i, a, l] * x[stencil[i, l], c]
+                out[i, a, c] = total
+
+
 def sample_points(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """``(k, q, 3)`` sample points of every segment (or piece)."""
-    return np.einsum("kal,klx->kax", weights, np.asarray(x, dtype=float)[stencil])
+    """``(k, q, 3)`` sample points of every segment (or piece), summed over the stencil in
+    the order of :func:`_integral_kernel`."""
+    out = np.empty((weights.shape[0], weights.shape[1], 3))
+    _sample_points_kernel(np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3),
+                          np.ascontiguousarray(stencil, dtype=np.int64),
+                          np.ascontiguousarray(weights, dtype=np.float64), out)
+    return out
+
+
+@njit()
+def _first_time_kernel(p0, v, pairs, threshold):
+    """Smallest root over the sample pairs of ``pairs`` (see
+    :func:`first_time_of_approach_samples`); 0.0 as soon as one pair is within
+    ``threshold``, 1.0 when none comes that close."""
+    q = p0.shape[1]
+    t2 = threshold * threshold
+    best = 1.0
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        for a in range(q):
+            for b in range(q):
+                r0 = p0[i, a, 0] - p0[j, b, 0]
+                r1 = p0[i, a, 1] - p0[j, b, 1]
+                r2 = p0[i, a, 2] - p0[j, b, 2]
+                v0 = v[i, a, 0] - v[j, b, 0]
+                v1 = v[i, a, 1] - v[j, b, 1]
+                v2 = v[i, a, 2] - v[j, b, 2]
+                c = r0 * r0 + r1 * r1 + r2 * r2 - t2
+                if c <= 0.0:
+                    return 0.0
+                aa = v0 * v0 + v1 * v1 + v2 * v2
+                bb = 2.0 * (r0 * v0 + r1 * v1 + r2 * v2)
+                if aa <= 0.0 or bb >= 0.0:
+                    continue
+                disc = bb * bb - 4.0 * aa * c
+                if disc < 0.0:
+                    continue
+                # smaller root of aa tau^2 + bb tau + c, in the stable form
+                tau = 2.0 * c / (-bb + math.sqrt(disc))
+                best = min(best, tau)
+    return best
 
 
 def first_time_of_approach_samples(x0: np.ndarray, dx: np.ndarray, stencil: np.ndarray,
@@ -288,26 +340,12 @@ def first_time_of_approach_samples(x0: np.ndarray, dx: np.ndarray, stencil: np.n
     which crawls when strands slide along each other at small gaps). Returns
     1.0 when no pair gets that close, 0.0 when one already is.
     """
-    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     if len(pairs) == 0:
         return 1.0
     p0 = sample_points(x0, stencil, weights)
     v = sample_points(dx, stencil, weights)
-    r0 = p0[pairs[:, 0]][:, :, None, :] - p0[pairs[:, 1]][:, None, :, :]  # (m, q, q, 3)
-    rv = v[pairs[:, 0]][:, :, None, :] - v[pairs[:, 1]][:, None, :, :]
-    a = np.sum(rv * rv, axis=-1)
-    b = 2.0 * np.sum(r0 * rv, axis=-1)
-    c = np.sum(r0 * r0, axis=-1) - threshold * threshold
-    if np.any(c <= 0.0):
-        return 0.0
-    disc = b * b - 4.0 * a * c
-    hit = (a > 0.0) & (b < 0.0) & (disc >= 0.0)
-    if not hit.any():
-        return 1.0
-    root = np.sqrt(disc[hit])
-    # smaller root of a tau^2 + b tau + c, in the stable form 2c / (-b + sqrt(disc))
-    tau = 2.0 * c[hit] / (-b[hit] + root)
-    return float(min(1.0, np.min(tau)))
+    return float(_first_time_kernel(p0, v, pairs, float(threshold)))
 
 
 # Uniform quintic B-spline: weight of control point k (of six) on u^p, times 120.
@@ -415,15 +453,67 @@ def quintic_samples(segments: np.ndarray, closed: bool, samples: int
 
 
 @njit()
-def _closest_samples_kernel(points, pairs, d_out, a_out, b_out):
-    q = points.shape[1]
+def _bounding_spheres(points, centre, radius):
+    """Centroid ``(k, 3)`` of every segment's samples and their largest distance ``(k,)``."""
+    k, q, _ = points.shape
+    for i in range(k):
+        for c in range(3):
+            total = 0.0
+            for a in range(q):
+                total += points[i, a, c]
+            centre[i, c] = total / q
+        largest = 0.0
+        for a in range(q):
+            d0 = points[i, a, 0] - centre[i, 0]
+            d1 = points[i, a, 1] - centre[i, 1]
+            d2 = points[i, a, 2] - centre[i, 2]
+            dd = d0 * d0 + d1 * d1 + d2 * d2
+            largest = max(largest, dd)
+        radius[i] = math.sqrt(largest)
+
+
+@njit()
+def _closest_samples_kernel(points, pairs, cutoff, d_out, a_out, b_out):
+    """Closest sample points of each pair (first in row-major order among equals).
+
+    With a finite ``cutoff``, pairs whose samples all lie farther apart report
+    ``inf``: a bounding sphere of each segment's samples rules out whole pairs, and
+    rows ``a`` whose distance to the other sphere exceeds the best distance so far,
+    with a margin far above round-off so that no row that could hold a closer (or
+    equally close, earlier) sample pair is skipped.
+    """
+    k, q, _ = points.shape
+    centre = np.empty((k, 3))
+    radius = np.empty(k)
+    bounded = cutoff < np.inf
+    if bounded:
+        _bounding_spheres(points, centre, radius)
     for p in range(pairs.shape[0]):
         i = pairs[p, 0]
         j = pairs[p, 1]
         best = np.inf
         ba = 0
         bb = 0
+        if bounded:
+            margin = 1e-9 * (cutoff + radius[i] + radius[j])
+            c0 = centre[i, 0] - centre[j, 0]
+            c1 = centre[i, 1] - centre[j, 1]
+            c2 = centre[i, 2] - centre[j, 2]
+            if math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) - radius[i] - radius[j] > cutoff + margin:
+                d_out[p] = np.inf
+                a_out[p] = 0
+                b_out[p] = 0
+                continue
+            reach = cutoff + margin  # rows farther than this from sphere j hold no pair within it
         for a in range(q):
+            if bounded:
+                e0 = points[i, a, 0] - centre[j, 0]
+                e1 = points[i, a, 1] - centre[j, 1]
+                e2 = points[i, a, 2] - centre[j, 2]
+                row_bound = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2) - radius[j]
+                limit = reach if best == np.inf else min(reach, math.sqrt(best) + margin)
+                if row_bound > limit:
+                    continue
             for b in range(q):
                 d0 = points[i, a, 0] - points[j, b, 0]
                 d1 = points[i, a, 1] - points[j, b, 1]
@@ -433,31 +523,60 @@ def _closest_samples_kernel(points, pairs, d_out, a_out, b_out):
                     best = dd
                     ba = a
                     bb = b
-        d_out[p] = math.sqrt(best)
+        d = math.sqrt(best)
+        if bounded and d > cutoff:
+            d = np.inf
+        d_out[p] = d
         a_out[p] = ba
         b_out[p] = bb
 
 
-def closest_samples(points: np.ndarray, pairs: np.ndarray):
+def closest_samples(points: np.ndarray, pairs: np.ndarray, cutoff: float = np.inf):
     """``(d, s, t)`` ``(m,)``: the closest sample points of each pair of segments, their
-    distance and parameters along the segments; ``points`` ``(k, q, 3)``."""
+    distance and parameters along the segments; ``points`` ``(k, q, 3)``.
+
+    With a finite ``cutoff`` only pairs within it are resolved: the others report
+    ``d = inf`` (and parameters of no meaning), and are found faster (bounding spheres).
+    """
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     m = len(pairs)
     d = np.zeros(m)
     a = np.zeros(m, dtype=np.int64)
     b = np.zeros(m, dtype=np.int64)
     if m:
-        _closest_samples_kernel(np.ascontiguousarray(points, dtype=np.float64), pairs, d, a, b)
+        _closest_samples_kernel(np.ascontiguousarray(points, dtype=np.float64), pairs,
+                                float(cutoff), d, a, b)
     q = points.shape[1]
     return d, (a + 0.5) / q, (b + 0.5) / q
+
+
+@njit()
+def _chord_deviation_kernel(points, starts, ends, out):
+    k, q, _ = points.shape
+    for i in range(k):
+        e0 = ends[i, 0] - starts[i, 0]
+        e1 = ends[i, 1] - starts[i, 1]
+        e2 = ends[i, 2] - starts[i, 2]
+        length2 = max(e0 * e0 + e1 * e1 + e2 * e2, 1e-300)
+        largest = 0.0
+        for a in range(q):
+            r0 = points[i, a, 0] - starts[i, 0]
+            r1 = points[i, a, 1] - starts[i, 1]
+            r2 = points[i, a, 2] - starts[i, 2]
+            t = min(1.0, max(0.0, (r0 * e0 + r1 * e1 + r2 * e2) / length2))
+            f0 = r0 - t * e0
+            f1 = r1 - t * e1
+            f2 = r2 - t * e2
+            dd = f0 * f0 + f1 * f1 + f2 * f2
+            largest = max(largest, dd)
+        out[i] = math.sqrt(largest)
 
 
 def chord_deviation(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """``(k,)`` largest distance of a segment's sample points ``(k, q, 3)`` from the
     segment ``starts[i] -> ends[i]`` (zero on the polygon)."""
-    e = ends - starts
-    length2 = np.maximum(np.sum(e * e, axis=1), 1e-300)
-    t = np.clip(np.einsum("kqx,kx->kq", points - starts[:, None, :], e) / length2[:, None],
-                0.0, 1.0)
-    foot = starts[:, None, :] + t[..., None] * e[:, None, :]
-    return np.sqrt(np.max(np.sum((points - foot) ** 2, axis=-1), axis=1))
+    out = np.zeros(points.shape[0])
+    _chord_deviation_kernel(np.ascontiguousarray(points, dtype=np.float64),
+                            np.ascontiguousarray(starts, dtype=np.float64),
+                            np.ascontiguousarray(ends, dtype=np.float64), out)
+    return out

@@ -439,7 +439,7 @@ class ContactProblem:
         if len(cand) == 0:
             empty = np.zeros(0)
             return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)
-        d, s, t = closest_samples(points, cand)
+        d, s, t = closest_samples(points, cand, cutoff)
         keep = d <= cutoff
         return PairState(cand[keep], d[keep], s[keep], t[keep])
 
@@ -691,6 +691,19 @@ class ContactProblem:
 
     def accept(self, q: np.ndarray) -> None:
         self.base.accept(q)
+
+    def parameter_derivative(self, q: np.ndarray, multipliers: np.ndarray,
+                             parameter: str) -> np.ndarray | None:
+        """The rod's ``parameter_derivative`` (None if it has none for ``parameter``),
+        zero on the contact constraints: the contact terms depend on ``q`` alone."""
+        derivative = getattr(self.base, "parameter_derivative", None)
+        m0 = self.base.n_constraints
+        full = None if derivative is None else derivative(
+            q, np.asarray(multipliers, dtype=float)[:m0], parameter)
+        if full is None:
+            return None
+        return np.concatenate([np.asarray(full, dtype=float),
+                               np.zeros(self.n_constraints - m0)])
 
     # ---------------------------------------------------- step guard (CCD)
     def admissible(self, q: np.ndarray) -> bool:

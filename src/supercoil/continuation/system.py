@@ -15,7 +15,7 @@ with ``S`` the problem's symmetry modes at the branch start (see
 
 and its parameter derivative ``F_lambda`` comes from the problem's optional
 ``parameter_derivative(q, multipliers, name)`` (``(n_dofs + n_constraints,)``,
-on all DOFs) or else from a central difference with step
+on all DOFs; None for a parameter it does not know) or else from a central difference with step
 ``finite_difference_step * max(1, |lambda|)`` (error ``O(step^2)``).
 """
 
@@ -25,6 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil.solvers.newton import _hessian
+from supercoil.solvers.patterns import csr_columns
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 
@@ -115,7 +116,7 @@ class ExtendedSystem:
         J = self.problem.constraint_jacobian(q)
         if J is not self._jacobian_source:
             self._jacobian_source = J
-            self._jacobian_free = J[:, self.free]
+            self._jacobian_free = csr_columns(J, self.free)
         return self._jacobian_free
 
     def _kkt_residual(self, q: np.ndarray, mu: np.ndarray) -> np.ndarray:
@@ -163,9 +164,12 @@ class ExtendedSystem:
         mu = x[self.n:self.n + self.m]
         p = self.problem
         derivative = getattr(p, "parameter_derivative", None)
+        full = None
         if derivative is not None:
             self.set_parameter(lam)
-            full = np.asarray(derivative(q, mu, self.parameter), dtype=float)
+            full = derivative(q, mu, self.parameter)
+        if full is not None:
+            full = np.asarray(full, dtype=float)
             out = np.concatenate([full[self.free], full[p.n_dofs:p.n_dofs + self.m]])
         else:
             step = self.fd_step * max(1.0, abs(lam))

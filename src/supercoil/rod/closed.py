@@ -374,6 +374,27 @@ class ClosedRodEnergy(RodEnergy):
     def twist_offset(self) -> float:
         return self.excess_link - self.reference_link
 
+    def parameter_derivative(self, q: np.ndarray, multipliers: np.ndarray,
+                             parameter: str) -> np.ndarray | None:
+        """``d/d excess_link`` of the KKT residual ``[gradient; constraints]``
+        ``(n_dofs + n_constraints,)``; None for another parameter (the caller then
+        differentiates numerically).
+
+        Only the twist term depends on the excess link: ``Tw = dLk - Lk_u + Phi / 2pi``
+        enters the gradient as ``k Tw grad(Phi) / 2pi`` (:meth:`gradient`), so the
+        derivative is ``k grad(Phi) / 2pi``; the constraints do not depend on it.
+        """
+        if parameter != "excess_link":
+            return None
+        key = _key(q)
+        cached = self._gradient_cache
+        if cached is not None and cached[0] == key:
+            twist_gradient = cached[3]
+        else:
+            twist_gradient = self._pattern.scatter_vector(self._twist_terms(q, 1)[1])
+        derivative = (self._twist_coefficient / (2 * np.pi)) * twist_gradient
+        return np.concatenate([derivative, np.zeros(self.n_constraints)])
+
     def repin(self, q: np.ndarray) -> None:
         """Re-pick the six rigid-motion pins (:func:`rigid_pins`) for the state ``q``.
 

@@ -14,7 +14,7 @@ pattern:
   scipy's merge does);
 * :func:`csr_restrict` is ``A[keep][:, keep]`` for sorted unique ``keep``:
   the kept entries of each kept row in their stored order, explicit zeros
-  included.
+  included; :func:`csr_columns` is ``A[:, keep]`` likewise.
 
 Anything else (other formats, unsorted or duplicate indices) goes to scipy.
 """
@@ -86,6 +86,23 @@ def _is_canonical_csr(A) -> bool:
     return getattr(A, "format", None) == "csr" and A.has_canonical_format
 
 
+def sorted_union(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.union1d(a, b)`` for integer arrays: their sorted distinct values.
+
+    By a sort of the concatenation; numpy 2's ``union1d`` (through the hash-based
+    ``unique``) took 20 times longer on the Hessian patterns of a contact branch
+    (measured 2.8 ms against 0.13 ms for 12 000 and 20 000 keys).
+    """
+    keys = np.concatenate([a, b])
+    keys.sort()
+    if keys.size == 0:
+        return keys
+    first = np.empty(keys.size, dtype=bool)
+    first[0] = True
+    np.not_equal(keys[1:], keys[:-1], out=first[1:])
+    return keys[first]
+
+
 def csr_add(A: sp.csr_matrix, B: sp.spmatrix) -> sp.csr_matrix:
     """``(A + B).tocsr()`` (see module doc)."""
     if not (_is_canonical_csr(A) and _is_canonical_csr(B)) or A.shape != B.shape \
@@ -99,7 +116,7 @@ def csr_add(A: sp.csr_matrix, B: sp.spmatrix) -> sp.csr_matrix:
             + A.indices
         key_b = np.repeat(np.arange(n_rows, dtype=np.int64), np.diff(B.indptr)) * n_cols \
             + B.indices
-        union = np.union1d(key_a, key_b)
+        union = sorted_union(key_a, key_b)
         maps = (np.searchsorted(union, key_a), np.searchsorted(union, key_b),
                 union // n_cols, (union % n_cols).astype(A.indices.dtype), union.size)
         _ADD_MEMO.put(key, maps)
@@ -135,3 +152,30 @@ def csr_restrict(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
     selected, indices, indptr = maps
     return sp.csr_matrix((A.data[selected], indices.copy(), indptr.copy()),
                          shape=(keep.size, keep.size))
+
+
+_COLUMNS_MEMO = PatternMemo()
+
+
+def csr_columns(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
+    """``A[:, keep]`` as CSR for sorted unique ``keep`` (explicit zeros kept, the stored
+    order of each row unchanged); anything else goes to scipy."""
+    keep = np.asarray(keep)
+    if getattr(A, "format", None) != "csr" or keep.ndim != 1 or keep.dtype.kind not in "iu" \
+            or (keep.size > 1 and not np.all(np.diff(keep) > 0)) \
+            or (keep.size and (keep[0] < 0 or keep[-1] >= A.shape[1])):
+        return A[:, keep].tocsr()
+    key = (_pattern_key(A), keep.tobytes())
+    maps = _COLUMNS_MEMO.get(key)
+    if maps is None:
+        new = np.full(A.shape[1], -1, dtype=np.int64)
+        new[keep] = np.arange(keep.size)
+        selected = np.flatnonzero(new[A.indices] >= 0)
+        rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))[selected]
+        indptr = np.zeros(A.shape[0] + 1, dtype=A.indptr.dtype)
+        np.cumsum(np.bincount(rows, minlength=A.shape[0]), out=indptr[1:])
+        maps = (selected, new[A.indices[selected]].astype(A.indices.dtype), indptr)
+        _COLUMNS_MEMO.put(key, maps)
+    selected, indices, indptr = maps
+    return sp.csr_matrix((A.data[selected], indices.copy(), indptr.copy()),
+                         shape=(A.shape[0], keep.size))

@@ -399,3 +399,16 @@ def test_repin_picks_the_best_rigid_pins_and_keeps_the_state():
     points = q.reshape(-1, 3)
     assert rotation_pin_determinant(points, rod.fixed) > 0
     assert rotation_pin_determinant(points, np.array([0, 1, 2, 3, 4])) == 0.0
+
+
+def test_a_mesh_without_a_modes_symmetry_is_noted():
+    """N = 50 is not a multiple of 3: beta's D_3 is not a symmetry of the mesh, and the
+    diagram says so (with the multiple to use); N = 48 is, and says nothing."""
+    def notes(n):
+        options = DiagramOptions(2 / 3, 40.0, n_nodes=n, modes=(2, 3), max_excess_link=1.0,
+                                 free_max_points=3, contact_max_points=2)
+        return [note for note in ring_diagram(options).notes if "not a multiple" in note]
+
+    (note,) = notes(50)
+    assert note.startswith("N = 50 is not a multiple of 3:") and note.endswith("of 6")
+    assert notes(48) == []

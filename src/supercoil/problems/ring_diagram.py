@@ -652,6 +652,13 @@ def ring_diagram(options: DiagramOptions,
         notes.append(f"segments ({problem.rod.edge_length:.3g} L) are longer than the tube "
                      f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "
                      f"{int(np.ceil(problem.rod.length / D))}")
+    asymmetric = [m for m in opts.modes if opts.n_nodes % m]
+    if asymmetric:
+        notes.append(f"N = {opts.n_nodes} is not a multiple of "
+                     f"{', '.join(map(str, asymmetric))}: the mesh lacks the D_m symmetry of "
+                     f"those primary branches, so their symmetry-breaking bifurcations (seed "
+                     f"001's P on beta) unfold into folds; use --nodes a multiple of "
+                     f"{math.lcm(*opts.modes)}")
     circle_records = _contact_records(probe, ring_records(problem), free=True)
     circle = _with_records(circle, problem, circle_records)
     final(circle, False)

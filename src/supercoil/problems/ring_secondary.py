@@ -24,9 +24,14 @@ point lies on and ``origin`` that point.
 A half-branch whose start fails at every amplitude in ``AMPLITUDES`` (times
 D) is not kept; a note says so (at a bifurcation point inside a contact the
 predictor along one side of the critical mode can push a pair into contact at
-once, which collision detection refuses). Whether a half-branch is new is not
-decided here: the switch starts on the hyperplane orthogonal to the parent's
-tangent, so it cannot fall back at its first point. The per-point symmetry
+once, which collision detection refuses). The switch starts on the hyperplane
+orthogonal to the parent's tangent, so it cannot fall back at its first point,
+but it can run back onto the parent's family later: after a switch at a
+double eigenvalue (a symmetry-breaking bifurcation), a half-branch that keeps
+the parent's symmetry at every point (:func:`fell_back`) is noted as such and
+not switched from again. At a double eigenvalue the switch goes along the
+combination of the critical modes that keeps a two-fold axis
+(:func:`switch_direction`). The per-point symmetry
 (:meth:`RingDiagram.points`, ``symmetry``) tells the branches apart once they
 have left the bifurcation point by more than the symmetry tolerance (0.05 D):
 closer to it a secondary point still carries its parent's label.
@@ -157,12 +162,13 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
                                      f"{point.parameter:.5g} found no point on side {sign} "
                                      f"(amplitudes {', '.join(f'{a:g}' for a in AMPLITUDES)} D)")
                         continue
-                    if fell_back(branch, point, D):
+                    back = fell_back(branch, point, D)
+                    if back:
                         notes.append(f"{name}: the switch from {parent.name} at dLk = "
                                      f"{point.parameter:.5g} on side {sign} kept the "
                                      f"symmetry of {parent.name} at every point: it fell "
-                                     "back onto that family, not kept")
-                        continue
+                                     "back onto that family (kept as computed, not "
+                                     "switched from)")
                     branch = classify_contact_events(branch, cp)
                     branch = dataclasses.replace(branch, parent=parent.name, origin=point)
                     final(branch, True)
@@ -171,7 +177,8 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
                     contact_names.add(name)
                     generations[name] = generation
                     added += 1
-                    next_families.append((name, [name]))
+                    if not back:
+                        next_families.append((name, [name]))
         families = next_families
     return _with(diagram, branches, contact_names, generations, seconds, notes)
 

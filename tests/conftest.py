@@ -33,3 +33,21 @@ def smooth_closed_curve(n_nodes: int, length: float = 1.0, wobble: float = 0.3) 
 @pytest.fixture
 def rng():
     return np.random.default_rng(20261122)
+
+
+def split_into_halves(A):
+    """``A`` (sparse) as a CSR matrix that stores every entry twice, each half of it: not
+    in canonical format, so code that sums duplicates (scipy's ``bmat``) and code that
+    reads the raw arrays can be compared on it."""
+    import scipy.sparse as sp
+
+    coo = A.tocoo()
+    n = A.shape[0]
+    rows = np.concatenate([coo.row, coo.row])
+    by_row = np.argsort(rows, kind="stable")
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
+    out = sp.csr_matrix((np.concatenate([coo.data, coo.data])[by_row] / 2,
+                         np.concatenate([coo.col, coo.col])[by_row], indptr), shape=A.shape)
+    assert not out.has_canonical_format
+    return out
+

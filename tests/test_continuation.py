@@ -178,6 +178,7 @@ def test_permuted_bordered_matrix_equals_bmat_and_fancy_indexing(seed):
     and fancy indexing (the previous code): the same stored entries (explicit zeros
     of H and J kept, zeros of the dense border dropped), bit for bit."""
     import scipy.sparse as sp
+    from conftest import split_into_halves
 
     from supercoil.continuation.bordered import _permuted_bordered
     from supercoil.solvers.kkt import kkt_order
@@ -195,13 +196,7 @@ def test_permuted_bordered_matrix_equals_bmat_and_fancy_indexing(seed):
     row[1::4] = -0.0
     corner = 0.0 if seed % 2 else 1.5
     if seed == 3:  # every entry stored as two halves (not canonical): bmat sums them
-        coo = H.tocoo()
-        rows = np.concatenate([coo.row, coo.row])
-        by_row = np.argsort(rows, kind="stable")
-        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
-        H = sp.csr_matrix((np.concatenate([coo.data, coo.data])[by_row] / 2,
-                           np.concatenate([coo.col, coo.col])[by_row], indptr), shape=H.shape)
-        assert not H.has_canonical_format
+        H = split_into_halves(H)
     order = np.concatenate([kkt_order(H, J), [n + m]])
     B = sp.bmat([[sp.bmat([[H, J.T], [J, None]]), sp.csr_matrix(column[:, None])],
                  [sp.csr_matrix(row[None, :]), sp.csr_matrix([[corner]])]], format="csc")

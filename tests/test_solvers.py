@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from conftest import smooth_closed_curve
+from conftest import smooth_closed_curve, split_into_halves
 
 from supercoil.problems.ring import twisted_circle_problem
 from supercoil.solvers.band import symmetric_inertia
@@ -142,13 +142,7 @@ def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
     J = J.tocsr()
     J.data[::4] = 0.0
     if seed == 3:  # every entry stored as two halves (not canonical): bmat sums them
-        coo = S.tocoo()
-        rows = np.concatenate([coo.row, coo.row])
-        by_row = np.argsort(rows, kind="stable")
-        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
-        S = sp.csr_matrix((np.concatenate([coo.data, coo.data])[by_row] / 2,
-                           np.concatenate([coo.col, coo.col])[by_row], indptr), shape=S.shape)
-        assert not S.has_canonical_format
+        S = split_into_halves(S)
     factor = KKTFactor(HessianParts(S), J)
     order = kkt_order(S, J)
     lu = splu(sp.bmat([[S, J.T], [J, None]], format="csr")[order][:, order].tocsc(),

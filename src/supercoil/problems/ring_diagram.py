@@ -116,6 +116,7 @@ branch replays them, and the ring's own pins are restored afterwards.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import time
@@ -738,9 +739,8 @@ def ring_diagram(options: DiagramOptions,
         old, complete = stored.get(contact_name, (None, False))
         if complete:
             contact = old
-            saved = (cp.base.fixed, cp.base.gauge_dofs, cp.fixed)
-            pins[contact_name] = tuple(replayed_pins(cp, old.states))
-            cp.base.fixed, cp.base.gauge_dofs, cp.fixed = saved
+            with _pins_restored(cp):
+                pins[contact_name] = tuple(replayed_pins(cp, old.states))
         else:
             contact, pins[contact_name] = _contact_branch(cp, free.states[k], old,
                                                           contact_opts, contact_name, on_point)
@@ -768,6 +768,17 @@ def ring_diagram(options: DiagramOptions,
     return diagram
 
 
+@contextlib.contextmanager
+def _pins_restored(cp: ContactProblem):
+    """Restore the ring's rigid pins (on the rod and its contact wrapper) on exit."""
+    rod = cp.base
+    saved = (rod.fixed, rod.gauge_dofs, cp.fixed)
+    try:
+        yield
+    finally:
+        rod.fixed, rod.gauge_dofs, cp.fixed = saved
+
+
 def replayed_pins(cp: ContactProblem, states: np.ndarray
                   ) -> list[tuple[int, tuple[int, ...]]]:
     """The rigid pins of a contact branch computed by :func:`_contact_branch` without
@@ -792,12 +803,11 @@ def _contact_branch(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
     "Rigid pins"), and its pins (:attr:`RingDiagram.pins`); the ring's construction pins
     are restored afterwards."""
     rod = cp.base
-    saved = (rod.fixed, rod.gauge_dofs, cp.fixed)
     records = _contact_records(cp, ring_records(cp), free=False)
     events = (contact_count_event(cp),)
     first_opts = dataclasses.replace(options, max_points=min(CONTACT_SEGMENT_POINTS,
                                                              options.max_points))
-    try:
+    with _pins_restored(cp):
         if old is not None and len(old):
             # the pins the interrupted run had; a resumed run's later boundaries
             # are counted from the point it resumed at
@@ -815,8 +825,6 @@ def _contact_branch(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
                                max_points=options.max_points,
                                segment_points=CONTACT_SEGMENT_POINTS, on_point=on_point,
                                quality=PIN_QUALITY)
-    finally:
-        rod.fixed, rod.gauge_dofs, cp.fixed = saved
     # follow reports the rod's gauge_dofs, which are all six pins for a ring
     return branch, tuple(earlier) + tuple((i, d) for i, d in later if i > 0)
 

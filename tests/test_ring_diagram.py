@@ -117,14 +117,22 @@ def test_sliding_residual_is_the_unpinned_kkt_residual(diagram):
     assert free[0] and np.all(contact.records["sliding_residual"][free] < 1e-8)
 
 
-@pytest.mark.xfail(strict=True, reason="contact branches are equilibria only with the "
-                   "material sliding held by the gauge: the discrete contact (the integral on "
-                   "the spline too, far less than the pair sum on the polygon) pushes the "
-                   "material along the rod (ring_diagram's docs, 'Material sliding')")
 def test_contact_branch_states_are_equilibria_without_the_gauge(diagram):
+    """The primary branch is switched off the circle with a two-fold axis through node 0
+    and followed with pins the half-turn about that axis maps onto themselves
+    (rod.closed.rigid_pins), so every state keeps the axis exactly; the sliding mode
+    is odd under it and the energy gradient even, so the discrete contact cannot push
+    the material along the rod, and the states are equilibria without the gauge
+    (before the axis was on the mesh, the sliding force was up to 5e-3 here).
+    Oracles: the symmetry to round-off, and the KKT residual without the gauge."""
+    from supercoil.geometry.symmetry import reversal_residuals
+
+    contact = diagram.branch("alpha_contact")
+    for q in contact.states:
+        assert reversal_residuals(q.reshape(-1, 3), [0.0], direct=True)[0] < 1e-9
     base = _problem()
     cp = ContactProblem(base, OPTIONS.contact_options(OPTIONS.diameter))
-    report = consistency_check(diagram.branch("alpha_contact"), cp, residual_tolerance=1e-6,
+    report = consistency_check(contact, cp, residual_tolerance=1e-6,
                                pin=lambda i, s: diagram.pin_branch("alpha_contact", i, s, cp))
     assert not [p for p in report.problems if "KKT residual" in p]
 
@@ -399,6 +407,39 @@ def test_repin_picks_the_best_rigid_pins_and_keeps_the_state():
     points = q.reshape(-1, 3)
     assert rotation_pin_determinant(points, rod.fixed) > 0
     assert rotation_pin_determinant(points, np.array([0, 1, 2, 3, 4])) == 0.0
+    assert rotation_pin_determinant(points, np.array([0, 1, 2, 3, 4, 5])) < 1e-15
+
+
+def test_rigid_pins_of_a_state_with_an_axis_through_node_0_are_equivariant():
+    """rod.closed.rigid_pins: on a state with a two-fold axis along x through node 0
+    (x_i = R x_{-i}, R the half-turn), the pinned DOFs are mapped onto themselves by
+    that map (nodes 0 and n/2 onto themselves, k onto n - k, the same coordinate), and
+    they remove every rigid motion (the 6 x 6 determinant, brute force over the six
+    rigid motions, against rotation_pin_determinant); a perturbed state without the
+    axis keeps node 0 fully pinned."""
+    from supercoil.rod.closed import rigid_pins, rotation_pin_determinant
+
+    n = 60
+    s = 2 * np.pi * np.arange(n) / n
+    # a symmetric figure-eight-like curve: x even, y and z odd in s about node 0
+    points = np.c_[np.cos(s) + 0.3 * np.cos(2 * s), np.sin(s), 0.4 * np.sin(2 * s)]
+    flip = np.array([1.0, -1.0, -1.0])
+    points = 0.5 * (points + points[(-np.arange(n)) % n] * flip)  # exactly symmetric
+    assert np.array_equal(points[(-np.arange(n)) % n] * flip, points)
+    pins = rigid_pins(points)
+    mapped = {3 * ((-(d // 3)) % n) + d % 3 for d in pins}
+    assert mapped == set(int(d) for d in pins)
+    rows = []
+    for d in pins:
+        node, k = divmod(int(d), 3)
+        e = np.eye(3)[k]
+        motions = [np.eye(3)[t] @ e for t in range(3)]  # translations
+        motions += [np.cross(np.eye(3)[a], points[node] - points[0]) @ e for a in range(3)]
+        rows.append(motions)
+    det = abs(np.linalg.det(np.array(rows)))
+    assert det > 0 and det == pytest.approx(rotation_pin_determinant(points, pins), rel=1e-12)
+    rng = np.random.default_rng(0)
+    assert list(rigid_pins(points + 1e-3 * rng.standard_normal(points.shape))[:3]) == [0, 1, 2]
 
 
 def test_a_mesh_without_a_modes_symmetry_is_noted():

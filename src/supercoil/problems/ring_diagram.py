@@ -97,7 +97,14 @@ still counts a contact a varying number of times across piece junctions:
 measured in docs/benchmarks.md ("Spline contact"). The default, the double
 integral on the spline (``contact_formulation="integral"``), keeps the sliding
 force below about 3e-3 on alpha up to ``dLk`` 6 (N = 200), against up to 27 with
-the pair sum; the gauge is still needed.
+the pair sum. On a state with a two-fold axis that is a symmetry of the mesh (through
+a node or an edge midpoint) the force vanishes: the sliding mode is odd under the
+axis and the gradient even. The primary branches are switched off the circle with
+an axis through node 0 (:func:`on_mesh_direction`) and followed with rigid pins that
+this axis maps onto themselves (:func:`~supercoil.rod.closed.rigid_pins`), so they
+keep it to round-off and their states are equilibria without the gauge
+(tests/test_ring_diagram.py); states without such an axis (tertiary branches) still
+need it.
 
 Rigid pins on contact branches. The ring removes its rigid motions by fixing
 six DOFs (``ClosedRodEnergy.fixed``, chosen on the circle). As alpha folds into
@@ -142,7 +149,7 @@ from supercoil.continuation import (
 )
 from supercoil.continuation.branch import jsonable
 from supercoil.continuation.resume import resume_branch
-from supercoil.geometry.symmetry import curve_symmetry
+from supercoil.geometry.symmetry import axis_invariant_combination, curve_symmetry
 from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_branches import PRIMARY_NAMES, circle_branch, ring_records
 from supercoil.problems.ring_contact import validate_diameter
@@ -841,12 +848,14 @@ def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
     amplitudes are tried, in that order. The last attempt is returned anyway.
     """
     records = _contact_records(probe, ring_records(problem), free=True)
+    direction = on_mesh_direction(problem, point)
     attempts = [(a, side) for a in SWITCH_AMPLITUDES for side in (1, -1)]
     for number, (amplitude, side) in enumerate(attempts):
         trial_opts = dataclasses.replace(options, max_points=SWITCH_TRIAL_POINTS,
                                          initial_step=amplitude)
         trial = switch_branch(problem, circle, point, trial_opts, side=side,
-                              amplitude=amplitude, name=name, records=records)
+                              amplitude=amplitude, name=name, records=records,
+                              direction=direction)
         wr = np.abs(trial.records.get("writhe", np.zeros(0)))
         leaves = wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0]
         if leaves or number == len(attempts) - 1:
@@ -859,8 +868,35 @@ def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
             opts = dataclasses.replace(options, initial_step=amplitude)
             return switch_branch(problem, circle, point, opts, side=side, amplitude=amplitude,
                                  name=name, records=records, events=(onset_event(probe),),
-                                 on_point=on_point)
+                                 on_point=on_point, direction=direction)
     raise AssertionError("unreachable")
+
+
+def on_mesh_direction(problem, point: SpecialPoint) -> np.ndarray | None:
+    """The combination of a circle bifurcation's two critical modes (``cos m theta``,
+    ``sin m theta``: the circle's O(2) makes the eigenvalue double) whose two-fold axis
+    passes through node 0 (``c = 0`` of :func:`~supercoil.geometry.symmetry.reversal_axes`),
+    a full DOF vector; None for a simple eigenvalue.
+
+    On the discrete ring the map ``x_i -> R x_{c - i}`` is an exact symmetry only for
+    an integer ``c`` (an axis through a node or an edge midpoint); the switch picks
+    the axis, and the continuation (equivariant, the integral phase row included)
+    keeps it: measured at L/D 122, N = 132, beta with the axis at ``c = 0`` kept it to
+    1e-11 D up to dLk 6, where the modes' own combination put it at ``c = 22.03``
+    (``22 + 0.03``) and the axes drifted to ``0.11`` off the mesh. An axis off the
+    mesh is a symmetry of no discrete problem: the secondary branches' C_2 was then
+    approximate, and their symmetry-breaking bifurcations (seed 001's S) unfolded into
+    smooth turns from C_2 to C_1. With ``m`` dividing ``N`` all ``m`` axes of a D_m
+    branch are on the mesh.
+    """
+    modes = np.asarray(point.critical_modes, dtype=float)
+    if modes.ndim != 2 or modes.shape[0] < 2:
+        return None
+    x = np.asarray(point.q, dtype=float).reshape(-1, 3)
+    fields = modes.reshape(modes.shape[0], -1, 3)
+    mass = np.asarray(problem.mass, dtype=float).reshape(-1, 3)[:, 0]
+    a = axis_invariant_combination(x, 0.0, fields, mass)
+    return a @ modes
 
 
 def _with_records(branch: Branch, problem, records) -> Branch:

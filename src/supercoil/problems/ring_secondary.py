@@ -215,7 +215,11 @@ def switch_direction(cp, point: SpecialPoint, diameter: float) -> np.ndarray | N
         return None
     mass = np.asarray(cp.mass, dtype=float).reshape(-1, 3)[:, 0]
     fields = modes.reshape(modes.shape[0], -1, 3)
-    a = axis_invariant_combination(x, axes[0][0], fields, mass)
+    # the axis through node 0 (c = 0 mod n) when there is one: the rigid pins keep that
+    # axis an exact symmetry of the discrete problem (rod.closed.rigid_pins)
+    n = x.shape[0]
+    c = min(axes, key=lambda axis: min(axis[0] % n, n - axis[0] % n))[0]
+    a = axis_invariant_combination(x, c, fields, mass)
     return (a @ modes.reshape(modes.shape[0], -1)).ravel()
 
 

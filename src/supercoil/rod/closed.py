@@ -513,55 +513,121 @@ class ClosedRodEnergy(RodEnergy):
 
 
 def rotation_pin_determinant(points: np.ndarray, pins: np.ndarray) -> float:
-    """``|det|`` of the response of the pinned coordinates beyond node 0 to infinitesimal
-    rotations about node 0: ``rows (r_i x e_k)`` for each pinned DOF ``3 i + k``.
+    """``|det|`` of the response of the six pinned coordinates to the rigid motions:
+    row ``(e_k, r_i x e_k)`` for each pinned DOF ``3 i + k`` (translations, then
+    rotations about node 0; ``r_i = x_i - x_0``).
 
-    Zero when the pins do not remove some rotation; it scales as ``|r|^3``.
+    Zero when the pins do not remove some rigid motion (or are not six); it scales as
+    ``|r|^3``. With node 0 fully pinned it is the ``|det|`` of the three other rows'
+    rotation parts.
     """
     x = np.asarray(points, dtype=float).reshape(-1, 3)
-    rows = []
-    for dof in np.asarray(pins, dtype=np.int64):
-        node, k = divmod(int(dof), 3)
-        if node == 0:
-            continue
-        e = np.zeros(3)
-        e[k] = 1.0
-        rows.append(np.cross(x[node] - x[0], e))
-    if len(rows) != 3:
+    pins = np.asarray(pins, dtype=np.int64)
+    if pins.size != 6:
         return 0.0
-    return float(abs(np.linalg.det(np.array(rows))))
+    return float(abs(np.linalg.det(_rigid_rows(x, pins))))
+
+
+def _rigid_rows(points: np.ndarray, dofs) -> np.ndarray:
+    """Rows ``(e_k, (x_i - x_0) x e_k)`` of the DOFs ``3 i + k``, ``(len(dofs), 6)``."""
+    dofs = np.asarray(dofs, dtype=np.int64)
+    node, k = np.divmod(dofs, 3)
+    unit = np.eye(3)[k]
+    return np.hstack([unit, np.cross(points[node] - points[0], unit)])
+
+
+# the equivariant pins (rigid_pins) are taken when they remove rotations at least this
+# well relative to the best of all candidate sets
+EQUIVARIANT_PIN_QUALITY = 0.25
 
 
 def rigid_pins(points: np.ndarray) -> np.ndarray:
     """Six DOF indices whose fixing removes the rigid motions of a free body.
 
-    Node 0 is fixed (translations); three coordinates of two far nodes are
-    chosen to maximise ``|det|`` of their response to infinitesimal rotations
+    By default node 0 is fixed (translations) and three coordinates of far nodes
+    are chosen to maximise ``|det|`` of their response to infinitesimal rotations
     about node 0 (:func:`rotation_pin_determinant`; so rotations are removed
     as well as the geometry allows).
     At an equilibrium the rigid motions are null vectors of the Hessian, so
     fixing these DOFs restricts the Hessian to a complement of the rigid modes
     and leaves its inertia unchanged.
+
+    Equivariant pins. For an even number of nodes and a state that the two-fold map
+    ``x_i -> R x_{-i}`` (``R`` the half-turn about the line through node 0 along
+    ``x``) leaves unchanged (:func:`_axis_through_node_0`), the six are taken, when
+    they reach ``EQUIVARIANT_PIN_QUALITY`` of the best determinant, among sets
+    that this map maps onto themselves (:func:`_equivariant_sets`). On the
+    circle (node 0 on the ``x`` axis, :func:`~supercoil.geometry.curves.circle`)
+    that line is the two-fold axis through nodes 0 and ``n/2``
+    (:func:`~supercoil.problems.ring_diagram.on_mesh_direction` switches the
+    primary branches along it). With such pins the pinned equations are
+    equivariant, so a state symmetric about that axis stays exactly so along a
+    branch; with others the pins turn the axis a little at each step, the
+    integral phase condition (invariant to rotations only to first order) then
+    slides the material, and the symmetry is lost by ``O(step^2)`` per step
+    (measured: alpha, N = 200, the axis 0.01 node spacings off the mesh by
+    dLk 6), which unfolds the symmetry-breaking bifurcations of secondary
+    branches.
     """
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
-    candidates = []
-    for node in (n // 3, (2 * n) // 3, n // 2, n // 6):
-        r = points[node] - points[0]
-        for k in range(3):
-            e = np.zeros(3)
-            e[k] = 1.0
-            candidates.append((3 * node + k, np.cross(r, e)))
+    candidates = [3 * node + k for node in (n // 3, (2 * n) // 3, n // 2, n // 6)
+                  for k in range(3)]
     best, best_det = None, -1.0
     for a in range(len(candidates)):
         for b in range(a + 1, len(candidates)):
             for c in range(b + 1, len(candidates)):
-                rows = [candidates[a], candidates[b], candidates[c]]
-                if len({r[0] for r in rows}) < 3:
+                dofs = [candidates[a], candidates[b], candidates[c]]
+                if len(set(dofs)) < 3:
                     continue
-                det = abs(np.linalg.det(np.array([r[1] for r in rows])))
+                det = abs(np.linalg.det(_rigid_rows(points, [0, 1, 2] + dofs)))
                 if det > best_det:
-                    best, best_det = [r[0] for r in rows], det
+                    best, best_det = dofs, det
     if best is None or best_det <= 1e-12 * np.ptp(points) ** 3:
         raise ValueError("cannot remove rigid rotations: the curve is (nearly) a straight line")
-    return np.array(sorted([0, 1, 2] + best), dtype=np.int64)
+    best = [0, 1, 2] + best
+    if n % 2 == 0 and n >= 8 and _axis_through_node_0(points):
+        sets = _equivariant_sets(n)
+        rows = _rigid_rows(points, np.arange(3 * n))
+        dets = np.abs(np.linalg.det(rows[sets]))
+        k = int(np.argmax(dets))
+        if dets[k] >= EQUIVARIANT_PIN_QUALITY * best_det:
+            best = [int(d) for d in sets[k]]
+    return np.array(sorted(best), dtype=np.int64)
+
+
+def _equivariant_sets(n: int) -> np.ndarray:
+    """Six-DOF pin sets (even ``n``) that ``x_i -> R x_{-i}`` maps onto themselves, ``R``
+    the half-turn about the line through node 0 along ``x`` (coordinates map to
+    coordinates), ``(k, 6)``. Nodes 0 and ``n/2`` are their own images, node ``k`` and
+    ``n - k`` each other's: node 0 (all three) with one coordinate of node ``n/2`` and
+    one coordinate of a pair ``k``, ``n - k``; or two coordinates of node 0 with two
+    pairs (when nodes 0 and ``n/2`` come close, as at alpha's crossing, the first kind
+    loses its grip on rotations)."""
+    half = n // 2
+    nodes = sorted({(j * n) // 24 for j in range(1, 12)} - {0, half})
+    pairs = [(k, c) for k in nodes for c in range(3)]
+    sets = []
+    for k, c in pairs:
+        for a in range(3):
+            sets.append([0, 1, 2, 3 * half + a, 3 * k + c, 3 * (n - k) + c])
+    for i in range(len(pairs)):
+        for j in range(i + 1, len(pairs)):
+            (k, c), (m, d) = pairs[i], pairs[j]
+            for skipped in range(3):
+                origin = [a for a in range(3) if a != skipped]
+                sets.append(origin + [3 * k + c, 3 * (n - k) + c, 3 * m + d, 3 * (n - m) + d])
+    return np.array(sets, dtype=np.int64)
+
+
+def _axis_through_node_0(points: np.ndarray, tolerance: float = 1e-8) -> bool:
+    """True when ``x_i = R x_{-i}`` for every node within ``tolerance`` times the curve's
+    size, ``R`` the half-turn about the line through node 0 along ``x``: the curve has a
+    two-fold axis on that line, through node 0 (and node ``n/2`` for even ``n``)."""
+    x = np.asarray(points, dtype=float)
+    n = x.shape[0]
+    image = x[(-np.arange(n)) % n] - x[0]
+    image[:, 1:] *= -1.0
+    image += x[0]
+    size = float(np.ptp(x, axis=0).max())
+    return bool(np.max(np.abs(image - x)) <= tolerance * max(size, 1e-300))

@@ -428,7 +428,7 @@ def test_rigid_pins_of_a_state_with_an_axis_through_node_0_are_equivariant():
     assert np.array_equal(points[(-np.arange(n)) % n] * flip, points)
     pins = rigid_pins(points)
     mapped = {3 * ((-(d // 3)) % n) + d % 3 for d in pins}
-    assert mapped == set(int(d) for d in pins)
+    assert mapped == {int(d) for d in pins}
     rows = []
     for d in pins:
         node, k = divmod(int(d), 3)

@@ -177,7 +177,18 @@ def test_secondary_branches_are_dashed_in_the_diagram_and_in_supercoil_plot(diag
         assert rows[b.name]["linestyle"] == GENERATION_STYLES[2] != "-"
 
 
-def test_beta_at_seed_001s_parameters_is_stable_from_b1_to_p():
+SEED_OPTIONS = DiagramOptions(2 / 3, 122.0, n_nodes=132, modes=(3,), max_excess_link=6.0,
+                              contact_max_points=150)
+
+
+@pytest.fixture(scope="module")
+def seed_diagram():
+    """Seed 001's DNA example (C/A = 2/3, L/D = 122), beta only, N = 132 (a multiple of 6:
+    D_3's axes through nodes)."""
+    return ring_diagram(SEED_OPTIONS)
+
+
+def test_beta_at_seed_001s_parameters_is_stable_from_b1_to_p(seed_diagram):
     """Seed 001, Figure 2 (C/A = 2/3, L/D = 122): "condition theta holds only for the
     configurations in the heavily drawn interval of branch beta that runs from the
     bifurcation point B_1 to the bifurcation point P". Oracle: on beta_contact (N = 132,
@@ -185,9 +196,7 @@ def test_beta_at_seed_001s_parameters_is_stable_from_b1_to_p():
     points, B_1 at the three-point contact onset (count 2 -> 0) and P (0 -> 2), both
     through a double eigenvalue (an E mode of D_3), and beta keeps D_3 throughout (the
     integral phase condition's reaction has no net torque: sliding_phase_modes)."""
-    options = DiagramOptions(2 / 3, 122.0, n_nodes=132, modes=(3,), max_excess_link=6.0,
-                             contact_max_points=150)
-    diagram = ring_diagram(options)
+    diagram = seed_diagram
     beta = diagram.branch("beta_contact")
     # measured with these options: the fold at the contact (count 3 -> 2) and B_1 lie in
     # one segment; the fold's own count change is not reported as a bifurcation
@@ -229,3 +238,61 @@ def test_a_switch_that_keeps_the_parents_symmetry_fell_back():
                          diameter)
     simple = SimpleNamespace(q=point.q, critical_modes=np.zeros((1, 3 * n)))
     assert not fell_back(SimpleNamespace(states=np.array(d3)), simple, diameter)
+
+
+def _half_turn_image(points: np.ndarray, axis_node_0: np.ndarray) -> np.ndarray:
+    """``x_i -> R x_{-i}``, ``R`` the half-turn about the line along x through the point
+    ``axis_node_0`` (node 0 of a state symmetric about that line), ``(n, 3)``."""
+    n = points.shape[0]
+    image = points[(-np.arange(n)) % n].copy()
+    image[:, 1:] = 2 * axis_node_0[1:] - image[:, 1:]
+    return image
+
+
+def test_a_tertiary_branch_breaks_the_two_fold_axis_of_beta_ii(seed_diagram):
+    """Seed 001, Figures 2 and 3: beta_II, the secondary branch from P, has C_2 symmetry
+    and a bifurcation point S from which the tertiary branch beta*_II issues with no
+    symmetry left. Oracles: the secondary states keep the axis through node 0 to
+    round-off (the discrete problem is equivariant: on_mesh_direction, rigid_pins);
+    S is a located change of the count by one whose single critical mode is odd under
+    that axis (a pitchfork: ring_secondary.mirror_axis); the tertiary half-branches
+    on the two sides of S leave the symmetry (C_1 beyond the symmetry tolerance) and
+    are each other's images under the axis, point by point (which is why
+    secondary_branches computes one of them)."""
+    from supercoil.geometry.symmetry import reversal_residuals
+    from supercoil.problems.ring_secondary import follow_bifurcating_branch, mirror_axis
+
+    beta = seed_diagram.branch("beta_contact")
+    p = beta.points_of_kind("bifurcation")[-1]
+    assert 5.0 < p.parameter < 5.3 and p.critical_modes.shape[0] == 2
+    found = []
+    for side in (1, -1):
+        half = follow_bifurcating_branch(seed_diagram, beta, p, side, max_points=32)
+        assert half is not None and len(half) >= 2
+        for q in half.states:
+            assert reversal_residuals(q.reshape(-1, 3), [0.0], direct=True)[0] < 1e-9
+        found += [(half, point) for point in half.points_of_kind("bifurcation")
+                  if mirror_axis(point) == 0]
+    assert found, "no symmetry-breaking bifurcation on beta_II"
+    secondary, s = found[0]
+    assert abs(s.count_after - s.count_before) == 1 and s.critical_modes.shape[0] == 1
+    assert s.located and p.parameter < s.parameter < 6.0
+    axis = np.asarray(s.q).reshape(-1, 3)[0]
+    plus = follow_bifurcating_branch(seed_diagram, secondary, s, 1, max_points=12)
+    minus = follow_bifurcating_branch(seed_diagram, secondary, s, -1, max_points=12)
+    assert len(plus) == len(minus) == 12
+    # to the located S's own asymmetry (its image misfits by about 2e-7; measured: the
+    # halves agree to 4e-7 in dLk and 1e-6 of the size in the states)
+    np.testing.assert_allclose(minus.parameter_values, plus.parameter_values, rtol=0,
+                               atol=1e-5)
+    size = np.ptp(plus.states[0].reshape(-1, 3), axis=0).max()
+    for a, b in zip(plus.states, minus.states):
+        image = _half_turn_image(a.reshape(-1, 3), axis)
+        assert np.max(np.abs(image - b.reshape(-1, 3))) < 1e-5 * size
+    tolerance = 0.05 * SEED_OPTIONS.diameter
+    from supercoil.geometry.symmetry import curve_symmetry
+
+    groups = [curve_symmetry(q.reshape(-1, 3), tolerance).group for q in plus.states]
+    assert groups[-1] == "C1", groups
+    # the first point is one switching amplitude from S: the axis is broken by about it
+    assert reversal_residuals(plus.states[-1].reshape(-1, 3), [0.0], direct=True)[0] > tolerance

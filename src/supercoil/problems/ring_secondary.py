@@ -53,6 +53,8 @@ from supercoil.geometry.symmetry import (
     axis_invariant_combination,
     curve_symmetry,
     reversal_axes,
+    reversal_image,
+    reversal_residuals,
 )
 from supercoil.problems.ring_branches import PRIMARY_NAMES, ring_records
 
@@ -103,7 +105,6 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
     contact branch). Returns a new ``RingDiagram``.
     """
     from supercoil.problems.ring_diagram import (
-        CONTACT_MIN_STEP,
         _contact_records,
         classify_contact_events,
         contact_count_event,
@@ -126,13 +127,7 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
     if depth == 1 or cp is None:
         return diagram
     D = opts.diameter
-    base = ContinuationOptions(
-        min_step=CONTACT_MIN_STEP, max_step=opts.contact_max_step * D, max_points=max_points,
-        parameter_bounds=(0.0, opts.max_excess_link), parameter_weight=D,
-        tolerance=opts.contact_tolerance, near_symmetry_gauge=opts.contact_gauge,
-        gauge=opts.gauge, rephase=opts.gauge == "integral",
-        regauge=True, event_tolerance=opts.contact_event_tolerance,
-        initial_step=AMPLITUDES[0] * D, predictor=opts.contact_predictor)
+    base = _options(opts, max_points)
     records = _contact_records(cp, ring_records(cp), free=False)
     added = 0
     # families: name stem -> branches of that family, one generation at a time
@@ -145,7 +140,15 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
         for stem, family in families:
             for k, point in enumerate(family_bifurcations(branches, family), start=1):
                 parent = next(b for b in branches if b.name == point.branch)
+                mirrored = mirror_axis(point)
                 for side, sign in ((1, "+"), (-1, "-")):
+                    if side == -1 and mirrored is not None:
+                        notes.append(f"{stem}_{roman(k)}-: not computed, the mirror image of "
+                                     f"{stem}_{roman(k)}+ under the two-fold axis c = "
+                                     f"{mirrored:g} of {parent.name} at dLk = "
+                                     f"{point.parameter:.5g} (the critical mode is odd "
+                                     "under it: a pitchfork)")
+                        continue
                     if added >= max_branches:
                         notes.append(f"secondary branches: stopped at max_branches = "
                                      f"{max_branches}")
@@ -183,6 +186,50 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
     return _with(diagram, branches, contact_names, generations, seconds, notes)
 
 
+def _options(opts, max_points: int) -> ContinuationOptions:
+    """The continuation options of a half-branch: the diagram's contact branches'."""
+    from supercoil.problems.ring_diagram import CONTACT_MIN_STEP
+
+    D = opts.diameter
+    return ContinuationOptions(
+        min_step=CONTACT_MIN_STEP, max_step=opts.contact_max_step * D, max_points=max_points,
+        parameter_bounds=(0.0, opts.max_excess_link), parameter_weight=D,
+        tolerance=opts.contact_tolerance, near_symmetry_gauge=opts.contact_gauge,
+        gauge=opts.gauge, rephase=opts.gauge == "integral",
+        regauge=True, event_tolerance=opts.contact_event_tolerance,
+        initial_step=AMPLITUDES[0] * D, predictor=opts.contact_predictor)
+
+
+def follow_bifurcating_branch(diagram, parent: Branch, point: SpecialPoint, side: int, *,
+                              max_points: int = 60, name: str | None = None
+                              ) -> Branch | None:
+    """The half-branch switched from the bifurcation ``point`` of ``parent`` on ``side``
+    (+1 / -1) and followed with self-contact, as :func:`secondary_branches` does for
+    every bifurcation point (same options, switch direction and amplitudes), with its
+    contact events classified; None when no amplitude gives a first point. For
+    following one chosen branch (a tertiary one, say) without all the others."""
+    from supercoil.problems.ring_diagram import (
+        _contact_records,
+        classify_contact_events,
+        contact_count_event,
+    )
+
+    cp = diagram.contact_problem
+    if cp is None:
+        raise ValueError("the diagram has no contact problem (no contact branch was computed)")
+    if side not in (1, -1):
+        raise ValueError(f"side must be +1 or -1, got {side!r}")
+    D = diagram.options.diameter
+    label = name or f"{parent.name}/{point.kind}{point.index}{'+' if side > 0 else '-'}"
+    records = _contact_records(cp, ring_records(cp), free=False)
+    branch = _switch(cp, parent, point, _options(diagram.options, max_points), side, label,
+                     records, contact_count_event(cp), None, D)
+    if branch is None:
+        return None
+    branch = classify_contact_events(branch, cp)
+    return dataclasses.replace(branch, parent=parent.name, origin=point)
+
+
 def fell_back(branch: Branch, point: SpecialPoint, diameter: float) -> bool:
     """True when ``branch``, switched at a multiple eigenvalue (several critical
     modes: a symmetry-breaking bifurcation), keeps the symmetry group of the state at
@@ -196,6 +243,37 @@ def fell_back(branch: Branch, point: SpecialPoint, diameter: float) -> bool:
     group = curve_symmetry(np.asarray(point.q).reshape(-1, 3), tolerance).group
     return all(curve_symmetry(q.reshape(-1, 3), tolerance).group in (group, "O(2)")
                for q in branch.states)
+
+
+# a state and a mode are symmetric / odd under a mesh axis when their misfit is below
+# this fraction of their size: along a branch the misfit is round-off (about 1e-11), at
+# a located pitchfork the nearly singular odd mode amplifies it (measured up to 3e-7
+# of the size, and 2e-6 for the mode; a mode of the other parity misfits by 2)
+EXACT_SYMMETRY = 1e-5
+
+
+def mirror_axis(point: SpecialPoint) -> int | None:
+    """The two-fold axis ``c`` (an integer: through a node or an edge midpoint, an exact
+    symmetry of the discrete ring) under which the state at ``point`` is symmetric and
+    its single critical mode odd, or None.
+
+    There the bifurcation is a pitchfork that breaks the axis, and the two
+    half-branches are each other's images under it (the discrete problem, the pins and
+    the phase condition included, is equivariant: rod.closed.rigid_pins), so one of
+    them is enough (tests/test_ring_secondary.py computes both and compares)."""
+    modes = np.asarray(point.critical_modes, dtype=float)
+    if modes.ndim != 2 or modes.shape[0] != 1:
+        return None
+    x = np.asarray(point.q, dtype=float).reshape(-1, 3)
+    n = x.shape[0]
+    v = modes[0].reshape(1, n, 3)
+    size = float(np.sqrt(np.mean(np.sum((x - x.mean(axis=0)) ** 2, axis=1))))
+    misfits = reversal_residuals(x, np.arange(n, dtype=float), direct=True)
+    for c in np.flatnonzero(misfits <= EXACT_SYMMETRY * size):
+        image = reversal_image(x, float(c), v)
+        if np.max(np.abs(image + v)) <= EXACT_SYMMETRY * np.max(np.abs(v)):
+            return int(c)
+    return None
 
 
 def switch_direction(cp, point: SpecialPoint, diameter: float) -> np.ndarray | None:

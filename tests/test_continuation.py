@@ -90,6 +90,26 @@ def test_bratu_fold_is_located_converges_at_order_two_and_extrapolates_to_the_co
     assert abs(richardson - BRATU_FOLD) < 1e-6
 
 
+def test_a_stop_condition_refuses_a_point_and_ends_the_run_before_it():
+    """continuation(stop=...): the first corrected state the condition refuses is not
+    accepted; the run ends at the point before with status STOPPED (an ok status) and the
+    condition's message. Oracle: the same run without the condition, whose points up to
+    the refused one are the same."""
+    opts = ContinuationOptions(parameter_bounds=(1.0, 4.0), initial_step=0.05, max_step=0.5)
+    free = continuation(Bratu(32, 1.0), np.zeros(33), parameter="lam", options=opts)
+    first = int(np.argmax(free.states[:, 16] > 0.5))
+    assert 2 <= first < len(free) - 1
+    p = Bratu(32, 1.0)
+    b = continuation(p, np.zeros(33), parameter="lam", options=opts,
+                     stop=lambda q: "u(1/2) above 0.5" if q[16] > 0.5 else None)
+    assert b.status is ContinuationStatus.STOPPED and b.status.ok
+    assert b.message.endswith("u(1/2) above 0.5")
+    assert len(b) == first
+    np.testing.assert_array_equal(b.states, free.states[:first])
+    assert np.all(b.states[:, 16] <= 0.5)
+    assert np.array_equal(np.array(p.accepted[-len(b):]), b.states)
+
+
 def test_bratu_through_the_fold_comes_back_down_the_upper_branch():
     user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[16] - 1.0})
     p = Bratu(32, 1.0)

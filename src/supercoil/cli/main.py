@@ -714,6 +714,18 @@ def diagram_ring(
                      "the secondary branches switched from their bifurcation points; 3: also "
                      "the tertiary ones (seed 001, Figure 2)."),
     ] = 1,
+    secondary_max_points: Annotated[
+        int,
+        typer.Option("--secondary-max-points", metavar="K", help="With --branch-depth 2 or "
+                     "3: most points of each secondary or tertiary half-branch."),
+    ] = 40,
+    secondary_max_branches: Annotated[
+        int,
+        typer.Option("--secondary-max-branches", metavar="K", help="With --branch-depth 2 or "
+                     "3: most secondary and tertiary half-branches in all (at a pitchfork "
+                     "of a symmetric branch only one half is computed: the other is its "
+                     "mirror image)."),
+    ] = 12,
     contact_curve: Annotated[
         str,
         typer.Option("--contact-curve", metavar="CURVE", help="Curve whose self-distance is "
@@ -767,6 +779,12 @@ def diagram_ring(
              "or 3 (and tertiary)")
     if not 2 <= contact_max_points <= 100_000:
         fail(f"--contact-max-points {contact_max_points}: give an integer from 2 to 100000")
+    if not 2 <= secondary_max_points <= 100_000:
+        fail(f"--secondary-max-points {secondary_max_points}: give an integer from 2 to "
+             "100000")
+    if not 0 <= secondary_max_branches <= 1000:
+        fail(f"--secondary-max-branches {secondary_max_branches}: give an integer from 0 "
+             "to 1000")
     check_contact_choice(contact_curve, contact_formulation)
     prepare_output_folder(out, force, "the diagram's files")
     from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
@@ -777,7 +795,9 @@ def diagram_ring(
                                  tuple(int(w) for w in words), max_excess_link, contact,
                                  branch_depth=branch_depth, contact_curve=contact_curve,
                                  contact_formulation=contact_formulation,
-                                 contact_max_points=contact_max_points)
+                                 contact_max_points=contact_max_points,
+                                 secondary_max_points=secondary_max_points,
+                                 secondary_max_branches=secondary_max_branches)
     except ValueError as exc:
         fail(str(exc))
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "

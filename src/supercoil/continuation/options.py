@@ -16,11 +16,13 @@ class ContinuationStatus(enum.Enum):
     STEP_TOO_SMALL = "the corrector failed at the minimum step"
     START_FAILED = "the starting point did not converge"
     CLOSED_LOOP = "the branch closed on itself (it came back to one of its points)"
+    STOPPED = "stopped by the caller's condition before a point it refused"
 
     @property
     def ok(self) -> bool:
         return self in (ContinuationStatus.PARAMETER_BOUND, ContinuationStatus.MAX_POINTS,
-                        ContinuationStatus.MAX_ARCLENGTH, ContinuationStatus.CLOSED_LOOP)
+                        ContinuationStatus.MAX_ARCLENGTH, ContinuationStatus.CLOSED_LOOP,
+                        ContinuationStatus.STOPPED)
 
 
 @dataclass(frozen=True)

@@ -128,6 +128,7 @@ class _Tracer:
                  on_point: PointCallback | None = None):
         self.system = system
         self.on_point = on_point
+        self.stop: Callable[[np.ndarray], str | None] | None = None  # see continuation()
         self.opts = options
         self.name, self.parent, self.origin = name, parent, origin
         self.records_fn = records
@@ -423,6 +424,12 @@ class _Tracer:
             if failure is None and t_new @ (system.weights * t_k) < cos_turn:
                 failure = (f"the tangent turned by more than {opts.max_turn_degrees} degrees "
                            f"(a jump to another branch?)")
+            if failure is None and self.stop is not None:
+                refusal = self.stop(system.q(x_new))
+                if refusal:
+                    return ContinuationStatus.STOPPED, (
+                        f"stopped after {len(self.xs)} points at {system.parameter} = "
+                        f"{x_k[-1]:.10g}: {refusal}")
             bound = None
             if failure is None and not low <= x_new[-1] <= high:
                 bound = low if x_new[-1] < low else high
@@ -520,7 +527,8 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                  options: ContinuationOptions | None = None, *, name: str = "branch",
                  records: RecordFunction | None = None,
                  events: Sequence[UserEvent] = (),
-                 on_point: PointCallback | None = None) -> Branch:
+                 on_point: PointCallback | None = None,
+                 stop: Callable[[np.ndarray], str | None] | None = None) -> Branch:
     """Follow the equilibria of ``problem`` through ``q0`` as ``problem.<parameter>`` varies.
 
     ``q0`` (n_dofs,) is a (near-)equilibrium at the current parameter value;
@@ -531,7 +539,10 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     after each accepted point (events between it and the previous point
     located) with the branch so far (status ``MAX_POINTS``, message
     ``PARTIAL_MESSAGE``), e.g. to save it; an exception it raises (a
-    KeyboardInterrupt) propagates. Returns a :class:`Branch` whose ``status`` says how
+    KeyboardInterrupt) propagates. ``stop(q)``, if given, is asked about each corrected
+    state before it is accepted: a non-empty message refuses it and ends the run at
+    the point before (status ``STOPPED``), e.g. when a problem's gauge pins lose their
+    grip there and must be picked again. Returns a :class:`Branch` whose ``status`` says how
     the run ended; numerical failures never raise. The problem is left at the
     last point's parameter value and state (accepted).
     """
@@ -549,6 +560,7 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     mu0 = (least_squares_multipliers(problem, q0, system.free) if multipliers0 is None
            else np.asarray(multipliers0, dtype=float))
     tracer = _Tracer(system, opts, name, None, None, records, events, on_point)
+    tracer.stop = stop
     x0 = system.pack(q0, mu0, lam0)
     e_lam = np.zeros(system.size)
     e_lam[-1] = 1.0

@@ -158,7 +158,7 @@ from supercoil.problems.ring_secondary import (
     generation_of,
     secondary_branches,
 )
-from supercoil.problems.segments import follow, set_pin
+from supercoil.problems.segments import follow, grip_stop, set_pin
 from supercoil.solvers.problem import free_dofs
 
 MAX_LEVEL = 8  # contact-count indicators n - k + 1/2 for k = 1 .. MAX_LEVEL
@@ -752,8 +752,10 @@ def ring_diagram(options: DiagramOptions,
             contact, pins[contact_name] = _contact_branch(cp, free.states[k], old,
                                                           contact_opts, contact_name, on_point)
             contact = classify_contact_events(contact, cp)
-        if len(contact) and opts.contact_gauge:
-            sliding = contact.records["sliding_residual"]
+        sliding = contact.records.get("sliding_residual", np.zeros(0))
+        # on a branch with a two-fold axis on the mesh the force vanishes by symmetry (module
+        # doc, "Material sliding"): no note when it is within the corrector's tolerance
+        if len(contact) and opts.contact_gauge and np.max(sliding) > opts.contact_tolerance:
             notes.append(f"{contact_name}: the material sliding is held fixed (a gauge); the "
                          f"sliding force it holds, max |KKT residual| without the gauge, is at "
                          f"most {float(np.max(sliding)):.2e} (at dLk = "
@@ -827,11 +829,11 @@ def _contact_branch(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
             earlier = [(0, tuple(int(d) for d in rod.fixed))]
             first = continuation(cp, q_start, parameter="excess_link", options=first_opts,
                                  name=name, records=records, events=events,
-                                 on_point=on_point)
+                                 on_point=on_point, stop=grip_stop(rod.pin_grip, q_start))
         branch, later = follow(cp, rod, first, options, name, records, events,
                                max_points=options.max_points,
                                segment_points=CONTACT_SEGMENT_POINTS, on_point=on_point,
-                               quality=PIN_QUALITY)
+                               quality=PIN_QUALITY, grip=rod.pin_grip)
     # follow reports the rod's gauge_dofs, which are all six pins for a ring
     return branch, tuple(earlier) + tuple((i, d) for i, d in later if i > 0)
 
@@ -895,8 +897,13 @@ def on_mesh_direction(problem, point: SpecialPoint) -> np.ndarray | None:
     x = np.asarray(point.q, dtype=float).reshape(-1, 3)
     fields = modes.reshape(modes.shape[0], -1, 3)
     mass = np.asarray(problem.mass, dtype=float).reshape(-1, 3)[:, 0]
-    a = axis_invariant_combination(x, 0.0, fields, mass)
-    return a @ modes
+    direction = axis_invariant_combination(x, 0.0, fields, mass) @ modes
+    # node 0 moves outward: for even m it then sits at a lobe's tip, far from node n/2
+    # (the axis's other point), and the rigid pins on that axis keep their grip (with
+    # node 0 at alpha's crossing, nodes 0 and n/2 came within 1.7 D)
+    if direction.reshape(-1, 3)[0] @ (x[0] - x.mean(axis=0)) < 0:
+        direction = -direction
+    return direction
 
 
 def _with_records(branch: Branch, problem, records) -> Branch:

@@ -409,6 +409,11 @@ class ClosedRodEnergy(RodEnergy):
         self.fixed = rigid_pins(np.asarray(q, dtype=float).reshape(-1, 3))
         self.gauge_dofs = self.fixed
 
+    def pin_grip(self, q: np.ndarray) -> float:
+        """:func:`rotation_pin_determinant` of the current pins at ``q``: zero where they do
+        not remove some rigid motion (cheap: one 6 x 6 determinant)."""
+        return rotation_pin_determinant(np.asarray(q, dtype=float).reshape(-1, 3), self.fixed)
+
     def pin_quality(self, q: np.ndarray) -> float:
         """:func:`rotation_pin_determinant` of the current pins at ``q`` over that of the
         pins :func:`rigid_pins` would choose there, in ``[0, 1]`` (1 right after

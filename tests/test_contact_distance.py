@@ -1,10 +1,14 @@
 """Segment–segment distance and its derivatives (supercoil.contact.distance).
 
-Oracles: a dense 400 x 400 grid of (s, t) plus an exact bounded least-squares
-solve (scipy's BVLS) for the distance; central finite differences of
+Oracles: a dense 400 x 400 grid of (s, t), an exact bounded least-squares
+solve (scipy's BVLS) and the squared distance in exact rational arithmetic
+(``fractions``) for the distance; central finite differences of
 ``segment_distance`` and JAX autodiff of each type's closed-form formula for
 the derivatives; analytic values for the special configurations.
 """
+
+import math
+from fractions import Fraction
 
 import jax
 import jax.numpy as jnp
@@ -47,10 +51,78 @@ def bvls_distance(p0, p1, q0, q1):
     return np.linalg.norm(a @ result.x + (p0 - q0))
 
 
+def exact_distance_squared(p0, p1, q0, q1) -> Fraction:
+    """``d^2`` in exact rational arithmetic.
+
+    The float coordinates are exact rationals and ``|r(s, t)|^2`` is a quadratic with
+    rational coefficients, so its minimum over the square is rational: the interior
+    critical point when it lies in the square, else the best of the four endpoint-to-
+    segment projections clamped to ``[0, 1]`` (the textbook formulas, here without
+    rounding).
+    """
+    p0, p1, q0, q1 = ([Fraction(float(c)) for c in x] for x in (p0, p1, q0, q1))
+    u = [b - a for a, b in zip(p0, p1)]
+    v = [b - a for a, b in zip(q0, q1)]
+    w = [b - a for a, b in zip(q0, p0)]
+
+    def dot(x, y):
+        return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+
+    def h(s, t):
+        r = [w[k] + s * u[k] - t * v[k] for k in range(3)]
+        return dot(r, r)
+
+    def clamp(x):
+        return min(max(x, Fraction(0)), Fraction(1))
+
+    a, b, c, dw, ew = dot(u, u), dot(u, v), dot(v, v), dot(u, w), dot(v, w)
+    candidates = []
+    det = a * c - b * b
+    if det > 0:
+        s, t = (b * ew - c * dw) / det, (a * ew - b * dw) / det
+        if 0 <= s <= 1 and 0 <= t <= 1:
+            candidates.append(h(s, t))
+    for s in (Fraction(0), Fraction(1)):
+        candidates.append(h(s, clamp((ew + s * b) / c) if c > 0 else Fraction(0)))
+    for t in (Fraction(0), Fraction(1)):
+        candidates.append(h(clamp((t * b - dw) / a) if a > 0 else Fraction(0), t))
+    return min(candidates)
+
+
+EPS = np.finfo(float).eps
+
+
+def rounding_scale(p0, p1, q0, q1) -> float:
+    """``|p0 - q0| + |p1 - p0| + |q1 - q0|``: the size of the differences the kernel rounds."""
+    return float(np.linalg.norm(np.subtract(p0, q0)) + np.linalg.norm(np.subtract(p1, p0))
+                 + np.linalg.norm(np.subtract(q1, q0)))
+
+
+def assert_near_exact(d, p0, p1, q0, q1, tolerance):
+    """``|d - sqrt(exact d^2)| <= tolerance``, decided in exact arithmetic."""
+    exact = exact_distance_squared(p0, p1, q0, q1)
+    d, tolerance = Fraction(float(d)), Fraction(float(tolerance))
+    assert max(d - tolerance, Fraction(0)) ** 2 <= exact <= (d + tolerance) ** 2, (
+        f"d = {float(d)!r}, exact {math.sqrt(exact)!r}, tolerance {float(tolerance)!r}")
+
+
+# The kernel's error bound (module docstring of supercoil.contact.distance, "Accuracy"):
+# the differences w, e_p, e_q are rounded once (eps/2 relative), r(s, t) = w + s e_p - t e_q
+# is rounded a few more times, and the error of (s, t) along the valley of |r|^2 is
+# O(eps ℓ): a few eps times rounding_scale, i.e. the exact distance of segments moved by a
+# few units in the last place. Measured: at most 0.93 eps * rounding_scale on 48000 random
+# nearly parallel, coplanar crossing, rotated crossing and generic pairs. Below
+# sqrt(tiny) ≈ 1.5e-154 the squares of the coordinates of r underflow (hypothesis found
+# coordinates of 7e-228): an absolute error of a few sqrt(tiny) comes on top.
+ROUNDING = 4 * EPS
+UNDERFLOW = 4 * np.sqrt(np.finfo(float).tiny)
+
+
 def check_against_oracles(p0, p1, q0, q1, grid=400):
     p0, p1, q0, q1 = (np.asarray(x, dtype=float) for x in (p0, p1, q0, q1))
     d, s, t = segment_distance(p0, p1, q0, q1)
     scale = max(1.0, *(np.abs(x).max() for x in (p0, p1, q0, q1)))
+    assert_near_exact(d, p0, p1, q0, q1, ROUNDING * rounding_scale(p0, p1, q0, q1) + UNDERFLOW)
     assert 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0
     # the returned points realise d
     np.testing.assert_allclose(np.linalg.norm(p0 + s * (p1 - p0) - q0 - t * (q1 - q0)), d,
@@ -199,6 +271,9 @@ def test_zero_length_segments(rng):
         d3, _, _ = check_against_oracles(a, a, b, b)
         assert d3 == pytest.approx(np.linalg.norm(a - b), rel=1e-15)
     assert segment_distance(a, a, a, a)[0] == 0.0
+    # below a squared length of 1e-300 a segment is a point (its foot parameter 0)
+    d4, s4, _ = check_against_oracles(a, a + 1e-160, b, c)
+    assert s4 == 0.0 and d4 == pytest.approx(d, rel=1e-12)
 
 
 def test_crossing_segments_have_zero_distance(rng):
@@ -222,13 +297,99 @@ def test_t_configurations(rng, height):
     np.testing.assert_allclose([d, s, t], [height, 0.65, 0.0], atol=1e-14)
 
 
+# Nearly antiparallel, overlapping, EPS_AP = 1.19e-8 apart: p(s) = (ε(1 - s), 1 - s, εs) and
+# q(t) = (0, t, 0), so |p(s) - q(1 - s)|^2 = ε^2 ((1 - s)^2 + s^2) (t = 1 - s is the foot), least
+# at s = t = 1/2: d = ε / sqrt(2) ≈ 8.41e-9 (the textbook numerators cancelled to garbage and
+# the kernel returned the endpoint distance ε, hypothesis found it).
+EPS_AP = 1.19e-8
+ANTIPARALLEL = np.array([[EPS_AP, 1, 0], [0, 0, EPS_AP], [0, 0, 0], [0, 1, 0]], dtype=float)
+# Coplanar (z = 0) segments crossing at s ≈ 0.66, t ≈ 0.42 at 0.58°: the exact distance is 0
+# (exact_distance_squared says so); the kernel returned 1.52e-12.
+COPLANAR_CROSSING = np.array([[-0.018, -0.104, 0], [-0.28, 0.271, 0], [-0.389, 0.421, 0],
+                              [0.085, -0.243, 0]], dtype=float)
+
+
+def test_nearly_antiparallel_overlap_is_exact(rng):
+    assert exact_distance_squared(*ANTIPARALLEL) == Fraction(EPS_AP) ** 2 / 2  # the closed form
+    d, s, t = segment_distance(*ANTIPARALLEL)
+    scale = rounding_scale(*ANTIPARALLEL)
+    assert abs(d - EPS_AP / np.sqrt(2)) <= ROUNDING * scale
+    # the minimiser is unique (the lines are skew): s = t = 1/2. Along the valley the distance
+    # grows like d (1 + 2 δs^2), so an error of ROUNDING · scale in d pins s and t only to
+    # δs ≈ sqrt(ROUNDING · scale / (2 d)) ≈ 4e-4
+    np.testing.assert_allclose([s, t], [0.5, 0.5], atol=1e-3)
+    # rigid motions: the exact distance of the rounded images is the oracle, and it is within
+    # the rounding of the images (~ eps |x|) of the closed form
+    for _ in range(20):
+        transform = random_rigid(rng)
+        x = [transform(y) for y in ANTIPARALLEL]
+        d_moved = segment_distance(*x)[0]
+        assert_near_exact(d_moved, *x, ROUNDING * rounding_scale(*x))
+        assert abs(d_moved - EPS_AP / np.sqrt(2)) < 1e-14
+
+
+def test_coplanar_crossing_is_round_off_from_zero(rng):
+    assert exact_distance_squared(*COPLANAR_CROSSING) == 0
+    d, s, t = segment_distance(*COPLANAR_CROSSING)
+    # backward error: d is the exact distance of the pair with q moved by d normal to the
+    # plane, so d <= a few ulps of the coordinates (ROUNDING · scale) is all rounding allows
+    assert d <= ROUNDING * rounding_scale(*COPLANAR_CROSSING)
+    p0, p1, q0, q1 = COPLANAR_CROSSING
+    u, v = p1 - p0, q1 - q0
+    n = np.cross(u, v)[2]  # the crossing parameters in closed form (2D Cramer)
+    w = q0 - p0
+    np.testing.assert_allclose([s, t], [np.cross(w, v)[2] / n, np.cross(w, u)[2] / n], atol=1e-12)
+    # the same crossing with generic coordinates: rotated and shifted, no longer exactly
+    # coplanar, checked against the exact distance of the rounded images
+    for _ in range(20):
+        transform = random_rigid(rng)
+        x = [transform(y) for y in COPLANAR_CROSSING]
+        assert_near_exact(segment_distance(*x)[0], *x, ROUNDING * rounding_scale(*x))
+
+
 finite = st.floats(-10.0, 10.0, allow_nan=False, allow_subnormal=False)
 
 
 @settings(max_examples=60, deadline=None)
 @given(arrays(np.float64, (4, 3), elements=finite))
+@example(ANTIPARALLEL)
+@example(COPLANAR_CROSSING)
 def test_hypothesis_distance_matches_oracles(x):
     check_against_oracles(*x, grid=120)
+
+
+@st.composite
+def nearly_parallel_pairs(draw):
+    """Overlapping, nearly parallel or antiparallel segments (4, 3), 1e-12 … 1e-3 of their
+    length apart, at an angle 0 or 1e-16 … 1e-2, then rotated and shifted."""
+    length = draw(st.floats(0.1, 10.0))
+    other_length = length * draw(st.floats(0.3, 3.0))
+    separation = length * 10.0 ** draw(st.floats(-12.0, -3.0))
+    angle = draw(st.sampled_from([0.0]) | st.floats(-16.0, -2.0).map(lambda e: 10.0**e))
+    tilt = draw(st.floats(0.0, 2 * np.pi))  # the plane of the angle
+    overlap = draw(st.floats(0.0, 1.0))  # where the middle of q sits along p
+    euler = draw(arrays(np.float64, 3, elements=st.floats(-np.pi, np.pi)))
+    shift = draw(arrays(np.float64, 3, elements=st.floats(-10.0, 10.0)))
+    half = 0.5 * other_length * np.array([np.cos(angle), np.sin(angle) * np.cos(tilt),
+                                          np.sin(angle) * np.sin(tilt)])
+    middle = np.array([overlap * length, separation, 0.0])
+    q0, q1 = middle - half, middle + half
+    if draw(st.booleans()):
+        q0, q1 = q1, q0
+    rotation = Rotation.from_euler("zyx", euler).as_matrix()
+    return np.array([[0.0, 0.0, 0.0], [length, 0.0, 0.0], q0, q1]) @ rotation.T + shift
+
+
+@settings(max_examples=200, deadline=None)
+@given(nearly_parallel_pairs())
+def test_hypothesis_nearly_parallel_matches_exact(x):
+    d, s, t = segment_distance(*x)
+    assert 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0
+    assert_near_exact(d, *x, ROUNDING * rounding_scale(*x) + UNDERFLOW)
+    # the returned points realise d (up to the rounding of this recomputation)
+    p0, p1, q0, q1 = x
+    np.testing.assert_allclose(np.linalg.norm(p0 + s * (p1 - p0) - q0 - t * (q1 - q0)), d,
+                               rtol=0, atol=8 * EPS * max(np.abs(x).max(), 1.0))
 
 
 # --------------------------------------------------------------------------
@@ -276,11 +437,11 @@ def test_derivatives_in_each_region(rng, kind):
     np.testing.assert_allclose(hess, hess.T, atol=1e-14)
 
 
-def _twisted_parallel(theta, rng, offset=0.3, length=1.0):
-    """p along x; q of length ``length`` above it at height 0.5, rotated by theta about z at its
+def _twisted_parallel(theta, rng, offset=0.3, length=1.0, height=0.5):
+    """p along x; q of length ``length`` above it at ``height``, rotated by theta/2 about z at its
     midpoint: the exact minimiser is interior whenever theta != 0."""
     c, s = np.cos(theta / 2), np.sin(theta / 2)
-    mid = np.array([offset + length / 2, 0.0, 0.5])
+    mid = np.array([offset + length / 2, 0.0, height])
     half = 0.5 * length * np.array([c, s, 0.0])
     transform = random_rigid(rng)
     return np.concatenate([transform(y) for y in ([0, 0, 0], [1, 0, 0], mid - half, mid + half)])
@@ -329,6 +490,35 @@ def test_line_formula_hessian_blows_up_without_fallback(rng):
     assert np.abs(np.linalg.eigvalsh(hess)).max() > 1e3
     _, _, hess_fallback, _ = derivatives(x)
     assert np.abs(np.linalg.eigvalsh(hess_fallback)).max() < 100
+
+
+@pytest.mark.parametrize("height", [1e-6, 1e-4, 1e-2])
+@pytest.mark.parametrize("theta", [0.01, 0.1])
+def test_near_parallel_edge_edge_derivatives(rng, theta, height):
+    # nearly parallel and close, but above the fallback tolerance: the edge-edge type, whose
+    # weights (1 - s, s, t - 1, -t) use the interior (s, t) of the kernel
+    x = _twisted_parallel(theta, rng, height=height)
+    d, g, hess, kind = derivatives(x)
+    assert kind == K.EDGE_EDGE
+    sin = abs(np.sin(theta / 2))  # the angle between the segments
+    points = x.reshape(4, 3)
+    # the line formula |w.n| / |n| has the direction of n to ~eps / sin θ
+    assert_near_exact(d, *points, ROUNDING * rounding_scale(*points) / sin)
+    _, grad_jax, hess_jax = jax_oracle(kind)
+    # s and t carry errors ~eps / sin θ (the textbook numerators gave ~eps / sin^2 θ: 2e-12
+    # here at theta = 0.01)
+    np.testing.assert_allclose(g, grad_jax(x), atol=10 * EPS / sin)
+    # central differences of the exact distance, step h: round-off ~ ROUNDING · scale / h
+    h = 1e-7
+    np.testing.assert_allclose(g, fd_gradient(x, h),
+                               atol=10 * ROUNDING * rounding_scale(*points) / h)
+    # hess d = (hess h - grad d grad d^T) / d, with |hess h| ~ 1 / sin^2 θ, cancels to an
+    # error ~eps / (d sin^2 θ)
+    cancellation = 10 * EPS / (d * sin**2)
+    np.testing.assert_allclose(hess, hess_jax(x), atol=cancellation)
+    hess_fd = np.array([(derivatives(x + h * e)[1] - derivatives(x - h * e)[1]) / (2 * h)
+                        for e in np.eye(12)])
+    np.testing.assert_allclose(hess, hess_fd, atol=cancellation + 1e-8 * np.abs(hess).max())
 
 
 def _slide(kind_boundary, lam):

@@ -70,6 +70,19 @@ def test_diagram_options_follow_the_study():
                                                   'continuation.gauge="integral"']
                          ).diagram_options()
     assert (deeper.branch_depth, deeper.gauge, deeper.secondary_max_points) == (3, "integral", 40)
+    # the contact's formulation, curve and predictor and the secondary branches' count
+    pairs = parse_study(RING_DIAGRAM, overrides=[
+        'continuation.contact_formulation="pairs"', 'continuation.contact_curve="polygon"',
+        'continuation.contact_predictor="tangent"', "continuation.secondary_max_branches=3"]
+    ).diagram_options()
+    assert (pairs.contact_formulation, pairs.contact_curve, pairs.contact_predictor,
+            pairs.secondary_max_branches) == ("pairs", "polygon", "tangent", 3)
+    default = parse_study(RING_DIAGRAM).diagram_options()
+    assert (default.contact_formulation, default.contact_curve, default.contact_predictor,
+            default.secondary_max_branches) == (DiagramOptions.contact_formulation,
+                                                DiagramOptions.contact_curve,
+                                                DiagramOptions.contact_predictor,
+                                                DiagramOptions.secondary_max_branches)
 
 
 @pytest.mark.parametrize("edit, words", [
@@ -100,6 +113,10 @@ def test_diagram_options_follow_the_study():
     (("contact_max_points = 8", "branch_depth = 4"),
      ["[continuation] branch_depth must be 1 (primary branches), 2 (and secondary)"]),
     (("contact_max_points = 8", 'gauge = "nodes"'), ['gauge must be "node" or "integral"']),
+    (("contact_max_points = 8", 'contact_formulation = "pair"'),
+     ['contact_formulation must be "integral" or "pairs"']),
+    (("contact_max_points = 8", 'contact_curve = "quintic"\ncontact_formulation = "pairs"'),
+     ["contact_curve 'quintic' needs contact_formulation 'integral'"]),
 ])
 def test_bad_keys_and_types_are_one_line_errors(edit, words):
     old, new = edit

@@ -11,7 +11,9 @@ A study has six tables (``[study]`` and ``[continuation]`` optional)::
     [problem]        kind = "ring_diagram", "ring" or "tweezers", and its keys (below)
     [continuation]   ring_diagram and tweezers: the step, length and tolerance options
                      of DiagramOptions / TweezersOptions (free_max_step, ...); for
-                     ring_diagram also gauge, branch_depth, secondary_max_points
+                     ring_diagram also gauge, branch_depth, secondary_max_points,
+                     secondary_max_branches, contact_formulation, contact_curve,
+                     contact_predictor
     [outputs]        figures (PNG, default true), json (the JSON summary, true)
 
 ``[problem]`` keys: ``ring_diagram``: ``modes`` (list of Michell modes >= 2),
@@ -208,6 +210,17 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
                              _count(1, 3), 1, kinds=("ring_diagram",)),
         "secondary_max_points": _Key("an integer >= 2 (points per secondary half-branch)",
                                      _count(2, 100_000), 40, kinds=("ring_diagram",)),
+        "secondary_max_branches": _Key("an integer >= 0 (secondary and tertiary "
+                                       "half-branches in all)", _count(0, 1000), 12,
+                                       kinds=("ring_diagram",)),
+        "contact_formulation": _Key('"integral" or "pairs"', _choice(("integral", "pairs")),
+                                    "integral", kinds=("ring_diagram",)),
+        "contact_curve": _Key('"spline", "polygon" or "quintic"',
+                              _choice(("spline", "polygon", "quintic")), "spline",
+                              kinds=("ring_diagram",)),
+        "contact_predictor": _Key('"quadratic", "tangent" or "secant"',
+                                  _choice(("quadratic", "tangent", "secant")), "quadratic",
+                                  kinds=("ring_diagram",)),
     },
     "outputs": {
         "figures": _Key("true or false", lambda v: isinstance(v, bool), True),

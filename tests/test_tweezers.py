@@ -385,3 +385,29 @@ def test_point_stability_assembles_once_and_equals_the_separate_parts(small_run,
         assert stab.unstable_count == branch.unstable_count[i]
         np.testing.assert_array_equal(stab.eigenvalues, values)
         np.testing.assert_array_equal(stab.modes, modes)
+
+
+def test_straight_branch_bifurcations_do_not_depend_on_its_step():
+    """The straight rod's points only bracket its count changes: with the branch's
+    steps of up to one turn, the bifurcations (and the counts between them) are those
+    of steps of a quarter turn, within the event tolerance."""
+    from supercoil.continuation import ContinuationOptions, continuation
+    from supercoil.problems import tweezers
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 4.0), n_nodes=40)
+    problem, q0 = clamped_problem(opts)
+    coarse = straight_branch(opts, problem, q0, None)
+    problem, q0 = clamped_problem(opts)
+    fine = continuation(problem, q0, parameter="turns", name="straight", options=(
+        ContinuationOptions(initial_step=0.05, max_step=0.25, parameter_bounds=opts.turns,
+                            max_points=opts.max_points, event_tolerance=opts.event_tolerance)))
+    assert tweezers.STRAIGHT_MAX_STEP > 0.25 and len(coarse) < len(fine)
+    a, b = coarse.points_of_kind("bifurcation"), fine.points_of_kind("bifurcation")
+    assert len(a) == len(b) >= 3
+    for p, r in zip(a, b):
+        assert p.located and r.located
+        assert (p.count_before, p.count_after) == (r.count_before, r.count_after)
+        assert abs(p.parameter - r.parameter) <= 10 * opts.event_tolerance
+    # the first is the clamped Greenhill threshold up to the O(h^2) error (0.6 % at N = 40)
+    assert a[0].parameter == pytest.approx(critical_turns(4 / 3, 20.0), rel=1e-2)

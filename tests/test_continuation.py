@@ -820,3 +820,35 @@ def test_segment_evaluations_are_computed_once_and_equal_fresh_ones(monkeypatch)
     calls["inertia"].clear()
     assert locate_count_change(segment, 1e-9 / segment.length, 1e-3, located.resume) is None
     assert calls["inertia"] == []
+
+
+def test_a_converged_correction_assembles_a_hessian_only_for_a_newton_step(monkeypatch):
+    """A point whose residual already meets the tolerance is returned without a Hessian;
+    one that needed Newton steps carries the Hessian at the converged point only when
+    the round-off test needed it. Tangents with and without it are the same vector."""
+    from supercoil.continuation.corrector import correct, tangent
+
+    p = DiagonalQuartic(np.array([1.0, 2.0, 3.5]))
+    system = ExtendedSystem(p, "lam", np.zeros(3))
+    assemblies = []
+    original = ExtendedSystem.hessian
+
+    def counted(self, x):
+        assemblies.append(float(x[-1]))
+        return original(self, x)
+
+    monkeypatch.setattr(ExtendedSystem, "hessian", counted)
+    x = system.pack(np.zeros(3), np.zeros(0), 0.5)  # on the trivial branch: converged
+    e_lam = np.zeros(system.size)
+    e_lam[-1] = 1.0
+    corr = correct(system, x, e_lam, x, 0.0, 1e-10, 10)
+    assert corr.ok and corr.iterations == 0 and corr.hessian is None and assemblies == []
+    t_lazy = tangent(system, corr.x, e_lam, corr.hessian)
+    t_given = tangent(system, corr.x, e_lam, original(system, corr.x))
+    assert np.array_equal(t_lazy, t_given)
+    # a start off the branch takes Newton steps, each with its Hessian
+    start = system.pack(np.array([0.1, -0.05, 0.02]), np.zeros(0), 0.5)
+    corr = correct(system, start, e_lam, start, 0.0, 1e-10, 20)
+    assert corr.ok and corr.iterations >= 2
+    assert np.max(np.abs(corr.x[:3])) < 1e-9
+    assert len(assemblies) == 1 + corr.iterations  # the lazy tangent's, then one per step

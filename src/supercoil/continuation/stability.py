@@ -122,14 +122,13 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
 
 
 def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
-               lagrangian_hessian=None) -> tuple[np.ndarray, np.ndarray]:
+               full=None) -> tuple[np.ndarray, np.ndarray]:
     """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``.
 
-    ``lagrangian_hessian``: :func:`full_hessian` at ``x`` if already assembled."""
+    ``full``: :func:`full_hessian` at ``x`` if already assembled."""
     problem = system.problem
     system.set_parameter(x[-1])
-    dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x),
-                                          lagrangian_hessian)
+    dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x), full)
     m = J.shape[0] if J is not None else 0
     dim = dofs.size - m - sym.shape[1]
     if dim <= 0:

@@ -2,9 +2,14 @@
 F L^2/A = 75 (the problem the issue quotes for PyElastica), timed for the whole command.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers.py [--nodes N] [--stop T]
-[--pyelastica PYTHON [--pyelastica-steps K]]``.
+[--repeat K [--against SRC]] [--pyelastica PYTHON [--pyelastica-steps K]]``.
 Prints wall time, points per branch, folds, the last state's extension and writhe and the
-closest approach. With ``--pyelastica PYTHON`` (an interpreter with PyElastica installed,
+closest approach. ``--repeat K`` runs the command K times and prints the smallest and
+the median wall and CPU time (user + system of the command's process); with
+``--against SRC`` each run alternates with one of the source tree ``SRC`` (its
+``src`` folder, put on ``PYTHONPATH``; e.g. a ``git archive`` of an older commit) and
+the ratio of the smallest times is printed: on a shared machine the smallest of
+alternated runs is the least disturbed comparison. With ``--pyelastica PYTHON`` (an interpreter with PyElastica installed,
 ``pip install pyelastica`` or ``pip install -e ".[pyelastica]"``) the same problem is run
 by :mod:`bench_tweezers_pyelastica` (explicit dynamics to rest, 1.1 million steps at N = 100;
 ``--pyelastica-steps`` runs only that many and extrapolates the time) and the wall-time
@@ -14,11 +19,53 @@ ratio and the agreement of extension and writhe are printed.
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+
+def timed_command(cmd: list[str], source: str | None) -> tuple[float, float, subprocess.CompletedProcess]:
+    """``(wall s, CPU s of the process, completed process)`` of one run of ``cmd``
+    (``source``: a ``src`` folder put first on ``PYTHONPATH``)."""
+    env = dict(os.environ)
+    if source is not None:
+        env["PYTHONPATH"] = os.pathsep.join([source, env.get("PYTHONPATH", "")]).rstrip(
+            os.pathsep)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, check=False, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, proc
+
+
+def repeated(cmd_for, repeat: int, against: str | None) -> None:
+    """Run the command ``repeat`` times (alternating with ``against``); print min/median."""
+    trees = [None] + ([against] if against else [])
+    times: dict[str | None, list[tuple[float, float]]] = {t: [] for t in trees}
+    for _ in range(repeat):
+        for tree in trees:
+            with tempfile.TemporaryDirectory() as folder:
+                wall, cpu, proc = timed_command(cmd_for(Path(folder) / "run"), tree)
+            if proc.returncode != 0:
+                print(f"exit {proc.returncode}: {proc.stderr.strip()[-300:]}")
+            label = tree or "this tree"
+            print(f"{label}: wall {wall:.2f} s, cpu {cpu:.2f} s", flush=True)
+            times[tree].append((wall, cpu))
+    best = {}
+    for tree, rows in times.items():
+        walls, cpus = sorted(r[0] for r in rows), sorted(r[1] for r in rows)
+        best[tree] = (walls[0], cpus[0])
+        print(f"{tree or 'this tree'}: wall min {walls[0]:.2f} median {walls[len(walls) // 2]:.2f}"
+              f" s; cpu min {cpus[0]:.2f} median {cpus[len(cpus) // 2]:.2f} s")
+    if against:
+        print(f"ratio this / against (smallest): wall {best[None][0] / best[against][0]:.2f}, "
+              f"cpu {best[None][1] / best[against][1]:.2f}")
 
 
 def main() -> None:
@@ -28,18 +75,23 @@ def main() -> None:
     parser.add_argument("--max-points", type=int, default=3000)
     parser.add_argument("--pyelastica", metavar="PYTHON", default=None)
     parser.add_argument("--pyelastica-steps", type=int, default=0)
+    parser.add_argument("--repeat", type=int, default=0)
+    parser.add_argument("--against", metavar="SRC", default=None)
     args = parser.parse_args()
     import json
 
+    def cmd_for(out: Path) -> list[str]:
+        return [sys.executable, "-m", "supercoil.cli.main", "tweezers", "--twist-ratio",
+                str(4 / 3), "--length-over-diameter", "33", "--tension", "75", "--turns",
+                f"0:{args.stop}", "--nodes", str(args.nodes), "--max-points",
+                str(args.max_points), "--out", str(out)]
+
+    if args.repeat:
+        repeated(cmd_for, args.repeat, args.against)
+        return
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "run"
-        cmd = [sys.executable, "-m", "supercoil.cli.main", "tweezers", "--twist-ratio",
-               str(4 / 3), "--length-over-diameter", "33", "--tension", "75", "--turns",
-               f"0:{args.stop}", "--nodes", str(args.nodes), "--max-points",
-               str(args.max_points), "--out", str(out)]
-        start = time.perf_counter()
-        proc = subprocess.run(cmd, check=False, capture_output=True, text=True)
-        wall = time.perf_counter() - start
+        wall, _cpu, proc = timed_command(cmd_for(out), None)
         print(proc.stdout, proc.stderr)
         data = json.loads((out / "branch.json").read_text())
     last = data["points"][-1]

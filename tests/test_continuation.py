@@ -795,3 +795,80 @@ def test_user_event_bracket_from_corrected_points_gives_the_same_root():
     assert first.located and second.located
     assert abs(first.u - exact) <= 2 * xtol and abs(second.u - exact) <= 2 * xtol
     assert n_first >= 10 and n_second <= 2
+
+
+def test_segment_evaluations_are_computed_once_and_equal_fresh_ones(monkeypatch):
+    """A segment keeps the counts, nearest eigenvalues and tangents of its trial points
+    (never accepted): a second evaluation returns the first (no new inertia or
+    eigenproblem), equal to what a fresh segment computes, and the pitchfork at
+    ``lambda = d_0`` is located at its exact value with each evaluation done once."""
+    from supercoil.continuation import events
+    from supercoil.continuation.events import Segment, locate_count_change
+
+    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
+    p = DiagonalQuartic(d)
+    system = ExtendedSystem(p, "lam", np.zeros(6))
+    x_a, x_b = system.pack(np.zeros(6), np.zeros(0), 0.8), system.pack(np.zeros(6), np.zeros(0),
+                                                                          1.3)
+    calls = {"inertia": [], "eigenpairs": []}
+    for name in calls:
+        original = getattr(events, name)
+
+        def counted(system, x, *args, _original=original, _name=name):
+            calls[_name].append(float(x[-1]))
+            return _original(system, x, *args)
+
+        monkeypatch.setattr(events, name, counted)
+    segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
+    first = [(segment.count(u), segment.nearest_eigenvalue(u), segment.tangent(u))
+             for u in (0.0, 0.6, 1.0)]
+    second = [(segment.count(u), segment.nearest_eigenvalue(u), segment.tangent(u))
+              for u in (0.0, 0.6, 1.0)]
+    fresh = Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
+    for (c1, e1, t1), (c2, e2, t2), u in zip(first, second, (0.0, 0.6, 1.0)):
+        assert c1 == c2 == fresh.count(u) and e1 == e2 == fresh.nearest_eigenvalue(u)
+        assert np.array_equal(t1, t2) and np.array_equal(t1, fresh.tangent(u))
+    assert [c for c, _, _ in first] == [0, 1, 1]
+    assert first[1][1] == pytest.approx(1.0 - (0.8 + 0.6 * 0.5), abs=1e-12)
+    calls["inertia"].clear()
+    calls["eigenpairs"].clear()
+    located = locate_count_change(segment, 1e-9 / segment.length, 1e-3)
+    assert located.located and located.x[-1] == pytest.approx(1.0, abs=1e-9)
+    for name, lams in calls.items():
+        assert len(lams) == len(set(lams)), name  # no point evaluated twice
+    # the further search from the bracket the bisection left reuses its counts
+    calls["inertia"].clear()
+    assert locate_count_change(segment, 1e-9 / segment.length, 1e-3, located.resume) is None
+    assert calls["inertia"] == []
+
+
+def test_a_converged_correction_assembles_a_hessian_only_for_a_newton_step(monkeypatch):
+    """A point whose residual already meets the tolerance is returned without a Hessian;
+    one that needed Newton steps carries the Hessian at the converged point only when
+    the round-off test needed it. Tangents with and without it are the same vector."""
+    from supercoil.continuation.corrector import correct, tangent
+
+    p = DiagonalQuartic(np.array([1.0, 2.0, 3.5]))
+    system = ExtendedSystem(p, "lam", np.zeros(3))
+    assemblies = []
+    original = ExtendedSystem.hessian
+
+    def counted(self, x):
+        assemblies.append(float(x[-1]))
+        return original(self, x)
+
+    monkeypatch.setattr(ExtendedSystem, "hessian", counted)
+    x = system.pack(np.zeros(3), np.zeros(0), 0.5)  # on the trivial branch: converged
+    e_lam = np.zeros(system.size)
+    e_lam[-1] = 1.0
+    corr = correct(system, x, e_lam, x, 0.0, 1e-10, 10)
+    assert corr.ok and corr.iterations == 0 and corr.hessian is None and assemblies == []
+    t_lazy = tangent(system, corr.x, e_lam, corr.hessian)
+    t_given = tangent(system, corr.x, e_lam, original(system, corr.x))
+    assert np.array_equal(t_lazy, t_given)
+    # a start off the branch takes Newton steps, each with its Hessian
+    start = system.pack(np.array([0.1, -0.05, 0.02]), np.zeros(0), 0.5)
+    corr = correct(system, start, e_lam, start, 0.0, 1e-10, 20)
+    assert corr.ok and corr.iterations >= 2
+    assert np.max(np.abs(corr.x[:3])) < 1e-9
+    assert len(assemblies) == 1 + corr.iterations  # the lazy tangent's, then one per step

@@ -296,3 +296,21 @@ def test_a_dna_result_says_so_in_its_title(ring, tmp_path):
     result = load_result(_store(ring, tmp_path / "dna.h5", summary=True,
                                 extra={"base_pairs": 600, "salt_mM": 150.0}))
     assert result.title == "DNA ring of 600 bp in 150 mM salt, C/A = 0.6667, L/D = 40, N = 24"
+
+
+def test_tweezers_figures_fast_png_encoding_keeps_the_pixels(tmp_path):
+    """The tweezers figures are saved with a faster zlib level: the decoded image equals
+    the one saved with Pillow's default compression, pixel for pixel."""
+    from supercoil.plotting.figures import diagram_figure
+    from supercoil.plotting.tweezers import SAVE_OPTIONS
+
+    turns = np.linspace(0.0, 3.0, 40)
+    branches = [{"name": "buckled", "turns": turns, "extension": 1.0 - 0.1 * turns**2,
+                 "stable": turns < 2.0}]
+    specials = [{"kind": "fold", "turns": 2.0, "extension": 0.6}]
+    fig = diagram_figure(branches, specials, title="clamped rod", x="turns", y="extension")
+    fig.savefig(tmp_path / "default.png", dpi=SAVE_OPTIONS["dpi"])
+    fig.savefig(tmp_path / "fast.png", **SAVE_OPTIONS)
+    assert SAVE_OPTIONS["pil_kwargs"]["compress_level"] < 6
+    assert (tmp_path / "fast.png").read_bytes() != (tmp_path / "default.png").read_bytes()
+    np.testing.assert_array_equal(_png(tmp_path / "fast.png"), _png(tmp_path / "default.png"))

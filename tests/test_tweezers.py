@@ -339,3 +339,75 @@ def test_continuation_in_force_locates_the_buckling_force():
     errors = np.abs(np.array(values) - exact) / exact
     orders = np.log2(errors[:-1] / errors[1:])
     assert np.all(np.abs(orders - 2) < 0.2), (errors, orders)
+
+
+def _same_hessian(a, b):
+    """Bit-for-bit equal ``HessianParts`` (stored pattern, values, rank-one terms)."""
+    return (np.array_equal(a.sparse.indptr, b.sparse.indptr)
+            and np.array_equal(a.sparse.indices, b.sparse.indices)
+            and np.array_equal(a.sparse.data, b.sparse.data)
+            and np.array_equal(a.vectors, b.vectors)
+            and np.array_equal(a.coefficients, b.coefficients))
+
+
+@pytest.mark.parametrize("name", ["buckled", "buckled_contact"])
+def test_point_stability_assembles_once_and_equals_the_separate_parts(small_run, name):
+    """One assembly of the Lagrangian's Hessian serves the count and the eigenproblem:
+    its restrictions equal the two separately assembled Hessians bit for bit, and the
+    point's stability equals the inertia and eigenpairs computed each on its own."""
+    from supercoil.continuation.stability import (
+        eigenpairs,
+        full_hessian,
+        inertia,
+        point_stability,
+    )
+    from supercoil.continuation.system import ExtendedSystem
+    from supercoil.solvers.newton import _hessian
+    from supercoil.stability.analysis import _eigen_dofs
+
+    branch = small_run.branch(name)
+    problem = small_run.pin_branch(name)
+    for i in (1, len(branch) // 2, len(branch) - 1):
+        q, mu, lam = branch.states[i], branch.multipliers[i], branch.parameter_values[i]
+        system = ExtendedSystem(problem, branch.parameter, q)
+        x = system.pack(q, mu, lam)
+        system.set_parameter(lam)
+        problem.accept(q)
+        full = full_hessian(system, x)
+        assert _same_hessian(full.restrict(system.free), system.hessian(x))
+        dofs = _eigen_dofs(problem)
+        assert dofs.size > system.free.size  # the gauge pin is released there
+        assert _same_hessian(full.restrict(dofs), _hessian(problem, q, mu, dofs))
+        stab = point_stability(system, x, 1e-6, 2)
+        neg, sign = inertia(system, x, 1e-6)
+        values, modes = eigenpairs(system, x, neg + 2)
+        assert (stab.negative_count, stab.determinant_sign) == (neg, sign)
+        assert stab.unstable_count == branch.unstable_count[i]
+        np.testing.assert_array_equal(stab.eigenvalues, values)
+        np.testing.assert_array_equal(stab.modes, modes)
+
+
+def test_straight_branch_bifurcations_do_not_depend_on_its_step():
+    """The straight rod's points only bracket its count changes: with the branch's
+    steps of up to one turn, the bifurcations (and the counts between them) are those
+    of steps of a quarter turn, within the event tolerance."""
+    from supercoil.continuation import ContinuationOptions, continuation
+    from supercoil.problems import tweezers
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 4.0), n_nodes=40)
+    problem, q0 = clamped_problem(opts)
+    coarse = straight_branch(opts, problem, q0, None)
+    problem, q0 = clamped_problem(opts)
+    fine = continuation(problem, q0, parameter="turns", name="straight", options=(
+        ContinuationOptions(initial_step=0.05, max_step=0.25, parameter_bounds=opts.turns,
+                            max_points=opts.max_points, event_tolerance=opts.event_tolerance)))
+    assert tweezers.STRAIGHT_MAX_STEP > 0.25 and len(coarse) < len(fine)
+    a, b = coarse.points_of_kind("bifurcation"), fine.points_of_kind("bifurcation")
+    assert len(a) == len(b) >= 3
+    for p, r in zip(a, b):
+        assert p.located and r.located
+        assert (p.count_before, p.count_after) == (r.count_before, r.count_after)
+        assert abs(p.parameter - r.parameter) <= 10 * opts.event_tolerance
+    # the first is the clamped Greenhill threshold up to the O(h^2) error (0.6 % at N = 40)
+    assert a[0].parameter == pytest.approx(critical_turns(4 / 3, 20.0), rel=1e-2)

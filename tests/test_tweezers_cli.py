@@ -175,3 +175,30 @@ def test_displacement_control_cli(tmp_path):
         assert p["extension"] == pytest.approx(0.7, abs=1e-9) and p["load_potential"] == 0.0
     assert data["points"][0]["tension"] < 0  # the clamped buckle is compressed at 0 turns
     assert (out / "tension.png").exists() and not (out / "hat_curve.png").exists()
+
+
+def test_each_final_branch_file_is_written_once(tmp_path, monkeypatch):
+    """run_saving writes every branch when it becomes final; write_tweezers does not
+    write the same branch object again. The files hold the computed branches."""
+    writes, computed = [], {}
+    original_save = Branch.save
+
+    def counted_save(self, path, compressed=True):
+        if compressed:  # a final save (in-progress ones are not compressed)
+            writes.append(f"{self.name}.npz")
+            computed[f"{self.name}.npz"] = self
+        return original_save(self, path, compressed)
+
+    monkeypatch.setattr(Branch, "save", counted_save)
+    out = tmp_path / "once"
+    status = run(["tweezers", "--twist-ratio", "1.3333333333333333", "--length-over-diameter",
+                  "20", "--tension", "20", "--turns", "0:1.6", "--nodes", "30", "--out",
+                  str(out), "--quiet"])
+    assert status == 0
+    names = ["straight.npz", "buckled.npz", "buckled_contact.npz"]
+    assert sorted(writes) == sorted(names)  # once each
+    for name in names:
+        stored, branch = Branch.load(out / "branches" / name), computed[name]
+        assert np.array_equal(stored.states, branch.states)
+        assert np.array_equal(stored.parameter_values, branch.parameter_values)
+        assert [p.kind for p in stored.special_points] == [p.kind for p in branch.special_points]

@@ -210,8 +210,17 @@ def tweezers(
           f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
     from supercoil.cli.diagram_output import run_saving
 
-    result = run_saving(lambda message, on_point, on_branch: tweezers_branches(
-        options, progress=message, on_point=on_point, on_branch=on_branch), out, quiet)
+    saved = []  # the final branches run_saving wrote (write_tweezers does not rewrite them)
+
+    def compute(message, on_point, on_branch):
+        def final(branch, contact):
+            on_branch(branch, contact)
+            saved.append(branch)
+
+        return tweezers_branches(options, progress=message, on_point=on_point,
+                                 on_branch=final)
+
+    result = run_saving(compute, out, quiet)
     if result is None:
         raise typer.Exit(EXIT_NOT_CONVERGED)
     path = None
@@ -223,7 +232,7 @@ def tweezers(
         warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
         path = quasistatic_path(options, protocol, step=step, force_range=ramp,
                                 force_step=force_step)
-    payload = write_tweezers(result, out, path, preset)
+    payload = write_tweezers(result, out, path, preset, saved=saved)
     if not payload["ok"] or (path is not None and not path.ok):
         if path is not None and not path.ok:
             payload["notes"].append(f"path: {path.message}")
@@ -233,8 +242,12 @@ def tweezers(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def write_tweezers(result, out: Path, path=None, preset=None) -> dict:
+def write_tweezers(result, out: Path, path=None, preset=None, saved=()) -> dict:
     """Save the branches, branch.json (with the envelope) and the figures; return the payload.
+
+    ``saved``: branches already written to ``out/branches`` as they are (the very
+    objects, e.g. by :func:`~supercoil.cli.diagram_output.run_saving` as each became
+    final): not written again (three compressed saves, about 0.05 s at N = 100).
 
     ``path``: the quasi-static path (:class:`~supercoil.problems.tweezers_protocol.PathResult`)
     of the up-down protocol, written as the list ``path`` with its jumps among the special
@@ -247,7 +260,8 @@ def write_tweezers(result, out: Path, path=None, preset=None) -> dict:
     from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
 
     for branch in result.branches:
-        branch.save(out / "branches" / f"{branch.name}.npz")
+        if not any(branch is done for done in saved):
+            branch.save(out / "branches" / f"{branch.name}.npz")
     payload = result_payload(result)
     states = {b.name: b.states for b in result.branches}
     if path is not None:

@@ -38,7 +38,9 @@ class Correction:
     iterations: int
     residual: float
     message: str
-    # the Hessian at ``x`` (converged), for a tangent or inertia there before any accept
+    # the Hessian at ``x`` (converged) if it was assembled (None when the residual met
+    # the tolerance before a Newton step needed it), for a tangent or inertia there
+    # before any accept
     hessian: object = field(default=None, repr=False, compare=False)
 
 
@@ -62,8 +64,13 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
         if not np.all(np.isfinite(F)):
             return Correction(None, False, it, np.inf, f"non-finite residual at iteration {it}")
         res = float(np.max(np.abs(F))) if F.size else 0.0
+        if res <= tolerance:
+            # no Hessian: a caller that needs one at x (a tangent, a count) assembles
+            # it, the same matrix; the trial points of a user event need none
+            return Correction(x, True, it, res, f"converged in {it} iterations (residual "
+                              f"{res:.2e})")
         H = system.hessian(x)
-        if res <= tolerance or res <= roundoff_floor(H, system.q(x)):
+        if res <= roundoff_floor(H, system.q(x)):
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
                               f"{res:.2e})", H)
         if it == max_iterations:

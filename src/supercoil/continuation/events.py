@@ -69,6 +69,13 @@ class Segment:
         # Hessians at the re-corrected trial points (never accepted, so they stay
         # valid): their tangents and counts need no new one
         self._hessians: dict[float, object] = {}
+        # counts, nearest eigenvalues and tangents already computed, by fraction: the
+        # points are never accepted, so a second evaluation would repeat the first
+        # (Brent's method re-evaluates the bracket's ends the bisection left, and a
+        # further count change is searched from the bisection's last bracket)
+        self._counts: dict[float, int] = {}
+        self._nearest: dict[float, float] = {}
+        self._tangents: dict[float, np.ndarray] = {}
 
     @property
     def corrected(self) -> list[float]:
@@ -111,26 +118,37 @@ class Segment:
         return self._points[u]
 
     def tangent(self, u: float) -> np.ndarray:
-        try:
-            x = self.point(u)
-            return tangent(self.system, x, self.row, self._hessians.get(float(u)))
-        except SingularMatrixError as exc:
-            raise LocationFailed(str(exc)) from None
+        u = float(u)
+        if u not in self._tangents:
+            try:
+                x = self.point(u)
+                self._tangents[u] = tangent(self.system, x, self.row, self._hessians.get(u))
+            except SingularMatrixError as exc:
+                raise LocationFailed(str(exc)) from None
+        return self._tangents[u].copy()
 
     def count(self, u: float) -> int:
-        try:
-            x = self.point(u)
-            return inertia(self.system, x, self.zero_tolerance, self._hessians.get(float(u)))[0]
-        except (SingularMatrixError, InertiaError) as exc:
-            raise LocationFailed(str(exc)) from None
+        u = float(u)
+        if u not in self._counts:
+            try:
+                x = self.point(u)
+                self._counts[u] = inertia(self.system, x, self.zero_tolerance,
+                                          self._hessians.get(u))[0]
+            except (SingularMatrixError, InertiaError) as exc:
+                raise LocationFailed(str(exc)) from None
+        return self._counts[u]
 
     def system_eigenpairs(self, u: float, n_wanted: int) -> tuple[np.ndarray, np.ndarray]:
         """Eigenpairs of the constrained Hessian nearest zero at ``u`` (``eigenpairs``)."""
         return eigenpairs(self.system, self.point(u), n_wanted)
 
     def nearest_eigenvalue(self, u: float) -> float:
-        values, _ = self.system_eigenpairs(u, 4)
-        return float(values[np.argmin(np.abs(values))]) if values.size else float("nan")
+        u = float(u)
+        if u not in self._nearest:
+            values, _ = self.system_eigenpairs(u, 4)
+            self._nearest[u] = (float(values[np.argmin(np.abs(values))]) if values.size
+                                else float("nan"))
+        return self._nearest[u]
 
 
 @dataclass(frozen=True)

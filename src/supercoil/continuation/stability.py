@@ -24,6 +24,7 @@ import numpy as np
 
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, KKTFactor, SingularMatrixError
+from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.stability.analysis import (
     _eigen_system,
     _lowest_pairs,
@@ -120,12 +121,14 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
         return factor.reduced_negative_count, 0
 
 
-def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``."""
+def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
+               full=None) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``.
+
+    ``full``: :func:`full_hessian` at ``x`` if already assembled."""
     problem = system.problem
     system.set_parameter(x[-1])
-    dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x))
+    dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x), full)
     m = J.shape[0] if J is not None else 0
     dim = dofs.size - m - sym.shape[1]
     if dim <= 0:
@@ -140,11 +143,23 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int
     return values, modes
 
 
+def full_hessian(system: ExtendedSystem, x: np.ndarray):
+    """Hessian of the Lagrangian at ``x`` on all the problem's DOFs (``HessianParts``).
+
+    Restricted to ``system.free`` it is ``system.hessian(x)``, and to the
+    eigenproblem's DOFs (the free ones and the gauge pins) the eigenproblem's:
+    one assembly serves both parts of :func:`point_stability`.
+    """
+    system.set_parameter(x[-1])
+    return lagrangian_hessian(system.problem, system.q(x), system.multipliers(x))
+
+
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
                     n_modes: int) -> PointStability:
     """Stability report at the point ``x`` of the extended system (see module doc)."""
-    neg, det_sign = inertia(system, x, zero_tolerance)
-    values, modes = eigenpairs(system, x, neg + n_modes)
+    full = full_hessian(system, x)
+    neg, det_sign = inertia(system, x, zero_tolerance, full.restrict(system.free))
+    values, modes = eigenpairs(system, x, neg + n_modes, full)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # as analyse: at least what the eigensolver found below -tol, at least the

@@ -17,6 +17,9 @@ import numpy as np
 from supercoil.plotting.figures import configurations_figure, diagram_figure
 
 FIGURES = {"hat_curve.png": "extension", "torque.png": "torque", "writhe.png": "writhe"}
+# zlib level 1 instead of Pillow's 6: the same pixels, files about 17 % larger, the
+# encoding of the four figures about 0.1-0.2 s shorter (measured at N = 100, 0-5 turns)
+SAVE_OPTIONS = {"dpi": 150, "pil_kwargs": {"compress_level": 1}}
 
 
 def _branches(payload: Mapping, y: str) -> list[dict]:
@@ -68,7 +71,7 @@ def write_figures(payload: Mapping, configurations: Sequence[Mapping],
     for name, y in figures.items():
         specials = [p for p in payload["special_points"] if y in p and "turns" in p]
         fig = diagram_figure(_branches(payload, y), specials, title=title, x="turns", y=y)
-        fig.savefig(folder / name, dpi=150)
+        fig.savefig(folder / name, **SAVE_OPTIONS)
         written.append(folder / name)
     ramp = [p for p in payload.get("path") or [] if p.get("ramp") == "tension"]
     if ramp:
@@ -78,12 +81,12 @@ def write_figures(payload: Mapping, configurations: Sequence[Mapping],
         specials = [{**j, "tension": j["tension"]} for j in payload["special_points"]
                     if j.get("ramp") == "tension"]
         fig = diagram_figure([rows], specials, title=title, x="tension", y="extension")
-        fig.savefig(folder / "force_extension.png", dpi=150)
+        fig.savefig(folder / "force_extension.png", **SAVE_OPTIONS)
         written.append(folder / "force_extension.png")
     if configurations:
         fig = configurations_figure(configurations, diameter=payload.get("diameter"),
                                     title=title, closed=False)
-        fig.savefig(folder / "configurations.png", dpi=150)
+        fig.savefig(folder / "configurations.png", **SAVE_OPTIONS)
         written.append(folder / "configurations.png")
     return written
 

@@ -351,11 +351,21 @@ def _onset_stop(run: Branch) -> bool:
 
 
 # ----------------------------------------------------------------------------- branches
+STRAIGHT_MAX_STEP = 1.0  # arclength step of the straight branch (see straight_branch)
+
+
 def straight_branch(options: TweezersOptions, problem: ClampedRodEnergy, q0: np.ndarray,
                     records, on_point=None) -> Branch:
-    """The straight rod in turns (load control), with its bifurcations located."""
+    """The straight rod in turns (load control), with its bifurcations located.
+
+    The straight twisted rod is the same state at every ``turns``: its points
+    only bracket the count changes, which are located to ``event_tolerance``
+    whatever the step. Steps up to one turn (``STRAIGHT_MAX_STEP``) halve the
+    points against a quarter turn (N = 100, 0-5 turns: 12 points instead of 24,
+    the five bifurcations within 3e-9 turns of those found with quarter turns).
+    """
     opts = options
-    cont = ContinuationOptions(initial_step=0.05, max_step=0.25,
+    cont = ContinuationOptions(initial_step=0.05, max_step=STRAIGHT_MAX_STEP,
                                parameter_bounds=opts.turns, max_points=opts.max_points,
                                event_tolerance=opts.event_tolerance)
     return continuation(problem, q0, parameter="turns", options=cont, name="straight",

@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from supercoil.solvers.kkt import KKTFactor, SingularMatrixError
-from supercoil.solvers.problem import ConstrainedEnergy, free_dofs
+from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 log = logging.getLogger(__name__)
 
@@ -141,11 +141,17 @@ def roundoff_floor(H, q: np.ndarray) -> float:
     return np.finfo(float).eps * norm_h * max(float(np.max(np.abs(q))), 1e-300)
 
 
-def _hessian(problem, q, lam, free):
+def lagrangian_hessian(problem, q, lam) -> HessianParts:
+    """Hessian of the Lagrangian ``E + lam . c`` on all ``n_dofs`` DOFs (restrict it to
+    the DOFs wanted: one assembly can serve several restrictions)."""
     parts = problem.hessian(q)
     if problem.n_constraints:
         parts = parts.plus_sparse(problem.constraint_hessian(q, lam))
-    return parts.restrict(free)
+    return parts
+
+
+def _hessian(problem, q, lam, free):
+    return lagrangian_hessian(problem, q, lam).restrict(free)
 
 
 def _shifted_step(problem, q, free, H, J, mass, rhs, radius, opts):

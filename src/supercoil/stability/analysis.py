@@ -201,10 +201,16 @@ def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, dofs: np.ndarray,
     return qmat[:, keep] / root[:, None]
 
 
-def _eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray):
-    """``(dofs, H, J, mass, symmetry)`` of the constrained eigenproblem (see _eigen_dofs)."""
+def _eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
+                  lagrangian_hessian=None):
+    """``(dofs, H, J, mass, symmetry)`` of the constrained eigenproblem (see _eigen_dofs).
+
+    ``lagrangian_hessian``: the Hessian of the Lagrangian at ``(q, multipliers)`` on all
+    DOFs (:func:`~supercoil.solvers.newton.lagrangian_hessian`) if already assembled.
+    """
     dofs = _eigen_dofs(problem)
-    H = _hessian(problem, q, multipliers, dofs)
+    H = (_hessian(problem, q, multipliers, dofs) if lagrangian_hessian is None
+         else lagrangian_hessian.restrict(dofs))
     J = problem.constraint_jacobian(q)[:, dofs] if problem.n_constraints else None
     return dofs, H, J, problem.mass[dofs], _symmetry_basis(problem, q, dofs)
 

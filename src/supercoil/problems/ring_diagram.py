@@ -142,6 +142,7 @@ from supercoil.contact.report import contact_summary
 from supercoil.continuation import (
     Branch,
     ContinuationOptions,
+    ContinuationStatus,
     SpecialPoint,
     UserEvent,
     continuation,
@@ -607,7 +608,10 @@ def _mark_contact_bifurcations(points: list[SpecialPoint], problem: ContactProbl
 
 
 def truncate_after(branch: Branch, point: SpecialPoint, message: str) -> Branch:
-    """The branch up to the first point beyond ``point`` (later special points dropped)."""
+    """The branch up to the first point beyond ``point`` (later special points dropped),
+    with status ``STOPPED`` and ``message``: how the run went on past it (a failure
+    there, e.g. Newton diverging where the contact-free rod passes through itself, is
+    past the point kept and does not make the branch incomplete; the message says it)."""
     k = point.index + 2
     keep = tuple(p for p in branch.special_points
                  if p.index < point.index or (p.index == point.index
@@ -617,7 +621,7 @@ def truncate_after(branch: Branch, point: SpecialPoint, message: str) -> Branch:
         "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")}
     return dataclasses.replace(branch, special_points=keep,
                                records={n: v[:k] for n, v in branch.records.items()},
-                               message=message, **arrays)
+                               status=ContinuationStatus.STOPPED, message=message, **arrays)
 
 
 # ------------------------------------------------------------------------- the diagram

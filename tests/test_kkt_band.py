@@ -1,0 +1,87 @@
+"""KKTFactor(band=True): LAPACK's band LU in place of SuperLU (ring stability path).
+
+Oracles: the SuperLU factor of the same matrix (solves to round-off, the same
+determinant sign and inertia) and the dense matrix (eigenvalues' signs and
+product, the solve's residual).
+"""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from supercoil.solvers.kkt import KKTFactor, SingularMatrixError, _BandLU, _OrderedLU
+from supercoil.solvers.problem import HessianParts
+
+
+def banded_kkt(rng, n, m, rank_one=0, dense_rows=0, width=3):
+    """A chain-like KKT problem: ``H`` of half-bandwidth ``width`` (indefinite),
+    ``m`` constraints on neighbouring unknowns, ``dense_rows`` rows on every unknown
+    (integral phase conditions) and ``rank_one`` dense symmetric rank-one terms."""
+    H = np.zeros((n, n))
+    for k in range(width + 1):
+        d = rng.standard_normal(n - k)
+        H += np.diag(d, k) + (np.diag(d, -k) if k else 0.0)
+    H += np.diag(rng.uniform(-1.0, 3.0, n))
+    J = np.zeros((m + dense_rows, n))
+    for j in range(m):
+        start = int(rng.integers(0, n - 3))
+        J[j, start:start + 3] = rng.standard_normal(3)
+    J[m:] = rng.standard_normal((dense_rows, n))
+    vecs = rng.standard_normal((rank_one, n))
+    coefs = rng.uniform(0.5, 3.0, rank_one) * rng.choice([-1, 1], rank_one)
+    return HessianParts(sp.csr_matrix(H), vecs, coefs), sp.csr_matrix(J)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_band_factor_equals_superlu_factor_and_the_dense_matrix(seed):
+    rng = np.random.default_rng(900 + seed)
+    n, m = int(rng.integers(60, 160)), int(rng.integers(1, 12))
+    H, J = banded_kkt(rng, n, m, rank_one=int(rng.integers(0, 3)),
+                      dense_rows=int(seed % 3 == 2))
+    shift, mass = (0.0, None) if seed % 2 else (-0.3, rng.uniform(0.5, 2.0, n))
+    band = KKTFactor(H, J, shift=shift, mass=mass, band=True)
+    reference = KKTFactor(H, J, shift=shift, mass=mass)
+    assert isinstance(band._lu, _BandLU) and isinstance(reference._lu, _OrderedLU)
+    k = J.shape[0]
+    Hd = H.dense() - shift * np.diag(mass if mass is not None else np.ones(n))
+    K = np.block([[Hd, J.toarray().T], [J.toarray(), np.zeros((k, k))]])
+    ev = np.linalg.eigvalsh(K)
+    assert band.negative_count == reference.negative_count == np.sum(ev < 0)
+    assert band.determinant_sign == reference.determinant_sign == int(np.prod(np.sign(ev)))
+    rhs = rng.standard_normal((n + k, 2))
+    z_band, z_ref = band.solve(rhs), reference.solve(rhs)
+    cond = np.linalg.cond(K)
+    assert np.max(np.abs(z_band - z_ref)) <= 1e-13 * cond * np.max(np.abs(z_ref))
+    assert np.max(np.abs(K @ z_band - rhs)) <= 1e-12 * cond * np.max(np.abs(rhs))
+
+
+def test_band_determinant_sign_counts_row_swaps():
+    """Matrices whose LU needs row swaps (zero diagonal): the sign from U's diagonal
+    and the pivots equals the sign of the determinant, either parity of swaps."""
+    rng = np.random.default_rng(7)
+    for trial in range(20):
+        n = 40
+        A = np.zeros((n, n))
+        for k in range(3):
+            d = rng.standard_normal(n - k)
+            A += np.diag(d, k) + (np.diag(d, -k) if k else 0.0)
+        A[np.arange(0, n, 3), np.arange(0, n, 3)] = 0.0  # forces pivoting
+        coo = sp.coo_matrix(A)
+        lu = _BandLU.of(n, coo.row, coo.col, coo.data, np.arange(n))
+        assert np.any(lu._piv != np.arange(n))
+        assert lu.determinant_sign() == int(np.sign(np.linalg.det(A)))
+
+
+def test_band_falls_back_to_superlu_and_reports_singular_matrices():
+    rng = np.random.default_rng(3)
+    # a band wider than a quarter of the matrix: SuperLU
+    A = rng.standard_normal((20, 20))
+    A = A + A.T
+    wide = KKTFactor(HessianParts(sp.csr_matrix(A)), band=True)
+    assert isinstance(wide._lu, _OrderedLU)
+    # an exactly singular banded matrix: the error SuperLU gives
+    H = np.diag(np.r_[np.ones(30), 0.0, np.ones(29)])
+    with pytest.raises(SingularMatrixError):
+        KKTFactor(HessianParts(sp.csr_matrix(H)), band=True)
+    with pytest.raises(SingularMatrixError):
+        KKTFactor(HessianParts(sp.csr_matrix(H)))

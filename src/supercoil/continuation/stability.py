@@ -110,14 +110,14 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     """
     H, J = _count_system(system, x, hessian)
     try:
-        factor = KKTFactor(H, J)
+        factor = KKTFactor(H, J, band=True)
         negative = factor.reduced_negative_count
         return negative, int(factor.determinant_sign * (-1) ** J.shape[0])
     except (SingularMatrixError, InertiaError):
         if zero_tolerance is None:
             raise
         mass = system.mass[np.setdiff1d(np.arange(system.n), count_gauge(system, x))]
-        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=mass)
+        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=mass, band=True)
         return factor.reduced_negative_count, 0
 
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.solvers.newton import _hessian
+from supercoil.solvers.newton import _hessian, lagrangian_hessian
 from supercoil.solvers.patterns import csr_columns
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
@@ -142,6 +142,12 @@ class ExtendedSystem:
         """Hessian of the Lagrangian on the free DOFs (phase conditions are linear)."""
         self.set_parameter(x[-1])
         return _hessian(self.problem, self.q(x), x[self.n:self.n + self.m], self.free)
+
+    def full_hessian(self, x: np.ndarray) -> HessianParts:
+        """Hessian of the Lagrangian on all DOFs: :meth:`hessian` is its restriction to
+        the free ones (the same entries), the stability's eigenproblem another."""
+        self.set_parameter(x[-1])
+        return lagrangian_hessian(self.problem, self.q(x), x[self.n:self.n + self.m])
 
     def jacobian(self, x: np.ndarray) -> sp.csr_matrix:
         """Constraint Jacobian with the phase rows, ``(m + r, n)``."""

@@ -42,6 +42,8 @@ class Correction:
     # the tolerance before a Newton step needed it), for a tangent or inertia there
     # before any accept
     hessian: object = field(default=None, repr=False, compare=False)
+    # the same on all DOFs (``hessian`` is its restriction to the free ones)
+    full_hessian: object = field(default=None, repr=False, compare=False)
 
 
 def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
@@ -69,10 +71,11 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
             # it, the same matrix; the trial points of a user event need none
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
                               f"{res:.2e})")
-        H = system.hessian(x)
+        full = system.full_hessian(x)
+        H = full.restrict(system.free)  # = system.hessian(x)
         if res <= roundoff_floor(H, system.q(x)):
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
-                              f"{res:.2e})", H)
+                              f"{res:.2e})", H, full)
         if it == max_iterations:
             break
         rising = it >= 2 and res > previous

@@ -278,7 +278,8 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     )
 
 
-def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False):
+def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
+                  band=False):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
@@ -289,7 +290,8 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
     its banded pattern. (Projecting ``v`` onto the M-complement of ``S``
     instead agrees only when ``S`` spans an invariant subspace of ``H``, which
     an approximate symmetry does not: measured 3606 against the dense 3630 for
-    the lowest eigenvalue on a contact branch at N = 200.)
+    the lowest eigenvalue on a contact branch at N = 200.) ``band``: the KKT
+    factorisation by the band LU (``KKTFactor(band=True)``).
     """
     r = 0 if symmetry is None else symmetry.shape[1]
     dim = n - m - r
@@ -298,7 +300,7 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         return values[:k], vectors[:, :k]
     sigma = -1e-3
-    opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma)
+    opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma, band)
     Op = spla.LinearOperator((n, n), matvec=opinv, dtype=float)
     A = spla.LinearOperator((n, n), matvec=H.matvec, dtype=float)
     Mop = spla.LinearOperator((n, n), matvec=lambda x: mass * np.ravel(x), dtype=float)
@@ -310,7 +312,7 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
     return values[order], vectors[:, order]
 
 
-def _constrained_shift_invert(H, J, mass, symmetry, sigma: float):
+def _constrained_shift_invert(H, J, mass, symmetry, sigma: float, band: bool = False):
     """``x -> v`` solving ``(H - sigma M) v + J^T a + M S b = x, J v = 0, S^T M v = 0``.
 
     One sparse KKT factorisation of ``[[H - sigma M, J^T], [J, 0]]``; the ``r``
@@ -319,7 +321,7 @@ def _constrained_shift_invert(H, J, mass, symmetry, sigma: float):
     """
     n = mass.size
     m = J.shape[0] if J is not None else 0
-    factor = KKTFactor(H, J, shift=sigma, mass=mass)
+    factor = KKTFactor(H, J, shift=sigma, mass=mass, band=band)
     r = 0 if symmetry is None else symmetry.shape[1]
     if r:
         C = (mass[:, None] * symmetry).T  # (r, n)

@@ -74,3 +74,43 @@ def test_point_stability_equals_the_fresh_count_and_eigenpairs(excess_link):
     # the eigenpairs: the same computation on the same entries, bit for bit
     ev, modes = eigenpairs(system, x, neg + n_modes)
     assert np.array_equal(stab.eigenvalues, ev) and np.array_equal(stab.modes, modes)
+
+
+def test_band_eigenpairs_equal_the_superlu_eigenpairs_to_round_off():
+    system, x = _system(excess_link=2.5)
+    values, modes = eigenpairs(system, x, 8)
+    band_values, band_modes = eigenpairs(system, x, 8, band=True)
+    scale = np.max(np.abs(values))
+    np.testing.assert_allclose(band_values, values, rtol=0, atol=1e-9 * scale)
+    mass = system.problem.mass
+    overlap = np.abs(np.einsum("ij,ij->i", band_modes * mass, modes))  # M-orthonormal modes
+    assert np.all(overlap > 1 - 1e-8)
+
+
+def test_the_hessian_before_accept_serves_the_point_after_it():
+    """add_point passes the converged correction's Hessian, assembled before the accept
+    that carries the reference frames to the point: the accept changes it by round-off,
+    and the count and eigenvalues from it equal the fresh ones."""
+    system, x = _system(excess_link=2.5)
+    rng = np.random.default_rng(5)
+    problem = system.problem
+    n = problem.n_dofs // 3
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    bump = np.stack([np.cos(3 * t), np.sin(2 * t), np.cos(t + rng.uniform())], axis=1)
+    x2 = x.copy()
+    x2[:system.n] += 0.02 * bump.ravel()[system.free]  # the frames turn by a few degrees
+    before = system.full_hessian(x2)
+    problem.accept(system.q(x2))
+    after = system.full_hessian(x2)
+    scale = np.max(np.abs(after.sparse.data))
+    assert np.max(np.abs((before.sparse - after.sparse).data), initial=0.0) <= 1e-13 * scale
+    np.testing.assert_allclose(before.vectors, after.vectors, rtol=0,
+                               atol=1e-13 * np.max(np.abs(after.vectors)))
+    np.testing.assert_allclose(before.coefficients, after.coefficients, rtol=1e-13)
+    reused = point_stability(system, x2, 1e-6, 6, before, band=True)
+    fresh = point_stability(system, x2, 1e-6, 6)
+    assert (reused.negative_count, reused.unstable_count, reused.zero_modes,
+            reused.determinant_sign) == (fresh.negative_count, fresh.unstable_count,
+                                         fresh.zero_modes, fresh.determinant_sign)
+    np.testing.assert_allclose(reused.eigenvalues, fresh.eigenvalues, rtol=0,
+                               atol=1e-9 * np.max(np.abs(fresh.eigenvalues)))

@@ -85,3 +85,24 @@ def test_band_falls_back_to_superlu_and_reports_singular_matrices():
         KKTFactor(HessianParts(sp.csr_matrix(H)), band=True)
     with pytest.raises(SingularMatrixError):
         KKTFactor(HessianParts(sp.csr_matrix(H)))
+
+
+def test_pinned_rows_from_the_remembered_layout_rebuild_the_jacobian():
+    """PinnedRows.of remembers where the kept entries go per pattern: with other values
+    on the same pattern (the second call) the split still satisfies
+    J = sparse + I[:, rows] delta, each dense row cut to its pin."""
+    from supercoil.solvers.kkt import PinnedRows
+
+    rng = np.random.default_rng(11)
+    _, J = banded_kkt(rng, 120, 10, dense_rows=2)
+    J = J.tocsr()
+    for trial in range(3):
+        J = sp.csr_matrix((rng.standard_normal(J.nnz), J.indices, J.indptr), shape=J.shape)
+        split = PinnedRows.of(J)
+        assert split is not None and np.array_equal(split.rows, [10, 11])
+        rebuilt = split.sparse.toarray()
+        rebuilt[split.rows] += split.delta
+        assert np.array_equal(rebuilt, J.toarray())
+        for j, row in enumerate(split.rows):
+            cut = split.sparse[row]
+            assert cut.nnz == 1 and cut.indices[0] == split.pins[j]

@@ -182,8 +182,11 @@ def _stored(values: np.ndarray) -> np.ndarray:
 
 
 def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
-                       border_row: np.ndarray, corner: float, order: np.ndarray):
-    """``P B P^T`` as CSR, and the stored entries of its leading block ``P K P^T``.
+                       border_row: np.ndarray, corner: float, order: np.ndarray,
+                       matrix: bool = True, s_bytes: tuple[bytes, bytes] | None = None):
+    """``P B P^T`` as CSR (None without ``matrix``), and the stored entries of its
+    leading block ``P K P^T``. ``s_bytes``: ``(S.indptr.tobytes(), S.indices.tobytes())``
+    if already made (bytes keep their hash: a second key on them costs no rehash).
 
     ``B = [[S, J^T, column], [J, 0], [border_row, corner]]``; the stored
     entries are those of ``scipy.sparse.bmat`` of the blocks (explicit zeros
@@ -198,7 +201,9 @@ def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
     size = n + m + 1
     col_at = np.flatnonzero(column)
     row_at = np.flatnonzero(border_row)
-    key = (n, m, S.indptr.tobytes(), S.indices.tobytes(), J.indptr.tobytes(),
+    if s_bytes is None:
+        s_bytes = (S.indptr.tobytes(), S.indices.tobytes())
+    key = (n, m, *s_bytes, J.indptr.tobytes(),
            J.indices.tobytes(), col_at.tobytes(), row_at.tobytes(), corner != 0.0,
            np.asarray(order).tobytes())
     layout = _LAYOUTS.get(key)
@@ -208,6 +213,8 @@ def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
     by_row, pcol, indptr, inner, inner_rows, inner_cols = layout
     values = np.concatenate([S.data, J.data, J.data, column[col_at], border_row[row_at],
                              [corner] if corner != 0.0 else []])[by_row]
+    if not matrix:
+        return None, (inner_rows, inner_cols, values[inner])
     Bp = sp.csr_matrix((values, pcol.copy(), indptr.copy()), shape=(size, size))
     return Bp, (inner_rows, inner_cols, values[inner])
 
@@ -280,7 +287,9 @@ class BorderedFactor:
         self.kkt_order = kkt_order(S, J_banded) if order is None else order
         self.order = np.concatenate([self.kkt_order, [size - 1]])
         border_row = self.row_scale * row[:-1]
-        Bp, k_entries = _permuted_bordered(S, J, column, border_row, corner, self.order)
+        s_bytes = (S.indptr.tobytes(), S.indices.tobytes())
+        Bp, k_entries = _permuted_bordered(S, J, column, border_row, corner, self.order,
+                                           s_bytes=s_bytes)
         C = _stored(column)[self.kkt_order][:, None]
         R = _stored(border_row)[self.kkt_order][:, None]
         D = _stored(np.array([[corner]]))
@@ -289,7 +298,7 @@ class BorderedFactor:
             # borders (class doc): [[K_pin, c, root E, Delta / root], [r^T, d, 0, 0],
             # [Delta^T / root, 0, -I, 0], [root E^T, 0, 0, -I]]
             _, k_entries = _permuted_bordered(S, J_banded, column, border_row, corner,
-                                              self.order)
+                                              self.order, matrix=False, s_bytes=s_bytes)
             E, Delta, gamma = pinned.low_rank(n, size - 1)
             E, Delta, root = E[self.kkt_order], Delta[self.kkt_order], np.sqrt(gamma)
             C = np.hstack([C, E * root, Delta / root])

@@ -124,10 +124,11 @@ class PinnedRows:
         rows = dense_rows(J)
         if rows.size == 0:
             return None
-        J = canonical(J)
-        rows = dense_rows(J)
-        if rows.size == 0:
-            return None
+        if not J.has_canonical_format:
+            J = canonical(J)
+            rows = dense_rows(J)
+            if rows.size == 0:
+                return None
         r, n = rows.size, J.shape[1]
         dense = np.zeros((r, n))
         for j, row in enumerate(rows):
@@ -144,21 +145,30 @@ class PinnedRows:
         values = dense[np.arange(r), pins]
         delta = dense.copy()
         delta[np.arange(r), pins] = 0.0
-        # the CSR arrays of J with each dense row cut to its pin (canonical: one entry)
-        counts = np.diff(J.indptr)
-        new_counts = counts.copy()
-        new_counts[rows] = 1
-        indptr = np.zeros(J.shape[0] + 1, dtype=J.indptr.dtype)
-        np.cumsum(new_counts, out=indptr[1:])
-        row_of = np.repeat(np.arange(J.shape[0]), counts)
-        kept = np.ones(J.shape[0], dtype=bool)
-        kept[rows] = False
-        kept = kept[row_of]
-        entries = np.flatnonzero(kept)
-        at = indptr[row_of[entries]] + entries - J.indptr[row_of[entries]]
-        indices = np.empty(indptr[-1], dtype=J.indices.dtype)
+        # the CSR arrays of J with each dense row cut to its pin (canonical: one entry);
+        # where the kept entries go depends on the pattern only (remembered)
+        key = (J.shape, J.indptr.tobytes(), J.indices.tobytes(), rows.tobytes())
+        layout = _CUT_MEMO.get(key)
+        if layout is None:
+            counts = np.diff(J.indptr)
+            new_counts = counts.copy()
+            new_counts[rows] = 1
+            indptr = np.zeros(J.shape[0] + 1, dtype=J.indptr.dtype)
+            np.cumsum(new_counts, out=indptr[1:])
+            row_of = np.repeat(np.arange(J.shape[0]), counts)
+            kept = np.ones(J.shape[0], dtype=bool)
+            kept[rows] = False
+            kept = kept[row_of]
+            entries = np.flatnonzero(kept)
+            at = indptr[row_of[entries]] + entries - J.indptr[row_of[entries]]
+            indices = np.empty(indptr[-1], dtype=J.indices.dtype)
+            indices[at] = J.indices[entries]
+            layout = (indptr, at, entries, indices)
+            _CUT_MEMO.put(key, layout)
+        indptr, at, entries, indices = layout
+        indptr, indices = indptr.copy(), indices.copy()
         data = np.empty(indptr[-1])
-        indices[at], data[at] = J.indices[entries], J.data[entries]
+        data[at] = J.data[entries]
         indices[indptr[rows]], data[indptr[rows]] = pins, values
         sparse = sp.csr_matrix((data, indices, indptr), shape=J.shape)
         sparse.has_canonical_format = True
@@ -177,6 +187,9 @@ class PinnedRows:
         gamma = np.max(np.abs(self.delta), axis=1)
         gamma[gamma == 0.0] = 1.0
         return E, Delta, gamma
+
+
+_CUT_MEMO = PatternMemo()
 
 
 def kkt_negative_count(K: sp.spmatrix, n_constraints: int = 0,

@@ -76,10 +76,13 @@ def test_point_stability_equals_the_fresh_count_and_eigenpairs(excess_link):
     assert np.array_equal(stab.eigenvalues, ev) and np.array_equal(stab.modes, modes)
 
 
-def test_band_eigenpairs_equal_the_superlu_eigenpairs_to_round_off():
-    system, x = _system(excess_link=2.5)
+@pytest.mark.parametrize("excess_link", [0.5, 2.5, 6.0])
+def test_fast_eigenpairs_equal_the_generalised_superlu_eigenpairs_to_round_off(excess_link):
+    """fast=True: band LU, standard-mode Lanczos on the scaled operator; the reference:
+    SuperLU, ARPACK's generalised shift-invert mode."""
+    system, x = _system(excess_link=excess_link)
     values, modes = eigenpairs(system, x, 8)
-    band_values, band_modes = eigenpairs(system, x, 8, band=True)
+    band_values, band_modes = eigenpairs(system, x, 8, fast=True)
     scale = np.max(np.abs(values))
     np.testing.assert_allclose(band_values, values, rtol=0, atol=1e-9 * scale)
     mass = system.problem.mass
@@ -107,7 +110,7 @@ def test_the_hessian_before_accept_serves_the_point_after_it():
     np.testing.assert_allclose(before.vectors, after.vectors, rtol=0,
                                atol=1e-13 * np.max(np.abs(after.vectors)))
     np.testing.assert_allclose(before.coefficients, after.coefficients, rtol=1e-13)
-    reused = point_stability(system, x2, 1e-6, 6, before, band=True)
+    reused = point_stability(system, x2, 1e-6, 6, before, fast=True)
     fresh = point_stability(system, x2, 1e-6, 6)
     assert (reused.negative_count, reused.unstable_count, reused.zero_modes,
             reused.determinant_sign) == (fresh.negative_count, fresh.unstable_count,

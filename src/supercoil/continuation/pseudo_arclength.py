@@ -173,7 +173,8 @@ class _Tracer:
         largest entry, as much as assembling it twice at ``x`` with other states
         evaluated in between does).
         The point's eigenvalues feed no event or switch (those are recomputed), so
-        they are computed on the band LU (``point_stability(band=True)``).
+        they are computed by the faster path (``point_stability(fast=True)``: band
+        LU, standard-mode Lanczos; equal to round-off).
         """
         system = self.system
         system.set_parameter(x[-1])
@@ -181,7 +182,7 @@ class _Tracer:
         self._accepted_hessian = None
         full = system.full_hessian(x) if full_hessian is None else full_hessian
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
-                                    full, band=True)
+                                    full, fast=True)
         records = self._records(x)
         user = [user_values(ev, system, x) for ev in self.events]
         self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))

@@ -122,11 +122,13 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
 
 
 def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
-               full=None, band: bool = False) -> tuple[np.ndarray, np.ndarray]:
+               full=None, fast: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``.
 
-    ``full``: :func:`full_hessian` at ``x`` if already assembled; ``band``: the
-    shift-invert factor on the band LU, eigenvalues equal to round-off, not bit for bit."""
+    ``full``: :func:`full_hessian` at ``x`` if already assembled; ``fast``: the
+    shift-invert factor on the band LU and Lanczos in ARPACK's standard mode
+    (:func:`~supercoil.stability.analysis._lowest_pairs`), eigenvalues equal to
+    round-off, not bit for bit."""
     problem = system.problem
     system.set_parameter(x[-1])
     dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x), full)
@@ -138,7 +140,7 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
         values, vectors = dense_constrained_eigenpairs(H, J, mass, sym)
     else:
         values, vectors = _lowest_pairs(H, J, mass, n_wanted=min(n_wanted, dim - 2), n=dofs.size,
-                                        m=m, symmetry=sym, force_sparse=True, band=band)
+                                        m=m, symmetry=sym, force_sparse=True, fast=fast)
     modes = np.zeros((values.size, problem.n_dofs))
     modes[:, dofs] = vectors.T
     return values, modes
@@ -156,15 +158,15 @@ def full_hessian(system: ExtendedSystem, x: np.ndarray):
 
 
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
-                    n_modes: int, full=None, band: bool = False) -> PointStability:
+                    n_modes: int, full=None, fast: bool = False) -> PointStability:
     """Stability report at the point ``x`` of the extended system (see module doc).
 
     ``full``: :func:`full_hessian` at ``x`` if already assembled (a converged
-    correction's); ``band``: as :func:`eigenpairs`.
+    correction's); ``fast``: as :func:`eigenpairs`.
     """
     full = full_hessian(system, x) if full is None else full
     neg, det_sign = inertia(system, x, zero_tolerance, full.restrict(system.free))
-    values, modes = eigenpairs(system, x, neg + n_modes, full, band)
+    values, modes = eigenpairs(system, x, neg + n_modes, full, fast)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # as analyse: at least what the eigensolver found below -tol, at least the

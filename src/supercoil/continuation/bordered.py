@@ -312,6 +312,7 @@ class BorderedFactor:
             except RuntimeError as exc:  # "Factor is exactly singular"
                 raise SingularMatrixError(f"bordered matrix is singular ({exc})") from None
         self.size = size
+        self.row = row
         r = len(hessian.coefficients)
         self._w = np.asarray(hessian.coefficients, dtype=float)
         self._V = np.zeros((size, r))
@@ -325,6 +326,53 @@ class BorderedFactor:
         out = np.empty_like(sol)
         out[self.order] = sol
         return out
+
+    def refined_solve(self, hessian: HessianParts, jacobian: sp.spmatrix, column: np.ndarray,
+                      row: np.ndarray, rhs: np.ndarray, max_steps: int = 6
+                      ) -> np.ndarray | None:
+        """Solve ``B' z = rhs`` (``(size,)``) for the bordered matrix ``B'`` of these
+        arguments (as the constructor's) by iterative refinement with this factor, of a
+        nearby ``B`` (one Newton step away): ``z += B^-1 (rhs - B' z)`` while the
+        residual (the border row scaled as in the factor) at least halves, at most
+        ``max_steps`` times, so that it ends at the round-off floor as a new factor's
+        solve does. None (then factorise ``B'``) unless it meets the bound of
+        :class:`_BandBordered`'s own refinement, ``1e-14`` of ``|rhs| + max|B'| |z|``."""
+        S = hessian.sparse
+        J = jacobian if isinstance(jacobian, sp.csr_matrix) else sp.csr_matrix(jacobian)
+        n = S.shape[0]
+        column = np.asarray(column, dtype=float)
+        row = np.asarray(row, dtype=float)
+        rhs = np.asarray(rhs, dtype=float)
+        if rhs.shape != (self.size,) or row.shape != (self.size,) or n + J.shape[0] + 1 \
+                != self.size:
+            raise ValueError("refined_solve: sizes differ from the factor's")
+
+        def residual(z):
+            x, multipliers, lam = z[:n], z[n:-1], z[-1]
+            top = hessian.matvec(x) + J.T @ multipliers + column[:n] * lam
+            middle = J @ x + column[n:] * lam
+            res = rhs - np.concatenate([top, middle, [row @ z]])
+            res[-1] *= self.row_scale
+            return res
+
+        b_max = max(float(np.max(np.abs(S.data), initial=0.0)),
+                    float(np.max(np.abs(J.data), initial=0.0)),
+                    float(np.max(np.abs(column), initial=0.0)),
+                    self.row_scale * float(np.max(np.abs(row))))
+        size = max(float(np.max(np.abs(rhs[:-1]), initial=0.0)), self.row_scale * abs(rhs[-1]))
+        z = self.solve(rhs)
+        best, best_norm = None, np.inf
+        for _ in range(max_steps + 1):
+            res = residual(z)
+            norm = float(np.max(np.abs(res)))
+            if not norm < 0.5 * best_norm:
+                break
+            best, best_norm = z, norm
+            res[-1] /= self.row_scale
+            z = z + self.solve(res)
+        if best is not None and best_norm <= 1e-14 * (size + b_max * float(np.max(np.abs(best)))):
+            return best
+        return None
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve ``B z = rhs`` (``rhs`` unscaled, ``(size,)`` or ``(size, k)``)."""

@@ -44,6 +44,9 @@ class Correction:
     hessian: object = field(default=None, repr=False, compare=False)
     # the same on all DOFs (``hessian`` is its restriction to the free ones)
     full_hessian: object = field(default=None, repr=False, compare=False)
+    # the bordered factor of the last Newton step (at the iterate before ``x``; None
+    # when ``x`` is the start): a preconditioner for the tangent at ``x``
+    factor: object = field(default=None, repr=False, compare=False)
 
 
 def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
@@ -61,6 +64,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     previous = np.inf
     x_previous = x
     res = np.nan
+    factor = None
     F = system.residual(x)
     for it in range(max_iterations + 1):
         if not np.all(np.isfinite(F)):
@@ -70,12 +74,12 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
             # no Hessian: a caller that needs one at x (a tangent, a count) assembles
             # it, the same matrix; the trial points of a user event need none
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
-                              f"{res:.2e})")
+                              f"{res:.2e})", factor=factor)
         full = system.full_hessian(x)
         H = full.restrict(system.free)  # = system.hessian(x)
         if res <= roundoff_floor(H, system.q(x)):
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
-                              f"{res:.2e})", H, full)
+                              f"{res:.2e})", H, full, factor)
         if it == max_iterations:
             break
         rising = it >= 2 and res > previous
@@ -132,14 +136,24 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
 
 
 def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
-            hessian=None) -> np.ndarray:
+            hessian=None, preconditioner: BorderedFactor | None = None) -> np.ndarray:
     """Unit tangent (arclength metric) at ``x``, oriented so that ``row . t > 0``.
 
     ``hessian``: ``system.hessian(x)`` if already known (a converged
-    :class:`Correction`'s, the problem not accepted since).
+    :class:`Correction`'s, the problem not accepted since). ``preconditioner``: a
+    bordered factor with the same ``row`` at a nearby point (a converged
+    :class:`Correction`'s ``factor``): the tangent is then solved by iterative
+    refinement with it (:meth:`BorderedFactor.refined_solve`, to the accuracy of a
+    new factor's solve) and only factorised afresh when that does not converge.
     """
-    factor = bordered_factor(system, x, row, hessian)
     e_last = np.zeros(system.size)
     e_last[-1] = 1.0
+    if preconditioner is not None and np.array_equal(preconditioner.row, row):
+        H = system.hessian(x) if hessian is None else hessian
+        z = preconditioner.refined_solve(H, system.jacobian(x), system.parameter_derivative(x),
+                                         row, e_last)
+        if z is not None and np.all(np.isfinite(z)):
+            return z / system.norm(z)
+    factor = bordered_factor(system, x, row, hessian)
     z = factor.solve(e_last)
     return z / system.norm(z)

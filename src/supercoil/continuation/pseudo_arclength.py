@@ -443,7 +443,8 @@ class _Tracer:
                 hessian = corr.hessian if corr.hessian is not None else \
                     full.restrict(system.free)
                 try:
-                    t_new = tangent(system, x_new, system.weights * t_k, hessian)
+                    t_new = tangent(system, x_new, system.weights * t_k, hessian,
+                                    corr.factor if opts.tangent_refinement else None)
                 except SingularMatrixError as exc:
                     failure = f"tangent: {exc}"
             if failure is None and hasattr(problem, "admissible") and \

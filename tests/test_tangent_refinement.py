@@ -1,0 +1,76 @@
+"""The tangent by iterative refinement with the previous Newton step's bordered factor
+(ContinuationOptions.tangent_refinement) against a new factorisation at the point:
+the same solve to round-off; a factor too far away is refused (None), not trusted."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_point_stability_paths import _system
+
+from supercoil.continuation.corrector import bordered_factor, tangent
+
+
+def _nearby(system, x, size, seed=0):
+    rng = np.random.default_rng(seed)
+    n = system.problem.n_dofs // 3
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    bump = np.stack([np.cos(2 * t + 0.3), np.sin(3 * t), np.cos(t)], axis=1).ravel()
+    y = x.copy()
+    y[:system.n] += size * bump[system.free]
+    y[system.n:-1] += size * rng.standard_normal(system.size - system.n - 1)
+    y[-1] += size
+    return y
+
+
+def _dense(system, y, row, H):
+    n, J, column = system.n, system.jacobian(y).toarray(), system.parameter_derivative(y)
+    m = J.shape[0]
+    B = np.zeros((system.size, system.size))
+    B[:n, :n] = H.dense()
+    B[:n, n:n + m] = J.T
+    B[n:n + m, :n] = J
+    B[:-1, -1] = column
+    B[-1] = row
+    return B
+
+
+@pytest.mark.parametrize("size", [1e-7, 1e-5])
+def test_refined_solve_is_as_accurate_as_a_new_factor_solve(size):
+    """Oracle: the dense solve. The bordered matrix of this bent ring is ill-conditioned
+    (condition number ~1e12), so both are compared by their error against it."""
+    system, x = _system(excess_link=2.5)
+    row = system.weights * np.linspace(1.0, 2.0, system.size)
+    old = bordered_factor(system, x, row)
+    y = _nearby(system, x, size)
+    H = system.hessian(y)
+    fresh = bordered_factor(system, y, row, H)
+    B = _dense(system, y, row, H)
+    rng = np.random.default_rng(3)
+    for rhs in (np.eye(system.size)[-1], rng.standard_normal(system.size)):
+        z = old.refined_solve(H, system.jacobian(y), system.parameter_derivative(y), row, rhs)
+        assert z is not None
+        exact = np.linalg.solve(B, rhs)
+        scale = np.max(np.abs(exact))
+        error_fresh = np.max(np.abs(fresh.solve(rhs) - exact)) / scale
+        error_refined = np.max(np.abs(z - exact)) / scale
+        assert error_refined <= max(10 * error_fresh, 1e-12), (error_refined, error_fresh)
+    t_refined = tangent(system, y, row, H, preconditioner=old)
+    t_fresh = tangent(system, y, row, H)
+    np.testing.assert_allclose(t_refined, t_fresh, rtol=0, atol=1e-7 * np.max(np.abs(t_fresh)))
+
+
+def test_refined_solve_refuses_a_factor_too_far_away():
+    system, x = _system(excess_link=2.5)
+    row = system.weights * np.linspace(1.0, 2.0, system.size)
+    far = bordered_factor(system, _nearby(system, x, 0.3, seed=1), row)
+    H = system.hessian(x)
+    e_last = np.eye(system.size)[-1]
+    z = far.refined_solve(H, system.jacobian(x), system.parameter_derivative(x), row, e_last)
+    if z is not None:  # accepted only when it meets the solve's own residual bound
+        reference = bordered_factor(system, x, row, H).solve(e_last)
+        np.testing.assert_allclose(z, reference, rtol=0, atol=1e-9 * np.max(np.abs(reference)))
+    # another border row: the preconditioner is not used, the tangent is the fresh one
+    other = bordered_factor(system, x, 2.0 * row, H)
+    np.testing.assert_array_equal(tangent(system, x, row, H, preconditioner=other),
+                                  tangent(system, x, row, H))

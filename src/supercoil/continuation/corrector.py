@@ -56,8 +56,16 @@ def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
 
 
 def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref: np.ndarray,
-            sigma: float, tolerance: float, max_iterations: int) -> Correction:
-    """Newton on ``F(x) = 0, row . (x - x_ref) = sigma`` from ``x_start`` (see module doc)."""
+            sigma: float, tolerance: float, max_iterations: int,
+            refine_below: float | None = None) -> Correction:
+    """Newton on ``F(x) = 0, row . (x - x_ref) = sigma`` from ``x_start`` (see module doc).
+
+    ``refine_below``: a Newton step at an iterate whose residual is below this
+    fraction of the residual where the last bordered factor was made is solved by
+    iterative refinement with that factor (:meth:`BorderedFactor.refined_solve`:
+    the exact Newton step to the accuracy of a new factor's solve), a new factor
+    only when refinement does not converge. None: a new factor at every step.
+    """
     problem = system.problem
     x = np.array(x_start, dtype=float)
     bounded = hasattr(problem, "step_bound")
@@ -65,6 +73,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     x_previous = x
     res = np.nan
     factor = None
+    factor_residual = np.inf
     F = system.residual(x)
     for it in range(max_iterations + 1):
         if not np.all(np.isfinite(F)):
@@ -87,8 +96,16 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
             return Correction(None, False, it, res, f"corrector diverging at iteration {it} "
                               f"(residual {res:.2e} > {previous:.2e})")
         try:
-            factor = bordered_factor(system, x, row, H)
-            dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
+            dx = None
+            if refine_below is not None and factor is not None \
+                    and res <= refine_below * factor_residual:
+                step = factor.refined_solve(H, system.jacobian(x),
+                                            system.parameter_derivative(x), row,
+                                            np.concatenate([F, [row @ (x - x_ref) - sigma]]))
+                dx = None if step is None or not np.all(np.isfinite(step)) else -step
+            if dx is None:
+                factor, factor_residual = bordered_factor(system, x, row, H), res
+                dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
         except SingularMatrixError as exc:
             return Correction(None, False, it, res, f"iteration {it}: {exc}")
         if rising:

@@ -742,7 +742,7 @@ def ring_diagram(options: DiagramOptions,
             parameter_weight=D, tolerance=opts.contact_tolerance,
             near_symmetry_gauge=opts.contact_gauge, gauge=opts.gauge, regauge=True,
             rephase=opts.gauge == "integral", predictor=opts.contact_predictor,
-            tangent_refinement=True, event_tolerance=opts.contact_event_tolerance)
+            factor_refinement=True, event_tolerance=opts.contact_event_tolerance)
         if not 0.0 <= cp.excess_link <= opts.max_excess_link:
             notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "
                          f"[0, {opts.max_excess_link:g}]: not computed")

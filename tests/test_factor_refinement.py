@@ -1,5 +1,5 @@
-"""The tangent by iterative refinement with the previous Newton step's bordered factor
-(ContinuationOptions.tangent_refinement) against a new factorisation at the point:
+"""Bordered solves by iterative refinement with the previous Newton step's bordered factor
+(ContinuationOptions.factor_refinement) against a new factorisation at the point:
 the same solve to round-off; a factor too far away is refused (None), not trusted."""
 
 from __future__ import annotations
@@ -74,3 +74,42 @@ def test_refined_solve_refuses_a_factor_too_far_away():
     other = bordered_factor(system, x, 2.0 * row, H)
     np.testing.assert_array_equal(tangent(system, x, row, H, preconditioner=other),
                                   tangent(system, x, row, H))
+
+
+def test_newton_steps_by_refinement_converge_as_with_new_factors(monkeypatch):
+    """correct(refine_below=...): late Newton steps solved by refinement with the last
+    factor are the exact Newton steps to round-off: the same iteration count and the
+    same converged point as with a new factor at every step (a ring bent off the
+    circle, corrected back at fixed excess link), with refinement actually used."""
+    from supercoil.continuation import bordered
+    from supercoil.continuation.corrector import correct
+    from supercoil.continuation.options import ContinuationOptions
+    from supercoil.continuation.pseudo_arclength import branch_phase_modes
+    from supercoil.continuation.system import ExtendedSystem
+    from supercoil.problems.ring import twisted_circle_problem
+
+    n = 60
+    rod, q = twisted_circle_problem(2 / 3, 1.5, n)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    bent = q.reshape(-1, 3).copy()
+    bent[:, 2] += 0.02 * np.sin(2 * t)
+    bent = bent.ravel()
+    modes = branch_phase_modes(rod, bent, ContinuationOptions(gauge="integral"))
+    system = ExtendedSystem(rod, "excess_link", bent, modes, bent)
+    x0 = system.pack(bent, np.zeros(rod.n_constraints), 1.5)
+    e_lam = np.eye(system.size)[-1]
+    used = []
+    original = bordered.BorderedFactor.refined_solve
+
+    def counted(self, *args, **kwargs):
+        z = original(self, *args, **kwargs)
+        used.append(z is not None)
+        return z
+
+    monkeypatch.setattr(bordered.BorderedFactor, "refined_solve", counted)
+    fresh = correct(system, x0, e_lam, x0, 0.0, 1e-10, 40)
+    assert not used
+    refined = correct(system, x0, e_lam, x0, 0.0, 1e-10, 40, refine_below=1e-2)
+    assert any(used)
+    assert fresh.ok and refined.ok and fresh.iterations == refined.iterations
+    np.testing.assert_allclose(refined.x, fresh.x, rtol=0, atol=1e-10 * np.max(np.abs(fresh.x)))

@@ -691,7 +691,7 @@ def ring_diagram(options: DiagramOptions,
             initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
             max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
             event_tolerance=opts.event_tolerance, gauge=opts.gauge,
-            rephase=opts.gauge == "integral")
+            rephase=opts.gauge == "integral", factor_refinement=True)
         old, complete = stored.get(name, (None, False))
         if complete:
             free = old

@@ -321,8 +321,12 @@ class BorderedFactor:
             self._BV = self._sparse_solve(self._V)
             self._small = np.diag(1.0 / self._w) + self._V.T @ self._BV
 
-    def _sparse_solve(self, rhs: np.ndarray) -> np.ndarray:
-        sol = self._lu.solve(np.ascontiguousarray(rhs[self.order]))
+    def _sparse_solve(self, rhs: np.ndarray, refine: bool = True) -> np.ndarray:
+        ordered = np.ascontiguousarray(rhs[self.order])
+        if not refine and isinstance(self._lu, _BandBordered) and self._lu._fallback is None:
+            sol = self._lu._once(ordered)  # one block elimination, no refinement
+        else:
+            sol = self._lu.solve(ordered)
         out = np.empty_like(sol)
         out[self.order] = sol
         return out
@@ -336,7 +340,9 @@ class BorderedFactor:
         residual (the border row scaled as in the factor) at least halves, at most
         ``max_steps`` times, so that it ends at the round-off floor as a new factor's
         solve does. None (then factorise ``B'``) unless it meets the bound of
-        :class:`_BandBordered`'s own refinement, ``1e-14`` of ``|rhs| + max|B'| |z|``."""
+        :class:`_BandBordered`'s own refinement, ``1e-14`` of ``|rhs| + max|B'| |z|``.
+        Each step's solve with ``B`` is one block elimination (``solve(refine=False)``):
+        refining it against ``B`` too would not make the result closer to ``B'``'s."""
         S = hessian.sparse
         J = jacobian if isinstance(jacobian, sp.csr_matrix) else sp.csr_matrix(jacobian)
         n = S.shape[0]
@@ -360,7 +366,7 @@ class BorderedFactor:
                     float(np.max(np.abs(column), initial=0.0)),
                     self.row_scale * float(np.max(np.abs(row))))
         size = max(float(np.max(np.abs(rhs[:-1]), initial=0.0)), self.row_scale * abs(rhs[-1]))
-        z = self.solve(rhs)
+        z = self.solve(rhs, refine=False)
         best, best_norm = None, np.inf
         for _ in range(max_steps + 1):
             res = residual(z)
@@ -369,16 +375,17 @@ class BorderedFactor:
                 break
             best, best_norm = z, norm
             res[-1] /= self.row_scale
-            z = z + self.solve(res)
+            z = z + self.solve(res, refine=False)
         if best is not None and best_norm <= 1e-14 * (size + b_max * float(np.max(np.abs(best)))):
             return best
         return None
 
-    def solve(self, rhs: np.ndarray) -> np.ndarray:
-        """Solve ``B z = rhs`` (``rhs`` unscaled, ``(size,)`` or ``(size, k)``)."""
+    def solve(self, rhs: np.ndarray, refine: bool = True) -> np.ndarray:
+        """Solve ``B z = rhs`` (``rhs`` unscaled, ``(size,)`` or ``(size, k)``;
+        ``refine=False``: the band LU's block elimination without its refinement)."""
         rhs = np.array(rhs, dtype=float)
         rhs[-1] = rhs[-1] * self.row_scale
-        z = self._sparse_solve(rhs)
+        z = self._sparse_solve(rhs, refine)
         if len(self._w):
             z = z - self._BV @ np.linalg.solve(self._small, self._V.T @ z)
         if not np.all(np.isfinite(z)):

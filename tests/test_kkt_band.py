@@ -106,3 +106,23 @@ def test_pinned_rows_from_the_remembered_layout_rebuild_the_jacobian():
         for j, row in enumerate(split.rows):
             cut = split.sparse[row]
             assert cut.nnz == 1 and cut.indices[0] == split.pins[j]
+
+
+def test_permuted_bordered_entries_without_the_matrix_are_the_same():
+    """BorderedFactor asks _permuted_bordered for the pinned K's entries only
+    (matrix=False): the same entries as with the matrix built, bit for bit."""
+    from supercoil.continuation.bordered import _permuted_bordered
+    from supercoil.solvers.kkt import kkt_order
+
+    rng = np.random.default_rng(21)
+    H, J = banded_kkt(rng, 80, 9)
+    S = H.sparse.tocsr()
+    n, m = 80, J.shape[0]
+    column, row = rng.standard_normal(n + m), rng.standard_normal(n + m)
+    order = np.concatenate([kkt_order(S, J), [n + m]])
+    B, with_matrix = _permuted_bordered(S, J, column, row, 1.5, order)
+    none, entries = _permuted_bordered(S, J, column, row, 1.5, order, matrix=False,
+                                       s_bytes=(S.indptr.tobytes(), S.indices.tobytes()))
+    assert B is not None and none is None
+    for a, b in zip(with_matrix, entries):
+        assert np.array_equal(a, b)

@@ -113,3 +113,24 @@ def test_newton_steps_by_refinement_converge_as_with_new_factors(monkeypatch):
     assert any(used)
     assert fresh.ok and refined.ok and fresh.iterations == refined.iterations
     np.testing.assert_allclose(refined.x, fresh.x, rtol=0, atol=1e-10 * np.max(np.abs(fresh.x)))
+
+
+def test_the_stacked_jacobian_is_reused_only_while_its_parts_are():
+    """ExtendedSystem.jacobian returns the same stacked matrix for the same problem
+    Jacobian object and phase rows, a new one (with the new rows) once either changes;
+    its entries are those of a fresh stack."""
+    import scipy.sparse as sp
+
+    system, x = _system(excess_link=2.5)
+    first = system.jacobian(x)
+    assert system.jacobian(x.copy()) is first
+    fresh = sp.vstack([system._free_jacobian(system.q(x)), sp.csr_matrix(system.P)],
+                      format="csr")
+    assert (first != fresh).nnz == 0
+    moved = _nearby(system, x, 1e-3)
+    other = system.jacobian(moved)
+    assert other is not first and (other != first).nnz > 0
+    system.set_phase(2.0 * system.phase_modes, system.q_phase_full)
+    rephased = system.jacobian(moved)
+    assert rephased is not other
+    np.testing.assert_array_equal(rephased.toarray()[-1], 2.0 * other.toarray()[-1])

@@ -150,18 +150,27 @@ class ExtendedSystem:
         return lagrangian_hessian(self.problem, self.q(x), x[self.n:self.n + self.m])
 
     def jacobian(self, x: np.ndarray) -> sp.csr_matrix:
-        """Constraint Jacobian with the phase rows, ``(m + r, n)``."""
+        """Constraint Jacobian with the phase rows, ``(m + r, n)``. The stacked matrix
+        is returned again (the same object: callers must not modify it) while the
+        problem returns the same Jacobian object and the phase rows are unchanged
+        (a corrector's residual, factor and refinement at one iterate)."""
         self.set_parameter(x[-1])
         rows = []
+        free = self._free_jacobian(self.q(x)) if self.m else None
+        if self.r and (self._phase_rows is None or self._phase_rows[0] is not self.P):
+            self._phase_rows = (self.P, sp.csr_matrix(self.P))
+        stacked = self.__dict__.get("_stacked")
+        if stacked is not None and stacked[0] is free and stacked[1] is self._phase_rows:
+            return stacked[2]
         if self.m:
-            rows.append(sp.csr_matrix(self._free_jacobian(self.q(x))))
+            rows.append(sp.csr_matrix(free))
         if self.r:
-            if self._phase_rows is None or self._phase_rows[0] is not self.P:
-                self._phase_rows = (self.P, sp.csr_matrix(self.P))
             rows.append(self._phase_rows[1])
         if not rows:
             return sp.csr_matrix((0, self.n))
-        return sp.vstack(rows, format="csr")
+        out = sp.vstack(rows, format="csr")
+        self._stacked = (free, self._phase_rows, out)
+        return out
 
     def parameter_derivative(self, x: np.ndarray) -> np.ndarray:
         """``dF/dlambda`` at ``x``, shape ``(n + m + r,)``."""

@@ -126,3 +126,41 @@ def test_permuted_bordered_entries_without_the_matrix_are_the_same():
     assert B is not None and none is None
     for a, b in zip(with_matrix, entries):
         assert np.array_equal(a, b)
+
+
+def test_remembered_kkt_order_with_two_term_entries_that_cancel_or_nearly():
+    """An entry of J^T J with two terms is stored by scipy exactly when their sum is
+    not 0 (the same in either order), however small: the memo certifies it when it
+    is stored or dropped as when the ordering was computed (exactly symmetric
+    states), and only then. Oracle: the computed ordering, every time."""
+    from supercoil.solvers import kkt
+
+    rng = np.random.default_rng(8)
+    n = 40
+    base = np.zeros((n, n))
+    for k in range(2):
+        d = rng.standard_normal(n - k)
+        base += np.diag(d, k) + (np.diag(d, -k) if k else 0.0)
+    S = sp.csr_matrix(base + 4.0 * np.eye(n))
+    rows = [(a, int(rng.choice(np.arange(2, n))), rng.standard_normal())
+            for a in rng.choice(np.arange(2, n), size=10)]
+
+    def jacobian(second, scale=1.0):
+        J = np.zeros((len(rows) + 2, n))
+        J[0, 0], J[0, 30], J[1, 0], J[1, 30] = 1.0, 1.0, 1.0, second  # (0, 30): 1 + second
+        for k, (a, b, u) in enumerate(rows):
+            J[k + 2, a], J[k + 2, b] = scale * u, 1.0
+        return sp.csr_matrix(J)
+
+    tiny = -(1.0 - 2.0**-52)  # 1 + tiny = 2^-52: stored, far below the 1e-8 bound
+    for first, others in ((-1.0, (-1.0, tiny, 0.3)), (tiny, (-(1.0 - 2.0**-51), -1.0))):
+        kkt._ORDER_MEMO.clear()
+        computed = kkt.kkt_order(S, jacobian(first))
+        assert np.array_equal(computed, kkt._kkt_order(S, jacobian(first)))
+        assert len(kkt._ORDER_MEMO) == 1  # remembered despite the (near) cancellation
+        ((memo, *_arrays),) = kkt._ORDER_MEMO.values()
+        for second in others:
+            J = jacobian(second, scale=1.3)
+            same = (1.0 + second == 0.0) == (1.0 + first == 0.0)
+            assert memo.certifies(J) == same
+            assert np.array_equal(kkt.kkt_order(S, J), kkt._kkt_order(S, J))

@@ -857,7 +857,14 @@ def test_a_converged_correction_assembles_a_hessian_only_for_a_newton_step(monke
         assemblies.append(float(x[-1]))
         return original(self, x)
 
+    original_full = ExtendedSystem.full_hessian
+
+    def counted_full(self, x):  # the corrector assembles on all DOFs and restricts
+        assemblies.append(float(x[-1]))
+        return original_full(self, x)
+
     monkeypatch.setattr(ExtendedSystem, "hessian", counted)
+    monkeypatch.setattr(ExtendedSystem, "full_hessian", counted_full)
     x = system.pack(np.zeros(3), np.zeros(0), 0.5)  # on the trivial branch: converged
     e_lam = np.zeros(system.size)
     e_lam[-1] = 1.0

@@ -95,6 +95,7 @@ from supercoil.contact.spline_distance import (
     piece_distance_derivatives,
     sag_bound,
 )
+from supercoil.solvers.patterns import block_csr
 from supercoil.solvers.problem import HessianParts
 from supercoil.topology import writhe
 
@@ -603,14 +604,9 @@ class ContactProblem:
             # a sample pair touching without force (penalty) weighs nothing here: the
             # one-sided closing stiffness of the pairs formulation is not added
             _st, (_e, _g, local, _f, _p, dofs) = self._integral(q, 2)
-            local = local[: len(dofs)]
-            n = self.n_dofs
-            if len(dofs) == 0:
-                return sp.csr_matrix((n, n))
-            w = dofs.shape[1]
-            rows = np.repeat(dofs, w, axis=1).ravel()
-            cols = np.tile(dofs, (1, w)).ravel()
-            return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))
+            # the pair blocks in one compiled pass (scipy's COO path took 0.6 ms at
+            # N = 200; the same pattern, duplicates summed in another order)
+            return block_csr(dofs, local, self.n_dofs)
         if one_sided:
             st = self.pair_state(q, max(self._cutoff(), D * (1 + self.options.tolerance)))
         else:

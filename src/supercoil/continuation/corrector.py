@@ -42,6 +42,11 @@ class Correction:
     # the tolerance before a Newton step needed it), for a tangent or inertia there
     # before any accept
     hessian: object = field(default=None, repr=False, compare=False)
+    # the same on all DOFs (``hessian`` is its restriction to the free ones)
+    full_hessian: object = field(default=None, repr=False, compare=False)
+    # the bordered factor of the last Newton step (at the iterate before ``x``; None
+    # when ``x`` is the start): a preconditioner for the tangent at ``x``
+    factor: object = field(default=None, repr=False, compare=False)
 
 
 def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
@@ -51,14 +56,24 @@ def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
 
 
 def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref: np.ndarray,
-            sigma: float, tolerance: float, max_iterations: int) -> Correction:
-    """Newton on ``F(x) = 0, row . (x - x_ref) = sigma`` from ``x_start`` (see module doc)."""
+            sigma: float, tolerance: float, max_iterations: int,
+            refine_below: float | None = None) -> Correction:
+    """Newton on ``F(x) = 0, row . (x - x_ref) = sigma`` from ``x_start`` (see module doc).
+
+    ``refine_below``: a Newton step at an iterate whose residual is below this
+    fraction of the residual where the last bordered factor was made is solved by
+    iterative refinement with that factor (:meth:`BorderedFactor.refined_solve`:
+    the exact Newton step to the accuracy of a new factor's solve), a new factor
+    only when refinement does not converge. None: a new factor at every step.
+    """
     problem = system.problem
     x = np.array(x_start, dtype=float)
     bounded = hasattr(problem, "step_bound")
     previous = np.inf
     x_previous = x
     res = np.nan
+    factor = None
+    factor_residual = np.inf
     F = system.residual(x)
     for it in range(max_iterations + 1):
         if not np.all(np.isfinite(F)):
@@ -68,11 +83,12 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
             # no Hessian: a caller that needs one at x (a tangent, a count) assembles
             # it, the same matrix; the trial points of a user event need none
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
-                              f"{res:.2e})")
-        H = system.hessian(x)
+                              f"{res:.2e})", factor=factor)
+        full = system.full_hessian(x)
+        H = full.restrict(system.free)  # = system.hessian(x)
         if res <= roundoff_floor(H, system.q(x)):
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
-                              f"{res:.2e})", H)
+                              f"{res:.2e})", H, full, factor)
         if it == max_iterations:
             break
         rising = it >= 2 and res > previous
@@ -80,8 +96,16 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
             return Correction(None, False, it, res, f"corrector diverging at iteration {it} "
                               f"(residual {res:.2e} > {previous:.2e})")
         try:
-            factor = bordered_factor(system, x, row, H)
-            dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
+            dx = None
+            if refine_below is not None and factor is not None \
+                    and res <= refine_below * factor_residual:
+                step = factor.refined_solve(H, system.jacobian(x),
+                                            system.parameter_derivative(x), row,
+                                            np.concatenate([F, [row @ (x - x_ref) - sigma]]))
+                dx = None if step is None or not np.all(np.isfinite(step)) else -step
+            if dx is None:
+                factor, factor_residual = bordered_factor(system, x, row, H), res
+                dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
         except SingularMatrixError as exc:
             return Correction(None, False, it, res, f"iteration {it}: {exc}")
         if rising:
@@ -129,14 +153,24 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
 
 
 def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
-            hessian=None) -> np.ndarray:
+            hessian=None, preconditioner: BorderedFactor | None = None) -> np.ndarray:
     """Unit tangent (arclength metric) at ``x``, oriented so that ``row . t > 0``.
 
     ``hessian``: ``system.hessian(x)`` if already known (a converged
-    :class:`Correction`'s, the problem not accepted since).
+    :class:`Correction`'s, the problem not accepted since). ``preconditioner``: a
+    bordered factor with the same ``row`` at a nearby point (a converged
+    :class:`Correction`'s ``factor``): the tangent is then solved by iterative
+    refinement with it (:meth:`BorderedFactor.refined_solve`, to the accuracy of a
+    new factor's solve) and only factorised afresh when that does not converge.
     """
-    factor = bordered_factor(system, x, row, hessian)
     e_last = np.zeros(system.size)
     e_last[-1] = 1.0
+    if preconditioner is not None and np.array_equal(preconditioner.row, row):
+        H = system.hessian(x) if hessian is None else hessian
+        z = preconditioner.refined_solve(H, system.jacobian(x), system.parameter_derivative(x),
+                                         row, e_last)
+        if z is not None and np.all(np.isfinite(z)):
+            return z / system.norm(z)
+    factor = bordered_factor(system, x, row, hessian)
     z = factor.solve(e_last)
     return z / system.norm(z)

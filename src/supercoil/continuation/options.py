@@ -53,6 +53,15 @@ class ContinuationOptions:
       smooth: measured on the tweezers' contact branch, whose stiff barrier
       makes the corrector's iterations grow fast with the predictor's error,
       93 points instead of 289 (the same events).
+    * ``factor_refinement``: bordered solves by iterative refinement with the
+      corrector's last bordered factor (the same border row, at an iterate
+      nearby) instead of a new factorisation, to the accuracy of a new factor's
+      own solve, a new one where refinement does not converge
+      (:meth:`~supercoil.continuation.bordered.BorderedFactor.refined_solve`):
+      the tangent at each corrected point, and the Newton steps whose residual
+      is below ``REFINE_BELOW`` of the one where the factor was made. The
+      iterates and tangents are the same to round-off, with fewer
+      factorisations.
     * ``zero_tolerance``: eigenvalues (of ``H v = mu M v`` on the constraint
       tangent space) with ``|mu|`` below it are ``zero_modes``, never signed.
     * ``n_modes``: eigenvalues computed at each point beyond the unstable ones.
@@ -132,6 +141,7 @@ class ContinuationOptions:
     tolerance: float = 1e-10
     direction: int = 1
     predictor: str = "tangent"
+    factor_refinement: bool = False
     parameter_weight: float = 1.0
     zero_tolerance: float = 1e-6
     n_modes: int = 2

@@ -55,6 +55,11 @@ RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
 PointCallback = Callable[[Branch], None]
 PARTIAL_MESSAGE = "in progress: the branch so far (its computation has not ended)"
 CLOSURE_TOLERANCE = 1e-6  # a closed branch passes through its earlier point to this (relative)
+# with ContinuationOptions.factor_refinement, Newton steps at iterates whose residual is
+# below this fraction of the one where the corrector last factorised are solved by
+# refinement with that factor (measured on the ring's alpha_contact at N = 200: 181
+# such steps converged, 37 fell back to a new factor; at 0.1, 229 and 196)
+REFINE_BELOW = 1e-2
 
 
 def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
@@ -143,6 +148,9 @@ class _Tracer:
         # (tangent, step) of the point before the first one, for the quadratic
         # predictor of a resumed branch (set by resume_branch)
         self.before: tuple[np.ndarray, float] | None = None
+        # (x, full Hessian) of the last point added, assembled after its accept: the
+        # rephase tangent there needs no new one (phase rows are linear)
+        self._accepted_hessian: tuple[np.ndarray, object] | None = None
 
     def _previous_tangent(self) -> tuple[np.ndarray, float] | None:
         """The tangent at the point before the last and the arclength between the two."""
@@ -157,13 +165,29 @@ class _Tracer:
         self.system.set_parameter(x[-1])
         return dict(self.records_fn(self.system.q(x), self.system.multipliers(x), float(x[-1])))
 
-    def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True) -> None:
+    def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True,
+                  full_hessian=None) -> None:
         """Keep ``x``: stability, records and user values first (an exception leaves the
-        branch as it was), then the point, then the events since the previous one."""
+        branch as it was), then the point, then the events since the previous one.
+
+        ``full_hessian``: the Hessian on all DOFs at ``x`` if known (a converged
+        :class:`~supercoil.continuation.corrector.Correction`'s), for the stability
+        and the rephase tangent. It was assembled before ``accept``, which carries
+        the rod's reference frames to ``x``: that changes the Hessian by round-off
+        only (measured on the ring's alpha branch at N = 200: at most 3e-16 of its
+        largest entry, as much as assembling it twice at ``x`` with other states
+        evaluated in between does).
+        The point's eigenvalues feed no event or switch (those are recomputed), so
+        they are computed by the faster path (``point_stability(fast=True)``: band
+        LU, standard-mode Lanczos; equal to round-off).
+        """
         system = self.system
         system.set_parameter(x[-1])
         system.problem.accept(system.q(x))
-        stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes)
+        self._accepted_hessian = None
+        full = system.full_hessian(x) if full_hessian is None else full_hessian
+        stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
+                                    full, fast=True)
         records = self._records(x)
         user = [user_values(ev, system, x) for ev in self.events]
         self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))
@@ -172,6 +196,7 @@ class _Tracer:
         self.stabs.append(stability)
         self.recs.append(records)
         self.user.append(user)
+        self._accepted_hessian = (x, full)
         if len(self.xs) >= 2 and search_events:
             self._search_events()
         if self.on_point is not None:
@@ -299,7 +324,9 @@ class _Tracer:
         if modes is None or modes.shape != system.phase_modes.shape:
             return
         system.set_phase(modes, q)
-        self.ts[-1] = tangent(system, x, self._orientation(x, self.ts[-1]))
+        known = self._accepted_hessian
+        hessian = known[1].restrict(system.free) if known and known[0] is x else None
+        self.ts[-1] = tangent(system, x, self._orientation(x, self.ts[-1]), hessian)
 
     def _orientation(self, x: np.ndarray, t_old: np.ndarray) -> np.ndarray:
         """The row that orients a tangent recomputed in a new gauge: ``W t_old`` with the
@@ -409,13 +436,21 @@ class _Tracer:
                     # fifth of D.)
                     start = x_k + 0.9 * fraction * ds * d
             corr = correct(system, start, row, x_k, ds, opts.tolerance,
-                           opts.max_corrector_iterations)
+                           opts.max_corrector_iterations,
+                           REFINE_BELOW if opts.factor_refinement else None)
             failure = None if corr.ok else corr.message
-            x_new = t_new = None
+            x_new = t_new = full = None
             if failure is None:
                 x_new = corr.x
+                # one assembly at the new point for its tangent, count and eigenpairs (the
+                # corrector's if it made one there)
+                full = corr.full_hessian if corr.full_hessian is not None else \
+                    system.full_hessian(x_new)
+                hessian = corr.hessian if corr.hessian is not None else \
+                    full.restrict(system.free)
                 try:
-                    t_new = tangent(system, x_new, system.weights * t_k, corr.hessian)
+                    t_new = tangent(system, x_new, system.weights * t_k, hessian,
+                                    corr.factor if opts.factor_refinement else None)
                 except SingularMatrixError as exc:
                     failure = f"tangent: {exc}"
             if failure is None and hasattr(problem, "admissible") and \
@@ -471,7 +506,7 @@ class _Tracer:
                 continue
             regauged = False
             try:
-                self.add_point(x_new, t_new)
+                self.add_point(x_new, t_new, full_hessian=full if bound is None else None)
                 if opts.rephase and system.r:
                     self._rephase()
             except (SingularMatrixError, InertiaError) as exc:

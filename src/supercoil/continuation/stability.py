@@ -110,22 +110,25 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     """
     H, J = _count_system(system, x, hessian)
     try:
-        factor = KKTFactor(H, J)
+        factor = KKTFactor(H, J, band=True)
         negative = factor.reduced_negative_count
         return negative, int(factor.determinant_sign * (-1) ** J.shape[0])
     except (SingularMatrixError, InertiaError):
         if zero_tolerance is None:
             raise
         mass = system.mass[np.setdiff1d(np.arange(system.n), count_gauge(system, x))]
-        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=mass)
+        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=mass, band=True)
         return factor.reduced_negative_count, 0
 
 
 def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
-               full=None) -> tuple[np.ndarray, np.ndarray]:
+               full=None, fast: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``.
 
-    ``full``: :func:`full_hessian` at ``x`` if already assembled."""
+    ``full``: :func:`full_hessian` at ``x`` if already assembled; ``fast``: the
+    shift-invert factor on the band LU and Lanczos in ARPACK's standard mode
+    (:func:`~supercoil.stability.analysis._lowest_pairs`), eigenvalues equal to
+    round-off, not bit for bit."""
     problem = system.problem
     system.set_parameter(x[-1])
     dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x), full)
@@ -137,7 +140,7 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
         values, vectors = dense_constrained_eigenpairs(H, J, mass, sym)
     else:
         values, vectors = _lowest_pairs(H, J, mass, n_wanted=min(n_wanted, dim - 2), n=dofs.size,
-                                        m=m, symmetry=sym, force_sparse=True)
+                                        m=m, symmetry=sym, force_sparse=True, fast=fast)
     modes = np.zeros((values.size, problem.n_dofs))
     modes[:, dofs] = vectors.T
     return values, modes
@@ -155,11 +158,15 @@ def full_hessian(system: ExtendedSystem, x: np.ndarray):
 
 
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
-                    n_modes: int) -> PointStability:
-    """Stability report at the point ``x`` of the extended system (see module doc)."""
-    full = full_hessian(system, x)
+                    n_modes: int, full=None, fast: bool = False) -> PointStability:
+    """Stability report at the point ``x`` of the extended system (see module doc).
+
+    ``full``: :func:`full_hessian` at ``x`` if already assembled (a converged
+    correction's); ``fast``: as :func:`eigenpairs`.
+    """
+    full = full_hessian(system, x) if full is None else full
     neg, det_sign = inertia(system, x, zero_tolerance, full.restrict(system.free))
-    values, modes = eigenpairs(system, x, neg + n_modes, full)
+    values, modes = eigenpairs(system, x, neg + n_modes, full, fast)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # as analyse: at least what the eigensolver found below -tol, at least the

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.solvers.newton import _hessian
+from supercoil.solvers.newton import _hessian, lagrangian_hessian
 from supercoil.solvers.patterns import csr_columns
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
@@ -143,19 +143,34 @@ class ExtendedSystem:
         self.set_parameter(x[-1])
         return _hessian(self.problem, self.q(x), x[self.n:self.n + self.m], self.free)
 
+    def full_hessian(self, x: np.ndarray) -> HessianParts:
+        """Hessian of the Lagrangian on all DOFs: :meth:`hessian` is its restriction to
+        the free ones (the same entries), the stability's eigenproblem another."""
+        self.set_parameter(x[-1])
+        return lagrangian_hessian(self.problem, self.q(x), x[self.n:self.n + self.m])
+
     def jacobian(self, x: np.ndarray) -> sp.csr_matrix:
-        """Constraint Jacobian with the phase rows, ``(m + r, n)``."""
+        """Constraint Jacobian with the phase rows, ``(m + r, n)``. The stacked matrix
+        is returned again (the same object: callers must not modify it) while the
+        problem returns the same Jacobian object and the phase rows are unchanged
+        (a corrector's residual, factor and refinement at one iterate)."""
         self.set_parameter(x[-1])
         rows = []
+        free = self._free_jacobian(self.q(x)) if self.m else None
+        if self.r and (self._phase_rows is None or self._phase_rows[0] is not self.P):
+            self._phase_rows = (self.P, sp.csr_matrix(self.P))
+        stacked = self.__dict__.get("_stacked")
+        if stacked is not None and stacked[0] is free and stacked[1] is self._phase_rows:
+            return stacked[2]
         if self.m:
-            rows.append(sp.csr_matrix(self._free_jacobian(self.q(x))))
+            rows.append(sp.csr_matrix(free))
         if self.r:
-            if self._phase_rows is None or self._phase_rows[0] is not self.P:
-                self._phase_rows = (self.P, sp.csr_matrix(self.P))
             rows.append(self._phase_rows[1])
         if not rows:
             return sp.csr_matrix((0, self.n))
-        return sp.vstack(rows, format="csr")
+        out = sp.vstack(rows, format="csr")
+        self._stacked = (free, self._phase_rows, out)
+        return out
 
     def parameter_derivative(self, x: np.ndarray) -> np.ndarray:
         """``dF/dlambda`` at ``x``, shape ``(n + m + r,)``."""

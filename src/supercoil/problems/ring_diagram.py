@@ -691,7 +691,7 @@ def ring_diagram(options: DiagramOptions,
             initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
             max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
             event_tolerance=opts.event_tolerance, gauge=opts.gauge,
-            rephase=opts.gauge == "integral")
+            rephase=opts.gauge == "integral", factor_refinement=True)
         old, complete = stored.get(name, (None, False))
         if complete:
             free = old
@@ -742,7 +742,7 @@ def ring_diagram(options: DiagramOptions,
             parameter_weight=D, tolerance=opts.contact_tolerance,
             near_symmetry_gauge=opts.contact_gauge, gauge=opts.gauge, regauge=True,
             rephase=opts.gauge == "integral", predictor=opts.contact_predictor,
-            event_tolerance=opts.contact_event_tolerance)
+            factor_refinement=True, event_tolerance=opts.contact_event_tolerance)
         if not 0.0 <= cp.excess_link <= opts.max_excess_link:
             notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "
                          f"[0, {opts.max_excess_link:g}]: not computed")

@@ -272,15 +272,30 @@ class RodEnergy(abc.ABC):
         return J
 
     def _constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
+        """Row ``k``: ``-e_k`` on the first node of constrained edge ``k``, ``e_k`` on the
+        second (``e_k`` the edge over its rest length). Built as the CSR matrix that
+        scipy's COO path ``csr_matrix((data, (rows, cols)))`` gave (six distinct columns
+        per row, sorted; zeros stored), from a layout remembered per constrained set:
+        the COO path cost 0.5 ms of the corrector's every residual at N = 200."""
         m = self.n_constraints
         e = self._edge_vectors(q)[self._constrained] / self.rod.edge_length
-        nodes = self.edge_nodes[self._constrained]
-        a = 3 * nodes[:, :1] + np.arange(3)
-        b = 3 * nodes[:, 1:] + np.arange(3)
-        rows = np.repeat(np.arange(m), 6)
-        cols = np.concatenate([a, b], axis=1).ravel()
-        data = np.concatenate([-e, e], axis=1).ravel()
-        return sp.csr_matrix((data, (rows, cols)), shape=(m, self.n_dofs))
+        layout = self.__dict__.get("_jacobian_layout")
+        if layout is None or layout[0] is not self._constrained:
+            nodes = self.edge_nodes[self._constrained]
+            a = 3 * nodes[:, :1] + np.arange(3)
+            b = 3 * nodes[:, 1:] + np.arange(3)
+            cols = np.concatenate([a, b], axis=1).reshape(m, 6)
+            order = np.argsort(cols, axis=1, kind="stable")
+            index = np.int32 if max(self.n_dofs, 6 * m) < 2**31 - 1 else np.int64
+            indices = np.take_along_axis(cols, order, axis=1).ravel().astype(index)
+            indptr = np.arange(0, 6 * m + 1, 6, dtype=index)
+            layout = (self._constrained, order, indices, indptr)
+            self._jacobian_layout = layout
+        _, order, indices, indptr = layout
+        data = np.take_along_axis(np.concatenate([-e, e], axis=1), order, axis=1).ravel()
+        J = sp.csr_matrix((data, indices.copy(), indptr.copy()), shape=(m, self.n_dofs))
+        J.has_canonical_format = True
+        return J
 
     def _constraint_hessian_entries(self):
         """``(rows, cols)`` of the constraint curvature's COO entries (see below)."""

@@ -16,6 +16,10 @@ pattern:
   the kept entries of each kept row in their stored order, explicit zeros
   included; :func:`csr_columns` is ``A[:, keep]`` likewise.
 
+:func:`block_csr` assembles dense element blocks (a contact Hessian's pair
+blocks) into canonical CSR in one compiled pass: the pattern of scipy's
+``csr_matrix((data, (rows, cols)))``, duplicates summed in the input order.
+
 Anything else (other formats, unsorted or duplicate indices) goes to scipy.
 """
 
@@ -23,6 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+
+from supercoil._numba import njit
 
 
 class PatternMemo:
@@ -179,3 +185,99 @@ def csr_columns(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
     selected, indices, indptr = maps
     return sp.csr_matrix((A.data[selected], indices.copy(), indptr.copy()),
                          shape=(A.shape[0], keep.size))
+
+
+def block_csr(dofs: np.ndarray, blocks: np.ndarray, n: int) -> sp.csr_matrix:
+    """``sum_k`` of the dense ``blocks[k]`` ``(w, w)`` at rows and columns ``dofs[k]``
+    ``(w,)``, as an ``(n, n)`` canonical CSR matrix (``dofs`` ``(p, w)``, entries in
+    ``[0, n)``; ``blocks`` ``(>= p, w, w)``, the first ``p`` used).
+
+    The pattern, explicit zeros included, and the stored order are those of
+    ``scipy.sparse.csr_matrix((blocks.ravel(), (rows, cols)))`` with ``rows``,
+    ``cols`` the blocks' DOFs; duplicates are summed in the order the blocks
+    come (a stable sort of each row), scipy sums them in the order of its
+    unstable sort: equal to round-off. Measured on the ring's contact branch
+    at N = 200 (57 pair blocks of 24 DOFs): 0.05 ms against 0.63 ms.
+    """
+    dofs = np.ascontiguousarray(dofs, dtype=np.int64)
+    p = dofs.shape[0]
+    blocks = np.ascontiguousarray(np.asarray(blocks, dtype=float)[:p])
+    if p == 0:
+        return sp.csr_matrix((n, n))
+    if dofs.min() < 0 or dofs.max() >= n or blocks.shape != (p, dofs.shape[1], dofs.shape[1]):
+        raise ValueError("block_csr: DOFs outside [0, n) or blocks of the wrong shape")
+    indptr, indices, data = _block_csr_kernel(dofs, blocks, n)
+    index = np.int32 if max(n, indices.size) < 2**31 - 1 else np.int64
+    out = sp.csr_matrix((data, indices.astype(index), indptr.astype(index)), shape=(n, n))
+    out.has_canonical_format = True
+    return out
+
+
+@njit()
+def _block_csr_kernel(dofs, blocks, n):
+    p, w = dofs.shape
+    # the blocks' rows touching each DOF (CSR of the incidence), in block order
+    start = np.zeros(n + 1, dtype=np.int64)
+    for k in range(p):
+        for i in range(w):
+            start[dofs[k, i] + 1] += 1
+    for r in range(n):
+        start[r + 1] += start[r]
+    which = np.empty(start[n], dtype=np.int64)  # k * w + i
+    fill = start[:n].copy()
+    for k in range(p):
+        for i in range(w):
+            r = dofs[k, i]
+            which[fill[r]] = k * w + i
+            fill[r] += 1
+    slot = np.full(n, -1, dtype=np.int64)  # column -> position in the row being built
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    indices = np.empty(start[n] * w, dtype=np.int64)
+    data = np.empty(start[n] * w)
+    values = np.empty(n)
+    nnz = 0
+    for r in range(n):
+        first = nnz
+        for e in range(start[r], start[r + 1]):
+            k = which[e] // w
+            i = which[e] - k * w
+            for j in range(w):  # duplicates summed in the blocks' order
+                c = dofs[k, j]
+                if slot[c] < 0:
+                    slot[c] = nnz
+                    indices[nnz] = c
+                    values[c] = blocks[k, i, j]
+                    nnz += 1
+                else:
+                    values[c] += blocks[k, i, j]
+        for t in range(first, nnz):
+            c = indices[t]
+            data[t] = values[c]
+            slot[c] = -1
+        indptr[r + 1] = nnz
+    # the columns of each row sorted by transposing twice (a counting sort each time;
+    # numba's sort of every row's slice took 20 times longer)
+    t_indptr, t_indices, t_data = _transpose(indptr, indices[:nnz], data[:nnz], n)
+    return _transpose(t_indptr, t_indices, t_data, n)
+
+
+@njit()
+def _transpose(indptr, indices, data, n):
+    """CSR of the transpose of the square CSR ``(indptr, indices, data)``: each row's
+    entries sorted by column, whatever the order of the input's."""
+    nnz = indptr[n]
+    out_ptr = np.zeros(n + 1, dtype=np.int64)
+    for e in range(nnz):
+        out_ptr[indices[e] + 1] += 1
+    for r in range(n):
+        out_ptr[r + 1] += out_ptr[r]
+    fill = out_ptr[:n].copy()
+    out_indices = np.empty(nnz, dtype=np.int64)
+    out_data = np.empty(nnz)
+    for r in range(n):
+        for e in range(indptr[r], indptr[r + 1]):
+            c = indices[e]
+            out_indices[fill[c]] = r
+            out_data[fill[c]] = data[e]
+            fill[c] += 1
+    return out_ptr, out_indices, out_data

@@ -278,7 +278,8 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     )
 
 
-def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False):
+def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
+                  fast=False):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
@@ -290,6 +291,13 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
     instead agrees only when ``S`` spans an invariant subspace of ``H``, which
     an approximate symmetry does not: measured 3606 against the dense 3630 for
     the lowest eigenvalue on a contact branch at N = 200.)
+
+    ``fast``: the KKT factorisation by the band LU (``KKTFactor(band=True)``)
+    and Lanczos in ARPACK's standard mode on the symmetrically scaled operator
+    ``M^(1/2) (H - sigma M)^-1 M^(1/2)`` (constrained as above), whose
+    eigenvalues are ``1 / (mu - sigma)``: one callback per Lanczos step instead
+    of the generalised mode's two or three (measured at N = 200: 83 callbacks
+    per call, 22 of them solves). The same eigenpairs to round-off (``tol``).
     """
     r = 0 if symmetry is None else symmetry.shape[1]
     dim = n - m - r
@@ -298,7 +306,17 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         return values[:k], vectors[:, :k]
     sigma = -1e-3
-    opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma)
+    opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma, fast)
+    if fast:
+        root = np.sqrt(mass)
+        scaled = spla.LinearOperator((n, n), matvec=lambda y: root * opinv(root * np.ravel(y)),
+                                     dtype=float)
+        rng = np.random.default_rng(12345)
+        y0 = root * opinv(mass * rng.standard_normal(n))  # M^(1/2) of the start below
+        nu, y = spla.eigsh(scaled, k=k, v0=y0, which="LM", tol=1e-12)
+        values, vectors = sigma + 1.0 / nu, y / root[:, None]
+        order = np.argsort(values)
+        return values[order], vectors[:, order]
     Op = spla.LinearOperator((n, n), matvec=opinv, dtype=float)
     A = spla.LinearOperator((n, n), matvec=H.matvec, dtype=float)
     Mop = spla.LinearOperator((n, n), matvec=lambda x: mass * np.ravel(x), dtype=float)
@@ -310,7 +328,7 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False)
     return values[order], vectors[:, order]
 
 
-def _constrained_shift_invert(H, J, mass, symmetry, sigma: float):
+def _constrained_shift_invert(H, J, mass, symmetry, sigma: float, band: bool = False):
     """``x -> v`` solving ``(H - sigma M) v + J^T a + M S b = x, J v = 0, S^T M v = 0``.
 
     One sparse KKT factorisation of ``[[H - sigma M, J^T], [J, 0]]``; the ``r``
@@ -319,7 +337,7 @@ def _constrained_shift_invert(H, J, mass, symmetry, sigma: float):
     """
     n = mass.size
     m = J.shape[0] if J is not None else 0
-    factor = KKTFactor(H, J, shift=sigma, mass=mass)
+    factor = KKTFactor(H, J, shift=sigma, mass=mass, band=band)
     r = 0 if symmetry is None else symmetry.shape[1]
     if r:
         C = (mass[:, None] * symmetry).T  # (r, n)

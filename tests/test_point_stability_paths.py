@@ -1,0 +1,119 @@
+"""The per-point stability's fast paths against the fresh computations they replace.
+
+``point_stability`` computes the Hessian of the Lagrangian once on all DOFs and
+restricts it for the count and for the eigenproblem, and counts with the band LU
+(``KKTFactor(band=True)``). Oracles: the restricted Hessian equals
+``ExtendedSystem.hessian`` bit for bit; the count and determinant sign equal those
+of SuperLU's factor with a freshly assembled Hessian and the dense matrix's
+eigenvalues; the eigenpairs equal the fresh ones bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.linalg import null_space
+
+from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.continuation.options import ContinuationOptions
+from supercoil.continuation.pseudo_arclength import branch_phase_modes
+from supercoil.continuation.stability import (
+    _count_system,
+    eigenpairs,
+    inertia,
+    point_stability,
+)
+from supercoil.continuation.system import ExtendedSystem
+from supercoil.geometry.curves import circle
+from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.solvers.kkt import KKTFactor, _BandLU
+
+
+def _system(n: int = 60, amplitude: float = 0.03, excess_link: float = 2.5):
+    """A bent, twisted ring with integral barrier contact and the integral phase row."""
+    x = circle(n)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    x[:, 2] += amplitude * np.sin(2 * t)
+    x[:, 0] *= 1.0 + 0.1 * np.cos(2 * t)
+    rod = ClosedRodEnergy(Rod(n_nodes=n, twist_stiffness=2 / 3), x, excess_link)
+    problem = ContactProblem(rod, ContactOptions(diameter=0.05, formulation="integral"))
+    q = x.ravel()
+    modes = branch_phase_modes(problem, q, ContinuationOptions(gauge="integral"))
+    assert modes is not None and modes.shape[0] == 1
+    system = ExtendedSystem(problem, "excess_link", q, modes, q)
+    mu = np.linspace(-1.0, 1.0, problem.n_constraints)
+    return system, system.pack(q, mu, excess_link)
+
+
+@pytest.mark.parametrize("excess_link", [0.5, 2.5, 6.0])
+def test_point_stability_equals_the_fresh_count_and_eigenpairs(excess_link):
+    system, x = _system(excess_link=excess_link)
+    full = system.full_hessian(x)
+    fresh = system.hessian(x)
+    restricted = full.restrict(system.free)
+    for a, b in ((restricted.sparse.data, fresh.sparse.data),
+                 (restricted.sparse.indices, fresh.sparse.indices),
+                 (restricted.sparse.indptr, fresh.sparse.indptr),
+                 (restricted.vectors, fresh.vectors),
+                 (restricted.coefficients, fresh.coefficients)):
+        assert np.array_equal(a, b)
+
+    tol, n_modes = 1e-6, 6
+    stab = point_stability(system, x, tol, n_modes)
+    # the count with SuperLU on a freshly assembled Hessian, and the dense oracle
+    H, J = _count_system(system, x)
+    superlu = KKTFactor(H, J)
+    assert isinstance(KKTFactor(H, J, band=True)._lu, _BandLU)  # the path point_stability takes
+    neg, det_sign = inertia(system, x, tol)
+    assert stab.negative_count == neg == superlu.reduced_negative_count
+    assert stab.determinant_sign == det_sign == superlu.determinant_sign * (-1) ** J.shape[0]
+    Z = null_space(J.toarray())
+    values = np.linalg.eigvalsh(Z.T @ H.dense() @ Z)
+    assert neg == int(np.sum(values < 0))
+    assert det_sign == int(np.prod(np.sign(values)))
+    # the eigenpairs: the same computation on the same entries, bit for bit
+    ev, modes = eigenpairs(system, x, neg + n_modes)
+    assert np.array_equal(stab.eigenvalues, ev) and np.array_equal(stab.modes, modes)
+
+
+@pytest.mark.parametrize("excess_link", [0.5, 2.5, 6.0])
+def test_fast_eigenpairs_equal_the_generalised_superlu_eigenpairs_to_round_off(excess_link):
+    """fast=True: band LU, standard-mode Lanczos on the scaled operator; the reference:
+    SuperLU, ARPACK's generalised shift-invert mode."""
+    system, x = _system(excess_link=excess_link)
+    values, modes = eigenpairs(system, x, 8)
+    band_values, band_modes = eigenpairs(system, x, 8, fast=True)
+    scale = np.max(np.abs(values))
+    np.testing.assert_allclose(band_values, values, rtol=0, atol=1e-9 * scale)
+    mass = system.problem.mass
+    overlap = np.abs(np.einsum("ij,ij->i", band_modes * mass, modes))  # M-orthonormal modes
+    assert np.all(overlap > 1 - 1e-8)
+
+
+def test_the_hessian_before_accept_serves_the_point_after_it():
+    """add_point passes the converged correction's Hessian, assembled before the accept
+    that carries the reference frames to the point: the accept changes it by round-off,
+    and the count and eigenvalues from it equal the fresh ones."""
+    system, x = _system(excess_link=2.5)
+    rng = np.random.default_rng(5)
+    problem = system.problem
+    n = problem.n_dofs // 3
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    bump = np.stack([np.cos(3 * t), np.sin(2 * t), np.cos(t + rng.uniform())], axis=1)
+    x2 = x.copy()
+    x2[:system.n] += 0.02 * bump.ravel()[system.free]  # the frames turn by a few degrees
+    before = system.full_hessian(x2)
+    problem.accept(system.q(x2))
+    after = system.full_hessian(x2)
+    scale = np.max(np.abs(after.sparse.data))
+    assert np.max(np.abs((before.sparse - after.sparse).data), initial=0.0) <= 1e-13 * scale
+    np.testing.assert_allclose(before.vectors, after.vectors, rtol=0,
+                               atol=1e-13 * np.max(np.abs(after.vectors)))
+    np.testing.assert_allclose(before.coefficients, after.coefficients, rtol=1e-13)
+    reused = point_stability(system, x2, 1e-6, 6, before, fast=True)
+    fresh = point_stability(system, x2, 1e-6, 6)
+    assert (reused.negative_count, reused.unstable_count, reused.zero_modes,
+            reused.determinant_sign) == (fresh.negative_count, fresh.unstable_count,
+                                         fresh.zero_modes, fresh.determinant_sign)
+    np.testing.assert_allclose(reused.eigenvalues, fresh.eigenvalues, rtol=0,
+                               atol=1e-9 * np.max(np.abs(fresh.eigenvalues)))

@@ -110,3 +110,26 @@ def test_the_axis_invariant_combination_of_an_e_mode_keeps_that_axis():
     a0 = axis_invariant_combination(x, axes[0][0], modes)
     a1 = axis_invariant_combination(x, axes[1][0], modes)
     assert abs(abs(a0 @ a1) / (np.linalg.norm(a0) * np.linalg.norm(a1)) - 1) > 0.1
+
+
+@pytest.mark.parametrize("m, bump, height_bump", [
+    (2, 0.0, 0.0), (3, 0.0, 0.0), (3, 0.05, 0.0), (4, 0.0, 0.0), (3, 0.05, 0.03)])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("n", [48, 97])
+def test_reversal_axes_equal_the_half_node_scan_reference(m, bump, height_bump, seed, n):
+    """reversal_axes (integer scan, pruned by the edge length, refined within a node)
+    against _reversal_axes_reference (half-node trigonometric scan, every local minimum
+    refined): the same axes, to the refinement's tolerance, on curves with D_m, C_2 and
+    no reversing axis, sampled from random phases (axes off the nodes) and with a loose
+    tolerance as the ring diagram uses (0.05 D), so that near-misses are candidates too."""
+    from supercoil.geometry.symmetry import _reversal_axes_reference
+
+    x = sampled(lambda s: 1 + 0.2 * np.cos(m * s) + bump * np.cos(2 * s),
+                lambda s: 0.15 * np.sin(m * s) + height_bump * np.cos(s), n=n, seed=seed)
+    for tolerance in (TOL, 1e-3):
+        fast = reversal_axes(x, tolerance)
+        reference = _reversal_axes_reference(x, tolerance)
+        assert len(fast) == len(reference), (fast, reference)
+        for (c, r), (c_ref, r_ref) in zip(fast, reference):
+            assert min(abs(c - c_ref), n - abs(c - c_ref)) < 1e-5
+            assert abs(r - r_ref) < 1e-9

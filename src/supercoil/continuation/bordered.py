@@ -32,6 +32,7 @@ import scipy.sparse as sp
 from scipy.linalg import lapack, lu_factor, lu_solve
 from scipy.sparse.linalg import splu
 
+from supercoil.solvers.band import band_lu
 from supercoil.solvers.kkt import PinnedRows, SingularMatrixError, canonical, kkt_order
 from supercoil.solvers.patterns import PatternMemo
 from supercoil.solvers.problem import HessianParts
@@ -102,15 +103,10 @@ class _BandBordered:
         n = C.shape[0]
         if n < 2 or k_values.size == 0:
             return None
-        kl = int(max(0, np.max(k_rows - k_cols)))
-        ku = int(max(0, np.max(k_cols - k_rows)))
-        if kl + ku + 1 > n // 4:
+        factor = band_lu(n, k_rows, k_cols, k_values)
+        if factor is None or factor[4] != 0:
             return None
-        ab = np.zeros((2 * kl + ku + 1, n))
-        ab[kl + ku + k_rows - k_cols, k_cols] = k_values
-        lub, piv, info = lapack.dgbtrf(ab, kl, ku)
-        if info != 0:
-            return None
+        lub, piv, kl, ku, _info = factor
         out = cls(B, lub, piv, kl, ku, C, R, D)
         schur = D - R.T @ out._KC
         if not np.all(np.isfinite(schur)):

@@ -116,11 +116,21 @@ def reversal_axes(points: np.ndarray, tolerance: float) -> list[tuple[float, flo
     h = float(np.mean(np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)))
     candidates = np.flatnonzero((values <= left) & (values <= right)
                                 & (values <= h + tolerance))
+    return _refined_axes(x, candidates.astype(float), 1.0, tolerance)
+
+
+def _refined_axes(x: np.ndarray, centres: np.ndarray, reach: float, tolerance: float
+                  ) -> list[tuple[float, float]]:
+    """The axes found by Brent's method within ``reach`` of each of ``centres``: those
+    whose residual is within ``tolerance``, each once (sorted by ``c``)."""
+    n = x.shape[0]
     axes: list[tuple[float, float]] = []
-    for c0 in candidates:
+    for c0 in centres:
+        # The mean square is smooth (quadratic) at its minimum, the RMS a V; the
+        # offset from c0 is the variable, as Brent's tolerance is relative to it.
         result = minimize_scalar(
             lambda dc, c0=float(c0): float(reversal_residuals(x, [c0 + dc], True)[0]) ** 2,
-            bounds=(-1.0, 1.0), method="bounded", options={"xatol": 1e-10})
+            bounds=(-reach, reach), method="bounded", options={"xatol": 1e-10})
         c, value = float(c0 + result.x) % n, float(np.sqrt(result.fun))
         if value > tolerance:
             continue
@@ -137,7 +147,6 @@ def _reversal_axes_reference(points: np.ndarray, tolerance: float) -> list[tuple
     n = x.shape[0]
     grid = np.arange(2 * n) * 0.5
     values = reversal_residuals(x, grid)
-    axes: list[tuple[float, float]] = []
     left, right = np.roll(values, 1), np.roll(values, -1)
     # A local minimum on the half-node grid is refined (an axis rarely falls on it)
     # when it can hide a zero: near an axis the residual is a V, k |c - c*|, and the
@@ -145,20 +154,7 @@ def _reversal_axes_reference(points: np.ndarray, tolerance: float) -> list[tuple
     # neighbour (at least 1/2 away); 3/4 leaves room for the V's curvature.
     candidates = np.flatnonzero((values <= left) & (values <= right) &
                                 (values <= 0.75 * np.maximum(left, right) + tolerance))
-    for i in candidates:
-        c0 = grid[i]
-        # The mean square is smooth (quadratic) at its minimum, the RMS a V; the
-        # offset from c0 is the variable, as Brent's tolerance is relative to it.
-        result = minimize_scalar(
-            lambda dc, c0=c0: float(reversal_residuals(x, [c0 + dc], True)[0]) ** 2,
-            bounds=(-0.5, 0.5), method="bounded", options={"xatol": 1e-10})
-        c, value = float(c0 + result.x) % n, float(np.sqrt(result.fun))
-        if value > tolerance:
-            continue
-        if any(min(abs(c - a), n - abs(c - a)) < 0.25 for a, _ in axes):
-            continue
-        axes.append((c, value))
-    return sorted(axes)
+    return _refined_axes(x, grid[candidates], 0.5, tolerance)
 
 
 @dataclass(frozen=True)

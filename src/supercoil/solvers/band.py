@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.linalg import lapack
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 from threadpoolctl import ThreadpoolController
 
@@ -36,6 +37,22 @@ _MAX_CONDITION = 1e4
 # At most this many blocks' worth of directions are carried at once.
 _MAX_CARRIED = 4
 _CONTROLLER: ThreadpoolController | None = None
+
+
+def band_lu(size: int, rows: np.ndarray, cols: np.ndarray, values: np.ndarray,
+            max_fraction: float = 0.25):
+    """LAPACK's band LU (``dgbtrf``) of the ``(size, size)`` matrix with entries ``values``
+    at ``(rows, cols)`` (no duplicates): ``(lub, piv, kl, ku, info)``, or None when the
+    band ``kl + ku + 1`` is wider than ``max_fraction`` of ``size`` (a sparse LU pays
+    then). ``info > 0``: a pivot is exactly zero; ``info < 0``: a bad argument."""
+    kl = int(max(0, np.max(rows - cols)))
+    ku = int(max(0, np.max(cols - rows)))
+    if kl + ku + 1 > size * max_fraction:
+        return None
+    ab = np.zeros((2 * kl + ku + 1, size))
+    ab[kl + ku + rows - cols, cols] = values
+    lub, piv, info = lapack.dgbtrf(ab, kl, ku)
+    return lub, piv, kl, ku, info
 
 
 def bandwidth_order(A: sp.spmatrix) -> np.ndarray:

@@ -40,7 +40,7 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 from scipy.sparse.linalg import splu
 
-from supercoil.solvers.band import bandwidth_order, symmetric_inertia
+from supercoil.solvers.band import band_lu, bandwidth_order, symmetric_inertia
 from supercoil.solvers.patterns import PatternMemo
 from supercoil.solvers.problem import HessianParts
 
@@ -426,13 +426,10 @@ class _BandLU:
         position = np.empty(size, dtype=np.int64)
         position[order] = np.arange(size)
         prow, pcol = position[rows], position[cols]
-        kl = int(max(0, np.max(prow - pcol)))
-        ku = int(max(0, np.max(pcol - prow)))
-        if kl + ku + 1 > size // 4:
+        factor = band_lu(size, prow, pcol, values)
+        if factor is None:
             return None
-        ab = np.zeros((2 * kl + ku + 1, size))
-        ab[kl + ku + prow - pcol, pcol] = values
-        lub, piv, info = lapack.dgbtrf(ab, kl, ku)
+        lub, piv, kl, ku, info = factor
         if info > 0:  # U(info, info) is exactly zero, as SuperLU's "exactly singular"
             raise SingularMatrixError("KKT matrix is singular (a zero pivot in the band LU)")
         if info < 0:

@@ -31,7 +31,10 @@ double eigenvalue (a symmetry-breaking bifurcation), a half-branch that keeps
 the parent's symmetry at every point (:func:`fell_back`) is noted as such and
 not switched from again. At a double eigenvalue the switch goes along the
 combination of the critical modes that keeps a two-fold axis
-(:func:`switch_direction`). The per-point symmetry
+(:func:`switch_direction`). At a pitchfork of a state with an exact mesh axis (its
+single critical mode odd under the axis, :func:`mirror_axis`: seed 001's S on beta_II)
+only the ``+`` half-branch is computed: the ``-`` half is its mirror image, and a note
+says so. The per-point symmetry
 (:meth:`RingDiagram.points`, ``symmetry``) tells the branches apart once they
 have left the bifurcation point by more than the symmetry tolerance (0.05 D):
 closer to it a secondary point still carries its parent's label.

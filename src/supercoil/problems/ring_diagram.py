@@ -758,8 +758,10 @@ def ring_diagram(options: DiagramOptions,
             contact = classify_contact_events(contact, cp)
         sliding = contact.records.get("sliding_residual", np.zeros(0))
         # on a branch with a two-fold axis on the mesh the force vanishes by symmetry (module
-        # doc, "Material sliding"): no note when it is within the corrector's tolerance
-        if len(contact) and opts.contact_gauge and np.max(sliding) > opts.contact_tolerance:
+        # doc, "Material sliding"): no note while it is at the corrector's own level (the
+        # residual without the gauge measured 6e-9 to 1.5e-8 there, tolerance 1e-8)
+        if (len(contact) and opts.contact_gauge
+                and np.max(sliding) > 10 * opts.contact_tolerance):
             notes.append(f"{contact_name}: the material sliding is held fixed (a gauge); the "
                          f"sliding force it holds, max |KKT residual| without the gauge, is at "
                          f"most {float(np.max(sliding)):.2e} (at dLk = "

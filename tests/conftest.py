@@ -51,3 +51,16 @@ def split_into_halves(A):
     assert not out.has_canonical_format
     return out
 
+
+
+def with_rank_one_terms(rng, H: np.ndarray, J: np.ndarray, rank_one: int):
+    """``(HessianParts(H) plus rank_one random dense symmetric rank-one terms of either
+    sign, csr J)``: the KKT test problems of the solver tests."""
+    import scipy.sparse as sp
+
+    from supercoil.solvers.problem import HessianParts
+
+    n = H.shape[0]
+    vecs = rng.standard_normal((rank_one, n))
+    coefs = rng.uniform(0.5, 3.0, rank_one) * rng.choice([-1, 1], rank_one)
+    return HessianParts(sp.csr_matrix(H), vecs, coefs), sp.csr_matrix(J)

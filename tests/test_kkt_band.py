@@ -8,6 +8,7 @@ product, the solve's residual).
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from conftest import with_rank_one_terms
 
 from supercoil.solvers.kkt import KKTFactor, SingularMatrixError, _BandLU, _OrderedLU
 from supercoil.solvers.problem import HessianParts
@@ -27,9 +28,7 @@ def banded_kkt(rng, n, m, rank_one=0, dense_rows=0, width=3):
         start = int(rng.integers(0, n - 3))
         J[j, start:start + 3] = rng.standard_normal(3)
     J[m:] = rng.standard_normal((dense_rows, n))
-    vecs = rng.standard_normal((rank_one, n))
-    coefs = rng.uniform(0.5, 3.0, rank_one) * rng.choice([-1, 1], rank_one)
-    return HessianParts(sp.csr_matrix(H), vecs, coefs), sp.csr_matrix(J)
+    return with_rank_one_terms(rng, H, J, rank_one)
 
 
 @pytest.mark.parametrize("seed", range(8))

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from conftest import smooth_closed_curve, split_into_halves
+from conftest import smooth_closed_curve, split_into_halves, with_rank_one_terms
 
 from supercoil.problems.ring import twisted_circle_problem
 from supercoil.solvers.band import symmetric_inertia
@@ -38,9 +38,7 @@ def random_kkt(rng, n, m, rank_one):
     for j in range(m):
         cols = rng.choice(n, size=3, replace=False)
         J[j, cols] = rng.standard_normal(3)
-    vecs = rng.standard_normal((rank_one, n))
-    coefs = rng.uniform(0.5, 3.0, rank_one) * rng.choice([-1, 1], rank_one)
-    return HessianParts(sp.csr_matrix(H), vecs, coefs), sp.csr_matrix(J)
+    return with_rank_one_terms(rng, H, J, rank_one)
 
 
 @pytest.mark.parametrize("seed", range(10))

@@ -110,6 +110,61 @@ def test_a_stop_condition_refuses_a_point_and_ends_the_run_before_it():
     assert np.array_equal(np.array(p.accepted[-len(b):]), b.states)
 
 
+class _NoPins:
+    """segments.PinnedRod for a problem without symmetry pins (Bratu's fixed ends stay)."""
+
+    def __init__(self, problem):
+        self.fixed = self.gauge_dofs = problem.fixed
+        self.repicked = 0
+
+    def repin(self, q):
+        self.repicked += 1
+
+    def pin_quality(self, q):
+        return 1.0
+
+
+@pytest.mark.parametrize("refusing", ["once", "always"])
+def test_follow_repicks_pins_where_their_grip_is_lost_and_fails_when_fresh_pins_refuse_too(
+        refusing):
+    """segments.follow(grip=...): a run refuses the first point where the grip fell below a
+    quarter of its value at the run's start; the pins are picked again there and the
+    branch goes on to its bound (the refused point is computed again, with the new
+    pins). If fresh pins refuse the very next point too, the branch ends with a failed
+    status (STEP_TOO_SMALL), not an ok one. Oracles: the bound reached and the pins'
+    history (once); no point beyond the first run and the status (always)."""
+    from supercoil.problems.segments import follow
+
+    p = Bratu(32, 1.0)
+    opts = ContinuationOptions(parameter_bounds=(1.0, 3.0), initial_step=0.05, max_step=0.2,
+                               max_points=6)
+    first = continuation(p, np.zeros(33), parameter="lam", options=opts)
+    rod = _NoPins(p)
+    refused = []
+
+    def grip(q):
+        # full grip at u(1/2) below 0.6 and at every run's start; lost once above it
+        # ("once": only the first time a state above it is asked about)
+        if q[16] <= 0.6 or (refusing == "once" and refused):
+            return 1.0
+        if not any(np.array_equal(q, r) for r in refused):
+            refused.append(q.copy())
+            return 0.1
+        return 1.0 if refusing == "once" else 0.1
+
+    branch, pins = follow(p, rod, first, dataclasses.replace(opts, max_points=200), "bratu",
+                          None, max_points=200, segment_points=6, grip=grip)
+    if refusing == "once":
+        assert branch.status is ContinuationStatus.PARAMETER_BOUND, branch.message
+        assert len(refused) == 1 and rod.repicked == 1 and len(pins) == 2
+        # the pins were picked again at the last point before the refused one
+        assert branch.states[pins[1][0], 16] <= 0.6 < refused[0][16]
+    else:
+        assert branch.status is ContinuationStatus.STEP_TOO_SMALL
+        assert "refused" in branch.message
+        assert np.all(branch.states[:, 16] <= 0.6)
+
+
 def test_bratu_through_the_fold_comes_back_down_the_upper_branch():
     user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[16] - 1.0})
     p = Bratu(32, 1.0)

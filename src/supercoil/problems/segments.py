@@ -22,7 +22,13 @@ from typing import Protocol
 
 import numpy as np
 
-from supercoil.continuation import Branch, ContinuationOptions, UserEvent, continuation
+from supercoil.continuation import (
+    Branch,
+    ContinuationOptions,
+    ContinuationStatus,
+    UserEvent,
+    continuation,
+)
 
 
 class PinnedRod(Protocol):
@@ -120,10 +126,12 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
     total = len(first)
     run = first
     stopped_at = None
+    stuck = False
     while run.ok and total < max_points and not (stop and stop(run)) \
             and run.status.name in ("MAX_POINTS", "STOPPED"):
         if run.status.name == "STOPPED":
             if stopped_at == total:  # fresh pins refused the very next point too
+                stuck = True
                 break
             stopped_at = total
         elif len(run) < 2:
@@ -151,6 +159,12 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         parts.append(run)
         total += len(run) - 1
     merged = merge_branches(parts, name)
-    if merged.ok and total >= max_points and merged.status.name == "MAX_POINTS":
-        merged = dataclasses.replace(merged, message=f"{total} points computed (max_points)")
+    if stuck:
+        merged = dataclasses.replace(
+            merged, status=ContinuationStatus.STEP_TOO_SMALL,
+            message=f"stopped after {total} points: freshly picked pins refused the next "
+                    f"point too ({merged.message})")
+    elif merged.ok and total >= max_points and merged.status.name in ("MAX_POINTS", "STOPPED"):
+        merged = dataclasses.replace(merged, status=ContinuationStatus.MAX_POINTS,
+                                     message=f"{total} points computed (max_points)")
     return merged, tuple(pins)

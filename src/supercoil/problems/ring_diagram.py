@@ -115,7 +115,10 @@ pushes through zero, and the branch folded back and forth there (measured:
 L/D = 122, N = 200, from ``dLk`` 3.40). Contact branches therefore run in
 segments of ``CONTACT_SEGMENT_POINTS`` points (:mod:`supercoil.problems.segments`):
 the pins are picked at the branch's start and re-picked at a segment boundary
-where their quality fell below ``PIN_QUALITY``; the pinned coordinates keep
+where their quality fell below ``PIN_QUALITY``, and within a run a point where
+their determinant fell below a quarter of its value at the run's start is refused
+and the pins picked there (``segments.follow(grip=...)``: a fixed set can pass
+through a shape where it removes no rotation); the pinned coordinates keep
 their values there. :attr:`RingDiagram.pins` records them
 (:meth:`RingDiagram.pin_branch` sets them for checking a point), a resumed
 branch replays them, and the ring's own pins are restored afterwards.

@@ -355,12 +355,7 @@ def test_point_stability_assembles_once_and_equals_the_separate_parts(small_run,
     """One assembly of the Lagrangian's Hessian serves the count and the eigenproblem:
     its restrictions equal the two separately assembled Hessians bit for bit, and the
     point's stability equals the inertia and eigenpairs computed each on its own."""
-    from supercoil.continuation.stability import (
-        eigenpairs,
-        full_hessian,
-        inertia,
-        point_stability,
-    )
+    from supercoil.continuation.stability import eigenpairs, inertia, point_stability
     from supercoil.continuation.system import ExtendedSystem
     from supercoil.solvers.newton import _hessian
     from supercoil.stability.analysis import _eigen_dofs
@@ -373,7 +368,7 @@ def test_point_stability_assembles_once_and_equals_the_separate_parts(small_run,
         x = system.pack(q, mu, lam)
         system.set_parameter(lam)
         problem.accept(q)
-        full = full_hessian(system, x)
+        full = system.full_hessian(x)
         assert _same_hessian(full.restrict(system.free), system.hessian(x))
         dofs = _eigen_dofs(problem)
         assert dofs.size > system.free.size  # the gauge pin is released there

@@ -191,7 +191,8 @@ class ContinuationOptions:
             raise ValueError("rephase re-anchors the integral phase condition: it needs "
                              f"gauge='integral', got gauge={self.gauge!r}")
         if self.predictor not in ("tangent", "secant", "quadratic"):
-            raise ValueError(f"predictor must be 'tangent' or 'secant', got {self.predictor!r}")
+            raise ValueError(f"predictor must be 'tangent', 'secant' or 'quadratic', "
+                             f"got {self.predictor!r}")
         if self.n_modes < 1:
             raise ValueError(f"n_modes must be >= 1, got {self.n_modes!r}")
         if self.max_turn_degrees >= 180.0:

@@ -24,7 +24,6 @@ import numpy as np
 
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.kkt import InertiaError, KKTFactor, SingularMatrixError
-from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.stability.analysis import (
     _eigen_system,
     _lowest_pairs,
@@ -125,7 +124,7 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
                full=None, fast: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``.
 
-    ``full``: :func:`full_hessian` at ``x`` if already assembled; ``fast``: the
+    ``full``: ``system.full_hessian(x)`` if already assembled; ``fast``: the
     shift-invert factor on the band LU and Lanczos in ARPACK's standard mode
     (:func:`~supercoil.stability.analysis._lowest_pairs`), eigenvalues equal to
     round-off, not bit for bit."""
@@ -146,25 +145,14 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
     return values, modes
 
 
-def full_hessian(system: ExtendedSystem, x: np.ndarray):
-    """Hessian of the Lagrangian at ``x`` on all the problem's DOFs (``HessianParts``).
-
-    Restricted to ``system.free`` it is ``system.hessian(x)``, and to the
-    eigenproblem's DOFs (the free ones and the gauge pins) the eigenproblem's:
-    one assembly serves both parts of :func:`point_stability`.
-    """
-    system.set_parameter(x[-1])
-    return lagrangian_hessian(system.problem, system.q(x), system.multipliers(x))
-
-
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
                     n_modes: int, full=None, fast: bool = False) -> PointStability:
     """Stability report at the point ``x`` of the extended system (see module doc).
 
-    ``full``: :func:`full_hessian` at ``x`` if already assembled (a converged
+    ``full``: ``system.full_hessian(x)`` if already assembled (a converged
     correction's); ``fast``: as :func:`eigenpairs`.
     """
-    full = full_hessian(system, x) if full is None else full
+    full = system.full_hessian(x) if full is None else full
     neg, det_sign = inertia(system, x, zero_tolerance, full.restrict(system.free))
     values, modes = eigenpairs(system, x, neg + n_modes, full, fast)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))

@@ -90,8 +90,7 @@ refinement once the contact force is large (measured, C/A = 2/3: at L/D =
 it falls from 0.032 (N = 48) to about 0.006 (N = 96) at ``dLk`` 1.35, but is
 0.43 and 0.55 at ``dLk`` 1.9). A contact formulation that keeps the
 sliding symmetry (distances between smooth interpolants of the nodes, not
-between segments) is the fix; until then the xfail test in
-tests/test_ring_diagram.py records the defect. ``contact_curve="spline"``
+between segments) is the fix. ``contact_curve="spline"``
 (B-spline pieces) removes the chords' sag ripple but a sum over piece pairs
 still counts a contact a varying number of times across piece junctions:
 measured in docs/benchmarks.md ("Spline contact"). The default, the double

@@ -110,6 +110,27 @@ def test_a_stop_condition_refuses_a_point_and_ends_the_run_before_it():
     assert np.array_equal(np.array(p.accepted[-len(b):]), b.states)
 
 
+def test_an_admissibility_condition_shortens_the_steps_that_would_cross_it():
+    """continuation(admissible=...): a corrected state it refuses is not accepted and the
+    step is retried shorter (unlike ``stop``, the run goes on). Oracle: the same Bratu run
+    without it (on the lower branch, u(1/2) grows with lam): every accepted state is
+    admissible, the run ends at the minimum step within that step of the threshold, and
+    the points before the first refused one are the unconditioned run's."""
+    opts = ContinuationOptions(parameter_bounds=(1.0, 4.0), initial_step=0.05, max_step=0.5,
+                               min_step=1e-6)
+    free = continuation(Bratu(32, 1.0), np.zeros(33), parameter="lam", options=opts)
+    first = int(np.argmax(free.states[:, 16] > 0.5))
+    assert 2 <= first < len(free) - 1
+    b = continuation(Bratu(32, 1.0), np.zeros(33), parameter="lam", options=opts,
+                     admissible=lambda q: q[16] <= 0.5)
+    assert np.all(b.states[:, 16] <= 0.5)
+    assert len(b) > first
+    np.testing.assert_array_equal(b.states[:first], free.states[:first])
+    assert b.status is ContinuationStatus.STEP_TOO_SMALL
+    assert "inadmissible" in b.message
+    assert 0.5 - b.states[-1, 16] < 1e-5
+
+
 class _NoPins:
     """segments.PinnedRod for a problem without symmetry pins (Bratu's fixed ends stay)."""
 

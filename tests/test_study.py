@@ -54,7 +54,9 @@ def test_defaults_filled_and_values_converted():
     assert isinstance(s["rod"]["length_over_diameter"], float)
     assert s["problem"] == {"kind": "ring_diagram", "modes": [2], "max_excess_link": 4.0,
                             "contact": "barrier"}
-    assert s["continuation"]["free_max_step"] == 0.05  # DiagramOptions' default
+    from supercoil.problems.ring_diagram import DiagramOptions
+
+    assert s["continuation"]["free_max_step"] == DiagramOptions.free_max_step  # its default
     assert s["outputs"] == {"figures": False, "json": True}
     assert s["units"] == {"preset": "nondimensional"}
 
@@ -490,7 +492,7 @@ def test_tweezers_study():
     study = parse_study(TWEEZERS)
     opts = study.tweezers_options()
     assert opts.tension == 20.0 and opts.turns == (0.0, 1.6) and opts.n_nodes == 40
-    assert opts.free_max_step == 0.1  # the tweezers' default, not the ring diagram's 0.05
+    assert opts.free_max_step == 0.1  # TweezersOptions' default
     assert study.settings["continuation"]["max_points"] == 400
     for edit, words in [
         (("tension = 20.0", "tension = 20.0\nend_distance = 0.5"), "exactly one of tension"),

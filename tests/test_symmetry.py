@@ -15,9 +15,13 @@ from supercoil.geometry.symmetry import curve_symmetry, cyclic_residual, reversa
 TOL = 1e-8
 
 
-def sampled(radius, height, n=96, seed=0):
+def sampled(radius, height, n=96, seed=0, phase=None):
+    """The curve at ``n`` nodes from a random starting point (``phase``, in node spacings,
+    if given: 0 puts the reversing axis of an even radius and odd height through node 0,
+    1/2 through an edge midpoint), rotated and moved at random."""
     rng = np.random.default_rng(seed)
-    s = 2 * np.pi * (np.arange(n) + rng.uniform()) / n
+    start = rng.uniform() if phase is None else phase
+    s = 2 * np.pi * (np.arange(n) + start) / n
     r = radius(s)
     x = np.stack([r * np.cos(s), r * np.sin(s), height(s)], axis=1)
     return Rotation.random(random_state=seed).apply(x) + rng.normal(size=3)
@@ -133,3 +137,43 @@ def test_reversal_axes_equal_the_half_node_scan_reference(m, bump, height_bump, 
         for (c, r), (c_ref, r_ref) in zip(fast, reference):
             assert min(abs(c - c_ref), n - abs(c - c_ref)) < 1e-5
             assert abs(r - r_ref) < 1e-9
+
+
+def test_the_integer_scan_by_fft_equals_the_permuted_copies():
+    """_integer_reversal_scan (covariances by FFT cross-correlation) against the residuals
+    of the reversed curve's node permutations, each fitted by Kabsch (brute force)."""
+    from supercoil.geometry.symmetry import _fit_residuals, _integer_reversal_scan
+
+    for n, seed in ((48, 0), (97, 1), (200, 2)):
+        x = sampled(lambda s: 1 + 0.2 * np.cos(3 * s) + 0.05 * np.cos(2 * s),
+                    lambda s: 0.15 * np.sin(3 * s) + 0.03 * np.cos(s), n=n, seed=seed)
+        index = (-(np.arange(n)[None, :] + np.arange(n)[:, None])) % n
+        brute = _fit_residuals(x, x[index])
+        # both cancel sums of squares down to about sqrt(eps) of the curve's size
+        np.testing.assert_allclose(_integer_reversal_scan(x), brute, rtol=0, atol=1e-6)
+        assert np.argmin(_integer_reversal_scan(x)) == np.argmin(brute)
+
+
+@pytest.mark.parametrize("m, bump, height_bump", [
+    (2, 0.0, 0.0), (3, 0.0, 0.0), (3, 0.05, 0.0), (4, 0.0, 0.0), (3, 0.05, 0.03)])
+@pytest.mark.parametrize("phase", [0.0, 0.5, None])
+@pytest.mark.parametrize("n", [48, 97])
+def test_axes_counted_without_refinement_are_the_refined_axes(m, bump, height_bump, phase, n):
+    """reversal_axes(refine=False), which curve_symmetry uses, against the refined axes:
+    as many, each within a third of a node of a refined one and within the tolerance;
+    on curves whose axes pass through nodes (phase 0) or edge midpoints (1/2), the
+    unrefined integer axes are taken (the fast path runs), off the mesh they are refined."""
+    x = sampled(lambda s: 1 + 0.2 * np.cos(m * s) + bump * np.cos(2 * s),
+                lambda s: 0.15 * np.sin(m * s) + height_bump * np.cos(s), n=n, seed=3,
+                phase=phase)
+    for tolerance in (TOL, 1e-3):
+        refined = reversal_axes(x, tolerance)
+        counted = reversal_axes(x, tolerance, refine=False)
+        assert len(counted) == len(refined), (counted, refined)
+        for c, r in counted:
+            assert min(min(abs(c - a), n - abs(c - a)) for a, _ in refined) < 1 / 3
+            assert r <= tolerance
+        if phase is not None and counted:
+            assert any(c == round(c) for c, _ in counted)
+        if phase is None and tolerance == TOL:
+            assert all(c != round(c) for c, _ in counted)

@@ -88,10 +88,11 @@ def run_demo(folder: Path, quiet: bool = False) -> bool:
     print(f"supercoil demo: bifurcation diagram of a twisted ring with self-contact, "
           f"C/A = 2/3, L/D = {LENGTH_OVER_DIAMETER:g} (seed 001's DNA example), N = {N_NODES}, "
           f"modes {', '.join(map(str, MODES))}, dLk <= {MAX_EXCESS_LINK:g}", flush=True)
-    diagram = compute_diagram(options, folder, quiet)
+    saved: dict = {}
+    diagram = compute_diagram(options, folder, quiet, saved)
     if diagram is None:
         return False
-    payload = write_diagram(diagram, folder, options.contact)
+    payload = write_diagram(diagram, folder, options.contact, saved)
     message = incomplete_message(payload, folder)
     if message is not None:
         warn(message)

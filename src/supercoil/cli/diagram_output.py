@@ -24,15 +24,16 @@ DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configur
 SAVE_EVERY = 10
 
 
-def run_saving(compute, out: Path, quiet: bool = False):
+def run_saving(compute, out: Path, quiet: bool = False, saved: dict | None = None):
     """Run ``compute(message, on_point, on_branch)`` with a progress display, saving
     branches into ``out/branches`` as they come.
 
     Every branch is written to ``out/branches/<name>.npz`` when it is final,
     and a branch in progress every ``SAVE_EVERY`` points (atomically: a
     temporary file renamed), so an interrupt (Ctrl-C) loses at most that many
-    points. Returns what ``compute`` returns, or None after an interrupt (the
-    message says what was kept).
+    points. ``saved`` (a dict, if given) gets ``name -> branch`` for every final
+    branch written, so that a later writer need not write it again. Returns what
+    ``compute`` returns, or None after an interrupt (the message says what was kept).
     """
     from supercoil.cli.progress import Progress
 
@@ -56,8 +57,13 @@ def run_saving(compute, out: Path, quiet: bool = False):
                 # (the final save, below, is compressed)
                 save(branch, compressed=False)
 
+        def on_branch(branch, contact) -> None:
+            save(branch)
+            if saved is not None:
+                saved[branch.name] = branch
+
         try:
-            return compute(progress.message, on_point, lambda branch, contact: save(branch))
+            return compute(progress.message, on_point, on_branch)
         except KeyboardInterrupt:
             kept = sorted(p.name for p in folder.glob("*.npz") if not p.name.startswith("."))
             warn(f"interrupted: kept {', '.join(kept) or 'no branch'} in {folder.resolve()} "
@@ -66,16 +72,17 @@ def run_saving(compute, out: Path, quiet: bool = False):
             return None
 
 
-def compute_diagram(options, out: Path, quiet: bool = False):
+def compute_diagram(options, out: Path, quiet: bool = False, saved: dict | None = None):
     """:func:`ring_diagram` through :func:`run_saving` (None after an interrupt)."""
     from supercoil.problems.ring_diagram import ring_diagram
 
     return run_saving(lambda message, on_point, on_branch: ring_diagram(
-        options, progress=message, on_point=on_point, on_branch=on_branch), out, quiet)
+        options, progress=message, on_point=on_point, on_branch=on_branch), out, quiet, saved)
 
 
-def write_diagram(diagram, out: Path, contact: str) -> dict:
-    """Save ``diagram`` (a RingDiagram) into ``out``, print a summary; return the payload."""
+def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None) -> dict:
+    """Save ``diagram`` (a RingDiagram) into ``out``, print a summary; return the payload.
+    Branches that ``saved`` holds (:func:`run_saving`'s record) are already written."""
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.figures import through_special_points
     from supercoil.plotting.ring_diagram import (
@@ -88,7 +95,8 @@ def write_diagram(diagram, out: Path, contact: str) -> dict:
     options = diagram.options
     (out / "branches").mkdir(parents=True, exist_ok=True)
     for branch in diagram.branches:
-        branch.save(out / "branches" / f"{branch.name}.npz")
+        if saved is None or saved.get(branch.name) is not branch:
+            branch.save(out / "branches" / f"{branch.name}.npz")
     payload = diagram.payload()
     points = payload["points"]
     by_branch = {b["name"]: [p for p in points if p["branch"] == b["name"]]

@@ -802,10 +802,11 @@ def diagram_ring(
         fail(str(exc))
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "
           f"N = {nodes}, modes {', '.join(words)}, dLk <= {max_excess_link:g}", flush=True)
-    diagram = compute_diagram(options, out, quiet)
+    saved: dict = {}
+    diagram = compute_diagram(options, out, quiet, saved)
     if diagram is None:
         raise typer.Exit(EXIT_NOT_CONVERGED)
-    payload = write_diagram(diagram, out, contact)
+    payload = write_diagram(diagram, out, contact, saved)
     message = incomplete_message(payload, out)
     if message is not None:
         warn(message)

@@ -134,6 +134,9 @@ class _Tracer:
         self.system = system
         self.on_point = on_point
         self.stop: Callable[[np.ndarray], str | None] | None = None  # see continuation()
+        # see continuation(); by default the problem's own admissible(q), if it has one
+        self.admissible: Callable[[np.ndarray], bool] | None = getattr(
+            system.problem, "admissible", None)
         self.opts = options
         self.name, self.parent, self.origin = name, parent, origin
         self.records_fn = records
@@ -453,8 +456,8 @@ class _Tracer:
                                     corr.factor if opts.factor_refinement else None)
                 except SingularMatrixError as exc:
                     failure = f"tangent: {exc}"
-            if failure is None and hasattr(problem, "admissible") and \
-                    not problem.admissible(system.q(x_new)):
+            if failure is None and self.admissible is not None and \
+                    not self.admissible(system.q(x_new)):
                 failure = "the corrected state is inadmissible (e.g. its linking number changed)"
             if failure is None and t_new @ (system.weights * t_k) < cos_turn:
                 failure = (f"the tangent turned by more than {opts.max_turn_degrees} degrees "
@@ -563,7 +566,8 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                  records: RecordFunction | None = None,
                  events: Sequence[UserEvent] = (),
                  on_point: PointCallback | None = None,
-                 stop: Callable[[np.ndarray], str | None] | None = None) -> Branch:
+                 stop: Callable[[np.ndarray], str | None] | None = None,
+                 admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
     """Follow the equilibria of ``problem`` through ``q0`` as ``problem.<parameter>`` varies.
 
     ``q0`` (n_dofs,) is a (near-)equilibrium at the current parameter value;
@@ -577,7 +581,10 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     KeyboardInterrupt) propagates. ``stop(q)``, if given, is asked about each corrected
     state before it is accepted: a non-empty message refuses it and ends the run at
     the point before (status ``STOPPED``), e.g. when a problem's gauge pins lose their
-    grip there and must be picked again. Returns a :class:`Branch` whose ``status`` says how
+    grip there and must be picked again. ``admissible(q)``, if given, replaces the
+    problem's own ``admissible`` (if any): a corrected state it refuses is not
+    accepted, and the step is retried shorter (e.g. a contact-free ring that would
+    pass through itself). Returns a :class:`Branch` whose ``status`` says how
     the run ended; numerical failures never raise. The problem is left at the
     last point's parameter value and state (accepted).
     """
@@ -596,6 +603,8 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
            else np.asarray(multipliers0, dtype=float))
     tracer = _Tracer(system, opts, name, None, None, records, events, on_point)
     tracer.stop = stop
+    if admissible is not None:
+        tracer.admissible = admissible
     x0 = system.pack(q0, mu0, lam0)
     e_lam = np.zeros(system.size)
     e_lam[-1] = 1.0

@@ -14,6 +14,7 @@ uninterrupted run gives it (tested: the same points to round-off).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -120,12 +121,14 @@ def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOption
 def resume_branch(problem: ConstrainedEnergy, partial: Branch,
                   options: ContinuationOptions | None = None, *,
                   records: RecordFunction | None = None, events: tuple[UserEvent, ...] = (),
-                  on_point: PointCallback | None = None, step: float | None = None) -> Branch:
+                  on_point: PointCallback | None = None, step: float | None = None,
+                  admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
     """Continue ``partial`` (at least one point) under ``options`` (the options it was
     computed with: ``max_points`` counts the whole branch); see the module docstring.
 
-    ``records`` and ``events`` must be those of the interrupted run. ``on_point``
-    receives the whole branch so far. Numerical failures end in the status.
+    ``records``, ``events`` and ``admissible`` must be those of the interrupted run
+    (:func:`~supercoil.continuation.continuation`). ``on_point`` receives the whole
+    branch so far. Numerical failures end in the status.
     """
     opts = options or ContinuationOptions()
     k = len(partial)
@@ -159,6 +162,8 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     tracer = _Tracer(system, dataclasses.replace(opts, max_points=opts.max_points - (k - 1)),
                      partial.name, partial.parent, partial.origin, records, events,
                      None if on_point is None else joined)
+    if admissible is not None:
+        tracer.admissible = admissible
     if k >= 2:
         tracer.before = (_reduced(system, partial.tangents[-2]),
                          float(partial.arclength[-1] - partial.arclength[-2]))

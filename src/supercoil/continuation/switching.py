@@ -24,6 +24,8 @@ symmetric point, so they are taken on the new branch).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from supercoil.continuation.branch import Branch, SpecialPoint
@@ -90,7 +92,8 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
                   amplitude: float | None = None, name: str | None = None,
                   records: RecordFunction | None = None,
                   events: tuple[UserEvent, ...] = (),
-                  on_point: PointCallback | None = None) -> Branch:
+                  on_point: PointCallback | None = None,
+                  admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
     """Follow the branch that bifurcates from ``special_point`` of ``branch`` (see module doc).
 
     ``side`` (+1 / -1) picks the half-branch along ``+-`` the critical mode
@@ -99,7 +102,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     bifurcation (arclength metric; default ``options.initial_step``).
     ``problem.accept(special_point.q)`` is called first so that a problem
     with a reference state (rod frames) is brought back to that point.
-    ``on_point`` as in :func:`~supercoil.continuation.continuation`.
+    ``on_point`` and ``admissible`` as in :func:`~supercoil.continuation.continuation`.
     """
     opts = options or ContinuationOptions()
     if side not in (1, -1):
@@ -135,6 +138,8 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     x_star = system.pack(q_star, special_point.multipliers, special_point.parameter)
     tracer = _Tracer(system, opts, label, branch.name, special_point, records, events,
                      on_point)
+    if admissible is not None:
+        tracer.admissible = admissible
     row = system.weights * v
     corr = correct(system, x_star + side * eps * v, row, x_star, side * eps, opts.tolerance,
                    4 * opts.max_corrector_iterations)

@@ -72,12 +72,33 @@ def _fit_residuals(x: np.ndarray, ys: np.ndarray, direct: bool = False) -> np.nd
         rotation = u @ vt  # x ~ y R^T per row: R = U diag(1, 1, d) V^T
         fitted = np.einsum("cib,cab->cia", yc, rotation)
         return np.sqrt(np.mean(np.sum((xc[None] - fitted) ** 2, axis=2), axis=1))
+    return _procrustes_residuals(cov, np.sum(xc**2) + np.sum(yc**2, axis=(1, 2)), x.shape[0])
+
+
+def _procrustes_residuals(cov: np.ndarray, squares: np.ndarray | float, n: int) -> np.ndarray:
+    """RMS residuals of the best proper rotations from the covariances ``cov`` (k, 3, 3) of
+    two centred ``n``-point sets and the sums ``squares`` of their squared norms (k,):
+    ``sqrt((squares - 2 (s_1 + s_2 + d s_3)) / n)`` (:func:`_fit_residuals`)."""
     sv = np.linalg.svd(cov, compute_uv=False)
     sign = np.sign(np.linalg.det(cov))
     sign[sign == 0] = 1.0
     trace = sv[:, 0] + sv[:, 1] + sign * sv[:, 2]
-    total = np.sum(xc**2) + np.sum(yc**2, axis=(1, 2)) - 2.0 * trace
-    return np.sqrt(np.maximum(total, 0.0) / x.shape[0])
+    return np.sqrt(np.maximum(squares - 2.0 * trace, 0.0) / n)
+
+
+def _integer_reversal_scan(x: np.ndarray) -> np.ndarray:
+    """The residuals of ``x(c - s) = R x(s)`` at every integer ``c`` in ``[0, n)``, ``(n,)``,
+    as :func:`reversal_residuals` (not ``direct``) gives them, in O(n log n): the
+    covariance of the curve with its reversed copy shifted by ``c`` is a circular
+    cross-correlation, ``sum_i xc_i (x) r_{i+c}`` with ``r_j = xc_{-j}``, computed for all
+    ``c`` at once by FFT (a permutation keeps the centroid and the sum of squares)."""
+    n = x.shape[0]
+    xc = x - x.mean(axis=0)
+    reversed_ = xc[(-np.arange(n)) % n]
+    spectrum = np.conj(np.fft.rfft(xc, axis=0))[:, :, None] * \
+        np.fft.rfft(reversed_, axis=0)[:, None, :]
+    cov = np.fft.irfft(spectrum, n, axis=0)  # cov[c, a, b] = sum_i xc[i, a] r[i + c, b]
+    return _procrustes_residuals(cov, 2.0 * np.sum(xc**2), n)
 
 
 def cyclic_residual(points: np.ndarray, order: float) -> float:
@@ -94,44 +115,57 @@ def reversal_residuals(points: np.ndarray, c: np.ndarray, direct: bool = False) 
     return _fit_residuals(x, shifted(reversed_, np.asarray(c, dtype=float)), direct)
 
 
-def reversal_axes(points: np.ndarray, tolerance: float) -> list[tuple[float, float]]:
+def reversal_axes(points: np.ndarray, tolerance: float, refine: bool = True
+                  ) -> list[tuple[float, float]]:
     """The reversing two-fold axes: ``(c, residual)`` for each ``c`` in ``[0, n)`` (node
     spacings) where ``x(c - s) = R x(s)`` holds within ``tolerance``; each axis once.
 
     The residual is scanned at the integer ``c`` (the reversed curve's nodes
-    permuted, no interpolation), and refined by Brent's method within one node of
-    each local minimum of that scan whose value allows an axis nearby: near an axis
-    ``c*`` the residual is a V of slope at most the mean edge length ``h`` (shifting
-    the curve by ``dc`` moves each node by about ``h dc``), so the nearest integer
-    (within 1/2) has a residual below ``h / 2 + tolerance``; scan minima above
-    ``h + tolerance`` are skipped. :func:`_reversal_axes_reference` (a half-node
-    trigonometric scan, every local minimum refined) is the test oracle.
+    permuted, no interpolation; :func:`_integer_reversal_scan`), and refined by
+    Brent's method within one node of each local minimum of that scan whose value
+    allows an axis nearby: near an axis ``c*`` the residual is a V of slope at most
+    the mean edge length ``h`` (shifting the curve by ``dc`` moves each node by about
+    ``h dc``), so the nearest integer (within 1/2) has a residual below
+    ``h / 2 + tolerance``; scan minima above ``h + tolerance`` are skipped.
+    :func:`_reversal_axes_reference` (a half-node trigonometric scan, every local
+    minimum refined) is the test oracle.
+
+    ``refine=False`` (enough to count the axes, as :func:`curve_symmetry` does): a
+    scan minimum below half of both its neighbours (the V's bottom within a third of
+    a node of it, so no neighbour is such a minimum too) whose own residual is
+    within ``tolerance`` is taken as it is, ``c`` an integer; the others are refined.
     """
     x = np.asarray(points, dtype=float)
-    n = x.shape[0]
-    # y_c[i] = x(-(i + c)): the reversed curve shifted by integer c (as reversal_residuals)
-    index = (-(np.arange(n)[None, :] + np.arange(n)[:, None])) % n
-    values = _fit_residuals(x, x[index])
+    values = _integer_reversal_scan(x)
     left, right = np.roll(values, 1), np.roll(values, -1)
     h = float(np.mean(np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)))
     candidates = np.flatnonzero((values <= left) & (values <= right)
                                 & (values <= h + tolerance))
-    return _refined_axes(x, candidates.astype(float), 1.0, tolerance)
+    clear = None
+    if not refine:
+        clear = values[candidates] <= 0.5 * np.minimum(left, right)[candidates]
+    return _refined_axes(x, candidates.astype(float), 1.0, tolerance, clear)
 
 
-def _refined_axes(x: np.ndarray, centres: np.ndarray, reach: float, tolerance: float
-                  ) -> list[tuple[float, float]]:
+def _refined_axes(x: np.ndarray, centres: np.ndarray, reach: float, tolerance: float,
+                  as_they_are: np.ndarray | None = None) -> list[tuple[float, float]]:
     """The axes found by Brent's method within ``reach`` of each of ``centres``: those
-    whose residual is within ``tolerance``, each once (sorted by ``c``)."""
+    whose residual is within ``tolerance``, each once (sorted by ``c``).
+    ``as_they_are`` (bool per centre): a centre whose own residual is within
+    ``tolerance`` is taken without refinement."""
     n = x.shape[0]
     axes: list[tuple[float, float]] = []
-    for c0 in centres:
-        # The mean square is smooth (quadratic) at its minimum, the RMS a V; the
-        # offset from c0 is the variable, as Brent's tolerance is relative to it.
-        result = minimize_scalar(
-            lambda dc, c0=float(c0): float(reversal_residuals(x, [c0 + dc], True)[0]) ** 2,
-            bounds=(-reach, reach), method="bounded", options={"xatol": 1e-10})
-        c, value = float(c0 + result.x) % n, float(np.sqrt(result.fun))
+    for i, c0 in enumerate(centres):
+        c, value = float(c0) % n, np.inf
+        if as_they_are is not None and as_they_are[i]:
+            value = float(reversal_residuals(x, [c0], True)[0])
+        if value > tolerance:
+            # The mean square is smooth (quadratic) at its minimum, the RMS a V; the
+            # offset from c0 is the variable, as Brent's tolerance is relative to it.
+            result = minimize_scalar(
+                lambda dc, c0=float(c0): float(reversal_residuals(x, [c0 + dc], True)[0]) ** 2,
+                bounds=(-reach, reach), method="bounded", options={"xatol": 1e-10})
+            c, value = float(c0 + result.x) % n, float(np.sqrt(result.fun))
         if value > tolerance:
             continue
         if any(min(abs(c - a), n - abs(c - a)) < 0.25 for a, _ in axes):
@@ -197,7 +231,7 @@ def curve_symmetry(points: np.ndarray, tolerance: float,
         if value <= tolerance:
             order, worst = m, value
             break
-    axes = reversal_axes(x, tolerance)
+    axes = reversal_axes(x, tolerance, refine=False)
     if axes:
         worst = max(worst, max(r for _, r in axes))
     if order >= 2:

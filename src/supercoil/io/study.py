@@ -184,7 +184,7 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
     },
     "continuation": {
         "free_max_step": _Key("a positive arclength step (units of L)", _POSITIVE,
-                              {"ring_diagram": 0.05, "tweezers": 0.1},
+                              {"ring_diagram": 0.1, "tweezers": 0.1},
                               kinds=("ring_diagram", "tweezers"), convert=float),
         "free_max_points": _Key("an integer >= 2", _count(2, 100_000), 80,
                                 kinds=("ring_diagram",)),

@@ -232,7 +232,7 @@ class DiagramOptions:
     modes: tuple[int, ...] = (2, 3)
     max_excess_link: float = 6.0
     contact: str = DEFAULT_TREATMENT
-    free_max_step: float = 0.05
+    free_max_step: float = 0.1
     free_max_points: int = 80
     contact_max_step: float = 0.5
     contact_max_points: int = 150
@@ -700,7 +700,7 @@ def ring_diagram(options: DiagramOptions,
         elif old is not None and len(old):
             free = resume_branch(problem, old, free_opts, on_point=on_point,
                                  records=_contact_records(probe, ring_records(problem), True),
-                                 events=(onset_event(probe),))
+                                 events=(onset_event(probe),), admissible=probe.admissible)
         else:
             free = _switch_off_circle(problem, circle, point, free_opts, name, probe, notes,
                                       on_point)
@@ -856,6 +856,13 @@ def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
     trial run (``SWITCH_TRIAL_POINTS`` points) must show the writhe growing
     away from zero; otherwise the other side of the critical mode and larger
     amplitudes are tried, in that order. The last attempt is returned anyway.
+
+    The run refuses a state past a strand passage (``probe.admissible``: the
+    double-sum writhe off the carried one by 2) and retries the step shorter:
+    the onset event measures an unsigned distance, positive on both sides of
+    a step that carries the rod through itself (measured: alpha at N = 200
+    with steps of 0.2 L ran to dLk = 0 without an onset, and at 0.1 L the
+    demo's N = 132 kept a point with Tw + Wr off dLk by 2 after the onset).
     """
     records = _contact_records(probe, ring_records(problem), free=True)
     direction = on_mesh_direction(problem, point)
@@ -878,7 +885,8 @@ def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
             opts = dataclasses.replace(options, initial_step=amplitude)
             return switch_branch(problem, circle, point, opts, side=side, amplitude=amplitude,
                                  name=name, records=records, events=(onset_event(probe),),
-                                 on_point=on_point, direction=direction)
+                                 on_point=on_point, direction=direction,
+                                 admissible=probe.admissible)
     raise AssertionError("unreachable")
 
 

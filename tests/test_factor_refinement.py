@@ -134,3 +134,37 @@ def test_the_stacked_jacobian_is_reused_only_while_its_parts_are():
     rephased = system.jacobian(moved)
     assert rephased is not other
     np.testing.assert_array_equal(rephased.toarray()[-1], 2.0 * other.toarray()[-1])
+
+
+def test_rephased_tangents_by_refinement_equal_those_of_new_factors(monkeypatch):
+    """The integral phase condition re-anchored at each point (rephase) needs the tangent
+    in the new gauge; with factor_refinement it is solved by refinement with the step's
+    corrector factor under that factor's row and oriented by the orientation row. Oracle:
+    the same run with a new factor for every solve (factor_refinement=False): the same
+    points and tangents to round-off, with fewer tangent factorisations."""
+    from supercoil.continuation import pseudo_arclength
+    from supercoil.continuation.options import ContinuationOptions
+    from supercoil.continuation.switching import switch_branch
+    from supercoil.problems.ring_branches import circle_branch
+
+    circle, problem = circle_branch(2 / 3, 24, 3.0)
+    point = circle.points_of_kind("bifurcation")[0]
+    calls = []
+    original = pseudo_arclength.tangent
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(pseudo_arclength, "tangent", counted)
+    runs = {}
+    for refine in (False, True):
+        calls.clear()
+        opts = ContinuationOptions(initial_step=0.01, max_step=0.05, max_points=8,
+                                   gauge="integral", rephase=True, factor_refinement=refine)
+        runs[refine] = (switch_branch(problem, circle, point, opts), len(calls))
+    (fresh, fresh_calls), (refined, refined_calls) = runs[False], runs[True]
+    assert len(fresh) == len(refined) == 8
+    np.testing.assert_allclose(refined.states, fresh.states, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(refined.tangents, fresh.tangents, rtol=0, atol=1e-8)
+    assert refined_calls < fresh_calls

@@ -27,6 +27,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import (
@@ -314,11 +315,16 @@ class _Tracer:
             self._rephase()
         return True
 
-    def _rephase(self) -> None:
+    def _rephase(self, factor: BorderedFactor | None = None) -> None:
         """Re-anchor the integral phase condition at the last point (``ContinuationOptions.rephase``).
 
         The point satisfies the new condition (``q - q_k = 0``); only its tangent
-        is recomputed, oriented along the old one.
+        is recomputed, oriented along the old one. ``factor``: the bordered factor
+        of the step's corrector (``ContinuationOptions.factor_refinement``): the
+        tangent is then solved by iterative refinement with it, under its own border
+        row (the kernel of ``[K, F_lambda]`` is one direction, whichever row
+        normalises it), and oriented by the sign of its product with the
+        orientation row; a new factor only when refinement does not converge.
         """
         system = self.system
         x = self.xs[-1]
@@ -329,7 +335,16 @@ class _Tracer:
         system.set_phase(modes, q)
         known = self._accepted_hessian
         hessian = known[1].restrict(system.free) if known and known[0] is x else None
-        self.ts[-1] = tangent(system, x, self._orientation(x, self.ts[-1]), hessian)
+        orientation = self._orientation(x, self.ts[-1])
+        if factor is not None and hessian is not None:
+            e_last = np.zeros(system.size)
+            e_last[-1] = 1.0
+            z = factor.refined_solve(hessian, system.jacobian(x),
+                                     system.parameter_derivative(x), factor.row, e_last)
+            if z is not None and np.all(np.isfinite(z)) and z @ orientation != 0.0:
+                self.ts[-1] = np.sign(z @ orientation) * z / system.norm(z)
+                return
+        self.ts[-1] = tangent(system, x, orientation, hessian)
 
     def _orientation(self, x: np.ndarray, t_old: np.ndarray) -> np.ndarray:
         """The row that orients a tangent recomputed in a new gauge: ``W t_old`` with the
@@ -511,7 +526,8 @@ class _Tracer:
             try:
                 self.add_point(x_new, t_new, full_hessian=full if bound is None else None)
                 if opts.rephase and system.r:
-                    self._rephase()
+                    self._rephase(corr.factor if opts.factor_refinement and bound is None
+                                  else None)
             except (SingularMatrixError, InertiaError) as exc:
                 return ContinuationStatus.STEP_TOO_SMALL, (
                     f"stability at point {len(self.xs)} failed: {exc}")

@@ -46,6 +46,12 @@ def test_branches_and_contact_onset(diagram):
                 - alpha.records["min_gap_over_diameter"][first.index]) / (
         alpha.arclength[first.index + 1] - alpha.arclength[first.index])
     assert abs(gap - 1.0) <= 10 * slope * OPTIONS.event_tolerance + 1e-9
+    # the contact-free run ended at the first point past its onset, which is kept
+    assert first.index + 2 == len(alpha)
+    assert alpha.message.endswith("the contact onset is located")
+    # no strand passage on the way: Tw + Wr = dLk at every point (Wr from the double sum)
+    np.testing.assert_allclose(alpha.records["twist"] + alpha.records["writhe"],
+                               alpha.parameter_values, rtol=0, atol=1e-8)
     # the contact branch starts at the last contact-free point before the onset
     # that the barrier does not reach yet (closest approach above 1.01 D)
     contact = diagram.branch("alpha_contact")
@@ -197,7 +203,7 @@ def test_cli_interrupt_keeps_the_branches_saved_so_far(tmp_path, capsys, monkeyp
         def point(branch):
             on_point(branch)
             count[0] += 1
-            if count[0] == 25:
+            if count[0] == 15:
                 raise KeyboardInterrupt
 
         return original(options, progress, on_point=point, on_branch=on_branch)
@@ -209,7 +215,7 @@ def test_cli_interrupt_keeps_the_branches_saved_so_far(tmp_path, capsys, monkeyp
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 1 and err[-1].startswith("interrupted: kept alpha.npz, circle.npz")
     alpha = Branch.load(out / "branches" / "alpha.npz")
-    assert len(alpha) == 20
+    assert len(alpha) == 10
     assert np.allclose(alpha.records["twist"] + alpha.records["writhe"],
                        alpha.parameter_values, atol=1e-8)
     assert len(Branch.load(out / "branches" / "circle.npz")) > 2

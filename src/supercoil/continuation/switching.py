@@ -93,6 +93,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
                   records: RecordFunction | None = None,
                   events: tuple[UserEvent, ...] = (),
                   on_point: PointCallback | None = None,
+                  stop: Callable[[np.ndarray], str | None] | None = None,
                   admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
     """Follow the branch that bifurcates from ``special_point`` of ``branch`` (see module doc).
 
@@ -102,7 +103,8 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     bifurcation (arclength metric; default ``options.initial_step``).
     ``problem.accept(special_point.q)`` is called first so that a problem
     with a reference state (rod frames) is brought back to that point.
-    ``on_point`` and ``admissible`` as in :func:`~supercoil.continuation.continuation`.
+    ``on_point``, ``stop`` and ``admissible`` as in
+    :func:`~supercoil.continuation.continuation`.
     """
     opts = options or ContinuationOptions()
     if side not in (1, -1):
@@ -138,6 +140,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     x_star = system.pack(q_star, special_point.multipliers, special_point.parameter)
     tracer = _Tracer(system, opts, label, branch.name, special_point, records, events,
                      on_point)
+    tracer.stop = stop
     if admissible is not None:
         tracer.admissible = admissible
     row = system.weights * v

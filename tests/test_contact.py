@@ -80,6 +80,26 @@ def test_crossed_rods_contact_force_equals_load(treatment):
         assert abs(d_min - 1.0) <= problem.options.penetration_tolerance
 
 
+@pytest.mark.parametrize("treatment", ["penalty", "barrier"])
+def test_remembered_summaries_equal_fresh_ones_and_are_copies(treatment):
+    """contact_summary remembers its result per (state, multipliers, stiffness): oracle,
+    the uncached summary; a caller's edit does not reach the memo; another stiffness is
+    another summary (the penalty's force is stiffness times penetration)."""
+    from supercoil.contact.report import _contact_summary
+
+    toy, problem = _crossed(treatment)
+    res = solve_contact(problem, toy.points.ravel(), NewtonOptions(max_iterations=200))
+    first = contact_summary(problem, res.q, res.multipliers)
+    assert first == _contact_summary(problem, res.q, res.multipliers)
+    first["contacts"].clear()
+    again = contact_summary(problem, res.q.copy(), res.multipliers.copy())
+    assert again == _contact_summary(problem, res.q, res.multipliers) and again["contacts"]
+    problem.stiffness *= 2.0
+    stiffer = contact_summary(problem, res.q, res.multipliers)
+    assert stiffer == _contact_summary(problem, res.q, res.multipliers)
+    assert stiffer["contacts"][0]["force"] != again["contacts"][0]["force"]
+
+
 def test_penalty_tends_to_exact_as_stiffness_grows():
     toy, exact = _crossed("exact")
     ref = solve_contact(exact, toy.points.ravel())

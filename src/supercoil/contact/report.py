@@ -32,12 +32,18 @@ of seed 001's Figure 4.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from supercoil.contact.problem import ContactProblem
 
 GROUPING_FLOOR = 1e-2  # of the largest contact force, see the module docstring
+# summaries remembered per problem (contact_summary): a continuation point asks for its
+# summary in its records and in its contact-count event, and a ring diagram's payload
+# once more after the run; a few kilobytes each
+SUMMARY_MEMO = 512
 
 
 def _components(points: np.ndarray, reach: float, periodic: bool) -> np.ndarray:
@@ -116,7 +122,31 @@ def group_contacts(s1: np.ndarray, s2: np.ndarray, force: np.ndarray, spacing: f
 
 def contact_summary(problem: ContactProblem, q: np.ndarray,
                     multipliers: np.ndarray | None = None) -> dict:
-    """The contact keys of DESIGN.md for the state ``q`` (see the module docstring)."""
+    """The contact keys of DESIGN.md for the state ``q`` (see the module docstring).
+
+    For the barrier and penalty treatments the summary is a function of ``q``,
+    ``multipliers`` and the problem's stiffness, diameter and exclusion alone; it is
+    remembered for the last ``SUMMARY_MEMO`` arguments (a copy is returned).
+    """
+    if problem.treatment not in ("barrier", "penalty"):
+        return _contact_summary(problem, q, multipliers)
+    key = (np.ascontiguousarray(q, dtype=np.float64).tobytes(),
+           None if multipliers is None else
+           np.ascontiguousarray(multipliers, dtype=np.float64).tobytes(),
+           problem.treatment, float(problem.stiffness), float(problem.diameter),
+           float(problem.exclusion))
+    memo = problem.__dict__.setdefault("_summary_memo", {})
+    found = memo.get(key)
+    if found is None:
+        found = _contact_summary(problem, q, multipliers)
+        if len(memo) >= SUMMARY_MEMO:
+            del memo[next(iter(memo))]
+        memo[key] = found
+    return copy.deepcopy(found)
+
+
+def _contact_summary(problem: ContactProblem, q: np.ndarray,
+                     multipliers: np.ndarray | None) -> dict:
     rod = problem.base.rod
     force_scale = rod.length**2 / rod.bending_stiffness
     st, force = problem.pair_forces(q, multipliers)

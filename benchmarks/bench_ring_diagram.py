@@ -6,6 +6,7 @@ Run from the repository root:
         [--contact-max-points 400] [--contact-formulation integral|pairs]
         [--contact-curve spline|polygon|quintic] [--gauge integral|node]
         [--predictor quadratic|tangent|secant] [--profile]
+    python benchmarks/bench_ring_diagram.py --command [--repeat K [--against SRC]]
 
 Times :func:`supercoil.problems.ring_diagram.ring_diagram` for C/A = 2/3,
 L/D = 122 (seed 001's DNA example), mode 2 only (the circle, alpha without
@@ -15,7 +16,16 @@ run at N = 48 (numba caches). It
 prints the wall time per branch, the points, the excess link and writhe
 reached, and the time per contact-branch point; with ``--profile`` the
 top of a cProfile by cumulative time. Target (issue 4): the whole alpha
-branch to dLk = 6 at N = 200 in at most 10 s.
+branch to dLk = 6 at N = 200 in at most 10 s, for the whole command.
+
+``--command`` times that command instead, ``supercoil diagram ring --twist-ratio
+2/3 --length-over-diameter 122 --nodes N --modes 2 --max-excess-link X
+--contact-max-points K --out DIR --quiet`` in a fresh process (imports, numba's
+cache loads, figures and files included), and prints its wall time and the
+branches' seconds from ``diagram.json``; ``--repeat K [--against SRC]`` runs it
+K times, alternating with the source tree SRC (a ``src`` folder put on
+``PYTHONPATH``), and prints the smallest and median times (``bench_tweezers``'s
+``repeated``).
 """
 
 from __future__ import annotations
@@ -39,7 +49,12 @@ def main(argv=None) -> int:
     parser.add_argument("--predictor", default="quadratic",
                         choices=("quadratic", "tangent", "secant"))
     parser.add_argument("--profile", action="store_true")
+    parser.add_argument("--command", action="store_true")
+    parser.add_argument("--repeat", type=int, default=0)
+    parser.add_argument("--against", metavar="SRC", default=None)
     args = parser.parse_args(argv)
+    if args.command or args.repeat:
+        return whole_command(args)
 
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
@@ -77,6 +92,36 @@ def main(argv=None) -> int:
     print(f"total {total:.2f} s")
     if profile:
         pstats.Stats(profile).sort_stats("cumulative").print_stats(30)
+    return 0
+
+
+def whole_command(args) -> int:
+    """Time the ``diagram ring`` command (module doc, ``--command``)."""
+    import json
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    from bench_tweezers import repeated, timed_command
+
+    def cmd_for(out: Path) -> list[str]:
+        return [sys.executable, "-m", "supercoil.cli.main", "diagram", "ring", "--twist-ratio",
+                "2/3", "--length-over-diameter", "122", "--nodes", str(args.nodes), "--modes",
+                "2", "--max-excess-link", str(args.max_excess_link), "--contact-max-points",
+                str(args.contact_max_points), "--out", str(out), "--quiet"]
+
+    if args.repeat:
+        repeated(cmd_for, args.repeat, args.against)
+        return 0
+    with tempfile.TemporaryDirectory() as folder:
+        out = Path(folder) / "run"
+        wall, cpu, proc = timed_command(cmd_for(out), None)
+        if proc.returncode != 0:
+            print(proc.stderr.strip()[-500:])
+            return proc.returncode
+        data = json.loads((out / "diagram.json").read_text())
+    print(f"whole command: wall {wall:.2f} s, cpu {cpu:.2f} s; " + ", ".join(
+        f"{b['name']} {b['n_points']} points {b['seconds']:.2f} s" for b in data["branches"]))
     return 0
 
 

@@ -314,3 +314,20 @@ def test_tweezers_figures_fast_png_encoding_keeps_the_pixels(tmp_path):
     assert SAVE_OPTIONS["pil_kwargs"]["compress_level"] < 6
     assert (tmp_path / "fast.png").read_bytes() != (tmp_path / "default.png").read_bytes()
     np.testing.assert_array_equal(_png(tmp_path / "fast.png"), _png(tmp_path / "default.png"))
+
+
+def test_house_style_png_fast_encoding_keeps_the_pixels(tmp_path):
+    """style.save writes PNGs at zlib level 1: decoded, the same pixels as the default
+    level (and not the same bytes, so the option reached the encoder)."""
+    from supercoil.plotting.figures import diagram_figure
+    from supercoil.plotting.style import save, styled
+
+    x = np.linspace(0.0, 3.0, 40)
+    with styled():
+        fig = diagram_figure([{"name": "alpha", "writhe": x, "excess_link": 1 + x**2,
+                               "stable": x < 2.0}], [], title="ring", x="writhe",
+                             y="excess_link")
+        fig.savefig(tmp_path / "default.png", format="png", metadata={})
+    save(fig, tmp_path / "fast.png")
+    assert (tmp_path / "fast.png").read_bytes() != (tmp_path / "default.png").read_bytes()
+    np.testing.assert_array_equal(_png(tmp_path / "fast.png"), _png(tmp_path / "default.png"))

@@ -95,14 +95,17 @@ def special_marker(kind: str) -> tuple[str, str]:
 
 def save(fig, path: str | os.PathLike, formats: Sequence[str] | None = None) -> list[Path]:
     """Save ``fig`` to ``path`` (with its suffix), or to ``path.<fmt>`` for each of
-    ``formats``. Metadata carry no date, so the same data give the same files."""
+    ``formats``. Metadata carry no date, so the same data give the same files. PNGs
+    are deflated at zlib level 1 (as the tweezers' figures): the same pixels, files
+    about a sixth larger, encoded several times faster."""
     path = Path(path)
     targets = [path] if formats is None else [path.with_suffix("." + f) for f in formats]
     with styled():
         for target in targets:
             fmt = target.suffix.lstrip(".").lower()
             metadata = {"Date": None} if fmt == "svg" else {}
-            fig.savefig(target, format=fmt, metadata=metadata)
+            extra = {"pil_kwargs": {"compress_level": 1}} if fmt == "png" else {}
+            fig.savefig(target, format=fmt, metadata=metadata, **extra)
     return targets
 
 

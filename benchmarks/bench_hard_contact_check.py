@@ -3,6 +3,7 @@
 Run from the repository root:
 
     python benchmarks/bench_hard_contact_check.py [--nodes 132] [--branches /tmp/hc]
+        [--stable 5 --unstable 2 | --all]
 
 The continuation (docs/benchmarks.md, "Session 7: exact mesh symmetry") finds
 stretches of the secondary branch β_II with unstable count 0 where seed 001
@@ -296,6 +297,7 @@ def main() -> None:
                         help="folder of the saved branches (computed and saved if absent)")
     parser.add_argument("--stable", type=int, default=5, help="count-0 points per branch")
     parser.add_argument("--unstable", type=int, default=2, help="count >= 1 points per branch")
+    parser.add_argument("--all", action="store_true", help="every point of the three branches")
     args = parser.parse_args()
 
     family = branches(args.nodes, args.branches)
@@ -303,7 +305,8 @@ def main() -> None:
     start = time.perf_counter()
     for name in ("beta_contact", "beta_II-", "beta_II+"):
         branch = family[name]
-        points = chosen_points(branch, args.stable, args.unstable)
+        points = (list(range(len(branch))) if args.all
+                  else chosen_points(branch, args.stable, args.unstable))
         if name == "beta_contact":
             points = sorted(set(points) | set(onset_window(branch)))
         for i in points:

@@ -22,9 +22,11 @@ on the same cubic B-spline (it takes the ``pairs`` formulation: one constraint
 active set starts as the piece pairs within 1 % of D of the barrier state whose
 closest points are local minima of the curve distance (the barrier's contacts,
 shadows dropped), kept linearly independent
-(:func:`~supercoil.contact.solve._independent_pairs`), and
-:func:`~supercoil.contact.solve.solve_contact` runs its active-set loop from there
-(Newton in stationary mode: an unstable state must not be minimised away).
+(:func:`~supercoil.contact.solve._independent_pairs`), and the active-set loop of
+:func:`~supercoil.contact.solve.solve_contact` runs from there (Newton in
+stationary mode: an unstable state must not be minimised away; see
+:func:`hard_contact` for the retries, and for the polygon's exact contact, tried
+where the spline's is not solved).
 
 Count: :func:`~supercoil.stability.analysis.analyse` on the exact problem (the
 Hessian of the Lagrangian, contact multipliers included, on the null space of the
@@ -34,15 +36,22 @@ space is the critical cone, so this is the second-order condition of the hard
 problem. Oracle: a dense eigen-decomposition of ``Z^T H_L Z`` against ``Z^T M Z``,
 ``Z`` a null-space basis of the active Jacobian and of the M-weighted rigid
 motions and sliding on all DOFs (no pins), counted below -1e-6 as ``analyse``
-counts. Contacts with a multiplier below 1e-3 of the largest are reported as
-weakly active (there the critical cone is not a subspace).
+counts; the barrier's count is the continuation's stored one, ``analyse``'s and
+the same oracle's. Contacts with a multiplier below 1e-3 of the largest are
+reported as weakly active (there the critical cone is not a subspace), and active
+pairs whose closest point is a piece end as "at a junction" (see
+:func:`hard_contact_row`).
 
 Checks per state: the KKT residual without any gauge, no penetration, the contact
-positions (s1, s2) matched to the barrier's, Lk = Tw + Wr (twist from the material
-frames, writhe from the double sum). Prints one table row per state; the branches
-are computed as ``bench_beta_secondary.py`` computes them (about 40 s at N = 132)
+positions (s1, s2) matched to the barrier's (the largest distance, in segment
+lengths h, from a hard contact to the nearest barrier contact and the reverse),
+the distance moved from the barrier state, Lk = Tw + Wr (twist from the material
+frames, writhe from the double sum). Prints one table row per state (``--all``:
+every point of the three branches, 86 s at N = 132, 207 s at N = 204); the
+branches are computed as ``bench_beta_secondary.py`` computes them (20 to 40 s)
 and saved to ``--branches`` (read from there when present). docs/benchmarks.md,
-"Stability: the barrier is not the cause", records the table at N = 132 and 204.
+"Stability: hard contact agrees with the barrier; the disagreement with seed 001
+stands (session 8)", records the results at N = 132 and 204.
 """
 
 from __future__ import annotations
@@ -174,7 +183,8 @@ def dense_reduced_eigenvalues(problem, q: np.ndarray, multipliers: np.ndarray) -
     return eigh(0.5 * (A + A.T), 0.5 * (B + B.T), eigvals_only=True)
 
 
-def hard_contact(base, q: np.ndarray, diameter: float, curve: str, attempts: int = 4):
+def hard_contact(base, q: np.ndarray, diameter: float, curve: str, attempts: int = 4,
+                 minimise: bool = False):
     """``(problem, result, mode)``: the exact-treatment equilibrium on ``curve`` from ``q``
     (``problem`` None when not solved; ``result`` the last attempt's).
 
@@ -188,8 +198,9 @@ def hard_contact(base, q: np.ndarray, diameter: float, curve: str, attempts: int
     then picked again at the stalled state (up to ``attempts`` times in all).
     Polygon (the chords sag inside the spline by up to ``h^2 kappa / 8``, a few per cent
     of D here, so ``q`` is not next to its solution): the whole exact solve
-    (augmented-Lagrangian start, then the active-set loop), stationary first, then
-    minimising; the mode that converged is returned with the result.
+    (augmented-Lagrangian start, then the active-set loop), stationary first, then,
+    if ``minimise`` (asked only where the barrier's count is 0: a minimisation leaves a
+    saddle), minimising; the mode that converged is returned with the result.
     """
     from supercoil.contact.problem import ContactOptions, ContactProblem
     from supercoil.contact.solve import _active_set_loop, solve_contact
@@ -216,7 +227,7 @@ def hard_contact(base, q: np.ndarray, diameter: float, curve: str, attempts: int
                 break
             start = stalled
         return None, res, None
-    for mode in ("stationary", "minimize"):
+    for mode in ("stationary", "minimize") if minimise else ("stationary",):
         hard = ContactProblem(base, options)
         res = solve_contact(hard, q, NewtonOptions(mode=mode, tolerance=1e-10,
                                                    max_iterations=200))
@@ -233,12 +244,18 @@ def hard_contact_row(base, hard, res, q, barrier_positions: np.ndarray,
     from supercoil.stability.analysis import analyse
 
     forces = -res.multipliers[hard.n_equalities:]
+    # an active pair whose closest point is a piece end (a junction of the spline): its
+    # distance is the minimum over its own pieces only, whose Hessian there exceeds the
+    # curve distance's (the neighbouring piece is not minimised over), and the force
+    # times it counts as extra negative curvature: such a count is not the curve's
+    _d, s, t = hard.pair_distances(res.q, hard.active)
+    ends = np.minimum(np.minimum(s, 1.0 - s), np.minimum(t, 1.0 - t))
     report = analyse(hard, res.q, res.multipliers)
     dense = dense_reduced_eigenvalues(hard, res.q, res.multipliers)
     after, label = contacts(hard, res.q, res.multipliers)
     return {"count": report.unstable_count, "certified": report.certified, "dense": int(np.sum(dense < -ZERO_TOLERANCE)),
             "zero_modes": report.zero_modes, "lowest": float(dense[0]),
-            "contacts": label,
+            "contacts": label, "junctions": int(np.sum(ends < 1e-6)),
             "min_force": float(forces.min()) if forces.size else float("nan"),
             "weak": int(np.sum(forces < WEAK_MULTIPLIER * forces.max())) if forces.size else 0,
             "kkt": kkt_residual(hard, res.q, res.multipliers),
@@ -279,7 +296,8 @@ def check_state(branch, i: int, nodes: int,
            "barrier_dense": int(np.sum(barrier_dense < -ZERO_TOLERANCE)),
            "barrier_lowest": float(barrier_dense[0]), "barrier_contacts": label}
     for curve in ("spline", "polygon"):
-        hard, res, mode = hard_contact(base, q, D, curve)
+        hard, res, mode = hard_contact(base, q, D, curve,
+                                       minimise=int(branch.unstable_count[i]) == 0)
         if hard is None:
             row[curve] = {"message": res.message}
         else:
@@ -331,6 +349,7 @@ def print_table(rows: list[dict], n: int) -> None:
     print("|" + "---|" * 11)
     for r in rows:
         h = r["spline"] if "count" in r["spline"] else r.get("polygon", {})
+        junctions = f" ({h['junctions']} at a junction)" if h.get("junctions") else ""
         barrier = (f"{r['barrier_stored']} / {r['barrier']}"
                    f"{'' if r['barrier_certified'] else '*'} / {r['barrier_dense']}")
         head = f"| {r['branch']} [{r['index']}] | {r['excess_link']:.4f} | {barrier} | "
@@ -341,7 +360,7 @@ def print_table(rows: list[dict], n: int) -> None:
         curve = "" if h is r["spline"] else (" (polygon" + (", minimised" if h["mode"] ==
                                                            "minimize" else "") + ")")
         print(head + f"{_count(h)}{curve} | {r['barrier_lowest']:.4g} / {h['lowest']:.4g} | "
-              f"{r['barrier_contacts']} / {h['contacts']} | {h['min_force']:.3g} "
+              f"{r['barrier_contacts']} / {h['contacts']}{junctions} | {h['min_force']:.3g} "
               f"({h['weak']}) | {h['kkt']:.1e} | {h['shift_to_barrier'] * n:.2f} / "
               f"{h['shift_from_barrier'] * n:.2f} | "
               f"{h['moved_over_D']:.2f} | {h['link_error']:.0e} |")

@@ -11,10 +11,10 @@ equilibrium; its unstable count (``stability.analysis.analyse``) equals the numb
 negative eigenvalues of a dense reduced Hessian written out here (the Hessian of the
 Lagrangian on a null-space basis of the active Jacobian and of the M-weighted rigid
 motions and sliding, no pins); the barrier's stored count equals the hard one on a
-clearly stable and a clearly unstable state. And the one place they differ
-(docs/benchmarks.md, "Stability: hard contact against the barrier"): between the contact
-onset and B₁ the barrier, whose spring is still soft there, keeps β's unstable modes,
-while the hard contact with a positive force has none.
+clearly stable and a clearly unstable state. And where they differ
+(docs/benchmarks.md, "Stability: hard contact agrees with the barrier"): between the
+contact onset and B₁ the barrier, whose spring is still soft there, keeps β's
+unstable modes, while the hard contact with a positive force has none.
 """
 
 import numpy as np

@@ -15,8 +15,9 @@ constraints, after the rigid motions (fixed DOFs) are removed. We report
   sign; ``unstable_count``: the eigenvalues below ``-zero_tolerance``
   (``max(found below, negative_count - zero_modes)``);
 * approximate symmetries (``near_symmetry_modes``: a closed rod's material
-  sliding off the circle) are projected out of the eigenvalues and pinned
-  out of the count (:func:`near_symmetry_gauge`), as DESIGN.md asks;
+  sliding off the circle) are projected out of the eigenvalues and, by an
+  integral phase row, out of the count (:func:`_reduced_system`), as DESIGN.md
+  asks;
 * ``determinant_sign``: the sign of ``det(Z^T H_L Z)`` — Chamekh et al.'s test
   (seed 000), which only sees the parity of ``negative_count``: when
   eigenvalues cross zero in pairs (symmetric bifurcations) the determinant
@@ -28,6 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.linalg import eigh, null_space
 
@@ -56,10 +58,27 @@ class StabilityReport:
 
 
 def _reduced_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray):
-    """``(dofs, H, J)`` of the count: the free DOFs less the near-symmetry gauge."""
-    free = np.setdiff1d(free_dofs(problem), near_symmetry_gauge(problem, q))
+    """``(dofs, H, J)`` of the count: the free DOFs, ``J`` the constraints' rows and one
+    integral phase row ``(M g)^T v = 0`` per approximate symmetry ``g``
+    (:func:`sliding_phase_modes`, M-orthogonal to the rigid motions).
+
+    That is the subspace of the eigenvalues (the rigid motions and ``g`` projected
+    out) and of the continuation's count with the integral gauge. Pinning a DOF
+    instead (:func:`near_symmetry_gauge`) counts on another subspace, which gives the
+    same inertia only while the sliding is nearly free: on contact states, where the
+    discretisation gives it a clear curvature (Rayleigh quotient -1102 at a state of
+    the ring's beta_II, N = 204), the pinned count was off by one from the
+    eigenvalues and from a dense null-space count at 17 of 143 hard-contact states
+    and 18 of 158 barrier states of beta and beta_II at N = 132 (docs/benchmarks.md,
+    "hard contact").
+    """
+    free = free_dofs(problem)
     H = _hessian(problem, q, multipliers, free)
     J = problem.constraint_jacobian(q)[:, free] if problem.n_constraints else None
+    modes = sliding_phase_modes(problem, q)
+    if modes.size:
+        rows = sp.csr_matrix(modes[:, free] * np.asarray(problem.mass, dtype=float)[free])
+        J = rows if J is None else sp.vstack([sp.csr_matrix(J), rows], format="csr")
     return free, H, J
 
 
@@ -235,13 +254,12 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
             n_modes: int = 6, zero_tolerance: float = DEFAULT_ZERO_TOLERANCE) -> StabilityReport:
     """Full stability report at an equilibrium (see module docstring)."""
     _dofs, H, J = _reduced_system(problem, q, multipliers)
-    m = J.shape[0] if J is not None else 0
     factor = KKTFactor(H, J)
     neg = factor.reduced_negative_count
-    det_sign = int(factor.determinant_sign * (-1) ** m)
+    det_sign = int(factor.determinant_sign * (-1) ** (J.shape[0] if J is not None else 0))
     dofs, H_e, J_e, mass_e, sym = _eigen_system(problem, q, multipliers)
     values, vectors = _lowest_pairs(H_e, J_e, mass_e, n_wanted=neg + n_modes, n=dofs.size,
-                                    m=m, symmetry=sym)
+                                    m=J_e.shape[0] if J_e is not None else 0, symmetry=sym)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # Approximate symmetries (a closed rod's material sliding) are projected out

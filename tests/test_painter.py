@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import time
+
 import numpy as np
 import pytest
 
@@ -93,3 +96,17 @@ def test_unused_helpers_end_with_the_painter(tmp_path):
     assert all(h.returncode is not None for h in helpers)
     assert painter.draw([("never", "diagram", {})]) == [("never", "diagram", {})]
     assert not any(tmp_path.iterdir())
+
+
+@needs_two_cores
+@pytest.mark.skipif(not hasattr(os, "getpriority"), reason="no process priorities")
+def test_the_helper_runs_at_the_lowest_priority():
+    """Exact value: niceness 19 (os.nice caps there whatever the parent's), so that the
+    helper never takes time from the computation on a busy machine."""
+    with Painter(1) as painter:
+        helper = painter._helpers[0]
+        deadline = time.monotonic() + 30.0
+        while os.getpriority(os.PRIO_PROCESS, helper.pid) != 19 and \
+                time.monotonic() < deadline and helper.poll() is None:
+            time.sleep(0.01)
+        assert os.getpriority(os.PRIO_PROCESS, helper.pid) == 19

@@ -9,9 +9,13 @@ command computes, then waits for the figures
 (:func:`supercoil.plotting.tweezers.figure_jobs`, pickled on its standard
 input) and draws them. The command's own process never imports matplotlib,
 so the helper adds only its interpreter and numpy (about 0.15 s of CPU).
-One helper, not one per figure: two would import matplotlib twice, and on
-the two-core benchmark machine, with another process busy, two made the
-figures slower, not faster (docs/benchmarks.md, "Session 8").
+The helper runs at the lowest priority (``nice 19``): on a machine whose other
+cores are busy it takes no time from the computation and does its work while
+the command waits for it; at normal priority it slowed the computation by
+about as much as it saved. One helper, not one per figure: two would import
+matplotlib twice, and on the two-core benchmark machine, with another
+process busy, two made the figures slower, not faster (docs/benchmarks.md,
+"Session 8").
 
 The files are the same as drawn in the command's own process (the same
 builders, style and save options). Whatever the helper did not draw (it
@@ -130,6 +134,9 @@ def _warm_up() -> None:
 def main() -> int:
     """The helper: warm up, read the pickled jobs from standard input, draw them."""
     try:
+        with contextlib.suppress(AttributeError, OSError):
+            # the lowest priority: the helper takes only a core the command leaves idle
+            os.nice(19)
         _warm_up()
         data = sys.stdin.buffer.read()
         if not data:

@@ -55,6 +55,7 @@ def test_the_helper_draws_the_files_the_command_would(tmp_path):
     here = write_figures(payload, configurations, tmp_path / "here")
     jobs = figure_jobs(payload, configurations, tmp_path / "helper")
     with Painter(1) as painter:
+        assert painter.ready(timeout=120.0)
         assert painter.draw(jobs) == []
     assert [p.name for p in here] == [job[0].name for job in jobs]
     assert len(here) == 4
@@ -110,3 +111,17 @@ def test_the_helper_runs_at_the_lowest_priority():
                 time.monotonic() < deadline and helper.poll() is None:
             time.sleep(0.01)
         assert os.getpriority(os.PRIO_PROCESS, helper.pid) == 19
+
+
+@needs_two_cores
+def test_a_helper_not_ready_is_ended_and_its_figures_drawn_here(tmp_path):
+    """Figures due before the helper warmed up (its imports take a few tenths of a
+    second): draw hands it nothing and ends it; write_figures draws every file."""
+    payload, configurations = _payload_and_configurations()
+    with Painter(1) as painter:
+        helpers = list(painter._helpers)
+        assert not painter.ready()
+        written = write_figures(payload, configurations, tmp_path, painter)
+    assert all(h.returncode is not None for h in helpers)
+    assert sorted(p.name for p in written) == sorted(p.name for p in tmp_path.iterdir())
+    assert len(written) == 4

@@ -5,21 +5,25 @@ the drawing (0.1 s a figure) after its computation, one after the other. A
 :class:`Painter` started before the computation runs ``python -m
 supercoil.plotting.painter``, which imports matplotlib and draws a small
 figure (the fonts and the mathtext parser loaded) on another core while the
-command computes, then waits for the figures
-(:func:`supercoil.plotting.tweezers.figure_jobs`, pickled on its standard
-input) and draws them. The command's own process never imports matplotlib,
-so the helper adds only its interpreter and numpy (about 0.15 s of CPU).
-The helper runs at the lowest priority (``nice 19``): on a machine whose other
-cores are busy it takes no time from the computation and does its work while
-the command waits for it; at normal priority it slowed the computation by
-about as much as it saved. One helper, not one per figure: two would import
-matplotlib twice, and on the two-core benchmark machine, with another
-process busy, two made the figures slower, not faster (docs/benchmarks.md,
-"Session 8").
+command computes, says so on its standard output, then waits for the
+figures (:func:`supercoil.plotting.tweezers.figure_jobs`, pickled on its
+standard input) and draws them. The command's own process then never
+imports matplotlib.
+
+The helper runs at the lowest priority (``nice 19``), so that it takes no
+time from the computation when the machine's other cores are busy; at
+normal priority, with another job on the two-core machine, it slowed the
+computation by about as much as it saved. A helper that is not ready when
+the figures are due (it was starved) is ended and the caller draws them
+itself, as without a painter: its interpreter and numpy imports are then
+the only cost. One helper, not one per figure: two would import matplotlib
+twice, and with another job on the machine two made the figures slower,
+not faster (docs/benchmarks.md, "Session 8").
 
 The files are the same as drawn in the command's own process (the same
 builders, style and save options). Whatever the helper did not draw (it
-could not start, failed or timed out) is reported back and drawn by the caller.
+could not start, was not ready, failed or timed out) is reported back and
+drawn by the caller.
 """
 
 from __future__ import annotations
@@ -27,14 +31,17 @@ from __future__ import annotations
 import contextlib
 import os
 import pickle
+import select
 import subprocess
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Self
 
 PROCESSES = 1  # helpers (module doc)
 TIMEOUT = 300.0  # seconds a helper may take for its figures before it is killed
+READY = b"ready\n"  # what a helper writes on its standard output once warmed up
 
 
 def usable_cores() -> int:
@@ -54,9 +61,10 @@ class Painter:
 
     def __init__(self, processes: int | None = None):
         count = PROCESSES if processes is None else int(processes)
-        if usable_cores() < 2:
+        if usable_cores() < 2 or os.name == "nt":  # Windows: no select() on pipes
             count = 0
         self._helpers: list[subprocess.Popen] = []
+        self._ready: set[int] = set()
         env = dict(os.environ)
         # the helpers import this very package, wherever it was imported from
         source = str(Path(__file__).resolve().parents[2])
@@ -66,15 +74,41 @@ class Painter:
             try:
                 self._helpers.append(subprocess.Popen(
                     [sys.executable, "-m", "supercoil.plotting.painter"],
-                    stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                    stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                     stderr=subprocess.DEVNULL, env=env))
             except OSError:
                 break
 
+    def _warmed_up(self, helper: subprocess.Popen, timeout: float) -> bool:
+        """Whether ``helper`` said it is warmed up, waiting up to ``timeout`` seconds."""
+        if helper.pid in self._ready:
+            return True
+        try:
+            readable, _, _ = select.select([helper.stdout], [], [], timeout)
+        except (OSError, ValueError):
+            return False
+        if readable and helper.stdout.read(len(READY)) == READY:  # b"" if it ended
+            self._ready.add(helper.pid)
+            return True
+        return False
+
+    def ready(self, timeout: float = 0.0) -> bool:
+        """Whether every helper has imported matplotlib and warmed up (it says so on
+        its standard output), waiting up to ``timeout`` seconds; False without helpers."""
+        deadline = time.monotonic() + timeout
+        return bool(self._helpers) and all(
+            self._warmed_up(h, max(0.0, deadline - time.monotonic())) for h in self._helpers)
+
     def draw(self, jobs: Sequence) -> list:
-        """Hand ``jobs`` round-robin to the helpers and wait for them; returns the jobs
-        that were not drawn (all of them without helpers), for the caller to draw."""
-        helpers, self._helpers = self._helpers, []
+        """Hand ``jobs`` round-robin to the helpers that are ready and wait for them;
+        returns the jobs that were not drawn, for the caller to draw.
+
+        A helper that is not ready (the machine's other cores were busy, and at
+        its priority it waited) is ended: drawing its share here costs less than
+        its imports still would (measured with one core busy: the command took
+        0.2-0.3 s longer when it waited for such a helper)."""
+        helpers = [h for h in self._helpers if self._warmed_up(h, 0.0)]
+        self.close(keep=helpers)
         if not helpers:
             return list(jobs)
         shares = [list(jobs[i::len(helpers)]) for i in range(len(helpers))]
@@ -96,20 +130,24 @@ class Painter:
                 helper.kill()
                 helper.wait()
                 ok = False
+            helper.stdout.close()
             if not ok or helper.returncode != 0:
                 left += share
         return left
 
-    def close(self) -> None:
-        """End helpers that got no jobs (the command failed or was interrupted): they
-        have written nothing, and would otherwise first finish importing matplotlib."""
+    def close(self, keep: Sequence[subprocess.Popen] = ()) -> None:
+        """End the helpers (but those in ``keep``) that got no jobs: the command failed
+        or was interrupted, or they were not ready. They have written nothing."""
         helpers, self._helpers = self._helpers, []
         for helper in helpers:
+            if any(helper is k for k in keep):
+                continue
             with contextlib.suppress(OSError):
                 helper.kill()
             helper.wait()
-            with contextlib.suppress(OSError):
-                helper.stdin.close()
+            for pipe in (helper.stdin, helper.stdout):
+                with contextlib.suppress(OSError):
+                    pipe.close()
 
     def __enter__(self) -> Self:
         return self
@@ -138,6 +176,8 @@ def main() -> int:
             # the lowest priority: the helper takes only a core the command leaves idle
             os.nice(19)
         _warm_up()
+        sys.stdout.buffer.write(READY)
+        sys.stdout.buffer.flush()
         data = sys.stdin.buffer.read()
         if not data:
             return 0  # closed without jobs

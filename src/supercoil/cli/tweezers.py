@@ -221,7 +221,7 @@ def tweezers(
         return tweezers_branches(options, progress=message, on_point=on_point,
                                  on_branch=final)
 
-    # started before the computation: the figure helpers import matplotlib meanwhile
+    # started before the computation: the figure helper imports matplotlib meanwhile
     with Painter() as painter:
         result = run_saving(compute, out, quiet)
         if result is None:
@@ -257,7 +257,7 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
     points, and its states as ``branches/path.npz``. ``preset``: a
     :class:`~supercoil.units.dna.DNAPreset`; its suffixed keys are added to every point,
     special point and path point, and ``units`` is ``dna``. ``painter``: a
-    :class:`~supercoil.plotting.painter.Painter` whose helpers draw the figures.
+    :class:`~supercoil.plotting.painter.Painter` whose helper draws the figures.
     """
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.tweezers import pick_configurations, write_figures

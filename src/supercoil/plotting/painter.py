@@ -104,9 +104,9 @@ class Painter:
         returns the jobs that were not drawn, for the caller to draw.
 
         A helper that is not ready (the machine's other cores were busy, and at
-        its priority it waited) is ended: drawing its share here costs less than
-        its imports still would (measured with one core busy: the command took
-        0.2-0.3 s longer when it waited for such a helper)."""
+        its priority it waited) is ended: drawing its share here needs only
+        matplotlib's import, the helper still its interpreter's, numpy's and
+        matplotlib's."""
         helpers = [h for h in self._helpers if self._warmed_up(h, 0.0)]
         self.close(keep=helpers)
         if not helpers:

@@ -451,8 +451,8 @@ def tweezers_branches(options: TweezersOptions,
                                     parameter_bounds=opts.turns, max_points=opts.segment_points,
                                     event_tolerance=opts.event_tolerance)
     # The contact-free runs end at the first point past a located contact onset (the
-    # branch is cut there anyway): the switch's run went on to its 30 points, 11 of
-    # them past the onset (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
+    # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
+    # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
     free_point, past_onset = (_stop_after_onset(on_point) if probe is not None
                               else (on_point, None))
     branches: list[Branch] = []

@@ -406,3 +406,29 @@ def test_straight_branch_bifurcations_do_not_depend_on_its_step():
         assert abs(p.parameter - r.parameter) <= 10 * opts.event_tolerance
     # the first is the clamped Greenhill threshold up to the O(h^2) error (0.6 % at N = 40)
     assert a[0].parameter == pytest.approx(critical_turns(4 / 3, 20.0), rel=1e-2)
+
+
+def test_buckled_run_ends_at_the_point_past_its_onset(small_run, monkeypatch):
+    """Oracle for the contact-free runs' stop after a located onset: without it (the run
+    going on to its segment's end, then cut by ``truncate_after``) the buckled branch has
+    the same points and onset to round-off, and the run computed points past the cut."""
+    from supercoil.problems import tweezers
+
+    buckled = small_run.branch("buckled")
+    onset = buckled.points_of_kind("contact_onset")[0]
+    assert len(buckled) == onset.index + 2
+    assert buckled.message.endswith("the contact onset is located")
+    computed = []
+
+    def counting(branch):
+        if branch.name == "buckled":
+            computed.append(len(branch))
+
+    monkeypatch.setattr(tweezers, "_stop_after_onset", lambda on_point: (on_point, None))
+    old = tweezers_branches(small_run.options, on_point=counting).branch("buckled")
+    assert max(computed) > len(old)  # the old run went past the point kept
+    old_onset = old.points_of_kind("contact_onset")[0]
+    assert len(old) == len(buckled) and old_onset.index == onset.index
+    assert old_onset.parameter == pytest.approx(onset.parameter, abs=1e-12)
+    assert np.max(np.abs(old.states - buckled.states)) < 1e-12
+    assert np.array_equal(old.unstable_count, buckled.unstable_count)

@@ -209,6 +209,7 @@ def tweezers(
           f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
           f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
     from supercoil.cli.diagram_output import run_saving
+    from supercoil.plotting.painter import Painter
 
     saved = []  # the final branches run_saving wrote (write_tweezers does not rewrite them)
 
@@ -220,19 +221,21 @@ def tweezers(
         return tweezers_branches(options, progress=message, on_point=on_point,
                                  on_branch=final)
 
-    result = run_saving(compute, out, quiet)
-    if result is None:
-        raise typer.Exit(EXIT_NOT_CONVERGED)
-    path = None
-    if protocol != "up":
-        from supercoil.problems.tweezers_protocol import quasistatic_path
+    # started before the computation: the figure helper imports matplotlib meanwhile
+    with Painter() as painter:
+        result = run_saving(compute, out, quiet)
+        if result is None:
+            raise typer.Exit(EXIT_NOT_CONVERGED)
+        path = None
+        if protocol != "up":
+            from supercoil.problems.tweezers_protocol import quasistatic_path
 
-        what = ("and back" if protocol == "up-down" else
-                f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
-        warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
-        path = quasistatic_path(options, protocol, step=step, force_range=ramp,
-                                force_step=force_step)
-    payload = write_tweezers(result, out, path, preset, saved=saved)
+            what = ("and back" if protocol == "up-down" else
+                    f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
+            warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
+            path = quasistatic_path(options, protocol, step=step, force_range=ramp,
+                                    force_step=force_step)
+        payload = write_tweezers(result, out, path, preset, saved=saved, painter=painter)
     if not payload["ok"] or (path is not None and not path.ok):
         if path is not None and not path.ok:
             payload["notes"].append(f"path: {path.message}")
@@ -242,7 +245,7 @@ def tweezers(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def write_tweezers(result, out: Path, path=None, preset=None, saved=()) -> dict:
+def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=None) -> dict:
     """Save the branches, branch.json (with the envelope) and the figures; return the payload.
 
     ``saved``: branches already written to ``out/branches`` as they are (the very
@@ -253,7 +256,8 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=()) -> dict:
     of the up-down protocol, written as the list ``path`` with its jumps among the special
     points, and its states as ``branches/path.npz``. ``preset``: a
     :class:`~supercoil.units.dna.DNAPreset`; its suffixed keys are added to every point,
-    special point and path point, and ``units`` is ``dna``.
+    special point and path point, and ``units`` is ``dna``. ``painter``: a
+    :class:`~supercoil.plotting.painter.Painter` whose helper draws the figures.
     """
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.tweezers import pick_configurations, write_figures
@@ -273,7 +277,7 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=()) -> dict:
         payload["special_points"] += list(path.jumps)
         np.savez_compressed(out / "branches" / "path.npz", states=path.states,
                             turns=np.array([p["turns"] for p in path.points]))
-    write_figures(payload, pick_configurations(payload, states), out)
+    write_figures(payload, pick_configurations(payload, states), out, painter)
     if preset is not None:
         from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
 

@@ -49,19 +49,13 @@ def _title(payload: Mapping) -> str:
     return "clamped rod, " + ", ".join(parts)
 
 
-def write_figures(payload: Mapping, configurations: Sequence[Mapping],
-                  folder: str | os.PathLike) -> list[Path]:
-    """Write the PNG figures into ``folder``; returns the paths written.
-
-    Extension (load control) or the end's axial force (displacement control),
-    torque and writhe against turns; extension against force for a force ramp;
-    tube pictures.
-
-    ``configurations``: ``{label, points (n, 3), contact_points, contact_intervals}``
-    of the states to draw as tubes.
-    """
+def figure_jobs(payload: Mapping, configurations: Sequence[Mapping],
+                folder: str | os.PathLike) -> list[tuple[Path, str, dict]]:
+    """The PNG figures of :func:`write_figures`, each ``(path, builder, keyword
+    arguments)`` for :func:`draw_job` (plain data: a job can be pickled to a helper
+    process, :mod:`supercoil.plotting.painter`)."""
     folder = Path(folder)
-    written = []
+    jobs = []
     title = _title(payload)
     figures = dict(FIGURES)
     if payload.get("control") == "displacement":
@@ -70,9 +64,9 @@ def write_figures(payload: Mapping, configurations: Sequence[Mapping],
         figures["tension.png"] = "tension"
     for name, y in figures.items():
         specials = [p for p in payload["special_points"] if y in p and "turns" in p]
-        fig = diagram_figure(_branches(payload, y), specials, title=title, x="turns", y=y)
-        fig.savefig(folder / name, **SAVE_OPTIONS)
-        written.append(folder / name)
+        jobs.append((folder / name, "diagram", {
+            "branches": _branches(payload, y), "special_points": specials, "title": title,
+            "x": "turns", "y": y}))
     ramp = [p for p in payload.get("path") or [] if p.get("ramp") == "tension"]
     if ramp:
         rows = {"name": "force ramp", "tension": [p["tension"] for p in ramp],
@@ -80,15 +74,47 @@ def write_figures(payload: Mapping, configurations: Sequence[Mapping],
                 "stable": [p["stable"] for p in ramp], "color": "0.15"}
         specials = [{**j, "tension": j["tension"]} for j in payload["special_points"]
                     if j.get("ramp") == "tension"]
-        fig = diagram_figure([rows], specials, title=title, x="tension", y="extension")
-        fig.savefig(folder / "force_extension.png", **SAVE_OPTIONS)
-        written.append(folder / "force_extension.png")
+        jobs.append((folder / "force_extension.png", "diagram", {
+            "branches": [rows], "special_points": specials, "title": title, "x": "tension",
+            "y": "extension"}))
     if configurations:
-        fig = configurations_figure(configurations, diameter=payload.get("diameter"),
-                                    title=title, closed=False)
-        fig.savefig(folder / "configurations.png", **SAVE_OPTIONS)
-        written.append(folder / "configurations.png")
-    return written
+        jobs.append((folder / "configurations.png", "configurations", {
+            "configurations": list(configurations), "diameter": payload.get("diameter"),
+            "title": title, "closed": False}))
+    return jobs
+
+
+def draw_job(job: tuple[Path, str, dict]) -> Path:
+    """Build the figure of one of :func:`figure_jobs` and save it; returns its path."""
+    path, builder, kwargs = job
+    build = diagram_figure if builder == "diagram" else configurations_figure
+    kwargs = dict(kwargs)
+    if builder == "diagram":
+        fig = build(kwargs.pop("branches"), kwargs.pop("special_points"), **kwargs)
+    else:
+        fig = build(kwargs.pop("configurations"), **kwargs)
+    fig.savefig(path, **SAVE_OPTIONS)
+    return Path(path)
+
+
+def write_figures(payload: Mapping, configurations: Sequence[Mapping],
+                  folder: str | os.PathLike, painter=None) -> list[Path]:
+    """Write the PNG figures into ``folder``; returns the paths written.
+
+    Extension (load control) or the end's axial force (displacement control),
+    torque and writhe against turns; extension against force for a force ramp;
+    tube pictures.
+
+    ``configurations``: ``{label, points (n, 3), contact_points, contact_intervals}``
+    of the states to draw as tubes. ``painter``: a started
+    :class:`~supercoil.plotting.painter.Painter`, whose helper processes draw the
+    figures (those it could not draw are drawn here); None: all drawn here.
+    """
+    jobs = figure_jobs(payload, configurations, folder)
+    left = jobs if painter is None else painter.draw(jobs)
+    for job in left:
+        draw_job(job)
+    return [Path(job[0]) for job in jobs]
 
 
 def pick_configurations(payload: Mapping, states: Mapping[str, np.ndarray],

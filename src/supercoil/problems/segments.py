@@ -94,12 +94,30 @@ def grip_stop(grip: Callable[[np.ndarray], float], q: np.ndarray, fraction: floa
     return refuse
 
 
+def _either(*stops: Callable[[np.ndarray], str | None] | None
+            ) -> Callable[[np.ndarray], str | None] | None:
+    """A ``continuation`` ``stop`` that refuses what any of ``stops`` (None: absent) does."""
+    given = [s for s in stops if s is not None]
+    if len(given) <= 1:
+        return given[0] if given else None
+
+    def refuse(q: np.ndarray) -> str | None:
+        for stop in given:
+            message = stop(q)
+            if message:
+                return message
+        return None
+
+    return refuse
+
+
 def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
            name: str, records, events: tuple[UserEvent, ...] = (),
            stop: Callable[[Branch], bool] | None = None, max_points: int = 400,
            segment_points: int = 30, on_point: Callable[[Branch], None] | None = None,
            quality: float = 0.5, grip: Callable[[np.ndarray], float] | None = None,
            grip_fraction: float = 0.25,
+           refuse: Callable[[np.ndarray], str | None] | None = None,
            ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
     """Continue ``first`` (a computed run) in runs of ``segment_points``, re-pinning between.
 
@@ -120,6 +138,11 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
     configuration where it does not remove a rigid motion at all: measured on the
     ring's alpha branch (N = 200, dLk 3.667), the grip fell to 5 % of the best
     choice's at one point, and the unstable count flickered there.
+
+    ``refuse(q)``: a ``continuation`` ``stop`` asked in every run (after the grip's),
+    e.g. to end a run as soon as what ``stop(run)`` waits for has happened instead of
+    at the end of the run (a refusal it makes ends the branch when ``stop(run)`` is
+    then true; otherwise the pins are re-picked as after the grip's).
     """
     parts = [first]
     pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
@@ -152,10 +175,10 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         done = merge_branches(parts, name) if on_point is not None else None
         report = None if on_point is None else (
             lambda partial, done=done: on_point(merge_branches([done, partial], name)))
-        refuse = None if grip is None else grip_stop(grip, q, grip_fraction)
+        held = None if grip is None else grip_stop(grip, q, grip_fraction)
         run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
                            options=opts, name=name, records=records, events=events,
-                           on_point=report, stop=refuse)
+                           on_point=report, stop=_either(held, refuse))
         parts.append(run)
         total += len(run) - 1
     merged = merge_branches(parts, name)

@@ -72,6 +72,7 @@ from supercoil.continuation import (
 from supercoil.continuation.resume import resume_branch
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.ring_diagram import (
+    _stop_after_onset,
     branch_tolerances,
     classify_contact_events,
     contact_count_event,
@@ -449,6 +450,11 @@ def tweezers_branches(options: TweezersOptions,
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns, max_points=opts.segment_points,
                                     event_tolerance=opts.event_tolerance)
+    # The contact-free runs end at the first point past a located contact onset (the
+    # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
+    # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
+    free_point, past_onset = (_stop_after_onset(on_point) if probe is not None
+                              else (on_point, None))
     branches: list[Branch] = []
     start = time.perf_counter()
     if opts.load_control:
@@ -482,7 +488,8 @@ def tweezers_branches(options: TweezersOptions,
             first = switch_branch(rod, straight, point,
                                   dataclasses.replace(free_opts, initial_step=amplitude),
                                   direction=direction, amplitude=amplitude, name=free_name,
-                                  records=free_records, events=events, on_point=on_point)
+                                  records=free_records, events=events, on_point=free_point,
+                                  stop=past_onset)
             if len(first):
                 break
         if not free_complete and not len(first):
@@ -506,7 +513,7 @@ def tweezers_branches(options: TweezersOptions,
         rod.accept(res.q)
         first = continuation(rod, res.q, res.multipliers, parameter="turns", options=free_opts,
                              name=free_name, records=free_records, events=events,
-                             on_point=on_point)
+                             on_point=free_point, stop=past_onset)
     old, free_complete = stored.get(free_name, (None, False))
     if free_complete:
         free, free_pins = old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
@@ -514,8 +521,8 @@ def tweezers_branches(options: TweezersOptions,
         free, free_pins = follow(rod, rod, first, free_opts, free_name, free_records, events,
                                  stop=_onset_stop if probe is not None else None,
                                  max_points=opts.max_points,
-                                 segment_points=opts.segment_points, on_point=on_point,
-                                 quality=PIN_QUALITY)
+                                 segment_points=opts.segment_points, on_point=free_point,
+                                 quality=PIN_QUALITY, refuse=past_onset)
     onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}

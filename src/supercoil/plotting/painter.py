@@ -1,0 +1,194 @@
+"""Figures drawn by a helper process that imports matplotlib during the computation.
+
+A command that ends by drawing figures pays matplotlib's import (0.3 s) and
+the drawing (0.1 s a figure) after its computation, one after the other. A
+:class:`Painter` started before the computation runs ``python -m
+supercoil.plotting.painter``, which imports matplotlib and draws a small
+figure (the fonts and the mathtext parser loaded) on another core while the
+command computes, says so on its standard output, then waits for the
+figures (:func:`supercoil.plotting.tweezers.figure_jobs`, pickled on its
+standard input) and draws them. The command's own process then never
+imports matplotlib.
+
+The helper runs at the lowest priority (``nice 19``), so that it takes no
+time from the computation when the machine's other cores are busy; at
+normal priority, with another job on the two-core machine, it slowed the
+computation by about as much as it saved. A helper that is not ready when
+the figures are due (it was starved) is ended and the caller draws them
+itself, as without a painter: its interpreter and numpy imports are then
+the only cost. One helper, not one per figure: two would import matplotlib
+twice, and with another job on the machine two made the figures slower,
+not faster (docs/benchmarks.md, "Session 8").
+
+The files are the same as drawn in the command's own process (the same
+builders, style and save options). Whatever the helper did not draw (it
+could not start, was not ready, failed or timed out) is reported back and
+drawn by the caller.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pickle
+import select
+import subprocess
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Self
+
+PROCESSES = 1  # helpers (module doc)
+TIMEOUT = 300.0  # seconds a helper may take for its figures before it is killed
+READY = b"ready\n"  # what a helper writes on its standard output once warmed up
+
+
+def usable_cores() -> int:
+    """Cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on every platform
+        return os.cpu_count() or 1
+
+
+class Painter:
+    """Helper processes that draw figure jobs (module doc); a context manager.
+
+    ``processes``: how many helpers (default :data:`PROCESSES`; none on a
+    single core, where a helper would only take turns with the computation).
+    """
+
+    def __init__(self, processes: int | None = None):
+        count = PROCESSES if processes is None else int(processes)
+        if usable_cores() < 2 or os.name == "nt":  # Windows: no select() on pipes
+            count = 0
+        self._helpers: list[subprocess.Popen] = []
+        self._ready: set[int] = set()
+        env = dict(os.environ)
+        # the helpers import this very package, wherever it was imported from
+        source = str(Path(__file__).resolve().parents[2])
+        env["PYTHONPATH"] = os.pathsep.join(
+            p for p in (source, env.get("PYTHONPATH", "")) if p)
+        for _ in range(count):
+            try:
+                self._helpers.append(subprocess.Popen(
+                    [sys.executable, "-m", "supercoil.plotting.painter"],
+                    stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                    stderr=subprocess.DEVNULL, env=env))
+            except OSError:
+                break
+
+    def _warmed_up(self, helper: subprocess.Popen, timeout: float) -> bool:
+        """Whether ``helper`` said it is warmed up, waiting up to ``timeout`` seconds."""
+        if helper.pid in self._ready:
+            return True
+        try:
+            readable, _, _ = select.select([helper.stdout], [], [], timeout)
+        except (OSError, ValueError):
+            return False
+        if readable and helper.stdout.read(len(READY)) == READY:  # b"" if it ended
+            self._ready.add(helper.pid)
+            return True
+        return False
+
+    def ready(self, timeout: float = 0.0) -> bool:
+        """Whether every helper has imported matplotlib and warmed up (it says so on
+        its standard output), waiting up to ``timeout`` seconds; False without helpers."""
+        deadline = time.monotonic() + timeout
+        return bool(self._helpers) and all(
+            self._warmed_up(h, max(0.0, deadline - time.monotonic())) for h in self._helpers)
+
+    def draw(self, jobs: Sequence) -> list:
+        """Hand ``jobs`` round-robin to the helpers that are ready and wait for them;
+        returns the jobs that were not drawn, for the caller to draw.
+
+        A helper that is not ready (the machine's other cores were busy, and at
+        its priority it waited) is ended: drawing its share here needs only
+        matplotlib's import, the helper still its interpreter's, numpy's and
+        matplotlib's."""
+        helpers = [h for h in self._helpers if self._warmed_up(h, 0.0)]
+        self.close(keep=helpers)
+        if not helpers:
+            return list(jobs)
+        shares = [list(jobs[i::len(helpers)]) for i in range(len(helpers))]
+        sent = []
+        for helper, share in zip(helpers, shares, strict=True):
+            try:
+                helper.stdin.write(pickle.dumps(share))
+                helper.stdin.close()
+                sent.append(True)
+            except OSError:  # the helper is gone (a broken pipe)
+                with contextlib.suppress(OSError):
+                    helper.stdin.close()  # closes the pipe even when its flush fails
+                sent.append(False)
+        left = []
+        for helper, share, ok in zip(helpers, shares, sent, strict=True):
+            try:
+                helper.wait(timeout=TIMEOUT)
+            except subprocess.TimeoutExpired:
+                helper.kill()
+                helper.wait()
+                ok = False
+            helper.stdout.close()
+            if not ok or helper.returncode != 0:
+                left += share
+        return left
+
+    def close(self, keep: Sequence[subprocess.Popen] = ()) -> None:
+        """End the helpers (but those in ``keep``) that got no jobs: the command failed
+        or was interrupted, or they were not ready. They have written nothing."""
+        helpers, self._helpers = self._helpers, []
+        for helper in helpers:
+            if any(helper is k for k in keep):
+                continue
+            with contextlib.suppress(OSError):
+                helper.kill()
+            helper.wait()
+            for pipe in (helper.stdin, helper.stdout):
+                with contextlib.suppress(OSError):
+                    pipe.close()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _warm_up() -> None:
+    """Draw and encode a small figure in the house style (fonts, mathtext, PNG)."""
+    import io
+
+    from supercoil.plotting.tweezers import SAVE_OPTIONS, diagram_figure
+
+    fig = diagram_figure([{"name": "a", "turns": [0.0, 1.0], "extension": [1.0, 0.5],
+                           "stable": [True, False]}],
+                         [{"kind": "fold", "turns": 1.0, "extension": 0.5}],
+                         title="warm-up", x="turns", y="extension")
+    fig.savefig(io.BytesIO(), format="png", **SAVE_OPTIONS)
+
+
+def main() -> int:
+    """The helper: warm up, read the pickled jobs from standard input, draw them."""
+    try:
+        with contextlib.suppress(AttributeError, OSError):
+            # the lowest priority: the helper takes only a core the command leaves idle
+            os.nice(19)
+        _warm_up()
+        sys.stdout.buffer.write(READY)
+        sys.stdout.buffer.flush()
+        data = sys.stdin.buffer.read()
+        if not data:
+            return 0  # closed without jobs
+        from supercoil.plotting.tweezers import draw_job
+
+        for job in pickle.loads(data):
+            draw_job(job)
+    except KeyboardInterrupt:  # Ctrl-C reaches the whole process group
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,127 @@
+"""The figure helper process (supercoil.plotting.painter): same files, fallback, clean-up."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+from supercoil.plotting.painter import Painter, usable_cores
+from supercoil.plotting.tweezers import figure_jobs, write_figures
+
+needs_two_cores = pytest.mark.skipif(usable_cores() < 2, reason="no helper on one core")
+
+
+def _payload_and_configurations():
+    """A small tweezers payload (two branches, a fold) and two tube configurations."""
+    turns = np.linspace(0.0, 3.0, 25)
+    points = []
+    for name, shift in (("buckled", 0.0), ("buckled_contact", 0.02)):
+        for n in turns:
+            points.append({"branch": name, "turns": float(n),
+                           "extension": float(1.0 - 0.05 * n**2 - shift),
+                           "torque": float(0.3 * n), "writhe": float(0.4 * n + shift),
+                           "stable": bool(n < 2.0)})
+    payload = {"twist_ratio": 4 / 3, "force": 75.0, "length_over_diameter": 33.0,
+               "n_nodes": 30, "diameter": 1 / 33, "points": points,
+               "branches": [{"name": "buckled"}, {"name": "buckled_contact"}],
+               "special_points": [{"kind": "fold", "branch": "buckled_contact",
+                                   "turns": 2.0, "extension": 0.78, "torque": 0.6,
+                                   "writhe": 0.82}]}
+    s = np.linspace(0.0, 1.0, 30)
+    configurations = [{"label": f"state {k}",
+                       "points": np.stack([0.1 * k * np.sin(np.pi * s),
+                                           0.05 * np.sin(2 * np.pi * s), s], axis=1),
+                       "contact_points": [{"s1": 0.3, "s2": 0.7}] if k else [],
+                       "contact_intervals": []} for k in (1, 2)]
+    return payload, configurations
+
+
+def _pixels(path):
+    from matplotlib.image import imread
+
+    return imread(path)
+
+
+@needs_two_cores
+def test_the_helper_draws_the_files_the_command_would(tmp_path):
+    """Oracle: the figures drawn in this process. The helper's files hold the same
+    pixels, and it drew every job (none left to the caller)."""
+    payload, configurations = _payload_and_configurations()
+    (tmp_path / "here").mkdir()
+    (tmp_path / "helper").mkdir()
+    here = write_figures(payload, configurations, tmp_path / "here")
+    jobs = figure_jobs(payload, configurations, tmp_path / "helper")
+    with Painter(1) as painter:
+        assert painter.ready(timeout=120.0)
+        assert painter.draw(jobs) == []
+    assert [p.name for p in here] == [job[0].name for job in jobs]
+    assert len(here) == 4
+    for path in here:
+        np.testing.assert_array_equal(_pixels(tmp_path / "helper" / path.name),
+                                      _pixels(path))
+
+
+@needs_two_cores
+def test_a_dead_helper_leaves_its_figures_to_the_caller(tmp_path):
+    """A helper that is gone before the jobs are sent draws nothing: draw returns every
+    job and write_figures draws them itself (the same pixels as without a painter)."""
+    payload, configurations = _payload_and_configurations()
+    (tmp_path / "here").mkdir()
+    (tmp_path / "fallback").mkdir()
+    here = write_figures(payload, configurations, tmp_path / "here")
+    jobs = figure_jobs(payload, configurations, tmp_path / "fallback")
+    with Painter(1) as painter:
+        for helper in painter._helpers:
+            helper.kill()
+            helper.wait()
+        assert painter.draw(jobs) == jobs
+    with Painter(1) as painter:
+        for helper in painter._helpers:
+            helper.kill()
+            helper.wait()
+        written = write_figures(payload, configurations, tmp_path / "fallback", painter)
+    assert [p.name for p in written] == [p.name for p in here]
+    for path in here:
+        np.testing.assert_array_equal(_pixels(tmp_path / "fallback" / path.name),
+                                      _pixels(path))
+
+
+def test_unused_helpers_end_with_the_painter(tmp_path):
+    """A command that stops before its figures (an error, Ctrl-C) leaves no helper
+    running, and the helper wrote nothing."""
+    with Painter(1) as painter:
+        helpers = list(painter._helpers)
+    assert all(h.returncode is not None for h in helpers)
+    assert painter.draw([("never", "diagram", {})]) == [("never", "diagram", {})]
+    assert not any(tmp_path.iterdir())
+
+
+@needs_two_cores
+@pytest.mark.skipif(not hasattr(os, "getpriority"), reason="no process priorities")
+def test_the_helper_runs_at_the_lowest_priority():
+    """Exact value: niceness 19 (os.nice caps there whatever the parent's), so that the
+    helper never takes time from the computation on a busy machine."""
+    with Painter(1) as painter:
+        helper = painter._helpers[0]
+        deadline = time.monotonic() + 30.0
+        while os.getpriority(os.PRIO_PROCESS, helper.pid) != 19 and \
+                time.monotonic() < deadline and helper.poll() is None:
+            time.sleep(0.01)
+        assert os.getpriority(os.PRIO_PROCESS, helper.pid) == 19
+
+
+@needs_two_cores
+def test_a_helper_not_ready_is_ended_and_its_figures_drawn_here(tmp_path):
+    """Figures due before the helper warmed up (its imports take a few tenths of a
+    second): draw hands it nothing and ends it; write_figures draws every file."""
+    payload, configurations = _payload_and_configurations()
+    with Painter(1) as painter:
+        helpers = list(painter._helpers)
+        assert not painter.ready()
+        written = write_figures(payload, configurations, tmp_path, painter)
+    assert all(h.returncode is not None for h in helpers)
+    assert sorted(p.name for p in written) == sorted(p.name for p in tmp_path.iterdir())
+    assert len(written) == 4

@@ -424,7 +424,7 @@ def test_buckled_run_ends_at_the_point_past_its_onset(small_run, monkeypatch):
         if branch.name == "buckled":
             computed.append(len(branch))
 
-    monkeypatch.setattr(tweezers, "_stop_after_onset", lambda on_point: (on_point, None))
+    monkeypatch.setattr(tweezers, "stop_after_onset", lambda on_point: (on_point, None))
     old = tweezers_branches(small_run.options, on_point=counting).branch("buckled")
     assert max(computed) > len(old)  # the old run went past the point kept
     old_onset = old.points_of_kind("contact_onset")[0]

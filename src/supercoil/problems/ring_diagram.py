@@ -887,7 +887,7 @@ def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
                 notes.append(f"failed: {name}: every switching attempt fell back onto the "
                              "circle")
             opts = dataclasses.replace(options, initial_step=amplitude)
-            watched, stop = _stop_after_onset(on_point)
+            watched, stop = stop_after_onset(on_point)
             return switch_branch(problem, circle, point, opts, side=side, amplitude=amplitude,
                                  name=name, records=records, events=(onset_event(probe),),
                                  on_point=watched, direction=direction, stop=stop,
@@ -895,7 +895,7 @@ def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
     raise AssertionError("unreachable")
 
 
-def _stop_after_onset(on_point=None):
+def stop_after_onset(on_point=None):
     """``(on_point, stop)`` for a contact-free run: the first passes each partial branch
     on to ``on_point`` and notes a located ``contact_onset``; from then on the second
     refuses the next state (the run ends ``STOPPED`` at the point past the onset)."""

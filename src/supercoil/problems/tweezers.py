@@ -72,11 +72,11 @@ from supercoil.continuation import (
 from supercoil.continuation.resume import resume_branch
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.ring_diagram import (
-    _stop_after_onset,
     branch_tolerances,
     classify_contact_events,
     contact_count_event,
     onset_event,
+    stop_after_onset,
     truncate_after,
 )
 from supercoil.problems.segments import follow, merge_branches, set_pin  # noqa: F401 (API)
@@ -453,7 +453,7 @@ def tweezers_branches(options: TweezersOptions,
     # The contact-free runs end at the first point past a located contact onset (the
     # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
     # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
-    free_point, past_onset = (_stop_after_onset(on_point) if probe is not None
+    free_point, past_onset = (stop_after_onset(on_point) if probe is not None
                               else (on_point, None))
     branches: list[Branch] = []
     start = time.perf_counter()

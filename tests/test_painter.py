@@ -125,3 +125,38 @@ def test_a_helper_not_ready_is_ended_and_its_figures_drawn_here(tmp_path):
     assert all(h.returncode is not None for h in helpers)
     assert sorted(p.name for p in written) == sorted(p.name for p in tmp_path.iterdir())
     assert len(written) == 4
+
+
+def _ring_jobs(folder):
+    """The three ring-diagram jobs of cli.diagram_output.write_diagram on small data."""
+    w = np.linspace(0.0, 1.5, 20)
+    branch = {"name": "alpha_contact", "linestyle": "-", "writhe": w, "excess_link": 1 + w,
+              "stable": w < 1.0, "contact_points": [[{"s1": 0.2, "s2": 0.7}]] * 20,
+              "contact_intervals": [[]] * 20}
+    s = np.linspace(0.0, 2 * np.pi, 40, endpoint=False)
+    ring = np.stack([np.cos(s), np.sin(2 * s) / 3, 0.1 * np.sin(s)], axis=1)
+    specials = [{"kind": "fold", "branch": "alpha_contact", "writhe": 1.0, "excess_link": 2.0}]
+    return [(folder / "link_writhe.png", "ring:link_writhe",
+             {"branches": [branch], "special_points": specials, "title": "ring"}),
+            (folder / "contact_map.png", "ring:contact_map",
+             {"branches": [branch], "title": "ring"}),
+            (folder / "configurations.png", "ring:configurations",
+             {"configurations": [{"label": "a", "points": ring}], "diameter": 0.05,
+              "title": "ring"})]
+
+
+@needs_two_cores
+def test_the_helper_draws_the_ring_diagram_figures_as_the_command_would(tmp_path):
+    """The ring diagram's jobs (builders ``ring:...``): drawn by the helper, every one of
+    them, with the pixels of the same jobs drawn in this process."""
+    from supercoil.plotting.ring_diagram import draw_jobs
+
+    (tmp_path / "here").mkdir()
+    (tmp_path / "helper").mkdir()
+    draw_jobs(_ring_jobs(tmp_path / "here"))
+    jobs = _ring_jobs(tmp_path / "helper")
+    with Painter(1) as painter:
+        assert painter.ready(timeout=120.0)
+        assert painter.draw(jobs) == []
+    for path, _builder, _kwargs in jobs:
+        np.testing.assert_array_equal(_pixels(path), _pixels(tmp_path / "here" / path.name))

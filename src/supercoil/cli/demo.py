@@ -82,17 +82,15 @@ def demo_options():
 def run_demo(folder: Path, quiet: bool = False) -> bool:
     """Compute the diagram, write it into ``folder`` and say where; True if every branch
     ended as asked (False after an interrupt too: what was saved is kept)."""
-    from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
+    from supercoil.cli.diagram_output import incomplete_message, run_diagram
 
     options = demo_options()
     print(f"supercoil demo: bifurcation diagram of a twisted ring with self-contact, "
           f"C/A = 2/3, L/D = {LENGTH_OVER_DIAMETER:g} (seed 001's DNA example), N = {N_NODES}, "
           f"modes {', '.join(map(str, MODES))}, dLk <= {MAX_EXCESS_LINK:g}", flush=True)
-    saved: dict = {}
-    diagram = compute_diagram(options, folder, quiet, saved)
-    if diagram is None:
+    payload = run_diagram(options, folder, quiet)
+    if payload is None:
         return False
-    payload = write_diagram(diagram, folder, options.contact, saved)
     message = incomplete_message(payload, folder)
     if message is not None:
         warn(message)

@@ -1,7 +1,8 @@
 """Run and write branch computations of the CLI (``diagram ring``, ``demo``, ``tweezers``).
 
 No numerics: :func:`run_saving` runs a computation it is given with a
-progress display and saves its branches as they come; :func:`write_diagram`
+progress display and saves its branches as they come; :func:`run_diagram`
+computes a ring diagram and writes it; :func:`write_diagram`
 saves a ring diagram's branches, puts the payload of
 :meth:`~supercoil.problems.ring_diagram.RingDiagram.payload` into
 ``diagram.json`` (with the JSON envelope) and draws the three figures of
@@ -80,16 +81,29 @@ def compute_diagram(options, out: Path, quiet: bool = False, saved: dict | None 
         options, progress=message, on_point=on_point, on_branch=on_branch), out, quiet, saved)
 
 
-def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None) -> dict:
+def run_diagram(options, out: Path, quiet: bool = False) -> dict | None:
+    """:func:`compute_diagram` then :func:`write_diagram`; the payload, or None after an
+    interrupt. The figures' helper process (:class:`~supercoil.plotting.painter.Painter`)
+    is started first, so that it imports matplotlib while the diagram is computed."""
+    from supercoil.plotting.painter import Painter
+
+    saved: dict = {}
+    with Painter() as painter:
+        diagram = compute_diagram(options, out, quiet, saved)
+        if diagram is None:
+            return None
+        return write_diagram(diagram, out, options.contact, saved, painter)
+
+
+def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None,
+                  painter=None) -> dict:
     """Save ``diagram`` (a RingDiagram) into ``out``, print a summary; return the payload.
-    Branches that ``saved`` holds (:func:`run_saving`'s record) are already written."""
+    Branches that ``saved`` holds (:func:`run_saving`'s record) are already written.
+    ``painter``: a started :class:`~supercoil.plotting.painter.Painter` whose helper
+    draws the figures (what it does not draw is drawn here)."""
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.figures import through_special_points
-    from supercoil.plotting.ring_diagram import (
-        plot_configurations,
-        plot_contact_map,
-        plot_link_writhe,
-    )
+    from supercoil.plotting.ring_diagram import draw_jobs
     from supercoil.plotting.style import generation_style
 
     options = diagram.options
@@ -116,11 +130,11 @@ def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None) -
                       "contact_intervals": [r["contact_intervals"] for r in rows]})
     lines = [through_special_points(b, payload["special_points"], ("writhe", "excess_link"))
              for b in shown]
-    plot_link_writhe(out / "link_writhe.png", branches=lines,
-                     special_points=payload["special_points"], title=title)
-    plot_contact_map(out / "contact_map.png",
-                     branches=[b for b, e in zip(shown, payload["branches"]) if e["contact"]],
-                     title=title)
+    jobs = [(out / "link_writhe.png", "ring:link_writhe",
+             {"branches": lines, "special_points": payload["special_points"], "title": title}),
+            (out / "contact_map.png", "ring:contact_map",
+             {"branches": [b for b, e in zip(shown, payload["branches"]) if e["contact"]],
+              "title": title})]
     configurations = []
     for branch in diagram.branches:
         if branch.name not in diagram.contact_branches or len(branch) == 0:
@@ -130,8 +144,10 @@ def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None) -
                 "label": f"{branch.name}, dLk = {branch.parameter_values[index]:.3f}, "
                          f"Wr = {float(branch.records['writhe'][index]):.3f}",
                 "points": branch.states[index].reshape(-1, 3)})
-    plot_configurations(out / "configurations.png", configurations=configurations,
-                        diameter=options.diameter, title=title)
+    jobs.append((out / "configurations.png", "ring:configurations",
+                 {"configurations": configurations, "diameter": options.diameter,
+                  "title": title}))
+    draw_jobs(jobs, painter)
     write_json(envelope(payload, n_nodes=options.n_nodes, tolerances=options.tolerances,
                         contact_treatment=contact), out / "diagram.json")
     where = out.resolve()

@@ -787,7 +787,7 @@ def diagram_ring(
              "to 1000")
     check_contact_choice(contact_curve, contact_formulation)
     prepare_output_folder(out, force, "the diagram's files")
-    from supercoil.cli.diagram_output import compute_diagram, incomplete_message, write_diagram
+    from supercoil.cli.diagram_output import incomplete_message, run_diagram
     from supercoil.problems.ring_diagram import DiagramOptions
 
     try:
@@ -802,11 +802,9 @@ def diagram_ring(
         fail(str(exc))
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "
           f"N = {nodes}, modes {', '.join(words)}, dLk <= {max_excess_link:g}", flush=True)
-    saved: dict = {}
-    diagram = compute_diagram(options, out, quiet, saved)
-    if diagram is None:
+    payload = run_diagram(options, out, quiet)
+    if payload is None:
         raise typer.Exit(EXIT_NOT_CONVERGED)
-    payload = write_diagram(diagram, out, contact, saved)
     message = incomplete_message(payload, out)
     if message is not None:
         warn(message)

@@ -6,7 +6,8 @@ the drawing (0.1 s a figure) after its computation, one after the other. A
 supercoil.plotting.painter``, which imports matplotlib and draws a small
 figure (the fonts and the mathtext parser loaded) on another core while the
 command computes, says so on its standard output, then waits for the
-figures (:func:`supercoil.plotting.tweezers.figure_jobs`, pickled on its
+figures (:func:`supercoil.plotting.tweezers.figure_jobs`, or the ring diagram's
+jobs of :mod:`supercoil.plotting.ring_diagram`, pickled on its
 standard input) and draws them. The command's own process then never
 imports matplotlib.
 
@@ -181,9 +182,11 @@ def main() -> int:
         data = sys.stdin.buffer.read()
         if not data:
             return 0  # closed without jobs
-        from supercoil.plotting.tweezers import draw_job
-
         for job in pickle.loads(data):
+            if str(job[1]).startswith("ring:"):
+                from supercoil.plotting.ring_diagram import draw_job
+            else:
+                from supercoil.plotting.tweezers import draw_job
             draw_job(job)
     except KeyboardInterrupt:  # Ctrl-C reaches the whole process group
         return 130

@@ -12,12 +12,17 @@ calls.
   the writhe (Figure 4), contact points as dots, intervals as vertical bars;
 * :func:`plot_configurations`: a few centrelines drawn as tubes of diameter D
   (Figure 3), as thick lines in projection (line width = D in data units).
+
+Each figure can also be a *job* ``(path, builder, keyword arguments)``, plain
+data that :mod:`supercoil.plotting.painter`'s helper process draws
+(:func:`draw_job`, builders named ``ring:...``) while the command computes.
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 from supercoil.plotting import figures, style
 
@@ -45,3 +50,22 @@ def plot_configurations(path: str | os.PathLike, *, configurations: Sequence[Map
     the plane of their two largest principal axes, far segments first."""
     fig = figures.configurations_figure(configurations, diameter=diameter, title=title)
     style.save(fig, path)
+
+
+BUILDERS = {"ring:link_writhe": plot_link_writhe, "ring:contact_map": plot_contact_map,
+            "ring:configurations": plot_configurations}
+
+
+def draw_job(job: tuple[str | os.PathLike, str, dict]) -> Path:
+    """Draw one job ``(path, builder, keyword arguments)`` (builders: :data:`BUILDERS`)."""
+    path, builder, kwargs = job
+    BUILDERS[builder](path, **kwargs)
+    return Path(path)
+
+
+def draw_jobs(jobs: Sequence[tuple], painter=None) -> None:
+    """Draw ``jobs``: by ``painter``'s helper (a started
+    :class:`~supercoil.plotting.painter.Painter`) if given, those it did not draw here."""
+    left = list(jobs) if painter is None else painter.draw(list(jobs))
+    for job in left:
+        draw_job(job)

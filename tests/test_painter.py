@@ -45,15 +45,22 @@ def _pixels(path):
     return imread(path)
 
 
+def _drawn_here_and_jobs(tmp_path, other: str):
+    """``(payload, configurations, paths drawn in this process into tmp_path/here, the
+    same figures' jobs into tmp_path/<other>)``."""
+    payload, configurations = _payload_and_configurations()
+    (tmp_path / "here").mkdir()
+    (tmp_path / other).mkdir()
+    here = write_figures(payload, configurations, tmp_path / "here")
+    return payload, configurations, here, figure_jobs(payload, configurations,
+                                                      tmp_path / other)
+
+
 @needs_two_cores
 def test_the_helper_draws_the_files_the_command_would(tmp_path):
     """Oracle: the figures drawn in this process. The helper's files hold the same
     pixels, and it drew every job (none left to the caller)."""
-    payload, configurations = _payload_and_configurations()
-    (tmp_path / "here").mkdir()
-    (tmp_path / "helper").mkdir()
-    here = write_figures(payload, configurations, tmp_path / "here")
-    jobs = figure_jobs(payload, configurations, tmp_path / "helper")
+    _payload, _configurations, here, jobs = _drawn_here_and_jobs(tmp_path, "helper")
     with Painter(1) as painter:
         assert painter.ready(timeout=120.0)
         assert painter.draw(jobs) == []
@@ -68,11 +75,7 @@ def test_the_helper_draws_the_files_the_command_would(tmp_path):
 def test_a_dead_helper_leaves_its_figures_to_the_caller(tmp_path):
     """A helper that is gone before the jobs are sent draws nothing: draw returns every
     job and write_figures draws them itself (the same pixels as without a painter)."""
-    payload, configurations = _payload_and_configurations()
-    (tmp_path / "here").mkdir()
-    (tmp_path / "fallback").mkdir()
-    here = write_figures(payload, configurations, tmp_path / "here")
-    jobs = figure_jobs(payload, configurations, tmp_path / "fallback")
+    payload, configurations, here, jobs = _drawn_here_and_jobs(tmp_path, "fallback")
     with Painter(1) as painter:
         for helper in painter._helpers:
             helper.kill()

@@ -895,7 +895,8 @@ def _switch_off_circle(problem, circle: Branch, point: SpecialPoint,
     raise AssertionError("unreachable")
 
 
-def stop_after_onset(on_point=None):
+def stop_after_onset(on_point: Callable[[Branch], None] | None = None
+                     ) -> tuple[Callable[[Branch], None], Callable[[np.ndarray], str | None]]:
     """``(on_point, stop)`` for a contact-free run: the first passes each partial branch
     on to ``on_point`` and notes a located ``contact_onset``; from then on the second
     refuses the next state (the run ends ``STOPPED`` at the point past the onset)."""

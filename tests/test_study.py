@@ -373,6 +373,27 @@ def test_interrupted_run_keeps_a_valid_file_and_resume_completes_it(tmp_path, ca
     assert (out / "result.h5").read_bytes() == before
 
 
+def test_a_run_interrupted_in_the_contact_free_branch_resumes_to_the_same_result(tmp_path):
+    """Interrupted while alpha (the contact-free run, stopped past its contact onset) is
+    computed, then resumed: the same branches as the uninterrupted run (the resumed
+    alpha stops past its onset too, and nothing of it is computed twice)."""
+    full_dir, full = run_diagram(tmp_path, "full")
+    assert full["status"] == "complete", full
+    reference = supercoil.load(full_dir / "result.h5")
+    assert reference.branch("alpha").message.endswith("the contact onset is located")
+    out, outcome = run_diagram(tmp_path, "cut", progress=InterruptAt(8))
+    assert outcome["status"] == "interrupted"
+    cut = supercoil.load(out / "result.h5")
+    assert 0 < len(cut.branch("alpha")) < len(reference.branch("alpha"))
+    assert "alpha_contact" not in cut.branch_names
+    assert cli(["run", str(write_study(tmp_path)), "--out", str(out), "--resume",
+                "--quiet"]) == 0
+    resumed = supercoil.load(out / "result.h5")
+    assert resumed.status == "complete"
+    assert_same_branches(resumed, reference)
+    assert "the contact onset is located (resumed after point" in resumed.branch("alpha").message
+
+
 # -------------------------------------------------------------------- resume_branch
 def ring_alpha(n_nodes=24):
     from supercoil.problems.ring_branches import circle_branch

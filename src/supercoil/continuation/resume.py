@@ -122,13 +122,14 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
                   options: ContinuationOptions | None = None, *,
                   records: RecordFunction | None = None, events: tuple[UserEvent, ...] = (),
                   on_point: PointCallback | None = None, step: float | None = None,
+                  stop: Callable[[np.ndarray], str | None] | None = None,
                   admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
     """Continue ``partial`` (at least one point) under ``options`` (the options it was
     computed with: ``max_points`` counts the whole branch); see the module docstring.
 
-    ``records``, ``events`` and ``admissible`` must be those of the interrupted run
-    (:func:`~supercoil.continuation.continuation`). ``on_point`` receives the whole
-    branch so far. Numerical failures end in the status.
+    ``records``, ``events``, ``stop`` and ``admissible`` must be those of the
+    interrupted run (:func:`~supercoil.continuation.continuation`). ``on_point``
+    receives the whole branch so far. Numerical failures end in the status.
     """
     opts = options or ContinuationOptions()
     k = len(partial)
@@ -162,6 +163,7 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     tracer = _Tracer(system, dataclasses.replace(opts, max_points=opts.max_points - (k - 1)),
                      partial.name, partial.parent, partial.origin, records, events,
                      None if on_point is None else joined)
+    tracer.stop = stop
     if admissible is not None:
         tracer.admissible = admissible
     if k >= 2:

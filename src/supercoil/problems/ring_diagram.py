@@ -698,9 +698,11 @@ def ring_diagram(options: DiagramOptions,
         if complete:
             free = old
         elif old is not None and len(old):
-            free = resume_branch(problem, old, free_opts, on_point=on_point,
+            watched, stop = stop_after_onset(on_point)
+            free = resume_branch(problem, old, free_opts, on_point=watched,
                                  records=_contact_records(probe, ring_records(problem), True),
-                                 events=(onset_event(probe),), admissible=probe.admissible)
+                                 events=(onset_event(probe),), stop=stop,
+                                 admissible=probe.admissible)
         else:
             free = _switch_off_circle(problem, circle, point, free_opts, name, probe, notes,
                                       on_point)

@@ -113,6 +113,12 @@ def require_nodes(option: str, value: int) -> None:
         )
 
 
+def require_count(option: str, value: int, low: int, high: int) -> None:
+    """Refuse an integer option outside ``[low, high]`` (a count of points, sides, ...)."""
+    if not low <= value <= high:
+        fail(f"{option} {value}: give an integer from {low} to {high}")
+
+
 def parse_ratio(text: str) -> float:
     """A number written as a decimal (``0.6667``) or a fraction (``2/3``), as papers
     quote twist ratios; a typer ``parser``. Other text raises ``ValueError``, which the

@@ -11,7 +11,7 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import fail
+from supercoil.cli._common import fail, require_count
 
 FORMATS = ("vtk", "xyz", "pdb", "obj")
 
@@ -61,8 +61,7 @@ def export_command(
                  f"{out.suffix or '(none)'!r}; give --format {'|'.join(FORMATS)}")
     if fmt not in FORMATS:
         fail(f"--format {fmt!r}: give one of {', '.join(FORMATS)}")
-    if not 3 <= sides <= 256:
-        fail(f"--sides {sides}: give an integer from 3 to 256")
+    require_count("--sides", sides, 3, 256)
     if bp is not None and bp < 12:
         fail(f"--bp {bp}: give a whole number of base pairs >= 12")
     if out.is_dir():

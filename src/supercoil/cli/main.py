@@ -30,6 +30,7 @@ from supercoil.cli._common import (
     parse_vector,
     prepare_output_folder,
     raised_while_solving,
+    require_count,
     require_finite,
     require_magnitude,
     require_nodes,
@@ -777,14 +778,9 @@ def diagram_ring(
     if branch_depth not in (1, 2, 3):
         fail(f"--branch-depth {branch_depth}: give 1 (primary branches), 2 (and secondary) "
              "or 3 (and tertiary)")
-    if not 2 <= contact_max_points <= 100_000:
-        fail(f"--contact-max-points {contact_max_points}: give an integer from 2 to 100000")
-    if not 2 <= secondary_max_points <= 100_000:
-        fail(f"--secondary-max-points {secondary_max_points}: give an integer from 2 to "
-             "100000")
-    if not 0 <= secondary_max_branches <= 1000:
-        fail(f"--secondary-max-branches {secondary_max_branches}: give an integer from 0 "
-             "to 1000")
+    require_count("--contact-max-points", contact_max_points, 2, 100_000)
+    require_count("--secondary-max-points", secondary_max_points, 2, 100_000)
+    require_count("--secondary-max-branches", secondary_max_branches, 0, 1000)
     check_contact_choice(contact_curve, contact_formulation)
     prepare_output_folder(out, force, "the diagram's files")
     from supercoil.cli.diagram_output import incomplete_message, run_diagram

@@ -20,6 +20,7 @@ from supercoil.cli._common import (
     fail,
     parse_ratio,
     prepare_output_folder,
+    require_count,
     require_magnitude,
     require_nodes,
     require_positive,
@@ -189,8 +190,7 @@ def tweezers(
         fail("--force-range and --force-step need --protocol force-ramp")
     if not (math.isfinite(step) and 0 < step <= stop - start):
         fail(f"--step {step:g}: give a positive number of turns up to STOP - START")
-    if not 2 <= max_points <= 100_000:
-        fail(f"--max-points {max_points}: give an integer from 2 to 100000")
+    require_count("--max-points", max_points, 2, 100_000)
     check_contact_choice(contact_curve, contact_formulation)
     prepare_output_folder(out, force, "this command's files")
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches

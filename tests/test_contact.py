@@ -94,6 +94,9 @@ def test_remembered_summaries_equal_fresh_ones_and_are_copies(treatment):
     first["contacts"].clear()
     again = contact_summary(problem, res.q.copy(), res.multipliers.copy())
     assert again == _contact_summary(problem, res.q, res.multipliers) and again["contacts"]
+    again["contacts"][0]["force"] = -1.0  # an edit inside an entry does not reach it either
+    assert contact_summary(problem, res.q, res.multipliers) == _contact_summary(
+        problem, res.q, res.multipliers)
     problem.stiffness *= 2.0
     stiffer = contact_summary(problem, res.q, res.multipliers)
     assert stiffer == _contact_summary(problem, res.q, res.multipliers)

@@ -331,7 +331,11 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
                                      dtype=float)
         rng = np.random.default_rng(12345)
         y0 = root * opinv(mass * rng.standard_normal(n))  # M^(1/2) of the start below
-        nu, y = spla.eigsh(scaled, k=k, v0=y0, which="LM", tol=1e-12)
+        # ncv: 12 Lanczos vectors (ARPACK's default 20) took 17 solves instead of 23
+        # per call at the ring's points (N = 200), about 10 % of the call, with
+        # the same eigenvalues to 2e-12 relative (docs/benchmarks.md, "Session 9")
+        nu, y = spla.eigsh(scaled, k=k, v0=y0, which="LM", tol=1e-12,
+                           ncv=min(n, max(2 * k + 1, 12)))
         values, vectors = sigma + 1.0 / nu, y / root[:, None]
         order = np.argsort(values)
         return values[order], vectors[:, order]

@@ -87,24 +87,18 @@ def _symmetric_inertia(A: sp.spmatrix, order: np.ndarray | None = None) -> tuple
     Every eigenvalue gets the sign it is computed with (the caller decides
     which ones are numerically zero, e.g. from the eigenvalues themselves).
     """
-    A = sp.csr_matrix(A, dtype=float, copy=True)
-    A.eliminate_zeros()
+    A = sp.csr_matrix(A, dtype=float)  # no copy: read only
+    if not A.has_canonical_format:
+        A = A.copy()
+        A.sum_duplicates()
     n = A.shape[0]
     if n == 0:
         return 0, 0, 0
     if order is None:
         order = bandwidth_order(A)
-    prow, pcol, values = equilibrated_entries(A, order)
-    b = int(np.max(np.abs(prow - pcol))) if values.size else 0
-    s = max(b, 16)
-    # Row block k (rows k s .. k s + s) of the permuted matrix, its columns
-    # k s .. k s + 2 s: the diagonal block and the coupling to block k + 1.
-    n_blocks = -(-n // s)
-    blocks = np.zeros((n_blocks, s, 2 * s))
-    block = prow // s
-    upper = pcol >= block * s
-    blocks[block[upper], prow[upper] - block[upper] * s,
-           pcol[upper] - block[upper] * s] = values[upper]
+    position = np.empty(n, dtype=np.int64)
+    position[np.asarray(order, dtype=np.int64)] = np.arange(n)
+    blocks, s = _equilibrated_blocks(A.indptr, A.indices, A.data, position)
     neg, zero, pos = _block_inertia_pivoted(blocks, n, s, _MAX_CONDITION, _MAX_CARRIED,
                                             _MIN_PIVOT)
     return int(neg), int(zero), int(pos)
@@ -139,6 +133,47 @@ def equilibrated_entries(A: sp.csr_matrix, order: np.ndarray
     position = np.empty(n, dtype=np.int64)
     position[np.asarray(order, dtype=np.int64)] = np.arange(n)
     return position[row[stored]], position[col[stored]], values[stored]
+
+
+@njit()
+def _equilibrated_blocks(indptr, indices, data, position):
+    """The row blocks of :func:`_symmetric_inertia` from a csr matrix without
+    duplicates, compiled: ``(blocks, s)``.
+
+    The entries are those of :func:`equilibrated_entries` (the same Ruiz sweeps,
+    the same products ``(d_i a_ij) d_j`` in the same order, exact zeros dropped:
+    the same bits), put by ``position`` (``position[order[k]] = k``) into
+    ``blocks[k]`` of shape ``(s, 2 s)``, ``s = max(b, 16)`` for the half-bandwidth
+    ``b`` after the permutation: row block ``k`` (rows ``k s .. k s + s``) on the
+    columns ``k s .. k s + 2 s``. numpy's version of the two steps cost 0.6 ms
+    of a 2 ms inertia at N = 200 (contact state, b = 43).
+    """
+    n = indptr.size - 1
+    d = np.ones(n)
+    for _ in range(8):
+        scaled = np.empty(n)
+        for i in range(n):
+            row_max = 0.0
+            for p in range(indptr[i], indptr[i + 1]):
+                row_max = max(row_max, abs((d[i] * data[p]) * d[indices[p]]))
+            scaled[i] = d[i] / np.sqrt(row_max if row_max > 0 else 1.0)
+        d = scaled
+    b = 0
+    for i in range(n):
+        for p in range(indptr[i], indptr[i + 1]):
+            if (d[i] * data[p]) * d[indices[p]] != 0.0:
+                b = max(b, abs(position[i] - position[indices[p]]))
+    s = max(b, 16)
+    blocks = np.zeros((-(-n // s), s, 2 * s))
+    for i in range(n):
+        row = position[i]
+        k = row // s
+        for p in range(indptr[i], indptr[i + 1]):
+            value = (d[i] * data[p]) * d[indices[p]]
+            col = position[indices[p]]
+            if value != 0.0 and col >= k * s:
+                blocks[k, row - k * s, col - k * s] = value
+    return blocks, s
 
 
 def _block_inertia(blocks: np.ndarray, n: int, s: int) -> tuple[int, int, int]:

@@ -17,6 +17,19 @@ an earlier version of this routine that merged blocks a bounded number of
 times and then eliminated them anyway (measured: a stable ring reported
 unstable at N >= 2000). Cost ``O(n s^2)`` while few directions are carried.
 
+The eigendecomposition is the expensive part (measured 122 us of a 150 us step
+at s = 43), so each pivot block is first reduced by a Bunch–Kaufman
+``L D L^T`` (:func:`_partial_ldl`) that divides only by pivots of magnitude
+above ``_MIN_PIVOT`` (1e-3) times the block's largest entry; a leading column
+whose pivot is smaller is deferred. ``P = L diag(D, R) L^T`` is again an exact
+congruence, and the deferred rest ``R`` (a few rows: the near-null directions)
+goes through the eigh step above. Measured on the N = 200 ring's KKT matrices:
+15 of 19 pivot blocks have ``|mu|`` below ``max|mu| / 1e4`` (so a fast path for
+well-conditioned blocks only would rarely apply), while ``R`` has 0 to 6 rows;
+the Schur complements' largest entries are those of the eigh-only elimination
+(no extra growth), and the counts are the same (``_block_inertia``, the
+eigh-only reference, in the tests).
+
 (LAPACK's band tridiagonalisation ``dsbtrd`` would also give the inertia,
 but it costs ``O(n^2 b)``: measured 77 s at n = 40 000.)
 """

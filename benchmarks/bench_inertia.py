@@ -6,7 +6,9 @@ Run from the repository root:
         [--against SRC] [--rounds 7] [--calls 50]
 
 Each ``MATRIX.pkl`` holds ``(A, order)`` (a sparse symmetric matrix and its
-bandwidth-reducing order, as ``kkt_negative_count`` passes them). Times
+bandwidth-reducing order, as ``kkt_negative_count`` passes them); a ``.npz``
+holds ``n``, csr ``indptr``, ``indices``, ``data`` and ``order`` (the two of
+``tests/data/kkt_ring200_*.npz``, captured from the N = 200 ring). Times
 ``band._symmetric_inertia(A, order)`` warm, ``--calls`` calls per round; with
 ``--against SRC`` (a ``src`` folder, e.g. ``git archive main src | tar -x -C
 /tmp/old``) the ``solvers/band.py`` of that tree is loaded beside this one and
@@ -34,6 +36,18 @@ def _load(path: Path, name: str):
     return module
 
 
+def _matrix(path: str):
+    if path.endswith(".npz"):
+        import numpy as np
+        import scipy.sparse as sp
+
+        f = np.load(path)
+        n = int(f["n"])
+        return sp.csr_matrix((f["data"], f["indices"], f["indptr"]), shape=(n, n)), f["order"]
+    with open(path, "rb") as handle:
+        return pickle.load(handle)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("matrices", nargs="+")
@@ -50,8 +64,7 @@ def main(argv=None) -> int:
                                     "band_against")
     with threadpool_limits(limits=1, user_api="blas"):
         for path in args.matrices:
-            with open(path, "rb") as handle:
-                A, order = pickle.load(handle)
+            A, order = _matrix(path)
             counts = {k: v._symmetric_inertia(A, order) for k, v in versions.items()}
             times: dict[str, list[float]] = {k: [] for k in versions}
             for _ in range(args.rounds):

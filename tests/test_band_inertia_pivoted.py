@@ -94,7 +94,7 @@ def test_pivoted_block_inertia_equals_the_dense_count_and_the_eigh_reference(see
         n = int(rng.integers(30, 120))
         A = _saddle_band(rng, n, int(rng.integers(n // 3, n - 2)))
         s = 16
-    else:  # rank-one huge stretches, as test_band_inertia_compiled's
+    else:  # rank-one huge stretches: pivot blocks whose directions are carried
         n, b = int(rng.integers(60, 200)), int(rng.integers(2, 12))
         A = np.zeros((n, n))
         for k in range(b + 1):

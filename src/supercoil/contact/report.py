@@ -32,7 +32,6 @@ of seed 001's Figure 4.
 
 from __future__ import annotations
 
-
 import numpy as np
 from scipy.spatial import cKDTree
 

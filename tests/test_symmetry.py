@@ -10,7 +10,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from supercoil.geometry.symmetry import curve_symmetry, cyclic_residual, reversal_axes, shifted
+from supercoil.geometry.symmetry import (
+    curve_symmetry,
+    cyclic_residual,
+    cyclic_residuals,
+    reversal_axes,
+    shifted,
+)
 
 TOL = 1e-8
 
@@ -75,6 +81,19 @@ def test_a_broken_symmetry_has_a_residual_of_the_size_of_the_perturbation():
                     lambda s: 0.15 * np.sin(3 * s))
         r = cyclic_residual(x, 3)
         assert 0.3 * eps < r < 3 * eps
+
+
+def test_batched_cyclic_residuals_equal_the_single_ones():
+    """curve_symmetry fits all orders at once: each value is the one computed alone (bit
+    for bit here; round-off allowed, as batched kernels may take other SIMD paths)."""
+    orders = np.array([1 / 0.3819660112501051, 6, 5, 4, 3, 2])
+    for m, seed in ((2, 1), (3, 2), (5, 3)):
+        x = sampled(lambda s, m=m: 1 + 0.2 * np.cos(m * s), lambda s, m=m: 0.1 * np.sin(m * s),
+                    n=60, seed=seed)
+        x = x + 1e-3 * np.random.default_rng(seed).normal(size=x.shape)  # and broken
+        batched = cyclic_residuals(x, orders)
+        np.testing.assert_allclose(batched, [cyclic_residual(x, k) for k in orders],
+                                   rtol=1e-12, atol=1e-15)
 
 
 def test_bad_input_is_refused():

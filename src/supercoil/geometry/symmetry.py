@@ -103,8 +103,16 @@ def _integer_reversal_scan(x: np.ndarray) -> np.ndarray:
 
 def cyclic_residual(points: np.ndarray, order: float) -> float:
     """Residual of ``x(s + L/order) = R x(s)`` (an ``order``-fold axis), in length units."""
+    return float(cyclic_residuals(points, np.array([order]))[0])
+
+
+def cyclic_residuals(points: np.ndarray, orders: np.ndarray) -> np.ndarray:
+    """:func:`cyclic_residual` for each of ``orders`` ``(k,)`` at once, ``(k,)``: one
+    spectrum, one batched inverse transform and SVD (each value as computed alone, to
+    round-off: bit for bit on the ring diagram's 169 states at N = 200)."""
     x = np.asarray(points, dtype=float)
-    return float(_fit_residuals(x, shifted(x, x.shape[0] / order)[None], direct=True)[0])
+    shifts = x.shape[0] / np.asarray(orders, dtype=float)
+    return _fit_residuals(x, shifted(x, shifts), direct=True)
 
 
 def reversal_residuals(points: np.ndarray, c: np.ndarray, direct: bool = False) -> np.ndarray:
@@ -220,16 +228,16 @@ def curve_symmetry(points: np.ndarray, tolerance: float,
         raise ValueError(f"points must be (n >= 4, 3), got shape {x.shape}")
     if not tolerance > 0:
         raise ValueError(f"tolerance must be positive, got {tolerance!r}")
-    generic = cyclic_residual(x, 1.0 / _GENERIC_SHIFT)
-    if generic <= tolerance:
-        return CurveSymmetry("O(2)", 0, 0, generic)
+    # the generic shift and every order at once, in one batched fit (the same values;
+    # curve_symmetry at N = 200: 1.6-1.9 ms -> 1.3-1.4 ms a state)
+    orders = [m for m in range(max_order, 1, -1) if x.shape[0] >= 2 * m]
+    residuals = cyclic_residuals(x, np.array([1.0 / _GENERIC_SHIFT, *orders]))
+    if residuals[0] <= tolerance:
+        return CurveSymmetry("O(2)", 0, 0, float(residuals[0]))
     order, worst = 1, 0.0
-    for m in range(max_order, 1, -1):
-        if x.shape[0] < 2 * m:
-            continue
-        value = cyclic_residual(x, m)
-        if value <= tolerance:
-            order, worst = m, value
+    for m, value in zip(orders, residuals[1:], strict=True):
+        if value <= tolerance:  # the highest order that holds
+            order, worst = m, float(value)
             break
     axes = reversal_axes(x, tolerance, refine=False)
     if axes:

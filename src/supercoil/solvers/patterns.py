@@ -281,3 +281,63 @@ def _transpose(indptr, indices, data, n):
             out_data[fill[c]] = data[e]
             fill[c] += 1
     return out_ptr, out_indices, out_data
+
+
+class CSRArrays:
+    """A square or rectangular CSR matrix held as its arrays, for the products of
+    refinement loops: ``A @ x`` (``x`` ``(n,)`` or ``(n, k)``) by :func:`csr_matvec`,
+    without a ``scipy.sparse`` object (its construction and operator dispatch cost
+    30 µs per factor and 20 µs per product at N = 100). ``tocsr``/``tocsc`` give
+    the scipy matrix (a sparse LU fallback)."""
+
+    __slots__ = ("data", "indices", "indptr", "shape")
+
+    def __init__(self, data: np.ndarray, indices: np.ndarray, indptr: np.ndarray,
+                 shape: tuple[int, int]):
+        self.data, self.indices, self.indptr, self.shape = data, indices, indptr, shape
+
+    def __matmul__(self, x: np.ndarray) -> np.ndarray:
+        return csr_matvec(self.indptr, self.indices, self.data, x)
+
+    def tocsr(self) -> sp.csr_matrix:
+        return sp.csr_matrix((self.data, self.indices.copy(), self.indptr.copy()),
+                             shape=self.shape)
+
+    def tocsc(self) -> sp.csc_matrix:
+        return self.tocsr().tocsc()
+
+
+def csr_matvec(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray,
+               x: np.ndarray) -> np.ndarray:
+    """``A @ x`` for the CSR arrays of ``A`` and ``x`` ``(n,)`` or ``(n, k)``: each row's
+    products summed in stored order from 0, the loop of scipy's ``csr_matvec`` and
+    ``csr_matvecs`` (the same sums; the tests compare them bit for bit)."""
+    x = np.asarray(x, dtype=float)
+    if x.ndim == 1:
+        return _csr_matvec(indptr, indices, data, x)
+    return _csr_matvecs(indptr, indices, data, np.ascontiguousarray(x))
+
+
+@njit()
+def _csr_matvec(indptr, indices, data, x):
+    n = indptr.size - 1
+    y = np.empty(n)
+    for i in range(n):
+        total = 0.0
+        for jj in range(indptr[i], indptr[i + 1]):
+            total += data[jj] * x[indices[jj]]
+        y[i] = total
+    return y
+
+
+@njit()
+def _csr_matvecs(indptr, indices, data, x):
+    n, k = indptr.size - 1, x.shape[1]
+    y = np.zeros((n, k))
+    for i in range(n):
+        for jj in range(indptr[i], indptr[i + 1]):
+            a = data[jj]
+            j = indices[jj]
+            for c in range(k):
+                y[i, c] += a * x[j, c]
+    return y

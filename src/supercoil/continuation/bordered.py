@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.linalg import lapack, lu_factor, lu_solve
+from scipy.linalg import lapack
 from scipy.sparse.linalg import splu
 
 from supercoil.solvers.band import BandLayout, band_factor, band_lu
@@ -41,7 +41,7 @@ from supercoil.solvers.kkt import (
     kkt_band_layout,
     kkt_order,
 )
-from supercoil.solvers.patterns import CSRArrays, PatternMemo
+from supercoil.solvers.patterns import CSRArrays, PatternMemo, csr_matvec, csr_rmatvec
 from supercoil.solvers.problem import HessianParts
 
 
@@ -147,7 +147,11 @@ class _BandBordered:
                 return None
         elif np.linalg.svd(scaled, compute_uv=False)[-1] <= 1e-13:
             return None
-        out._schur = schur if schur.shape[0] == 1 else lu_factor(schur, check_finite=False)
+        if schur.shape[0] == 1:
+            out._schur = schur
+        else:  # lu_factor's LAPACK call, without its wrapper
+            lu, piv, _info = lapack.dgetrf(schur)
+            out._schur = (lu, piv)
         return out
 
     def _k_solve(self, f):
@@ -164,8 +168,8 @@ class _BandBordered:
         u = self._k_solve(f)
         if self._C.shape[1] == 1:
             y = (g - self._R.T @ u) / self._schur[0, 0]
-        else:
-            y = lu_solve(self._schur, g - self._R.T @ u, check_finite=False)
+        else:  # lu_solve's LAPACK call, without its wrapper
+            y, _info = lapack.dgetrs(*self._schur, g - self._R.T @ u)
         x = u - self._KC @ y
         return np.concatenate([x, y[:k_true]])
 
@@ -390,10 +394,17 @@ class BorderedFactor:
                 != self.size:
             raise ValueError("refined_solve: sizes differ from the factor's")
 
+        canonical_j = J.dtype == np.float64
+
         def residual(z):
             x, multipliers, lam = z[:n], z[n:-1], z[-1]
-            top = hessian.matvec(x) + J.T @ multipliers + column[:n] * lam
-            middle = J @ x + column[n:] * lam
+            if canonical_j:  # the sums of J.T @ mu and J @ x, without scipy's dispatch
+                jt_mu = csr_rmatvec(J.indptr, J.indices, J.data, multipliers, n)
+                j_x = csr_matvec(J.indptr, J.indices, J.data, x)
+            else:
+                jt_mu, j_x = J.T @ multipliers, J @ x
+            top = hessian.matvec(x) + jt_mu + column[:n] * lam
+            middle = j_x + column[n:] * lam
             res = rhs - np.concatenate([top, middle, [row @ z]])
             res[-1] *= self.row_scale
             return res

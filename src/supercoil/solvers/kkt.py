@@ -40,6 +40,7 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 from scipy.sparse.linalg import splu
 
+from supercoil._numba import njit
 from supercoil.solvers.band import (
     BandLayout,
     band_factor,
@@ -100,11 +101,13 @@ def dense_rows(J: sp.spmatrix) -> np.ndarray:
     """Indices of the dense rows of the constraint Jacobian ``J`` ``(m, n)`` (rule above)."""
     J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)
     limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
-    if J.shape[0] == 0 or np.max(np.diff(J.indptr)) <= limit:  # stored >= nonzero
+    if J.shape[0] == 0:
         return np.zeros(0, dtype=np.int64)
-    row_of = np.repeat(np.arange(J.shape[0]), np.diff(J.indptr))
-    counts = np.bincount(row_of[J.data != 0], minlength=J.shape[0])
-    return np.flatnonzero(counts > limit)
+    # only rows storing more than the limit can hold more nonzeros: count theirs
+    candidates = np.flatnonzero(np.diff(J.indptr) > limit)
+    counts = [np.count_nonzero(J.data[J.indptr[k]:J.indptr[k + 1]]) for k in candidates]
+    return candidates[np.asarray(counts, dtype=np.int64) > limit] if candidates.size \
+        else np.zeros(0, dtype=np.int64)
 
 
 class PinnedRows:
@@ -229,7 +232,7 @@ def kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
     entries (:class:`_OrderMemo`). Forming the pattern of ``S + J^T J`` with
     scipy.sparse cost 0.6 ms of a 2 ms bordered factorisation at N = 100.
     """
-    J = sp.csr_matrix(J)
+    J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)  # read only here
     if getattr(S, "format", None) != "csr" or not J.has_canonical_format:
         return _kkt_order(S, J)
     key = (S.shape, J.shape, S.indptr.tobytes(), S.indices.tobytes(),
@@ -300,14 +303,13 @@ class _OrderMemo:
     def _exactly_cancelled(self, J: sp.csr_matrix) -> np.ndarray:
         """Entries of J^T J with two terms that sum to exactly 0 (a sum of two numbers
         is the same in either order, so scipy's product drops exactly these)."""
-        terms = J.data[self._first] * J.data[self._second]
-        total = np.bincount(self._group, terms, minlength=self._n_groups)
+        total, _size = _pair_sums(J.data, self._first, self._second, self._group,
+                                  self._n_groups)
         return self._two_terms & (total == 0.0)
 
     def certifies(self, J: sp.csr_matrix) -> bool:
-        terms = J.data[self._first] * J.data[self._second]
-        total = np.bincount(self._group, terms, minlength=self._n_groups)
-        size = np.bincount(self._group, np.abs(terms), minlength=self._n_groups)
+        total, size = _pair_sums(J.data, self._first, self._second, self._group,
+                                 self._n_groups)
         nonzero = np.abs(total) > 1e-8 * size
         if self._cancelled is None:
             return bool(np.all(nonzero))
@@ -317,6 +319,21 @@ class _OrderMemo:
         cancelled = self._two_terms & (total == 0.0)
         return bool(np.all(nonzero | self._two_terms)
                     and np.array_equal(cancelled, self._cancelled))
+
+
+@njit()
+def _pair_sums(data, first, second, group, n_groups):
+    """Per entry of ``J^T J``: the sum of its terms ``t = data[first] * data[second]`` and
+    of their magnitudes, added in the terms' order: ``np.bincount(group, t)`` and
+    ``np.bincount(group, |t|)`` (the same sums; one pass, no temporaries: 0.05 ms of a
+    memo hit at N = 100 before)."""
+    total = np.zeros(n_groups)
+    size = np.zeros(n_groups)
+    for i in range(group.size):
+        t = data[first[i]] * data[second[i]]
+        total[group[i]] += t
+        size[group[i]] += abs(t)
+    return total, size
 
 
 # values (memo, its arrays): the arrays only count towards the memory bound

@@ -29,12 +29,19 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.linalg import lapack, lu_factor, lu_solve
+from scipy.linalg import lapack
 from scipy.sparse.linalg import splu
 
-from supercoil.solvers.band import band_lu
-from supercoil.solvers.kkt import PinnedRows, SingularMatrixError, canonical, kkt_order
-from supercoil.solvers.patterns import PatternMemo
+from supercoil.solvers.band import BandLayout, band_factor, band_lu
+from supercoil.solvers.kkt import (
+    PinnedRows,
+    SingularMatrixError,
+    _kkt_values,
+    canonical,
+    kkt_band_layout,
+    kkt_order,
+)
+from supercoil.solvers.patterns import CSRArrays, PatternMemo, csr_matvec, csr_rmatvec
 from supercoil.solvers.problem import HessianParts
 
 
@@ -97,14 +104,28 @@ class _BandBordered:
                    C: np.ndarray, R: np.ndarray, D: np.ndarray):
         """Factor of ``E`` from ``K``'s stored entries (no duplicates) and the borders
         ``C``, ``R`` ``(n, k)``, ``D`` ``(k, k)`` (class doc)."""
-        C = np.ascontiguousarray(np.asarray(C, dtype=float).reshape(C.shape[0], -1))
-        R = np.asarray(R, dtype=float).reshape(C.shape)
-        D = np.asarray(D, dtype=float).reshape(C.shape[1], C.shape[1])
-        n = C.shape[0]
+        n = np.asarray(C).shape[0]
         if n < 2 or k_values.size == 0:
             return None
         factor = band_lu(n, k_rows, k_cols, k_values)
-        if factor is None or factor[4] != 0:
+        return None if factor is None else cls._from_factor(B, factor, C, R, D)
+
+    @classmethod
+    def from_layout(cls, B, layout: BandLayout | None, k_values: np.ndarray,
+                    C: np.ndarray, R: np.ndarray, D: np.ndarray):
+        """:meth:`from_parts` with the band layout of ``K``'s entries already made
+        (:func:`~supercoil.solvers.kkt.kkt_band_layout`, None: band too wide) and their
+        values in its order."""
+        if layout is None or layout.size < 2 or k_values.size == 0:
+            return None
+        return cls._from_factor(B, band_factor(layout, k_values), C, R, D)
+
+    @classmethod
+    def _from_factor(cls, B, factor, C: np.ndarray, R: np.ndarray, D: np.ndarray):
+        C = np.ascontiguousarray(np.asarray(C, dtype=float).reshape(C.shape[0], -1))
+        R = np.asarray(R, dtype=float).reshape(C.shape)
+        D = np.asarray(D, dtype=float).reshape(C.shape[1], C.shape[1])
+        if factor[4] != 0:
             return None
         lub, piv, kl, ku, _info = factor
         out = cls(B, lub, piv, kl, ku, C, R, D)
@@ -126,7 +147,11 @@ class _BandBordered:
                 return None
         elif np.linalg.svd(scaled, compute_uv=False)[-1] <= 1e-13:
             return None
-        out._schur = schur if schur.shape[0] == 1 else lu_factor(schur, check_finite=False)
+        if schur.shape[0] == 1:
+            out._schur = schur
+        else:  # lu_factor's LAPACK call, without its wrapper
+            lu, piv, _info = lapack.dgetrf(schur)
+            out._schur = (lu, piv)
         return out
 
     def _k_solve(self, f):
@@ -143,8 +168,8 @@ class _BandBordered:
         u = self._k_solve(f)
         if self._C.shape[1] == 1:
             y = (g - self._R.T @ u) / self._schur[0, 0]
-        else:
-            y = lu_solve(self._schur, g - self._R.T @ u, check_finite=False)
+        else:  # lu_solve's LAPACK call, without its wrapper
+            y, _info = lapack.dgetrs(*self._schur, g - self._R.T @ u)
         x = u - self._KC @ y
         return np.concatenate([x, y[:k_true]])
 
@@ -179,10 +204,14 @@ def _stored(values: np.ndarray) -> np.ndarray:
 
 def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
                        border_row: np.ndarray, corner: float, order: np.ndarray,
-                       matrix: bool = True, s_bytes: tuple[bytes, bytes] | None = None):
-    """``P B P^T`` as CSR (None without ``matrix``), and the stored entries of its
-    leading block ``P K P^T``. ``s_bytes``: ``(S.indptr.tobytes(), S.indices.tobytes())``
-    if already made (bytes keep their hash: a second key on them costs no rehash).
+                       matrix: bool | str = True, s_bytes: tuple[bytes, bytes] | None = None,
+                       entries: bool = True):
+    """``P B P^T`` as CSR (None without ``matrix``; its arrays, a
+    :class:`~supercoil.solvers.patterns.CSRArrays` sharing the remembered index arrays,
+    with ``matrix="arrays"``), and the stored entries of its
+    leading block ``P K P^T`` (None without ``entries``). ``s_bytes``:
+    ``(S.indptr.tobytes(), S.indices.tobytes())`` if already made (bytes keep their
+    hash: a second key on them costs no rehash).
 
     ``B = [[S, J^T, column], [J, 0], [border_row, corner]]``; the stored
     entries are those of ``scipy.sparse.bmat`` of the blocks (explicit zeros
@@ -190,7 +219,9 @@ def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
     refinement's products ``B z`` sum the same terms in the same order (by
     column within each row) as with the matrix ``bmat`` and fancy indexing
     built before (5 times slower). The sorting permutation is remembered per
-    pattern (:data:`_LAYOUTS`): along a branch a few patterns repeat.
+    pattern (:data:`_LAYOUTS`): along a branch a few patterns repeat. Its index
+    arrays are kept in the index type scipy would pick (int32 below 2^31), so
+    that making the matrix does not convert them.
     """
     S, J = canonical(S), canonical(J)
     n, m = S.shape[0], J.shape[0]
@@ -207,12 +238,18 @@ def _permuted_bordered(S: sp.csr_matrix, J: sp.csr_matrix, column: np.ndarray,
         layout = _bordered_layout(S, J, col_at, row_at, corner != 0.0, order)
         _LAYOUTS.put(key, layout)
     by_row, pcol, indptr, inner, inner_rows, inner_cols = layout
-    values = np.concatenate([S.data, J.data, J.data, column[col_at], border_row[row_at],
-                             [corner] if corner != 0.0 else []])[by_row]
+    parts = [S.data, J.data, J.data, column[col_at], border_row[row_at]]
+    if corner != 0.0:
+        parts.append(np.array([corner]))
+    values = np.concatenate(parts)[by_row]
+    k_entries = (inner_rows, inner_cols, values[inner]) if entries else None
     if not matrix:
-        return None, (inner_rows, inner_cols, values[inner])
+        return None, k_entries
+    if matrix == "arrays":
+        return CSRArrays(values, pcol, indptr, (size, size)), k_entries
     Bp = sp.csr_matrix((values, pcol.copy(), indptr.copy()), shape=(size, size))
-    return Bp, (inner_rows, inner_cols, values[inner])
+    Bp.has_canonical_format = True
+    return Bp, k_entries
 
 
 def _bordered_layout(S, J, col_at, row_at, has_corner, order):
@@ -236,7 +273,10 @@ def _bordered_layout(S, J, col_at, row_at, has_corner, order):
     indptr = np.zeros(size + 1, dtype=np.int64)
     np.cumsum(np.bincount(prow, minlength=size), out=indptr[1:])
     inner = np.flatnonzero((prow < size - 1) & (pcol < size - 1))
-    return by_row, pcol, indptr, inner, prow[inner], pcol[inner]
+    index = np.int32 if max(size, pcol.size) < 2**31 - 1 else np.int64
+    pcol_stored, indptr = pcol.astype(index), indptr.astype(index)
+    pcol_stored.flags.writeable = indptr.flags.writeable = False  # shared by the factors
+    return by_row, pcol_stored, indptr, inner, prow[inner], pcol[inner]
 
 
 _LAYOUTS = PatternMemo()
@@ -285,9 +325,14 @@ class BorderedFactor:
         self.kkt_order = kkt_order(S, J_banded) if order is None else order
         self.order = np.concatenate([self.kkt_order, [size - 1]])
         border_row = self.row_scale * row[:-1]
+        S, J, J_banded = canonical(S), canonical(J), canonical(J_banded)
         s_bytes = (S.indptr.tobytes(), S.indices.tobytes())
-        Bp, k_entries = _permuted_bordered(S, J, column, border_row, corner, self.order,
-                                           s_bytes=s_bytes)
+        Bp, _ = _permuted_bordered(S, J, column, border_row, corner, self.order,
+                                   matrix="arrays", s_bytes=s_bytes, entries=False)
+        # the banded block K (K_pin with pins): its band layout is remembered per pattern
+        # and filled with its values in the order of _kkt_entries
+        layout = kkt_band_layout(S, J_banded, self.kkt_order, s_bytes)
+        k_values = _kkt_values(S, J_banded)
         C = _stored(column)[self.kkt_order][:, None]
         R = _stored(border_row)[self.kkt_order][:, None]
         D = _stored(np.array([[corner]]))
@@ -295,15 +340,13 @@ class BorderedFactor:
             # K_pin banded, the rest of the dense rows and columns as 2r auxiliary
             # borders (class doc): [[K_pin, c, root E, Delta / root], [r^T, d, 0, 0],
             # [Delta^T / root, 0, -I, 0], [root E^T, 0, 0, -I]]
-            _, k_entries = _permuted_bordered(S, J_banded, column, border_row, corner,
-                                              self.order, matrix=False, s_bytes=s_bytes)
             E, Delta, gamma = pinned.low_rank(n, size - 1)
             E, Delta, root = E[self.kkt_order], Delta[self.kkt_order], np.sqrt(gamma)
             C = np.hstack([C, E * root, Delta / root])
             R = np.hstack([R, Delta / root, E * root])
             k = 2 * pinned.rows.size
             D = np.block([[D, np.zeros((1, k))], [np.zeros((k, 1)), -np.eye(k)]])
-        self._lu = _BandBordered.from_parts(Bp, *k_entries, C, R, D)
+        self._lu = _BandBordered.from_layout(Bp, layout, k_values, C, R, D)
         if self._lu is None:
             try:
                 self._lu = splu(Bp.tocsc(), permc_spec="NATURAL")
@@ -351,10 +394,17 @@ class BorderedFactor:
                 != self.size:
             raise ValueError("refined_solve: sizes differ from the factor's")
 
+        canonical_j = J.dtype == np.float64
+
         def residual(z):
             x, multipliers, lam = z[:n], z[n:-1], z[-1]
-            top = hessian.matvec(x) + J.T @ multipliers + column[:n] * lam
-            middle = J @ x + column[n:] * lam
+            if canonical_j:  # the sums of J.T @ mu and J @ x, without scipy's dispatch
+                jt_mu = csr_rmatvec(J.indptr, J.indices, J.data, multipliers, n)
+                j_x = csr_matvec(J.indptr, J.indices, J.data, x)
+            else:
+                jt_mu, j_x = J.T @ multipliers, J @ x
+            top = hessian.matvec(x) + jt_mu + column[:n] * lam
+            middle = j_x + column[n:] * lam
             res = rhs - np.concatenate([top, middle, [row @ z]])
             res[-1] *= self.row_scale
             return res

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil.solvers.newton import _hessian, lagrangian_hessian
-from supercoil.solvers.patterns import csr_columns
+from supercoil.solvers.patterns import csr_columns, csr_vstack
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 
@@ -163,12 +163,12 @@ class ExtendedSystem:
         if stacked is not None and stacked[0] is free and stacked[1] is self._phase_rows:
             return stacked[2]
         if self.m:
-            rows.append(sp.csr_matrix(free))
+            rows.append(free if isinstance(free, sp.csr_matrix) else sp.csr_matrix(free))
         if self.r:
             rows.append(self._phase_rows[1])
         if not rows:
             return sp.csr_matrix((0, self.n))
-        out = sp.vstack(rows, format="csr")
+        out = csr_vstack(rows)
         self._stacked = (free, self._phase_rows, out)
         return out
 

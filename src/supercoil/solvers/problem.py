@@ -12,7 +12,7 @@ from typing import Protocol
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.solvers.patterns import csr_add, csr_restrict
+from supercoil.solvers.patterns import csr_add, csr_matvec, csr_restrict
 
 
 @dataclass(frozen=True)
@@ -43,7 +43,12 @@ class HessianParts:
         return full
 
     def matvec(self, x: np.ndarray) -> np.ndarray:
-        y = self.sparse @ x
+        S = self.sparse
+        if getattr(S, "format", None) == "csr" and S.dtype == np.float64 \
+                and np.ndim(x) == 1 and np.shape(x)[0] == S.shape[1]:
+            y = csr_matvec(S.indptr, S.indices, S.data, x)  # scipy's sums, without its dispatch
+        else:
+            y = S @ x
         for c, v in zip(self.coefficients, self.vectors):
             y = y + c * v * (v @ x)
         return y

@@ -432,3 +432,107 @@ def test_buckled_run_ends_at_the_point_past_its_onset(small_run, monkeypatch):
     assert old_onset.parameter == pytest.approx(onset.parameter, abs=1e-12)
     assert np.max(np.abs(old.states - buckled.states)) < 1e-12
     assert np.array_equal(old.unstable_count, buckled.unstable_count)
+
+
+def _generic_straight(opts):
+    """The straight branch as before the pencil: the continuation's own localisation
+    (bisection on the inertia count, then Brent's method on the eigenvalue nearest zero),
+    with the same steps."""
+    from supercoil.continuation import ContinuationOptions, continuation
+    from supercoil.problems import tweezers
+
+    problem, q0 = clamped_problem(opts)
+    return continuation(problem, q0, parameter="turns", name="straight", options=(
+        ContinuationOptions(initial_step=0.05, max_step=tweezers.STRAIGHT_MAX_STEP,
+                            parameter_bounds=opts.turns, max_points=opts.max_points,
+                            event_tolerance=opts.event_tolerance)))
+
+
+def test_straight_state_is_an_equilibrium_at_every_turns():
+    """The pencil's premise: the straight rod with the multipliers of its first point
+    solves the equilibrium equations at any turns (residual <= 1e-10), and the branch
+    stores that one state at every point."""
+    from supercoil.continuation.system import ExtendedSystem
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 4.0), n_nodes=40)
+    problem, q0 = clamped_problem(opts)
+    branch = straight_branch(opts, problem, q0, None)
+    assert np.array_equal(branch.states, np.broadcast_to(q0, branch.states.shape))
+    system = ExtendedSystem(problem, "turns", q0)
+    for turns in (0.0, 0.37, 2.2, 3.9, 7.5):
+        residual = system.residual(system.pack(q0, branch.multipliers[0], turns))
+        assert np.max(np.abs(residual)) <= 1e-10, turns
+
+
+def test_straight_pencil_matches_the_continuations_localisation():
+    """Oracle: the continuation's bisection-then-Brent localisation at the same points.
+    The same bifurcations (counts before and after, within the event tolerance), each
+    certified by the inertia on both sides; the critical pair at zero to round-off."""
+    from supercoil.continuation.stability import inertia
+    from supercoil.continuation.system import ExtendedSystem
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 4.0), n_nodes=40)
+    problem, q0 = clamped_problem(opts)
+    fast = straight_branch(opts, problem, q0, None)
+    slow = _generic_straight(opts)
+    a, b = fast.points_of_kind("bifurcation"), slow.points_of_kind("bifurcation")
+    assert len(a) == len(b) >= 3
+    np.testing.assert_array_equal(fast.unstable_count, slow.unstable_count)
+    system = ExtendedSystem(problem, "turns", q0)
+    mu = fast.multipliers[0]
+    for p, r in zip(a, b):
+        assert p.located and (p.count_before, p.count_after) == (r.count_before, r.count_after)
+        assert p.count_after - p.count_before == 2  # the axisymmetric rod's pair
+        assert p.index == r.index
+        assert abs(p.parameter - r.parameter) <= opts.event_tolerance
+        assert np.all(np.abs(p.critical_eigenvalues) <= 1e-6)
+        assert p.unstable_count == p.count_before
+        for side, count in ((-1, p.count_before), (1, p.count_after)):
+            x = system.pack(q0, mu, p.parameter + side * 10 * opts.event_tolerance)
+            assert inertia(system, x)[0] == count
+
+
+def test_straight_pencil_falls_back_when_not_certified(monkeypatch):
+    """A pencil that fails its check (here: linearity asked to better than exactly)
+    gives way to the continuation's localisation: the generic branch, bit for bit."""
+    from supercoil.problems import tweezers
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 2.0), n_nodes=30)
+    monkeypatch.setattr(tweezers, "PENCIL_LINEARITY", -1.0)
+    problem, q0 = clamped_problem(opts)
+    fallback = straight_branch(opts, problem, q0, None)
+    slow = _generic_straight(opts)
+    assert len(fallback.special_points) == len(slow.special_points) == 1
+    assert fallback.special_points[0].parameter == slow.special_points[0].parameter
+    np.testing.assert_array_equal(fallback.unstable_count, slow.unstable_count)
+
+
+def test_switch_pin_is_the_one_repin_picks_and_the_mode_does_not_move_it():
+    """``_pin_node`` pins what ``repin(q* + 1e-3 mode)`` picks when one node is farthest
+    (the mode's symmetric tie broken by a small bump), and the rotated mode has no
+    component on the pinned coordinate whichever of two tied nodes is taken."""
+    from supercoil.problems import tweezers
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 2.0), n_nodes=30)
+    problem, q0 = clamped_problem(opts)
+    point = straight_branch(opts, problem, q0, None).special_points[0]
+    mode = point.critical_modes[0]
+    radius = np.linalg.norm(mode.reshape(-1, 3)[:, :2], axis=1)
+    tied = np.flatnonzero(radius >= (1 - 1e-6) * radius.max())
+    assert tied.size == 2 and tied.sum() == opts.n_nodes - 1  # symmetric about the middle
+    for bump in (1.0 + 1e-3, 1.0 / (1.0 + 1e-3)):
+        bumped = mode.copy().reshape(-1, 3)
+        bumped[tied[1], :2] *= bump
+        direction, node = tweezers._rotated_mode(bumped.ravel())
+        assert node == (tied[1] if bump > 1 else tied[0])
+        tweezers._pin_node(problem, node)
+        pinned = problem.gauge_dofs.copy()
+        problem.repin(point.q + 1e-3 * direction)
+        np.testing.assert_array_equal(problem.gauge_dofs, pinned)
+        assert direction[pinned[0]] == pytest.approx(0.0, abs=1e-14)
+    direction, node = tweezers._rotated_mode(mode)
+    assert node == tied[0] and direction[3 * node + 1] == pytest.approx(0.0, abs=1e-14)

@@ -536,3 +536,61 @@ def test_switch_pin_is_the_one_repin_picks_and_the_mode_does_not_move_it():
         assert direction[pinned[0]] == pytest.approx(0.0, abs=1e-14)
     direction, node = tweezers._rotated_mode(mode)
     assert node == tied[0] and direction[3 * node + 1] == pytest.approx(0.0, abs=1e-14)
+
+
+def test_every_point_keeps_a_pin_of_quality(small_run):
+    """The pin is checked at every point (``pin_stop``): each stored point of the buckled
+    branches has, with the pin it was computed with, a pin quality of at least
+    ``PIN_QUALITY`` (checked only between runs of 30 points before)."""
+    from supercoil.problems import tweezers
+
+    for branch in small_run.branches[1:]:
+        for i, q in enumerate(branch.states):
+            small_run.pin_branch(branch.name, i)
+            assert small_run.rod_problem.pin_quality(q) >= tweezers.PIN_QUALITY, (branch.name, i)
+    small_run.pin_branch("straight")
+
+
+def test_long_runs_keep_the_branch_of_short_runs(small_run):
+    """Oracle: short runs between pin checks, as before (30 points at the benchmark's size;
+    8 here, so that the branches of this small run are cut into several). Runs as long
+    as the pin holds (the default) give the same special points within their tolerances
+    (two localisations, each to its tolerance in arclength, which weighs the parameter
+    by the branch's ``parameter_weight``), the same counts where the old branch's
+    neighbours agree, and the same last state up to the rotation about the axis (the
+    pins, which fix it, may differ: two nodes tie for the farthest from the axis)."""
+    short = tweezers_branches(dataclasses.replace(small_run.options, segment_points=8))
+    assert len(short.branch("buckled_contact")) > 2 * 8
+    for new, old in zip(small_run.branches, short.branches, strict=True):
+        assert new.name == old.name
+        a, b = new.special_points, old.special_points
+        assert [p.kind for p in a] == [p.kind for p in b], new.name
+        weight = small_run.options.diameter if new.name == "buckled_contact" else 1.0
+        for p, r in zip(a, b):
+            assert weight * abs(p.parameter - r.parameter) <= 2 * max(p.tolerance, r.tolerance)
+        for s, count in zip(new.arclength, new.unstable_count):
+            near = np.argsort(np.abs(old.arclength - s))[:2]
+            if old.unstable_count[near[0]] == old.unstable_count[near[1]]:
+                assert count == old.unstable_count[near[0]], (new.name, s)
+        assert new.parameter_values[-1] == pytest.approx(old.parameter_values[-1], abs=1e-12)
+        for key in ("extension", "writhe", "torque", "energy"):
+            assert new.records[key][-1] == pytest.approx(old.records[key][-1], abs=1e-7), key
+
+
+def test_pin_stop_refuses_a_state_its_pin_does_not_hold(small_run):
+    """``pin_stop`` refuses exactly the states whose pin quality is below PIN_QUALITY: a
+    stored state is accepted, the same state turned a quarter turn about the axis (the
+    pinned node's rotation then moves across its pinned coordinate) refused."""
+    from supercoil.problems import tweezers
+
+    branch = small_run.branch("buckled_contact")
+    small_run.pin_branch(branch.name, len(branch) - 1)
+    rod = small_run.rod_problem
+    q = branch.states[-1]
+    stop = tweezers.pin_stop(rod)
+    assert rod.pin_quality(q) >= tweezers.PIN_QUALITY and stop(q) is None
+    x = q.reshape(-1, 3)
+    turned = np.column_stack([-x[:, 1], x[:, 0], x[:, 2]]).ravel()
+    assert rod.pin_quality(turned) < tweezers.PIN_QUALITY
+    assert "pin's quality fell" in stop(turned)
+    small_run.pin_branch("straight")

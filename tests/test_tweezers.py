@@ -594,3 +594,12 @@ def test_pin_stop_refuses_a_state_its_pin_does_not_hold(small_run):
     assert rod.pin_quality(turned) < tweezers.PIN_QUALITY
     assert "pin's quality fell" in stop(turned)
     small_run.pin_branch("straight")
+
+
+def test_max_points_bounds_every_branch(small_run):
+    """Runs are as long as ``segment_points`` (2000 by default): ``max_points`` still bounds
+    each branch, and a branch it stops is reported incomplete."""
+    opts = dataclasses.replace(small_run.options, max_points=10)
+    result = tweezers_branches(opts)
+    assert all(len(b) <= 10 for b in result.branches)
+    assert result.branches[-1].status.name == "MAX_POINTS" and not result.ok

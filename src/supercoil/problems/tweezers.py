@@ -632,7 +632,8 @@ def tweezers_branches(options: TweezersOptions,
     free_records = tweezers_records(rod, rod, False, probe)
     events = (onset_event(probe),) if probe is not None else ()
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
-                                    parameter_bounds=opts.turns, max_points=opts.segment_points,
+                                    parameter_bounds=opts.turns,
+                                    max_points=min(opts.segment_points, opts.max_points),
                                     event_tolerance=opts.event_tolerance)
     # The contact-free runs end at the first point past a located contact onset (the
     # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
@@ -743,7 +744,8 @@ def tweezers_branches(options: TweezersOptions,
     set_pin(cp, rod, q)
     contact_opts = ContinuationOptions(
         initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
-        max_step=opts.contact_max_step * D, max_points=opts.segment_points,
+        max_step=opts.contact_max_step * D,
+        max_points=min(opts.segment_points, opts.max_points),
         parameter_bounds=opts.turns, direction=1 if free.tangents[k, -1] >= 0 else -1,
         parameter_weight=D, tolerance=opts.contact_tolerance,
         event_tolerance=opts.contact_event_tolerance,

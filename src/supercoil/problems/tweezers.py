@@ -469,9 +469,11 @@ def straight_bifurcations(problem: ClampedRodEnergy, branch: Branch,
     are 0, 2, 4, 6, 8).
 
     Measured (N = 100, C/A = 4/3, F L^2/A = 75, 0-5 turns): the five bifurcations agree
-    with the continuation's bisection-then-Brent localisation to 3e-10 turns (its
-    tolerance 1e-8); the localisation took 0.31 s there (58 inertia counts and 24
-    eigenproblems) against 0.07 s here.
+    with the continuation's bisection-then-Brent localisation to 1e-9 turns (its
+    tolerance 1e-8); the straight branch took 75 inertia counts and 48 eigenproblems
+    with that localisation, 27 and 17 with this one (12 points, 10 certifying counts,
+    5 special points) plus the 192 x 192 definite eigenproblem: 0.54-0.69 s against
+    0.18 s of CPU (docs/benchmarks.md, "Session 9").
     """
     from scipy.linalg import LinAlgError, eigh, null_space
 

@@ -2,14 +2,18 @@
 F L^2/A = 75 (the problem the issue quotes for PyElastica), timed for the whole command.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers.py [--nodes N] [--stop T]
-[--repeat K [--against SRC]] [--pyelastica PYTHON [--pyelastica-steps K]]``.
+[--repeat K [--against SRC]] [--bytecode] [--pyelastica PYTHON [--pyelastica-steps K]]``.
 Prints wall time, points per branch, folds, the last state's extension and writhe and the
 closest approach. ``--repeat K`` runs the command K times and prints the smallest and
 the median wall and CPU time (user + system of the command's process); with
 ``--against SRC`` each run alternates with one of the source tree ``SRC`` (its
 ``src`` folder, put on ``PYTHONPATH``; e.g. a ``git archive`` of an older commit) and
 the ratio of the smallest times is printed: on a shared machine the smallest of
-alternated runs is the least disturbed comparison. With ``--pyelastica PYTHON`` (an interpreter with PyElastica installed,
+alternated runs is the least disturbed comparison. ``--bytecode`` first compiles the
+timed source trees' modules (``python -m compileall``), as an installed package has them:
+where the environment sets ``PYTHONDONTWRITEBYTECODE=1`` (this machine's), every run
+otherwise compiles supercoil's 850 kB of source again (about 0.5 s of the command,
+measured: the command's imports 1.06-1.10 s without, 0.58-0.59 s with). With ``--pyelastica PYTHON`` (an interpreter with PyElastica installed,
 ``pip install pyelastica`` or ``pip install -e ".[pyelastica]"``) the same problem is run
 by :mod:`bench_tweezers_pyelastica` (explicit dynamics to rest, 1.1 million steps at N = 100;
 ``--pyelastica-steps`` runs only that many and extrapolates the time) and the wall-time
@@ -42,6 +46,23 @@ def timed_command(cmd: list[str], source: str | None) -> tuple[float, float, sub
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return wall, cpu, proc
+
+
+def compile_trees(sources: list[str | None]) -> None:
+    """Write the bytecode of the supercoil package of each source tree (None: the one this
+    interpreter imports) with ``python -m compileall``, as pip does on installation."""
+    for source in sources:
+        env = dict(os.environ)
+        if source is not None:
+            env["PYTHONPATH"] = os.pathsep.join([source, env.get("PYTHONPATH", "")]).rstrip(
+                os.pathsep)
+        code = "import os, supercoil; print(os.path.dirname(supercoil.__file__))"
+        where = subprocess.run([sys.executable, "-c", code], check=True,
+                               capture_output=True, text=True, env=env)
+        folder = where.stdout.strip()
+        subprocess.run([sys.executable, "-m", "compileall", "-q", folder], check=True,
+                       capture_output=True, env=env)
+        print(f"compiled {folder}")
 
 
 def repeated(cmd_for, repeat: int, against: str | None) -> None:
@@ -77,7 +98,10 @@ def main() -> None:
     parser.add_argument("--pyelastica-steps", type=int, default=0)
     parser.add_argument("--repeat", type=int, default=0)
     parser.add_argument("--against", metavar="SRC", default=None)
+    parser.add_argument("--bytecode", action="store_true")
     args = parser.parse_args()
+    if args.bytecode:
+        compile_trees([None] + ([args.against] if args.against else []))
     import json
 
     def cmd_for(out: Path) -> list[str]:

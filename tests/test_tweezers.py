@@ -432,3 +432,174 @@ def test_buckled_run_ends_at_the_point_past_its_onset(small_run, monkeypatch):
     assert old_onset.parameter == pytest.approx(onset.parameter, abs=1e-12)
     assert np.max(np.abs(old.states - buckled.states)) < 1e-12
     assert np.array_equal(old.unstable_count, buckled.unstable_count)
+
+
+def _generic_straight(opts):
+    """The straight branch as before the pencil: the continuation's own localisation
+    (bisection on the inertia count, then Brent's method on the eigenvalue nearest zero),
+    with the same steps."""
+    from supercoil.continuation import ContinuationOptions, continuation
+    from supercoil.problems import tweezers
+
+    problem, q0 = clamped_problem(opts)
+    return continuation(problem, q0, parameter="turns", name="straight", options=(
+        ContinuationOptions(initial_step=0.05, max_step=tweezers.STRAIGHT_MAX_STEP,
+                            parameter_bounds=opts.turns, max_points=opts.max_points,
+                            event_tolerance=opts.event_tolerance)))
+
+
+def test_straight_state_is_an_equilibrium_at_every_turns():
+    """The pencil's premise: the straight rod with the multipliers of its first point
+    solves the equilibrium equations at any turns (residual <= 1e-10), and the branch
+    stores that one state at every point."""
+    from supercoil.continuation.system import ExtendedSystem
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 4.0), n_nodes=40)
+    problem, q0 = clamped_problem(opts)
+    branch = straight_branch(opts, problem, q0, None)
+    assert np.array_equal(branch.states, np.broadcast_to(q0, branch.states.shape))
+    system = ExtendedSystem(problem, "turns", q0)
+    for turns in (0.0, 0.37, 2.2, 3.9, 7.5):
+        residual = system.residual(system.pack(q0, branch.multipliers[0], turns))
+        assert np.max(np.abs(residual)) <= 1e-10, turns
+
+
+def test_straight_pencil_matches_the_continuations_localisation():
+    """Oracle: the continuation's bisection-then-Brent localisation at the same points.
+    The same bifurcations (counts before and after, within the event tolerance), each
+    certified by the inertia on both sides; the critical pair at zero to round-off."""
+    from supercoil.continuation.stability import inertia
+    from supercoil.continuation.system import ExtendedSystem
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 4.0), n_nodes=40)
+    problem, q0 = clamped_problem(opts)
+    fast = straight_branch(opts, problem, q0, None)
+    slow = _generic_straight(opts)
+    a, b = fast.points_of_kind("bifurcation"), slow.points_of_kind("bifurcation")
+    assert len(a) == len(b) >= 3
+    np.testing.assert_array_equal(fast.unstable_count, slow.unstable_count)
+    system = ExtendedSystem(problem, "turns", q0)
+    mu = fast.multipliers[0]
+    for p, r in zip(a, b):
+        assert p.located and (p.count_before, p.count_after) == (r.count_before, r.count_after)
+        assert p.count_after - p.count_before == 2  # the axisymmetric rod's pair
+        assert p.index == r.index
+        assert abs(p.parameter - r.parameter) <= opts.event_tolerance
+        assert np.all(np.abs(p.critical_eigenvalues) <= 1e-6)
+        assert p.unstable_count == p.count_before
+        for side, count in ((-1, p.count_before), (1, p.count_after)):
+            x = system.pack(q0, mu, p.parameter + side * 10 * opts.event_tolerance)
+            assert inertia(system, x)[0] == count
+
+
+def test_straight_pencil_falls_back_when_not_certified(monkeypatch):
+    """A pencil that fails its check (here: linearity asked to better than exactly)
+    gives way to the continuation's localisation: the generic branch, bit for bit."""
+    from supercoil.problems import tweezers
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 2.0), n_nodes=30)
+    monkeypatch.setattr(tweezers, "PENCIL_LINEARITY", -1.0)
+    problem, q0 = clamped_problem(opts)
+    fallback = straight_branch(opts, problem, q0, None)
+    slow = _generic_straight(opts)
+    assert len(fallback.special_points) == len(slow.special_points) == 1
+    assert fallback.special_points[0].parameter == slow.special_points[0].parameter
+    np.testing.assert_array_equal(fallback.unstable_count, slow.unstable_count)
+
+
+def test_switch_pin_is_the_one_repin_picks_and_the_mode_does_not_move_it():
+    """``_pin_node`` pins what ``repin(q* + 1e-3 mode)`` picks when one node is farthest
+    (the mode's symmetric tie broken by a small bump), and the rotated mode has no
+    component on the pinned coordinate whichever of two tied nodes is taken."""
+    from supercoil.problems import tweezers
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 2.0), n_nodes=30)
+    problem, q0 = clamped_problem(opts)
+    point = straight_branch(opts, problem, q0, None).special_points[0]
+    mode = point.critical_modes[0]
+    radius = np.linalg.norm(mode.reshape(-1, 3)[:, :2], axis=1)
+    tied = np.flatnonzero(radius >= (1 - 1e-6) * radius.max())
+    assert tied.size == 2 and tied.sum() == opts.n_nodes - 1  # symmetric about the middle
+    for bump in (1.0 + 1e-3, 1.0 / (1.0 + 1e-3)):
+        bumped = mode.copy().reshape(-1, 3)
+        bumped[tied[1], :2] *= bump
+        direction, node = tweezers._rotated_mode(bumped.ravel())
+        assert node == (tied[1] if bump > 1 else tied[0])
+        tweezers._pin_node(problem, node)
+        pinned = problem.gauge_dofs.copy()
+        problem.repin(point.q + 1e-3 * direction)
+        np.testing.assert_array_equal(problem.gauge_dofs, pinned)
+        assert direction[pinned[0]] == pytest.approx(0.0, abs=1e-14)
+    direction, node = tweezers._rotated_mode(mode)
+    assert node == tied[0] and direction[3 * node + 1] == pytest.approx(0.0, abs=1e-14)
+
+
+def test_every_point_keeps_a_pin_of_quality(small_run):
+    """The pin is checked at every point (``pin_stop``): each stored point of the buckled
+    branches has, with the pin it was computed with, a pin quality of at least
+    ``PIN_QUALITY`` (checked only between runs of 30 points before)."""
+    from supercoil.problems import tweezers
+
+    for branch in small_run.branches[1:]:
+        for i, q in enumerate(branch.states):
+            small_run.pin_branch(branch.name, i)
+            assert small_run.rod_problem.pin_quality(q) >= tweezers.PIN_QUALITY, (branch.name, i)
+    small_run.pin_branch("straight")
+
+
+def test_long_runs_keep_the_branch_of_short_runs(small_run):
+    """Oracle: short runs between pin checks, as before (30 points at the benchmark's size;
+    8 here, so that the branches of this small run are cut into several). Runs as long
+    as the pin holds (the default) give the same special points within their tolerances
+    (two localisations, each to its tolerance in arclength, which weighs the parameter
+    by the branch's ``parameter_weight``), the same counts where the old branch's
+    neighbours agree, and the same last state up to the rotation about the axis (the
+    pins, which fix it, may differ: two nodes tie for the farthest from the axis)."""
+    short = tweezers_branches(dataclasses.replace(small_run.options, segment_points=8))
+    assert len(short.branch("buckled_contact")) > 2 * 8
+    for new, old in zip(small_run.branches, short.branches, strict=True):
+        assert new.name == old.name
+        a, b = new.special_points, old.special_points
+        assert [p.kind for p in a] == [p.kind for p in b], new.name
+        weight = small_run.options.diameter if new.name == "buckled_contact" else 1.0
+        for p, r in zip(a, b):
+            assert weight * abs(p.parameter - r.parameter) <= 2 * max(p.tolerance, r.tolerance)
+        for s, count in zip(new.arclength, new.unstable_count):
+            near = np.argsort(np.abs(old.arclength - s))[:2]
+            if old.unstable_count[near[0]] == old.unstable_count[near[1]]:
+                assert count == old.unstable_count[near[0]], (new.name, s)
+        assert new.parameter_values[-1] == pytest.approx(old.parameter_values[-1], abs=1e-12)
+        for key in ("extension", "writhe", "torque", "energy"):
+            assert new.records[key][-1] == pytest.approx(old.records[key][-1], abs=1e-7), key
+
+
+def test_pin_stop_refuses_a_state_its_pin_does_not_hold(small_run):
+    """``pin_stop`` refuses exactly the states whose pin quality is below PIN_QUALITY: a
+    stored state is accepted, the same state turned a quarter turn about the axis (the
+    pinned node's rotation then moves across its pinned coordinate) refused."""
+    from supercoil.problems import tweezers
+
+    branch = small_run.branch("buckled_contact")
+    small_run.pin_branch(branch.name, len(branch) - 1)
+    rod = small_run.rod_problem
+    q = branch.states[-1]
+    stop = tweezers.pin_stop(rod)
+    assert rod.pin_quality(q) >= tweezers.PIN_QUALITY and stop(q) is None
+    x = q.reshape(-1, 3)
+    turned = np.column_stack([-x[:, 1], x[:, 0], x[:, 2]]).ravel()
+    assert rod.pin_quality(turned) < tweezers.PIN_QUALITY
+    assert "pin's quality fell" in stop(turned)
+    small_run.pin_branch("straight")
+
+
+def test_max_points_bounds_every_branch(small_run):
+    """Runs are as long as ``segment_points`` (2000 by default): ``max_points`` still bounds
+    each branch, and a branch it stops is reported incomplete."""
+    opts = dataclasses.replace(small_run.options, max_points=10)
+    result = tweezers_branches(opts)
+    assert all(len(b) <= 10 for b in result.branches)
+    assert result.branches[-1].status.name == "MAX_POINTS" and not result.ok

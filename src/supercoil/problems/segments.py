@@ -94,9 +94,10 @@ def grip_stop(grip: Callable[[np.ndarray], float], q: np.ndarray, fraction: floa
     return refuse
 
 
-def _either(*stops: Callable[[np.ndarray], str | None] | None
-            ) -> Callable[[np.ndarray], str | None] | None:
-    """A ``continuation`` ``stop`` that refuses what any of ``stops`` (None: absent) does."""
+def either(*stops: Callable[[np.ndarray], str | None] | None
+           ) -> Callable[[np.ndarray], str | None] | None:
+    """A ``continuation`` ``stop`` that refuses what any of ``stops`` (None: absent) does,
+    asked in order."""
     given = [s for s in stops if s is not None]
     if len(given) <= 1:
         return given[0] if given else None
@@ -178,7 +179,7 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         held = None if grip is None else grip_stop(grip, q, grip_fraction)
         run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
                            options=opts, name=name, records=records, events=events,
-                           on_point=report, stop=_either(held, refuse))
+                           on_point=report, stop=either(held, refuse))
         parts.append(run)
         total += len(run) - 1
     merged = merge_branches(parts, name)

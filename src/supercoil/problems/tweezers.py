@@ -27,10 +27,11 @@ contact as above (branch ``clamped``, ``clamped_contact``).
 
 The rotation about the axis is an exact symmetry of every state; the rod
 pins the azimuth of one node (:meth:`ClampedRodEnergy.repin`). Along a
-branch the pin is re-picked every ``segment_points`` points (a new
-continuation run from the last point, in the direction the branch was
-going), whenever the pinned node no longer sees the rotation well; the
-runs are merged into one :class:`~supercoil.continuation.Branch`. At an
+branch a continuation run ends at the point before one where the pinned node
+no longer sees the rotation well (:func:`pin_stop`, checked at every point),
+or after ``segment_points`` points; the pin is re-picked there when needed and
+a new run goes on from the last point in the direction the branch was going;
+the runs are merged into one :class:`~supercoil.continuation.Branch`. At an
 equilibrium the pin carries no reaction (the energy is invariant under the
 rotation, and the pinned coordinate moves under it), so every stored state
 is an equilibrium of the unpinned problem and the count does not depend on
@@ -79,7 +80,7 @@ from supercoil.problems.ring_diagram import (
     stop_after_onset,
     truncate_after,
 )
-from supercoil.problems.segments import follow, merge_branches, set_pin  # noqa: F401 (API)
+from supercoil.problems.segments import either, follow, merge_branches, set_pin  # noqa: F401
 from supercoil.rod.closed import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 from supercoil.solvers.newton import NewtonOptions, newton
@@ -107,7 +108,11 @@ class TweezersOptions:
     branch starts at ``start``); ``n_nodes`` N. ``free_max_step``: largest
     arclength step without contact (units of L); ``contact_max_step``: with
     contact (units of D); ``max_points`` bounds each branch;
-    ``segment_points`` the points per continuation run between pin checks.
+    ``segment_points`` the most points per continuation run: the azimuth pin is checked
+    at every point (:func:`pin_stop`) and a run ends where it must be picked again, so
+    runs need no other bound (2000, the default ``max_points``; with 30, before the
+    per-point check, the benchmark's contact branch took 4 runs and 887 bordered
+    factorisations against 1 run and 852, and its pin never changed).
     ``contact_predictor``: the predictor of the contact branch
     (``ContinuationOptions.predictor``). ``"quadratic"`` adds the curvature
     of the branch from the last two tangents: the barrier's stiffness makes
@@ -135,7 +140,7 @@ class TweezersOptions:
     free_max_step: float = 0.1
     contact_max_step: float = 0.5
     max_points: int = 2000
-    segment_points: int = 30
+    segment_points: int = 2000
     contact_predictor: str = "quadratic"
     event_tolerance: float = 1e-8
     contact_event_tolerance: float = 1e-6
@@ -335,16 +340,59 @@ def axial_force(rod: ClampedRodEnergy, multipliers: np.ndarray) -> float:
     return float(mu[rod.n_constraints - 1]) if mu.size >= rod.n_constraints else float("nan")
 
 
-def _rotated_mode(mode: np.ndarray) -> np.ndarray:
-    """The critical mode turned about the axis so the node it moves most moves along +x."""
+def _rotated_mode(mode: np.ndarray) -> tuple[np.ndarray, int]:
+    """The critical mode turned about the axis so the node it moves most moves along +x,
+    and that node.
+
+    The first such node within a relative ``1e-6`` of the largest move: the clamped
+    rod's modes are symmetric about its middle, so two nodes tie exactly and round-off
+    picks either (nodes 49 and 50 of 100); see :func:`_pin_node`."""
     v = mode.reshape(-1, 3).copy()
     r = np.linalg.norm(v[:, :2], axis=1)
-    k = int(np.argmax(r))
+    k = int(np.flatnonzero(r >= (1.0 - 1e-6) * r.max())[0])
     a = -math.atan2(v[k, 1], v[k, 0])
     c, s = math.cos(a), math.sin(a)
     x, y = v[:, 0].copy(), v[:, 1].copy()
     v[:, 0], v[:, 1] = c * x - s * y, s * x + c * y
-    return v.ravel()
+    return v.ravel(), k
+
+
+def _pin_node(rod: ClampedRodEnergy, node: int) -> None:
+    """Pin the azimuth of the straight rod's buckling at ``node``: its ``y`` coordinate,
+    along which the mode of :func:`_rotated_mode` does not move it.
+
+    What ``rod.repin(q* + 1e-3 mode)`` picks when ``node`` is the one farthest from the
+    axis; with two nodes tied (the mode's symmetry about the rod's middle) the rotation's
+    round-off decided, and a pin on the other node, which the mode moves across it,
+    drops that component of the switch's direction: the switch then left the straight
+    rod for another branch (measured at N = 100, F L^2/A = 75: its first point at 2.59
+    turns, beyond the second bifurcation, instead of the subcritical branch at 2.20).
+    """
+    clamps = np.setdiff1d(rod.fixed, rod.gauge_dofs)
+    rod.gauge_dofs = np.array([3 * node + 1], dtype=np.int64)
+    rod.fixed = np.array(sorted(set(clamps.tolist()) | {3 * node + 1}), dtype=np.int64)
+
+
+def pin_stop(rod: ClampedRodEnergy) -> Callable[[np.ndarray], str | None]:
+    """A ``continuation`` ``stop`` that refuses a state where the azimuth pin's quality
+    (``rod.pin_quality``) is below ``PIN_QUALITY``: the run ends at the point before,
+    where :func:`~supercoil.problems.segments.follow` picks the pin again.
+
+    Checked at every point (about 20 us): the pin was re-picked only between runs of
+    ``segment_points``, so it could degrade for up to that many points, and the runs
+    were kept short (30 points) for it; each new run starts without the step growth and
+    the quadratic predictor's history of the last, and recomputes its first point's
+    stability (measured on the benchmark's contact branch, which keeps its first pin:
+    93 points in 4 runs, against 91 in one).
+    """
+
+    def refuse(q: np.ndarray) -> str | None:
+        quality = rod.pin_quality(q)
+        if quality < PIN_QUALITY:
+            return f"the azimuth pin's quality fell to {quality:.2g} (below {PIN_QUALITY:g})"
+        return None
+
+    return refuse
 
 
 def _onset_stop(run: Branch) -> bool:
@@ -353,6 +401,9 @@ def _onset_stop(run: Branch) -> bool:
 
 # ----------------------------------------------------------------------------- branches
 STRAIGHT_MAX_STEP = 1.0  # arclength step of the straight branch (see straight_branch)
+# relative departure from linearity in turns of the straight rod's Hessian above which
+# the pencil is not trusted (measured: 1e-17 of its largest entry at N = 100)
+PENCIL_LINEARITY = 1e-10
 
 
 def straight_branch(options: TweezersOptions, problem: ClampedRodEnergy, q0: np.ndarray,
@@ -360,17 +411,152 @@ def straight_branch(options: TweezersOptions, problem: ClampedRodEnergy, q0: np.
     """The straight rod in turns (load control), with its bifurcations located.
 
     The straight twisted rod is the same state at every ``turns``: its points
-    only bracket the count changes, which are located to ``event_tolerance``
-    whatever the step. Steps up to one turn (``STRAIGHT_MAX_STEP``) halve the
-    points against a quarter turn (N = 100, 0-5 turns: 12 points instead of 24,
-    the five bifurcations within 3e-9 turns of those found with quarter turns).
+    only bracket the count changes. Steps up to one turn (``STRAIGHT_MAX_STEP``)
+    halve the points against a quarter turn (N = 100, 0-5 turns: 12 points
+    instead of 24, the five bifurcations within 3e-9 turns of those found with
+    quarter turns). The points are followed without bifurcation detection and
+    the count changes are located all at once by :func:`straight_bifurcations`
+    (the Hessian is linear in turns there); where that does not certify them,
+    the branch is computed again with the continuation's own localisation
+    (bisection on the count, then Brent's method on the eigenvalue nearest zero).
     """
     opts = options
     cont = ContinuationOptions(initial_step=0.05, max_step=STRAIGHT_MAX_STEP,
                                parameter_bounds=opts.turns, max_points=opts.max_points,
-                               event_tolerance=opts.event_tolerance)
-    return continuation(problem, q0, parameter="turns", options=cont, name="straight",
-                        records=records, on_point=on_point)
+                               event_tolerance=opts.event_tolerance, detect_bifurcations=False)
+    branch = continuation(problem, q0, parameter="turns", options=cont, name="straight",
+                          records=records, on_point=on_point)
+    specials = straight_bifurcations(problem, branch, cont, records)
+    if specials is not None:
+        return dataclasses.replace(branch, special_points=specials)
+    problem.turns = opts.turns[0]
+    problem.accept(q0)
+    return continuation(problem, q0, parameter="turns", options=dataclasses.replace(
+        cont, detect_bifurcations=True), name="straight", records=records, on_point=on_point)
+
+
+def straight_bifurcations(problem: ClampedRodEnergy, branch: Branch,
+                          options: ContinuationOptions, records=None
+                          ) -> tuple[SpecialPoint, ...] | None:
+    """The count changes of the straight branch from one symmetric-definite eigenproblem;
+    None where they are not certified (the caller then locates them by continuation).
+
+    Every point of ``branch`` is the one state ``(q, mu)`` (checked), so the Hessian
+    of the Lagrangian on the free DOFs is a function of ``turns`` alone, and it is
+    linear there, ``H(t) = H_0 + (t - t_0) B``: the twist energy is ``(C/2L)(2 pi Tw)^2``
+    with ``Tw = turns + f(q)`` and ``grad f = 0`` on the straight rod (by its symmetry
+    under the half turn about the axis), so its Hessian is ``(C/L)(2 pi)^2 Tw hess f``.
+    Linearity is checked at a third point (departure at most ``PENCIL_LINEARITY``
+    of the largest entry). With ``Z`` an orthonormal basis of the constraints' kernel
+    (``J Z = 0``, the same ``J`` at every point) and ``A = Z^T H_0 Z`` positive definite
+    (the count is 0 at the first point), Sylvester's law of inertia gives the count at
+    ``t > t_0`` as the number of eigenvalues ``theta > 1 / (t - t_0)`` of the definite
+    pencil ``(-Z^T B Z) v = theta A v``: the constrained Hessian is singular exactly at
+    ``t_0 + 1 / theta``, the axisymmetric rod's pairs giving double roots. These roots
+    are the bifurcations (roots within ``event_tolerance`` of each other one event, its
+    count jump their number).
+
+    Certified by the branch's own inertia counts: the pencil's count must equal the
+    stored count at every point, and the continuation's :func:`~supercoil.continuation.stability.inertia`
+    at ``event_tolerance`` (in turns) on either side of each root must give the counts
+    before and after. Each special point is then filled as the continuation's
+    localisation fills it (its stability, ``point_stability``, with the critical modes
+    that the branch switch follows; its records), at the state of the branch, except
+    its ``unstable_count``: the count of the eigenvalues below zero there, i.e. the
+    count before (certified; the pair is at zero). ``point_stability`` at a point this
+    close to singular counts from an inertia that round-off decides and undercounts
+    (measured: 0, 2, 2, 5, 8 at the continuation's five points, whose counts before
+    are 0, 2, 4, 6, 8).
+
+    Measured (N = 100, C/A = 4/3, F L^2/A = 75, 0-5 turns): the five bifurcations agree
+    with the continuation's bisection-then-Brent localisation to 1e-9 turns (its
+    tolerance 1e-8); the straight branch took 75 inertia counts and 48 eigenproblems
+    with that localisation, 27 and 17 with this one (12 points, 10 certifying counts,
+    5 special points) plus the 192 x 192 definite eigenproblem: 0.54-0.69 s against
+    0.18 s of CPU (docs/benchmarks.md, "Session 9").
+    """
+    from scipy.linalg import LinAlgError, eigh, null_space
+
+    from supercoil.continuation.stability import count_gauge, inertia, point_stability
+    from supercoil.continuation.system import ExtendedSystem
+
+    n_points = len(branch)
+    if n_points < 2 or branch.unstable_count[0] != 0 or branch.zero_modes[0] != 0:
+        return None
+    q, mu = branch.states[0], branch.multipliers[0]
+    if not (np.array_equal(branch.states, np.broadcast_to(q, branch.states.shape))
+            and np.array_equal(branch.multipliers,
+                               np.broadcast_to(mu, branch.multipliers.shape))):
+        return None
+    turns = branch.parameter_values
+    t0 = float(turns[0])
+    system = ExtendedSystem(problem, "turns", q, None, q, options.parameter_weight,
+                            options.finite_difference_step)
+
+    def x_at(t: float) -> np.ndarray:
+        return system.pack(q, mu, t)
+
+    last = float(turns[-1])
+    try:
+        if count_gauge(system, x_at(t0)).size:
+            return None
+        h0 = system.hessian(x_at(t0)).dense()
+        slope = (system.hessian(x_at(last)).dense() - h0) / (last - t0)
+        middle = float(turns[n_points // 2])
+        departure = np.abs(system.hessian(x_at(middle)).dense() - (h0 + (middle - t0) * slope))
+        if departure.max() > PENCIL_LINEARITY * np.abs(h0).max():
+            return None
+        J = system.jacobian(x_at(t0))
+        Z = null_space(J.toarray()) if J.shape[0] else np.eye(system.n)
+        theta = eigh(-(Z.T @ slope @ Z), Z.T @ h0 @ Z, eigvals_only=True)
+    except LinAlgError:
+        return None
+    roots = np.sort(t0 + 1.0 / theta[theta > 0])
+    counts = np.array([0] + [int(np.sum(theta > 1.0 / (t - t0))) for t in turns[1:]])
+    if not np.array_equal(counts, branch.unstable_count) or np.any(branch.zero_modes):
+        return None
+    roots = roots[roots <= last]
+    delta = options.event_tolerance / options.parameter_weight  # in turns
+    clusters: list[list[float]] = []
+    for root in roots:
+        if clusters and root - clusters[-1][-1] <= delta:
+            clusters[-1].append(float(root))
+        else:
+            clusters.append([float(root)])
+    specials = []
+    before = 0
+    try:
+        for k, cluster in enumerate(clusters):
+            at = float(np.mean(cluster))
+            if (k + 1 < len(clusters) and clusters[k + 1][0] - cluster[-1] <= 4 * delta) \
+                    or at - delta <= t0:
+                return None
+            after = before + len(cluster)
+            sides = [inertia(system, x_at(t), options.zero_tolerance)[0]
+                     for t in (at - delta, at + delta)]
+            if sides != [before, after]:
+                return None
+            index = int(np.searchsorted(turns, at)) - 1
+            x = x_at(at)
+            stab = point_stability(system, x, options.zero_tolerance, options.n_modes)
+            values, modes = stab.critical_modes(len(cluster))
+            u = (at - turns[index]) / (turns[index + 1] - turns[index])
+            arclength = float(branch.arclength[index]
+                              + u * (branch.arclength[index + 1] - branch.arclength[index]))
+            tangent = np.zeros(branch.tangents.shape[1])
+            tangent[-1] = 1.0  # the branch's secant: the state does not move
+            system.set_parameter(at)
+            specials.append(SpecialPoint(
+                kind="bifurcation", label="bifurcation", branch=branch.name, index=index,
+                parameter=at, arclength=arclength, q=q.copy(), multipliers=mu.copy(),
+                tangent=tangent, unstable_count=before, count_before=before,
+                count_after=after, critical_eigenvalues=values, critical_modes=modes,
+                located=True, tolerance=options.event_tolerance,
+                records=dict(records(q, mu, at)) if records is not None else {}))
+            before = after
+    finally:
+        system.set_parameter(last)
+    return tuple(specials)
 
 
 def straight_force_branch(options: TweezersOptions, turns: float,
@@ -419,7 +605,7 @@ def tweezers_branches(options: TweezersOptions,
     final = on_branch or (lambda branch, contact: None)
     stored = dict(resume or {})
 
-    def resumed(problem, name, segment_opts, records, events):
+    def resumed(problem, name, segment_opts, records, events, stop=None):
         """The stored branch ``name`` continued for one segment, or None (none stored)."""
         old, complete = stored.get(name, (None, False))
         if old is None or complete or len(old) < 2:
@@ -430,7 +616,7 @@ def tweezers_branches(options: TweezersOptions,
         set_pin(problem, rod, q)
         return resume_branch(problem, old, dataclasses.replace(
             segment_opts, max_points=len(old) + segment_opts.max_points - 1),
-            records=records, events=events, on_point=on_point)
+            records=records, events=events, on_point=on_point, stop=stop)
     say = progress or (lambda message: None)
     seconds: dict[str, float] = {}
     notes: list[str] = []
@@ -448,13 +634,16 @@ def tweezers_branches(options: TweezersOptions,
     free_records = tweezers_records(rod, rod, False, probe)
     events = (onset_event(probe),) if probe is not None else ()
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
-                                    parameter_bounds=opts.turns, max_points=opts.segment_points,
+                                    parameter_bounds=opts.turns,
+                                    max_points=min(opts.segment_points, opts.max_points),
                                     event_tolerance=opts.event_tolerance)
     # The contact-free runs end at the first point past a located contact onset (the
     # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
     # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
     free_point, past_onset = (stop_after_onset(on_point) if probe is not None
                               else (on_point, None))
+    pinned = pin_stop(rod)
+    free_stop = either(past_onset, pinned)
     branches: list[Branch] = []
     start = time.perf_counter()
     if opts.load_control:
@@ -475,21 +664,21 @@ def tweezers_branches(options: TweezersOptions,
         free_name = "buckled"
         start = time.perf_counter()
         free_complete = stored.get(free_name, (None, False))[1]
-        first = resumed(rod, free_name, free_opts, free_records, events)
+        first = resumed(rod, free_name, free_opts, free_records, events, free_stop)
         if first is not None:
             say(f"{free_name}: continued from point {len(stored[free_name][0]) - 1}")
-        direction = _rotated_mode(point.critical_modes[0])
+        direction, node = _rotated_mode(point.critical_modes[0])
         for amplitude in SWITCH_AMPLITUDES if first is None and not free_complete else ():
             if amplitude == SWITCH_AMPLITUDES[0]:
                 say(f"{free_name}: switched from the straight rod at {point.parameter:.6g} "
                     "turns")
             rod.turns = point.parameter
-            set_pin(rod, rod, point.q + 1e-3 * direction)
+            _pin_node(rod, node)
             first = switch_branch(rod, straight, point,
                                   dataclasses.replace(free_opts, initial_step=amplitude),
                                   direction=direction, amplitude=amplitude, name=free_name,
                                   records=free_records, events=events, on_point=free_point,
-                                  stop=past_onset)
+                                  stop=free_stop)
             if len(first):
                 break
         if not free_complete and not len(first):
@@ -502,7 +691,7 @@ def tweezers_branches(options: TweezersOptions,
         free_name = "clamped"
         say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")
         free_complete = stored.get(free_name, (None, False))[1]
-        first = resumed(rod, free_name, free_opts, free_records, events)
+        first = resumed(rod, free_name, free_opts, free_records, events, free_stop)
     if not opts.load_control and first is None and not free_complete:
         set_pin(rod, rod, q0)
         res = newton(rod, q0, NewtonOptions(mode="stationary"))
@@ -513,7 +702,7 @@ def tweezers_branches(options: TweezersOptions,
         rod.accept(res.q)
         first = continuation(rod, res.q, res.multipliers, parameter="turns", options=free_opts,
                              name=free_name, records=free_records, events=events,
-                             on_point=free_point, stop=past_onset)
+                             on_point=free_point, stop=free_stop)
     old, free_complete = stored.get(free_name, (None, False))
     if free_complete:
         free, free_pins = old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
@@ -522,7 +711,7 @@ def tweezers_branches(options: TweezersOptions,
                                  stop=_onset_stop if probe is not None else None,
                                  max_points=opts.max_points,
                                  segment_points=opts.segment_points, on_point=free_point,
-                                 quality=PIN_QUALITY, refuse=past_onset)
+                                 quality=PIN_QUALITY, refuse=free_stop)
     onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
@@ -557,7 +746,8 @@ def tweezers_branches(options: TweezersOptions,
     set_pin(cp, rod, q)
     contact_opts = ContinuationOptions(
         initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
-        max_step=opts.contact_max_step * D, max_points=opts.segment_points,
+        max_step=opts.contact_max_step * D,
+        max_points=min(opts.segment_points, opts.max_points),
         parameter_bounds=opts.turns, direction=1 if free.tangents[k, -1] >= 0 else -1,
         parameter_weight=D, tolerance=opts.contact_tolerance,
         event_tolerance=opts.contact_event_tolerance,
@@ -568,18 +758,19 @@ def tweezers_branches(options: TweezersOptions,
     if contact_complete:
         contact, contact_pins = old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
     else:
-        first = resumed(cp, contact_name, contact_opts, contact_records, contact_events)
+        first = resumed(cp, contact_name, contact_opts, contact_records, contact_events,
+                        pinned)
         if first is not None:
             say(f"{contact_name}: continued from point {len(old) - 1}")
         else:
             first = continuation(cp, q, parameter="turns", options=contact_opts,
                                  name=contact_name, records=contact_records,
-                                 events=contact_events, on_point=on_point)
+                                 events=contact_events, on_point=on_point, stop=pinned)
         contact, contact_pins = follow(cp, rod, first, contact_opts, contact_name,
                                        contact_records, contact_events,
                                        max_points=opts.max_points,
                                        segment_points=opts.segment_points, on_point=on_point,
-                                       quality=PIN_QUALITY)
+                                       quality=PIN_QUALITY, refuse=pinned)
         contact = classify_contact_events(contact, cp)
     contact = dataclasses.replace(contact, parent=free_name, origin=onset)
     seconds[contact_name] = time.perf_counter() - start

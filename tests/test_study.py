@@ -514,6 +514,10 @@ def test_tweezers_study():
     opts = study.tweezers_options()
     assert opts.tension == 20.0 and opts.turns == (0.0, 1.6) and opts.n_nodes == 40
     assert opts.free_max_step == 0.1  # TweezersOptions' default
+    from supercoil.problems.tweezers import TweezersOptions
+
+    # runs as long as the library's (the pin is checked at every point since session 9)
+    assert opts.segment_points == TweezersOptions.segment_points == 2000
     assert study.settings["continuation"]["max_points"] == 400
     for edit, words in [
         (("tension = 20.0", "tension = 20.0\nend_distance = 0.5"), "exactly one of tension"),

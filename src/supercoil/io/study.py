@@ -194,8 +194,9 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
                                    kinds=("ring_diagram",)),
         "max_points": _Key("an integer >= 2 (points per branch)", _count(2, 100_000), 400,
                            kinds=("tweezers",)),
-        "segment_points": _Key("an integer >= 2 (points per run between azimuth-pin checks)",
-                               _count(2, 100_000), 30, kinds=("tweezers",)),
+        "segment_points": _Key("an integer >= 2 (the most points per continuation run; the "
+                               "azimuth pin is checked at every point)",
+                               _count(2, 100_000), 2000, kinds=("tweezers",)),
         "event_tolerance": _Key("a positive arclength tolerance", _POSITIVE, 1e-8,
                                 kinds=("ring_diagram", "tweezers"), convert=float),
         "contact_event_tolerance": _Key("a positive arclength tolerance", _POSITIVE, 1e-6,

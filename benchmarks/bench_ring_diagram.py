@@ -25,7 +25,10 @@ cache loads, figures and files included), and prints its wall time and the
 branches' seconds from ``diagram.json``; ``--repeat K [--against SRC]`` runs it
 K times, alternating with the source tree SRC (a ``src`` folder put on
 ``PYTHONPATH``), and prints the smallest and median times (``bench_tweezers``'s
-``repeated``).
+``repeated``). ``--bytecode`` first writes the bytecode of the timed trees
+(``bench_tweezers.compile_trees``): with ``PYTHONDONTWRITEBYTECODE`` set, as on the
+development machine, every run would otherwise compile the edited modules again
+(tens of ms), which an installed package never does.
 """
 
 from __future__ import annotations
@@ -52,6 +55,7 @@ def main(argv=None) -> int:
     parser.add_argument("--command", action="store_true")
     parser.add_argument("--repeat", type=int, default=0)
     parser.add_argument("--against", metavar="SRC", default=None)
+    parser.add_argument("--bytecode", action="store_true")
     args = parser.parse_args(argv)
     if args.command or args.repeat:
         return whole_command(args)
@@ -102,7 +106,10 @@ def whole_command(args) -> int:
     import tempfile
     from pathlib import Path
 
-    from bench_tweezers import repeated, timed_command
+    from bench_tweezers import compile_trees, repeated, timed_command
+
+    if args.bytecode:
+        compile_trees([None] + ([args.against] if args.against else []))
 
     def cmd_for(out: Path) -> list[str]:
         return [sys.executable, "-m", "supercoil.cli.main", "diagram", "ring", "--twist-ratio",

@@ -86,25 +86,39 @@ class Segment:
         return list(self._points)
 
     def start(self, u: float) -> np.ndarray:
-        """Warm corrector start at ``u``: the chord between the corrected points nearest
-        to ``u`` on either side (it lies on the hyperplane of ``u``, as any point of a
-        chord between two of them does).
+        """Warm corrector start at ``u``: the quadratic (Lagrange, in ``u``) through the
+        corrected points nearest to ``u`` on either side and the next nearest one, or
+        the chord between the two while there are only the segment's ends. It lies on
+        the hyperplane of ``u``: the Lagrange weights ``w_i`` sum to one and
+        ``sum w_i u_i = u``, and the hyperplane's condition is linear.
 
-        As a bracket shrinks, this chord is within ``O(width^2)`` of the branch, so
+        As a bracket shrinks, the chord is within ``O(width^2)`` of the branch, so
         the corrector needs one or two iterations instead of the four or five from
         the segment's own chord (measured on the tweezers' contact branch, where
-        Brent's method on a contact count's indicator bisects 10-14 times). Used
-        for user events (:func:`locate_user_event`); folds and bifurcations keep the
-        segment's chord: a bifurcation point moved within the tolerance turns the
-        critical mode of a double eigenvalue (the circle's), and the switched branch
-        with it (measured: the ring's beta branch then lost a bifurcation point at
-        a contact release 1e-4 away).
+        Brent's method on a contact count's indicator bisects 10-14 times); the
+        quadratic, within ``O(width^3)`` where the branch is smooth, saves a third
+        of what remains (measured, user events of the tweezers benchmark at N = 100
+        and of the ring diagram at N = 200: 97 -> 65 and 103 -> 81 corrector
+        iterations; docs/benchmarks.md, Session 9 (events9)). Used for user events
+        (:func:`locate_user_event`); folds and bifurcations keep the segment's
+        chord: a bifurcation point moved within the tolerance turns the critical
+        mode of a double eigenvalue (the circle's), and the switched branch with it
+        (measured: the ring's beta branch then lost a bifurcation point at a contact
+        release 1e-4 away), and a fold's point corrected from a warm start stops at
+        the corrector's tolerance where the cold one lands at round-off (measured
+        on Bratu, N = 16: the fold's parameter moved by 9e-11).
         """
         known = np.array(sorted(self._points))
         above = min(max(int(np.searchsorted(known, u)), 1), known.size - 1)
-        lo, hi = known[above - 1], known[above]
-        x_lo, x_hi = self._points[lo], self._points[hi]
-        return x_lo + (u - lo) / (hi - lo) * (x_hi - x_lo)
+        nodes = [known[above - 1], known[above]]
+        others = np.delete(known, [above - 1, above])
+        if others.size:
+            nodes.append(others[np.argmin(np.abs(others - u))])
+        x = np.zeros_like(self.x_a)
+        for i, u_i in enumerate(nodes):
+            weight = np.prod([(u - u_j) / (u_i - u_j) for j, u_j in enumerate(nodes) if j != i])
+            x += weight * self._points[u_i]
+        return x
 
     def point(self, u: float, warm: bool = False) -> np.ndarray:
         """The branch's point at ``u``, corrected from the segment's chord or, with
@@ -176,25 +190,19 @@ def _brent(f, lo: float, hi: float, xtol: float) -> float:
 
 
 RTOL = 4 * np.finfo(float).eps
-# the end-game probe of :func:`_zeroin`, in units of its half stopping width delta: below
-# 2 (the bracket [x, x + PROBE delta] then meets the stopping rule |x_other - x| < 2 delta)
-PROBE = 1.9
 
 
 def _zeroin(f: Callable[[float], float], lo: float, hi: float, xtol: float,
             f_lo: float | None = None, f_hi: float | None = None,
             guess: float | None = None, maxiter: int = 200) -> float:
     """A zero of ``f`` in ``[lo, hi]`` by Brent's method, as scipy's ``brentq`` (the same
-    stopping rule: the returned point ``x`` is the end with the
-    smaller ``|f|`` of a bracket ``[x, x_other]`` with a sign change and
-    ``|x_other - x| < xtol + RTOL |x|``, or an exact zero), with two differences.
+    steps, the same result without ``guess``, and the same stopping rule: the returned
+    point ``x`` is the end with the smaller ``|f|`` of a bracket ``[x, x_other]`` with a
+    sign change and ``|x_other - x| < xtol + RTOL |x|``, or an exact zero), with two
+    differences.
 
     * ``f_lo``, ``f_hi``: the values at the ends when they are known (accepted
       points' user values, tangents), so that they are not evaluated.
-    * An interpolation step shorter than ``PROBE delta`` (the zero estimated
-      within the stopping width ``2 delta = xtol + RTOL |x|``) is replaced by a
-      step of ``PROBE delta`` towards the contrapoint: the bracket then closes
-      with that evaluation when the estimate is right.
     * ``guess``: a first iterate inside the bracket (e.g. the zero of a Hermite
       interpolant, :func:`_fold_guess`), evaluated before any other point. The
       method then continues with inverse quadratic interpolation through the
@@ -243,13 +251,7 @@ def _zeroin(f: Callable[[float], float], lo: float, hi: float, xtol: float,
                 d_pre = (f_pre - f_cur) / (x_pre - x_cur)
                 d_blk = (f_blk - f_cur) / (x_blk - x_cur)
                 s_try = -f_cur * (f_blk * d_blk - f_pre * d_pre) / (d_blk * d_pre * (f_blk - f_pre))
-            if abs(s_try) < PROBE * delta:
-                # the zero is estimated within the stopping width of x_cur: probe at
-                # almost that width towards the contrapoint, so that the bracket closes
-                # with this evaluation if the estimate is right (brentq steps to the
-                # estimate, or by delta, and usually needs one evaluation more)
-                s_pre, s_cur = s_cur, PROBE * delta * np.sign(s_bis)
-            elif 2 * abs(s_try) < min(abs(s_pre), 3 * abs(s_bis) - delta):
+            if 2 * abs(s_try) < min(abs(s_pre), 3 * abs(s_bis) - delta):
                 s_pre, s_cur = s_cur, s_try
             else:
                 s_pre = s_cur = s_bis

@@ -7,7 +7,9 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
 
 * a **fold** is a sign change of ``dlambda/ds`` (the tangent's last
   component, oriented along ``d``), located by Brent's method (secant steps
-  safeguarded by bisection) on ``u`` to ``event_tolerance`` in arclength;
+  safeguarded by bisection) on ``u`` to ``event_tolerance`` in arclength,
+  started from the extremum of the cubic Hermite interpolant of ``lambda``
+  through the ends (:func:`_fold_guess`);
 * a **bifurcation** is a change of the unstable count that a fold does not
   explain (a fold changes it by exactly one). Bisection on the exact inertia
   count (seed 000; pairs of eigenvalues crossing together are seen, unlike
@@ -184,12 +186,12 @@ class Located:
     resume: float | None = None  # where to search for a further count change
 
 
+RTOL = 4 * np.finfo(float).eps  # brentq's rtol here: the root's relative round-off
+
+
 def _brent(f, lo: float, hi: float, xtol: float) -> float:
     """scipy's ``brentq`` with this module's tolerances (the reference for :func:`_zeroin`)."""
     return float(brentq(f, lo, hi, xtol=xtol, rtol=RTOL, maxiter=200))
-
-
-RTOL = 4 * np.finfo(float).eps
 
 
 def _zeroin(f: Callable[[float], float], lo: float, hi: float, xtol: float,

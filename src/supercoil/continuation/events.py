@@ -7,7 +7,9 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
 
 * a **fold** is a sign change of ``dlambda/ds`` (the tangent's last
   component, oriented along ``d``), located by Brent's method (secant steps
-  safeguarded by bisection) on ``u`` to ``event_tolerance`` in arclength;
+  safeguarded by bisection) on ``u`` to ``event_tolerance`` in arclength,
+  started from the extremum of the cubic Hermite interpolant of ``lambda``
+  through the ends (:func:`_fold_guess`);
 * a **bifurcation** is a change of the unstable count that a fold does not
   explain (a fold changes it by exactly one). Bisection on the exact inertia
   count (seed 000; pairs of eigenvalues crossing together are seen, unlike
@@ -76,6 +78,9 @@ class Segment:
         self._counts: dict[float, int] = {}
         self._nearest: dict[float, float] = {}
         self._tangents: dict[float, np.ndarray] = {}
+        # user events' values at trial points, by id(event) and fraction (all of an
+        # event's labels come from one evaluation)
+        self.user_values: dict[int, dict[float, dict[str, float]]] = {}
 
     @property
     def corrected(self) -> list[float]:
@@ -83,25 +88,39 @@ class Segment:
         return list(self._points)
 
     def start(self, u: float) -> np.ndarray:
-        """Warm corrector start at ``u``: the chord between the corrected points nearest
-        to ``u`` on either side (it lies on the hyperplane of ``u``, as any point of a
-        chord between two of them does).
+        """Warm corrector start at ``u``: the quadratic (Lagrange, in ``u``) through the
+        corrected points nearest to ``u`` on either side and the next nearest one, or
+        the chord between the two while there are only the segment's ends. It lies on
+        the hyperplane of ``u``: the Lagrange weights ``w_i`` sum to one and
+        ``sum w_i u_i = u``, and the hyperplane's condition is linear.
 
-        As a bracket shrinks, this chord is within ``O(width^2)`` of the branch, so
+        As a bracket shrinks, the chord is within ``O(width^2)`` of the branch, so
         the corrector needs one or two iterations instead of the four or five from
         the segment's own chord (measured on the tweezers' contact branch, where
-        Brent's method on a contact count's indicator bisects 10-14 times). Used
-        for user events (:func:`locate_user_event`); folds and bifurcations keep the
-        segment's chord: a bifurcation point moved within the tolerance turns the
-        critical mode of a double eigenvalue (the circle's), and the switched branch
-        with it (measured: the ring's beta branch then lost a bifurcation point at
-        a contact release 1e-4 away).
+        Brent's method on a contact count's indicator bisects 10-14 times); the
+        quadratic, within ``O(width^3)`` where the branch is smooth, saves a third
+        of what remains (measured, user events of the tweezers benchmark at N = 100
+        and of the ring diagram at N = 200: 97 -> 65 and 103 -> 81 corrector
+        iterations; docs/benchmarks.md, Session 9 (events9)). Used for user events
+        (:func:`locate_user_event`); folds and bifurcations keep the segment's
+        chord: a bifurcation point moved within the tolerance turns the critical
+        mode of a double eigenvalue (the circle's), and the switched branch with it
+        (measured: the ring's beta branch then lost a bifurcation point at a contact
+        release 1e-4 away), and a fold's point corrected from a warm start stops at
+        the corrector's tolerance where the cold one lands at round-off (measured
+        on Bratu, N = 16: the fold's parameter moved by 9e-11).
         """
         known = np.array(sorted(self._points))
         above = min(max(int(np.searchsorted(known, u)), 1), known.size - 1)
-        lo, hi = known[above - 1], known[above]
-        x_lo, x_hi = self._points[lo], self._points[hi]
-        return x_lo + (u - lo) / (hi - lo) * (x_hi - x_lo)
+        nodes = [known[above - 1], known[above]]
+        others = np.delete(known, [above - 1, above])
+        if others.size:
+            nodes.append(others[np.argmin(np.abs(others - u))])
+        x = np.zeros_like(self.x_a)
+        for i, u_i in enumerate(nodes):
+            weight = np.prod([(u - u_j) / (u_i - u_j) for j, u_j in enumerate(nodes) if j != i])
+            x += weight * self._points[u_i]
+        return x
 
     def point(self, u: float, warm: bool = False) -> np.ndarray:
         """The branch's point at ``u``, corrected from the segment's chord or, with
@@ -167,14 +186,116 @@ class Located:
     resume: float | None = None  # where to search for a further count change
 
 
+RTOL = 4 * np.finfo(float).eps  # brentq's rtol here: the root's relative round-off
+
+
 def _brent(f, lo: float, hi: float, xtol: float) -> float:
-    return float(brentq(f, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200))
+    """scipy's ``brentq`` with this module's tolerances (the reference for :func:`_zeroin`)."""
+    return float(brentq(f, lo, hi, xtol=xtol, rtol=RTOL, maxiter=200))
+
+
+def _zeroin(f: Callable[[float], float], lo: float, hi: float, xtol: float,
+            f_lo: float | None = None, f_hi: float | None = None,
+            guess: float | None = None, maxiter: int = 200) -> float:
+    """A zero of ``f`` in ``[lo, hi]`` by Brent's method, as scipy's ``brentq`` (the same
+    steps, the same result without ``guess``, and the same stopping rule: the returned
+    point ``x`` is the end with the smaller ``|f|`` of a bracket ``[x, x_other]`` with a
+    sign change and ``|x_other - x| < xtol + RTOL |x|``, or an exact zero), with two
+    differences.
+
+    * ``f_lo``, ``f_hi``: the values at the ends when they are known (accepted
+      points' user values, tangents), so that they are not evaluated.
+    * ``guess``: a first iterate inside the bracket (e.g. the zero of a Hermite
+      interpolant, :func:`_fold_guess`), evaluated before any other point. The
+      method then continues with inverse quadratic interpolation through the
+      guess and both ends (the guess being the current iterate, the end of its
+      sign the previous one, the other end the contrapoint), so a good guess
+      saves the first secant steps.
+
+    Raises ValueError when the end values have the same sign (as ``brentq``).
+    """
+    f_lo = f(lo) if f_lo is None else f_lo
+    f_hi = f(hi) if f_hi is None else f_hi
+    if f_lo == 0:
+        return lo
+    if f_hi == 0:
+        return hi
+    if f_lo * f_hi > 0:
+        raise ValueError("f(lo) and f(hi) must have different signs")
+    x_pre, f_pre, x_cur, f_cur = lo, f_lo, hi, f_hi
+    x_blk, f_blk, s_pre, s_cur = 0.0, 0.0, 0.0, 0.0
+    if guess is not None and min(lo, hi) < guess < max(lo, hi):
+        f_g = f(guess)
+        if f_g == 0:
+            return guess
+        # the end of the guess's sign is the previous iterate, the other the contrapoint
+        same, other = ((lo, f_lo), (hi, f_hi)) if np.signbit(f_g) == np.signbit(f_lo) \
+            else ((hi, f_hi), (lo, f_lo))
+        x_pre, f_pre = same
+        x_blk, f_blk = other
+        x_cur, f_cur = guess, f_g
+        s_pre = s_cur = hi - lo  # as brentq's start: interpolation allowed at once
+    for _ in range(maxiter):
+        if f_pre != 0 and f_cur != 0 and np.signbit(f_pre) != np.signbit(f_cur):
+            x_blk, f_blk = x_pre, f_pre
+            s_pre = s_cur = x_cur - x_pre
+        if abs(f_blk) < abs(f_cur):
+            x_pre, x_cur, x_blk = x_cur, x_blk, x_cur
+            f_pre, f_cur, f_blk = f_cur, f_blk, f_cur
+        delta = 0.5 * (xtol + RTOL * abs(x_cur))
+        s_bis = 0.5 * (x_blk - x_cur)
+        if f_cur == 0 or abs(s_bis) < delta:
+            return x_cur
+        if abs(s_pre) > delta and abs(f_cur) < abs(f_pre):
+            if x_pre == x_blk:  # secant
+                s_try = -f_cur * (x_cur - x_pre) / (f_cur - f_pre)
+            else:  # inverse quadratic interpolation
+                d_pre = (f_pre - f_cur) / (x_pre - x_cur)
+                d_blk = (f_blk - f_cur) / (x_blk - x_cur)
+                s_try = -f_cur * (f_blk * d_blk - f_pre * d_pre) / (d_blk * d_pre * (f_blk - f_pre))
+            if 2 * abs(s_try) < min(abs(s_pre), 3 * abs(s_bis) - delta):
+                s_pre, s_cur = s_cur, s_try
+            else:
+                s_pre = s_cur = s_bis
+        else:
+            s_pre = s_cur = s_bis
+        x_pre, f_pre = x_cur, f_cur
+        x_cur += s_cur if abs(s_cur) > delta else (delta if s_bis > 0 else -delta)
+        f_cur = f(x_cur)
+    return x_cur
+
+
+def _fold_guess(segment: Segment, t_a: np.ndarray, t_b: np.ndarray) -> float | None:
+    """Zero in ``(0, 1)`` of ``dlambda/du`` of the cubic Hermite interpolant of
+    ``lambda(u)`` through the segment's ends (None if there is none).
+
+    With ``x(s)`` on the branch, ``du/ds = row . t`` (the hyperplane's row), so the
+    ends' slopes are ``m = t_lambda / (row . t)``. The interpolant's derivative is
+    ``p(u) = 6 u (u - 1) (lambda_a - lambda_b) + m_a (3u^2 - 4u + 1) + m_b (3u^2 - 2u)``,
+    a quadratic with ``p(0) = m_a`` and ``p(1) = m_b`` of opposite signs: one zero in
+    ``(0, 1)``. It is exact for a parabola ``lambda(u)`` (a fold's leading term), so
+    its error is of the order of the branch's cubic term, where the secant of
+    ``t_lambda`` (Brent's first step) errs by the quadratic one.
+    """
+    r_a, r_b = float(segment.row @ t_a), float(segment.row @ t_b)
+    if not (r_a > 0 and r_b > 0):
+        return None
+    m_a, m_b = t_a[-1] / r_a, t_b[-1] / r_b
+    jump = segment.x_a[-1] - segment.x_b[-1]
+    coefficients = (6 * jump + 3 * (m_a + m_b), -6 * jump - 4 * m_a - 2 * m_b, m_a)
+    roots = np.roots(coefficients) if coefficients[0] != 0 else np.roots(coefficients[1:])
+    inside = [float(r.real) for r in np.atleast_1d(roots)
+              if abs(r.imag) <= 1e-12 * max(1.0, abs(r)) and 0.0 < r.real < 1.0]
+    return inside[0] if len(inside) == 1 else None
 
 
 def locate_fold(segment: Segment, xtol: float) -> Located:
-    """Root of ``dlambda/ds`` on the segment."""
+    """Root of ``dlambda/ds`` on the segment: Brent's method (:func:`_zeroin`) started
+    from the zero of the Hermite interpolant of ``lambda`` (:func:`_fold_guess`)."""
     try:
-        u = _brent(lambda u: segment.tangent(u)[-1], 0.0, 1.0, xtol)
+        t_a, t_b = segment.tangent(0.0), segment.tangent(1.0)
+        u = _zeroin(lambda u: segment.tangent(u)[-1], 0.0, 1.0, xtol, t_a[-1], t_b[-1],
+                    _fold_guess(segment, t_a, t_b))
         return Located("fold", "fold", u, segment.point(u), segment.tangent(u), True)
     except (LocationFailed, ValueError):
         return Located("fold", "fold", 1.0, segment.x_b, None, False)
@@ -276,21 +397,24 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
         lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, max(switch_below, xtol))
         f_lo, f_hi = segment.nearest_eigenvalue(lo), segment.nearest_eigenvalue(hi)
         if np.isfinite(f_lo) and np.isfinite(f_hi) and f_lo * f_hi < 0:
-            u = _brent(segment.nearest_eigenvalue, lo, hi, xtol)
+            u = _zeroin(segment.nearest_eigenvalue, lo, hi, xtol, f_lo, f_hi)
         else:
             lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, xtol)
             u = hi  # the first point found with the new count (already corrected)
         resume = hi
-        x = segment.point(u)
-        try:
-            t = segment.tangent(u)
-        except LocationFailed:
-            # [K, F_lambda] has a two-dimensional kernel at a bifurcation point: the
-            # bordered matrix may be exactly singular there; use the secant instead
-            t = segment.d / segment.length
-        return Located("bifurcation", "bifurcation", u, x, t, True, c_lo, c_hi, resume=resume)
+        return Located("bifurcation", "bifurcation", u, segment.point(u),
+                       _tangent_or_secant(segment, u), True, c_lo, c_hi, resume=resume)
     except LocationFailed:
         return Located("bifurcation", "bifurcation", 1.0, segment.x_b, None, False)
+
+
+def _tangent_or_secant(segment: Segment, u: float) -> np.ndarray:
+    try:
+        return segment.tangent(u)
+    except LocationFailed:
+        # [K, F_lambda] has a two-dimensional kernel at a bifurcation point: the
+        # bordered matrix may be exactly singular there; use the secant instead
+        return segment.d / segment.length
 
 
 def user_values(event: UserEvent, system: ExtendedSystem, x: np.ndarray) -> dict[str, float]:
@@ -299,22 +423,30 @@ def user_values(event: UserEvent, system: ExtendedSystem, x: np.ndarray) -> dict
             event.function(system.q(x), system.multipliers(x), float(x[-1])).items()}
 
 
-def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: float) -> Located:
-    """Root of the event's value ``label`` on the segment (Brent's method).
+def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: float,
+                      ends: tuple[Mapping[str, float], Mapping[str, float]] | None = None
+                      ) -> Located:
+    """Root of the event's value ``label`` on the segment (Brent's method, :func:`_zeroin`).
 
     The bracket is first narrowed to the tightest pair of points already
     corrected on the segment (by earlier localisations) between which the
     value changes sign: two indicators of one transition (a contact point
     turning into an interval changes two counts) then cost one localisation
-    and a few evaluations, not two.
+    and a few evaluations, not two. The event's values at each trial point are
+    kept on the segment for the other labels (one evaluation of all of them per
+    point); ``ends``: its values at the accepted ends, when known.
     """
-    values: dict[float, float] = {}
+    known_values = segment.user_values.setdefault(id(event), {})
+    if ends is not None:
+        known_values.setdefault(0.0, dict(ends[0]))
+        known_values.setdefault(1.0, dict(ends[1]))
 
     def value(u):
         u = float(u)
-        if u not in values:
-            values[u] = user_values(event, segment.system, segment.point(u, warm=True))[label]
-        return values[u]
+        if u not in known_values:
+            known_values[u] = user_values(event, segment.system,
+                                          segment.point(u, warm=True))
+        return known_values[u][label]
 
     try:
         lo, hi = 0.0, 1.0
@@ -324,7 +456,7 @@ def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: floa
             if f_a * f_b < 0:
                 lo, hi = a, b
                 break
-        u = _brent(value, lo, hi, xtol)
+        u = _zeroin(value, lo, hi, xtol)
         return Located(event.kind, label, u, segment.point(u), segment.tangent(u), True)
     except (LocationFailed, ValueError):
         return Located(event.kind, label, 1.0, segment.x_b, None, False)

@@ -239,7 +239,8 @@ class _Tracer:
         for event, before, after in zip(self.events, self.user[k], self.user[k + 1]):
             for label in before:
                 if label in after and before[label] * after[label] < 0:
-                    found.append(locate_user_event(segment, event, label, xtol))
+                    found.append(locate_user_event(segment, event, label, xtol,
+                                                   (before, after)))
         for ev in sorted(found, key=lambda e: e.u):
             self.specials.append(self._special(ev, k, segment))
             self.system.set_parameter(x_b[-1])

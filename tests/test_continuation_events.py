@@ -1,0 +1,219 @@
+"""Localisation of special points on a segment (supercoil.continuation.events): exact answers
+and the number of evaluations against scipy's brentq (the previous root finder) on the
+same functions."""
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from test_continuation_toys import Bratu, DiagonalQuartic
+
+from supercoil.continuation import ContinuationOptions, continuation, events
+from supercoil.continuation.events import (
+    Segment,
+    UserEvent,
+    _brent,
+    _zeroin,
+    locate_count_change,
+    locate_fold,
+    locate_user_event,
+)
+from supercoil.continuation.system import ExtendedSystem
+
+
+class Counted:
+    def __init__(self, f):
+        self.f, self.points = f, []
+
+    def __call__(self, u):
+        self.points.append(float(u))
+        return self.f(u)
+
+
+SMOOTH = [  # (function, exact root in (0, 1))
+    (lambda u: np.tan(u - 0.3), 0.3),
+    (lambda u: np.exp(u) - 1.5, np.log(1.5)),
+    (lambda u: (u - 0.77) ** 3 + 0.01 * (u - 0.77), 0.77),
+    (lambda u: np.sin(2 * u) - 0.3, np.arcsin(0.3) / 2),
+    (lambda u: 1.0 / (u + 0.1) - 2.5, 0.3),
+]
+
+
+def _bracket_closes(f, points, x, xtol):
+    """brentq's guarantee: an evaluated point within xtol (+ round-off) of x with the
+    other sign of f (or f(x) = 0)."""
+    fx = f(x)
+    return fx == 0 or any(abs(p - x) <= xtol * (1 + 1e-9) + 1e-15 and f(p) * fx < 0
+                          for p in points)
+
+
+@pytest.mark.parametrize("xtol", [1e-2, 1e-6, 1e-10])
+def test_zeroin_without_a_guess_is_brentq(xtol):
+    """Oracle: scipy's brentq (the same steps: the same points evaluated, the same
+    result) and the exact roots; known end values are not evaluated again."""
+    for f, root in SMOOTH:
+        reference, counted = Counted(f), Counted(f)
+        x_ref = brentq(reference, 0.0, 1.0, xtol=xtol, rtol=events.RTOL)
+        x = _zeroin(counted, 0.0, 1.0, xtol)
+        assert x == x_ref and counted.points == reference.points
+        assert abs(x - root) <= xtol and _bracket_closes(f, counted.points, x, xtol)
+        known = Counted(f)
+        assert _zeroin(known, 0.0, 1.0, xtol, f(0.0), f(1.0)) == x_ref
+        assert known.points == reference.points[2:]
+
+
+def test_zeroin_from_a_guess_within_the_tolerance_needs_two_evaluations():
+    xtol = 1e-8
+    for f, root in SMOOTH:
+        for offset in (-0.4, 0.3):
+            counted = Counted(f)
+            x = _zeroin(counted, 0.0, 1.0, xtol, f(0.0), f(1.0), root + offset * xtol)
+            assert len(counted.points) == 2
+            assert abs(x - root) <= xtol and _bracket_closes(f, counted.points, x, xtol)
+        # a poor guess still ends with the guarantee
+        counted = Counted(f)
+        x = _zeroin(counted, 0.0, 1.0, xtol, f(0.0), f(1.0), 0.5 * (root + 1.0))
+        assert abs(x - root) <= xtol and _bracket_closes(f, counted.points, x, xtol)
+    # a step function: bisection, as brentq
+    step = Counted(lambda u: 0.5 if u > 0.4321 else -0.5)
+    reference = Counted(step.f)
+    x = _zeroin(step, 0.0, 1.0, 1e-6)
+    brentq(reference, 0.0, 1.0, xtol=1e-6, rtol=events.RTOL)
+    assert abs(x - 0.4321) <= 1e-6 and len(step.points) == len(reference.points)
+
+
+def _fold_segment(n, max_step):
+    p = Bratu(n, 3.0)
+    b = continuation(p, np.zeros(n + 1), parameter="lam", options=ContinuationOptions(
+        parameter_bounds=(3.0, 4.0), initial_step=0.05, max_step=max_step))
+    t = b.tangents[:, -1]
+    k = int(np.flatnonzero(t[:-1] * t[1:] < 0)[0])
+    system = ExtendedSystem(p, "lam", b.states[k])
+    x_a = system.pack(b.states[k], b.multipliers[k], b.parameter_values[k])
+    x_b = system.pack(b.states[k + 1], b.multipliers[k + 1], b.parameter_values[k + 1])
+    return system, x_a, x_b
+
+
+def test_bratu_fold_is_located_as_by_brentq_with_fewer_corrections():
+    """Oracle: brentq on the same segment's dlambda/ds (the previous algorithm) and the
+    Moore-Spence fold of the discrete problem (tests/test_continuation.py). The Hermite
+    guess and the end-game probe never cost more trial corrections here, and fewer in
+    all (measured: 104 -> 83 over N = 16, 32, 64 and four step sizes)."""
+    from test_continuation import moore_spence_fold
+
+    total_reference = total = 0
+    for n, max_step in ((16, 0.5), (32, 0.05), (32, 0.2)):
+        system, x_a, x_b = _fold_segment(n, max_step)
+        exact = moore_spence_fold(n)
+        for tolerance in (1e-6, 1e-10):
+            reference = Segment(system, x_a, x_b, 1e-10, 10, 1e-6)
+            segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-6)
+            xtol = tolerance / segment.length
+            u_ref = _brent(lambda u, r=reference: r.tangent(u)[-1], 0.0, 1.0, xtol)
+            located = locate_fold(segment, xtol)
+            assert located.located
+            # both within xtol of the zero of dlambda/ds
+            assert abs(located.u - u_ref) * segment.length <= 2 * tolerance
+            assert abs(located.x[-1] - exact) < 1e-11
+            n_reference = len(reference.corrected) - 2
+            n_new = len(segment.corrected) - 2
+            assert n_new <= n_reference
+            total_reference += n_reference
+            total += n_new
+    assert total < total_reference
+
+
+def test_pitchfork_of_the_diagonal_problem_at_its_exact_parameter():
+    """Oracle: lambda = d_0 exactly (the trivial branch x = 0, eigenvalue d_0 - lambda);
+    the localisation with brentq in place of _zeroin (the previous algorithm) uses at
+    least as many eigenproblems."""
+    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
+    p = DiagonalQuartic(d)
+    system = ExtendedSystem(p, "lam", np.zeros(6))
+    calls = {}
+    for name, finder in (("new", None), ("brentq", lambda f, lo, hi, xtol, *a: _brent(
+            f, lo, hi, xtol))):
+        for lam_a, lam_b in ((0.8, 1.3), (0.55, 1.7)):
+            x_a = system.pack(np.zeros(6), np.zeros(0), lam_a)
+            x_b = system.pack(np.zeros(6), np.zeros(0), lam_b)
+            segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
+            original = events._zeroin
+            if finder is not None:
+                events._zeroin = finder
+            try:
+                located = locate_count_change(segment, 1e-10 / segment.length, 1e-3)
+            finally:
+                events._zeroin = original
+            assert located.located and (located.count_before, located.count_after) == (0, 1)
+            assert abs(located.x[-1] - 1.0) <= 1e-10 * (1 + 1e-6)
+            calls[name, lam_a] = len(segment._nearest)
+    for lam_a in (0.8, 0.55):
+        assert calls["new", lam_a] <= calls["brentq", lam_a]
+
+
+def test_user_event_labels_share_evaluations_and_locate_an_exact_threshold():
+    """Oracle: the branch's parameter crosses lambda* = the mean of the ends' at a point
+    found by brentq to 1e-14 on a reference segment; the event's two labels (the
+    threshold and its negative) are located within the tolerance of it, the user
+    function evaluated once per trial point for both, never at the ends (known)."""
+    p = Bratu(16, 3.0)
+    b = continuation(p, np.zeros(17), parameter="lam", options=ContinuationOptions(
+        parameter_bounds=(3.0, 4.0), initial_step=0.05, max_step=0.5))
+    system = ExtendedSystem(p, "lam", b.states[1])
+    # a segment before the fold: lambda increases along it
+    x_a = system.pack(b.states[1], b.multipliers[1], b.parameter_values[1])
+    x_b = system.pack(b.states[2], b.multipliers[2], b.parameter_values[2])
+    lam_a, lam_b = x_a[-1], x_b[-1]
+    assert lam_b > lam_a
+    star = 0.5 * (lam_a + lam_b)
+    calls = []
+
+    def function(q, mu, lam):
+        calls.append(lam)
+        return {"up": lam - star, "down": star - lam}
+
+    event = UserEvent("threshold", function)
+    tolerance = 1e-10
+    reference = Segment(system, x_a, x_b, 1e-12, 10, 1e-6)
+    exact = brentq(lambda u: reference.point(u)[-1] - star, 0.0, 1.0, xtol=1e-14)
+    segment = Segment(system, x_a, x_b, 1e-12, 10, 1e-6)
+    xtol = tolerance / segment.length
+    ends = ({"up": lam_a - star, "down": star - lam_a}, {"up": lam_b - star, "down": star - lam_b})
+    up = locate_user_event(segment, event, "up", xtol, ends)
+    n_up = len(calls)
+    down = locate_user_event(segment, event, "down", xtol, ends)
+    assert up.located and down.located
+    for located in (up, down):
+        assert abs(located.u - exact) * segment.length <= tolerance * (1 + 1e-6)
+        assert abs(located.x[-1] - star) < 1e-9
+    assert lam_a not in calls and lam_b not in calls
+    assert len(calls) == n_up == len(segment.corrected) - 2  # "down": no new evaluation
+    # brentq on the same function (the previous algorithm, one label) evaluated more
+    counted = Counted(lambda u: reference.point(u)[-1] - star)
+    brentq(counted, 0.0, 1.0, xtol=xtol, rtol=events.RTOL)
+    assert n_up <= len(counted.points) - 2
+
+
+def test_warm_start_is_the_quadratic_through_the_nearest_corrected_points():
+    """Oracle: on points x(u) = a + b u + c u^2 (a parabola in u) the start at any u is
+    x(u) itself (Lagrange interpolation is exact for quadratics), and it lies on the
+    hyperplane of u; with only the segment's ends it is the chord."""
+    p = Bratu(8, 3.0)
+    system = ExtendedSystem(p, "lam", np.zeros(9))
+    rng = np.random.default_rng(0)
+    a, b, c = (rng.standard_normal(system.size) for _ in range(3))
+    segment = Segment(system, a, a + b + c, 1e-10, 10, 1e-6)
+
+    def parabola(u):
+        return a + b * u + c * u**2
+
+    assert np.allclose(segment.start(0.3), a + 0.3 * (b + c), rtol=0, atol=1e-14)
+    for u in (0.1, 0.37, 0.52, 0.9):
+        segment._points[u] = parabola(u)
+    # points on the segment's hyperplanes (row . (x_v - a) = v): so is the start
+    on_planes = Segment(system, a, a + b, 1e-10, 10, 1e-6)
+    across = c - (on_planes.row @ c) * b  # row . b = 1: across . row = 0
+    for v in (0.1, 0.37, 0.52, 0.9):
+        on_planes._points[v] = a + v * b + np.sin(3 * v) * across
+    for u in (0.05, 0.2, 0.4, 0.45, 0.7, 0.95):
+        assert np.allclose(segment.start(u), parabola(u), rtol=0, atol=1e-12)
+        assert abs(on_planes.row @ (on_planes.start(u) - a) - u) < 1e-12

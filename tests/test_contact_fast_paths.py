@@ -178,3 +178,21 @@ def test_integral_terms_after_remembered_samples_equal_a_fresh_problem():
         mine, reference = problem.hessian(q), fresh.hessian(q)
         assert np.array_equal(mine.sparse.indices, reference.sparse.indices)
         assert np.array_equal(mine.sparse.data, reference.sparse.data)
+
+
+def test_extended_residual_equals_the_scipy_transpose_product_bit_for_bit():
+    """ExtendedSystem._kkt_residual forms J^T mu by csr_rmatvec: against scipy's J.T @ mu
+    (the former code) on the stadium's contact problem, bit for bit."""
+    from supercoil.continuation.system import ExtendedSystem
+
+    rod, x0 = _flattened_ring()
+    problem = ContactProblem(rod, ContactOptions(diameter=D, **CHOICES["integral spline barrier"]))
+    system = ExtendedSystem(problem, "excess_link", x0.ravel())
+    rng = np.random.default_rng(8)
+    for _ in range(3):
+        q = _smooth_move(x0, 0.05 * D, rng).ravel()
+        mu = rng.standard_normal(system.m)
+        J = system._free_jacobian(q)
+        former = np.concatenate([problem.gradient(q)[system.free] + J.T @ mu,
+                                 problem.constraints(q)])
+        assert np.array_equal(system._kkt_residual(q, mu), former)

@@ -204,3 +204,32 @@ def test_integral_hessian_equals_the_former_loop_bit_for_bit(curve):
     former = _former_hessian_loop(x, stencil, weights, pairs, diameter, 3.0, activation, scale)
     assert np.abs(former).max() > 0
     assert np.array_equal(terms[2], former)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_culled_sample_collision_time_equals_the_full_loop(seed):
+    """_first_time_kernel_culled (sample pairs that provably stay apart skipped) against
+    _first_time_kernel (every sample pair): the same time, bit for bit, for steps from
+    far below to far above the gaps, thresholds below and above the closest samples."""
+    from supercoil.contact.integral import _first_time_kernel, _first_time_kernel_culled
+
+    x, segments, pieces = _coil(60, 10 + seed)
+    rng = np.random.default_rng(seed)
+    stencil = np.ascontiguousarray(pieces.stencil)
+    weights = spline_weights(pieces.coefficients, 7)
+    pairs = _all_pairs(len(segments), 5)
+    p0 = sample_points(x, stencil, weights)
+    closest = float(np.min(closest_samples(p0, pairs, np.inf)[0]))
+    times = []
+    for size in (1e-3, 1e-2, 0.05, 0.2, 1.0):
+        for factor in (0.5, 0.9, 0.999, 1.01):
+            dx = size * rng.standard_normal(x.shape)
+            v = sample_points(dx, stencil, weights)
+            threshold = factor * closest
+            full = _first_time_kernel(p0, v, pairs, threshold)
+            assert _first_time_kernel_culled(p0, v, pairs, threshold) == full
+            assert first_time_of_approach_samples(x, dx, stencil, weights, pairs,
+                                                  threshold) == full
+            times.append(full)
+    times = np.array(times)
+    assert np.any(times == 1.0) and np.any((times > 0) & (times < 1)) and np.any(times == 0)

@@ -233,3 +233,24 @@ def test_culled_sample_collision_time_equals_the_full_loop(seed):
             times.append(full)
     times = np.array(times)
     assert np.any(times == 1.0) and np.any((times > 0) & (times < 1)) and np.any(times == 0)
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_integral_terms_from_given_sample_points_are_the_same(order):
+    """integral_terms with the sample points passed (ContactProblem's remembered ones)
+    against the kernel forming them per pair: every output bit for bit."""
+    from supercoil.contact.integral import integral_terms
+
+    x, _segments, pieces = _coil(50, 4)
+    stencil = np.ascontiguousarray(pieces.stencil)
+    weights = spline_weights(pieces.coefficients, 6)
+    points = sample_points(x, stencil, weights)
+    pairs = _all_pairs(len(stencil), 4)
+    d, _s, _t = closest_samples(points, pairs, np.inf)
+    diameter = float(np.min(d)) * 0.95
+    pairs = pairs[d < 1.5 * diameter]
+    args = (x, stencil, weights, pairs, diameter, "barrier", 2.0, 0.5 * diameter, 0.1, order)
+    given, formed = integral_terms(*args, points=points), integral_terms(*args)
+    assert np.abs(given[0]).max() > 0
+    for mine, reference in zip(given, formed):
+        assert np.array_equal(mine, reference)

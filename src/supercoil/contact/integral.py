@@ -133,7 +133,7 @@ def _psi(kind, g, stiffness, activation):
 
 @njit()
 def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, activation,
-                     scale, order, energy_out, grad, hess, force, param):
+                     scale, order, energy_out, grad, hess, force, param, points, have_points):
     """Per-pair terms of the double integral (see the module docstring).
 
     ``order`` 0: energy only; 1: and gradients; 2: and Hessians. Per pair ``p``:
@@ -141,7 +141,9 @@ def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, acti
     over the stencil nodes of both segments (``w`` per segment), ``force[p]`` the
     magnitude of the resultant of the pair's normal forces ``-psi' n * scale`` and
     ``param[p]`` the mean sample parameters on both segments, weighted by
-    ``-psi'``.
+    ``-psi'``. With ``have_points``, the sample points are read from ``points``
+    ``(k, q, 3)`` (:func:`sample_points`, the same sums) instead of formed again
+    for every pair.
     """
     m = pairs.shape[0]
     q = weights.shape[1]
@@ -160,6 +162,10 @@ def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, acti
         j = pairs[p, 1]
         for a in range(q):
             for k in range(3):
+                if have_points:
+                    pi[a, k] = points[i, a, k]
+                    pj[a, k] = points[j, a, k]
+                    continue
                 si = 0.0
                 sj = 0.0
                 for l in range(w):
@@ -251,7 +257,7 @@ def barrier(gap: np.ndarray, stiffness: float, activation: float):
 
 def integral_terms(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray, pairs: np.ndarray,
                    diameter: float, potential: str, stiffness: float, activation: float,
-                   edge_length: float, order: int = 2):
+                   edge_length: float, order: int = 2, points: np.ndarray | None = None):
     """Terms of the double-integral contact energy for segment pairs ``pairs`` ``(m, 2)``.
 
     ``x`` ``(n, 3)`` nodes; ``stencil`` ``(k, w)`` node indices and ``weights``
@@ -261,7 +267,8 @@ def integral_terms(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray, pair
     (m,), gradient (m, 6w), Hessian (m, 6w, 6w), force (m,), parameters (m,
     2), dofs (m, 6w))``; the gradient and Hessian are zero when ``order`` is
     below 1 and 2. ``energy`` is ``inf`` for a pair with a sample gap ``<= 0``
-    (barrier).
+    (barrier). ``points``: ``sample_points(x, stencil, weights)`` if the caller has
+    them (the same values; otherwise each pair's are formed in the kernel).
     """
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     m = len(pairs)
@@ -277,7 +284,10 @@ def integral_terms(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray, pair
         _integral_kernel(np.ascontiguousarray(x, dtype=np.float64), stencil, weights, pairs,
                          float(diameter), POTENTIALS[potential], float(stiffness),
                          float(activation), samples_weight, int(order), energy, grad, hess,
-                         force, param)
+                         force, param,
+                         np.zeros((1, 1, 3)) if points is None
+                         else np.ascontiguousarray(points, dtype=np.float64),
+                         points is not None)
     nodes = np.concatenate([stencil[pairs[:, 0]], stencil[pairs[:, 1]]], axis=1)
     dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(m, 6 * w)
     return energy, grad, hess, force, param, dofs

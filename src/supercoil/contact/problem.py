@@ -590,10 +590,12 @@ class ContactProblem:
                 and cached[2] == self.stiffness:
             return st, cached[3]
         opts = self.options
+        # the sample points of the pair state's search (remembered for this q), not
+        # formed again per pair in the kernel
         terms = integral_terms(np.asarray(q, dtype=float).reshape(-1, 3), self.sample_stencil,
                                self.sample_weights, st.pairs, self.diameter, self.treatment,
                                self.stiffness, opts.barrier_activation * self.diameter,
-                               self.edge_length, order)
+                               self.edge_length, order, points=self._samples(q)[0])
         self.__dict__["_integral_cache"] = (key, order, self.stiffness, terms)
         return st, terms
 

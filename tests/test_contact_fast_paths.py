@@ -196,3 +196,24 @@ def test_extended_residual_equals_the_scipy_transpose_product_bit_for_bit():
         former = np.concatenate([problem.gradient(q)[system.free] + J.T @ mu,
                                  problem.constraints(q)])
         assert np.array_equal(system._kkt_residual(q, mu), former)
+
+
+@pytest.mark.parametrize("name", list(CHOICES))
+def test_min_distance_from_remembered_states_equals_the_search(name):
+    """min_distance answers from a remembered non-empty pair state at q when there is
+    one: against a fresh problem's search (no remembered state), bit for bit, on the
+    contact curve and between the segments, after the states a residual and a step
+    bound leave."""
+    rod, x0 = _flattened_ring()
+    problem = ContactProblem(rod, ContactOptions(diameter=D, **CHOICES[name]))
+    rng = np.random.default_rng(21)
+    answered = 0
+    for state in range(6):
+        q = _smooth_move(x0, D * 0.05, rng).ravel()
+        problem.gradient(q)
+        problem.step_bound(q, 0.3 * problem.edge_length * rng.standard_normal(q.size))
+        for polygon in (False, True):
+            answered += problem._remembered_min_distance(q, polygon) is not None
+            fresh = ContactProblem(rod, problem.options)
+            assert problem.min_distance(q, polygon) == fresh.min_distance(q, polygon)
+    assert answered >= 6

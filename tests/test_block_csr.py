@@ -1,12 +1,14 @@
 """solvers.patterns.block_csr (the integral contact's Hessian assembly) against scipy's
 COO path: the same pattern (explicit zeros too) and stored order, values equal to
-round-off (duplicates summed in another order), exactly where there are none."""
+round-off (duplicates summed in another order), exactly where there are none; and
+csr_add_blocks (the blocks merged into the rod's Hessian) against
+csr_add(A, block_csr(...)) bit for bit and scipy's A + B to round-off."""
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from supercoil.solvers.patterns import block_csr
+from supercoil.solvers.patterns import block_csr, csr_add, csr_add_blocks
 
 
 def _scipy(dofs, blocks, n):
@@ -46,3 +48,69 @@ def test_block_csr_of_no_blocks_is_the_zero_matrix():
     assert empty.shape == (50, 50) and empty.nnz == 0
     with pytest.raises(ValueError):
         block_csr(np.array([[0, 50]]), np.zeros((1, 2, 2)), 50)
+
+
+def _same_bits(mine, ref):
+    return (mine.shape == ref.shape and mine.indices.dtype == ref.indices.dtype
+            and mine.indptr.dtype == ref.indptr.dtype
+            and np.array_equal(mine.indptr, ref.indptr)
+            and np.array_equal(mine.indices, ref.indices)
+            and np.array_equal(mine.data.view(np.int64), ref.data.view(np.int64)))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_csr_add_blocks_is_csr_add_of_block_csr_bit_for_bit(seed):
+    rng = np.random.default_rng(900 + seed)
+    n, p, w = int(rng.integers(30, 250)), int(rng.integers(0, 50)), int(rng.choice([6, 12, 24]))
+    A = sp.random(n, n, density=0.08, random_state=seed, format="csr")
+    A = (A + A.T + sp.eye(n)).tocsr()
+    A.data[::9] = 0.0  # explicit zeros of A: dropped by the sum, as scipy drops them
+    A.sort_indices()
+    dofs = np.array([rng.choice(n, size=w, replace=False) for _ in range(p)],
+                    dtype=np.int64).reshape(p, w)
+    blocks = rng.standard_normal((p, w, w))
+    if p:  # a block entry that cancels A's entry exactly (the sum is dropped)
+        r, c = dofs[0, 1], dofs[0, 2]
+        blocks[0, 1, 2] = -A[r, c] if A[r, c] != 0 else 0.0
+        blocks[0, 3, 4] = -0.0
+    mine = csr_add_blocks(A, dofs, blocks)
+    former = csr_add(A, block_csr(dofs, blocks, n))
+    assert mine.has_canonical_format and _same_bits(mine, former)
+    reference = (A + _scipy(dofs, blocks, n)).tocsr()
+    assert np.array_equal(mine.indptr, reference.indptr)
+    assert np.array_equal(mine.indices, reference.indices)
+    np.testing.assert_allclose(mine.data, reference.data, rtol=0,
+                               atol=1e-13 * max(1.0, np.abs(reference.data).max()))
+
+
+def test_csr_from_arrays_is_the_matrix_scipy_makes():
+    """csr_from_arrays (scipy's checks skipped for trusted layouts): the same attributes
+    as scipy's csr_matrix((data, indices, indptr)), a valid matrix by scipy's full check,
+    the same products and flags; odd inputs (mixed index dtypes) go to scipy."""
+    from supercoil.solvers.patterns import csr_from_arrays, csr_restrict
+
+    rng = np.random.default_rng(3)
+    A = sp.random(40, 30, density=0.2, random_state=4, format="csr")
+    for index in (np.int32, np.int64):
+        args = (A.data.copy(), A.indices.astype(index), A.indptr.astype(index))
+        mine = csr_from_arrays(*args, A.shape)
+        ref = sp.csr_matrix(args, shape=A.shape)
+        mine.check_format(full_check=True)
+        assert type(mine) is type(ref) and mine.shape == ref.shape
+        assert mine.indices.dtype == ref.indices.dtype and mine.indptr.dtype == ref.indptr.dtype
+        assert mine.has_canonical_format == ref.has_canonical_format
+        assert set(vars(mine)) == set(vars(ref))
+        x = rng.standard_normal(30)
+        assert np.array_equal(mine @ x, ref @ x)
+        assert np.array_equal((mine.T @ mine).toarray(), (ref.T @ ref).toarray())
+    mixed = csr_from_arrays(A.data, A.indices.astype(np.int32), A.indptr.astype(np.int64),
+                            A.shape)
+    mixed.check_format(full_check=True)
+    # an unsorted row is found out lazily, as for a matrix scipy made
+    B = sp.csr_matrix(np.eye(3) + np.eye(3, k=1))
+    indices = B.indices.copy()
+    indices[0], indices[1] = indices[1], indices[0]
+    unsorted = csr_from_arrays(B.data.copy(), indices, B.indptr.copy(), B.shape)
+    assert not unsorted.has_canonical_format
+    keep = np.array([0, 2])
+    assert np.array_equal(csr_restrict(unsorted, keep).toarray(), B.toarray()[keep][:, keep])

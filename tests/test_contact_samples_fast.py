@@ -127,3 +127,130 @@ def test_sample_collision_time_matches_the_vectorised_quadratic(seed):
         hits += 0.0 < got < 1.0
     assert hits >= 2  # the roots, not only the two early exits, are compared
     assert first_time_of_approach_samples(x, dx, stencil, weights, pairs[:0], 1.0) == 1.0
+
+
+def _former_hessian_loop(x, stencil, weights, pairs, diameter, stiffness, activation, scale):
+    """The pair Hessians of _integral_kernel (barrier) by its former loop nest (session
+    assembly9 reordered it), in plain Python: the same terms in the same order."""
+    from supercoil.contact.integral import _psi
+
+    psi = _psi.py_func
+    q, w = weights.shape[1], weights.shape[2]
+    hess = np.zeros((len(pairs), 6 * w, 6 * w))
+    for p, (i, j) in enumerate(pairs):
+        pi = [[_stencil_sum(weights[i, a], x[stencil[i]], k) for k in range(3)] for a in range(q)]
+        pj = [[_stencil_sum(weights[j, b], x[stencil[j]], k) for k in range(3)] for b in range(q)]
+        for a in range(q):
+            for b in range(q):
+                dv = [pi[a][k] - pj[b][k] for k in range(3)]
+                d = np.sqrt(dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2])
+                if d >= diameter + activation:
+                    continue
+                value, first, second = psi(0, d - diameter, stiffness, activation)
+                if value == np.inf:
+                    continue
+                first *= scale
+                nv = [dv[0] / d, dv[1] / d, dv[2] / d]
+                c = np.concatenate([weights[i, a], -weights[j, b]])
+                second *= scale
+                tang = first / d
+                h3 = np.empty((3, 3))
+                for r in range(3):
+                    for s in range(3):
+                        h3[r, s] = (second - tang) * nv[r] * nv[s]
+                    h3[r, r] += tang
+                for l1 in range(2 * w):
+                    if c[l1] == 0.0:
+                        continue
+                    for l2 in range(2 * w):
+                        cc = c[l1] * c[l2]
+                        if cc == 0.0:
+                            continue
+                        for r in range(3):
+                            for s in range(3):
+                                hess[p, 3 * l1 + r, 3 * l2 + s] += cc * h3[r, s]
+    return hess
+
+
+def _stencil_sum(weights_a, nodes, k):
+    total = 0.0
+    for l in range(len(weights_a)):
+        total += weights_a[l] * nodes[l, k]
+    return total
+
+
+@pytest.mark.parametrize("curve", ["polygon", "spline"])
+def test_integral_hessian_equals_the_former_loop_bit_for_bit(curve):
+    from supercoil.contact.integral import integral_terms
+
+    x, segments, pieces = _coil(40, 2)
+    samples = 5
+    if curve == "spline":
+        stencil = np.ascontiguousarray(pieces.stencil)
+        weights = spline_weights(pieces.coefficients, samples)
+    else:
+        stencil = np.ascontiguousarray(segments)
+        weights = polygon_weights(len(segments), samples)
+    points = sample_points(x, stencil, weights)
+    pairs = _all_pairs(len(segments), 4)
+    d, _s, _t = closest_samples(points, pairs, np.inf)
+    diameter = float(np.min(d)) * 0.9  # the closest samples just inside the barrier's reach
+    activation = 0.5 * diameter
+    pairs = pairs[d < diameter + activation][:12]
+    assert len(pairs) >= 4
+    terms = integral_terms(x, stencil, weights, pairs, diameter, "barrier", 3.0, activation,
+                           0.1, order=2)
+    scale = (0.1 / samples) ** 2 / (2.0 * diameter * activation)
+    former = _former_hessian_loop(x, stencil, weights, pairs, diameter, 3.0, activation, scale)
+    assert np.abs(former).max() > 0
+    assert np.array_equal(terms[2], former)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_culled_sample_collision_time_equals_the_full_loop(seed):
+    """_first_time_kernel_culled (sample pairs that provably stay apart skipped) against
+    _first_time_kernel (every sample pair): the same time, bit for bit, for steps from
+    far below to far above the gaps, thresholds below and above the closest samples."""
+    from supercoil.contact.integral import _first_time_kernel, _first_time_kernel_culled
+
+    x, segments, pieces = _coil(60, 10 + seed)
+    rng = np.random.default_rng(seed)
+    stencil = np.ascontiguousarray(pieces.stencil)
+    weights = spline_weights(pieces.coefficients, 7)
+    pairs = _all_pairs(len(segments), 5)
+    p0 = sample_points(x, stencil, weights)
+    closest = float(np.min(closest_samples(p0, pairs, np.inf)[0]))
+    times = []
+    for size in (1e-3, 1e-2, 0.05, 0.2, 1.0):
+        for factor in (0.5, 0.9, 0.999, 1.01):
+            dx = size * rng.standard_normal(x.shape)
+            v = sample_points(dx, stencil, weights)
+            threshold = factor * closest
+            full = _first_time_kernel(p0, v, pairs, threshold)
+            assert _first_time_kernel_culled(p0, v, pairs, threshold) == full
+            assert first_time_of_approach_samples(x, dx, stencil, weights, pairs,
+                                                  threshold) == full
+            times.append(full)
+    times = np.array(times)
+    assert np.any(times == 1.0) and np.any((times > 0) & (times < 1)) and np.any(times == 0)
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_integral_terms_from_given_sample_points_are_the_same(order):
+    """integral_terms with the sample points passed (ContactProblem's remembered ones)
+    against the kernel forming them per pair: every output bit for bit."""
+    from supercoil.contact.integral import integral_terms
+
+    x, _segments, pieces = _coil(50, 4)
+    stencil = np.ascontiguousarray(pieces.stencil)
+    weights = spline_weights(pieces.coefficients, 6)
+    points = sample_points(x, stencil, weights)
+    pairs = _all_pairs(len(stencil), 4)
+    d, _s, _t = closest_samples(points, pairs, np.inf)
+    diameter = float(np.min(d)) * 0.95
+    pairs = pairs[d < 1.5 * diameter]
+    args = (x, stencil, weights, pairs, diameter, "barrier", 2.0, 0.5 * diameter, 0.1, order)
+    given, formed = integral_terms(*args, points=points), integral_terms(*args)
+    assert np.abs(given[0]).max() > 0
+    for mine, reference in zip(given, formed):
+        assert np.array_equal(mine, reference)

@@ -133,7 +133,7 @@ def _psi(kind, g, stiffness, activation):
 
 @njit()
 def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, activation,
-                     scale, order, energy_out, grad, hess, force, param):
+                     scale, order, energy_out, grad, hess, force, param, points, have_points):
     """Per-pair terms of the double integral (see the module docstring).
 
     ``order`` 0: energy only; 1: and gradients; 2: and Hessians. Per pair ``p``:
@@ -141,7 +141,9 @@ def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, acti
     over the stencil nodes of both segments (``w`` per segment), ``force[p]`` the
     magnitude of the resultant of the pair's normal forces ``-psi' n * scale`` and
     ``param[p]`` the mean sample parameters on both segments, weighted by
-    ``-psi'``.
+    ``-psi'``. With ``have_points``, the sample points are read from ``points``
+    ``(k, q, 3)`` (:func:`sample_points`, the same sums) instead of formed again
+    for every pair.
     """
     m = pairs.shape[0]
     q = weights.shape[1]
@@ -150,6 +152,7 @@ def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, acti
     pi = np.empty((q, 3))
     pj = np.empty((q, 3))
     c = np.empty(2 * w)
+    cc_row = np.empty(2 * w)
     h3 = np.empty((3, 3))
     u = np.empty(q)
     for a in range(q):
@@ -159,6 +162,10 @@ def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, acti
         j = pairs[p, 1]
         for a in range(q):
             for k in range(3):
+                if have_points:
+                    pi[a, k] = points[i, a, k]
+                    pj[a, k] = points[j, a, k]
+                    continue
                 si = 0.0
                 sj = 0.0
                 for l in range(w):
@@ -211,16 +218,27 @@ def _integral_kernel(x, stencil, weights, pairs, diameter, kind, stiffness, acti
                     for s in range(3):
                         h3[r, s] = (second - tang) * nv[r] * nv[s]
                     h3[r, r] += tang
+                # entry (3 l1 + r, 3 l2 + s) gains (c[l1] c[l2]) h3[r, s], one term per
+                # sample pair in the sample pairs' order; the row's 6w columns in one
+                # contiguous run (measured 2x faster than the (l1, l2, r, s) nest that
+                # skipped zero weights; a zero weight adds +-0, which leaves every
+                # entry as it was)
                 for l1 in range(2 * w):
-                    if c[l1] == 0.0:
+                    c1 = c[l1]
+                    if c1 == 0.0:
                         continue
                     for l2 in range(2 * w):
-                        cc = c[l1] * c[l2]
-                        if cc == 0.0:
-                            continue
-                        for r in range(3):
-                            for s in range(3):
-                                hess[p, 3 * l1 + r, 3 * l2 + s] += cc * h3[r, s]
+                        cc_row[l2] = c1 * c[l2]
+                    for r in range(3):
+                        row = hess[p, 3 * l1 + r]
+                        hr0 = h3[r, 0]
+                        hr1 = h3[r, 1]
+                        hr2 = h3[r, 2]
+                        for l2 in range(2 * w):
+                            cc = cc_row[l2]
+                            row[3 * l2] += cc * hr0
+                            row[3 * l2 + 1] += cc * hr1
+                            row[3 * l2 + 2] += cc * hr2
         energy_out[p] = e * scale
         force[p] = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
         if f_sum > 0.0:
@@ -239,7 +257,7 @@ def barrier(gap: np.ndarray, stiffness: float, activation: float):
 
 def integral_terms(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray, pairs: np.ndarray,
                    diameter: float, potential: str, stiffness: float, activation: float,
-                   edge_length: float, order: int = 2):
+                   edge_length: float, order: int = 2, points: np.ndarray | None = None):
     """Terms of the double-integral contact energy for segment pairs ``pairs`` ``(m, 2)``.
 
     ``x`` ``(n, 3)`` nodes; ``stencil`` ``(k, w)`` node indices and ``weights``
@@ -249,7 +267,8 @@ def integral_terms(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray, pair
     (m,), gradient (m, 6w), Hessian (m, 6w, 6w), force (m,), parameters (m,
     2), dofs (m, 6w))``; the gradient and Hessian are zero when ``order`` is
     below 1 and 2. ``energy`` is ``inf`` for a pair with a sample gap ``<= 0``
-    (barrier).
+    (barrier). ``points``: ``sample_points(x, stencil, weights)`` if the caller has
+    them (the same values; otherwise each pair's are formed in the kernel).
     """
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     m = len(pairs)
@@ -265,7 +284,10 @@ def integral_terms(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray, pair
         _integral_kernel(np.ascontiguousarray(x, dtype=np.float64), stencil, weights, pairs,
                          float(diameter), POTENTIALS[potential], float(stiffness),
                          float(activation), samples_weight, int(order), energy, grad, hess,
-                         force, param)
+                         force, param,
+                         np.zeros((1, 1, 3)) if points is None
+                         else np.ascontiguousarray(points, dtype=np.float64),
+                         points is not None)
     nodes = np.concatenate([stencil[pairs[:, 0]], stencil[pairs[:, 1]]], axis=1)
     dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(m, 6 * w)
     return energy, grad, hess, force, param, dofs
@@ -345,7 +367,90 @@ def first_time_of_approach_samples(x0: np.ndarray, dx: np.ndarray, stencil: np.n
         return 1.0
     p0 = sample_points(x0, stencil, weights)
     v = sample_points(dx, stencil, weights)
-    return float(_first_time_kernel(p0, v, pairs, float(threshold)))
+    return float(_first_time_kernel_culled(p0, v, pairs, float(threshold)))
+
+
+# Relative margin of the culling bound of _first_time_kernel_culled (see there).
+_CULL_MARGIN = 1e-6
+
+
+@njit()
+def _first_time_kernel_culled(p0, v, pairs, threshold):
+    """:func:`_first_time_kernel` skipping the sample pairs that provably stay farther
+    than ``threshold`` during the step; the same value.
+
+    Segment ``i``'s sample points lie in the ball of centre ``c_i`` (their mean) and
+    radius ``rho_i`` and move at most ``V_i = max_a |v_a|``; two of them, one of
+    ``i`` and one of ``j``, stay at least ``|c_i - c_j| - rho_i - rho_j - V_i - V_j``
+    apart for ``tau`` in ``[0, 1]``, and a sample point ``p_a`` of ``i`` at least
+    ``|p_a - c_j| - rho_j - |v_a| - V_j`` from those of ``j``. Where that bound
+    exceeds the threshold by ``m = 1e-6 (threshold + max rho + max V)``, no sample
+    pair is within the threshold now (no early 0.0) and the first root of its
+    quadratic lies beyond ``tau = 1`` by far more than its rounding (at least about
+    ``sqrt(2 m threshold) / |v|`` after 1 where the approach is tangential, against
+    a relative rounding of ``sqrt(eps)`` there), so it could only have returned
+    ``min(best, tau) = best``: the pairs left give the same result. Measured at a
+    late state of the ring (N = 200, 18 samples a segment, random steps): 1.01 ->
+    0.36 ms for a step of one edge length (886 pairs within reach), 0.63 -> 0.31 ms
+    for 0.3 h (552 pairs), 0.23 -> 0.25 ms for 0.03 h (136 pairs in contact, none
+    culled: the pre-pass costs a tenth).
+    """
+    k, q = p0.shape[0], p0.shape[1]
+    centre = np.zeros((k, 3))
+    radius = np.zeros(k)
+    speed = np.zeros(k)
+    for i in range(k):
+        for a in range(q):
+            for c in range(3):
+                centre[i, c] += p0[i, a, c]
+        for c in range(3):
+            centre[i, c] /= q
+        for a in range(q):
+            e0 = p0[i, a, 0] - centre[i, 0]
+            e1 = p0[i, a, 1] - centre[i, 1]
+            e2 = p0[i, a, 2] - centre[i, 2]
+            radius[i] = max(radius[i], math.sqrt(e0 * e0 + e1 * e1 + e2 * e2))
+            speed[i] = max(speed[i], math.sqrt(v[i, a, 0] ** 2 + v[i, a, 1] ** 2
+                                               + v[i, a, 2] ** 2))
+    far = threshold + _CULL_MARGIN * (threshold + np.max(radius) + np.max(speed))
+    t2 = threshold * threshold
+    best = 1.0
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        g0 = centre[i, 0] - centre[j, 0]
+        g1 = centre[i, 1] - centre[j, 1]
+        g2 = centre[i, 2] - centre[j, 2]
+        if math.sqrt(g0 * g0 + g1 * g1 + g2 * g2) - radius[i] - radius[j] - speed[i] \
+                - speed[j] > far:
+            continue
+        for a in range(q):
+            h0 = p0[i, a, 0] - centre[j, 0]
+            h1 = p0[i, a, 1] - centre[j, 1]
+            h2 = p0[i, a, 2] - centre[j, 2]
+            va = math.sqrt(v[i, a, 0] ** 2 + v[i, a, 1] ** 2 + v[i, a, 2] ** 2)
+            if math.sqrt(h0 * h0 + h1 * h1 + h2 * h2) - radius[j] - va - speed[j] > far:
+                continue
+            for b in range(q):
+                r0 = p0[i, a, 0] - p0[j, b, 0]
+                r1 = p0[i, a, 1] - p0[j, b, 1]
+                r2 = p0[i, a, 2] - p0[j, b, 2]
+                v0 = v[i, a, 0] - v[j, b, 0]
+                v1 = v[i, a, 1] - v[j, b, 1]
+                v2 = v[i, a, 2] - v[j, b, 2]
+                c = r0 * r0 + r1 * r1 + r2 * r2 - t2
+                if c <= 0.0:
+                    return 0.0
+                aa = v0 * v0 + v1 * v1 + v2 * v2
+                bb = 2.0 * (r0 * v0 + r1 * v1 + r2 * v2)
+                if aa <= 0.0 or bb >= 0.0:
+                    continue
+                disc = bb * bb - 4.0 * aa * c
+                if disc < 0.0:
+                    continue
+                tau = 2.0 * c / (-bb + math.sqrt(disc))
+                best = min(best, tau)
+    return best
 
 
 # Uniform quintic B-spline: weight of control point k (of six) on u^p, times 120.

@@ -95,7 +95,7 @@ from supercoil.contact.spline_distance import (
     piece_distance_derivatives,
     sag_bound,
 )
-from supercoil.solvers.patterns import block_csr
+from supercoil.solvers.patterns import block_csr, csr_add_blocks
 from supercoil.solvers.problem import HessianParts
 from supercoil.topology import writhe
 
@@ -407,35 +407,61 @@ class ContactProblem:
         ``cutoff`` (a segment distance changes by at most twice the largest
         node displacement), and the exact distances computed on them give the
         same pairs as a new broad phase. Cutoffs above ``_VERLET_CUTOFF D``
-        (a closest-approach search) bypass the list.
+        (a step bound's reach, a closest-approach search) are not widened: the
+        broad phase runs at the cutoff asked, unless one of the two lists (the
+        Verlet list, or the last such wide result, kept the same way) already
+        covers it by the same test. A step bound asks for two cutoffs at one
+        state (the sample points' reach, then the segments'); the wider first,
+        so that the second is served from it.
         """
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        scale = None
+        for slot in ("_verlet", "_verlet_wide"):
+            reference = self.__dict__.get(slot)
+            if reference is None:
+                continue
+            x_ref, reach, exclusion, pairs = reference
+            if x_ref.shape != x.shape or exclusion != self.exclusion or cutoff > reach:
+                continue
+            if scale is None:
+                scale = float(np.max(np.abs(x)))
+            moved = float(np.sqrt(np.max(np.sum((x - x_ref) ** 2, axis=1))))
+            slack = 1e-9 * max(1.0, scale, reach)
+            if cutoff + 2.0 * moved + slack <= reach:
+                return pairs
         a, b = self._endpoints(q)
         if cutoff > _VERLET_CUTOFF * self.diameter:
-            return candidate_pairs(a, b, self.s_start, self.s_end, cutoff, self.exclusion,
-                                   period=self.period)
-        x = np.asarray(q, dtype=float).reshape(-1, 3)
-        reference = self.__dict__.get("_verlet")
-        if reference is not None:
-            x_ref, reach, exclusion, pairs = reference
-            if x_ref.shape == x.shape and exclusion == self.exclusion:
-                moved = float(np.sqrt(np.max(np.sum((x - x_ref) ** 2, axis=1))))
-                slack = 1e-9 * max(1.0, float(np.max(np.abs(x))), reach)
-                if cutoff + 2.0 * moved + slack <= reach:
-                    return pairs
+            pairs = candidate_pairs(a, b, self.s_start, self.s_end, cutoff, self.exclusion,
+                                    period=self.period)
+            self.__dict__["_verlet_wide"] = (x.copy(), float(cutoff), self.exclusion, pairs)
+            return pairs
         reach = cutoff + min(self.diameter, _VERLET_MARGIN * self.edge_length)
         pairs = candidate_pairs(a, b, self.s_start, self.s_end, reach, self.exclusion,
                                 period=self.period)
         self.__dict__["_verlet"] = (x.copy(), reach, self.exclusion, pairs)
         return pairs
 
+    def _samples(self, q: np.ndarray):
+        """``(sample points (k, samples, 3), largest distance of a sample point from its
+        segment's chord)`` at ``q``; the last state's are remembered (a residual and the
+        step bound from the same iterate ask for them)."""
+        key = np.ascontiguousarray(q, dtype=np.float64).tobytes()
+        cached = self.__dict__.get("_sample_memo")
+        if cached is not None and cached[0] == key:
+            return cached[1], cached[2]
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        a, b = self._endpoints(q)
+        points = sample_points(x, self.sample_stencil, self.sample_weights)
+        deviation = float(np.max(chord_deviation(points, a, b), initial=0.0))
+        self.__dict__["_sample_memo"] = (key, points, deviation)
+        return points, deviation
+
     def _sample_pair_state(self, q: np.ndarray, cutoff: float) -> PairState:
         """Pairs whose closest *sample points* are within ``cutoff`` (integral formulation:
         the energy sees the curve only there). The broad phase runs on the segments, its
         cutoff widened by twice the samples' largest distance from their chords."""
-        a, b = self._endpoints(q)
-        points = sample_points(q.reshape(-1, 3) if np.ndim(q) == 1 else q,
-                               self.sample_stencil, self.sample_weights)
-        reach = cutoff + 2.0 * float(np.max(chord_deviation(points, a, b), initial=0.0))
+        points, deviation = self._samples(q)
+        reach = cutoff + 2.0 * deviation
         cand = self._candidates(q, reach)
         if len(cand) == 0:
             empty = np.zeros(0)
@@ -472,7 +498,20 @@ class ContactProblem:
 
     def min_distance(self, q: np.ndarray, polygon: bool = False) -> float:
         """Smallest distance over non-neighbour pairs (``inf`` if none), on the contact
-        curve or, with ``polygon``, between the segments."""
+        curve or, with ``polygon``, between the segments.
+
+        A remembered pair state at ``q`` (any cutoff) that holds a pair already knows
+        it: every pair beyond that state's cutoff is farther than the pairs within,
+        so their smallest distance is the smallest of all, the value the search
+        below finds (the same per-pair distances). The records of an accepted point
+        ask here right after the corrector's residual at it: along the ring's
+        diagram (N = 200) about 180 of the 2 D searches (sample states over some 700
+        candidate pairs each) are answered so; the guard's searches between the
+        segments (``admissible``) mostly find no remembered state.
+        """
+        remembered = self._remembered_min_distance(q, polygon)
+        if remembered is not None:
+            return remembered
         cutoff = 2.0 * self.diameter
         a, b = self._endpoints(q)
         span = float(np.max(np.ptp(np.concatenate([a, b]), axis=0)))
@@ -483,6 +522,20 @@ class ContactProblem:
             if cutoff > 2 * span + self.diameter:
                 return float("inf")
             cutoff *= 4.0
+
+    def _remembered_min_distance(self, q: np.ndarray, polygon: bool) -> float | None:
+        """Smallest distance of a remembered non-empty pair state at ``q`` (see
+        :meth:`min_distance`), or None. Not with ``count_local_minima``: its states
+        hold the local minima only."""
+        memo = self.__dict__.get("_pair_memo")
+        if not memo or (self.options.count_local_minima and not polygon):
+            return None
+        key = np.ascontiguousarray(q, dtype=np.float64).tobytes()
+        for (state, _cutoff, exclusion, on_polygon, _shadows), st in memo.items():
+            if on_polygon == bool(polygon) and exclusion == float(self.exclusion) \
+                    and len(st.pairs) and state == key:
+                return float(st.distance.min())
+        return None
 
     def _cutoff(self) -> float:
         """Distance below which a pair contributes to the energy or may become active."""
@@ -564,10 +617,12 @@ class ContactProblem:
                 and cached[2] == self.stiffness:
             return st, cached[3]
         opts = self.options
+        # the sample points of the pair state's search (remembered for this q), not
+        # formed again per pair in the kernel
         terms = integral_terms(np.asarray(q, dtype=float).reshape(-1, 3), self.sample_stencil,
                                self.sample_weights, st.pairs, self.diameter, self.treatment,
                                self.stiffness, opts.barrier_activation * self.diameter,
-                               self.edge_length, order)
+                               self.edge_length, order, points=self._samples(q)[0])
         self.__dict__["_integral_cache"] = (key, order, self.stiffness, terms)
         return st, terms
 
@@ -598,15 +653,23 @@ class ContactProblem:
         return g
 
     def contact_hessian(self, q: np.ndarray) -> sp.csr_matrix:
-        one_sided = self.stability_mode and self.treatment in ("penalty", "augmented")
-        D = self.diameter
         if self.integral:
-            # a sample pair touching without force (penalty) weighs nothing here: the
-            # one-sided closing stiffness of the pairs formulation is not added
-            _st, (_e, _g, local, _f, _p, dofs) = self._integral(q, 2)
             # the pair blocks in one compiled pass (scipy's COO path took 0.6 ms at
             # N = 200; the same pattern, duplicates summed in another order)
+            dofs, local = self._integral_blocks(q)
             return block_csr(dofs, local, self.n_dofs)
+        return self._pairs_contact_hessian(q)
+
+    def _integral_blocks(self, q: np.ndarray):
+        """``(dofs, blocks)`` of the integral formulation's contact Hessian at ``q``."""
+        # a sample pair touching without force (penalty) weighs nothing here: the
+        # one-sided closing stiffness of the pairs formulation is not added
+        _st, (_e, _g, local, _f, _p, dofs) = self._integral(q, 2)
+        return dofs, local
+
+    def _pairs_contact_hessian(self, q: np.ndarray) -> sp.csr_matrix:
+        one_sided = self.stability_mode and self.treatment in ("penalty", "augmented")
+        D = self.diameter
         if one_sided:
             st = self.pair_state(q, max(self._cutoff(), D * (1 + self.options.tolerance)))
         else:
@@ -630,7 +693,16 @@ class ContactProblem:
         return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))
 
     def hessian(self, q: np.ndarray) -> HessianParts:
-        return self.base.hessian(q).plus_sparse(self.contact_hessian(q))
+        """The rod's Hessian plus :meth:`contact_hessian`. The integral formulation's pair
+        blocks are merged into the rod's matrix directly (:func:`csr_add_blocks`, the
+        entries of ``csr_add(rod, contact_hessian)`` bit for bit, without the
+        intermediate matrix)."""
+        parts = self.base.hessian(q)
+        if self.integral:
+            dofs, local = self._integral_blocks(q)
+            return HessianParts(csr_add_blocks(parts.sparse, dofs, local), parts.vectors,
+                                parts.coefficients)
+        return parts.plus_sparse(self.contact_hessian(q))
 
     def stability_view(self) -> ContactProblem:
         """This problem as the stability analysis must see it (shares the state).
@@ -755,23 +827,38 @@ class ContactProblem:
         # pairs that may come within reach: relative motion at most twice the
         # largest node displacement; the barrier's threshold sits above D, so
         # a margin (2.5 rather than 2) keeps every pair that could reach it
-        reach = self.diameter + 2.5 * cap * largest
+        step = cap * largest
+        reach = self.diameter + 2.5 * step
         D = self.diameter
-        st = self.pair_state(q, reach, polygon=True)
+        polygon_barrier = self.treatment == "barrier" and not self.spline and not self.integral
+        samples = None
+        if self.integral and self.treatment == "barrier":
+            # asked first: its broad phase (the widest cutoff) serves the segments' below
+            samples = self.pair_state(q, reach)
+        if polygon_barrier:
+            st = self.pair_state(q, reach, polygon=True)
+        else:
+            # the threshold min(0.9 d0, max(0.1 d0, D/2)) is at most max(0.1 d0, D/2): a
+            # pair farther than D/2 + 2.5 s (s the step's largest node displacement)
+            # cannot reach it (its distance falls by at most 2 s, and 0.9 d0 > 2 s
+            # there), and the conservative advancement drops such a pair before its
+            # first move (its bound gap / speed exceeds 1) without touching the
+            # others: the pairs within the former reach D + 2.5 s give the same time
+            st = self.pair_state(q, 0.5 * D + 2.5 * step, polygon=True)
         t_hit = 1.0
         if len(st.pairs):
             d0 = st.distance
-            if self.treatment == "barrier" and not self.spline and not self.integral:
+            if polygon_barrier:
                 threshold = D + 0.1 * np.maximum(d0 - D, 0.0)
             else:
                 threshold = np.minimum(0.9 * d0, np.maximum(0.1 * d0, 0.5 * D))
             t_hit, _k = first_time_of_approach(x0, cap * dx, self._pair_nodes(st.pairs),
                                                threshold)
-        if self.integral and self.treatment == "barrier":
+        if samples is not None:
             # the barrier's gaps are those of the sample points: none may fall below
             # a tenth of the smallest one now (sliding brings other sample pairs
             # into line, and their gaps may fall to that of the contact)
-            st = self.pair_state(q, reach)
+            st = samples
             if len(st.pairs):
                 gap = float(np.min(st.distance)) - D  # the closest sample points'
                 t_samples = first_time_of_approach_samples(

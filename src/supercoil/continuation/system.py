@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil.solvers.newton import _hessian, lagrangian_hessian
-from supercoil.solvers.patterns import csr_columns, csr_vstack
+from supercoil.solvers.patterns import csr_columns, csr_rmatvec, csr_vstack
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 
@@ -123,7 +123,13 @@ class ExtendedSystem:
         p = self.problem
         g = p.gradient(q)[self.free]
         if self.m:
-            g = g + self._free_jacobian(q).T @ mu
+            J = self._free_jacobian(q)
+            if getattr(J, "format", None) == "csr" and J.dtype == np.float64:
+                # scipy's J.T @ mu (csc_matvec on the transpose, the same sums) without
+                # the transpose object and the operator dispatch (35 µs at N = 200)
+                g = g + csr_rmatvec(J.indptr, J.indices, J.data, mu, J.shape[1])
+            else:
+                g = g + J.T @ mu
             return np.concatenate([g, p.constraints(q)])
         return g
 

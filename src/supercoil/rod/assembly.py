@@ -6,6 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil._numba import njit
+from supercoil.solvers.patterns import csr_from_arrays
 
 
 @njit()
@@ -64,5 +65,5 @@ class StencilPattern:
             raise ValueError(f"local Hessians must have shape ({len(self.dofs)}, 9, 9)")
         data = np.zeros(self._nnz)
         _accumulate(self._slot, values, data)
-        return sp.csr_matrix((data, self._indices.copy(), self._indptr.copy()),
-                             shape=(self.n_dofs, self.n_dofs))
+        return csr_from_arrays(data, self._indices.copy(), self._indptr.copy(),
+                               (self.n_dofs, self.n_dofs))

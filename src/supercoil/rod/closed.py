@@ -32,6 +32,7 @@ import scipy.sparse as sp
 from supercoil.geometry.curves import edges, parallel_transport, perpendicular, signed_angle, unit
 from supercoil.rod import kernels
 from supercoil.rod.assembly import StencilPattern
+from supercoil.solvers.patterns import csr_from_arrays
 from supercoil.solvers.problem import HessianParts
 
 
@@ -293,9 +294,8 @@ class RodEnergy(abc.ABC):
             self._jacobian_layout = layout
         _, order, indices, indptr = layout
         data = np.take_along_axis(np.concatenate([-e, e], axis=1), order, axis=1).ravel()
-        J = sp.csr_matrix((data, indices.copy(), indptr.copy()), shape=(m, self.n_dofs))
-        J.has_canonical_format = True
-        return J
+        return csr_from_arrays(data, indices.copy(), indptr.copy(), (m, self.n_dofs),
+                               canonical=True)
 
     def _constraint_hessian_entries(self):
         """``(rows, cols)`` of the constraint curvature's COO entries (see below)."""
@@ -334,8 +334,8 @@ class RodEnergy(abc.ABC):
         values = data[first]
         double = second >= 0
         values[double] = values[double] + data[second[double]]
-        return sp.csr_matrix((values, indices.copy(), indptr.copy()),
-                             shape=(self.n_dofs, self.n_dofs))
+        return csr_from_arrays(values, indices.copy(), indptr.copy(),
+                               (self.n_dofs, self.n_dofs))
 
     def accept(self, q: np.ndarray) -> None:
         """Carry the reference directors to the new tangents (time-parallel transport)."""

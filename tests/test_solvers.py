@@ -194,18 +194,6 @@ def test_pattern_sums_and_restrictions_equal_scipy_bit_for_bit(seed):
         assert _same_csr(csr_columns(matrix, shuffled), matrix[:, shuffled].tocsr())
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_sorted_union_equals_numpy_union1d(seed):
-    from supercoil.solvers.patterns import sorted_union
-
-    rng = np.random.default_rng(seed)
-    for size_a, size_b in ((0, 0), (0, 7), (5, 0), (300, 500)):
-        a = rng.integers(0, 400, size_a)
-        b = rng.integers(0, 400, size_b)
-        got, expected = sorted_union(a, b), np.union1d(a, b)
-        assert got.dtype == expected.dtype and np.array_equal(got, expected)
-
-
 def test_rod_constraint_curvature_equals_the_coo_assembly():
     """The rod's constraint Hessian filled into its remembered pattern (fast path)
     against the COO assembly it replaced, zero multipliers (-0.0 entries) included."""

@@ -315,6 +315,31 @@ def sample_points(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray) -> np
     return out
 
 
+@njit(inline="always")
+def _sample_pair_time(p0, v, i, a, j, b, t2):
+    """Smaller root ``tau`` of ``|r0 + tau v|^2 = t2`` for sample point ``a`` of ``i``
+    and ``b`` of ``j`` (positions ``p0``, displacements ``v``): -1.0 when they are
+    already within (``c <= 0``), inf when they do not approach that close."""
+    r0 = p0[i, a, 0] - p0[j, b, 0]
+    r1 = p0[i, a, 1] - p0[j, b, 1]
+    r2 = p0[i, a, 2] - p0[j, b, 2]
+    v0 = v[i, a, 0] - v[j, b, 0]
+    v1 = v[i, a, 1] - v[j, b, 1]
+    v2 = v[i, a, 2] - v[j, b, 2]
+    c = r0 * r0 + r1 * r1 + r2 * r2 - t2
+    if c <= 0.0:
+        return -1.0
+    aa = v0 * v0 + v1 * v1 + v2 * v2
+    bb = 2.0 * (r0 * v0 + r1 * v1 + r2 * v2)
+    if aa <= 0.0 or bb >= 0.0:
+        return math.inf
+    disc = bb * bb - 4.0 * aa * c
+    if disc < 0.0:
+        return math.inf
+    # smaller root of aa tau^2 + bb tau + c, in the stable form
+    return 2.0 * c / (-bb + math.sqrt(disc))
+
+
 @njit()
 def _first_time_kernel(p0, v, pairs, threshold):
     """Smallest root over the sample pairs of ``pairs`` (see
@@ -328,24 +353,9 @@ def _first_time_kernel(p0, v, pairs, threshold):
         j = pairs[p, 1]
         for a in range(q):
             for b in range(q):
-                r0 = p0[i, a, 0] - p0[j, b, 0]
-                r1 = p0[i, a, 1] - p0[j, b, 1]
-                r2 = p0[i, a, 2] - p0[j, b, 2]
-                v0 = v[i, a, 0] - v[j, b, 0]
-                v1 = v[i, a, 1] - v[j, b, 1]
-                v2 = v[i, a, 2] - v[j, b, 2]
-                c = r0 * r0 + r1 * r1 + r2 * r2 - t2
-                if c <= 0.0:
+                tau = _sample_pair_time(p0, v, i, a, j, b, t2)
+                if tau < 0.0:
                     return 0.0
-                aa = v0 * v0 + v1 * v1 + v2 * v2
-                bb = 2.0 * (r0 * v0 + r1 * v1 + r2 * v2)
-                if aa <= 0.0 or bb >= 0.0:
-                    continue
-                disc = bb * bb - 4.0 * aa * c
-                if disc < 0.0:
-                    continue
-                # smaller root of aa tau^2 + bb tau + c, in the stable form
-                tau = 2.0 * c / (-bb + math.sqrt(disc))
                 best = min(best, tau)
     return best
 
@@ -432,23 +442,9 @@ def _first_time_kernel_culled(p0, v, pairs, threshold):
             if math.sqrt(h0 * h0 + h1 * h1 + h2 * h2) - radius[j] - va - speed[j] > far:
                 continue
             for b in range(q):
-                r0 = p0[i, a, 0] - p0[j, b, 0]
-                r1 = p0[i, a, 1] - p0[j, b, 1]
-                r2 = p0[i, a, 2] - p0[j, b, 2]
-                v0 = v[i, a, 0] - v[j, b, 0]
-                v1 = v[i, a, 1] - v[j, b, 1]
-                v2 = v[i, a, 2] - v[j, b, 2]
-                c = r0 * r0 + r1 * r1 + r2 * r2 - t2
-                if c <= 0.0:
+                tau = _sample_pair_time(p0, v, i, a, j, b, t2)
+                if tau < 0.0:
                     return 0.0
-                aa = v0 * v0 + v1 * v1 + v2 * v2
-                bb = 2.0 * (r0 * v0 + r1 * v1 + r2 * v2)
-                if aa <= 0.0 or bb >= 0.0:
-                    continue
-                disc = bb * bb - 4.0 * aa * c
-                if disc < 0.0:
-                    continue
-                tau = 2.0 * c / (-bb + math.sqrt(disc))
                 best = min(best, tau)
     return best
 

@@ -8,7 +8,24 @@ import numpy as np
 import scipy.sparse as sp
 from test_continuation_toys import Unconstrained
 
+from supercoil.contact.broadphase import candidate_pairs
+from supercoil.contact.distance import segment_distance
 from supercoil.solvers.problem import HessianParts
+
+
+def assert_fresh_pair_state(problem, state: np.ndarray, cutoff: float, fast) -> None:
+    """``fast`` (a ``problem.pair_state(state, cutoff, ...)`` on the segments) equals a
+    fresh broad phase and segment distances at ``state``, bit for bit: the oracle of
+    the remembered neighbour lists."""
+    a, b = problem._endpoints(state)
+    cand = candidate_pairs(a, b, problem.s_start, problem.s_end, cutoff, problem.exclusion,
+                           period=problem.period)
+    i, j = cand[:, 0], cand[:, 1]
+    d, s, t = segment_distance(a[i], b[i], a[j], b[j])
+    keep = d <= cutoff
+    assert np.array_equal(fast.pairs, cand[keep])
+    for mine, reference in ((fast.distance, d), (fast.s, s), (fast.t, t)):
+        assert np.array_equal(mine, reference[keep])
 
 
 @dataclass(frozen=True)

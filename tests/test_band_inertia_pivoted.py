@@ -152,6 +152,18 @@ def _captured(name):
     return sp.csr_matrix((f["data"], f["indices"], f["indptr"]), shape=(n, n)), f["order"]
 
 
+def _numpy_blocks(rows, cols, values, n):
+    """The row blocks of the permuted scaled entries as the numpy reference builds them
+    (``_symmetric_inertia`` before the compiled build): ``(blocks, s)``."""
+    s = max(int(np.max(np.abs(rows - cols))) if values.size else 0, 16)
+    blocks = np.zeros((-(-n // s), s, 2 * s))
+    block = rows // s
+    upper = cols >= block * s
+    blocks[block[upper], rows[upper] - block[upper] * s, cols[upper] - block[upper] * s] = \
+        values[upper]
+    return blocks, s
+
+
 @pytest.mark.parametrize("name", ["kkt_ring200_contact.npz", "kkt_ring200_free.npz"])
 def test_captured_ring_kkt_matrices(name):
     """KKT matrices of the N = 200 ring (alpha with contact, b = 43; without, b = 19):
@@ -165,12 +177,7 @@ def test_captured_ring_kkt_matrices(name):
     dense = _dense_count(0.5 * (scaled + scaled.T))
     assert dense is not None
     assert band.symmetric_inertia(A, order) == dense
-    s = max(int(np.max(np.abs(rows - cols))), 16)
-    blocks = np.zeros((-(-n // s), s, 2 * s))
-    block = rows // s
-    upper = cols >= block * s
-    blocks[block[upper], rows[upper] - block[upper] * s, cols[upper] - block[upper] * s] = \
-        values[upper]
+    blocks, s = _numpy_blocks(rows, cols, values, n)
     position = np.empty(n, dtype=np.int64)
     position[order] = np.arange(n)
     compiled, s_compiled = band._equilibrated_blocks(A.indptr, A.indices, A.data, position)
@@ -191,12 +198,7 @@ def test_compiled_blocks_equal_the_numpy_ones_bit_for_bit(seed):
     A.data[rng.random(A.data.size) < 0.1] = 0.0  # stored zeros, dropped by both
     order = rng.permutation(n)
     rows, cols, values = band.equilibrated_entries(A, order)
-    s = max(int(np.max(np.abs(rows - cols))) if values.size else 0, 16)
-    blocks = np.zeros((-(-n // s), s, 2 * s))
-    block = rows // s
-    upper = cols >= block * s
-    blocks[block[upper], rows[upper] - block[upper] * s, cols[upper] - block[upper] * s] = \
-        values[upper]
+    blocks, s = _numpy_blocks(rows, cols, values, n)
     position = np.empty(n, dtype=np.int64)
     position[order] = np.arange(n)
     compiled, s_compiled = band._equilibrated_blocks(A.indptr, A.indices, A.data, position)

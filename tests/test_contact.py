@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from contact_toys import CrossedRods
+from contact_toys import CrossedRods, assert_fresh_pair_state
 
 from supercoil.contact import potentials
 from supercoil.contact.problem import ContactOptions, ContactProblem
@@ -315,8 +315,6 @@ def test_pair_states_from_the_verlet_list_equal_a_new_broad_phase():
     broad phase (fast path); against the broad phase run at each state (the previous
     code): the same pairs, distances and feet, bit for bit, through small moves (list
     reused), large ones (list rebuilt) and the cutoffs the solvers ask for."""
-    from supercoil.contact.broadphase import candidate_pairs
-    from supercoil.contact.distance import segment_distance
     from supercoil.problems.ring import twisted_circle_problem
 
     rod, q = twisted_circle_problem(2 / 3, 0.0, 80)
@@ -335,13 +333,5 @@ def test_pair_states_from_the_verlet_list_equal_a_new_broad_phase():
             before = problem.__dict__.get("_verlet")
             fast = problem.pair_state(state, cutoff)
             reused += problem.__dict__.get("_verlet") is before
-            a, b = problem._endpoints(state)
-            cand = candidate_pairs(a, b, problem.s_start, problem.s_end, cutoff,
-                                   problem.exclusion, period=problem.period)
-            i, j = cand[:, 0], cand[:, 1]
-            d, s, t = segment_distance(a[i], b[i], a[j], b[j])
-            keep = d <= cutoff
-            assert np.array_equal(fast.pairs, cand[keep])
-            for mine, reference in ((fast.distance, d), (fast.s, s), (fast.t, t)):
-                assert np.array_equal(mine, reference[keep])
+            assert_fresh_pair_state(problem, state, cutoff, fast)
     assert reused > 100  # the list did serve most states

@@ -16,10 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from contact_toys import assert_fresh_pair_state
 
-from supercoil.contact.broadphase import candidate_pairs
 from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
-from supercoil.contact.distance import segment_distance
 from supercoil.contact.integral import first_time_of_approach_samples
 from supercoil.contact.problem import ContactOptions, ContactProblem
 
@@ -146,15 +145,7 @@ def test_wide_cutoffs_from_the_last_wide_broad_phase_equal_a_new_one(name):
             before = problem.__dict__.get("_verlet_wide")
             fast = problem.pair_state(q, cutoff, polygon=True)
             served += problem.__dict__.get("_verlet_wide") is before and cutoff > 2 * D
-            a, b = problem._endpoints(q)
-            cand = candidate_pairs(a, b, problem.s_start, problem.s_end, cutoff,
-                                   problem.exclusion, period=problem.period)
-            i, j = cand[:, 0], cand[:, 1]
-            d, s, t = segment_distance(a[i], b[i], a[j], b[j])
-            keep = d <= cutoff
-            assert np.array_equal(fast.pairs, cand[keep])
-            for mine, reference in ((fast.distance, d), (fast.s, s), (fast.t, t)):
-                assert np.array_equal(mine, reference[keep])
+            assert_fresh_pair_state(problem, q, cutoff, fast)
             if problem.integral:  # the sample points' state against a fresh problem
                 fresh = ContactProblem(problem.base, problem.options)
                 mine, reference = problem.pair_state(q, cutoff), fresh.pair_state(q, cutoff)

@@ -8,7 +8,7 @@ from contact_toys import CrossedRods, assert_fresh_pair_state
 
 from supercoil.contact import potentials
 from supercoil.contact.problem import ContactOptions, ContactProblem
-from supercoil.contact.report import contact_summary
+from supercoil.contact.report import COUNT_KEYS, PLACE_KEYS, contact_summary
 from supercoil.contact.solve import solve_contact
 from supercoil.solvers.newton import NewtonOptions
 
@@ -97,6 +97,11 @@ def test_remembered_summaries_equal_fresh_ones_and_are_copies(treatment):
     again["contacts"][0]["force"] = -1.0  # an edit inside an entry does not reach it either
     assert contact_summary(problem, res.q, res.multipliers) == _contact_summary(
         problem, res.q, res.multipliers)
+    for keys in (COUNT_KEYS, PLACE_KEYS):  # a selection of keys: those of the summary
+        part = contact_summary(problem, res.q, res.multipliers, keys)
+        assert part == {k: again[k] for k in keys} and list(part) == list(keys)
+    part["contact_points"].clear()
+    assert contact_summary(problem, res.q, res.multipliers, PLACE_KEYS)["contact_points"]
     problem.stiffness *= 2.0
     stiffer = contact_summary(problem, res.q, res.multipliers)
     assert stiffer == _contact_summary(problem, res.q, res.multipliers)

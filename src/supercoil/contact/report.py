@@ -32,11 +32,17 @@ of seed 001's Figure 4.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from supercoil.contact.problem import ContactProblem
 
+# Keys of a summary for callers that need only the counts and the closest approach
+# (per-point records, contact-count events), or the contact places (figures, payload)
+COUNT_KEYS = ("n_contact_points", "n_contact_intervals", "min_gap_over_diameter")
+PLACE_KEYS = ("contact_points", "contact_intervals")
 GROUPING_FLOOR = 1e-2  # of the largest contact force, see the module docstring
 # summaries remembered per problem (contact_summary): a continuation point asks for its
 # summary in its records and in its contact-count event, and a ring diagram's payload
@@ -119,15 +125,19 @@ def group_contacts(s1: np.ndarray, s2: np.ndarray, force: np.ndarray, spacing: f
 
 
 def contact_summary(problem: ContactProblem, q: np.ndarray,
-                    multipliers: np.ndarray | None = None) -> dict:
-    """The contact keys of DESIGN.md for the state ``q`` (see the module docstring).
+                    multipliers: np.ndarray | None = None,
+                    keys: Sequence[str] | None = None) -> dict:
+    """The contact keys of DESIGN.md for the state ``q`` (see the module docstring);
+    with ``keys``, only those (a caller after the counts need not copy the list of
+    every touching pair, ``contacts``: hundreds of entries on an interval contact).
 
     For the barrier and penalty treatments the summary is a function of ``q``,
     ``multipliers`` and the problem's stiffness, diameter and exclusion alone; it is
     remembered for the last ``SUMMARY_MEMO`` arguments (a copy is returned).
     """
     if problem.treatment not in ("barrier", "penalty"):
-        return _contact_summary(problem, q, multipliers)
+        found = _contact_summary(problem, q, multipliers)
+        return found if keys is None else {k: found[k] for k in keys}
     key = (np.ascontiguousarray(q, dtype=np.float64).tobytes(),
            None if multipliers is None else
            np.ascontiguousarray(multipliers, dtype=np.float64).tobytes(),
@@ -140,15 +150,15 @@ def contact_summary(problem: ContactProblem, q: np.ndarray,
         if len(memo) >= SUMMARY_MEMO:
             del memo[next(iter(memo))]
         memo[key] = found
-    return _copied(found)
+    return _copied(found, found.keys() if keys is None else keys)
 
 
-def _copied(summary: dict) -> dict:
-    """A copy of a summary that shares nothing mutable with it: its values are numbers,
-    None, or lists of flat dicts of numbers (as :func:`copy.deepcopy`, at a tenth of the
-    cost: deepcopy was half of a contact point's records at N = 200)."""
-    return {k: [dict(entry) for entry in v] if isinstance(v, list) else v
-            for k, v in summary.items()}
+def _copied(summary: dict, keys) -> dict:
+    """A copy of ``keys`` of a summary that shares nothing mutable with it: its values are
+    numbers, None, or lists of flat dicts of numbers (as :func:`copy.deepcopy`, at a
+    tenth of the cost: deepcopy was half of a contact point's records at N = 200)."""
+    return {k: [dict(entry) for entry in summary[k]] if isinstance(summary[k], list)
+            else summary[k] for k in keys}
 
 
 def _contact_summary(problem: ContactProblem, q: np.ndarray,

@@ -140,7 +140,7 @@ from supercoil.contact.problem import (
     ContactProblem,
     validate_contact_choice,
 )
-from supercoil.contact.report import contact_summary
+from supercoil.contact.report import COUNT_KEYS, PLACE_KEYS, contact_summary
 from supercoil.continuation import (
     Branch,
     ContinuationOptions,
@@ -387,7 +387,7 @@ class RingDiagram:
                          "symmetry_residual_over_diameter":
                              symmetry.residual / self.options.diameter}
                 if contact and cp is not None:
-                    summary = contact_summary(cp, b.states[i], b.multipliers[i])
+                    summary = contact_summary(cp, b.states[i], b.multipliers[i], PLACE_KEYS)
                     entry["contact_points"] = summary["contact_points"]
                     entry["contact_intervals"] = summary["contact_intervals"]
                 else:
@@ -469,7 +469,7 @@ def _contact_records(problem: ContactProblem, base_records, free: bool):
             out.update(n_contact_points=0, n_contact_intervals=0,
                        min_gap_over_diameter=float(d_min / problem.diameter))
         else:
-            summary = contact_summary(problem, q, multipliers)
+            summary = contact_summary(problem, q, multipliers, COUNT_KEYS)
             gap = summary["min_gap_over_diameter"]
             out.update(n_contact_points=summary["n_contact_points"],
                        n_contact_intervals=summary["n_contact_intervals"],
@@ -510,7 +510,7 @@ def contact_count_event(problem: ContactProblem) -> UserEvent:
     """Indicators ``n - k + 1/2`` of the contact point and interval counts (module doc)."""
 
     def levels(q, multipliers, excess_link):
-        summary = contact_summary(problem, q, multipliers)
+        summary = contact_summary(problem, q, multipliers, COUNT_KEYS)
         out = {}
         for k in range(1, MAX_LEVEL + 1):
             out[f"points>={k}"] = summary["n_contact_points"] - k + 0.5
@@ -522,7 +522,7 @@ def contact_count_event(problem: ContactProblem) -> UserEvent:
 
 def _positions(problem: ContactProblem, q, multipliers) -> np.ndarray:
     """(k, 2) positions (s1, s2) of the contacts (interval midpoints) at a state."""
-    summary = contact_summary(problem, q, multipliers)
+    summary = contact_summary(problem, q, multipliers, PLACE_KEYS)
     rows = [(p["s1"], p["s2"]) for p in summary["contact_points"]]
     for iv in summary["contact_intervals"]:
         rows.append((_mid(iv["s1_start"], iv["s1_end"]), _mid(iv["s2_start"], iv["s2_end"])))

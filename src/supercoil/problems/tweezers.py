@@ -62,7 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from supercoil.contact.problem import ContactOptions, ContactProblem, validate_contact_choice
-from supercoil.contact.report import contact_summary
+from supercoil.contact.report import COUNT_KEYS, contact_summary
 from supercoil.continuation import (
     Branch,
     ContinuationOptions,
@@ -318,7 +318,7 @@ def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
                "energy": rod.elastic_energy(q), "load_potential": rod.load_potential(q),
                "tension": axial_force(rod, multipliers)}
         if contact:
-            summary = contact_summary(problem, q, multipliers)
+            summary = contact_summary(problem, q, multipliers, COUNT_KEYS)
             gap = summary["min_gap_over_diameter"]
             out.update(n_contact_points=summary["n_contact_points"],
                        n_contact_intervals=summary["n_contact_intervals"],

@@ -249,7 +249,11 @@ class _Tracer:
         system, opts = self.system, self.opts
         x = ev.x
         t = ev.tangent if ev.tangent is not None else self.ts[k + 1]
-        stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes)
+        # the critical modes of folds and bifurcations feed branch switching: the
+        # reference eigensolver there; a user event keeps only its count (the fast
+        # path, as at regular points)
+        stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes,
+                               fast=ev.kind not in ("bifurcation", "fold"))
         values = modes = np.zeros(0)
         if ev.kind in ("bifurcation", "fold"):
             n_critical = max(1, abs(ev.count_after - ev.count_before))

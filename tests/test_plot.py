@@ -331,3 +331,41 @@ def test_house_style_png_fast_encoding_keeps_the_pixels(tmp_path):
     save(fig, tmp_path / "fast.png")
     assert (tmp_path / "fast.png").read_bytes() != (tmp_path / "default.png").read_bytes()
     np.testing.assert_array_equal(_png(tmp_path / "fast.png"), _png(tmp_path / "default.png"))
+
+
+def test_special_points_on_one_segment_enter_the_line_in_arclength_order():
+    """Two bifurcations between two samples (a straight rod stepping by a turn): each
+    enters twice, both in order along the segment, so the polyline goes forward."""
+    from supercoil.plotting.figures import through_special_points
+
+    row = {"name": "straight", "turns": [0.0, 1.0, 2.0, 3.0],
+           "extension": [1.0, 1.0, 1.0, 1.0], "stable": [True, True, False, False]}
+    specials = [  # listed out of order on purpose
+        {"branch": "straight", "index": 1, "arclength": 1.7, "turns": 1.7, "extension": 1.0,
+         "count_before": 2, "count_after": 4},
+        {"branch": "straight", "index": 1, "arclength": 1.2, "turns": 1.2, "extension": 1.0,
+         "count_before": 0, "count_after": 2},
+        {"branch": "other", "index": 1, "arclength": 1.5, "turns": 1.5, "extension": 1.0,
+         "count_before": 0, "count_after": 2},
+    ]
+    out = through_special_points(row, specials, ("turns", "extension"))
+    assert out["turns"].tolist() == [0.0, 1.0, 1.2, 1.2, 1.7, 1.7, 2.0, 3.0]
+    assert out["stable"].tolist() == [True, True, True, False, False, False, False, False]
+
+
+def test_tweezers_lines_are_stable_up_to_the_located_buckling():
+    """The hat curve's straight rod is heavy up to its located bifurcation (count 0
+    before it), not only up to its last stable sample."""
+    from supercoil.plotting.tweezers import figure_jobs
+
+    points = [{"branch": "straight", "turns": t, "extension": 1.0, "torque": 0.0,
+               "writhe": 0.0, "stable": s} for t, s in ((0.0, True), (1.6, True), (2.5, False))]
+    payload = {"branches": [{"name": "straight"}], "points": points, "twist_ratio": 1.0,
+               "n_nodes": 10, "special_points": [{
+                   "kind": "bifurcation", "branch": "straight", "index": 1, "arclength": 2.2,
+                   "turns": 2.2, "extension": 1.0, "torque": 0.0, "writhe": 0.0,
+                   "count_before": 0, "count_after": 2}]}
+    for _path, _builder, kwargs in figure_jobs(payload, [], "unused"):
+        (line,) = kwargs["branches"]
+        stable_turns = np.asarray(line["turns"])[np.asarray(line["stable"])]
+        assert stable_turns.max() == 2.2

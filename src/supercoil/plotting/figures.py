@@ -264,21 +264,25 @@ def through_special_points(row: Mapping, specials: Sequence[Mapping],
     ``count_before``, ``count_after`` or one of ``keys`` are left out.
     """
     k = len(row["stable"])
-    entries = [(float(i), [row[key][i] for key in keys], bool(row["stable"][i]))
+    # sort keys (segment position, arclength within it, before/after): several special
+    # points on one segment (two bifurcations between two widely spaced samples of a
+    # straight rod) follow each other by arclength, each one's pair kept together
+    entries = [((float(i), 0.0, 0), [row[key][i] for key in keys], bool(row["stable"][i]))
                for i in range(k)]
-    for p in specials:
+    for order, p in enumerate(specials):
         if p.get("branch", row.get("name")) != row.get("name"):
             continue
         try:
             at = int(p["index"]) + 0.5
             values = [float(p[key]) for key in keys]
             before, after = int(p["count_before"]), int(p["count_after"])
+            along = float(p.get("arclength", order))
         except (KeyError, TypeError, ValueError):
             continue
         if not 0 <= at < k:
             continue
-        entries.append((at, values, before == 0))
-        entries.append((at + 1e-6, values, after == 0))
+        entries.append(((at, along, 0), values, before == 0))
+        entries.append(((at, along, 1), values, after == 0))
     entries.sort(key=lambda e: e[0])
     out = dict(row)
     for j, key in enumerate(keys):

@@ -510,6 +510,48 @@ def test_straight_pencil_falls_back_when_not_certified(monkeypatch):
     np.testing.assert_array_equal(fallback.unstable_count, slow.unstable_count)
 
 
+def test_straight_pencil_is_certified_between_roots_not_at_them(monkeypatch):
+    """The certifying counts are taken halfway between consecutive roots (and the ends),
+    where the inertia resolves them: counts that round-off would decide next to a root
+    (at N = 1000 the eigenvalues 1e-8 turns from it are 1e-17 of the largest; simulated
+    here by a count that lies there) do not matter, a wrong count halfway does."""
+    from supercoil.continuation import ContinuationOptions, continuation, stability
+    from supercoil.problems import tweezers
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
+                           turns=(0.0, 4.0), n_nodes=40)
+    problem, q0 = clamped_problem(opts)
+    cont = ContinuationOptions(initial_step=0.05, max_step=tweezers.STRAIGHT_MAX_STEP,
+                               parameter_bounds=opts.turns, event_tolerance=opts.event_tolerance,
+                               detect_bifurcations=False)
+    branch = continuation(problem, q0, parameter="turns", options=cont, name="straight")
+    honest = tweezers.straight_bifurcations(problem, branch, cont)
+    roots = np.array([p.parameter for p in honest])
+    assert roots.size >= 3
+    true_inertia = stability.inertia
+    checked = []
+
+    def lying_near_roots(system, x, *args, **kwargs):
+        neg, sign = true_inertia(system, x, *args, **kwargs)
+        checked.append(float(x[-1]))
+        return (neg + 1, sign) if np.min(np.abs(roots - x[-1])) < 1e-3 else (neg, sign)
+
+    monkeypatch.setattr(stability, "inertia", lying_near_roots)
+    again = tweezers.straight_bifurcations(problem, branch, cont)
+    assert [p.parameter for p in again] == roots.tolist()
+    stops = [0.0, *roots.tolist(), branch.parameter_values[-1]]
+    away = [t for t in checked if np.min(np.abs(roots - t)) >= 1e-3]  # the others: the
+    # special points' own stability (their count is the certified count before)
+    np.testing.assert_allclose(away, 0.5 * (np.array(stops[:-1]) + np.array(stops[1:])))
+
+    def lying_halfway(system, x, *args, **kwargs):
+        neg, sign = true_inertia(system, x, *args, **kwargs)
+        return (neg + 1, sign) if abs(x[-1] - away[1]) < 1e-12 else (neg, sign)
+
+    monkeypatch.setattr(stability, "inertia", lying_halfway)
+    assert tweezers.straight_bifurcations(problem, branch, cont) is None
+
+
 def test_switch_pin_is_the_one_repin_picks_and_the_mode_does_not_move_it():
     """``_pin_node`` pins what ``repin(q* + 1e-3 mode)`` picks when one node is farthest
     (the mode's symmetric tie broken by a small bump), and the rotated mode has no

@@ -217,3 +217,22 @@ def test_warm_start_is_the_quadratic_through_the_nearest_corrected_points():
     for u in (0.05, 0.2, 0.4, 0.45, 0.7, 0.95):
         assert np.allclose(segment.start(u), parabola(u), rtol=0, atol=1e-12)
         assert abs(on_planes.row @ (on_planes.start(u) - a) - u) < 1e-12
+
+
+def test_zeroin_bisects_where_interpolation_divides_by_zero():
+    """Found by review: values of order 1e-110 underflow the interpolation's differences
+    to zero; brentq (C arithmetic) bisects there, and so must _zeroin (it raised
+    ZeroDivisionError). Oracle: brentq's zero."""
+    for scale in (1e-110, 1e-150, 1e-200):
+        def f(x, s=scale):
+            return s * ((x - 0.3) ** 3 + 0.1 * (x - 0.3))
+
+        x_ref = brentq(f, 0.0, 1.0, xtol=1e-12, rtol=events.RTOL)
+        assert abs(_zeroin(f, 0.0, 1.0, 1e-12) - x_ref) <= 2e-12
+
+
+def test_zeroin_that_does_not_converge_says_so():
+    """After maxiter steps without a bracket within xtol: LocationFailed (the callers'
+    'not located'), not an unconverged point reported as located."""
+    with pytest.raises(events.LocationFailed, match="no zero located"):
+        _zeroin(lambda x: np.exp(x) - 1.5, 0.0, 1.0, 1e-14, maxiter=2)

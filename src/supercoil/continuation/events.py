@@ -24,6 +24,7 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
@@ -212,7 +213,9 @@ def _zeroin(f: Callable[[float], float], lo: float, hi: float, xtol: float,
       sign the previous one, the other end the contrapoint), so a good guess
       saves the first secant steps.
 
-    Raises ValueError when the end values have the same sign (as ``brentq``).
+    Raises ValueError when the end values have the same sign (as ``brentq``), and
+    :class:`LocationFailed` when ``maxiter`` steps did not close the bracket (``brentq``
+    raised RuntimeError).
     """
     f_lo = f(lo) if f_lo is None else f_lo
     f_hi = f(hi) if f_hi is None else f_hi
@@ -247,12 +250,20 @@ def _zeroin(f: Callable[[float], float], lo: float, hi: float, xtol: float,
         if f_cur == 0 or abs(s_bis) < delta:
             return x_cur
         if abs(s_pre) > delta and abs(f_cur) < abs(f_pre):
-            if x_pre == x_blk:  # secant
-                s_try = -f_cur * (x_cur - x_pre) / (f_cur - f_pre)
-            else:  # inverse quadratic interpolation
-                d_pre = (f_pre - f_cur) / (x_pre - x_cur)
-                d_blk = (f_blk - f_cur) / (x_blk - x_cur)
-                s_try = -f_cur * (f_blk * d_blk - f_pre * d_pre) / (d_blk * d_pre * (f_blk - f_pre))
+            try:
+                if x_pre == x_blk:  # secant
+                    s_try = -f_cur * (x_cur - x_pre) / (f_cur - f_pre)
+                else:  # inverse quadratic interpolation
+                    d_pre = (f_pre - f_cur) / (x_pre - x_cur)
+                    d_blk = (f_blk - f_cur) / (x_blk - x_cur)
+                    s_try = -f_cur * (f_blk * d_blk - f_pre * d_pre) / (
+                        d_blk * d_pre * (f_blk - f_pre))
+            except ZeroDivisionError:
+                # brentq's C arithmetic gives inf or nan here and bisects (measured: tiny
+                # values, |f| ~ 1e-110, underflow the differences to zero)
+                s_try = math.inf
+            if not math.isfinite(s_try):
+                s_try = math.inf
             if 2 * abs(s_try) < min(abs(s_pre), 3 * abs(s_bis) - delta):
                 s_pre, s_cur = s_cur, s_try
             else:
@@ -262,7 +273,8 @@ def _zeroin(f: Callable[[float], float], lo: float, hi: float, xtol: float,
         x_pre, f_pre = x_cur, f_cur
         x_cur += s_cur if abs(s_cur) > delta else (delta if s_bis > 0 else -delta)
         f_cur = f(x_cur)
-    return x_cur
+    raise LocationFailed(f"no zero located to {xtol:.1e} in {maxiter} iterations "
+                         f"(bracket [{min(x_cur, x_blk):.10g}, {max(x_cur, x_blk):.10g}])")
 
 
 def _fold_guess(segment: Segment, t_a: np.ndarray, t_b: np.ndarray) -> float | None:

@@ -199,7 +199,7 @@ def test_products_and_stacks_equal_scipys_bit_for_bit():
         A = sp.random(60, 45, density=0.15, format="csr", random_state=trial)
         A.data = rng.standard_normal(A.data.size) * 10.0 ** rng.uniform(-6, 6, A.data.size)
         x, X, u = rng.standard_normal(45), rng.standard_normal((45, 3)), rng.standard_normal(60)
-        assert np.array_equal(csr_matvec(A.indptr, A.indices, A.data, x), A @ x)
+        assert np.array_equal(csr_matvec(A.indptr, A.indices, A.data, x, 45), A @ x)
         assert np.array_equal(CSRArrays(A.data, A.indices, A.indptr, A.shape) @ X, A @ X)
         assert np.array_equal(csr_rmatvec(A.indptr, A.indices, A.data, u, 45), A.T @ u)
         B = sp.csr_matrix(rng.standard_normal((2, 45)))
@@ -207,6 +207,14 @@ def test_products_and_stacks_equal_scipys_bit_for_bit():
             mine, former = csr_vstack(blocks), sp.vstack(blocks, format="csr")
             for name in ("data", "indices", "indptr"):
                 assert np.array_equal(getattr(mine, name), getattr(former, name))
+    # a wrong length is refused, as scipy's "dimension mismatch" (the compiled loops
+    # would read and write out of bounds: found by the session's review)
+    with pytest.raises(ValueError, match="dimension mismatch"):
+        csr_matvec(A.indptr, A.indices, A.data, x[:40], 45)
+    with pytest.raises(ValueError, match="dimension mismatch"):
+        CSRArrays(A.data, A.indices, A.indptr, A.shape) @ X[:40]
+    with pytest.raises(ValueError, match="dimension mismatch"):
+        csr_rmatvec(A.indptr, A.indices, A.data, u[:50], 45)
     H = HessianParts(sp.random(30, 30, density=0.2, format="csr", random_state=1),
                      rng.standard_normal((2, 30)), np.array([0.5, -2.0]))
     x = rng.standard_normal(30)

@@ -400,7 +400,7 @@ class BorderedFactor:
             x, multipliers, lam = z[:n], z[n:-1], z[-1]
             if canonical_j:  # the sums of J.T @ mu and J @ x, without scipy's dispatch
                 jt_mu = csr_rmatvec(J.indptr, J.indices, J.data, multipliers, n)
-                j_x = csr_matvec(J.indptr, J.indices, J.data, x)
+                j_x = csr_matvec(J.indptr, J.indices, J.data, x, J.shape[1])
             else:
                 jt_mu, j_x = J.T @ multipliers, J @ x
             top = hessian.matvec(x) + jt_mu + column[:n] * lam

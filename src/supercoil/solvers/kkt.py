@@ -570,7 +570,9 @@ class KKTFactor:
     (:attr:`order`); ``band`` factorises by LAPACK's band LU (:class:`_BandLU`:
     solves equal to SuperLU's to round-off, three times faster on a ring's
     contact states) when the ordered band is narrow, else by SuperLU. The inertia is
-    computed on first use of :attr:`reduced_negative_count`. Dense rows of
+    computed on first use of :attr:`reduced_negative_count`, from the matrices given
+    (referenced, not copied: a caller must not change their entries in place while
+    it uses the factor; none in the package does). Dense rows of
     ``J`` are pinned and their remainder taken by Woodbury's identity
     (module doc), so the sparse factorisation and the banded inertia see
     ``K_pin``; :attr:`order` is then :func:`kkt_order` of ``K_pin``'s pattern.

@@ -375,7 +375,7 @@ class CSRArrays:
         self.data, self.indices, self.indptr, self.shape = data, indices, indptr, shape
 
     def __matmul__(self, x: np.ndarray) -> np.ndarray:
-        return csr_matvec(self.indptr, self.indices, self.data, x)
+        return csr_matvec(self.indptr, self.indices, self.data, x, self.shape[1])
 
     def tocsr(self) -> sp.csr_matrix:
         return sp.csr_matrix((self.data, self.indices.copy(), self.indptr.copy()),
@@ -386,11 +386,16 @@ class CSRArrays:
 
 
 def csr_matvec(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray,
-               x: np.ndarray) -> np.ndarray:
-    """``A @ x`` for the CSR arrays of ``A`` and ``x`` ``(n,)`` or ``(n, k)``: each row's
-    products summed in stored order from 0, the loop of scipy's ``csr_matvec`` and
-    ``csr_matvecs`` (the same sums; the tests compare them bit for bit)."""
+               x: np.ndarray, n_cols: int) -> np.ndarray:
+    """``A @ x`` for the CSR arrays of ``A`` ``(m, n_cols)`` and ``x`` ``(n_cols,)`` or
+    ``(n_cols, k)``: each row's products summed in stored order from 0, the loop of
+    scipy's ``csr_matvec`` and ``csr_matvecs`` (the same sums; the tests compare them
+    bit for bit). A wrong length raises ValueError, as scipy's "dimension mismatch"
+    (the compiled loops do not check their indices)."""
     x = np.asarray(x, dtype=float)
+    if x.shape[0] != n_cols:
+        raise ValueError(f"dimension mismatch: a matrix of {n_cols} columns times a vector "
+                         f"of {x.shape[0]} entries")
     if x.ndim == 1:
         return _csr_matvec(indptr, indices, data, x)
     return _csr_matvecs(indptr, indices, data, np.ascontiguousarray(x))
@@ -426,8 +431,13 @@ def csr_rmatvec(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, x: np
     """``A.T @ x`` for the CSR arrays of ``A`` ``(m, n_cols)`` and ``x`` ``(m,)``: row ``k``'s
     entries times ``x[k]`` added to their columns, rows in order, the loop of scipy's
     ``csc_matvec`` on ``A.T`` (the same sums) without making the transpose (a new
-    ``csc_matrix`` each time, 15 µs at N = 200)."""
-    return _csr_rmatvec(indptr, indices, data, np.asarray(x, dtype=float), n_cols)
+    ``csc_matrix`` each time, 15 µs at N = 200). A wrong length of ``x`` raises
+    ValueError, as scipy's "dimension mismatch"."""
+    x = np.asarray(x, dtype=float)
+    if x.shape != (indptr.size - 1,):
+        raise ValueError(f"dimension mismatch: the transpose of a matrix of "
+                         f"{indptr.size - 1} rows times a vector of shape {x.shape}")
+    return _csr_rmatvec(indptr, indices, data, x, n_cols)
 
 
 @njit()

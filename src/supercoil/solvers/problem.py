@@ -46,7 +46,7 @@ class HessianParts:
         S = self.sparse
         if getattr(S, "format", None) == "csr" and S.dtype == np.float64 \
                 and np.ndim(x) == 1 and np.shape(x)[0] == S.shape[1]:
-            y = csr_matvec(S.indptr, S.indices, S.data, x)  # scipy's sums, without its dispatch
+            y = csr_matvec(S.indptr, S.indices, S.data, x, S.shape[1])  # scipy's sums
         else:
             y = S @ x
         for c, v in zip(self.coefficients, self.vectors):

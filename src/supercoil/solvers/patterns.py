@@ -176,6 +176,11 @@ def csr_add_blocks(A: sp.csr_matrix, dofs: np.ndarray, blocks: np.ndarray) -> sp
 
 
 def _canonical_csr(data, indices, indptr, shape, index_dtype, indptr_dtype) -> sp.csr_matrix:
+    """The merged arrays as a canonical csr_matrix with the operands' index dtypes, wider
+    (int64, as scipy would upcast) where those cannot hold the entry count or shape."""
+    widest = np.iinfo(np.dtype(indptr_dtype)).max
+    if max(int(indptr[-1]) if indptr.size else 0, *shape) > widest:
+        index_dtype = indptr_dtype = np.int64
     return csr_from_arrays(data, indices.astype(index_dtype), indptr.astype(indptr_dtype), shape,
                            canonical=True)
 

@@ -61,7 +61,8 @@ class _BandBordered:
     ``E``; the others are auxiliary unknowns with a zero right-hand side that
     carry a low-rank part of ``B``'s leading block: with
     ``[[K, U], [V^T, -I]]`` the first block row is ``(K + U V^T) x``.
-    :meth:`from_parts` returns None (the caller falls back to SuperLU on
+    :meth:`from_layout` (the factor's path) and :meth:`from_parts` return None (the
+    caller falls back to SuperLU on
     ``B``) when the band is wide, a pivot of ``K`` is exactly zero, or
     ``Sigma`` is numerically singular (the smallest singular value of
     ``Sigma`` equilibrated by the bounds ``|D_ij| + |R_i| |K^-1 C_j|`` of its

@@ -512,7 +512,8 @@ class _BandLU:
     within the band; solves agree to round-off (relative to the condition
     number), not bit for bit. Measured at N = 200 on the ring's contact branch
     (795 unknowns, half-bandwidths 43): 0.9 ms against 2.7 ms for
-    :class:`_OrderedLU`. :meth:`of` returns None (the caller takes SuperLU)
+    :class:`_OrderedLU`. :meth:`from_layout` (the factors' path) and :meth:`of` return
+    None (the caller takes SuperLU)
     when the band is wider than a quarter of the matrix, as
     :class:`~supercoil.continuation.bordered.BorderedFactor` does.
     """

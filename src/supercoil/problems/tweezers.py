@@ -479,9 +479,10 @@ def straight_bifurcations(problem: ClampedRodEnergy, branch: Branch,
     Measured (N = 100, C/A = 4/3, F L^2/A = 75, 0-5 turns): the five bifurcations agree
     with the continuation's bisection-then-Brent localisation to 1e-9 turns (its
     tolerance 1e-8); the straight branch took 75 inertia counts and 48 eigenproblems
-    with that localisation, 27 and 17 with this one (12 points, 10 certifying counts,
-    5 special points) plus the 192 x 192 definite eigenproblem: 0.54-0.69 s against
-    0.18 s of CPU (docs/benchmarks.md, "Session 9").
+    with that localisation, 23 and 17 with this one (12 points, 6 certifying counts
+    halfway between the roots and the ends, 5 special points; 27 with the first
+    version's two counts beside each root) plus the 192 x 192 definite eigenproblem:
+    0.54-0.69 s against 0.18 s of CPU (docs/benchmarks.md, "Session 9").
     """
     from scipy.linalg import LinAlgError, eigh, null_space
 

@@ -24,12 +24,15 @@ folds, bifurcations and user events (:mod:`supercoil.continuation.events`).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
+from supercoil._fork import Worker, point_workers
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.corrector import correct, tangent
@@ -128,6 +131,35 @@ def quadratic_term(system: ExtendedSystem, t_previous: np.ndarray, t_last: np.nd
     return term if system.norm(term) <= 0.5 * ds else np.zeros_like(t_last)
 
 
+@dataclass
+class _PendingPoint:
+    """A point handed to the tracer's worker (:meth:`_Tracer._hand_over`): its index,
+    whether its events are searched, the gauge's phase ``(phase_modes, q_phase_full)``
+    when it was added and its Hessian on all DOFs."""
+
+    index: int
+    search_events: bool
+    phase: tuple
+    full_hessian: object
+
+
+@dataclass
+class _PointRequest:
+    """What the worker needs to evaluate an accepted point as :meth:`_Tracer.add_point`
+    does here: the point and its tangent, whether its Hessian was assembled before
+    ``accept`` (the corrector's) or is to be after, whether to search events, the
+    last point and tangent as they are now (a regauge or rephase may have replaced
+    them), and the gauge's phase if it changed since the last request (else None)."""
+
+    x: np.ndarray
+    t: np.ndarray
+    hessian_before_accept: bool
+    search_events: bool
+    x_last: np.ndarray
+    t_last: np.ndarray
+    phase: tuple | None
+
+
 class _Tracer:
     """Follows one branch from a corrected point and tangent; collects points and events."""
 
@@ -162,6 +194,11 @@ class _Tracer:
         # ever appended)
         self._rows: list[tuple] = []
         self._columns: dict[str, list] = {}
+        # the point whose stability, records and events a fork is computing
+        # (:meth:`_hand_over`), settled by :meth:`_settle`
+        self._pending: _PendingPoint | None = None
+        self._worker: Worker | None = None
+        self._sent_phase: tuple | None = None  # the phase the worker has
 
     def _previous_tangent(self) -> tuple[np.ndarray, float] | None:
         """The tangent at the point before the last and the arclength between the two."""
@@ -191,16 +228,41 @@ class _Tracer:
         The point's eigenvalues feed no event or switch (those are recomputed), so
         they are computed by the faster path (``point_stability(fast=True)``: band
         LU, standard-mode Lanczos; equal to round-off).
+
+        With point workers (:func:`supercoil._fork.point_workers`), every point but a
+        run's first is handed to a fork of this process (:meth:`_hand_over`): the
+        fork computes from this very state what this method would, while the caller
+        corrects the next step, and :meth:`_settle` takes its answer (and calls
+        ``on_point``) before that step's point is judged or kept. An exception of the
+        fork's is raised by :meth:`_settle`, the point dropped, as here.
         """
+        self._settle()
         system = self.system
+        if self.xs and point_workers():
+            self._hand_over(x, t, full_hessian, search_events)
+            return
         system.set_parameter(x[-1])
         system.problem.accept(system.q(x))
         self._accepted_hessian = None
         full = system.full_hessian(x) if full_hessian is None else full_hessian
+        stability, records, user = self._evaluate(x, full)
+        self._append(x, t, stability, records, user, full)
+        if len(self.xs) >= 2 and search_events:
+            self._search_events()
+        if self.on_point is not None:
+            self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
+
+    def _evaluate(self, x: np.ndarray, full) -> tuple:
+        """``(stability, records, user values)`` of the accepted point ``x``."""
+        system = self.system
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
                                     full, fast=True)
         records = self._records(x)
         user = [user_values(ev, system, x) for ev in self.events]
+        return stability, records, user
+
+    def _append(self, x, t, stability, records, user, full) -> None:
+        system = self.system
         self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))
         self.xs.append(x)
         self.ts.append(t)
@@ -208,10 +270,121 @@ class _Tracer:
         self.recs.append(records)
         self.user.append(user)
         self._accepted_hessian = (x, full)
-        if len(self.xs) >= 2 and search_events:
+
+    # -- points computed in a fork ------------------------------------------------------------
+    def _hand_over(self, x: np.ndarray, t: np.ndarray, full_hessian, search_events: bool
+                   ) -> None:
+        """Send the point to the worker (forked now if there is none: it starts as this
+        process is, before the point's ``accept``), accept it here, and keep it with its
+        stability, records and user values pending (None) until :meth:`_settle`.
+
+        The worker mirrors this tracer: it receives every point added and every
+        change of the last point and of the gauge's phase (:class:`_PointRequest`), and
+        evaluates, accepts and searches events exactly as :meth:`add_point` does
+        here, so its problem goes through the same accepted states."""
+        system = self.system
+        if self._worker is None:
+            self._worker = Worker(self._serve)
+            self._sent_phase = (system.phase_modes, system.q_phase_full)
+        phase = (system.phase_modes, system.q_phase_full)
+        changed = phase[0] is not self._sent_phase[0] or phase[1] is not self._sent_phase[1]
+        self._worker.submit(_PointRequest(x, t, full_hessian is not None, search_events,
+                                          self.xs[-1], self.ts[-1],
+                                          phase if changed else None))
+        self._sent_phase = phase
+        system.set_parameter(x[-1])
+        system.problem.accept(system.q(x))
+        self._accepted_hessian = None
+        full = system.full_hessian(x) if full_hessian is None else full_hessian
+        pending = _PendingPoint(len(self.xs), search_events, phase, full)
+        self._append(x, t, None, None, None, full)
+        self._pending = pending
+
+    def _serve(self, request: _PointRequest) -> tuple:
+        """The worker's side of :meth:`_hand_over`: ``(stability, records, user values,
+        the special points found since the previous point)``."""
+        system, x = self.system, request.x
+        if request.phase is not None:
+            system.set_phase(*request.phase)
+        self.xs[-1], self.ts[-1] = request.x_last, request.t_last
+        system.set_parameter(x[-1])
+        full = system.full_hessian(x) if request.hessian_before_accept else None
+        system.problem.accept(system.q(x))
+        if full is None:
+            full = system.full_hessian(x)
+        stability, records, user = self._evaluate(x, full)
+        self._append(x, request.t, stability, records, user, full)
+        found = len(self.specials)
+        if len(self.xs) >= 2 and request.search_events:
             self._search_events()
+        return stability, records, user, self.specials[found:]
+
+    def _close_worker(self) -> None:
+        if self._worker is not None:
+            self._worker.close()
+            self._worker = None
+
+    def _settle(self) -> None:
+        """Take the answer of the fork computing the last point, if one is; then call
+        ``on_point``. Its exception is raised here, the point dropped (the gauge's phase
+        as it was when the point was added; the problem stays accepted there, as when
+        :meth:`add_point` raises). A fork that ended without an answer (killed) is
+        replaced by this process's own computation of the point."""
+        pending = self._pending
+        if pending is None:
+            return
+        system = self.system
+        lam = getattr(system.problem, system.parameter)
+        try:
+            done, answer = self._worker.result()
+        except KeyboardInterrupt:
+            raise  # the worker goes on; a later _settle takes its answer
+        except BaseException:
+            self._pending = None
+            self._drop_pending(pending)
+            self._close_worker()
+            raise
+        self._pending = None
+        k = pending.index
+        if not done:  # the worker was killed: this process evaluates, a new one follows
+            self._close_worker()
+            answer = self._evaluate_again(pending)
+        stability, records, user, specials = answer
+        self.stabs[k], self.recs[k], self.user[k] = stability, records, user
+        self.specials.extend(specials)
         if self.on_point is not None:
             self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
+        system.set_parameter(lam)
+
+    def _drop_pending(self, pending: _PendingPoint) -> None:
+        for values in (self.s, self.xs, self.ts, self.stabs, self.recs, self.user):
+            del values[pending.index:]
+        self._accepted_hessian = None
+        phase_modes, q_phase = pending.phase
+        if phase_modes is not self.system.phase_modes:  # rephased since
+            self.system.set_phase(phase_modes, q_phase)
+
+    def _evaluate_again(self, pending: _PendingPoint) -> tuple:
+        """This process's evaluation of the pending point (its fork was killed), in the
+        gauge it was added in; the events since the previous point searched too."""
+        system, k = self.system, pending.index
+        x, t = self.xs[k], self.ts[k]
+        now = (system.phase_modes, system.q_phase_full)
+        if pending.phase[0] is not now[0]:
+            system.set_phase(*pending.phase)
+        try:
+            system.set_parameter(x[-1])
+            stability, records, user = self._evaluate(x, pending.full_hessian)
+            self.stabs[k], self.recs[k], self.user[k] = stability, records, user
+            found = len(self.specials)
+            if k >= 1 and pending.search_events:
+                self._search_events()
+            specials = self.specials[found:]
+            del self.specials[found:]
+        finally:
+            if pending.phase[0] is not now[0]:
+                system.set_phase(*now)
+        return stability, records, user, specials
 
     # -- events between the last two points -------------------------------------------------
     def _search_events(self) -> None:
@@ -407,8 +580,12 @@ class _Tracer:
         gaps = np.sqrt(np.einsum("ij,ij->i", (a + u[:, None] * chord - earlier) ** 2,
                                  np.broadcast_to(w, earlier.shape)))
         cos_limit = math.cos(math.radians(15.0))
+        close = np.flatnonzero(gaps <= reach)
+        if close.size == 0:
+            return None
+        self._settle()  # the counts of the last point
         count = self.stabs[-1].unstable_count
-        for i in np.flatnonzero(gaps <= reach):
+        for i in close:
             j = int(near[i])
             if (self.ts[j] @ (w * self.ts[-1]) >= cos_limit
                     and self.stabs[j].unstable_count == count and self._closes_at(a, chord,
@@ -433,6 +610,31 @@ class _Tracer:
 
     # -- the stepping loop ------------------------------------------------------------------
     def run(self, step: float) -> tuple[ContinuationStatus, str]:
+        """Step from the last point until a bound, a stop or a failure; ``(status, message)``.
+
+        Every point is settled on return (:meth:`_settle`): a point whose stability
+        failed in its fork ends the run there, as it would have when it was added. An
+        interrupt (KeyboardInterrupt) first settles the point in progress, so that
+        ``on_point`` has seen every point computed."""
+        try:
+            status, message = self._run(step)
+            self._settle()
+        except (SingularMatrixError, InertiaError) as exc:
+            return self._stability_failed(exc)
+        except KeyboardInterrupt:
+            with contextlib.suppress(Exception):
+                self._settle()
+            raise
+        finally:
+            self._pending = None  # settled, or abandoned with an unexpected exception
+            self._close_worker()
+        return status, message
+
+    def _stability_failed(self, exc: Exception) -> tuple[ContinuationStatus, str]:
+        return ContinuationStatus.STEP_TOO_SMALL, (
+            f"stability at point {len(self.xs)} failed: {exc}")
+
+    def _run(self, step: float) -> tuple[ContinuationStatus, str]:
         system, opts = self.system, self.opts
         low, high = opts.parameter_bounds
         cos_turn = math.cos(math.radians(opts.max_turn_degrees))
@@ -492,6 +694,13 @@ class _Tracer:
             if failure is None and t_new @ (system.weights * t_k) < cos_turn:
                 failure = (f"the tangent turned by more than {opts.max_turn_degrees} degrees "
                            f"(a jump to another branch?)")
+            if failure is None:
+                # the last point's fork answers (its events and on_point come before
+                # this state is judged: a stop may watch them)
+                try:
+                    self._settle()
+                except (SingularMatrixError, InertiaError) as exc:
+                    return self._stability_failed(exc)
             if failure is None and self.stop is not None:
                 refusal = self.stop(system.q(x_new))
                 if refusal:
@@ -523,6 +732,10 @@ class _Tracer:
                 log.debug("step %.3g rejected: %s", ds, failure)
                 if opts.regauge and system.r and not regauged:
                     try:
+                        self._settle()
+                    except (SingularMatrixError, InertiaError) as exc:
+                        return self._stability_failed(exc)
+                    try:
                         moved = self._regauge()
                     except (SingularMatrixError, InertiaError) as exc:
                         return ContinuationStatus.STEP_TOO_SMALL, (
@@ -544,15 +757,17 @@ class _Tracer:
                     self._rephase(corr.factor if opts.factor_refinement and bound is None
                                   else None)
             except (SingularMatrixError, InertiaError) as exc:
-                return ContinuationStatus.STEP_TOO_SMALL, (
-                    f"stability at point {len(self.xs)} failed: {exc}")
+                return self._stability_failed(exc)
             if bound is None and x_new[-1] in (low, high):
                 bound = x_new[-1]  # the step ended exactly on the bound
             if bound is not None:
                 return ContinuationStatus.PARAMETER_BOUND, (
                     f"reached {system.parameter} = {bound:.10g} after {len(self.xs)} points")
             if opts.detect_closed_loops:
-                j = self._returned_to()
+                try:
+                    j = self._returned_to()
+                except (SingularMatrixError, InertiaError) as exc:
+                    return self._stability_failed(exc)
                 if j is not None:
                     return ContinuationStatus.CLOSED_LOOP, (
                         f"the branch closed on itself: after {len(self.xs)} points it came "

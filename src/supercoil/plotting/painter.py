@@ -43,17 +43,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Self
 
+from supercoil._fork import can_fork as _can_fork
+from supercoil._fork import usable_cores
+
 PROCESSES = 1  # helpers (module doc)
 TIMEOUT = 300.0  # seconds a helper may take for its figures before it is killed
 READY = b"ready\n"  # what a helper writes on its standard output once warmed up
-
-
-def usable_cores() -> int:
-    """Cores this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on every platform
-        return os.cpu_count() or 1
 
 
 class Painter:
@@ -209,20 +204,6 @@ def _draw(job) -> None:
     else:
         from supercoil.plotting.tweezers import draw_job
     draw_job(job)
-
-
-def _can_fork() -> bool:
-    """Whether :func:`draw_shared` may fork: Linux (a fork of a process that imported
-    matplotlib and numpy is safe there; macOS's system libraries are not fork-safe),
-    at least two cores, and no thread but this one, Python's or native (counted in
-    ``/proc/self/task``: another thread, e.g. a BLAS or XLA pool, could hold a
-    lock that the fork would then wait for forever)."""
-    if not (sys.platform.startswith("linux") and hasattr(os, "fork") and usable_cores() >= 2):
-        return False
-    try:
-        return len(os.listdir("/proc/self/task")) == 1
-    except OSError:
-        return False
 
 
 def draw_shared(jobs: Sequence, fork: bool | None = None) -> None:

@@ -69,6 +69,19 @@ CLOSURE_TOLERANCE = 1e-6  # a closed branch passes through its earlier point to 
 REFINE_BELOW = 1e-2
 
 
+# points that may be pending in the worker while a state is judged, when the stop looks
+# at the state alone (see _Tracer.add_point)
+POINT_LAG = 3
+
+
+def watches_points(stop: Callable[[np.ndarray], str | None] | None) -> bool:
+    """Whether ``stop`` must be asked only once ``on_point`` has seen every earlier point
+    (with point workers, :meth:`_Tracer.add_point`): True unless it declares that it
+    looks at the state alone (the attribute ``watches_points = False``), e.g. a stop
+    that watches the located special points through ``on_point``."""
+    return stop is not None and bool(getattr(stop, "watches_points", True))
+
+
 def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
                        options: ContinuationOptions) -> np.ndarray | None:
     """Phase-condition modes of a branch started at ``q`` (None when there are none).
@@ -194,9 +207,9 @@ class _Tracer:
         # ever appended)
         self._rows: list[tuple] = []
         self._columns: dict[str, list] = {}
-        # the point whose stability, records and events a fork is computing
-        # (:meth:`_hand_over`), settled by :meth:`_settle`
-        self._pending: _PendingPoint | None = None
+        # the points whose stability, records and events the worker is computing
+        # (:meth:`_hand_over`), oldest first, settled by :meth:`_settle`
+        self._pending: list[_PendingPoint] = []
         self._worker: Worker | None = None
         self._sent_phase: tuple | None = None  # the phase the worker has
 
@@ -230,13 +243,17 @@ class _Tracer:
         LU, standard-mode Lanczos; equal to round-off).
 
         With point workers (:func:`supercoil._fork.point_workers`), every point but a
-        run's first is handed to a fork of this process (:meth:`_hand_over`): the
-        fork computes from this very state what this method would, while the caller
-        corrects the next step, and :meth:`_settle` takes its answer (and calls
-        ``on_point``) before that step's point is judged or kept. An exception of the
-        fork's is raised by :meth:`_settle`, the point dropped, as here.
+        run's first is handed to the tracer's worker, a fork of this process that
+        mirrors it (:meth:`_hand_over`): the worker computes from the same state what
+        this method would, while the caller corrects the next steps, and
+        :meth:`_settle` takes its answers in order (and calls ``on_point`` for each).
+        A state is judged (``stop``) once every earlier point is settled, unless the
+        stop declares that it looks at the state alone (``watches_points = False``,
+        :func:`watches_points`): then up to ``POINT_LAG`` points stay pending. A
+        point whose evaluation raised in the worker is dropped by :meth:`_settle`
+        with every later point, and the exception raised there, as here.
         """
-        self._settle()
+        self._settle(POINT_LAG - 1 if self._worker is not None else 0)
         system = self.system
         if self.xs and point_workers():
             self._hand_over(x, t, full_hessian, search_events)
@@ -298,7 +315,7 @@ class _Tracer:
         full = system.full_hessian(x) if full_hessian is None else full_hessian
         pending = _PendingPoint(len(self.xs), search_events, phase, full)
         self._append(x, t, None, None, None, full)
-        self._pending = pending
+        self._pending.append(pending)
 
     def _serve(self, request: _PointRequest) -> tuple:
         """The worker's side of :meth:`_hand_over`: ``(stability, records, user values,
@@ -324,66 +341,85 @@ class _Tracer:
             self._worker.close()
             self._worker = None
 
-    def _settle(self) -> None:
-        """Take the answer of the fork computing the last point, if one is; then call
-        ``on_point``. Its exception is raised here, the point dropped (the gauge's phase
-        as it was when the point was added; the problem stays accepted there, as when
-        :meth:`add_point` raises). A fork that ended without an answer (killed) is
-        replaced by this process's own computation of the point."""
-        pending = self._pending
-        if pending is None:
-            return
+    def _settle(self, keep: int = 0) -> None:
+        """Take the worker's answers for the oldest pending points until at most ``keep``
+        remain, calling ``on_point`` after each. An exception of the worker's is raised
+        here, its point and every later one dropped (the gauge's phase and the accepted
+        state as they were when the point was added, as when :meth:`add_point`
+        raises). If the worker ended without answering (killed), this process
+        evaluates the points it had."""
         system = self.system
-        lam = getattr(system.problem, system.parameter)
-        try:
-            done, answer = self._worker.result()
-        except KeyboardInterrupt:
-            raise  # the worker goes on; a later _settle takes its answer
-        except BaseException:
-            self._pending = None
-            self._drop_pending(pending)
-            self._close_worker()
-            raise
-        self._pending = None
-        k = pending.index
-        if not done:  # the worker was killed: this process evaluates, a new one follows
-            self._close_worker()
-            answer = self._evaluate_again(pending)
-        stability, records, user, specials = answer
-        self.stabs[k], self.recs[k], self.user[k] = stability, records, user
-        self.specials.extend(specials)
-        if self.on_point is not None:
-            self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
-        system.set_parameter(lam)
+        while len(self._pending) > keep:
+            pending = self._pending[0]
+            lam = getattr(system.problem, system.parameter)
+            done = False
+            if self._worker is not None:
+                try:
+                    done, answer = self._worker.result()
+                except KeyboardInterrupt:
+                    raise  # the worker goes on; a later _settle takes its answer
+                except BaseException:
+                    self._drop_pending(pending)
+                    self._close_worker()
+                    raise
+            if not done:  # the worker was killed: this process evaluates, a new one follows
+                self._close_worker()
+                answer = self._evaluate_again(pending)
+            del self._pending[0]
+            k = pending.index
+            stability, records, user, specials = answer
+            self.stabs[k], self.recs[k], self.user[k] = stability, records, user
+            self.specials.extend(specials)
+            if self.on_point is not None:
+                self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE,
+                                          k + 1))
+            system.set_parameter(lam)
 
     def _drop_pending(self, pending: _PendingPoint) -> None:
-        for values in (self.s, self.xs, self.ts, self.stabs, self.recs, self.user):
-            del values[pending.index:]
+        """Forget ``pending`` and every later point; the phase and the accepted state
+        back to those of ``pending``."""
+        k, system = pending.index, self.system
+        x = self.xs[k]
+        for values in (self.s, self.xs, self.ts, self.stabs, self.recs, self.user,
+                       self._rows, *self._columns.values()):
+            del values[k:]
+        self._pending.clear()
         self._accepted_hessian = None
         phase_modes, q_phase = pending.phase
-        if phase_modes is not self.system.phase_modes:  # rephased since
-            self.system.set_phase(phase_modes, q_phase)
+        if phase_modes is not system.phase_modes:  # rephased since
+            system.set_phase(phase_modes, q_phase)
+        system.set_parameter(x[-1])
+        system.problem.accept(system.q(x))
 
     def _evaluate_again(self, pending: _PendingPoint) -> tuple:
-        """This process's evaluation of the pending point (its fork was killed), in the
-        gauge it was added in; the events since the previous point searched too."""
+        """This process's evaluation of a pending point (the worker was killed): the
+        later points set aside, the point accepted again in the gauge it was added in,
+        its events searched; then the last point accepted again, the gauge restored."""
         system, k = self.system, pending.index
-        x, t = self.xs[k], self.ts[k]
+        lists = (self.s, self.xs, self.ts, self.stabs, self.recs, self.user)
+        later = [values[k + 1:] for values in lists]
         now = (system.phase_modes, system.q_phase_full)
-        if pending.phase[0] is not now[0]:
-            system.set_phase(*pending.phase)
+        found = len(self.specials)
         try:
+            for values in lists:
+                del values[k + 1:]
+            system.set_phase(*pending.phase)
+            x = self.xs[k]
             system.set_parameter(x[-1])
+            system.problem.accept(system.q(x))
             stability, records, user = self._evaluate(x, pending.full_hessian)
             self.stabs[k], self.recs[k], self.user[k] = stability, records, user
-            found = len(self.specials)
             if k >= 1 and pending.search_events:
                 self._search_events()
             specials = self.specials[found:]
-            del self.specials[found:]
         finally:
-            if pending.phase[0] is not now[0]:
-                system.set_phase(*now)
+            del self.specials[found:]
+            for values, rest in zip(lists, later, strict=True):
+                values.extend(rest)
+            system.set_phase(*now)
+            last = self.xs[-1]
+            system.set_parameter(last[-1])
+            system.problem.accept(system.q(last))
         return stability, records, user, specials
 
     # -- events between the last two points -------------------------------------------------
@@ -626,7 +662,7 @@ class _Tracer:
                 self._settle()
             raise
         finally:
-            self._pending = None  # settled, or abandoned with an unexpected exception
+            self._pending.clear()  # settled, or abandoned with an unexpected exception
             self._close_worker()
         return status, message
 
@@ -695,10 +731,12 @@ class _Tracer:
                 failure = (f"the tangent turned by more than {opts.max_turn_degrees} degrees "
                            f"(a jump to another branch?)")
             if failure is None:
-                # the last point's fork answers (its events and on_point come before
-                # this state is judged: a stop may watch them)
+                # the worker's answers for the earlier points (their events and
+                # on_point come before this state is judged, unless the stop looks
+                # at the state alone)
                 try:
-                    self._settle()
+                    self._settle(POINT_LAG if self._worker is not None
+                                 and not watches_points(self.stop) else 0)
                 except (SingularMatrixError, InertiaError) as exc:
                     return self._stability_failed(exc)
             if failure is None and self.stop is not None:
@@ -778,46 +816,50 @@ class _Tracer:
         return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"
 
     # -- result -------------------------------------------------------------------------------
-    def branch(self, status: ContinuationStatus, message: str) -> Branch:
+    def branch(self, status: ContinuationStatus, message: str, count: int | None = None
+               ) -> Branch:
         """The branch so far (also the partial branch handed to ``on_point`` at every
-        point): each point's full-DOF rows and each record's values are converted once
-        and kept (:meth:`_point_rows`, :attr:`_columns`), so that a partial branch costs
-        the arrays' stacking, not a conversion of every point (measured on the tweezers
-        benchmark's contact branch, 91 points: 1.5 ms a call before)."""
+        point), or its first ``count`` points (those settled while later ones are
+        pending): each point's full-DOF rows and each record's values are converted
+        once and kept (:meth:`_point_rows`, :attr:`_columns`), so that a partial branch
+        costs the arrays' stacking, not a conversion of every point (measured on the
+        tweezers benchmark's contact branch, 91 points: 1.5 ms a call before)."""
         system = self.system
         n_dofs, m = system.problem.n_dofs, system.m
-        k = len(self.xs)
+        k = len(self.xs) if count is None else count
         records = {}
         if k and self.recs[0]:
             for name in self.recs[0]:
                 column = self._columns.setdefault(name, [])
-                column.extend(np.asarray(r[name]) for r in self.recs[len(column):])
-            records = {name: np.array(self._columns[name]) for name in self.recs[0]}
+                column.extend(np.asarray(r[name]) for r in self.recs[len(column):k])
+            records = {name: np.array(self._columns[name][:k]) for name in self.recs[0]}
         if k:
-            system.set_parameter(self.xs[-1][-1])
-        rows = self._point_rows()
+            system.set_parameter(self.xs[k - 1][-1])
+        rows = self._point_rows(k)
+        stabs = self.stabs[:k]
         return Branch(
             name=self.name, parent=self.parent, origin=self.origin,
             parameter=system.parameter,
-            parameter_values=np.array([x[-1] for x in self.xs]),
+            parameter_values=np.array([x[-1] for x in self.xs[:k]]),
             states=np.array([row[3] for row in rows]).reshape(k, n_dofs),
             multipliers=np.array([row[4] for row in rows]).reshape(k, m),
-            unstable_count=np.array([s.unstable_count for s in self.stabs], dtype=np.int64),
-            zero_modes=np.array([s.zero_modes for s in self.stabs], dtype=np.int64),
-            determinant_sign=np.array([s.determinant_sign for s in self.stabs], dtype=np.int64),
+            unstable_count=np.array([s.unstable_count for s in stabs], dtype=np.int64),
+            zero_modes=np.array([s.zero_modes for s in stabs], dtype=np.int64),
+            determinant_sign=np.array([s.determinant_sign for s in stabs], dtype=np.int64),
             nearest_eigenvalue=np.array([row[6] for row in rows]),
             tangents=np.array([row[5] for row in rows]).reshape(k, n_dofs + m + 1),
-            arclength=np.array(self.s),
+            arclength=np.array(self.s[:k]),
             special_points=tuple(self.specials), status=status, message=message,
             records=records, phase_modes=system.phase_modes,
             phase_state=system.q_phase_full)
 
-    def _point_rows(self) -> list[tuple]:
-        """Per point ``(x, t, stability, q, multipliers, full tangent, nearest
-        eigenvalue)``, converted when the point's ``x``, ``t`` or stability object is new
-        (a regauged point's ``x`` and a rephased point's tangent are replaced)."""
-        system, rows = self.system, self._rows  # points are only appended or replaced
-        for i, (x, t, stab) in enumerate(zip(self.xs, self.ts, self.stabs)):
+    def _point_rows(self, count: int) -> list[tuple]:
+        """Per point of the first ``count``, ``(x, t, stability, q, multipliers, full
+        tangent, nearest eigenvalue)``, converted when the point's ``x``, ``t`` or
+        stability object is new (a regauged point's ``x`` and a rephased point's tangent
+        are replaced; points dropped by :meth:`_drop_pending` are cut)."""
+        system, rows = self.system, self._rows
+        for i, (x, t, stab) in enumerate(zip(self.xs[:count], self.ts, self.stabs)):
             if i < len(rows) and rows[i][0] is x and rows[i][1] is t and rows[i][2] is stab:
                 continue
             row = (x, t, stab, system.q(x), system.multipliers(x), system.full_tangent(t),
@@ -826,7 +868,7 @@ class _Tracer:
                 rows[i] = row
             else:
                 rows.append(row)
-        return rows
+        return rows[:count]
 
 
 def continuation(problem: ConstrainedEnergy, q0: np.ndarray,

@@ -112,7 +112,11 @@ class Worker:
         self._partial = b""  # an answer read in part when an interrupt came
 
     def submit(self, request: object) -> None:
-        _send(self._requests, pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL))
+        """Queue ``request``; to a fork that has died, nothing (its :meth:`result` says so)."""
+        try:
+            _send(self._requests, pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL))
+        except BrokenPipeError:
+            pass  # the fork ended: result() answers (False, None) at the end of its answers
 
     def result(self) -> tuple[bool, object]:
         """The answer to the oldest request not yet answered: ``(True, value)``; the

@@ -898,12 +898,16 @@ def main(argv: Sequence[str] | None = None) -> NoReturn:
     """Entry point of the ``supercoil`` console script.
 
     The garbage collector of this process collects less often and not at the exit
-    (:mod:`supercoil._gc`); :func:`run`, which tests and scripts call in their own
-    processes, leaves it alone.
+    (:mod:`supercoil._gc`), and continuation points are evaluated by a worker on the
+    other core where the process may fork (:func:`supercoil._fork.use_point_workers`;
+    the results are those of the serial computation); :func:`run`, which tests and
+    scripts call in their own processes, leaves both alone.
     """
+    from supercoil._fork import use_point_workers
     from supercoil._gc import collect_less, freeze
 
     collect_less()
+    use_point_workers()
     status = run(argv)
     freeze()
     sys.exit(status)

@@ -22,11 +22,11 @@ a scalar attribute named by the caller (``excess_link``, ``turns``,
   bit those of the serial computation.
 """
 
+from supercoil._fork import use_point_workers
 from supercoil.continuation.branch import SCHEMA_VERSION, Branch, SpecialPoint
 from supercoil.continuation.consistency import ConsistencyReport, consistency_check
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
-from supercoil._fork import use_point_workers
 from supercoil.continuation.pseudo_arclength import continuation, watches_points
 from supercoil.continuation.switching import switch_branch
 

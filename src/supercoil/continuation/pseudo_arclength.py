@@ -399,11 +399,13 @@ class _Tracer:
         lists = (self.s, self.xs, self.ts, self.stabs, self.recs, self.user)
         later = [values[k + 1:] for values in lists]
         now = (system.phase_modes, system.q_phase_full)
+        rephased = pending.phase[0] is not now[0] or pending.phase[1] is not now[1]
         found = len(self.specials)
         try:
             for values in lists:
                 del values[k + 1:]
-            system.set_phase(*pending.phase)
+            if rephased:
+                system.set_phase(*pending.phase)
             x = self.xs[k]
             system.set_parameter(x[-1])
             system.problem.accept(system.q(x))
@@ -416,7 +418,8 @@ class _Tracer:
             del self.specials[found:]
             for values, rest in zip(lists, later, strict=True):
                 values.extend(rest)
-            system.set_phase(*now)
+            if rephased:
+                system.set_phase(*now)
             last = self.xs[-1]
             system.set_parameter(last[-1])
             system.problem.accept(system.q(last))

@@ -186,6 +186,9 @@ def serve(request):
 
 worker = Worker(serve)
 try:
+    # the request pipe's room: what is unanswered counts until its answer is read
+    big = Worker.pack(b"x" * (worker.capacity // 2))
+    assert worker.room(big) and not worker.room(big + big)
     for value in (1, 2, 3):
         worker.submit(value)
     assert [worker.result() for _ in range(3)] == [(True, 1), (True, 3), (True, 6)]

@@ -110,11 +110,27 @@ class Worker:
         self._requests = requests_write
         self._answers = answers_read
         self._partial = b""  # an answer read in part when an interrupt came
+        self.capacity = _widen(requests_write)  # bytes the request pipe holds
+        self._unanswered: list[int] = []  # sizes of the requests not answered yet
+
+    @staticmethod
+    def pack(request: object) -> bytes:
+        return pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL)
+
+    def room(self, packed: bytes) -> bool:
+        """Whether ``packed`` fits in the request pipe beside the unanswered requests. A
+        caller that reads no answer before its next request must wait for answers
+        until it does: the fork may be blocked writing an answer while the pipe is
+        full, and a write would then wait forever."""
+        return sum(self._unanswered) + len(packed) + _LENGTH.size <= self.capacity
 
     def submit(self, request: object) -> None:
-        """Queue ``request``; to a fork that has died, nothing (its :meth:`result` says so)."""
+        """Queue ``request`` (or its :meth:`pack`); to a fork that has died, nothing (its
+        :meth:`result` says so)."""
+        packed = request if isinstance(request, bytes) else self.pack(request)
+        self._unanswered.append(len(packed) + _LENGTH.size)
         try:
-            _send(self._requests, pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL))
+            _send(self._requests, packed)
         except BrokenPipeError:
             pass  # the fork ended: result() answers (False, None) at the end of its answers
 
@@ -124,6 +140,8 @@ class Worker:
         without answering (killed). An interrupt while waiting leaves the answer to a
         later call."""
         data = _receive(self._answers, self)
+        if self._unanswered:
+            del self._unanswered[0]
         if data is None:
             return False, None
         try:
@@ -147,6 +165,17 @@ class Worker:
 
 
 _LENGTH = struct.Struct("<Q")
+PIPE_BYTES = 1 << 20  # asked for the request pipe (Linux's default limit for a user)
+
+
+def _widen(fd: int) -> int:
+    """Ask for a pipe of ``PIPE_BYTES`` (Linux, ``F_SETPIPE_SZ``); the size it has."""
+    try:
+        import fcntl
+
+        return fcntl.fcntl(fd, fcntl.F_SETPIPE_SZ, PIPE_BYTES)
+    except (ImportError, AttributeError, OSError):
+        return 1 << 16  # the usual default
 
 
 def _send(fd: int, data: bytes) -> None:

@@ -305,9 +305,15 @@ class _Tracer:
             self._sent_phase = (system.phase_modes, system.q_phase_full)
         phase = (system.phase_modes, system.q_phase_full)
         changed = phase[0] is not self._sent_phase[0] or phase[1] is not self._sent_phase[1]
-        self._worker.submit(_PointRequest(x, t, full_hessian is not None, search_events,
-                                          self.xs[-1], self.ts[-1],
-                                          phase if changed else None))
+        request = self._worker.pack(_PointRequest(x, t, full_hessian is not None,
+                                                  search_events, self.xs[-1], self.ts[-1],
+                                                  phase if changed else None))
+        while self._worker is not None and self._pending and not self._worker.room(request):
+            self._settle(len(self._pending) - 1)  # a full pipe: answers first
+        if self._worker is None:  # it was killed meanwhile: this point goes to a new one
+            self._hand_over(x, t, full_hessian, search_events)
+            return
+        self._worker.submit(request)
         self._sent_phase = phase
         system.set_parameter(x[-1])
         system.problem.accept(system.q(x))
@@ -349,7 +355,7 @@ class _Tracer:
         raises). If the worker ended without answering (killed), this process
         evaluates the points it had."""
         system = self.system
-        while len(self._pending) > keep:
+        while len(self._pending) > (keep if self._worker is not None else 0):
             pending = self._pending[0]
             lam = getattr(system.problem, system.parameter)
             done = False
@@ -362,8 +368,8 @@ class _Tracer:
                     self._drop_pending(pending)
                     self._close_worker()
                     raise
-            if not done:  # the worker was killed: this process evaluates, a new one follows
-                self._close_worker()
+            if not done:  # the worker was killed: this process evaluates every point it
+                self._close_worker()  # had (a new worker follows at the next point)
                 answer = self._evaluate_again(pending)
             del self._pending[0]
             k = pending.index

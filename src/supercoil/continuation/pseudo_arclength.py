@@ -254,20 +254,25 @@ class _Tracer:
         with every later point, and the exception raised there, as here.
         """
         self._settle(POINT_LAG - 1 if self._worker is not None else 0)
-        system = self.system
         if self.xs and point_workers():
             self._hand_over(x, t, full_hessian, search_events)
             return
-        system.set_parameter(x[-1])
-        system.problem.accept(system.q(x))
-        self._accepted_hessian = None
-        full = system.full_hessian(x) if full_hessian is None else full_hessian
+        full = self._accept(x, full_hessian)
         stability, records, user = self._evaluate(x, full)
         self._append(x, t, stability, records, user, full)
         if len(self.xs) >= 2 and search_events:
             self._search_events()
         if self.on_point is not None:
             self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
+
+    def _accept(self, x: np.ndarray, full_hessian=None):
+        """Accept ``x`` in the problem; its Hessian on all DOFs (``full_hessian`` if given,
+        else assembled after the accept)."""
+        system = self.system
+        system.set_parameter(x[-1])
+        system.problem.accept(system.q(x))
+        self._accepted_hessian = None
+        return system.full_hessian(x) if full_hessian is None else full_hessian
 
     def _evaluate(self, x: np.ndarray, full) -> tuple:
         """``(stability, records, user values)`` of the accepted point ``x``."""
@@ -315,10 +320,7 @@ class _Tracer:
             return
         self._worker.submit(request)
         self._sent_phase = phase
-        system.set_parameter(x[-1])
-        system.problem.accept(system.q(x))
-        self._accepted_hessian = None
-        full = system.full_hessian(x) if full_hessian is None else full_hessian
+        full = self._accept(x, full_hessian)
         pending = _PendingPoint(len(self.xs), search_events, phase, full)
         self._append(x, t, None, None, None, full)
         self._pending.append(pending)
@@ -331,10 +333,9 @@ class _Tracer:
             system.set_phase(*request.phase)
         self.xs[-1], self.ts[-1] = request.x_last, request.t_last
         system.set_parameter(x[-1])
-        full = system.full_hessian(x) if request.hessian_before_accept else None
-        system.problem.accept(system.q(x))
-        if full is None:
-            full = system.full_hessian(x)
+        # the corrector's Hessian was assembled before the accept, as here
+        full = self._accept(x, system.full_hessian(x) if request.hessian_before_accept
+                            else None)
         stability, records, user = self._evaluate(x, full)
         self._append(x, request.t, stability, records, user, full)
         found = len(self.specials)

@@ -337,6 +337,33 @@ class RodEnergy(abc.ABC):
         return csr_from_arrays(values, indices.copy(), indptr.copy(),
                                (self.n_dofs, self.n_dofs))
 
+    # the load parameter that shifts ``twist_offset`` one for one (subclasses name it)
+    twist_parameter: str = ""
+
+    def parameter_derivative(self, q: np.ndarray, multipliers: np.ndarray,
+                             parameter: str) -> np.ndarray | None:
+        """``d/d parameter`` of the KKT residual ``[gradient; constraints]``
+        ``(n_dofs + n_constraints,)`` for :attr:`twist_parameter`; None for another
+        parameter (the caller then differentiates numerically).
+
+        That parameter (the ring's ``excess_link``, the clamped rod's ``turns``)
+        adds one for one to ``Tw = twist_offset + Phi / 2pi``, which enters the
+        gradient as ``k Tw grad(Phi) / 2pi`` (:meth:`gradient`): the derivative is
+        ``k grad(Phi) / 2pi``; the constraints (edge lengths) do not depend on it.
+        Exact, where the continuation's central difference costs two residuals and
+        carries an ``O(step^2)`` error.
+        """
+        if not parameter or parameter != self.twist_parameter:
+            return None
+        key = _key(q)
+        cached = self._gradient_cache
+        if cached is not None and cached[0] == key:
+            twist_gradient = cached[3]
+        else:
+            twist_gradient = self._pattern.scatter_vector(self._twist_terms(q, 1)[1])
+        derivative = (self._twist_coefficient / (2 * np.pi)) * twist_gradient
+        return np.concatenate([derivative, np.zeros(self.n_constraints)])
+
     def accept(self, q: np.ndarray) -> None:
         """Carry the reference directors to the new tangents (time-parallel transport)."""
         t_new = unit(self._edge_vectors(q))
@@ -386,29 +413,10 @@ class ClosedRodEnergy(RodEnergy):
         self.fixed = rigid_pins(points)
         self.gauge_dofs = self.fixed  # all six pins only remove rigid motions
 
+    twist_parameter = "excess_link"
+
     def twist_offset(self) -> float:
         return self.excess_link - self.reference_link
-
-    def parameter_derivative(self, q: np.ndarray, multipliers: np.ndarray,
-                             parameter: str) -> np.ndarray | None:
-        """``d/d excess_link`` of the KKT residual ``[gradient; constraints]``
-        ``(n_dofs + n_constraints,)``; None for another parameter (the caller then
-        differentiates numerically).
-
-        Only the twist term depends on the excess link: ``Tw = dLk - Lk_u + Phi / 2pi``
-        enters the gradient as ``k Tw grad(Phi) / 2pi`` (:meth:`gradient`), so the
-        derivative is ``k grad(Phi) / 2pi``; the constraints do not depend on it.
-        """
-        if parameter != "excess_link":
-            return None
-        key = _key(q)
-        cached = self._gradient_cache
-        if cached is not None and cached[0] == key:
-            twist_gradient = cached[3]
-        else:
-            twist_gradient = self._pattern.scatter_vector(self._twist_terms(q, 1)[1])
-        derivative = (self._twist_coefficient / (2 * np.pi)) * twist_gradient
-        return np.concatenate([derivative, np.zeros(self.n_constraints)])
 
     def repin(self, q: np.ndarray) -> None:
         """Re-pick the six rigid-motion pins (:func:`rigid_pins`) for the state ``q``.

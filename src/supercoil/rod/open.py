@@ -86,8 +86,23 @@ class ClampedRodEnergy(RodEnergy):
         self._end_mismatch = float(np.arctan2(-u_last[1], u_last[0]))  # (u x e_x).e_z, u.e_x
         self._turn_offset = 0  # whole turns restored after a rebuild of the frames (accept)
 
+    twist_parameter = "turns"
+
     def twist_offset(self) -> float:
         return self.turns + self._end_mismatch / (2 * np.pi) + self._turn_offset
+
+    def parameter_derivative(self, q: np.ndarray, multipliers: np.ndarray,
+                             parameter: str) -> np.ndarray | None:
+        """``d/d parameter`` of ``[gradient; constraints]`` ``(n_dofs + n_constraints,)``:
+        ``turns`` as :meth:`RodEnergy.parameter_derivative`; ``tension`` (the dead
+        load's potential ``-F (z_last - z_first)``, :meth:`gradient`) gives ``+1`` on
+        the first node's ``z`` and ``-1`` on the last one's; None for another parameter."""
+        if parameter != "tension":
+            return super().parameter_derivative(q, multipliers, parameter)
+        out = np.zeros(self.n_dofs + self.n_constraints)
+        out[2] = 1.0
+        out[self.n_dofs - 1] = -1.0
+        return out
 
     # An accepted state whose edges turned by more than this (degrees) from the
     # last one is a jump (a stored state), not a step: see accept.

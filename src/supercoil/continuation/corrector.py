@@ -29,6 +29,14 @@ BACKTRACKS = 4  # step halvings per corrector iteration (damped Newton)
 # step below NEGLIGIBLE_STEP relative (arclength metric)
 ROUNDOFF_RESIDUALS = 1e3
 NEGLIGIBLE_STEP = 1e-10
+# a chord step is tried only within this many tolerances: its contraction is 1e-4-1e-2
+# (measured on the tweezers' contact branch, where it landed from residuals up to 7e-6
+# against a tolerance of 1e-8, and not from 1e-5 and above)
+CHORD_REACH = 1e3
+# ... and not within this many round-off floors (of the last iterate with a Hessian):
+# there the residual may not fall (the straight rod's branches, tolerance 1e-10, stop at
+# 1-3e-10 by the floor) and the Newton path's floor test decides
+CHORD_ABOVE_FLOOR = 3.0
 
 
 @dataclass(frozen=True)
@@ -58,7 +66,7 @@ def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
 def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref: np.ndarray,
             sigma: float, tolerance: float, max_iterations: int,
             refine_below: float | None = None, max_distance: float | None = None,
-            center: np.ndarray | None = None) -> Correction:
+            center: np.ndarray | None = None, chord_below: float | None = None) -> Correction:
     """Newton on ``F(x) = 0, row . (x - x_ref) = sigma`` from ``x_start`` (see module doc).
 
     ``refine_below``: a Newton step at an iterate whose residual is below this
@@ -69,6 +77,19 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     ``max_distance``: the correction fails as soon as an iterate lies farther than
     this (arclength metric) from ``center`` (default ``x_start``), the trust
     region of a continuation step (``ContinuationOptions.max_corrector_distance``).
+
+    ``chord_below``: at an iterate whose residual is below this fraction of the
+    residual where the last bordered factor was made, a *chord step* is tried
+    first: the Newton step solved with that factor (no Hessian, no new factor).
+    In Newton's quadratic regime ``r_{k+1} ~ c r_k^2`` the ratio ``rho = r_k /
+    r_f`` estimates ``c r_f``, and the chord step's contraction is of that size
+    too (the bordered matrix moved by the last step, ``O(r_f)``): below
+    ``rho = 1e-3`` the chord step takes the residual from ``r_k`` to about
+    ``rho r_k``. It is kept only when it lands within ``tolerance`` (the
+    correction then ends there, as the Newton step would have: the iteration
+    count, which the step control reads, is the same); otherwise it is dropped
+    and the full Newton step is made from the same iterate. The converged point
+    differs from the Newton one below the tolerance only.
     """
     problem = system.problem
     x = np.array(x_start, dtype=float)
@@ -78,6 +99,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     res = np.nan
     factor = None
     factor_residual = np.inf
+    floor = 0.0  # round-off floor at the last iterate with a Hessian
     F = system.residual(x)
     for it in range(max_iterations + 1):
         if not np.all(np.isfinite(F)):
@@ -88,9 +110,21 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
             # it, the same matrix; the trial points of a user event need none
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
                               f"{res:.2e})", factor=factor)
+        chord_reach = min(chord_below * factor_residual, CHORD_REACH * tolerance) \
+            if chord_below is not None else 0.0
+        if factor is not None and it < max_iterations \
+                and CHORD_ABOVE_FLOOR * floor < res <= chord_reach:
+            landed = _chord_step(system, factor, x, F, row, x_ref, sigma, tolerance,
+                                 bounded, max_distance, x_start if center is None else center)
+            if landed is not None:
+                x_chord, res_chord = landed
+                return Correction(x_chord, True, it + 1, res_chord, f"converged in {it + 1} "
+                                  f"iterations (residual {res_chord:.2e}; the last a chord "
+                                  f"step)", factor=factor)
         full = system.full_hessian(x)
         H = full.restrict(system.free)  # = system.hessian(x)
-        if res <= roundoff_floor(H, system.q(x)):
+        floor = roundoff_floor(H, system.q(x))
+        if res <= floor:
             return Correction(x, True, it, res, f"converged in {it} iterations (residual "
                               f"{res:.2e})", H, full, factor)
         if it == max_iterations:
@@ -160,6 +194,35 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
                               f"or to another branch?)")
     return Correction(None, False, max_iterations, res, f"no convergence in {max_iterations} "
                       f"corrector iterations (residual {res:.2e} > {tolerance:.1e})")
+
+
+def _chord_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F: np.ndarray,
+                row: np.ndarray, x_ref: np.ndarray, sigma: float, tolerance: float,
+                bounded: bool, max_distance: float | None, center: np.ndarray
+                ) -> tuple[np.ndarray, float] | None:
+    """The chord step of :func:`correct` from ``x`` (residual ``F``) with an earlier
+    iterate's ``factor``: ``(x + dx, max|F|)`` there if the whole step is free of
+    collisions (``step_bound``), stays in the trust region and lands within
+    ``tolerance``; None otherwise (the caller then makes the Newton step)."""
+    try:
+        dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
+    except SingularMatrixError:
+        return None
+    if not np.all(np.isfinite(dx)):
+        return None
+    if bounded:
+        dq = np.zeros(system.problem.n_dofs)
+        dq[system.free] = dx[:system.n]
+        if float(system.problem.step_bound(system.q(x), dq)) < 1.0:
+            return None
+    x_new = x + dx
+    if max_distance is not None and system.norm(x_new - center) > max_distance:
+        return None
+    F_new = system.residual(x_new)
+    if not np.all(np.isfinite(F_new)):
+        return None
+    res = float(np.max(np.abs(F_new))) if F_new.size else 0.0
+    return (x_new, res) if res <= tolerance else None
 
 
 def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,

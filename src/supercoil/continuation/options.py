@@ -62,6 +62,12 @@ class ContinuationOptions:
       is below ``REFINE_BELOW`` of the one where the factor was made. The
       iterates and tangents are the same to round-off, with fewer
       factorisations.
+    * ``chord_steps``: where Newton's last step cut the residual by more than
+      ``CHORD_BELOW`` (1e-3), the next step is first tried with the same
+      bordered factor (no Hessian, no factorisation) and kept only when it lands
+      within ``tolerance`` (:func:`~supercoil.continuation.corrector.correct`'s
+      ``chord_below``): the same iteration counts, the points the same below the
+      tolerance.
     * ``zero_tolerance``: eigenvalues (of ``H v = mu M v`` on the constraint
       tangent space) with ``|mu|`` below it are ``zero_modes``, never signed.
     * ``n_modes``: eigenvalues computed at each point beyond the unstable ones.
@@ -158,6 +164,7 @@ class ContinuationOptions:
     direction: int = 1
     predictor: str = "tangent"
     factor_refinement: bool = False
+    chord_steps: bool = False
     parameter_weight: float = 1.0
     zero_tolerance: float = 1e-6
     n_modes: int = 2

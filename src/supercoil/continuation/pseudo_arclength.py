@@ -67,6 +67,10 @@ CLOSURE_TOLERANCE = 1e-6  # a closed branch passes through its earlier point to 
 # refinement with that factor (measured on the ring's alpha_contact at N = 200: 181
 # such steps converged, 37 fell back to a new factor; at 0.1, 229 and 196)
 REFINE_BELOW = 1e-2
+# with ContinuationOptions.chord_steps, an iterate whose residual is below this fraction
+# of the one where the corrector last factorised first tries a chord step with that
+# factor (corrector.correct's chord_below)
+CHORD_BELOW = 1e-2
 
 
 # points that may be pending in the worker while a state is judged, when the stop looks
@@ -718,7 +722,8 @@ class _Tracer:
                            opts.max_corrector_iterations,
                            REFINE_BELOW if opts.factor_refinement else None,
                            None if opts.max_corrector_distance is None
-                           else opts.max_corrector_distance * ds, predicted)
+                           else opts.max_corrector_distance * ds, predicted,
+                           CHORD_BELOW if opts.chord_steps else None)
             failure = None if corr.ok else corr.message
             x_new = t_new = full = None
             if failure is None:

@@ -667,7 +667,7 @@ def tweezers_branches(options: TweezersOptions,
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns,
                                     max_points=min(opts.segment_points, opts.max_points),
-                                    event_tolerance=opts.event_tolerance)
+                                    event_tolerance=opts.event_tolerance, chord_steps=True)
     # The contact-free runs end at the first point past a located contact onset (the
     # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
     # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
@@ -782,7 +782,8 @@ def tweezers_branches(options: TweezersOptions,
         parameter_bounds=opts.turns, direction=1 if free.tangents[k, -1] >= 0 else -1,
         parameter_weight=D, tolerance=opts.contact_tolerance,
         event_tolerance=opts.contact_event_tolerance,
-        predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE)
+        predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
+        chord_steps=True)
     contact_records = tweezers_records(cp, rod, True)
     contact_events = (contact_count_event(cp),)
     old, contact_complete = stored.get(contact_name, (None, False))

@@ -369,3 +369,46 @@ def test_tweezers_lines_are_stable_up_to_the_located_buckling():
         (line,) = kwargs["branches"]
         stable_turns = np.asarray(line["turns"])[np.asarray(line["stable"])]
         assert stable_turns.max() == 2.2
+
+
+@pytest.mark.parametrize("scale, names", [
+    (1.0, ("straight", "buckled")),
+    (1e5, ("a branch with a long name, and another clause", "b")),  # wide labels
+    (-3e-4, ("straight", "buckled_contact")),  # negative ticks, an offset text
+])
+def test_diagram_layout_keeps_every_text_inside_and_the_legend_beside(scale, names):
+    """The diagram's own layout (``figures._fit_beside_legend``): drawn at the saving
+    resolution, every tick label, axis label, the title and the legend lie inside the
+    figure, and the legend lies right of everything the axes draw."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from supercoil.plotting.figures import diagram_figure
+
+    turns = np.linspace(0.0, 5.0, 40)
+    branches = [{"name": name, "turns": turns, "torque": scale * (k + 1) * turns**2,
+                 "stable": turns < 2.5} for k, name in enumerate(names)]
+    specials = [{"kind": "fold", "turns": 2.0, "torque": 4.0 * scale}]
+    fig = diagram_figure(branches, specials, title="clamped rod, a title of some length",
+                         x="turns", y="torque")
+    fig.set_dpi(150)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    ax = fig.axes[0]
+    figure_box = fig.bbox
+    (x0, x1), (y0, y1) = sorted(ax.get_xlim()), sorted(ax.get_ylim())
+    # the tick labels drawn: those of ticks within the view limits
+    texts = [t for t in ax.get_xticklabels() if x0 <= t.get_position()[0] <= x1]
+    texts += [t for t in ax.get_yticklabels() if y0 <= t.get_position()[1] <= y1]
+    assert len(texts) >= 4
+    texts += [ax.xaxis.label, ax.yaxis.label, ax.title, ax.yaxis.get_offset_text()]
+    for text in texts:
+        if not text.get_visible() or not text.get_text():
+            continue
+        box = text.get_window_extent(renderer)
+        assert box.x0 >= figure_box.x0 - 0.5 and box.x1 <= figure_box.x1 + 0.5, text
+        assert box.y0 >= figure_box.y0 - 0.5 and box.y1 <= figure_box.y1 + 0.5, text
+    legend = fig.legends[0].get_window_extent(renderer)
+    assert figure_box.x0 <= legend.x0 and legend.x1 <= figure_box.x1 + 0.5
+    assert legend.y0 >= figure_box.y0 and legend.y1 <= figure_box.y1 + 0.5
+    assert legend.x0 >= ax.get_tightbbox(renderer).x1  # beside the axes, not over them

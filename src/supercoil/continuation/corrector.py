@@ -79,17 +79,16 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     region of a continuation step (``ContinuationOptions.max_corrector_distance``).
 
     ``chord_below``: at an iterate whose residual is below this fraction of the
-    residual where the last bordered factor was made, a *chord step* is tried
-    first: the Newton step solved with that factor (no Hessian, no new factor).
-    In Newton's quadratic regime ``r_{k+1} ~ c r_k^2`` the ratio ``rho = r_k /
-    r_f`` estimates ``c r_f``, and the chord step's contraction is of that size
-    too (the bordered matrix moved by the last step, ``O(r_f)``): below
-    ``rho = 1e-3`` the chord step takes the residual from ``r_k`` to about
-    ``rho r_k``. It is kept only when it lands within ``tolerance`` (the
-    correction then ends there, as the Newton step would have: the iteration
-    count, which the step control reads, is the same); otherwise it is dropped
-    and the full Newton step is made from the same iterate. The converged point
-    differs from the Newton one below the tolerance only.
+    residual where the last bordered factor was made (Newton's quadratic regime),
+    within ``CHORD_REACH`` tolerances and above ``CHORD_ABOVE_FLOOR`` round-off
+    floors, a *chord step* is tried first: the Newton step solved with that factor
+    (no Hessian, no new factor). Its contraction is that of the bordered matrix's
+    change over the last step, measured 1e-4 to 1e-2 on the tweezers' contact
+    branch. It is kept only when it lands within ``tolerance`` (the correction
+    then ends there, as the Newton step would have: the iteration count, which the
+    step control reads, is the same); otherwise it is dropped and the Newton step
+    is made from the same iterate. The converged point differs from the Newton
+    one below the tolerance only.
     """
     problem = system.problem
     x = np.array(x_start, dtype=float)

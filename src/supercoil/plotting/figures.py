@@ -199,6 +199,12 @@ def _segment_contact(s_mid: np.ndarray, conf: Mapping) -> np.ndarray:
     return hit
 
 
+CELL = 2.7  # inches: one configuration's cell
+SUPTITLE = 0.32  # inches above the cells for the figure's title
+CELL_PAD = 0.04  # inches around each axes
+CELL_TITLE = 0.22  # inches above each axes for its label (font size "small")
+
+
 def configurations_figure(configurations: Sequence[Mapping], *, diameter: float | None,
                           title: str, closed: bool = True):
     """Centrelines ``{label, points (n, 3), contact_points?, contact_intervals?}`` as tubes.
@@ -218,8 +224,20 @@ def configurations_figure(configurations: Sequence[Mapping], *, diameter: float 
     base = np.array(to_rgb(style.TUBE_COLOR))
     red = np.array(to_rgb(style.CONTACT_COLOR))
     with style.styled():
-        fig = Figure(figsize=(2.7 * cols, 2.7 * rows + 0.45), layout="constrained")
-        axes = np.atleast_1d(fig.subplots(rows, cols)).ravel()
+        # a fixed grid (no tick labels to fit): cells of CELL inches under a band of
+        # SUPTITLE inches, each axes a square below its title, so that the tubes' line
+        # widths in data units follow from the layout without a layout pass
+        cell, band, pad, title_band = CELL, SUPTITLE, CELL_PAD, CELL_TITLE
+        width_in, height_in = cell * cols, cell * rows + band
+        fig = Figure(figsize=(width_in, height_in))
+        side = cell - 2 * pad - title_band  # inches: each axes' square
+        axes = []
+        for index in range(rows * cols):
+            row, col = divmod(index, cols)
+            left = col * cell + 0.5 * (cell - side)
+            bottom = height_in - band - (row + 1) * cell + pad
+            axes.append(fig.add_axes((left / width_in, bottom / height_in, side / width_in,
+                                      side / height_in)))
         prepared = []
         for ax, conf in zip(axes, configurations, strict=False):
             x = np.asarray(conf["points"], float).reshape(-1, 3)
@@ -239,7 +257,6 @@ def configurations_figure(configurations: Sequence[Mapping], *, diameter: float 
             prepared.append((ax, conf, p, width, span))
         for ax in axes[len(configurations):]:
             ax.axis("off")
-        fig.draw_without_rendering()  # final axes sizes, for line widths in data units
         for ax, conf, p, width, span in prepared:
             path = np.vstack([p, p[:1]]) if closed else p
             s_mid = _arc_positions(p, closed)[: len(path) - 1] + 0.5 / (
@@ -250,7 +267,7 @@ def configurations_figure(configurations: Sequence[Mapping], *, diameter: float 
             contact = _segment_contact(s_mid, conf)
             body = np.where(contact[:, None], red, base) * (0.55 + 0.45 * shade[:, None])
             light = body + 0.55 * (1.0 - body)
-            width_pt = max(width / span * ax.bbox.height * 72.0 / fig.dpi, 0.6)
+            width_pt = max(width / span * side * 72.0, 0.6)  # the axes' side in points
             order = np.argsort(depth)  # far segments first, near ones drawn over them
             lines = np.empty((2 * len(order), 2, 2))
             lines[0::2] = segs[order]

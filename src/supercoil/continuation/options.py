@@ -68,8 +68,8 @@ class ContinuationOptions:
       factorisation) and kept only when it lands within ``tolerance``
       (:func:`~supercoil.continuation.corrector.correct`'s ``chord_below``): the
       same iteration counts, the points the same below the tolerance. Measured
-      on the tweezers' contact branch (N = 100): 60 of 67 tried landed, 48 fewer
-      factorisations of 693 (docs/benchmarks.md, "Session 12").
+      on the tweezers' contact branch (N = 100): 60 of 67 tried landed, 633
+      factorisations instead of 693 (docs/benchmarks.md, "Session 12").
     * ``zero_tolerance``: eigenvalues (of ``H v = mu M v`` on the constraint
       tangent space) with ``|mu|`` below it are ``zero_modes``, never signed.
     * ``n_modes``: eigenvalues computed at each point beyond the unstable ones.

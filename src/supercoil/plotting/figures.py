@@ -84,7 +84,7 @@ LAYOUT_PAD = 6.0  # points between the figure's edge, the axes' decorations and 
 def _fit_beside_legend(fig, ax, legend) -> None:
     """Place ``ax`` to fill ``fig`` with its tick labels, axis labels and title inside,
     and ``legend`` beside it on the right, top-aligned (what matplotlib's constrained
-    layout does with ``loc="outside right upper"``, from one measurement of the text).
+    layout does with ``loc="outside right upper"``, from the axes' decorations alone).
 
     The decorations are measured once at the first position, the axes moved so that
     they fit with :data:`LAYOUT_PAD` around them, then measured again at the new

@@ -48,6 +48,20 @@ def _counted(monkeypatch):
     return calls
 
 
+def _recorded_chords(monkeypatch):
+    """A list that gets, for every chord step tried, whether it landed."""
+    landed = []
+    original = corrector._chord_step
+
+    def recording(*args):
+        out = original(*args)
+        landed.append(out is not None)
+        return out
+
+    monkeypatch.setattr(corrector, "_chord_step", recording)
+    return landed
+
+
 @pytest.mark.parametrize("push", [0.02, 0.03, 0.05])
 def test_chord_step_lands_with_newtons_iteration_count_and_one_factor_fewer(monkeypatch, push):
     system, row, x_ref, start = _start(push=push)
@@ -75,15 +89,7 @@ def test_chord_steps_that_do_not_land_are_dropped(monkeypatch):
     made from the same iterate: the correction is Newton's, bit for bit."""
     system, row, x_ref, start = _start(push=0.4)
     monkeypatch.setattr(corrector, "CHORD_REACH", 1e30)
-    tried = []
-    original = corrector._chord_step
-
-    def recording(*args):
-        out = original(*args)
-        tried.append(out is not None)
-        return out
-
-    monkeypatch.setattr(corrector, "_chord_step", recording)
+    tried = _recorded_chords(monkeypatch)
     newton = correct(system, start, row, x_ref, 0.4, 1e-8, 20)
     chord = correct(system, start, row, x_ref, 0.4, 1e-8, 20, chord_below=1.0)
     assert tried and not any(tried)
@@ -110,15 +116,7 @@ def test_bratu_branch_with_chord_steps_has_the_same_points_and_fold(monkeypatch)
     from test_continuation import assert_consistent, bratu_branch, moore_spence_fold
 
     _, plain = bratu_branch(24, tolerance=1e-8)
-    landed = []
-    original = corrector._chord_step
-
-    def recording(*args):
-        out = original(*args)
-        landed.append(out is not None)
-        return out
-
-    monkeypatch.setattr(corrector, "_chord_step", recording)
+    landed = _recorded_chords(monkeypatch)
     problem, chord = bratu_branch(24, tolerance=1e-8, chord_steps=True)
     assert sum(landed) >= 3  # chord steps were taken
     assert plain.ok and chord.ok and len(chord) == len(plain)

@@ -371,15 +371,17 @@ def test_tweezers_lines_are_stable_up_to_the_located_buckling():
         assert stable_turns.max() == 2.2
 
 
+@pytest.mark.parametrize("made_at", [100, 150])  # 150: as draw_job makes the figures
 @pytest.mark.parametrize("scale, names", [
     (1.0, ("straight", "buckled")),
     (1e5, ("a branch with a long name, and another clause", "b")),  # wide labels
     (-3e-4, ("straight", "buckled_contact")),  # negative ticks, an offset text
 ])
-def test_diagram_layout_keeps_every_text_inside_and_the_legend_beside(scale, names):
-    """The diagram's own layout (``figures._fit_beside_legend``): drawn at the saving
-    resolution, every tick label, axis label, the title and the legend lie inside the
-    figure, and the legend lies right of everything the axes draw."""
+def test_diagram_layout_keeps_every_text_inside_and_the_legend_beside(scale, names, made_at):
+    """The diagram's own layout (``figures._fit_beside_legend``): made at ``made_at`` dpi
+    and drawn at the saving resolution, every tick label, axis label, the title and the
+    legend lie inside the figure, and the legend lies right of everything the axes draw."""
+    import matplotlib
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     from supercoil.plotting.figures import diagram_figure
@@ -388,8 +390,10 @@ def test_diagram_layout_keeps_every_text_inside_and_the_legend_beside(scale, nam
     branches = [{"name": name, "turns": turns, "torque": scale * (k + 1) * turns**2,
                  "stable": turns < 2.5} for k, name in enumerate(names)]
     specials = [{"kind": "fold", "turns": 2.0, "torque": 4.0 * scale}]
-    fig = diagram_figure(branches, specials, title="clamped rod, a title of some length",
-                         x="turns", y="torque")
+    with matplotlib.rc_context({"figure.dpi": made_at}):
+        fig = diagram_figure(branches, specials, title="clamped rod, a title of some length",
+                             x="turns", y="torque")
+    assert fig.dpi == made_at
     fig.set_dpi(150)
     canvas = FigureCanvasAgg(fig)
     canvas.draw()

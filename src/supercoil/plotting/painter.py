@@ -159,12 +159,15 @@ def _warm_up() -> None:
     """Draw and encode a small figure in the house style (fonts, mathtext, PNG)."""
     import io
 
+    import matplotlib
+
     from supercoil.plotting.tweezers import SAVE_OPTIONS, diagram_figure
 
-    fig = diagram_figure([{"name": "a", "turns": [0.0, 1.0], "extension": [1.0, 0.5],
-                           "stable": [True, False]}],
-                         [{"kind": "fold", "turns": 1.0, "extension": 0.5}],
-                         title="warm-up", x="turns", y="extension")
+    with matplotlib.rc_context({"figure.dpi": SAVE_OPTIONS["dpi"]}):  # as draw_job's
+        fig = diagram_figure([{"name": "a", "turns": [0.0, 1.0], "extension": [1.0, 0.5],
+                               "stable": [True, False]}],
+                             [{"kind": "fold", "turns": 1.0, "extension": 0.5}],
+                             title="warm-up", x="turns", y="extension")
     fig.savefig(io.BytesIO(), format="png", **SAVE_OPTIONS)
 
 

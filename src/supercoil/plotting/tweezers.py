@@ -97,13 +97,19 @@ def figure_jobs(payload: Mapping, configurations: Sequence[Mapping],
 
 def draw_job(job: tuple[Path, str, dict]) -> Path:
     """Build the figure of one of :func:`figure_jobs` and save it; returns its path."""
+    import matplotlib
+
     path, builder, kwargs = job
     build = diagram_figure if builder == "diagram" else configurations_figure
     kwargs = dict(kwargs)
-    if builder == "diagram":
-        fig = build(kwargs.pop("branches"), kwargs.pop("special_points"), **kwargs)
-    else:
-        fig = build(kwargs.pop("configurations"), **kwargs)
+    # made at the resolution it is saved at: the layout's text measurements are then
+    # the drawing's (matplotlib caches them per dpi), and the save does not rescale the
+    # figure (measured on the four figures of the benchmark: 12 % less CPU)
+    with matplotlib.rc_context({"figure.dpi": SAVE_OPTIONS["dpi"]}):
+        if builder == "diagram":
+            fig = build(kwargs.pop("branches"), kwargs.pop("special_points"), **kwargs)
+        else:
+            fig = build(kwargs.pop("configurations"), **kwargs)
     fig.savefig(path, **SAVE_OPTIONS)
     return Path(path)
 

@@ -484,13 +484,42 @@ def _place_multipliers(x_order: np.ndarray, rows: np.ndarray, columns: np.ndarra
                        m: int) -> np.ndarray:
     """``x_order`` with each multiplier right after the first unknown its constraint
     touches (``rows``, ``columns``: the nonzero entries of ``J``; see :func:`kkt_order`)."""
+    return _place_multipliers_kernel(np.asarray(x_order, dtype=np.int64),
+                                     np.asarray(rows, dtype=np.int64),
+                                     np.asarray(columns, dtype=np.int64), n, m)
+
+
+@njit()
+def _place_multipliers_kernel(x_order, rows, columns, n, m):
+    """:func:`_place_multipliers` compiled: the multipliers bucketed by the place of their
+    first unknown (in index order within a bucket, as numpy's stable sort of the keys
+    ``2 place + 1`` among the unknowns' ``2 k`` did; 50 µs of it at N = 100)."""
     position = np.empty(n, dtype=np.int64)
-    position[x_order] = np.arange(n)
+    for k in range(n):
+        position[x_order[k]] = k
     first = np.full(m, n, dtype=np.int64)
-    np.minimum.at(first, rows, position[columns])
-    keys = np.concatenate([2 * np.arange(n), 2 * first + 1])
-    items = np.concatenate([x_order, n + np.arange(m)])
-    return items[np.argsort(keys, kind="stable")]
+    for e in range(rows.size):
+        first[rows[e]] = min(first[rows[e]], position[columns[e]])
+    start = np.zeros(n + 2, dtype=np.int64)
+    for j in range(m):
+        start[first[j] + 1] += 1
+    for k in range(n + 1):
+        start[k + 1] += start[k]
+    bucket = np.empty(m, dtype=np.int64)
+    fill = start.copy()
+    for j in range(m):
+        bucket[fill[first[j]]] = j
+        fill[first[j]] += 1
+    out = np.empty(n + m, dtype=np.int64)
+    e = 0
+    for k in range(n + 1):
+        if k < n:
+            out[e] = x_order[k]
+            e += 1
+        for t in range(start[k], start[k + 1]):
+            out[e] = n + bucket[t]
+            e += 1
+    return out
 
 
 def _is_canonical_float(A) -> bool:

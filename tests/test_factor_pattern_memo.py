@@ -378,3 +378,19 @@ def test_one_border_schur_test_equals_the_array_formula():
             assert mine == former_schur_test(D, R, KC, schur)
         kept.append(mine)
     assert any(kept) and not all(kept)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_permuted_kkt_entries_equal_the_gathered_entries(seed):
+    """kkt_band_layout's places of the KKT entries against _kkt_entries gathered by the
+    positions (the former code), also without constraints."""
+    rng = np.random.default_rng(120 + seed)
+    S, J = contact_like_kkt(rng, int(rng.integers(4, 30)), int(rng.integers(0, 3)))
+    if seed == 2:
+        J = sp.csr_matrix((0, S.shape[0]))
+    size = S.shape[0] + J.shape[0]
+    position = rng.permutation(size)
+    rows, cols, _values = kkt._kkt_entries(S, J, values=False)
+    mine = kkt._permuted_kkt_entries(S.indptr, S.indices, J.indptr, J.indices, position)
+    for a, b in zip(mine, (position[rows], position[cols]), strict=True):
+        assert a.dtype == b.dtype and np.array_equal(a, b)

@@ -596,15 +596,13 @@ def kkt_band_layout(S: sp.csr_matrix, J: sp.csr_matrix, order: np.ndarray,
            float(max_fraction), values is not None)
     found = _BAND_MEMO.get(key)
     if found is None:
-        rows, cols, _values = _kkt_entries(S, J, values=False)
         size = n + m
         position = np.empty(size, dtype=np.int64)
         position[order] = np.arange(size)
-        layout = band_layout(size, position[rows], position[cols], max_fraction) \
-            if rows.size else None
+        rows, cols = _permuted_kkt_entries(S.indptr, S.indices, J.indptr, J.indices, position)
+        layout = band_layout(size, rows, cols, max_fraction) if rows.size else None
         if layout is None and values is not None and rows.size:
-            layout = band_layout_of_nonzeros(size, position[rows], position[cols], values,
-                                             max_fraction)
+            layout = band_layout_of_nonzeros(size, rows, cols, values, max_fraction)
         found = (layout,)
         _BAND_MEMO.put(key, found)
     layout = found[0]
@@ -612,6 +610,31 @@ def kkt_band_layout(S: sp.csr_matrix, J: sp.csr_matrix, order: np.ndarray,
             and (values is None or not layout.holds(values)):
         return None
     return layout
+
+
+@njit()
+def _permuted_kkt_entries(s_ptr, s_idx, j_ptr, j_idx, position):
+    """The places ``(position[rows], position[columns])`` of :func:`_kkt_entries`'
+    entries of canonical ``S``, ``J`` (int64), without its concatenations and gathers
+    (the larger half of a new pattern's band layout at N = 100)."""
+    n, m = s_ptr.size - 1, j_ptr.size - 1
+    total = s_idx.size + 2 * j_idx.size
+    rows = np.empty(total, dtype=np.int64)
+    cols = np.empty(total, dtype=np.int64)
+    e = 0
+    for i in range(n):
+        for p in range(s_ptr[i], s_ptr[i + 1]):
+            rows[e], cols[e] = position[i], position[s_idx[p]]
+            e += 1
+    for k in range(m):
+        for p in range(j_ptr[k], j_ptr[k + 1]):
+            rows[e], cols[e] = position[j_idx[p]], position[n + k]
+            e += 1
+    for k in range(m):
+        for p in range(j_ptr[k], j_ptr[k + 1]):
+            rows[e], cols[e] = position[n + k], position[j_idx[p]]
+            e += 1
+    return rows, cols
 
 
 _CSR_MEMO = PatternMemo()

@@ -50,8 +50,14 @@ class PatternMemo:
     @staticmethod
     def _size(item) -> int:
         if isinstance(item, tuple):
-            return sum(PatternMemo._size(part) for part in item)
-        return int(getattr(item, "nbytes", len(item) if isinstance(item, bytes) else 8))
+            total = 0
+            for part in item:
+                total += PatternMemo._size(part)
+            return total
+        if isinstance(item, bytes):
+            return len(item)
+        nbytes = getattr(item, "nbytes", None)
+        return 8 if nbytes is None else int(nbytes)
 
     def get(self, key: tuple):
         return self._items.get(key)

@@ -394,3 +394,25 @@ def test_permuted_kkt_entries_equal_the_gathered_entries(seed):
     mine = kkt._permuted_kkt_entries(S.indptr, S.indices, J.indptr, J.indices, position)
     for a, b in zip(mine, (position[rows], position[cols]), strict=True):
         assert a.dtype == b.dtype and np.array_equal(a, b)
+
+
+def test_dense_rows_with_the_long_row_check_follow_the_rule():
+    """dense_rows (its early exit on no long rows included) against the rule itself:
+    rows of more than max(32, 0.1 n) nonzeros, stored zeros not counted; a matrix
+    without long rows has none."""
+    rng = np.random.default_rng(130)
+    n = 500
+    for trial in range(6):
+        lengths = rng.integers(0, 80, 5)
+        J = np.zeros((5, n))
+        for k, length in enumerate(lengths):
+            J[k, rng.choice(n, size=length, replace=False)] = rng.standard_normal(length)
+        J = sp.csr_matrix(J)
+        if trial % 2:
+            J.data[::3] = 0.0  # stored zeros: long rows of few nonzeros
+        limit = max(kkt.DENSE_ROW_MIN_ENTRIES, kkt.DENSE_ROW_FRACTION * n)
+        rule = [k for k in range(5) if np.count_nonzero(J[k].data) > limit]
+        assert kkt.dense_rows(J).tolist() == rule
+        assert kkt.has_long_rows(J) == bool(np.max(np.diff(J.indptr)) > limit)
+        assert not rule or kkt.has_long_rows(J)
+    assert not kkt.has_long_rows(sp.csr_matrix((0, n)))

@@ -43,6 +43,7 @@ from supercoil.solvers.kkt import (
     _kkt_values,
     _permuted_kkt_entries,
     canonical,
+    has_long_rows,
     kkt_band_layout,
     remembered_order,
 )
@@ -603,14 +604,16 @@ class BorderedFactor:
         ``S``, ``J`` and the banded block's ``J``).
 
         Remembered per pattern (:data:`_PATTERNS`) when ``S``, ``J`` are canonical
-        float64 CSR, ``order`` is None and ``J`` has no dense rows: keyed by
+        float64 CSR, ``order`` is None and ``J`` has no row long enough to be dense
+        (:func:`~supercoil.solvers.kkt.has_long_rows`; a ring's phase condition: its
+        pins depend on the values, and its factors keep the memos below): keyed by
         :func:`~supercoil.solvers.patterns.pattern_words` of ``S``, ``J`` and the
         border's zeros, and used when the words are equal and the ordering's
         certificate holds for ``J``'s values (:meth:`~supercoil.solvers.kkt._OrderMemo.
         certifies`; else the ordering and layouts are looked up or made as without the
         memo). Everything else in it depends on the words only: the layouts of ``P B
         P^T`` and of ``K``'s band (whether the band holds the values, and a band too
-        wide, included), and the absence of dense rows. The three memos it replaces at
+        wide, included). The three memos it replaces at
         a hit (:func:`~supercoil.solvers.kkt.kkt_order`, :func:`_remembered_layout`,
         :func:`~supercoil.solvers.kkt.kkt_band_layout`) each made and hashed bytes of
         the patterns (Python's hash of ``S.indices``' bytes alone is 25 µs at N = 100),
@@ -620,7 +623,8 @@ class BorderedFactor:
         the certificate."""
         n, m, size = S.shape[0], J.shape[0], S.shape[0] + J.shape[0] + 1
         words = None
-        if order is None and _is_canonical_float(S) and _is_canonical_float(J):
+        if order is None and _is_canonical_float(S) and _is_canonical_float(J) \
+                and not has_long_rows(J):  # then J has no dense rows (no pins)
             words, fingerprint = pattern_words(S, J, column, scaled_row)
             key = (n, m, S.shape[1], J.shape[1], fingerprint)
             found = _PATTERNS.get(key)
@@ -647,7 +651,7 @@ class BorderedFactor:
         # pattern and filled with its values in the order of _kkt_entries
         pattern.band = kkt_band_layout(S, J_banded, kkt_ordering, s_bytes, BAND_FRACTION,
                                        _kkt_values(S, J_banded))
-        if words is not None and pinned is None and order_memo is not None:
+        if words is not None and order_memo is not None:
             _PATTERNS.put(key, (pattern,))
         return pattern, pinned, S, J, J_banded
 

@@ -102,14 +102,30 @@ DENSE_ROW_FRACTION = 0.1
 def dense_rows(J: sp.spmatrix) -> np.ndarray:
     """Indices of the dense rows of the constraint Jacobian ``J`` ``(m, n)`` (rule above)."""
     J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)
-    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
-    if J.shape[0] == 0:
+    if not has_long_rows(J):
         return np.zeros(0, dtype=np.int64)
+    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
     # only rows storing more than the limit can hold more nonzeros: count theirs
     candidates = np.flatnonzero(np.diff(J.indptr) > limit)
     counts = [np.count_nonzero(J.data[J.indptr[k]:J.indptr[k + 1]]) for k in candidates]
     return candidates[np.asarray(counts, dtype=np.int64) > limit] if candidates.size \
         else np.zeros(0, dtype=np.int64)
+
+
+def has_long_rows(J: sp.csr_matrix) -> bool:
+    """Whether the CSR matrix ``J`` stores a row of more entries than a dense row has
+    nonzeros (:func:`dense_rows` looks only at those: without them ``J`` has no dense
+    rows), by a compiled pass over ``J.indptr`` (numpy's took 30 µs at N = 100)."""
+    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
+    return J.shape[0] > 0 and _longest_row(J.indptr) > limit
+
+
+@njit()
+def _longest_row(indptr):
+    longest = 0
+    for k in range(indptr.size - 1):
+        longest = max(longest, indptr[k + 1] - indptr[k])
+    return longest
 
 
 class PinnedRows:

@@ -416,3 +416,17 @@ def test_dense_rows_with_the_long_row_check_follow_the_rule():
         assert kkt.has_long_rows(J) == bool(np.max(np.diff(J.indptr)) > limit)
         assert not rule or kkt.has_long_rows(J)
     assert not kkt.has_long_rows(sp.csr_matrix((0, n)))
+
+
+def test_pattern_memo_counts_the_layouts_it_keeps():
+    """The memo's memory bound sees the layouts a remembered pattern keeps alive."""
+    clear_memos()
+    rng = np.random.default_rng(140)
+    S, J = contact_like_kkt(rng, 25, 1)
+    size = S.shape[0] + J.shape[0] + 1
+    BorderedFactor(HessianParts(S), J, rng.standard_normal(size - 1), rng.standard_normal(size))
+    ((pattern,),) = bordered._PATTERNS.values()
+    held = sum(a.nbytes for a in pattern.layout) + pattern.band.positions.nbytes \
+        + pattern.words.nbytes
+    assert pattern.nbytes >= held
+    assert bordered._PATTERNS._total >= held

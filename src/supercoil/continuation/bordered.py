@@ -443,9 +443,13 @@ class _FactorPattern:
                  "words")
 
     @property
-    def nbytes(self) -> int:  # for PatternMemo's memory bound (the layouts are shared)
-        return sum(int(getattr(self, name).nbytes) for name in
-                   ("col_at", "kkt_order", "order", "row_at", "words"))
+    def nbytes(self) -> int:
+        """For PatternMemo's memory bound: everything it holds, the layouts shared with
+        their own memos included (they stay alive while this does)."""
+        arrays = [self.col_at, self.kkt_order, self.order, self.row_at, self.words,
+                  *self.layout]
+        return sum(int(a.nbytes) for a in arrays) \
+            + (0 if self.band is None else self.band.nbytes)
 
 
 _PATTERNS = PatternMemo()

@@ -105,12 +105,16 @@ def band_layout(size: int, rows: np.ndarray, cols: np.ndarray,
     band ``kl + ku + 1`` is wider than ``max_fraction`` of ``size`` (:func:`band_lu`)."""
     rows = np.asarray(rows, dtype=np.int64)
     cols = np.asarray(cols, dtype=np.int64)
-    if rows.size == 0 or rows.shape != cols.shape:  # numpy's errors
+    compiled = rows.ndim == 1 and rows.shape == cols.shape and rows.size > 0
+    if compiled:
+        kl, ku = _band_widths(rows, cols)
+    else:  # numpy's broadcasting and errors (an empty pattern), as before
         kl = int(max(0, np.max(rows - cols)))
-    kl, ku = _band_widths(rows, cols)
+        ku = int(max(0, np.max(cols - rows)))
     if kl + ku + 1 > size * max_fraction:
         return None
-    positions = _band_positions(rows, cols, kl, ku)
+    positions = _band_positions(rows, cols, kl, ku) if compiled \
+        else cols * (2 * kl + ku + 1) + (kl + ku + rows - cols)
     positions.flags.writeable = False  # shared by the factors of one pattern
     return BandLayout(size, kl, ku, positions)
 

@@ -615,7 +615,9 @@ def kkt_band_layout(S: sp.csr_matrix, J: sp.csr_matrix, order: np.ndarray,
         size = n + m
         position = np.empty(size, dtype=np.int64)
         position[order] = np.arange(size)
-        rows, cols = _permuted_kkt_entries(S.indptr, S.indices, J.indptr, J.indices, position)
+        S_c, J_c = canonical(S), canonical(J)  # as _kkt_entries
+        rows, cols = _permuted_kkt_entries(S_c.indptr, S_c.indices, J_c.indptr, J_c.indices,
+                                           position)
         layout = band_layout(size, rows, cols, max_fraction) if rows.size else None
         if layout is None and values is not None and rows.size:
             layout = band_layout_of_nonzeros(size, rows, cols, values, max_fraction)

@@ -83,6 +83,12 @@ class BandLayout:
         self.dropped = dropped
 
     @property
+    def storage_size(self) -> int:
+        """Length of the flat band storage: ``ab`` ``(2 kl + ku + 1, size)``, and one slot
+        past it for the dropped entries."""
+        return (2 * self.kl + self.ku + 1) * self.size + (self.dropped is not None)
+
+    @property
     def nbytes(self) -> int:  # for PatternMemo's memory bound
         return int(self.positions.nbytes) + (0 if self.dropped is None
                                              else int(self.dropped.nbytes))
@@ -99,13 +105,38 @@ def band_layout(size: int, rows: np.ndarray, cols: np.ndarray,
     band ``kl + ku + 1`` is wider than ``max_fraction`` of ``size`` (:func:`band_lu`)."""
     rows = np.asarray(rows, dtype=np.int64)
     cols = np.asarray(cols, dtype=np.int64)
-    kl = int(max(0, np.max(rows - cols)))
-    ku = int(max(0, np.max(cols - rows)))
+    compiled = rows.ndim == 1 and rows.shape == cols.shape and rows.size > 0
+    if compiled:
+        kl, ku = _band_widths(rows, cols)
+    else:  # numpy's broadcasting and errors (an empty pattern), as before
+        kl = int(max(0, np.max(rows - cols)))
+        ku = int(max(0, np.max(cols - rows)))
     if kl + ku + 1 > size * max_fraction:
         return None
-    positions = cols * (2 * kl + ku + 1) + (kl + ku + rows - cols)
+    positions = _band_positions(rows, cols, kl, ku) if compiled \
+        else cols * (2 * kl + ku + 1) + (kl + ku + rows - cols)
     positions.flags.writeable = False  # shared by the factors of one pattern
     return BandLayout(size, kl, ku, positions)
+
+
+@njit()
+def _band_widths(rows, cols):
+    """``(max(0, max(rows - cols)), max(0, max(cols - rows)))`` in one compiled pass
+    (numpy's temporaries were half of a new pattern's layout at N = 100)."""
+    kl = ku = 0
+    for i in range(rows.size):
+        kl = max(kl, rows[i] - cols[i])
+        ku = max(ku, cols[i] - rows[i])
+    return kl, ku
+
+
+@njit()
+def _band_positions(rows, cols, kl, ku):
+    """``cols * (2 kl + ku + 1) + (kl + ku + rows - cols)``: the offsets in ``ab``."""
+    positions = np.empty(rows.size, dtype=np.int64)
+    for i in range(rows.size):
+        positions[i] = cols[i] * (2 * kl + ku + 1) + (kl + ku + rows[i] - cols[i])
+    return positions
 
 
 def band_layout_of_nonzeros(size: int, rows: np.ndarray, cols: np.ndarray,
@@ -147,11 +178,17 @@ def band_factor(layout: BandLayout, values: np.ndarray):
     n = 795, ``kl = ku = 43``: 0.57 ms against 0.48 ms a factorisation with the
     factors kept alive; the same LAPACK call on the same numbers, the same result
     bit for bit)."""
-    kl, ku, size = layout.kl, layout.ku, layout.size
-    stored = (2 * kl + ku + 1) * size
-    flat = np.zeros(stored + (layout.dropped is not None))
+    flat = np.zeros(layout.storage_size)
     flat[layout.positions] = values
-    ab = flat[:stored].reshape((2 * kl + ku + 1, size), order="F")
+    return factor_band_storage(layout, flat)
+
+
+def factor_band_storage(layout: BandLayout, flat: np.ndarray):
+    """:func:`band_factor` of the band storage already filled: ``flat``
+    (``layout.storage_size``, float64) holds ``ab`` in Fortran order, then the slot of
+    the dropped entries if any; it is factorised in place."""
+    kl, ku, size = layout.kl, layout.ku, layout.size
+    ab = flat[:(2 * kl + ku + 1) * size].reshape((2 * kl + ku + 1, size), order="F")
     lub, piv, info = lapack.dgbtrf(ab, kl, ku, overwrite_ab=1)
     return lub, piv, kl, ku, info
 

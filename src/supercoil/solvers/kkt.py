@@ -102,14 +102,30 @@ DENSE_ROW_FRACTION = 0.1
 def dense_rows(J: sp.spmatrix) -> np.ndarray:
     """Indices of the dense rows of the constraint Jacobian ``J`` ``(m, n)`` (rule above)."""
     J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)
-    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
-    if J.shape[0] == 0:
+    if not has_long_rows(J):
         return np.zeros(0, dtype=np.int64)
+    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
     # only rows storing more than the limit can hold more nonzeros: count theirs
     candidates = np.flatnonzero(np.diff(J.indptr) > limit)
     counts = [np.count_nonzero(J.data[J.indptr[k]:J.indptr[k + 1]]) for k in candidates]
     return candidates[np.asarray(counts, dtype=np.int64) > limit] if candidates.size \
         else np.zeros(0, dtype=np.int64)
+
+
+def has_long_rows(J: sp.csr_matrix) -> bool:
+    """Whether the CSR matrix ``J`` stores a row of more entries than a dense row has
+    nonzeros (:func:`dense_rows` looks only at those: without them ``J`` has no dense
+    rows), by a compiled pass over ``J.indptr`` (numpy's took 30 µs at N = 100)."""
+    limit = max(DENSE_ROW_MIN_ENTRIES, DENSE_ROW_FRACTION * J.shape[1])
+    return J.shape[0] > 0 and _longest_row(J.indptr) > limit
+
+
+@njit()
+def _longest_row(indptr):
+    longest = 0
+    for k in range(indptr.size - 1):
+        longest = max(longest, indptr[k + 1] - indptr[k])
+    return longest
 
 
 class PinnedRows:
@@ -237,23 +253,32 @@ def kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
     at N = 100) is ordered from a compiled merge of the patterns
     (:func:`_kkt_order_merged`, 0.1 ms against scipy's 0.4 ms, the same ordering).
     """
+    return remembered_order(S, J)[0]
+
+
+def remembered_order(S: sp.spmatrix, J: sp.spmatrix) -> tuple[np.ndarray, _OrderMemo | None]:
+    """:func:`kkt_order` and the :class:`_OrderMemo` that certifies it for other values
+    of ``J`` of the same stored patterns and zeros (None: not remembered), for a caller
+    that remembers more per pattern (:class:`~supercoil.continuation.bordered.
+    BorderedFactor`)."""
     J = J if isinstance(J, sp.csr_matrix) else sp.csr_matrix(J)  # read only here
     if getattr(S, "format", None) != "csr" or not J.has_canonical_format:
-        return _kkt_order(S, J)
+        return _kkt_order(S, J), None
     j_key = (J.shape, J.indptr.tobytes(), J.indices.tobytes(),
              np.packbits(J.data != 0).tobytes())
     key = (S.shape, S.indptr.tobytes(), S.indices.tobytes(),
            np.packbits(S.data != 0).tobytes(), *j_key)
     memo = _ORDER_MEMO.get(key)
     if memo is not None and memo[0].certifies(J):
-        return memo[0].order.copy()
+        return memo[0].order.copy(), memo[0]
     pairs = _gram_pattern(J, j_key)
     order = _kkt_order(S, J, pairs)
     memo = _OrderMemo.of(J, order, pairs) if pairs is not None else None
     if memo is not None and memo.certifies(J):
         _ORDER_MEMO.put(key, (memo, memo.order, memo._first, memo._second, memo._group,
                               memo._two_terms, memo._cancelled))
-    return order
+        return order, memo
+    return order, None
 
 
 class _OrderMemo:
@@ -304,17 +329,34 @@ class _OrderMemo:
         return self._two_terms & (total == 0.0)
 
     def certifies(self, J: sp.csr_matrix) -> bool:
-        total, size = _pair_sums(J.data, self._first, self._second, self._group,
-                                 self._n_groups)
-        nonzero = np.abs(total) > 1e-8 * size
+        """Whether the order is that of ``J``'s values (class doc), in one compiled pass
+        (:func:`_certified`: the numpy version's sums and tests took 35 µs a call at
+        N = 100)."""
         if self._cancelled is None:
-            return bool(np.all(nonzero))
-        # an entry of two terms is present exactly when its sum is not 0 (either order
-        # gives the same sum): it certifies when it is present or absent as before;
-        # an entry of more terms must be certainly nonzero
-        cancelled = self._two_terms & (total == 0.0)
-        return bool(np.all(nonzero | self._two_terms)
-                    and np.array_equal(cancelled, self._cancelled))
+            none = np.zeros(0, dtype=bool)
+            return bool(_certified(J.data, self._first, self._second, self._group,
+                                   self._n_groups, none, none, True))
+        return bool(_certified(J.data, self._first, self._second, self._group,
+                               self._n_groups, self._two_terms, self._cancelled, False))
+
+
+@njit()
+def _certified(data, first, second, group, n_groups, two_terms, cancelled, strict):
+    """:meth:`_OrderMemo.certifies` on :func:`_pair_sums`' sums: every entry of ``J^T J``
+    has ``|sum| > 1e-8 sum |terms|`` (``strict``), or, else, every entry of more than
+    two terms has, and each entry of two terms cancels exactly (sum 0) where
+    ``cancelled`` says and only there (an entry of two terms is present exactly when
+    its sum is not 0: either order gives the same sum)."""
+    total, size = _pair_sums(data, first, second, group, n_groups)
+    for k in range(n_groups):
+        nonzero = abs(total[k]) > 1e-8 * size[k]
+        if strict:
+            if not nonzero:
+                return False
+        elif not (nonzero or two_terms[k]) \
+                or (two_terms[k] and total[k] == 0.0) != cancelled[k]:
+            return False
+    return True
 
 
 @njit()
@@ -458,13 +500,42 @@ def _place_multipliers(x_order: np.ndarray, rows: np.ndarray, columns: np.ndarra
                        m: int) -> np.ndarray:
     """``x_order`` with each multiplier right after the first unknown its constraint
     touches (``rows``, ``columns``: the nonzero entries of ``J``; see :func:`kkt_order`)."""
+    return _place_multipliers_kernel(np.asarray(x_order, dtype=np.int64),
+                                     np.asarray(rows, dtype=np.int64),
+                                     np.asarray(columns, dtype=np.int64), n, m)
+
+
+@njit()
+def _place_multipliers_kernel(x_order, rows, columns, n, m):
+    """:func:`_place_multipliers` compiled: the multipliers bucketed by the place of their
+    first unknown (in index order within a bucket, as numpy's stable sort of the keys
+    ``2 place + 1`` among the unknowns' ``2 k`` did; 50 µs of it at N = 100)."""
     position = np.empty(n, dtype=np.int64)
-    position[x_order] = np.arange(n)
+    for k in range(n):
+        position[x_order[k]] = k
     first = np.full(m, n, dtype=np.int64)
-    np.minimum.at(first, rows, position[columns])
-    keys = np.concatenate([2 * np.arange(n), 2 * first + 1])
-    items = np.concatenate([x_order, n + np.arange(m)])
-    return items[np.argsort(keys, kind="stable")]
+    for e in range(rows.size):
+        first[rows[e]] = min(first[rows[e]], position[columns[e]])
+    start = np.zeros(n + 2, dtype=np.int64)
+    for j in range(m):
+        start[first[j] + 1] += 1
+    for k in range(n + 1):
+        start[k + 1] += start[k]
+    bucket = np.empty(m, dtype=np.int64)
+    fill = start.copy()
+    for j in range(m):
+        bucket[fill[first[j]]] = j
+        fill[first[j]] += 1
+    out = np.empty(n + m, dtype=np.int64)
+    e = 0
+    for k in range(n + 1):
+        if k < n:
+            out[e] = x_order[k]
+            e += 1
+        for t in range(start[k], start[k + 1]):
+            out[e] = n + bucket[t]
+            e += 1
+    return out
 
 
 def _is_canonical_float(A) -> bool:
@@ -541,15 +612,15 @@ def kkt_band_layout(S: sp.csr_matrix, J: sp.csr_matrix, order: np.ndarray,
            float(max_fraction), values is not None)
     found = _BAND_MEMO.get(key)
     if found is None:
-        rows, cols, _values = _kkt_entries(S, J, values=False)
         size = n + m
         position = np.empty(size, dtype=np.int64)
         position[order] = np.arange(size)
-        layout = band_layout(size, position[rows], position[cols], max_fraction) \
-            if rows.size else None
+        S_c, J_c = canonical(S), canonical(J)  # as _kkt_entries
+        rows, cols = _permuted_kkt_entries(S_c.indptr, S_c.indices, J_c.indptr, J_c.indices,
+                                           position)
+        layout = band_layout(size, rows, cols, max_fraction) if rows.size else None
         if layout is None and values is not None and rows.size:
-            layout = band_layout_of_nonzeros(size, position[rows], position[cols], values,
-                                             max_fraction)
+            layout = band_layout_of_nonzeros(size, rows, cols, values, max_fraction)
         found = (layout,)
         _BAND_MEMO.put(key, found)
     layout = found[0]
@@ -557,6 +628,31 @@ def kkt_band_layout(S: sp.csr_matrix, J: sp.csr_matrix, order: np.ndarray,
             and (values is None or not layout.holds(values)):
         return None
     return layout
+
+
+@njit()
+def _permuted_kkt_entries(s_ptr, s_idx, j_ptr, j_idx, position):
+    """The places ``(position[rows], position[columns])`` of :func:`_kkt_entries`'
+    entries of canonical ``S``, ``J`` (int64), without its concatenations and gathers
+    (the larger half of a new pattern's band layout at N = 100)."""
+    n, m = s_ptr.size - 1, j_ptr.size - 1
+    total = s_idx.size + 2 * j_idx.size
+    rows = np.empty(total, dtype=np.int64)
+    cols = np.empty(total, dtype=np.int64)
+    e = 0
+    for i in range(n):
+        for p in range(s_ptr[i], s_ptr[i + 1]):
+            rows[e], cols[e] = position[i], position[s_idx[p]]
+            e += 1
+    for k in range(m):
+        for p in range(j_ptr[k], j_ptr[k + 1]):
+            rows[e], cols[e] = position[j_idx[p]], position[n + k]
+            e += 1
+    for k in range(m):
+        for p in range(j_ptr[k], j_ptr[k + 1]):
+            rows[e], cols[e] = position[n + k], position[j_idx[p]]
+            e += 1
+    return rows, cols
 
 
 _CSR_MEMO = PatternMemo()

@@ -5,17 +5,19 @@ sparsity patterns (rod + contact + constraint curvature, restricted to the
 free DOFs). scipy.sparse spends most of such a call on checks and index-dtype
 bookkeeping (measured at N = 100: 60 µs per sum and 80 µs per restriction for
 microseconds of arithmetic). These functions return the same matrices, entry
-for entry and in the same stored order, by compiled merges or from index maps
+for entry and in the same stored order, by compiled passes or from index maps
 computed once per pattern:
 
 * :func:`csr_add` is ``A + B`` of scipy for canonical CSR operands (sorted,
   no duplicates): the union pattern, ``a + b`` where both are stored, ``a``
   or ``b`` alone elsewhere, and every entry that comes out zero dropped (as
   scipy's merge does), one compiled merge of the rows;
-  :func:`csr_add_blocks` adds dense element blocks to ``A`` the same way;
+  :func:`csr_add_blocks` adds dense element blocks to ``A`` the same way, and
+  optionally a third matrix after them;
 * :func:`csr_restrict` is ``A[keep][:, keep]`` for sorted unique ``keep``:
   the kept entries of each kept row in their stored order, explicit zeros
-  included; :func:`csr_columns` is ``A[:, keep]`` likewise.
+  included, one compiled pass; :func:`csr_columns` is ``A[:, keep]`` likewise,
+  from index maps computed once per pattern.
 
 :func:`block_csr` assembles dense element blocks (a contact Hessian's pair
 blocks) into canonical CSR in one compiled pass: the pattern of scipy's

@@ -58,6 +58,9 @@ def test_csr_restrict_equals_scipy_bit_for_bit(seed):
         mine = csr_restrict(A, keep)
         assert _same_bits(mine, ref)
         assert np.array_equal(np.signbit(mine.data), np.signbit(ref.data))
+        # the canonical flag, where set, is what scipy's own check finds
+        fresh = sp.csr_matrix((mine.data, mine.indices, mine.indptr), shape=mine.shape)
+        assert mine.has_canonical_format == fresh.has_canonical_format
     if n > 2:  # not strictly increasing, or out of range: scipy's own path
         for keep in (np.array([2, 0, 1]), np.array([0, 0, 1]), np.array([-1, 0])):
             assert (csr_restrict(A, keep) != A[keep][:, keep]).nnz == 0
@@ -152,6 +155,15 @@ def test_contact_lagrangian_hessian_is_the_hessian_plus_the_curvature(choice):
             assert _same_bits(mine.sparse, ref.sparse)
             assert np.array_equal(mine.vectors, ref.vectors)
             assert np.array_equal(mine.coefficients, ref.coefficients)
+
+
+def test_rod_hessian_is_flagged_canonical_rightly():
+    rod, x = _stadium(40)
+    S = rod.hessian(x.ravel()).sparse
+    fresh = sp.csr_matrix((S.data, S.indices, S.indptr), shape=S.shape)
+    assert vars(S).get("_has_canonical_format") is True and fresh.has_canonical_format
+    restricted = csr_restrict(S, np.arange(3, S.shape[0] - 2))
+    assert vars(restricted).get("_has_canonical_format") is True
 
 
 def test_rod_constraint_curvature_equals_the_numpy_fill_bit_for_bit():

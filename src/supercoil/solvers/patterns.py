@@ -364,7 +364,10 @@ def csr_restrict(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
                                A.shape[0])
         if out is not None:
             indptr, indices, data = out
-            return csr_from_arrays(data, indices, indptr, (keep.size, keep.size))
+            # the restriction of a canonical matrix is canonical (flagged so, the sums
+            # that take it skip scipy's check)
+            return csr_from_arrays(data, indices, indptr, (keep.size, keep.size),
+                                   canonical=A.has_canonical_format)
     return A[keep][:, keep].tocsr()
 
 

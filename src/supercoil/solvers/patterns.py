@@ -299,7 +299,9 @@ def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data,
                 data[nnz] = value
                 nnz += 1
         indptr[r + 1] = nnz
-    return indptr, indices[:nnz], data[:nnz]
+    # copies: the arrays were sized for every block entry (five times the sum's
+    # entries at 79 pairs), which the matrix would otherwise hold
+    return indptr, indices[:nnz].copy(), data[:nnz].copy()
 
 
 def _canonical_csr(data, indices, indptr, shape, index_dtype, indptr_dtype) -> sp.csr_matrix:

@@ -708,9 +708,8 @@ class ContactProblem:
         """``hessian(q)`` plus ``constraint_hessian(q, multipliers)`` (the sum of
         :func:`~supercoil.solvers.newton.lagrangian_hessian`), bit for bit. The integral
         formulation's pair blocks and the constraint curvature are merged into the rod's
-        matrix in one compiled pass (:func:`csr_add_blocks` with ``then``): measured on
-        the tweezers' contact branch at N = 100, 0.13-0.37 ms of the former block matrix
-        and two merges made 0.04-0.10 ms."""
+        matrix in one compiled pass (:func:`csr_add_blocks` with ``then``) instead of a
+        merge for the blocks and another for the curvature (``plus_sparse``)."""
         if not self.integral:
             parts = self.hessian(q)
             if self.n_constraints:

@@ -704,6 +704,23 @@ class ContactProblem:
                                 parts.coefficients)
         return parts.plus_sparse(self.contact_hessian(q))
 
+    def lagrangian_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> HessianParts:
+        """``hessian(q)`` plus ``constraint_hessian(q, multipliers)`` (the sum of
+        :func:`~supercoil.solvers.newton.lagrangian_hessian`), bit for bit. The integral
+        formulation's pair blocks and the constraint curvature are merged into the rod's
+        matrix in one compiled pass (:func:`csr_add_blocks` with ``then``) instead of a
+        merge for the blocks and another for the curvature (``plus_sparse``)."""
+        if not self.integral:
+            parts = self.hessian(q)
+            if self.n_constraints:
+                parts = parts.plus_sparse(self.constraint_hessian(q, multipliers))
+            return parts
+        parts = self.base.hessian(q)
+        dofs, local = self._integral_blocks(q)
+        curvature = self.constraint_hessian(q, multipliers) if self.n_constraints else None
+        return HessianParts(csr_add_blocks(parts.sparse, dofs, local, curvature), parts.vectors,
+                            parts.coefficients)
+
     def stability_view(self) -> ContactProblem:
         """This problem as the stability analysis must see it (shares the state).
 

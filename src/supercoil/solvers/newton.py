@@ -153,7 +153,12 @@ def roundoff_floor(H, q: np.ndarray) -> float:
 
 def lagrangian_hessian(problem, q, lam) -> HessianParts:
     """Hessian of the Lagrangian ``E + lam . c`` on all ``n_dofs`` DOFs (restrict it to
-    the DOFs wanted: one assembly can serve several restrictions)."""
+    the DOFs wanted: one assembly can serve several restrictions). A problem may
+    provide ``lagrangian_hessian(q, lam)``, the same matrix bit for bit in fewer passes
+    (:meth:`~supercoil.contact.problem.ContactProblem.lagrangian_hessian`)."""
+    own = getattr(problem, "lagrangian_hessian", None)
+    if own is not None:
+        return own(q, lam)
     parts = problem.hessian(q)
     if problem.n_constraints:
         parts = parts.plus_sparse(problem.constraint_hessian(q, lam))

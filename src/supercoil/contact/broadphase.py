@@ -102,12 +102,13 @@ detection").
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 
 from supercoil._numba import njit
 
-__all__ = ["candidate_pairs", "pair_separation", "polygon_segments"]
+__all__ = ["candidate_pairs", "pair_separation", "polygon_segments", "verlet_displacement"]
 
 METHODS = ("kdtree", "brute")
 
@@ -525,3 +526,31 @@ def _validated(starts, ends, s_start, s_end, cutoff, exclusion, period, method):
 
 def _is_real(value) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+@njit()
+def _displacement_kernel(x, x_ref):
+    largest = 0.0
+    moved2 = 0.0
+    for i in range(x.shape[0]):
+        d0 = x[i, 0] - x_ref[i, 0]
+        d1 = x[i, 1] - x_ref[i, 1]
+        d2 = x[i, 2] - x_ref[i, 2]
+        dd = d0 * d0 + d1 * d1 + d2 * d2
+        if not math.isnan(moved2) and (dd > moved2 or math.isnan(dd)):  # nan stays (np.max)
+            moved2 = dd
+        for c in range(3):
+            a = abs(x[i, c])
+            if not math.isnan(largest) and (a > largest or math.isnan(a)):
+                largest = a
+    return largest, math.sqrt(moved2)
+
+
+def verlet_displacement(x: np.ndarray, x_ref: np.ndarray) -> tuple[float, float]:
+    """``(max |x|, largest node displacement |x_k - x_ref_k|)`` of nodes ``(n, 3)`` (n >= 1),
+    the values of ``np.max(np.abs(x))`` and ``sqrt(max(sum((x - x_ref)**2, axis=1)))``
+    (nan if some coordinate is nan), in one compiled call: a Verlet list's test of
+    whether it still holds (``ContactProblem._candidates``, some 3000 calls on the
+    tweezers' contact branch, 12 us each as numpy reductions at N = 100)."""
+    return _displacement_kernel(np.ascontiguousarray(x, dtype=np.float64),
+                                np.ascontiguousarray(x_ref, dtype=np.float64))

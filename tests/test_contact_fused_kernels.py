@@ -9,7 +9,9 @@ before; the oracle is that chain, and the values must agree bit for bit:
 * ``sample_state``: ``sample_points``, ``max(chord_deviation, initial=0)`` and the
   bounding spheres of each segment's samples;
 * ``verlet_displacement``: ``np.max(np.abs(x))`` and the largest node displacement;
-* ``scatter_add``: ``np.add.at``.
+* ``scatter_add``: ``np.add.at``;
+* ``largest_displacement``: ``np.max(np.linalg.norm(dx, axis=1))``;
+* the DOFs of ``integral_terms``, now written by its kernel.
 """
 
 from __future__ import annotations
@@ -18,12 +20,14 @@ import numpy as np
 import pytest
 
 from supercoil.contact.broadphase import candidate_pairs, verlet_displacement
+from supercoil.contact.ccd import largest_displacement
 from supercoil.contact.distance import segment_distance, segment_pairs_within
 from supercoil.contact.integral import (
     _bounding_spheres,
     chord_deviation,
     closest_samples,
     closest_samples_within,
+    integral_terms,
     polygon_weights,
     sample_points,
     sample_state,
@@ -164,3 +168,27 @@ def test_scatter_add_equals_add_at():
     fast = start.copy()
     scatter_add(fast, np.zeros((0, 12), np.int64), np.zeros((0, 12)))
     assert fast.tobytes() == start.tobytes()
+
+
+def test_largest_displacement_equals_the_numpy_norm():
+    rng = np.random.default_rng(11)
+    for n in (1, 3, 100):
+        dx = rng.standard_normal((n, 3)) * np.exp(4 * rng.standard_normal((n, 3)))
+        assert largest_displacement(dx) == float(np.max(np.linalg.norm(dx, axis=1)))
+    dx[40, 2] = np.nan
+    assert np.isnan(largest_displacement(dx))
+
+
+@pytest.mark.parametrize("spline", [False, True])
+def test_integral_terms_dofs_are_the_stencils_dofs(spline):
+    x, segments = _coil(60, 4)
+    pieces = bspline_pieces(segments, True)
+    stencil = np.ascontiguousarray(pieces.stencil) if spline else segments
+    weights = spline_weights(pieces.coefficients, 5) if spline else polygon_weights(60, 5)
+    pairs = _candidates(x, segments, 0.3)
+    dofs = integral_terms(x, stencil, weights, pairs, 0.2, "barrier", 1.0, 0.05, 1 / 60, 1)[5]
+    nodes = np.concatenate([stencil[pairs[:, 0]], stencil[pairs[:, 1]]], axis=1)
+    expected = (3 * nodes[:, :, None] + np.arange(3)).reshape(len(pairs), -1)
+    assert dofs.dtype == expected.dtype and np.array_equal(dofs, expected)
+    empty = integral_terms(x, stencil, weights, pairs[:0], 0.2, "barrier", 1.0, 0.05, 1 / 60, 1)
+    assert empty[5].shape == (0, 6 * stencil.shape[1])

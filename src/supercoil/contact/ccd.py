@@ -35,13 +35,16 @@ already later than the earliest hit found is dropped.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 
+from supercoil._numba import njit
 from supercoil.contact.distance import _distance_kernel
 from supercoil.contact.spline_distance import piece_distance_of_nodes
 
-__all__ = ["first_time_of_approach", "first_time_of_approach_pieces",
+__all__ = ["first_time_of_approach", "first_time_of_approach_pieces", "largest_displacement",
            "segments_cross_during_step"]
 
 # Fraction of the safe advance that is held back at each iteration.
@@ -214,3 +217,20 @@ def segments_cross_during_step(
     scale = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     _, k = first_time_of_approach(x0, dx, pairs, 1e-12 * scale, max_iterations, tolerance)
     return k >= 0
+
+
+@njit()
+def _largest_norm_kernel(v):
+    largest = 0.0
+    for i in range(v.shape[0]):
+        norm = math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
+        if not math.isnan(largest) and (norm > largest or math.isnan(norm)):
+            largest = norm  # a nan stays, as in np.max
+    return largest
+
+
+def largest_displacement(dx: np.ndarray) -> float:
+    """``float(np.max(np.linalg.norm(dx, axis=1)))`` for node displacements ``dx``
+    ``(n, 3)``, ``n >= 1`` (the same value, nan if one is nan), in one compiled call
+    (the step bound's trust region; 4 us as numpy steps at N = 100)."""
+    return float(_largest_norm_kernel(np.ascontiguousarray(dx, dtype=np.float64)))

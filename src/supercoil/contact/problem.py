@@ -75,7 +75,11 @@ import scipy.sparse as sp
 
 from supercoil.contact import potentials
 from supercoil.contact.broadphase import candidate_pairs, verlet_displacement
-from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
+from supercoil.contact.ccd import (
+    first_time_of_approach,
+    first_time_of_approach_pieces,
+    largest_displacement,
+)
 from supercoil.contact.distance import (
     segment_distance,
     segment_distance_derivatives,
@@ -818,7 +822,7 @@ class ContactProblem:
         """
         x0 = np.asarray(q, dtype=float).reshape(-1, 3)
         dx = np.asarray(dq, dtype=float).reshape(-1, 3)
-        largest = float(np.max(np.linalg.norm(dx, axis=1))) if dx.size else 0.0
+        largest = largest_displacement(dx) if dx.size else 0.0
         if largest == 0.0:
             return 1.0
         # Trust region: no node moves more than one edge length per step. The

@@ -192,3 +192,41 @@ def test_integral_terms_dofs_are_the_stencils_dofs(spline):
     assert dofs.dtype == expected.dtype and np.array_equal(dofs, expected)
     empty = integral_terms(x, stencil, weights, pairs[:0], 0.2, "barrier", 1.0, 0.05, 1 / 60, 1)
     assert empty[5].shape == (0, 6 * stencil.shape[1])
+
+
+def _former_first_time(x0, dx, pairs, threshold, max_iterations=100, tolerance=1e-3):
+    """first_time_of_approach before residual13: ccd._advance on ccd._pair_distance."""
+    from supercoil.contact import ccd
+
+    pair_x0, pair_dx = x0[pairs], dx[pairs]
+    relative = pair_dx[:, :2, None, :] - pair_dx[:, None, 2:, :]
+    speed = np.linalg.norm(relative, axis=-1).max(axis=(1, 2))
+    threshold = np.broadcast_to(np.asarray(threshold, dtype=float), (len(pairs),))
+    return ccd._advance(lambda idx, tau: ccd._pair_distance(pair_x0[idx], pair_dx[idx], tau),
+                        speed, threshold, max_iterations, tolerance)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_first_time_of_approach_equals_the_vectorised_advancement(seed):
+    from supercoil.contact.ccd import first_time_of_approach
+
+    rng = np.random.default_rng(seed)
+    x0, segments = _coil(80, seed)
+    pairs = _candidates(x0, segments, 0.3)
+    nodes = np.concatenate([segments[pairs[:, 0]], segments[pairs[:, 1]]], axis=1)
+    d0 = segment_distance(x0[nodes[:, 0]], x0[nodes[:, 1]], x0[nodes[:, 2]], x0[nodes[:, 3]])[0]
+    outcomes = set()
+    for size in (0.01, 0.05, 0.2, 1.0):
+        dx = size * rng.standard_normal(x0.shape)
+        dx[::7] = 0.0  # some pairs at rest relative to each other
+        for threshold, iterations, tolerance in ((0.5 * d0, 100, 1e-3), (0.9 * d0, 100, 1e-3),
+                                                 (0.05, 3, 1e-3), (0.5 * d0, 100, 0.3),
+                                                 (np.maximum(d0 - 0.01, 0.0), 100, 1e-3),
+                                                 (np.where(np.arange(d0.size) == 3, d0 + 0.01,
+                                                           0.5 * d0), 100, 1e-3)):
+            found = first_time_of_approach(x0, dx, nodes, threshold, iterations, tolerance)
+            expected = _former_first_time(x0, dx, nodes, threshold, iterations, tolerance)
+            assert found == expected
+            assert type(found[0]) is float and type(found[1]) is int
+            outcomes.add("clear" if found[1] < 0 else "now" if found[0] == 0.0 else "hit")
+    assert outcomes == {"clear", "now", "hit"}

@@ -9,7 +9,6 @@ before; the oracle is that chain, and the values must agree bit for bit:
 * ``sample_state``: ``sample_points``, ``max(chord_deviation, initial=0)`` and the
   bounding spheres of each segment's samples;
 * ``verlet_displacement``: ``np.max(np.abs(x))`` and the largest node displacement;
-* ``scatter_add``: ``np.add.at``;
 * ``largest_displacement``: ``np.max(np.linalg.norm(dx, axis=1))``;
 * the DOFs of ``integral_terms``, now written by its kernel.
 """
@@ -31,7 +30,6 @@ from supercoil.contact.integral import (
     polygon_weights,
     sample_points,
     sample_state,
-    scatter_add,
     spline_weights,
 )
 from supercoil.contact.spline_distance import bspline_pieces
@@ -153,21 +151,6 @@ def test_verlet_displacement_equals_the_numpy_reductions():
         y[row, 1] = np.nan
         assert all(np.isnan(v) for v in verlet_displacement(y, x_ref))
         assert np.isnan(verlet_displacement(x, y)[1])
-
-
-def test_scatter_add_equals_add_at():
-    rng = np.random.default_rng(3)
-    dofs = rng.integers(0, 30, size=(40, 12))  # repeated indices: the order of the sums
-    values = rng.standard_normal((41, 12)) * np.exp(5 * rng.standard_normal((41, 12)))
-    start = rng.standard_normal(30)
-    slow = start.copy()
-    np.add.at(slow, dofs.ravel(), values[:40].ravel())
-    fast = start.copy()
-    scatter_add(fast, dofs, values)
-    assert fast.tobytes() == slow.tobytes()
-    fast = start.copy()
-    scatter_add(fast, np.zeros((0, 12), np.int64), np.zeros((0, 12)))
-    assert fast.tobytes() == start.tobytes()
 
 
 def test_largest_displacement_equals_the_numpy_norm():

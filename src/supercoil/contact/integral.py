@@ -801,23 +801,3 @@ def chord_deviation(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) ->
                             np.ascontiguousarray(starts, dtype=np.float64),
                             np.ascontiguousarray(ends, dtype=np.float64), out)
     return out
-
-
-@njit()
-def _scatter_add_kernel(out, dofs, values):
-    for p in range(dofs.shape[0]):
-        for l in range(dofs.shape[1]):
-            out[dofs[p, l]] += values[p, l]
-
-
-def scatter_add(out: np.ndarray, dofs: np.ndarray, values: np.ndarray) -> None:
-    """``out[dofs[p, l]] += values[p, l]`` in the order of ``(p, l)``: ``np.add.at(out,
-    dofs.ravel(), values[:len(dofs)].ravel())`` (the same sums in the same order) for
-    float64 ``out`` ``(n,)``, ``dofs`` ``(m, w)`` and ``values`` ``(>= m, w)``, without
-    ``ufunc.at``'s set-up (a gradient of :func:`integral_terms` into the rod's)."""
-    dofs = np.ascontiguousarray(dofs, dtype=np.int64)
-    if out.dtype != np.float64 or out.ndim != 1 or dofs.ndim != 2 \
-            or values.shape[1:] != dofs.shape[1:] or len(values) < len(dofs):
-        np.add.at(out, dofs.ravel(), np.asarray(values)[:len(dofs)].ravel())
-        return
-    _scatter_add_kernel(out, dofs, np.ascontiguousarray(values, dtype=np.float64))

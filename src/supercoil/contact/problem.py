@@ -93,7 +93,6 @@ from supercoil.contact.integral import (
     polygon_weights,
     quintic_samples,
     sample_state,
-    scatter_add,
     spline_weights,
 )
 from supercoil.contact.spline_distance import (
@@ -649,7 +648,7 @@ class ContactProblem:
         g = self.base.gradient(q)
         if self.integral:
             _st, (_e, grad, _h, _f, _p, dofs) = self._integral(q, 1)
-            scatter_add(g, dofs, grad)  # np.add.at(g, dofs.ravel(), grad[:len(dofs)].ravel())
+            np.add.at(g, dofs.ravel(), grad[: len(dofs)].ravel())
             return g
         st = self._state(q)
         if len(st.pairs):

@@ -103,6 +103,15 @@ def test_sample_state_equals_points_deviation_and_spheres(spline, seed):
     expected = float(np.max(chord_deviation(slow, x[segments[:, 0]], x[segments[:, 1]]),
                             initial=0.0))
     assert deviation == expected and (deviation > 1e-12) == spline  # chords: round-off
+    # the kernels' arithmetic written out in numpy, operation by operation
+    a, e = x[segments[:, 0]], x[segments[:, 1]] - x[segments[:, 0]]
+    length2 = np.maximum(e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1] + e[:, 2] * e[:, 2], 1e-300)
+    r = slow - a[:, None, :]
+    t = np.minimum(1.0, np.maximum(0.0, (r[..., 0] * e[:, None, 0] + r[..., 1] * e[:, None, 1]
+                                         + r[..., 2] * e[:, None, 2]) / length2[:, None]))
+    f = r - t[..., None] * e[:, None, :]
+    dd = f[..., 0] * f[..., 0] + f[..., 1] * f[..., 1] + f[..., 2] * f[..., 2]
+    assert deviation == float(np.sqrt(np.max(dd)))
     centre_slow, radius_slow = np.empty((90, 3)), np.empty(90)
     _bounding_spheres(slow, centre_slow, radius_slow)
     assert centre.tobytes() == centre_slow.tobytes()

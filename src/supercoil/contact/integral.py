@@ -719,6 +719,27 @@ def closest_samples_within(points: np.ndarray, centre: np.ndarray, radius: np.nd
     return kept[:count], d[:count], s[:count], t[:count]
 
 
+@njit(inline="always")
+def _chord_deviation_of(points, i, s0, s1, s2, end0, end1, end2):
+    """Largest distance of segment ``i``'s sample points from the segment ``s -> end``."""
+    e0 = end0 - s0
+    e1 = end1 - s1
+    e2 = end2 - s2
+    length2 = max(e0 * e0 + e1 * e1 + e2 * e2, 1e-300)
+    largest = 0.0
+    for a in range(points.shape[1]):
+        r0 = points[i, a, 0] - s0
+        r1 = points[i, a, 1] - s1
+        r2 = points[i, a, 2] - s2
+        t = min(1.0, max(0.0, (r0 * e0 + r1 * e1 + r2 * e2) / length2))
+        f0 = r0 - t * e0
+        f1 = r1 - t * e1
+        f2 = r2 - t * e2
+        dd = f0 * f0 + f1 * f1 + f2 * f2
+        largest = max(largest, dd)
+    return math.sqrt(largest)
+
+
 @njit()
 def _sample_state_kernel(x, stencil, weights, segments, points, centre, radius):
     """:func:`_sample_points_kernel`, :func:`_bounding_spheres` and the largest of
@@ -727,27 +748,12 @@ def _sample_state_kernel(x, stencil, weights, segments, points, centre, radius):
     (0.0 without segments, nan if one is nan, as ``np.max(..., initial=0.0)``)."""
     _sample_points_kernel(x, stencil, weights, points)
     _bounding_spheres(points, centre, radius)
-    k, q, _ = points.shape
     overall = 0.0
-    for i in range(k):
+    for i in range(points.shape[0]):
         s = segments[i, 0]
         e = segments[i, 1]
-        e0 = x[e, 0] - x[s, 0]
-        e1 = x[e, 1] - x[s, 1]
-        e2 = x[e, 2] - x[s, 2]
-        length2 = max(e0 * e0 + e1 * e1 + e2 * e2, 1e-300)
-        largest = 0.0
-        for a in range(q):
-            r0 = points[i, a, 0] - x[s, 0]
-            r1 = points[i, a, 1] - x[s, 1]
-            r2 = points[i, a, 2] - x[s, 2]
-            t = min(1.0, max(0.0, (r0 * e0 + r1 * e1 + r2 * e2) / length2))
-            f0 = r0 - t * e0
-            f1 = r1 - t * e1
-            f2 = r2 - t * e2
-            dd = f0 * f0 + f1 * f1 + f2 * f2
-            largest = max(largest, dd)
-        deviation = math.sqrt(largest)
+        deviation = _chord_deviation_of(points, i, x[s, 0], x[s, 1], x[s, 2], x[e, 0], x[e, 1],
+                                        x[e, 2])
         if math.isnan(deviation):
             return deviation
         overall = max(overall, deviation)
@@ -773,24 +779,9 @@ def sample_state(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray,
 
 @njit()
 def _chord_deviation_kernel(points, starts, ends, out):
-    k, q, _ = points.shape
-    for i in range(k):
-        e0 = ends[i, 0] - starts[i, 0]
-        e1 = ends[i, 1] - starts[i, 1]
-        e2 = ends[i, 2] - starts[i, 2]
-        length2 = max(e0 * e0 + e1 * e1 + e2 * e2, 1e-300)
-        largest = 0.0
-        for a in range(q):
-            r0 = points[i, a, 0] - starts[i, 0]
-            r1 = points[i, a, 1] - starts[i, 1]
-            r2 = points[i, a, 2] - starts[i, 2]
-            t = min(1.0, max(0.0, (r0 * e0 + r1 * e1 + r2 * e2) / length2))
-            f0 = r0 - t * e0
-            f1 = r1 - t * e1
-            f2 = r2 - t * e2
-            dd = f0 * f0 + f1 * f1 + f2 * f2
-            largest = max(largest, dd)
-        out[i] = math.sqrt(largest)
+    for i in range(points.shape[0]):
+        out[i] = _chord_deviation_of(points, i, starts[i, 0], starts[i, 1], starts[i, 2],
+                                     ends[i, 0], ends[i, 1], ends[i, 2])
 
 
 def chord_deviation(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:

@@ -165,6 +165,25 @@ def test_kdtree_equals_brute_force(case):
 
 @settings(max_examples=150, deadline=None)
 @given(broad_phase_inputs())
+def test_all_pairs_path_equals_the_blocks(case):
+    """Up to ``_ALL_PAIRS_UP_TO`` segments the exact tests run on every pair; the blocks'
+    prefilter (forced by a threshold below every size) gives the same array."""
+    from supercoil.contact import broadphase
+
+    _, starts, ends, s_start, s_end, cutoff, exclusion, period = case
+    assert starts.shape[0] <= broadphase._ALL_PAIRS_UP_TO  # the strategy's sizes
+    every_pair = candidate_pairs(starts, ends, s_start, s_end, cutoff, exclusion, period)
+    saved = broadphase._ALL_PAIRS_UP_TO
+    try:
+        broadphase._ALL_PAIRS_UP_TO = -1
+        blocks = candidate_pairs(starts, ends, s_start, s_end, cutoff, exclusion, period)
+    finally:
+        broadphase._ALL_PAIRS_UP_TO = saved
+    np.testing.assert_array_equal(every_pair, blocks)
+
+
+@settings(max_examples=150, deadline=None)
+@given(broad_phase_inputs())
 def test_output_is_the_definition(case):
     _, starts, ends, s_start, s_end, cutoff, exclusion, period = case
     pairs = candidate_pairs(starts, ends, s_start, s_end, cutoff, exclusion, period)

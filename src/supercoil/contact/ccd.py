@@ -35,13 +35,16 @@ already later than the earliest hit found is dropped.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 
-from supercoil.contact.distance import _distance_kernel
+from supercoil._numba import njit
+from supercoil.contact.distance import _closest, _distance_kernel
 from supercoil.contact.spline_distance import piece_distance_of_nodes
 
-__all__ = ["first_time_of_approach", "first_time_of_approach_pieces",
+__all__ = ["first_time_of_approach", "first_time_of_approach_pieces", "largest_displacement",
            "segments_cross_during_step"]
 
 # Fraction of the safe advance that is held back at each iteration.
@@ -109,12 +112,114 @@ def first_time_of_approach(
         raise ValueError("need max_iterations >= 1 and 0 < tolerance < 1")
     if pairs.shape[0] == 0:
         return 1.0, -1
-    pair_x0 = x0[pairs]  # (m, 4, 3)
-    pair_dx = dx[pairs]
-    relative = pair_dx[:, :2, None, :] - pair_dx[:, None, 2:, :]  # (m, 2, 2, 3)
-    speed = np.linalg.norm(relative, axis=-1).max(axis=(1, 2))
-    return _advance(lambda idx, tau: _pair_distance(pair_x0[idx], pair_dx[idx], tau),
-                    speed, threshold, max_iterations, tolerance)
+    # _advance on _pair_distance in one compiled call (the same steps; 0.11 ms a call
+    # as numpy steps at the tweezers' contact states, where ~170 of the 690 step
+    # bounds meet segment pairs within D/2 plus the step)
+    t_hit, k = _segment_advance_kernel(
+        np.ascontiguousarray(x0), np.ascontiguousarray(dx),
+        np.ascontiguousarray(pairs, dtype=np.int64), np.ascontiguousarray(threshold),
+        int(max_iterations), float(tolerance))
+    return float(t_hit), int(k)
+
+
+@njit()
+def _pair_ends(x0, dx, pairs, p, tau, P0, P1, Q0, Q1):
+    """The ends of pair ``p`` at its time ``tau``, ``x0 + tau dx``, into the scratch rows."""
+    for c in range(3):
+        P0[0, c] = x0[pairs[p, 0], c] + tau * dx[pairs[p, 0], c]
+        P1[0, c] = x0[pairs[p, 1], c] + tau * dx[pairs[p, 1], c]
+        Q0[0, c] = x0[pairs[p, 2], c] + tau * dx[pairs[p, 2], c]
+        Q1[0, c] = x0[pairs[p, 3], c] + tau * dx[pairs[p, 3], c]
+
+
+@njit()
+def _segment_advance_kernel(x0, dx, pairs, threshold, max_iterations, tolerance):
+    """:func:`_advance` with the segment distances of :func:`_pair_distance` and the
+    speeds of :func:`first_time_of_approach`: every pair's arithmetic as there (the
+    same expressions, element by element) and the pairs advanced in the same
+    lock-step rounds, so that the earliest hit, which drops the pairs that cannot
+    precede it, is found at the same round: the same ``(t_hit, k)``."""
+    m = pairs.shape[0]
+    P0 = np.empty((1, 3))
+    P1 = np.empty((1, 3))
+    Q0 = np.empty((1, 3))
+    Q1 = np.empty((1, 3))
+    speed = np.empty(m)
+    gap0 = np.empty(m)
+    for p in range(m):
+        largest = -np.inf
+        for a in range(2):
+            for b in range(2):
+                r0 = dx[pairs[p, a], 0] - dx[pairs[p, 2 + b], 0]
+                r1 = dx[pairs[p, a], 1] - dx[pairs[p, 2 + b], 1]
+                r2 = dx[pairs[p, a], 2] - dx[pairs[p, 2 + b], 2]
+                largest = max(largest, math.sqrt(r0 * r0 + r1 * r1 + r2 * r2))
+        speed[p] = largest
+        _pair_ends(x0, dx, pairs, p, 0.0, P0, P1, Q0, Q1)
+        gap0[p] = _closest(P0, P1, Q0, Q1, 0, 0.0, True)[0] - threshold[p]
+    first = 0
+    for p in range(m):
+        if gap0[p] < gap0[first]:
+            first = p
+    if gap0[first] <= 0.0:
+        return 0.0, first
+    active = np.empty(m, dtype=np.int64)
+    tau = np.empty(m)
+    gap = np.empty(m)
+    n = 0
+    for p in range(m):
+        if speed[p] > 0.0:
+            active[n] = p
+            tau[n] = 0.0
+            gap[n] = gap0[p]
+            n += 1
+    best_t = 1.0
+    best_k = -1
+    exhausted = True
+    for _ in range(max_iterations):
+        limit = min(best_t, 1.0)
+        kept = 0
+        for i in range(n):
+            if tau[i] + gap[i] / speed[active[i]] < limit:
+                active[kept] = active[i]
+                tau[kept] = tau[i]
+                gap[kept] = gap[i]
+                kept += 1
+        n = kept
+        if n == 0:
+            exhausted = False
+            break
+        earliest = np.inf
+        j = -1
+        for i in range(n):
+            p = active[i]
+            tau[i] = tau[i] + (1.0 - _SAFETY) * gap[i] / speed[p]
+            _pair_ends(x0, dx, pairs, p, tau[i], P0, P1, Q0, Q1)
+            gap[i] = _closest(P0, P1, Q0, Q1, 0, 0.0, True)[0] - threshold[p]
+            if gap[i] <= tolerance * gap0[p] and (j < 0 or tau[i] < earliest):
+                earliest = tau[i]
+                j = i
+        if j >= 0:
+            if tau[j] < best_t:
+                best_t = tau[j]
+                best_k = active[j]
+            kept = 0
+            for i in range(n):
+                if not gap[i] <= tolerance * gap0[active[i]]:
+                    active[kept] = active[i]
+                    tau[kept] = tau[i]
+                    gap[kept] = gap[i]
+                    kept += 1
+            n = kept
+    if exhausted and n:  # unresolved after max_iterations: the last safe time
+        j = 0
+        for i in range(n):
+            if tau[i] < tau[j]:
+                j = i
+        if tau[j] < best_t:
+            best_t = tau[j]
+            best_k = active[j]
+    return best_t, best_k
 
 
 def first_time_of_approach_pieces(
@@ -214,3 +319,20 @@ def segments_cross_during_step(
     scale = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     _, k = first_time_of_approach(x0, dx, pairs, 1e-12 * scale, max_iterations, tolerance)
     return k >= 0
+
+
+@njit()
+def _largest_norm_kernel(v):
+    largest = 0.0
+    for i in range(v.shape[0]):
+        norm = math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
+        if not math.isnan(largest) and (norm > largest or math.isnan(norm)):
+            largest = norm  # a nan stays, as in np.max
+    return largest
+
+
+def largest_displacement(dx: np.ndarray) -> float:
+    """``float(np.max(np.linalg.norm(dx, axis=1)))`` for node displacements ``dx``
+    ``(n, 3)``, ``n >= 1`` (the same value, nan if one is nan), in one compiled call
+    (the step bound's trust region; 4 us as numpy steps at N = 100)."""
+    return float(_largest_norm_kernel(np.ascontiguousarray(dx, dtype=np.float64)))

@@ -122,6 +122,7 @@ temporary arrays per pair); no recompilation when the number of pairs changes.
 from __future__ import annotations
 
 import enum
+import math
 
 import numpy as np
 import numpy.typing as npt
@@ -133,6 +134,7 @@ __all__ = [
     "DistanceKind",
     "segment_distance",
     "segment_distance_derivatives",
+    "segment_pairs_within",
 ]
 
 # Below this fraction of the longer segment length the pair counts as crossing.
@@ -320,6 +322,93 @@ def _closest(P0, P1, Q0, Q1, i, parallel_tolerance, exact):
 def _distance_kernel(P0, P1, Q0, Q1, d, s, t):
     for i in range(P0.shape[0]):
         d[i], s[i], t[i], _ = _closest(P0, P1, Q0, Q1, i, 0.0, True)
+
+
+@njit()
+def _pairs_within_kernel(x, segments, pairs, cutoff, pairs_out, d_out, s_out, t_out):
+    """The pairs of ``pairs`` whose segments (``x[segments[i]]``) are within ``cutoff``,
+    written in order to the first ``count`` rows of the outputs; returns ``count``, or
+    -1 when an end of a pair's segments is not finite.
+
+    A pair whose midpoints lie farther apart than ``cutoff`` plus the two half lengths
+    (every point of a segment lies within its half length of its midpoint), by a margin
+    far above the rounding of that bound, is dropped without its distance; the others
+    get :func:`_closest` on their own ends, the values :func:`_distance_kernel` gives.
+    """
+    k = segments.shape[0]
+    mid = np.empty((k, 3))
+    half = np.empty(k)
+    finite = np.empty(k, dtype=np.bool_)
+    scale = 0.0
+    for i in range(k):
+        a = segments[i, 0]
+        b = segments[i, 1]
+        e2 = 0.0
+        finite[i] = True
+        for c in range(3):
+            mid[i, c] = 0.5 * (x[a, c] + x[b, c])
+            e = x[b, c] - x[a, c]
+            e2 += e * e
+            finite[i] = finite[i] and np.isfinite(x[a, c]) and np.isfinite(x[b, c])
+            scale = max(scale, abs(x[a, c]), abs(x[b, c]))
+        half[i] = 0.5 * math.sqrt(e2)
+    P0 = np.empty((1, 3))
+    P1 = np.empty((1, 3))
+    Q0 = np.empty((1, 3))
+    Q1 = np.empty((1, 3))
+    count = 0
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        if not (finite[i] and finite[j]):
+            return -1
+        m0 = mid[i, 0] - mid[j, 0]
+        m1 = mid[i, 1] - mid[j, 1]
+        m2 = mid[i, 2] - mid[j, 2]
+        apart = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+        radii = half[i] + half[j]
+        if apart - radii > cutoff + 1e-9 * (cutoff + apart + radii) + 1e-12 * scale:
+            continue
+        for c in range(3):
+            P0[0, c] = x[segments[i, 0], c]
+            P1[0, c] = x[segments[i, 1], c]
+            Q0[0, c] = x[segments[j, 0], c]
+            Q1[0, c] = x[segments[j, 1], c]
+        d, s, t, _ = _closest(P0, P1, Q0, Q1, 0, 0.0, True)
+        if d <= cutoff:
+            pairs_out[count, 0] = i
+            pairs_out[count, 1] = j
+            d_out[count] = d
+            s_out[count] = s
+            t_out[count] = t
+            count += 1
+    return count
+
+
+def segment_pairs_within(x: np.ndarray, segments: np.ndarray, pairs: np.ndarray,
+                         cutoff: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(pairs, d, s, t)`` of the segment pairs ``pairs`` ``(m, 2)`` within ``cutoff``,
+    in their order: :func:`segment_distance` of the pairs' ends (``x`` ``(n, 3)`` the
+    nodes, ``segments`` ``(k, 2)`` their end nodes) filtered by ``d <= cutoff``, the
+    same values, in one compiled pass that skips the distance of pairs whose bounding
+    spheres are apart. Measured at the tweezers' contact states (N = 100, some 1000
+    candidate pairs, none within ``D/2`` plus a step): the step bound's polygon pair
+    state took 92 us with the gathering, distances and filter as numpy steps, 12 us so.
+    The arrays are views of buffers of ``m`` rows.
+    Raises ValueError, as :func:`segment_distance`, when an end is not finite.
+    """
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    m = len(pairs)
+    kept = np.empty((m, 2), dtype=np.int64)
+    d = np.empty(m)
+    s = np.empty(m)
+    t = np.empty(m)
+    count = _pairs_within_kernel(np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3),
+                                 np.ascontiguousarray(segments, dtype=np.int64), pairs,
+                                 float(cutoff), kept, d, s, t) if m else 0
+    if count < 0:
+        raise ValueError("segment endpoints must be finite")
+    return kept[:count], d[:count], s[:count], t[:count]
 
 
 @njit()

@@ -74,18 +74,25 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil.contact import potentials
-from supercoil.contact.broadphase import candidate_pairs
-from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
-from supercoil.contact.distance import segment_distance, segment_distance_derivatives
+from supercoil.contact.broadphase import candidate_pairs, verlet_displacement
+from supercoil.contact.ccd import (
+    first_time_of_approach,
+    first_time_of_approach_pieces,
+    largest_displacement,
+)
+from supercoil.contact.distance import (
+    segment_distance,
+    segment_distance_derivatives,
+    segment_pairs_within,
+)
 from supercoil.contact.integral import (
-    chord_deviation,
-    closest_samples,
+    closest_samples_within,
     default_samples,
     first_time_of_approach_samples,
     integral_terms,
     polygon_weights,
     quintic_samples,
-    sample_points,
+    sample_state,
     spline_weights,
 )
 from supercoil.contact.spline_distance import (
@@ -415,7 +422,6 @@ class ContactProblem:
         so that the second is served from it.
         """
         x = np.asarray(q, dtype=float).reshape(-1, 3)
-        scale = None
         for slot in ("_verlet", "_verlet_wide"):
             reference = self.__dict__.get(slot)
             if reference is None:
@@ -423,9 +429,7 @@ class ContactProblem:
             x_ref, reach, exclusion, pairs = reference
             if x_ref.shape != x.shape or exclusion != self.exclusion or cutoff > reach:
                 continue
-            if scale is None:
-                scale = float(np.max(np.abs(x)))
-            moved = float(np.sqrt(np.max(np.sum((x - x_ref) ** 2, axis=1))))
+            scale, moved = verlet_displacement(x, x_ref)
             slack = 1e-9 * max(1.0, scale, reach)
             if cutoff + 2.0 * moved + slack <= reach:
                 return pairs
@@ -443,38 +447,39 @@ class ContactProblem:
 
     def _samples(self, q: np.ndarray):
         """``(sample points (k, samples, 3), largest distance of a sample point from its
-        segment's chord)`` at ``q``; the last state's are remembered (a residual and the
+        segment's chord)`` at ``q``; see :meth:`_sample_geometry`."""
+        return self._sample_geometry(q)[:2]
+
+    def _sample_geometry(self, q: np.ndarray):
+        """:func:`~supercoil.contact.integral.sample_state` at ``q``: the sample points,
+        their largest distance from their segment's chord, and the bounding spheres of
+        each segment's samples; the last state's are remembered (a residual and the
         step bound from the same iterate ask for them)."""
         key = np.ascontiguousarray(q, dtype=np.float64).tobytes()
         cached = self.__dict__.get("_sample_memo")
         if cached is not None and cached[0] == key:
-            return cached[1], cached[2]
-        x = np.asarray(q, dtype=float).reshape(-1, 3)
-        a, b = self._endpoints(q)
-        points = sample_points(x, self.sample_stencil, self.sample_weights)
-        deviation = float(np.max(chord_deviation(points, a, b), initial=0.0))
-        self.__dict__["_sample_memo"] = (key, points, deviation)
-        return points, deviation
+            return cached[1]
+        geometry = sample_state(np.asarray(q, dtype=float).reshape(-1, 3), self.sample_stencil,
+                                self.sample_weights, self.segments)
+        self.__dict__["_sample_memo"] = (key, geometry)
+        return geometry
 
     def _sample_pair_state(self, q: np.ndarray, cutoff: float) -> PairState:
         """Pairs whose closest *sample points* are within ``cutoff`` (integral formulation:
         the energy sees the curve only there). The broad phase runs on the segments, its
         cutoff widened by twice the samples' largest distance from their chords."""
-        points, deviation = self._samples(q)
+        points, deviation, centre, radius = self._sample_geometry(q)
         reach = cutoff + 2.0 * deviation
         cand = self._candidates(q, reach)
         if len(cand) == 0:
             empty = np.zeros(0)
             return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)
-        d, s, t = closest_samples(points, cand, cutoff)
-        keep = d <= cutoff
-        return PairState(cand[keep], d[keep], s[keep], t[keep])
+        return PairState(*closest_samples_within(points, centre, radius, cand, cutoff))
 
     def _compute_pair_state(self, q: np.ndarray, cutoff: float, polygon: bool,
                             shadows: bool) -> PairState:
         if self.integral and not polygon:
             return self._sample_pair_state(np.asarray(q, dtype=float), cutoff)
-        a, b = self._endpoints(q)
         spline = self.spline and not polygon
         reach = cutoff
         if spline:
@@ -484,11 +489,11 @@ class ContactProblem:
         if len(cand) == 0:
             empty = np.zeros(0)
             return PairState(np.zeros((0, 2), dtype=np.int64), empty, empty, empty)
-        if spline:
-            d, s, t = self.pair_distances(q, cand)
-        else:
-            i, j = cand[:, 0], cand[:, 1]
-            d, s, t = segment_distance(a[i], b[i], a[j], b[j])
+        if not spline:
+            # the segment distances of the candidates, filtered, in one compiled pass
+            return PairState(*segment_pairs_within(np.asarray(q, dtype=float).reshape(-1, 3),
+                                                   self.segments, cand, cutoff))
+        d, s, t = self.pair_distances(q, cand)
         keep = d <= cutoff
         if spline and self.options.count_local_minima and not shadows and keep.any():
             keep[keep] = local_minimum_pairs(np.asarray(q, dtype=float).reshape(-1, 3),
@@ -833,7 +838,7 @@ class ContactProblem:
         """
         x0 = np.asarray(q, dtype=float).reshape(-1, 3)
         dx = np.asarray(dq, dtype=float).reshape(-1, 3)
-        largest = float(np.max(np.linalg.norm(dx, axis=1))) if dx.size else 0.0
+        largest = largest_displacement(dx) if dx.size else 0.0
         if largest == 0.0:
             return 1.0
         # Trust region: no node moves more than one edge length per step. The
@@ -880,7 +885,7 @@ class ContactProblem:
                 gap = float(np.min(st.distance)) - D  # the closest sample points'
                 t_samples = first_time_of_approach_samples(
                     x0, cap * dx, self.sample_stencil, self.sample_weights, st.pairs,
-                    D + 0.1 * max(gap, 0.0))
+                    D + 0.1 * max(gap, 0.0), points0=self._samples(q)[0])
                 t_hit = min(t_hit, t_samples)
         elif self.spline and self.treatment == "barrier":
             # the barrier's gap is the spline's: keep it above a tenth of its value

@@ -440,6 +440,83 @@ def bending_kernels(form: str):
     return value, gradient, hessian
 
 
+@njit()
+def _gradient_kernel(q, dofs, bend_weights, form, frames, bend_out, twist_out, twist_values):
+    n = dofs.shape[0]
+    stencils = np.empty((n, 9))
+    for i in range(n):
+        for k in range(9):
+            stencils[i, k] = q[dofs[i, k]]
+    values = np.empty(n)
+    local = np.empty((n, 9))
+    no_hessians = np.zeros((0, 9, 9))
+    _bending_loop(stencils, bend_weights, form, 1, 1.0, values, local, no_hessians)
+    for i in range(n):  # np.bincount's sums: in the order of the stencils
+        for k in range(9):
+            bend_out[dofs[i, k]] += local[i, k]
+    _twist_loop(stencils, frames, 1, 1.0, twist_values, local, no_hessians)
+    for i in range(n):
+        for k in range(9):
+            twist_out[dofs[i, k]] += local[i, k]
+
+
+def gradient_terms(q: np.ndarray, dofs: np.ndarray, bend_weights: np.ndarray, form: str,
+                   frames: np.ndarray, n_dofs: int):
+    """``(bending gradient (n_dofs,), reference twists (n,), gradient of their sum
+    (n_dofs,))`` at ``q`` ``(n_dofs,)`` for the stencils of DOFs ``dofs`` ``(n, 9)``:
+    :func:`bending_terms` and :func:`twist_terms` at order 1 on ``q[dofs]`` with the
+    local gradients summed by DOF in the stencils' order (the values of
+    ``np.bincount(dofs.ravel(), weights=local.ravel())``), in one compiled call (the
+    gather, two kernels and two scatters cost 25 us at N = 100 as separate steps).
+    """
+    if form not in _FORM_CODE:
+        raise ValueError(f"curvature form must be one of {CURVATURE_FORMS}, got {form!r}")
+    dofs = np.ascontiguousarray(dofs, dtype=np.int64)
+    n = dofs.shape[0]
+    frames = np.ascontiguousarray(frames, dtype=np.float64)
+    bend_weights = np.ascontiguousarray(bend_weights, dtype=np.float64)
+    if dofs.shape != (n, 9) or frames.shape != (n, 4, 3) or bend_weights.shape != (n,):
+        raise ValueError(f"dofs (n, 9), frames (n, 4, 3) and weights (n,) needed; got "
+                         f"{dofs.shape}, {frames.shape}, {bend_weights.shape}")
+    bend = np.zeros(n_dofs)
+    twist = np.zeros(n_dofs)
+    values = np.empty(n)
+    _gradient_kernel(np.ascontiguousarray(q, dtype=np.float64), dofs, bend_weights,
+                     _FORM_CODE[form], frames, bend, twist, values)
+    return bend, values, twist
+
+
+@njit()
+def _edge_length_kernel(x, edges, h, order, values, data):
+    for k in range(edges.shape[0]):
+        a = edges[k, 0]
+        b = edges[k, 1]
+        e0 = x[b, 0] - x[a, 0]
+        e1 = x[b, 1] - x[a, 1]
+        e2 = x[b, 2] - x[a, 2]
+        values[k] = (e0 * e0 + e1 * e1 + e2 * e2 - h * h) / (2.0 * h)
+        scaled = (e0 / h, e1 / h, e2 / h)
+        for j in range(6):
+            source = order[k, j]
+            data[6 * k + j] = -scaled[source] if source < 3 else scaled[source - 3]
+
+
+def edge_length_terms(x: np.ndarray, edges: np.ndarray, h: float, order: np.ndarray):
+    """``(c (m,), data (6 m,))`` of the edges ``edges`` ``(m, 2)`` (node indices) at the
+    nodes ``x`` ``(n, 3)``: the inextensibility constraints ``c_k = (|e_k|^2 - h^2) /
+    (2 h)`` and their Jacobian's entries, row ``k`` the six values ``[-e_k / h, e_k /
+    h]`` taken in the order ``order[k]`` ``(m, 6)`` (the same sums and quotients as
+    the numpy expressions of :class:`~supercoil.rod.closed.RodEnergy`), in one call.
+    """
+    edges = np.ascontiguousarray(edges, dtype=np.int64)
+    m = edges.shape[0]
+    values = np.empty(m)
+    data = np.empty(6 * m)
+    _edge_length_kernel(np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3), edges,
+                        float(h), np.ascontiguousarray(order, dtype=np.int64), values, data)
+    return values, data
+
+
 def twist_value(stencils: np.ndarray, frames: np.ndarray) -> np.ndarray:
     """Reference twists ``(n,)`` (see :func:`twist_terms`)."""
     return twist_terms(stencils, frames, 0)[0]

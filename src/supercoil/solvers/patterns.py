@@ -493,10 +493,25 @@ def csr_columns(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
     """``A[:, keep]`` as CSR for sorted unique ``keep`` (explicit zeros kept, the stored
     order of each row unchanged); anything else goes to scipy."""
     keep = np.asarray(keep)
+    maps = csr_columns_map(A, keep)
+    if maps is None:
+        return A[:, keep].tocsr()
+    selected, indices, indptr = maps
+    return csr_from_arrays(A.data[selected], indices.copy(), indptr.copy(),
+                           (A.shape[0], keep.size))
+
+
+def csr_columns_map(A: sp.csr_matrix, keep: np.ndarray):
+    """``(selected, indices, indptr)`` with ``A[:, keep]`` equal to
+    ``csr_from_arrays(A.data[selected], indices, indptr, (A.shape[0], keep.size))`` for
+    every CSR matrix of ``A``'s pattern (what :func:`csr_columns` does), or None when
+    ``A`` is not CSR or ``keep`` is not sorted unique column indices (scipy's case).
+    Callers must not modify the arrays."""
+    keep = np.asarray(keep)
     if getattr(A, "format", None) != "csr" or keep.ndim != 1 or keep.dtype.kind not in "iu" \
             or (keep.size > 1 and not np.all(np.diff(keep) > 0)) \
             or (keep.size and (keep[0] < 0 or keep[-1] >= A.shape[1])):
-        return A[:, keep].tocsr()
+        return None
     key = (_pattern_key(A), keep.tobytes())
     maps = _COLUMNS_MEMO.get(key)
     if maps is None:
@@ -508,9 +523,7 @@ def csr_columns(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
         np.cumsum(np.bincount(rows, minlength=A.shape[0]), out=indptr[1:])
         maps = (selected, new[A.indices[selected]].astype(A.indices.dtype), indptr)
         _COLUMNS_MEMO.put(key, maps)
-    selected, indices, indptr = maps
-    return csr_from_arrays(A.data[selected], indices.copy(), indptr.copy(),
-                           (A.shape[0], keep.size))
+    return maps
 
 
 def block_csr(dofs: np.ndarray, blocks: np.ndarray, n: int) -> sp.csr_matrix:

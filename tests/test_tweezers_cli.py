@@ -202,3 +202,53 @@ def test_each_final_branch_file_is_written_once(tmp_path, monkeypatch):
         assert np.array_equal(stored.states, branch.states)
         assert np.array_equal(stored.parameter_values, branch.parameter_values)
         assert [p.kind for p in stored.special_points] == [p.kind for p in branch.special_points]
+
+
+def test_in_progress_saves_every_ten_points_at_most_every_interval(tmp_path, monkeypatch):
+    """run_saving writes a branch in progress after SAVE_EVERY new points, but not sooner
+    than SAVE_INTERVAL seconds after the previous in-progress save (a fake clock); the
+    final save always; an interrupt saves the branch up to its last point."""
+    from supercoil.cli import diagram_output
+
+    clock = [0.0]
+    monkeypatch.setattr(diagram_output.time, "monotonic", lambda: clock[0])
+    saves = []
+
+    class FakeBranch:
+        parameter = "turns"
+
+        def __init__(self, name, k):
+            self.name, self.k = name, k
+            self.parameter_values = np.arange(k, dtype=float)
+            self.arclength = np.arange(k, dtype=float)
+
+        def __len__(self):
+            return self.k
+
+        def save(self, path, compressed=True):
+            saves.append((self.name, self.k, compressed))
+            path.write_bytes(b"")
+
+    def compute(message, on_point, on_branch, seconds_per_point, interrupt_at=None):
+        for k in range(1, 46):
+            clock[0] += seconds_per_point
+            if k == interrupt_at:
+                raise KeyboardInterrupt
+            on_point(FakeBranch("a", k))
+        on_branch(FakeBranch("a", 45), True)
+        return "done"
+
+    # fast points: 0.05 s each, so ten points take 0.5 s < SAVE_INTERVAL (2 s)
+    assert diagram_output.run_saving(lambda *a: compute(*a, 0.05), tmp_path / "fast",
+                                     quiet=True) == "done"
+    assert saves == [("a", 40, False), ("a", 45, True)]  # 2 s passed at point 40
+    saves.clear()
+    # slow points (1 s each): every ten points, as before
+    diagram_output.run_saving(lambda *a: compute(*a, 1.0), tmp_path / "slow", quiet=True)
+    assert saves == [("a", 10, False), ("a", 20, False), ("a", 30, False), ("a", 40, False),
+                     ("a", 45, True)]
+    saves.clear()
+    # an interrupt at point 13: the branch saved up to point 12, uncompressed
+    assert diagram_output.run_saving(lambda *a: compute(*a, 0.05, interrupt_at=13),
+                                     tmp_path / "cut", quiet=True) is None
+    assert saves == [("a", 12, False)]

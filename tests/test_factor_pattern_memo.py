@@ -176,10 +176,6 @@ def test_pattern_words_differ_exactly_when_the_patterns_or_zeros_do():
     zero_j = J.copy()
     zero_j.data[2] = 0.0
     variants.append((S, zero_j, column, row))
-    moved = S.copy()
-    moved.indices = moved.indices.copy()
-    moved.indices[0] += 1 if moved.indices[1] > moved.indices[0] + 1 else 0
-    variants.append((moved, J, column, row))
     zero_column = column.copy()
     zero_column[4] = 0.0
     variants.append((S, J, zero_column, row))
@@ -188,7 +184,7 @@ def test_pattern_words_differ_exactly_when_the_patterns_or_zeros_do():
     variants.append((S, J, column, zero_row))
     variants.append((S, J, column, row[:-1]))  # a shorter row
     variants.append((S, J[:-1], column, row))  # one constraint fewer
-    for variant in variants[:2] + variants[3:]:
+    for variant in variants:
         other, _key = patterns.pattern_words(*variant)
         assert not patterns.same_words(words, other)
     assert patterns.same_words(words, patterns.pattern_words(S, J, column, row)[0])
@@ -268,8 +264,9 @@ def test_band_layout_offsets_equal_numpys(seed):
     ku = int(max(0, np.max(cols - rows)))
     layout = band.band_layout(size, rows.astype(np.int32), cols, 3.0)
     assert (layout.kl, layout.ku) == (kl, ku)
-    assert (band.band_layout(size, rows, cols, (kl + ku + 1) / size * 0.999) is None) \
-        == (kl + ku + 1 > 0.999 * (kl + ku + 1))
+    # a band just wider than the fraction allows is refused, one just narrower is not
+    assert band.band_layout(size, rows, cols, (kl + ku + 1) / size * 0.999) is None
+    assert band.band_layout(size, rows, cols, (kl + ku + 1) / size * 1.001) is not None
     assert np.array_equal(layout.positions, cols * (2 * kl + ku + 1) + (kl + ku + rows - cols))
     assert layout.storage_size == (2 * kl + ku + 1) * size
     with pytest.raises(ValueError):

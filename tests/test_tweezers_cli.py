@@ -208,10 +208,12 @@ def test_in_progress_saves_every_ten_points_at_most_every_interval(tmp_path, mon
     """run_saving writes a branch in progress after SAVE_EVERY new points, but not sooner
     than SAVE_INTERVAL seconds after the previous in-progress save (a fake clock); the
     final save always; an interrupt saves the branch up to its last point."""
+    import types
+
     from supercoil.cli import diagram_output
 
     clock = [0.0]
-    monkeypatch.setattr(diagram_output.time, "monotonic", lambda: clock[0])
+    monkeypatch.setattr(diagram_output, "time", types.SimpleNamespace(monotonic=lambda: clock[0]))
     saves = []
 
     class FakeBranch:

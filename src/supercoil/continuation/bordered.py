@@ -35,7 +35,7 @@ from scipy.linalg import lapack
 from scipy.sparse.linalg import splu
 
 from supercoil._numba import njit
-from supercoil.solvers.band import BandLayout, band_factor, band_lu, factor_band_storage
+from supercoil.solvers.band import BandLayout, band_lu, factor_band_storage
 from supercoil.solvers.kkt import (
     PinnedRows,
     SingularMatrixError,
@@ -81,7 +81,7 @@ class _BandBordered:
     ``E``; the others are auxiliary unknowns with a zero right-hand side that
     carry a low-rank part of ``B``'s leading block: with
     ``[[K, U], [V^T, -I]]`` the first block row is ``(K + U V^T) x``.
-    :meth:`from_layout` (the factor's path) and :meth:`from_parts` return None (the
+    :meth:`from_storage` (the factor's path) and :meth:`from_parts` return None (the
     caller falls back to SuperLU on
     ``B``) when the band is wide, a pivot of ``K`` is exactly zero, or
     ``Sigma`` is numerically singular (the smallest singular value of
@@ -133,20 +133,12 @@ class _BandBordered:
         return None if factor is None else cls._from_factor(B, factor, C, R, D)
 
     @classmethod
-    def from_layout(cls, B, layout: BandLayout | None, k_values: np.ndarray,
-                    C: np.ndarray, R: np.ndarray, D: np.ndarray):
-        """:meth:`from_parts` with the band layout of ``K``'s entries already made
-        (:func:`~supercoil.solvers.kkt.kkt_band_layout`, None: band too wide) and their
-        values in its order."""
-        if layout is None or layout.size < 2 or k_values.size == 0:
-            return None
-        return cls._from_factor(B, band_factor(layout, k_values), C, R, D)
-
-    @classmethod
     def from_storage(cls, B, layout: BandLayout, flat: np.ndarray, C: np.ndarray,
                      R: np.ndarray, D: np.ndarray, b_max: float):
-        """:meth:`from_layout` with ``K``'s band storage already filled (``flat``, see
-        :func:`~supercoil.solvers.band.factor_band_storage`) and ``max |B_ij|``."""
+        """:meth:`from_parts` with the band layout of ``K``'s entries already made
+        (:func:`~supercoil.solvers.kkt.kkt_band_layout`), ``K``'s band storage filled
+        (``flat``, see :func:`~supercoil.solvers.band.factor_band_storage`) and
+        ``max |B_ij|``."""
         return cls._from_factor(B, factor_band_storage(layout, flat), C, R, D, b_max)
 
     @classmethod
@@ -174,16 +166,10 @@ class _BandBordered:
         columns = np.max(bound / rows[:, None], axis=0)
         columns[columns == 0.0] = 1.0
         scaled = schur / rows[:, None] / columns[None, :]
-        if schur.shape[0] == 1:  # one border: y = (g - r^T u) / s, as LAPACK would not
-            if abs(scaled[0, 0]) <= 1e-13:
-                return None
-        elif np.linalg.svd(scaled, compute_uv=False)[-1] <= 1e-13:
+        if np.linalg.svd(scaled, compute_uv=False)[-1] <= 1e-13:
             return None
-        if schur.shape[0] == 1:
-            out._schur = schur
-        else:  # lu_factor's LAPACK call, without its wrapper
-            lu, piv, _info = lapack.dgetrf(schur)
-            out._schur = (lu, piv)
+        lu, piv, _info = lapack.dgetrf(schur)  # lu_factor's LAPACK call, without its wrapper
+        out._schur = (lu, piv)
         return out
 
     def _one_border(self, schur: np.ndarray):

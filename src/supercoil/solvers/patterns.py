@@ -257,8 +257,8 @@ def csr_add_blocks(A: sp.csr_matrix, dofs: np.ndarray, blocks: np.ndarray,
     dofs = np.ascontiguousarray(dofs, dtype=np.int64)
     p = dofs.shape[0]
     c = then
-    if not _is_canonical_csr(A) or A.dtype != np.float64 or A.shape[1] != n or (
-            c is not None and (not _is_canonical_csr(c) or c.dtype != np.float64
+    if dofs.ndim != 2 or not _is_canonical_csr(A) or A.dtype != np.float64 or \
+            A.shape[1] != n or (c is not None and (not _is_canonical_csr(c) or c.dtype != np.float64
                                or c.shape != A.shape)):
         out = csr_add(A, block_csr(dofs, blocks, n))
         return out if c is None else csr_add(out, c)
@@ -271,7 +271,7 @@ def csr_add_blocks(A: sp.csr_matrix, dofs: np.ndarray, blocks: np.ndarray,
         c_ptr = np.zeros(n + 1, dtype=np.int32)
     else:
         c_ptr = c.indptr
-    upper = A.indptr[n] - A.indptr[0] + blocks.size + c_ptr[n] - c_ptr[0]
+    upper = int(A.indptr[n]) - int(A.indptr[0]) + blocks.size + int(c_ptr[n]) - int(c_ptr[0])
     index_dtype, indptr_dtype = A.indices.dtype, A.indptr.dtype
     if max(int(upper), n) > np.iinfo(indptr_dtype).max:
         index_dtype = indptr_dtype = np.int64  # as scipy upcasts (see _canonical_csr)

@@ -107,6 +107,9 @@ def test_csr_add_blocks_then_is_two_csr_adds_bit_for_bit(seed):
     empty = np.zeros((0, w), dtype=np.int64)
     assert _same_bits(csr_add_blocks(A, empty, np.zeros((0, w, w)), C),
                       csr_add(csr_add(A, sp.csr_matrix((n, n))), C))
+    # no blocks given as an empty 1-D list (the former path; the kernel types 2-D DOFs)
+    assert _same_bits(csr_add_blocks(A, np.zeros(0, dtype=np.int64), np.zeros(0), C),
+                      csr_add(csr_add(A, sp.csr_matrix((n, n))), C))
     # a non-canonical third operand goes through csr_add's own path
     unsorted = C.copy()
     unsorted.has_canonical_format = False

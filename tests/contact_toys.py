@@ -101,3 +101,26 @@ class CrossedRods(Unconstrained):
         return HessianParts((self.K * (self._D2.T @ self._D2)
                              + sp.diags(self.anchor / self.n * self._anchor())).tocsr())
 
+
+def stadium_ring(n: int, radius: float):
+    """``(rod, x)``: a twisted ring problem of ``n`` nodes (C/A = 2/3) and a stadium of
+    length 1 for its nodes, two straight sides ``2 radius`` apart joined by half circles
+    of ``radius`` (in the plane z = 0)."""
+    from supercoil.problems.ring import twisted_circle_problem
+
+    rod, _q = twisted_circle_problem(2 / 3, 0.0, n)
+    r = radius
+    side = (1.0 - 2 * np.pi * r) / 2
+    x = np.zeros((n, 3))
+    for k, u in enumerate(np.arange(n) / n):
+        if u < side:
+            x[k] = (u - side / 2, -r, 0.0)
+        elif u < side + np.pi * r:
+            phi = (u - side) / r - np.pi / 2
+            x[k] = (side / 2 + r * np.cos(phi), r * np.sin(phi), 0.0)
+        elif u < 2 * side + np.pi * r:
+            x[k] = (side / 2 - (u - side - np.pi * r), r, 0.0)
+        else:
+            phi = (u - 2 * side - np.pi * r) / r + np.pi / 2
+            x[k] = (-side / 2 + r * np.cos(phi), r * np.sin(phi), 0.0)
+    return rod, x

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from contact_toys import assert_fresh_pair_state
+from contact_toys import assert_fresh_pair_state, stadium_ring
 
 from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
 from supercoil.contact.integral import first_time_of_approach_samples
@@ -35,25 +35,7 @@ CHOICES = {
 def _flattened_ring(n=80):
     """A stadium of length 1: two straight sides 1.2 D apart joined by half circles of
     radius 0.6 D (a rod in contact's reach, nowhere within D)."""
-    from supercoil.problems.ring import twisted_circle_problem
-
-    rod, _q = twisted_circle_problem(2 / 3, 0.0, n)
-    r = 0.6 * D
-    side = (1.0 - 2 * np.pi * r) / 2
-    s = np.arange(n) / n
-    x = np.zeros((n, 3))
-    for k, u in enumerate(s):
-        if u < side:
-            x[k] = (u - side / 2, -r, 0.0)
-        elif u < side + np.pi * r:
-            phi = (u - side) / r - np.pi / 2
-            x[k] = (side / 2 + r * np.cos(phi), r * np.sin(phi), 0.0)
-        elif u < 2 * side + np.pi * r:
-            x[k] = (side / 2 - (u - side - np.pi * r), r, 0.0)
-        else:
-            phi = (u - 2 * side - np.pi * r) / r + np.pi / 2
-            x[k] = (-side / 2 + r * np.cos(phi), r * np.sin(phi), 0.0)
-    return rod, x
+    return stadium_ring(n, 0.6 * D)
 
 
 def _smooth_move(x, amplitude, rng):

@@ -20,6 +20,7 @@ import math
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from contact_toys import stadium_ring
 
 from supercoil.contact.integral import _psi, integral_terms, polygon_weights, spline_weights
 from supercoil.contact.problem import ContactOptions, ContactProblem
@@ -121,24 +122,7 @@ D = 0.02
 
 def _stadium(n=80, spacing=1.05):
     """A closed rod of length 1 whose two straight sides lie ``spacing`` D apart."""
-    from supercoil.problems.ring import twisted_circle_problem
-
-    rod, _q = twisted_circle_problem(2 / 3, 0.0, n)
-    r = 0.5 * spacing * D
-    side = (1.0 - 2 * np.pi * r) / 2
-    x = np.zeros((n, 3))
-    for k, u in enumerate(np.arange(n) / n):
-        if u < side:
-            x[k] = (u - side / 2, -r, 0.0)
-        elif u < side + np.pi * r:
-            phi = (u - side) / r - np.pi / 2
-            x[k] = (side / 2 + r * np.cos(phi), r * np.sin(phi), 0.0)
-        elif u < 2 * side + np.pi * r:
-            x[k] = (side / 2 - (u - side - np.pi * r), r, 0.0)
-        else:
-            phi = (u - 2 * side - np.pi * r) / r + np.pi / 2
-            x[k] = (-side / 2 + r * np.cos(phi), r * np.sin(phi), 0.0)
-    return rod, x
+    return stadium_ring(n, 0.5 * spacing * D)
 
 
 @pytest.mark.parametrize("choice", [{"curve": "spline", "formulation": "integral"},

@@ -311,6 +311,7 @@ def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data,
     slot = np.full(n, -1, dtype=np.int64)  # column -> position in the row's block columns
     values = np.empty(n)  # the row's block sums, by column
     b_cols = np.empty(n, dtype=np.int64)
+    b_vals = np.empty(n)  # the block sums in the order of b_cols
     m_cols = np.empty(n, dtype=np.int64)  # the row of A + blocks
     m_vals = np.empty(n)
     nnz = 0
@@ -335,51 +336,14 @@ def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data,
                 b_cols[u + 1] = b_cols[u]
                 u -= 1
             b_cols[u + 1] = col
-        # A's row + the block row, as _merge_kernel
-        nm = 0
-        ia, ea = a_ptr[r], a_ptr[r + 1]
-        ib = 0
-        while ia < ea or ib < nb:
-            if ib >= nb or (ia < ea and a_idx[ia] < b_cols[ib]):
-                col = a_idx[ia]
-                value = a_data[ia]
-                ia += 1
-            elif ia >= ea or b_cols[ib] < a_idx[ia]:
-                col = b_cols[ib]
-                value = 0.0 + values[col]
-                ib += 1
-            else:
-                col = a_idx[ia]
-                value = a_data[ia] + values[col]
-                ia += 1
-                ib += 1
-            if value != 0.0:
-                m_cols[nm] = col
-                m_vals[nm] = value
-                nm += 1
         for t in range(nb):
+            b_vals[t] = values[b_cols[t]]
             slot[b_cols[t]] = -1
-        # that row + C's, as _merge_kernel
-        im = 0
-        ic, ec = c_ptr[r], c_ptr[r + 1]
-        while im < nm or ic < ec:
-            if ic >= ec or (im < nm and m_cols[im] < c_idx[ic]):
-                col = m_cols[im]
-                value = m_vals[im]
-                im += 1
-            elif im >= nm or c_idx[ic] < m_cols[im]:
-                col = c_idx[ic]
-                value = 0.0 + c_data[ic]
-                ic += 1
-            else:
-                col = m_cols[im]
-                value = m_vals[im] + c_data[ic]
-                im += 1
-                ic += 1
-            if value != 0.0:
-                indices[nnz] = col
-                data[nnz] = value
-                nnz += 1
+        # A's row + the block row, then that row + C's, as _merge_kernel
+        nm = _merge_rows(a_idx, a_data, a_ptr[r], a_ptr[r + 1], b_cols, b_vals, 0, nb,
+                         m_cols, m_vals, 0)
+        nnz = _merge_rows(m_cols, m_vals, 0, nm, c_idx, c_data, c_ptr[r], c_ptr[r + 1],
+                          indices, data, nnz)
         indptr[r + 1] = nnz
     # copies: the arrays were sized for every block entry (five times the sum's
     # entries at 79 pairs), which the matrix would otherwise hold
@@ -407,28 +371,37 @@ def _merge_kernel(a_ptr, a_idx, a_data, b_ptr, b_idx, b_data, n):
     data = np.empty(nnz_max)
     nnz = 0
     for r in range(n):
-        ia, ea = a_ptr[r], a_ptr[r + 1]
-        ib, eb = b_ptr[r], b_ptr[r + 1]
-        while ia < ea or ib < eb:
-            if ib >= eb or (ia < ea and a_idx[ia] < b_idx[ib]):
-                c = a_idx[ia]
-                value = a_data[ia]
-                ia += 1
-            elif ia >= ea or b_idx[ib] < a_idx[ia]:
-                c = b_idx[ib]
-                value = 0.0 + b_data[ib]
-                ib += 1
-            else:
-                c = a_idx[ia]
-                value = a_data[ia] + b_data[ib]
-                ia += 1
-                ib += 1
-            if value != 0.0:
-                indices[nnz] = c
-                data[nnz] = value
-                nnz += 1
+        nnz = _merge_rows(a_idx, a_data, a_ptr[r], a_ptr[r + 1], b_idx, b_data, b_ptr[r],
+                          b_ptr[r + 1], indices, data, nnz)
         indptr[r + 1] = nnz
     return indptr, indices[:nnz].copy(), data[:nnz].copy()
+
+
+@njit(inline="always")
+def _merge_rows(a_idx, a_data, ia, ea, b_idx, b_data, ib, eb, indices, data, nnz):
+    """One row of ``A + B``: the sorted entries ``ia:ea`` of ``a_idx``/``a_data`` and
+    ``ib:eb`` of ``b_idx``/``b_data`` merged into ``indices``/``data`` from ``nnz`` on,
+    ``a + b`` where both store the column, ``a`` or ``0.0 + b`` where one does, entries
+    equal to zero (either sign) dropped; returns the new ``nnz``."""
+    while ia < ea or ib < eb:
+        if ib >= eb or (ia < ea and a_idx[ia] < b_idx[ib]):
+            c = a_idx[ia]
+            value = a_data[ia]
+            ia += 1
+        elif ia >= ea or b_idx[ib] < a_idx[ia]:
+            c = b_idx[ib]
+            value = 0.0 + b_data[ib]
+            ib += 1
+        else:
+            c = a_idx[ia]
+            value = a_data[ia] + b_data[ib]
+            ia += 1
+            ib += 1
+        if value != 0.0:
+            indices[nnz] = c
+            data[nnz] = value
+            nnz += 1
+    return nnz
 
 
 def csr_restrict(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:

@@ -116,6 +116,10 @@ def test_sample_state_equals_points_deviation_and_spheres(spline, seed):
     _bounding_spheres(slow, centre_slow, radius_slow)
     assert centre.tobytes() == centre_slow.tobytes()
     assert radius.tobytes() == radius_slow.tobytes()
+    # and the spheres themselves, against numpy: the samples' mean, the farthest sample
+    assert np.allclose(centre, slow.mean(axis=1), rtol=0.0, atol=1e-15)
+    farthest = np.sqrt(np.max(np.sum((slow - centre[:, None, :]) ** 2, axis=2), axis=1))
+    assert np.allclose(radius, farthest, rtol=1e-14, atol=1e-16)
     for row in (5, 89):  # a nan node: the same deviation as the former steps
         y = x.copy()
         y[row, 1] = np.nan

@@ -121,19 +121,20 @@ def require_count(option: str, value: int, low: int, high: int) -> None:
 
 def parse_ratio(text: str) -> float:
     """A number written as a decimal (``0.6667``) or a fraction (``2/3``), as papers
-    quote twist ratios; a typer ``parser``. Other text raises ``ValueError``, which the
-    command line reports as an invalid value of the option."""
+    quote twist ratios; a typer ``parser``. Other text raises ``typer.BadParameter``
+    (a ``ValueError`` would lose its message in some typer releases), which the
+    command line reports as an invalid value of the option, with the reason."""
     words = str(text).split("/")
     if len(words) > 2:
-        raise ValueError(f"{text!r} is not a number or a fraction like 2/3")
+        raise typer.BadParameter(f"{text!r} is not a number or a fraction like 2/3")
     try:
         values = [float(word) for word in words]
     except ValueError:
-        raise ValueError(f"{text!r} is not a number or a fraction like 2/3") from None
+        raise typer.BadParameter(f"{text!r} is not a number or a fraction like 2/3") from None
     if len(values) == 1:
         return values[0]
     if values[1] == 0:
-        raise ValueError(f"{text!r} divides by zero")
+        raise typer.BadParameter(f"{text!r} divides by zero")
     return values[0] / values[1]
 
 

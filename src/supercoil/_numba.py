@@ -71,8 +71,11 @@ def njit(**options: object):
             dispatcher = numba.njit(cache=True, **options)(function)
         except RuntimeError:
             return numba.njit(cache=False, **options)(function)
-        if QUICK_LOOKUP and type(getattr(dispatcher, "_cache", None)) is _FunctionCache:
-            dispatcher._cache = _CachedFirst(function)
+        cache = getattr(dispatcher, "_cache", None)
+        if QUICK_LOOKUP and type(cache) is _FunctionCache:
+            # the same object, its lookup ours: a second cache object would locate (and
+            # test-write) the cache folder again, a temporary file per kernel at import
+            cache.__class__ = _CachedFirst
         return dispatcher
 
     return decorate

@@ -853,8 +853,11 @@ class KKTFactor:
         self._factored = (S, J_factored)
         self._lu = None
         if self._band:
-            layout = kkt_band_layout(S, J_factored, self._order)
-            self._lu = _BandLU.from_layout(self._order, layout, _kkt_values(S, J_factored))
+            # with the values: a straight rod stores zeros that couple far unknowns, whose
+            # stored band is too wide (SuperLU then) where its nonzero band is narrow
+            values = _kkt_values(S, J_factored)
+            layout = kkt_band_layout(S, J_factored, self._order, values=values)
+            self._lu = _BandLU.from_layout(self._order, layout, values)
         if self._lu is None:
             try:
                 self._lu = _OrderedLU(size, *_kkt_entries(S, J_factored), self._order)

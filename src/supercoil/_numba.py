@@ -11,7 +11,10 @@ and the hash-secret symbols that :mod:`numba.cpython.hashing` registers on impor
 a miss, or if loading fails, numba's own lookup runs, with its set-up, and compiles as
 usual. Numba itself uses the same two steps (its ``Cache.load_overload`` is the
 refresh followed by ``_load_overload``); the cached kernels are the same machine code
-either way, so results are identical bit for bit (``tests/test_numba_cache.py``).
+either way, so results are identical bit for bit (``tests/test_numba_cache.py``). Part of
+what the refresh imported is imported by the loads themselves: over the tweezers
+command's 41 kernel loads the net saving measured 0.05-0.1 s (docs/benchmarks.md,
+"Session 14").
 
 Set ``SUPERCOIL_NUMBA_PLAIN_CACHE=1`` to use numba's own lookup everywhere (e.g. if a
 numba release changes these internals in a way the fallback does not catch).

@@ -416,3 +416,66 @@ def test_diagram_layout_keeps_every_text_inside_and_the_legend_beside(scale, nam
     assert figure_box.x0 <= legend.x0 and legend.x1 <= figure_box.x1 + 0.5
     assert legend.y0 >= figure_box.y0 and legend.y1 <= figure_box.y1 + 0.5
     assert legend.x0 >= ax.get_tightbbox(renderer).x1  # beside the axes, not over them
+
+
+def _diagram_jobs(folder):
+    """Line-diagram jobs of :func:`supercoil.plotting.tweezers.draw_job` that differ in
+    what a figure drawn after another could carry over: y data and labels, tick label
+    widths, an offset text, legend entries and title, the x axis, dashed lines, no
+    special points, a branch unstable throughout."""
+    turns = np.linspace(0.0, 5.0, 40)
+    title = "clamped rod, C/A = 1.333, F L²/A = 75, L/D = 33, N = 100"
+    names = ("straight", "buckled", "buckled_contact")
+    specials = [{"kind": "bifurcation", "turns": 2.2}, {"kind": "fold", "turns": 3.1},
+                {"kind": "contact_onset", "turns": 1.2}]
+
+    def job(name, y, scale, *, x="turns", branch_names=names, points=specials,
+            heading=title, shift=0.0, **extra):
+        xs = turns if x == "turns" else 75.0 * turns
+        branches = [{"name": n, x: xs, y: shift + scale * (1.0 + k + np.sin(turns + k)),
+                     "stable": turns < 2.0 + k, **extra} for k, n in enumerate(branch_names)]
+        points = [{**p, x: p["turns"] * (1.0 if x == "turns" else 75.0),
+                   y: shift + scale * 1.5}
+                  for p in points]
+        return (folder / name, "diagram", {"branches": branches, "special_points": points,
+                                           "title": heading, "x": x, "y": y})
+
+    return [job("extension.png", "extension", 0.3),
+            job("torque.png", "torque", 12.0),
+            job("small.png", "writhe", -3e-4),
+            job("offset.png", "writhe", 1e-4, shift=5.0),
+            job("wide.png", "torque", 1e5,
+                branch_names=("a branch with a long name, and another clause", "b")),
+            job("ramp.png", "extension", 0.3, x="tension", branch_names=("force ramp",),
+                points=[], heading="another title", color="0.15"),
+            job("dashed.png", "writhe", 2.0, linestyle=(0, (6, 3)), points=specials[:1],
+                stable=np.zeros_like(turns, dtype=bool)),
+            job("extension_again.png", "extension", 0.3)]
+
+
+def test_diagrams_drawn_one_after_another_have_the_pixels_of_one_drawn_alone(tmp_path,
+                                                                             monkeypatch):
+    """Oracle: each line diagram made and saved on a canvas of its own (matplotlib's Agg
+    canvas, a new renderer for the layout and the drawing). Drawn as the figure helper
+    draws them (its warm-up, then the jobs one after another in one process, sharing a
+    renderer), every file decodes to the same pixels."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from supercoil.plotting import figures, painter
+    from supercoil.plotting.tweezers import SAVE_OPTIONS, draw_job
+
+    (tmp_path / "shared").mkdir()
+    (tmp_path / "alone").mkdir()
+    painter._warm_up()
+    for job in _diagram_jobs(tmp_path / "shared"):
+        draw_job(job)
+    monkeypatch.setattr(figures, "_shared_canvas_class", lambda: FigureCanvasAgg)
+    for path, _builder, kwargs in _diagram_jobs(tmp_path / "alone"):
+        kwargs = dict(kwargs)
+        with matplotlib.rc_context({"figure.dpi": SAVE_OPTIONS["dpi"]}):
+            fig = figures.diagram_figure(kwargs.pop("branches"), kwargs.pop("special_points"),
+                                         **kwargs)
+        assert type(fig.canvas) is FigureCanvasAgg
+        fig.savefig(path, **SAVE_OPTIONS)
+        np.testing.assert_array_equal(_png(tmp_path / "shared" / path.name), _png(path))

@@ -16,6 +16,7 @@ figure of a result and saves it as PNG and SVG.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -36,6 +37,9 @@ def _label(key: str) -> str:
 # ------------------------------------------------------------------- builders
 
 
+DIAGRAM_SIZE = (style.SINGLE[0] * 1.5, style.SINGLE[1] * 1.25)  # inches
+
+
 def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
                    title: str, x: str = "writhe", y: str = "excess_link",
                    legend_title: str | None = None):
@@ -43,39 +47,48 @@ def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping
     optionally ``color`` and ``linestyle`` (a matplotlib dash pattern);
     ``special_points``: ``{kind, <x>, <y>}``. Stable parts heavy, unstable thin."""
     from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
 
     with style.styled():
-        fig = Figure(figsize=(style.SINGLE[0] * 1.5, style.SINGLE[1] * 1.25))
+        fig = Figure(figsize=DIAGRAM_SIZE)
         ax = fig.subplots()
-        handles = []
-        for index, b in enumerate(branches):
-            xs = np.asarray(b[x], float)
-            ys = np.asarray(b[y], float)
-            stable = np.asarray(b["stable"], bool)
-            color = b.get("color") or style.branch_color(index)
-            ls = b.get("linestyle", "-")  # secondary / tertiary branches dashed (seed 001)
-            ax.plot(xs, ys, ls=ls, lw=style.UNSTABLE_WIDTH, color=color)
-            # a stable stretch includes the segments joining two stable points
-            ax.plot(xs, np.where(stable, ys, np.nan), ls=ls, lw=style.STABLE_WIDTH, color=color)
-            handles.append(Line2D([], [], color=color, lw=2.0, ls=ls, label=b["name"]))
-        seen: set[str] = set()
-        for p in special_points:
-            marker, color = style.special_marker(p["kind"])
-            ax.plot(p[x], p[y], marker, color=color, ms=6, mfc="none", mew=1.4, zorder=5)
-            if p["kind"] not in seen:
-                seen.add(p["kind"])
-                handles.append(Line2D([], [], ls="", marker=marker, color=color, mfc="none",
-                                      mew=1.4, label=p["kind"].replace("_", " ")))
-        handles += [Line2D([], [], color="0.3", lw=style.STABLE_WIDTH, label="stable"),
-                    Line2D([], [], color="0.3", lw=style.UNSTABLE_WIDTH, label="unstable")]
-        ax.set_xlabel(_label(x))
-        ax.set_ylabel(_label(y))
-        ax.set_title(title)
-        # beside the axes: branches cross the whole diagram, so no corner is free
-        legend = fig.legend(handles=handles, loc="upper left", title=legend_title)
-        _fit_beside_legend(fig, ax, legend)
+        _draw_diagram(fig, ax, branches, special_points, title=title, x=x, y=y,
+                      legend_title=legend_title)
     return fig
+
+
+def _draw_diagram(fig, ax, branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
+                  title: str, x: str, y: str, legend_title: str | None) -> None:
+    """Draw :func:`diagram_figure`'s lines, labels and legend on ``ax`` of ``fig`` (an
+    axes without lines, at its subplot position) and lay them out."""
+    from matplotlib.lines import Line2D
+
+    handles = []
+    for index, b in enumerate(branches):
+        xs = np.asarray(b[x], float)
+        ys = np.asarray(b[y], float)
+        stable = np.asarray(b["stable"], bool)
+        color = b.get("color") or style.branch_color(index)
+        ls = b.get("linestyle", "-")  # secondary / tertiary branches dashed (seed 001)
+        ax.plot(xs, ys, ls=ls, lw=style.UNSTABLE_WIDTH, color=color)
+        # a stable stretch includes the segments joining two stable points
+        ax.plot(xs, np.where(stable, ys, np.nan), ls=ls, lw=style.STABLE_WIDTH, color=color)
+        handles.append(Line2D([], [], color=color, lw=2.0, ls=ls, label=b["name"]))
+    seen: set[str] = set()
+    for p in special_points:
+        marker, color = style.special_marker(p["kind"])
+        ax.plot(p[x], p[y], marker, color=color, ms=6, mfc="none", mew=1.4, zorder=5)
+        if p["kind"] not in seen:
+            seen.add(p["kind"])
+            handles.append(Line2D([], [], ls="", marker=marker, color=color, mfc="none",
+                                  mew=1.4, label=p["kind"].replace("_", " ")))
+    handles += [Line2D([], [], color="0.3", lw=style.STABLE_WIDTH, label="stable"),
+                Line2D([], [], color="0.3", lw=style.UNSTABLE_WIDTH, label="unstable")]
+    ax.set_xlabel(_label(x))
+    ax.set_ylabel(_label(y))
+    ax.set_title(title)
+    # beside the axes: branches cross the whole diagram, so no corner is free
+    legend = fig.legend(handles=handles, loc="upper left", title=legend_title)
+    _fit_beside_legend(fig, ax, legend)
 
 
 LAYOUT_PAD = 6.0  # points between the figure's edge, the axes' decorations and the legend
@@ -93,9 +106,7 @@ def _fit_beside_legend(fig, ax, legend) -> None:
     passes of its own over the whole figure: measured on the tweezers' figures, 0.16 s
     of the 0.29 s a figure took to save (docs/benchmarks.md, "Session 12").
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    renderer = FigureCanvasAgg(fig).get_renderer()
+    renderer = _shared_canvas_class()(fig).get_renderer()
     width, height = fig.bbox.width, fig.bbox.height
     pad = LAYOUT_PAD * fig.dpi / 72.0
     legend_width = legend.get_window_extent(renderer).width
@@ -120,6 +131,58 @@ def _fit_beside_legend(fig, ax, legend) -> None:
     box = ax.get_position().transformed(fig.transFigure)
     legend.set_bbox_to_anchor(((box.x1 + margins[1] + pad) / width, box.y1 / height),
                               transform=fig.transFigure)
+
+
+RENDERERS_KEPT = 4  # renderers kept by _shared_canvas_class's canvases (sizes and dpis)
+_RENDERERS: dict = {}  # (width px, height px, dpi) -> RendererAgg, the latest used last
+if hasattr(os, "register_at_fork"):
+    # a fork makes its own renderers: a renderer's cached mathtext parses hold its
+    # process's fonts (FT2Font), which read their font files through descriptors whose
+    # file position a fork shares with its parent. matplotlib empties its font cache in
+    # a fork for the same reason; with a parent's renderer, 4 of 20 forks drawing the
+    # tweezers' figures side by side with their parent failed ("FT_Load_Glyph failed:
+    # too many hints") or drew other pixels
+    os.register_at_fork(after_in_child=_RENDERERS.clear)
+
+
+@functools.cache
+def _shared_canvas_class():
+    """An Agg canvas class whose renderer is this process's for the figure's size in pixels
+    and dpi (a fork makes its own, see ``_RENDERERS``): figures of one size drawn one
+    after the other share it, and with it matplotlib's text metrics, which are cached
+    per renderer (``text.py``, ``_get_text_metrics_with_cache``; mathtext parses too,
+    per renderer's parser). A renderer is cleared at the start of each draw, so figures
+    drawn one after the other are drawn as on a canvas of their own, pixel for pixel;
+    the image of a canvas (``buffer_rgba``) is then its figure's only until another
+    figure of its size is drawn, and two threads must not draw on them at once (none
+    do: the figures are drawn by processes, :mod:`supercoil.plotting.painter`).
+
+    :func:`diagram_figure` lays out and draws on it: the three line diagrams of
+    ``supercoil tweezers`` (the same size, title, x axis and legend entries) and the
+    figure helper's warm-up then measure their common texts once per process. Each
+    line diagram drawn after the warm-up, one after the other in one process: 0.118,
+    0.117, 0.128 s CPU -> 0.111, 0.110, 0.118 s (minima; medians 0.123, 0.122, 0.134 ->
+    0.115, 0.114, 0.126 s), the four figures 0.480 / 0.507 -> 0.458 / 0.481 s (min /
+    median of 14 alternated processes each, ``OPENBLAS_NUM_THREADS=1 python
+    benchmarks/bench_figures.py --run DIR --against OLD/src --repeat 14``, DIR a run of
+    issue 5's command); the files identical byte for byte.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
+
+    class SharedRendererCanvas(FigureCanvasAgg):
+        def get_renderer(self):
+            width, height = self.get_width_height(physical=True)
+            key = (width, height, self.figure.dpi)
+            renderer = _RENDERERS.pop(key, None)
+            if renderer is None:
+                renderer = RendererAgg(width, height, self.figure.dpi)
+            _RENDERERS[key] = renderer
+            while len(_RENDERERS) > RENDERERS_KEPT:
+                del _RENDERERS[next(iter(_RENDERERS))]
+            self.renderer = renderer
+            return renderer
+
+    return SharedRendererCanvas
 
 
 def link_writhe_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,

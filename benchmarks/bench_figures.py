@@ -17,13 +17,18 @@ smallest and the median of each figure and of all of them.
   ``SRC`` (a ``src`` folder, e.g. ``git archive <commit> src | tar -x -C /tmp/old``),
   the order swapped every round, and compares the PNGs of the two trees' last runs
   pixel by pixel (the fraction of pixels that differ and the largest difference of a
-  channel, per figure).
+  channel, per figure); given twice or more, every tree in each round.
 * ``--shared``: the jobs drawn as the helper draws them
   (:func:`~supercoil.plotting.painter.draw_shared`: the process and a fork of it, from
   one queue); the CPU time of both processes (the process's own and its waited-for
   fork's) and the wall time of the four.
-* ``--keep DIR``: the figures of each tree's last run are kept in ``DIR/this`` and
-  ``DIR/against``.
+* ``--instructions``: the figures counted in instructions instead of timed, by valgrind's
+  callgrind (not disturbed by other jobs, unlike CPU time on a shared host): one
+  interpreter per number k = 0, 1, ... of jobs drawn (``PYTHONHASHSEED=0``), each
+  figure's count the difference of two consecutive totals; millions of instructions.
+  About 50 s an interpreter, five a tree.
+* ``--keep DIR``: the figures of each tree's last run are kept in ``DIR/this``,
+  ``DIR/against``, ``DIR/against2``, ...
 
 Bytecode is written first (``compileall``), as an installed package has it.
 """
@@ -33,6 +38,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -55,6 +61,8 @@ payload = json.loads((run / "branch.json").read_text())
 states = {b["name"]: np.load(run / "branches" / f"{b['name']}.npz")["states"]
           for b in payload["branches"] if (run / "branches" / f"{b['name']}.npz").exists()}
 jobs = figure_jobs(payload, pick_configurations(payload, states), out)
+if len(sys.argv) > 4:
+    jobs = jobs[:int(sys.argv[4])]  # --instructions: the first k jobs
 collect_less()
 painter._warm_up()
 freeze()
@@ -102,6 +110,21 @@ def _measure(source: str | None, run: Path, out: Path, shared: bool) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def _instructions(source: str | None, run: Path, out: Path) -> dict:
+    """Millions of instructions of each figure (callgrind, see the module doc)."""
+    names = list(_measure(source, run, out / "names", False))[:-1]
+    totals = []
+    for k in range(len(names) + 1):
+        done = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+                               sys.executable, "-c", CHILD, str(run), str(out / "names"), "one",
+                               str(k)], check=True, capture_output=True, text=True,
+                              env={**_env(source), "PYTHONHASHSEED": "0"})
+        totals.append(int(re.search(r"Collected : (\d+)", done.stderr).group(1)))
+    counts = {name: (totals[i + 1] - totals[i]) / 1e6 for i, name in enumerate(names)}
+    counts["all"] = (totals[-1] - totals[0]) / 1e6
+    return counts
+
+
 def _report(name: str, rows: list[dict]) -> None:
     parts = []
     for key in rows[0]:
@@ -131,9 +154,10 @@ def compare_pngs(first: Path, second: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--run", metavar="DIR", default=None)
-    parser.add_argument("--against", metavar="SRC", default=None)
+    parser.add_argument("--against", metavar="SRC", action="append", default=[])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--shared", action="store_true")
+    parser.add_argument("--instructions", action="store_true")
     parser.add_argument("--keep", metavar="DIR", default=None)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
@@ -143,20 +167,26 @@ def main() -> None:
             subprocess.run([sys.executable, "-m", "supercoil.cli.main", *COMMAND, "--out",
                             str(run)], check=True, capture_output=True, env=_env(None))
         trees = {"this": None}
-        if args.against:
-            trees["against"] = args.against
+        for k, source in enumerate(args.against):
+            trees["against" + (str(k + 1) if k else "")] = source
         for source in trees.values():
             _compile(source)
         rows: dict = {name: [] for name in trees}
         names = list(trees)
+        if args.instructions:
+            for name in names:
+                counts = _instructions(trees[name], run, folder / "instructions" / name)
+                print(f"{trees[name] or 'this'} (millions of instructions): "
+                      + "; ".join(f"{key} {value:.0f}" for key, value in counts.items()))
+            return
         for k in range(args.repeat):
             for name in names if k % 2 == 0 else names[::-1]:
                 rows[name].append(_measure(trees[name], run, folder / name, args.shared))
         for name in names:
             _report(name if trees[name] is None else trees[name], rows[name])
-        if args.against:
-            print("pixels of this tree's figures against the other's:")
-            compare_pngs(folder / "this", folder / "against")
+        for name in names[1:]:
+            print(f"pixels of this tree's figures against {trees[name]}'s:")
+            compare_pngs(folder / "this", folder / name)
         if args.keep:
             for name in names:
                 shutil.copytree(folder / name, Path(args.keep) / name, dirs_exist_ok=True)

@@ -455,21 +455,25 @@ def _diagram_jobs(folder):
 
 def test_diagrams_drawn_one_after_another_have_the_pixels_of_one_drawn_alone(tmp_path,
                                                                              monkeypatch):
-    """Oracle: each line diagram made and saved on a canvas of its own (matplotlib's Agg
-    canvas, a new renderer for the layout and the drawing). Drawn as the figure helper
-    draws them (its warm-up, then the jobs one after another in one process, sharing a
-    renderer), every file decodes to the same pixels."""
+    """Oracle: each line diagram made and saved on a figure and a canvas of its own
+    (matplotlib's Agg canvas, a new renderer for the layout and the drawing). Drawn as
+    the figure helper draws them (its warm-up, then the jobs one after another in one
+    process, on the warm-up's figure and a shared renderer), every file decodes to the
+    same pixels."""
     import matplotlib
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     from supercoil.plotting import figures, painter
-    from supercoil.plotting.tweezers import SAVE_OPTIONS, draw_job
+    from supercoil.plotting.tweezers import LINE_DIAGRAM, SAVE_OPTIONS, draw_job
 
     (tmp_path / "shared").mkdir()
     (tmp_path / "alone").mkdir()
     painter._warm_up()
+    drawn_on = {id(LINE_DIAGRAM._fig)}
     for job in _diagram_jobs(tmp_path / "shared"):
         draw_job(job)
+        drawn_on.add(id(LINE_DIAGRAM._fig))
+    assert len(drawn_on) == 1  # the warm-up's figure, drawn again for every diagram
     monkeypatch.setattr(figures, "_shared_canvas_class", lambda: FigureCanvasAgg)
     for path, _builder, kwargs in _diagram_jobs(tmp_path / "alone"):
         kwargs = dict(kwargs)

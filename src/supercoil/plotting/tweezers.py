@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from supercoil.plotting.figures import (
+    DiagramFigure,
     configurations_figure,
-    diagram_figure,
     through_special_points,
 )
 
@@ -24,6 +24,9 @@ FIGURES = {"hat_curve.png": "extension", "torque.png": "torque", "writhe.png": "
 # zlib level 1 instead of Pillow's 6: the same pixels, files about 17 % larger, the
 # encoding of the four figures about 0.1-0.2 s shorter (measured at N = 100, 0-5 turns)
 SAVE_OPTIONS = {"dpi": 150, "pil_kwargs": {"compress_level": 1}}
+# the line diagrams of this process (and of the figure helper's warm-up): one figure
+# drawn again for each (figures.DiagramFigure)
+LINE_DIAGRAM = DiagramFigure()
 
 
 def _branches(payload: Mapping, y: str) -> list[dict]:
@@ -100,7 +103,7 @@ def draw_job(job: tuple[Path, str, dict]) -> Path:
     import matplotlib
 
     path, builder, kwargs = job
-    build = diagram_figure if builder == "diagram" else configurations_figure
+    build = LINE_DIAGRAM if builder == "diagram" else configurations_figure
     kwargs = dict(kwargs)
     # made at the resolution it is saved at: the layout's text measurements are then
     # the drawing's (matplotlib caches them per dpi), and the save does not rescale the

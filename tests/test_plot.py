@@ -298,22 +298,56 @@ def test_a_dna_result_says_so_in_its_title(ring, tmp_path):
     assert result.title == "DNA ring of 600 bp in 150 mM salt, C/A = 0.6667, L/D = 40, N = 24"
 
 
-def test_tweezers_figures_fast_png_encoding_keeps_the_pixels(tmp_path):
-    """The tweezers figures are saved with a faster zlib level: the decoded image equals
-    the one saved with Pillow's default compression, pixel for pixel."""
-    from supercoil.plotting.figures import diagram_figure
-    from supercoil.plotting.tweezers import SAVE_OPTIONS
+def test_tweezers_figures_png_encoding_keeps_the_pixels_and_chunks(tmp_path):
+    """Oracle: matplotlib's own PNG of the figure (Pillow, its default level). The
+    tweezers' encoder (tweezers.save_png: numpy's Up filter and zlib) writes another
+    file that decodes to the same pixels, with the same mode, dpi and Software text."""
+    from PIL import Image
+
+    from supercoil.plotting.figures import configurations_figure, diagram_figure
+    from supercoil.plotting.tweezers import SAVE_OPTIONS, save_png
 
     turns = np.linspace(0.0, 3.0, 40)
     branches = [{"name": "buckled", "turns": turns, "extension": 1.0 - 0.1 * turns**2,
                  "stable": turns < 2.0}]
     specials = [{"kind": "fold", "turns": 2.0, "extension": 0.6}]
-    fig = diagram_figure(branches, specials, title="clamped rod", x="turns", y="extension")
-    fig.savefig(tmp_path / "default.png", dpi=SAVE_OPTIONS["dpi"])
-    fig.savefig(tmp_path / "fast.png", **SAVE_OPTIONS)
-    assert SAVE_OPTIONS["pil_kwargs"]["compress_level"] < 6
-    assert (tmp_path / "fast.png").read_bytes() != (tmp_path / "default.png").read_bytes()
-    np.testing.assert_array_equal(_png(tmp_path / "fast.png"), _png(tmp_path / "default.png"))
+    s = np.linspace(0.0, 1.0, 30)
+    tubes = [{"label": "state", "points": np.stack([0.1 * np.sin(np.pi * s),
+                                                   0.05 * np.sin(2 * np.pi * s), s], axis=1)}]
+    for name, fig in (("diagram", diagram_figure(branches, specials, title="clamped rod",
+                                                 x="turns", y="extension")),
+                      ("tubes", configurations_figure(tubes, diameter=0.03, title="rod",
+                                                      closed=False))):
+        fig.savefig(tmp_path / f"{name}_matplotlib.png", dpi=SAVE_OPTIONS["dpi"])
+        save_png(fig, tmp_path / f"{name}.png")
+        ours, theirs = (Image.open(tmp_path / f"{name}{suffix}.png")
+                        for suffix in ("", "_matplotlib"))
+        assert (tmp_path / f"{name}.png").read_bytes() != \
+            (tmp_path / f"{name}_matplotlib.png").read_bytes()
+        assert ours.mode == theirs.mode == "RGBA"
+        assert ours.info == theirs.info  # dpi and Software
+        assert ours.info["dpi"][0] == pytest.approx(SAVE_OPTIONS["dpi"], abs=0.05)
+        np.testing.assert_array_equal(np.asarray(ours), np.asarray(theirs))
+
+
+def test_png_encoder_round_trips_any_image():
+    """Oracle: the image encoded. Random bytes (rows far from the row above: the Up
+    filter's differences wrap modulo 256), a single row and a single column decode
+    through Pillow to the very image."""
+    import io
+
+    from PIL import Image
+
+    from supercoil.plotting.png import encode_png
+
+    rng = np.random.default_rng(5)
+    for shape in ((37, 53, 4), (1, 9, 4), (12, 1, 4)):
+        image = rng.integers(0, 256, size=shape, dtype=np.uint8)
+        decoded = Image.open(io.BytesIO(encode_png(image, dpi=72, text={"a": "b"})))
+        assert decoded.mode == "RGBA" and decoded.info["a"] == "b"
+        np.testing.assert_array_equal(np.asarray(decoded), image)
+    with pytest.raises(ValueError, match="RGBA image of uint8"):
+        encode_png(np.zeros((3, 3, 3), np.uint8))
 
 
 def test_house_style_png_fast_encoding_keeps_the_pixels(tmp_path):

@@ -161,7 +161,7 @@ def _warm_up() -> None:
 
     import matplotlib
 
-    from supercoil.plotting.tweezers import LINE_DIAGRAM, SAVE_OPTIONS
+    from supercoil.plotting.tweezers import LINE_DIAGRAM, SAVE_OPTIONS, save_png
 
     # as draw_job draws a line diagram, on the figure it then draws them on
     with matplotlib.rc_context({"figure.dpi": SAVE_OPTIONS["dpi"]}):
@@ -169,7 +169,7 @@ def _warm_up() -> None:
                              "stable": [True, False]}],
                            [{"kind": "fold", "turns": 1.0, "extension": 0.5}],
                            title="warm-up", x="turns", y="extension")
-    fig.savefig(io.BytesIO(), format="png", **SAVE_OPTIONS)
+    save_png(fig, io.BytesIO())
 
 
 def main() -> int:

@@ -517,3 +517,36 @@ def test_diagrams_drawn_one_after_another_have_the_pixels_of_one_drawn_alone(tmp
         assert type(fig.canvas) is FigureCanvasAgg
         fig.savefig(path, **SAVE_OPTIONS)
         np.testing.assert_array_equal(_png(tmp_path / "shared" / path.name), _png(path))
+
+
+def test_the_diagrams_renderer_lays_every_text_out_as_agg_does():
+    """Oracle: matplotlib's own layout of each text (``Text._get_layout``) on a new Agg
+    renderer. On the diagrams' shared renderer, which answers the fonts' height metrics
+    from a memo (figures._font_height_metrics), every text of a diagram (tick labels,
+    mathtext axis labels, a two-line title, legend entries and title, the offset text)
+    lays out the same, to the last bit, within one pass and in the next."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import RendererAgg
+    from matplotlib.text import Text
+
+    from supercoil.plotting import figures
+
+    turns = np.linspace(0.0, 5.0, 40)
+    branches = [{"name": "buckled", "turns": turns, "writhe": 5.0 + 1e-4 * turns,
+                 "stable": turns < 2.0}]
+    specials = [{"kind": "fold", "turns": 2.0, "writhe": 5.0001}]
+    with matplotlib.rc_context({"figure.dpi": 150}):
+        fig = figures.diagram_figure(branches, specials, title="two\nlines", x="turns",
+                                     y="writhe", legend_title="branches")
+    texts = [t for t in fig.findobj(Text) if t.get_text()]
+    assert len(texts) >= 15
+    plain = RendererAgg(*fig.canvas.get_width_height(physical=True), fig.dpi)
+    shared = fig.canvas.get_renderer()
+    assert hasattr(shared, "_get_font_height_metrics")
+    for _ in range(2):
+        for text in texts:
+            ours, theirs = text._get_layout(shared), text._get_layout(plain)
+            assert ours[0].bounds == theirs[0].bounds, text
+            assert ours[1:] == theirs[1:], text
+        assert shared.font_heights  # answered from the memo
+        shared = fig.canvas.get_renderer()  # the next pass

@@ -298,22 +298,56 @@ def test_a_dna_result_says_so_in_its_title(ring, tmp_path):
     assert result.title == "DNA ring of 600 bp in 150 mM salt, C/A = 0.6667, L/D = 40, N = 24"
 
 
-def test_tweezers_figures_fast_png_encoding_keeps_the_pixels(tmp_path):
-    """The tweezers figures are saved with a faster zlib level: the decoded image equals
-    the one saved with Pillow's default compression, pixel for pixel."""
-    from supercoil.plotting.figures import diagram_figure
-    from supercoil.plotting.tweezers import SAVE_OPTIONS
+def test_tweezers_figures_png_encoding_keeps_the_pixels_and_chunks(tmp_path):
+    """Oracle: matplotlib's own PNG of the figure (Pillow, its default level). The
+    tweezers' encoder (tweezers.save_png: numpy's Up filter and zlib) writes another
+    file that decodes to the same pixels, with the same mode, dpi and Software text."""
+    from PIL import Image
+
+    from supercoil.plotting.figures import configurations_figure, diagram_figure
+    from supercoil.plotting.tweezers import SAVE_OPTIONS, save_png
 
     turns = np.linspace(0.0, 3.0, 40)
     branches = [{"name": "buckled", "turns": turns, "extension": 1.0 - 0.1 * turns**2,
                  "stable": turns < 2.0}]
     specials = [{"kind": "fold", "turns": 2.0, "extension": 0.6}]
-    fig = diagram_figure(branches, specials, title="clamped rod", x="turns", y="extension")
-    fig.savefig(tmp_path / "default.png", dpi=SAVE_OPTIONS["dpi"])
-    fig.savefig(tmp_path / "fast.png", **SAVE_OPTIONS)
-    assert SAVE_OPTIONS["pil_kwargs"]["compress_level"] < 6
-    assert (tmp_path / "fast.png").read_bytes() != (tmp_path / "default.png").read_bytes()
-    np.testing.assert_array_equal(_png(tmp_path / "fast.png"), _png(tmp_path / "default.png"))
+    s = np.linspace(0.0, 1.0, 30)
+    tubes = [{"label": "state", "points": np.stack([0.1 * np.sin(np.pi * s),
+                                                   0.05 * np.sin(2 * np.pi * s), s], axis=1)}]
+    for name, fig in (("diagram", diagram_figure(branches, specials, title="clamped rod",
+                                                 x="turns", y="extension")),
+                      ("tubes", configurations_figure(tubes, diameter=0.03, title="rod",
+                                                      closed=False))):
+        fig.savefig(tmp_path / f"{name}_matplotlib.png", dpi=SAVE_OPTIONS["dpi"])
+        save_png(fig, tmp_path / f"{name}.png")
+        ours, theirs = (Image.open(tmp_path / f"{name}{suffix}.png")
+                        for suffix in ("", "_matplotlib"))
+        assert (tmp_path / f"{name}.png").read_bytes() != \
+            (tmp_path / f"{name}_matplotlib.png").read_bytes()
+        assert ours.mode == theirs.mode == "RGBA"
+        assert ours.info == theirs.info  # dpi and Software
+        assert ours.info["dpi"][0] == pytest.approx(SAVE_OPTIONS["dpi"], abs=0.05)
+        np.testing.assert_array_equal(np.asarray(ours), np.asarray(theirs))
+
+
+def test_png_encoder_round_trips_any_image():
+    """Oracle: the image encoded. Random bytes (rows far from the row above: the Up
+    filter's differences wrap modulo 256), a single row and a single column decode
+    through Pillow to the very image."""
+    import io
+
+    from PIL import Image
+
+    from supercoil.plotting.png import encode_png
+
+    rng = np.random.default_rng(5)
+    for shape in ((37, 53, 4), (1, 9, 4), (12, 1, 4)):
+        image = rng.integers(0, 256, size=shape, dtype=np.uint8)
+        decoded = Image.open(io.BytesIO(encode_png(image, dpi=72, text={"a": "b"})))
+        assert decoded.mode == "RGBA" and decoded.info["a"] == "b"
+        np.testing.assert_array_equal(np.asarray(decoded), image)
+    with pytest.raises(ValueError, match="RGBA image of uint8"):
+        encode_png(np.zeros((3, 3, 3), np.uint8))
 
 
 def test_house_style_png_fast_encoding_keeps_the_pixels(tmp_path):
@@ -416,3 +450,106 @@ def test_diagram_layout_keeps_every_text_inside_and_the_legend_beside(scale, nam
     assert figure_box.x0 <= legend.x0 and legend.x1 <= figure_box.x1 + 0.5
     assert legend.y0 >= figure_box.y0 and legend.y1 <= figure_box.y1 + 0.5
     assert legend.x0 >= ax.get_tightbbox(renderer).x1  # beside the axes, not over them
+
+
+def _diagram_jobs(folder):
+    """Line-diagram jobs of :func:`supercoil.plotting.tweezers.draw_job` that differ in
+    what a figure drawn after another could carry over: y data and labels, tick label
+    widths, an offset text, legend entries and title, the x axis, dashed lines, no
+    special points, a branch unstable throughout."""
+    turns = np.linspace(0.0, 5.0, 40)
+    title = "clamped rod, C/A = 1.333, F L²/A = 75, L/D = 33, N = 100"
+    names = ("straight", "buckled", "buckled_contact")
+    specials = [{"kind": "bifurcation", "turns": 2.2}, {"kind": "fold", "turns": 3.1},
+                {"kind": "contact_onset", "turns": 1.2}]
+
+    def job(name, y, scale, *, x="turns", branch_names=names, points=specials,
+            heading=title, shift=0.0, **extra):
+        xs = turns if x == "turns" else 75.0 * turns
+        branches = [{"name": n, x: xs, y: shift + scale * (1.0 + k + np.sin(turns + k)),
+                     "stable": turns < 2.0 + k, **extra} for k, n in enumerate(branch_names)]
+        points = [{**p, x: p["turns"] * (1.0 if x == "turns" else 75.0),
+                   y: shift + scale * 1.5}
+                  for p in points]
+        return (folder / name, "diagram", {"branches": branches, "special_points": points,
+                                           "title": heading, "x": x, "y": y})
+
+    return [job("extension.png", "extension", 0.3),
+            job("torque.png", "torque", 12.0),
+            job("small.png", "writhe", -3e-4),
+            job("offset.png", "writhe", 1e-4, shift=5.0),
+            job("wide.png", "torque", 1e5,
+                branch_names=("a branch with a long name, and another clause", "b")),
+            job("ramp.png", "extension", 0.3, x="tension", branch_names=("force ramp",),
+                points=[], heading="another title", color="0.15"),
+            job("dashed.png", "writhe", 2.0, linestyle=(0, (6, 3)), points=specials[:1],
+                stable=np.zeros_like(turns, dtype=bool)),
+            job("extension_again.png", "extension", 0.3)]
+
+
+def test_diagrams_drawn_one_after_another_have_the_pixels_of_one_drawn_alone(tmp_path,
+                                                                             monkeypatch):
+    """Oracle: each line diagram made and saved on a figure and a canvas of its own
+    (matplotlib's Agg canvas, a new renderer for the layout and the drawing). Drawn as
+    the figure helper draws them (its warm-up, then the jobs one after another in one
+    process, on the warm-up's figure and a shared renderer), every file decodes to the
+    same pixels."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from supercoil.plotting import figures, painter
+    from supercoil.plotting.tweezers import LINE_DIAGRAM, SAVE_OPTIONS, draw_job
+
+    (tmp_path / "shared").mkdir()
+    (tmp_path / "alone").mkdir()
+    painter._warm_up()
+    drawn_on = {id(LINE_DIAGRAM._fig)}
+    for job in _diagram_jobs(tmp_path / "shared"):
+        draw_job(job)
+        drawn_on.add(id(LINE_DIAGRAM._fig))
+    assert len(drawn_on) == 1  # the warm-up's figure, drawn again for every diagram
+    monkeypatch.setattr(figures, "_shared_canvas_class", lambda: FigureCanvasAgg)
+    for path, _builder, kwargs in _diagram_jobs(tmp_path / "alone"):
+        kwargs = dict(kwargs)
+        with matplotlib.rc_context({"figure.dpi": SAVE_OPTIONS["dpi"]}):
+            fig = figures.diagram_figure(kwargs.pop("branches"), kwargs.pop("special_points"),
+                                         **kwargs)
+        assert type(fig.canvas) is FigureCanvasAgg
+        fig.savefig(path, **SAVE_OPTIONS)
+        np.testing.assert_array_equal(_png(tmp_path / "shared" / path.name), _png(path))
+
+
+def test_the_diagrams_renderer_lays_every_text_out_as_agg_does():
+    """Oracle: matplotlib's own layout of each text (``Text._get_layout``) on a new Agg
+    renderer. On the diagrams' shared renderer, which answers the fonts' height metrics
+    from a memo (figures._font_height_metrics), every text of a diagram (tick labels,
+    mathtext axis labels, a two-line title, legend entries and title, the offset text)
+    lays out the same, to the last bit, within one pass and in the next."""
+    import inspect
+
+    import matplotlib
+    from matplotlib.backends.backend_agg import RendererAgg
+    from matplotlib.text import Text
+
+    from supercoil.plotting import figures
+
+    turns = np.linspace(0.0, 5.0, 40)
+    branches = [{"name": "buckled", "turns": turns, "writhe": 5.0 + 1e-4 * turns,
+                 "stable": turns < 2.0}]
+    specials = [{"kind": "fold", "turns": 2.0, "writhe": 5.0001}]
+    with matplotlib.rc_context({"figure.dpi": 150}):
+        fig = figures.diagram_figure(branches, specials, title="two\nlines", x="turns",
+                                     y="writhe", legend_title="branches")
+    texts = [t for t in fig.findobj(Text) if t.get_text()]
+    assert len(texts) >= 15
+    plain = RendererAgg(*fig.canvas.get_width_height(physical=True), fig.dpi)
+    shared = fig.canvas.get_renderer()
+    # matplotlib from 3.11 asks the renderer; before, neither renderer is asked
+    asks = "_get_font_height_metrics" in inspect.getsource(Text._get_layout)
+    for _ in range(2):
+        for text in texts:
+            ours, theirs = text._get_layout(shared), text._get_layout(plain)
+            assert ours[0].bounds == theirs[0].bounds, text
+            assert ours[1:] == theirs[1:], text
+        assert bool(shared.font_heights) == asks  # answered from the memo
+        shared = fig.canvas.get_renderer()  # the next pass

@@ -161,14 +161,15 @@ def _warm_up() -> None:
 
     import matplotlib
 
-    from supercoil.plotting.tweezers import SAVE_OPTIONS, diagram_figure
+    from supercoil.plotting.tweezers import LINE_DIAGRAM, SAVE_OPTIONS, save_png
 
-    with matplotlib.rc_context({"figure.dpi": SAVE_OPTIONS["dpi"]}):  # as draw_job's
-        fig = diagram_figure([{"name": "a", "turns": [0.0, 1.0], "extension": [1.0, 0.5],
-                               "stable": [True, False]}],
-                             [{"kind": "fold", "turns": 1.0, "extension": 0.5}],
-                             title="warm-up", x="turns", y="extension")
-    fig.savefig(io.BytesIO(), format="png", **SAVE_OPTIONS)
+    # as draw_job draws a line diagram, on the figure it then draws them on
+    with matplotlib.rc_context({"figure.dpi": SAVE_OPTIONS["dpi"]}):
+        fig = LINE_DIAGRAM([{"name": "a", "turns": [0.0, 1.0], "extension": [1.0, 0.5],
+                             "stable": [True, False]}],
+                           [{"kind": "fold", "turns": 1.0, "extension": 0.5}],
+                           title="warm-up", x="turns", y="extension")
+    save_png(fig, io.BytesIO())
 
 
 def main() -> int:

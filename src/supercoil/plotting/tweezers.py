@@ -15,15 +15,19 @@ from pathlib import Path
 import numpy as np
 
 from supercoil.plotting.figures import (
+    DiagramFigure,
     configurations_figure,
-    diagram_figure,
     through_special_points,
 )
 
 FIGURES = {"hat_curve.png": "extension", "torque.png": "torque", "writhe.png": "writhe"}
-# zlib level 1 instead of Pillow's 6: the same pixels, files about 17 % larger, the
-# encoding of the four figures about 0.1-0.2 s shorter (measured at N = 100, 0-5 turns)
-SAVE_OPTIONS = {"dpi": 150, "pil_kwargs": {"compress_level": 1}}
+# the figures' resolution; they are encoded by save_png (zlib level 1, as Pillow's
+# compress_level 1 before, which against Pillow's 6 gave the same pixels, files about
+# 17 % larger, the encoding of the four figures about 0.1-0.2 s shorter)
+SAVE_OPTIONS = {"dpi": 150}
+# the line diagrams of this process (and of the figure helper's warm-up): one figure
+# drawn again for each (figures.DiagramFigure)
+LINE_DIAGRAM = DiagramFigure()
 
 
 def _branches(payload: Mapping, y: str) -> list[dict]:
@@ -100,7 +104,7 @@ def draw_job(job: tuple[Path, str, dict]) -> Path:
     import matplotlib
 
     path, builder, kwargs = job
-    build = diagram_figure if builder == "diagram" else configurations_figure
+    build = LINE_DIAGRAM if builder == "diagram" else configurations_figure
     kwargs = dict(kwargs)
     # made at the resolution it is saved at: the layout's text measurements are then
     # the drawing's (matplotlib caches them per dpi), and the save does not rescale the
@@ -110,8 +114,32 @@ def draw_job(job: tuple[Path, str, dict]) -> Path:
             fig = build(kwargs.pop("branches"), kwargs.pop("special_points"), **kwargs)
         else:
             fig = build(kwargs.pop("configurations"), **kwargs)
-    fig.savefig(path, **SAVE_OPTIONS)
+    save_png(fig, path)
     return Path(path)
+
+
+def save_png(fig, target) -> None:
+    """Save ``fig`` as a PNG file at ``SAVE_OPTIONS['dpi']`` into ``target`` (a path or a
+    binary file): the pixels of ``fig.savefig(target, **SAVE_OPTIONS)``, drawn by it
+    (``format="rgba"``), encoded by :func:`supercoil.plotting.png.encode_png` instead of
+    Pillow (its module doc), with the chunks matplotlib writes (dpi, ``Software``)."""
+    import io
+
+    import matplotlib
+
+    from supercoil.plotting.png import encode_png
+
+    dpi = SAVE_OPTIONS["dpi"]
+    raw = io.BytesIO()
+    fig.savefig(raw, format="rgba", dpi=dpi)
+    width, height = (int(v * dpi) for v in fig.get_size_inches())  # as the canvas's
+    rgba = np.frombuffer(raw.getbuffer(), np.uint8).reshape(height, width, 4)
+    data = encode_png(rgba, dpi=dpi, text={
+        "Software": f"Matplotlib version{matplotlib.__version__}, https://matplotlib.org/"})
+    if hasattr(target, "write"):
+        target.write(data)
+    else:
+        Path(target).write_bytes(data)
 
 
 def write_figures(payload: Mapping, configurations: Sequence[Mapping],

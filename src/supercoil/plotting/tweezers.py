@@ -132,7 +132,14 @@ def save_png(fig, target) -> None:
     dpi = SAVE_OPTIONS["dpi"]
     raw = io.BytesIO()
     fig.savefig(raw, format="rgba", dpi=dpi)
-    width, height = (int(v * dpi) for v in fig.get_size_inches())  # as the canvas's
+    pixels = raw.getbuffer().nbytes // 4
+    # the canvas's size: the inches times the dpi, truncated; a product that round-off
+    # puts a hair below an integer truncates one lower, hence the neighbours
+    w, h = (v * dpi for v in fig.get_size_inches())
+    sizes = [(int(w) + i, int(h) + j) for i in (0, -1, 1) for j in (0, -1, 1)]
+    width, height = next(((a, b) for a, b in sizes if a * b == pixels), (0, 0))
+    if width * height != pixels:
+        raise RuntimeError(f"a {w:.1f} x {h:.1f} pixel figure drew {pixels} pixels")
     rgba = np.frombuffer(raw.getbuffer(), np.uint8).reshape(height, width, 4)
     data = encode_png(rgba, dpi=dpi, text={
         "Software": f"Matplotlib version{matplotlib.__version__}, https://matplotlib.org/"})

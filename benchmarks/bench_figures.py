@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 import shutil
 import subprocess
@@ -45,8 +44,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-COMMAND = ["tweezers", "--twist-ratio", str(4 / 3), "--length-over-diameter", "33",
-           "--tension", "75", "--turns", "0:5", "--nodes", "100", "--quiet"]
+# issue 5's command, a source tree put on the path, its bytecode written
+from bench_fixed_costs import COMMAND, _compile, _env
 
 CHILD = r"""
 import json, os, sys, time
@@ -83,23 +82,6 @@ else:
     times["all"] = sum(times.values())
 print(json.dumps(times))
 """
-
-
-def _env(source: str | None) -> dict:
-    env = dict(os.environ)
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    if source is not None:
-        env["PYTHONPATH"] = os.pathsep.join([source, env.get("PYTHONPATH", "")]).rstrip(
-            os.pathsep)
-    return env
-
-
-def _compile(source: str | None) -> None:
-    code = "import os, supercoil; print(os.path.dirname(supercoil.__file__))"
-    folder = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
-                            text=True, env=_env(source)).stdout.strip()
-    subprocess.run([sys.executable, "-m", "compileall", "-q", folder], check=True,
-                   capture_output=True, env=_env(source))
 
 
 def _measure(source: str | None, run: Path, out: Path, shared: bool) -> dict:

@@ -72,6 +72,31 @@ def test_the_helper_draws_the_files_the_command_would(tmp_path):
 
 
 @needs_two_cores
+def test_meanwhile_runs_once_after_the_jobs_are_handed_over(tmp_path):
+    """write_figures(meanwhile=f) calls f once, after the helper took the jobs (it has
+    none left to take) and before the figures are waited for; the files are the ones
+    drawn without a painter, pixel for pixel. Without a painter f runs once too."""
+    payload, configurations, here, _jobs = _drawn_here_and_jobs(tmp_path, "helper")
+    calls = []
+    with Painter(1) as painter:
+        assert painter.ready(timeout=120.0)
+        helpers = list(painter._helpers)
+        written = write_figures(payload, configurations, tmp_path / "helper", painter,
+                                meanwhile=lambda: calls.append(
+                                    [h.stdin.closed for h in helpers]))
+    assert calls == [[True]]  # once, the jobs already written to the helper
+    assert [p.name for p in written] == [p.name for p in here]
+    for path in here:
+        np.testing.assert_array_equal(_pixels(tmp_path / "helper" / path.name),
+                                      _pixels(path))
+    calls.clear()
+    (tmp_path / "alone").mkdir()
+    write_figures(payload, configurations, tmp_path / "alone",
+                  meanwhile=lambda: calls.append(1))
+    assert calls == [1]
+
+
+@needs_two_cores
 def test_a_dead_helper_leaves_its_figures_to_the_caller(tmp_path):
     """A helper that is gone before the jobs are sent draws nothing: draw returns every
     job and write_figures draws them itself (the same pixels as without a painter)."""

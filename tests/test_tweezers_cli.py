@@ -58,6 +58,39 @@ def test_files_and_stored_states(folder):
         assert np.allclose(branch.records["extension"], [p["extension"] for p in rows])
 
 
+def test_contact_lists_are_those_of_the_stored_states(folder):
+    """Oracle: contact_summary of each saved state of the contact branch, recomputed
+    here; branch.json's lists are made while the figures are drawn (the tubes' states
+    before), and they must be the same, entry for entry."""
+    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.report import contact_summary
+    from supercoil.problems.tweezers import TweezersOptions, clamped_problem
+
+    data = json.loads((folder / "branch.json").read_text())
+    options = TweezersOptions(twist_ratio=1.3333333333333333, length_over_diameter=20,
+                              tension=20, turns=(0, 1.6), n_nodes=40)
+    rod, _ = clamped_problem(options)
+    cp = ContactProblem(rod, ContactOptions(diameter=options.diameter,
+                                            curve=options.contact_curve,
+                                            formulation=options.contact_formulation))
+    listed = 0
+    for b in data["branches"]:
+        branch = Branch.load(folder / b["file"])
+        rows = [p for p in data["points"] if p["branch"] == b["name"]]
+        for i, row in enumerate(rows):
+            if b["contact"]:
+                summary = contact_summary(cp, branch.states[i], branch.multipliers[i])
+                expected = (summary["contact_points"], summary["contact_intervals"])
+            else:
+                expected = ([], [])
+            # JSON keeps floats exactly: the same numbers, bit for bit
+            assert [row["contact_points"], row["contact_intervals"]] == \
+                json.loads(json.dumps(list(expected)))
+            assert len(row["contact_points"]) == row["n_contact_points"]
+            listed += len(row["contact_points"])
+    assert listed > 0
+
+
 @pytest.mark.parametrize("args, words", [
     (["--turns", "5:1"], "--turns"),
     (["--turns", "abc"], "--turns"),

@@ -264,13 +264,19 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
     :class:`~supercoil.plotting.painter.Painter` whose helper draws the figures.
     """
     from supercoil.io.results import envelope, write_json
-    from supercoil.plotting.tweezers import pick_configurations, write_figures
-    from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
+    from supercoil.plotting.tweezers import pick_configurations, picked_points, write_figures
+    from supercoil.problems.tweezers_output import (
+        TWEEZERS_CONVENTIONS,
+        add_contact_lists,
+        result_payload,
+    )
 
     for branch in result.branches:
         if not any(branch is done for done in saved):
             branch.save(out / "branches" / f"{branch.name}.npz")
-    payload = result_payload(result)
+    # the points' contact lists (0.05 s at N = 100) are made while the figures are drawn,
+    # but for the states drawn as tubes, which show them
+    payload = result_payload(result, contacts=False)
     states = {b.name: b.states for b in result.branches}
     if path is not None:
         import numpy as np
@@ -281,26 +287,36 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
         payload["special_points"] += list(path.jumps)
         np.savez_compressed(out / "branches" / "path.npz", states=path.states,
                             turns=np.array([p["turns"] for p in path.points]))
-    write_figures(payload, pick_configurations(payload, states), out, painter)
-    if preset is not None:
-        from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
+    add_contact_lists(result, [entry for _, _, entry in picked_points(payload, states)])
+    configurations = pick_configurations(payload, states)
 
-        for key in ("points", "special_points", "path"):
-            if key in payload:
-                payload[key] = [tweezers_point_in_dna_units(p, preset) for p in payload[key]]
-        payload.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                       diameter_nm=preset.effective_diameter_nm,
-                       force_pN=preset.force_to_pN(result.options.tension),
-                       relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
-    data = envelope(payload, n_nodes=result.options.n_nodes,
-                    tolerances=result.options.tolerances,
-                    units="nondimensional" if preset is None else preset.name,
-                    contact_treatment="barrier" if result.contact_problem else "none")
-    data["conventions"].update(TWEEZERS_CONVENTIONS)
+    def write_payload() -> None:
+        """branch.json, written while the figures are drawn."""
+        add_contact_lists(result, payload["points"])
+        if preset is not None:
+            from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
+
+            for key in ("points", "special_points", "path"):
+                if key in payload:
+                    payload[key] = [tweezers_point_in_dna_units(p, preset)
+                                    for p in payload[key]]
+            payload.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
+                           diameter_nm=preset.effective_diameter_nm,
+                           force_pN=preset.force_to_pN(result.options.tension),
+                           relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
+        data = envelope(payload, n_nodes=result.options.n_nodes,
+                        tolerances=result.options.tolerances,
+                        units="nondimensional" if preset is None else preset.name,
+                        contact_treatment="barrier" if result.contact_problem else "none")
+        data["conventions"].update(TWEEZERS_CONVENTIONS)
+        if preset is not None:
+            data["conventions"].update(preset.conventions())
+            data["provenance"]["units_preset"] = preset.record()
+        write_json(data, out / "branch.json")
+
+    write_figures(payload, configurations, out, painter, meanwhile=write_payload)
     if preset is not None:
-        data["conventions"].update(preset.conventions())
-        data["provenance"]["units_preset"] = preset.record()
-    write_json(data, out / "branch.json")
+        from supercoil.units.dna import ATHERMAL_CAVEAT
     for b in payload["branches"]:
         specials = [p for p in payload["special_points"] if p["branch"] == b["name"]
                     and p["kind"] != "fold"]

@@ -106,23 +106,37 @@ class Painter:
         its priority it waited) is ended: drawing its share here needs only
         matplotlib's import, the helper still its interpreter's, numpy's and
         matplotlib's."""
+        return self.wait(self.submit(jobs))
+
+    def submit(self, jobs: Sequence) -> list:
+        """The first half of :meth:`draw`: hand ``jobs`` to the helpers that are ready,
+        without waiting; returns what :meth:`wait` takes (the caller can work meanwhile,
+        e.g. write its data files while the figures are drawn)."""
         helpers = [h for h in self._helpers if self._warmed_up(h, 0.0)]
         self.close(keep=helpers)
         if not helpers:
-            return list(jobs)
+            return [(None, list(jobs), False)]
         shares = [list(jobs[i::len(helpers)]) for i in range(len(helpers))]
         sent = []
         for helper, share in zip(helpers, shares, strict=True):
             try:
                 helper.stdin.write(pickle.dumps(share))
                 helper.stdin.close()
-                sent.append(True)
+                sent.append((helper, share, True))
             except OSError:  # the helper is gone (a broken pipe)
                 with contextlib.suppress(OSError):
                     helper.stdin.close()  # closes the pipe even when its flush fails
-                sent.append(False)
+                sent.append((helper, share, False))
+        return sent
+
+    def wait(self, submitted: list) -> list:
+        """The second half of :meth:`draw`: wait for the helpers given jobs by
+        :meth:`submit`; returns the jobs that were not drawn, for the caller to draw."""
         left = []
-        for helper, share, ok in zip(helpers, shares, sent, strict=True):
+        for helper, share, ok in submitted:
+            if helper is None:
+                left += share
+                continue
             try:
                 helper.wait(timeout=TIMEOUT)
             except subprocess.TimeoutExpired:

@@ -168,3 +168,49 @@ def test_rephased_tangents_by_refinement_equal_those_of_new_factors(monkeypatch)
     np.testing.assert_allclose(refined.states, fresh.states, rtol=0, atol=1e-9)
     np.testing.assert_allclose(refined.tangents, fresh.tangents, rtol=0, atol=1e-8)
     assert refined_calls < fresh_calls
+
+
+def test_refined_tangents_alone_equal_those_of_new_factors(monkeypatch):
+    """ContinuationOptions.refined_tangents: each corrected point's tangent solved by
+    refinement with the corrector's factor, the Newton steps as without. Oracle: the same
+    run with a new factor for every tangent: the same points and tangents to round-off,
+    the same corrector iterations, one bordered factorisation fewer per point, and the
+    refinement accepted (not a new factor after all)."""
+    from supercoil.continuation import bordered
+    from supercoil.continuation.options import ContinuationOptions
+    from supercoil.continuation.switching import switch_branch
+    from supercoil.problems.ring_branches import circle_branch
+
+    circle, problem = circle_branch(2 / 3, 24, 3.0)
+    point = circle.points_of_kind("bifurcation")[0]
+    factors, refined = [], []
+    original_init = bordered.BorderedFactor.__init__
+    original_refined = bordered.BorderedFactor.refined_solve
+
+    def counted_init(self, *args, **kwargs):
+        factors.append(1)
+        original_init(self, *args, **kwargs)
+
+    def counted_refined(self, *args, **kwargs):
+        z = original_refined(self, *args, **kwargs)
+        refined.append(z is not None)
+        return z
+
+    monkeypatch.setattr(bordered.BorderedFactor, "__init__", counted_init)
+    monkeypatch.setattr(bordered.BorderedFactor, "refined_solve", counted_refined)
+    runs = {}
+    for refine in (False, True):
+        factors.clear()
+        refined.clear()
+        opts = ContinuationOptions(initial_step=0.01, max_step=0.05, max_points=8,
+                                   detect_bifurcations=False, detect_folds=False,
+                                   refined_tangents=refine)
+        runs[refine] = (switch_branch(problem, circle, point, opts), len(factors),
+                        list(refined))
+    (fresh, fresh_factors, fresh_refined), (new, new_factors, new_refined) = \
+        runs[False], runs[True]
+    assert len(fresh) == len(new) == 8
+    assert not fresh_refined and len(new_refined) >= 6 and all(new_refined)
+    assert new_factors == fresh_factors - len(new_refined)
+    np.testing.assert_allclose(new.states, fresh.states, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(new.tangents, fresh.tangents, rtol=0, atol=1e-8)

@@ -62,13 +62,6 @@ class ContinuationOptions:
       is below ``REFINE_BELOW`` of the one where the factor was made. The
       iterates and tangents are the same to round-off, with fewer
       factorisations.
-    * ``refined_tangents``: the tangent at each corrected point by that
-      refinement alone (implied by ``factor_refinement``; the Newton steps as
-      without). On the tweezers' contact branch (N = 100) it replaced 94 of its
-      633 bordered factorisations, with the same points, corrections and
-      iterations; the tangents' residuals end at the same round-off floor as a
-      new factor's, and the two agree to 2e-8 relative (the conditioning of the
-      bordered matrix against a barrier, ``1e8`` stiff), the points to 1.2e-9.
     * ``chord_steps``: where the residual fell below ``CHORD_BELOW`` (1e-2) of
       the one where the last bordered factor was made and within 1e3
       tolerances, the next step is first tried with that factor (no Hessian, no
@@ -173,7 +166,6 @@ class ContinuationOptions:
     direction: int = 1
     predictor: str = "tangent"
     factor_refinement: bool = False
-    refined_tangents: bool = False
     chord_steps: bool = False
     parameter_weight: float = 1.0
     zero_tolerance: float = 1e-6

@@ -737,8 +737,7 @@ class _Tracer:
                     full.restrict(system.free)
                 try:
                     t_new = tangent(system, x_new, system.weights * t_k, hessian,
-                                    corr.factor if opts.factor_refinement
-                                    or opts.refined_tangents else None)
+                                    corr.factor if opts.factor_refinement else None)
                 except SingularMatrixError as exc:
                     failure = f"tangent: {exc}"
             if failure is None and self.admissible is not None and \

@@ -783,7 +783,7 @@ def tweezers_branches(options: TweezersOptions,
         parameter_weight=D, tolerance=opts.contact_tolerance,
         event_tolerance=opts.contact_event_tolerance,
         predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
-        chord_steps=True, refined_tangents=True)
+        chord_steps=True)
     contact_records = tweezers_records(cp, rod, True)
     contact_events = (contact_count_event(cp),)
     old, contact_complete = stored.get(contact_name, (None, False))

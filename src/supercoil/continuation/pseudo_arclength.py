@@ -75,8 +75,12 @@ CHORD_BELOW = 1e-2
 
 
 # points that may be pending in the worker while a state is judged, when the stop looks
-# at the state alone (see _Tracer.add_point)
-POINT_LAG = 3
+# at the state alone (see _Tracer.add_point). The worker falls behind where its event
+# localisations bunch up (20-60 ms each): on the tweezers' contact branch (N = 100) the
+# command's process waited for answers 0.23-0.30 s in all with 3, 0.16-0.18 s with 8,
+# 0.20-0.22 s with 16 and 0.32-0.35 s with 30 (the backlog then drained at the run's
+# end), two runs each, measured
+POINT_LAG = 8
 
 
 def watches_points(stop: Callable[[np.ndarray], str | None] | None) -> bool:

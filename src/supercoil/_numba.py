@@ -115,14 +115,17 @@ def _unserialize_lazily(codegen, state):
     if names is None:
         return codegen._library_class._unserialize(codegen, state)
     library = codegen.create_library(name)
-    cls = type(library)
-    if cls not in _LAZY_CLASSES:
-        _LAZY_CLASSES[cls] = type(f"Lazy{cls.__name__}", (_LazyLinking, cls), {})
-    library.__class__ = _LAZY_CLASSES[cls]
-    library.__dict__.pop("_shared_module", None)  # the property answers now
-    library.enable_object_caching()
-    library._set_compiled_object(data[0])
-    library.__dict__["_supercoil_bitcode"] = data[1]
+    try:  # nothing is in numba's engine before _finalize_final_module
+        cls = type(library)
+        if cls not in _LAZY_CLASSES:
+            _LAZY_CLASSES[cls] = type(f"Lazy{cls.__name__}", (_LazyLinking, cls), {})
+        library.__class__ = _LAZY_CLASSES[cls]
+        library.__dict__.pop("_shared_module", None)  # the property answers now
+        library.enable_object_caching()
+        library._set_compiled_object(data[0])
+        library.__dict__["_supercoil_bitcode"] = data[1]
+    except (TypeError, AttributeError, ValueError):  # a library class unlike numba 0.68's
+        return codegen._library_class._unserialize(codegen, state)
     library._finalize_final_module()
     codegen._engine._defined_symbols |= names
     return library

@@ -315,8 +315,6 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
         write_json(data, out / "branch.json")
 
     write_figures(payload, configurations, out, painter, meanwhile=write_payload)
-    if preset is not None:
-        from supercoil.units.dna import ATHERMAL_CAVEAT
     for b in payload["branches"]:
         specials = [p for p in payload["special_points"] if p["branch"] == b["name"]
                     and p["kind"] != "fold"]
@@ -342,7 +340,7 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
               f"{payload['force_pN']:.4g} pN, D = {preset.effective_diameter_nm:.3g} nm; last "
               f"state: extension {last['extension_nm']:.4g} nm, torque "
               f"{last['torque_pN_nm']:.4g} pN nm")
-        warn(f"note: {ATHERMAL_CAVEAT}")
+        warn(f"note: {payload['athermal']}")
     print(f"wrote branch.json, branches/*.npz and figures to {out.resolve()}", flush=True)
     for note in payload["notes"]:
         warn(f"note: {note}")

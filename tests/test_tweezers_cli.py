@@ -211,15 +211,19 @@ def test_displacement_control_cli(tmp_path):
 
 
 def test_each_final_branch_file_is_written_once(tmp_path, monkeypatch):
-    """run_saving writes every branch when it becomes final; write_tweezers does not
-    write the same branch object again. The files hold the computed branches."""
+    """run_saving writes every branch when it becomes final, uncompressed (the command's
+    critical path); write_tweezers writes each of those branch objects once more,
+    compressed, while the figures are drawn, and no other. The files end compressed
+    and hold the computed branches."""
+    import zipfile
+
     writes, computed = [], {}
     original_save = Branch.save
 
     def counted_save(self, path, compressed=True):
-        if compressed:  # a final save (in-progress ones are not compressed)
+        if compressed:
             writes.append(f"{self.name}.npz")
-            computed[f"{self.name}.npz"] = self
+            assert computed.setdefault(f"{self.name}.npz", self) is self  # that very object
         return original_save(self, path, compressed)
 
     monkeypatch.setattr(Branch, "save", counted_save)
@@ -229,12 +233,45 @@ def test_each_final_branch_file_is_written_once(tmp_path, monkeypatch):
                   str(out), "--quiet"])
     assert status == 0
     names = ["straight.npz", "buckled.npz", "buckled_contact.npz"]
-    assert sorted(writes) == sorted(names)  # once each
+    assert sorted(writes) == sorted(names)  # compressed once each
+    assert sorted(p.name for p in (out / "branches").iterdir()) == sorted(names)  # no temp
     for name in names:
+        with zipfile.ZipFile(out / "branches" / name) as archive:
+            assert {i.compress_type for i in archive.infolist()} == {zipfile.ZIP_DEFLATED}
         stored, branch = Branch.load(out / "branches" / name), computed[name]
         assert np.array_equal(stored.states, branch.states)
         assert np.array_equal(stored.parameter_values, branch.parameter_values)
         assert [p.kind for p in stored.special_points] == [p.kind for p in branch.special_points]
+
+
+def test_final_branches_are_saved_uncompressed_when_final(tmp_path):
+    """run_saving(compress_final=False): each final branch is on disk, stored without
+    deflation, as soon as on_branch returns (what an interrupt of the figures leaves)."""
+    import zipfile
+
+    from supercoil.cli import diagram_output
+
+    class Fake:
+        def __init__(self, name):
+            self.name = name
+
+        def save(self, path, compressed=True):
+            with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED if compressed
+                                 else zipfile.ZIP_STORED) as archive:
+                archive.writestr("x.npy", b"0" * 100)
+
+    seen = []
+
+    def compute(message, on_point, on_branch):
+        for name in ("a", "b"):
+            on_branch(Fake(name), False)
+            with zipfile.ZipFile(tmp_path / "branches" / f"{name}.npz") as archive:
+                seen.append({i.compress_type for i in archive.infolist()})
+        return "done"
+
+    assert diagram_output.run_saving(compute, tmp_path, quiet=True,
+                                     compress_final=False) == "done"
+    assert seen == [{zipfile.ZIP_STORED}] * 2
 
 
 def test_in_progress_saves_every_ten_points_at_most_every_interval(tmp_path, monkeypatch):

@@ -217,7 +217,9 @@ def tweezers(
               f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
         from supercoil.cli.diagram_output import run_saving
 
-        saved = []  # the final branches run_saving wrote (write_tweezers does not rewrite them)
+        # the final branches run_saving wrote, uncompressed: write_tweezers compresses them
+        # while the figures are drawn
+        saved = []
 
         def compute(message, on_point, on_branch):
             def final(branch, contact):
@@ -227,7 +229,7 @@ def tweezers(
             return tweezers_branches(options, progress=message, on_point=on_point,
                                      on_branch=final)
 
-        result = run_saving(compute, out, quiet)
+        result = run_saving(compute, out, quiet, compress_final=False)
         if result is None:
             raise typer.Exit(EXIT_NOT_CONVERGED)
         path = None
@@ -254,7 +256,9 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
 
     ``saved``: branches already written to ``out/branches`` as they are (the very
     objects, e.g. by :func:`~supercoil.cli.diagram_output.run_saving` as each became
-    final): not written again (three compressed saves, about 0.05 s at N = 100).
+    final) but not compressed: rewritten compressed while the figures are drawn (three
+    compressed saves, about 0.05 s at N = 100, off the command's critical path; an
+    interrupt before leaves the uncompressed files, which load the same).
 
     ``path``: the quasi-static path (:class:`~supercoil.problems.tweezers_protocol.PathResult`)
     of the up-down protocol, written as the list ``path`` with its jumps among the special
@@ -263,6 +267,7 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
     special point and path point, and ``units`` is ``dna``. ``painter``: a
     :class:`~supercoil.plotting.painter.Painter` whose helper draws the figures.
     """
+    from supercoil.cli.diagram_output import save_branch
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.tweezers import pick_configurations, picked_points, write_figures
     from supercoil.problems.tweezers_output import (
@@ -313,6 +318,9 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
             data["conventions"].update(preset.conventions())
             data["provenance"]["units_preset"] = preset.record()
         write_json(data, out / "branch.json")
+        for branch in result.branches:
+            if any(branch is done for done in saved):
+                save_branch(branch, out / "branches")  # compressed, as the others
 
     write_figures(payload, configurations, out, painter, meanwhile=write_payload)
     for b in payload["branches"]:

@@ -9,7 +9,8 @@ the median wall and CPU time (user + system of the command's process); with
 ``--against SRC`` each run alternates with one of the source tree ``SRC`` (its
 ``src`` folder, put on ``PYTHONPATH``; e.g. a ``git archive`` of an older commit) and
 the ratio of the smallest times is printed: on a shared machine the smallest of
-alternated runs is the least disturbed comparison. ``--bytecode`` first compiles the
+alternated runs is the least disturbed comparison. Each round is preceded by a
+pure-Python probe (``probe``, printed), the host's speed at that moment. ``--bytecode`` first compiles the
 timed source trees' modules (``python -m compileall``), as an installed package has them:
 where the environment sets ``PYTHONDONTWRITEBYTECODE=1`` (this machine's), every run
 otherwise compiles supercoil's 850 kB of source again (about 0.5 s of the command,
@@ -65,11 +66,28 @@ def compile_trees(sources: list[str | None]) -> None:
         print(f"compiled {folder}")
 
 
+PROBE = compile("s = 0\nfor i in range(3_000_000):\n    s += i\n", "<probe>", "exec")
+
+
+def probe() -> float:
+    """Process time of a fixed pure-Python loop, run at module level (globals, as the
+    ``python -c`` probe quoted in docs/benchmarks.md: in a function's locals it runs
+    about twice as fast): the host's speed, 0.15 s in the quiet hours of sessions 5-10,
+    0.26-0.29 s through session 16."""
+    start = time.process_time()
+    exec(PROBE, {})  # noqa: S102 (a constant loop)
+    return time.process_time() - start
+
+
 def repeated(cmd_for, repeat: int, against: str | None) -> None:
-    """Run the command ``repeat`` times (alternating with ``against``); print min/median."""
+    """Run the command ``repeat`` times (alternating with ``against``); print min/median,
+    and the host's speed (:func:`probe`) before each round."""
     trees = [None] + ([against] if against else [])
     times: dict[str | None, list[tuple[float, float]]] = {t: [] for t in trees}
+    probes = []
     for _ in range(repeat):
+        probes.append(probe())
+        print(f"probe {probes[-1]:.3f} s", flush=True)
         for tree in trees:
             with tempfile.TemporaryDirectory() as folder:
                 wall, cpu, proc = timed_command(cmd_for(Path(folder) / "run"), tree)
@@ -84,6 +102,8 @@ def repeated(cmd_for, repeat: int, against: str | None) -> None:
         best[tree] = (walls[0], cpus[0])
         print(f"{tree or 'this tree'}: wall min {walls[0]:.2f} median {walls[len(walls) // 2]:.2f}"
               f" s; cpu min {cpus[0]:.2f} median {cpus[len(cpus) // 2]:.2f} s")
+    probes.sort()
+    print(f"probe min {probes[0]:.3f} median {probes[len(probes) // 2]:.3f} s")
     if against:
         print(f"ratio this / against (smallest): wall {best[None][0] / best[against][0]:.2f}, "
               f"cpu {best[None][1] / best[against][1]:.2f}")

@@ -217,18 +217,12 @@ def tweezers(
               f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
         from supercoil.cli.diagram_output import run_saving
 
-        # the final branches run_saving wrote, uncompressed: write_tweezers compresses them
-        # while the figures are drawn
-        saved = []
-
         def compute(message, on_point, on_branch):
-            def final(branch, contact):
-                on_branch(branch, contact)
-                saved.append(branch)
-
             return tweezers_branches(options, progress=message, on_point=on_point,
-                                     on_branch=final)
+                                     on_branch=on_branch)
 
+        # each final branch written uncompressed as it comes; write_tweezers writes them
+        # compressed while the figures are drawn
         result = run_saving(compute, out, quiet, compress_final=False)
         if result is None:
             raise typer.Exit(EXIT_NOT_CONVERGED)
@@ -241,7 +235,7 @@ def tweezers(
             warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
             path = quasistatic_path(options, protocol, step=step, force_range=ramp,
                                     force_step=force_step)
-        payload = write_tweezers(result, out, path, preset, saved=saved, painter=painter)
+        payload = write_tweezers(result, out, path, preset, painter=painter)
     if not payload["ok"] or (path is not None and not path.ok):
         if path is not None and not path.ok:
             payload["notes"].append(f"path: {path.message}")
@@ -251,14 +245,13 @@ def tweezers(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=None) -> dict:
+def write_tweezers(result, out: Path, path=None, preset=None, painter=None) -> dict:
     """Save the branches, branch.json (with the envelope) and the figures; return the payload.
 
-    ``saved``: branches already written to ``out/branches`` as they are (the very
-    objects, e.g. by :func:`~supercoil.cli.diagram_output.run_saving` as each became
-    final) but not compressed: rewritten compressed while the figures are drawn (three
-    compressed saves, about 0.05 s at N = 100, off the command's critical path; an
-    interrupt before leaves the uncompressed files, which load the same).
+    Every branch is written compressed to ``out/branches`` while the figures are drawn
+    (three compressed saves, about 0.05 s at N = 100, off the command's critical path);
+    the command's :func:`~supercoil.cli.diagram_output.run_saving` wrote each uncompressed
+    when it became final, which an interrupt before the figures leaves (they load the same).
 
     ``path``: the quasi-static path (:class:`~supercoil.problems.tweezers_protocol.PathResult`)
     of the up-down protocol, written as the list ``path`` with its jumps among the special
@@ -276,9 +269,6 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
         result_payload,
     )
 
-    for branch in result.branches:
-        if not any(branch is done for done in saved):
-            branch.save(out / "branches" / f"{branch.name}.npz")
     # the points' contact lists (0.05 s at N = 100) are made while the figures are drawn,
     # but for the states drawn as tubes, which show them
     payload = result_payload(result, contacts=False)
@@ -319,8 +309,7 @@ def write_tweezers(result, out: Path, path=None, preset=None, saved=(), painter=
             data["provenance"]["units_preset"] = preset.record()
         write_json(data, out / "branch.json")
         for branch in result.branches:
-            if any(branch is done for done in saved):
-                save_branch(branch, out / "branches")  # compressed, as the others
+            save_branch(branch, out / "branches")
 
     write_figures(payload, configurations, out, painter, meanwhile=write_payload)
     for b in payload["branches"]:

@@ -2,14 +2,19 @@
 F L^2/A = 75 (the problem the issue quotes for PyElastica), timed for the whole command.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers.py [--nodes N] [--stop T]
-[--repeat K [--against SRC]] [--bytecode] [--pyelastica PYTHON [--pyelastica-steps K]]``.
+[--repeat K [--against SRC [--against-seconds S]]] [--bytecode] [--pyelastica PYTHON [--pyelastica-steps K]]``.
 Prints wall time, points per branch, folds, the last state's extension and writhe and the
 closest approach. ``--repeat K`` runs the command K times and prints the smallest and
 the median wall and CPU time (user + system of the command's process); with
 ``--against SRC`` each run alternates with one of the source tree ``SRC`` (its
 ``src`` folder, put on ``PYTHONPATH``; e.g. a ``git archive`` of an older commit) and
 the ratio of the smallest times is printed: on a shared machine the smallest of
-alternated runs is the least disturbed comparison. Each round is preceded by a
+alternated runs is the least disturbed comparison. ``--against-seconds S`` (with
+``--against``): ``SRC``'s smallest wall time measured on a reference host; the host's
+slowdown against it (``SRC``'s smallest time now over ``S``) and this tree's time scaled
+to the reference host are printed too, a ruler for a host whose speed varies
+(docs/benchmarks.md, "Session 17": session 10's tree, ``git archive 1a51be0 src``,
+2.81 s on the quiet host of session 10). Each round is preceded by a
 pure-Python probe (``probe``, printed), the host's speed at that moment. ``--bytecode`` first compiles the
 timed source trees' modules (``python -m compileall``), as an installed package has them:
 where the environment sets ``PYTHONDONTWRITEBYTECODE=1`` (this machine's), every run
@@ -79,9 +84,13 @@ def probe() -> float:
     return time.process_time() - start
 
 
-def repeated(cmd_for, repeat: int, against: str | None) -> None:
+def repeated(cmd_for, repeat: int, against: str | None,
+             against_seconds: float | None = None) -> None:
     """Run the command ``repeat`` times (alternating with ``against``); print min/median,
-    and the host's speed (:func:`probe`) before each round."""
+    and the host's speed (:func:`probe`) before each round. ``against_seconds``: the
+    smallest wall time of ``against`` measured on a reference host (a quiet hour); the
+    smallest time of this tree is then also printed scaled to that host's speed (this
+    tree's minimum times that over ``against``'s minimum now)."""
     trees = [None] + ([against] if against else [])
     times: dict[str | None, list[tuple[float, float]]] = {t: [] for t in trees}
     probes = []
@@ -107,6 +116,11 @@ def repeated(cmd_for, repeat: int, against: str | None) -> None:
     if against:
         print(f"ratio this / against (smallest): wall {best[None][0] / best[against][0]:.2f}, "
               f"cpu {best[None][1] / best[against][1]:.2f}")
+        if against_seconds is not None:
+            slower = best[against][0] / against_seconds
+            print(f"host {slower:.2f} times slower than the reference ({against} took "
+                  f"{against_seconds:.2f} s there): this tree there about "
+                  f"{best[None][0] / slower:.2f} s (scaled, not measured)")
 
 
 def main() -> None:
@@ -118,8 +132,11 @@ def main() -> None:
     parser.add_argument("--pyelastica-steps", type=int, default=0)
     parser.add_argument("--repeat", type=int, default=0)
     parser.add_argument("--against", metavar="SRC", default=None)
+    parser.add_argument("--against-seconds", type=float, default=None, metavar="S")
     parser.add_argument("--bytecode", action="store_true")
     args = parser.parse_args()
+    if args.against_seconds is not None and not (args.against and args.repeat):
+        parser.error("--against-seconds needs --against SRC and --repeat K")
     if args.bytecode:
         compile_trees([None] + ([args.against] if args.against else []))
     import json
@@ -131,7 +148,7 @@ def main() -> None:
                 str(args.max_points), "--out", str(out)]
 
     if args.repeat:
-        repeated(cmd_for, args.repeat, args.against)
+        repeated(cmd_for, args.repeat, args.against, args.against_seconds)
         return
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "run"

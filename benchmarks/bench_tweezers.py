@@ -29,6 +29,7 @@ ratio and the agreement of extension and writhe are printed.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import resource
 import subprocess
@@ -88,9 +89,9 @@ def repeated(cmd_for, repeat: int, against: str | None,
              against_seconds: float | None = None) -> None:
     """Run the command ``repeat`` times (alternating with ``against``); print min/median,
     and the host's speed (:func:`probe`) before each round. ``against_seconds``: the
-    smallest wall time of ``against`` measured on a reference host (a quiet hour); the
-    smallest time of this tree is then also printed scaled to that host's speed (this
-    tree's minimum times that over ``against``'s minimum now)."""
+    smallest wall time of ``against`` measured on a reference host (a quiet hour); this
+    tree's smallest time is then also printed scaled to that host's speed: this tree's
+    minimum times ``against_seconds`` over ``against``'s minimum now."""
     trees = [None] + ([against] if against else [])
     times: dict[str | None, list[tuple[float, float]]] = {t: [] for t in trees}
     probes = []
@@ -135,8 +136,12 @@ def main() -> None:
     parser.add_argument("--against-seconds", type=float, default=None, metavar="S")
     parser.add_argument("--bytecode", action="store_true")
     args = parser.parse_args()
-    if args.against_seconds is not None and not (args.against and args.repeat):
-        parser.error("--against-seconds needs --against SRC and --repeat K")
+    if args.against_seconds is not None:
+        if not (args.against and args.repeat):
+            parser.error("--against-seconds needs --against SRC and --repeat K")
+        if not (math.isfinite(args.against_seconds) and args.against_seconds > 0):
+            parser.error(f"--against-seconds {args.against_seconds:g}: give SRC's smallest "
+                         "wall time on the reference host, a positive number of seconds")
     if args.bytecode:
         compile_trees([None] + ([args.against] if args.against else []))
     import json

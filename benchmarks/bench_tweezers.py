@@ -175,8 +175,10 @@ def peer_against_repeats(cmd_for, args) -> None:
     rounds(args.repeat, walls, last)
     print("PyElastica running ...", flush=True)
     peer = run_peer(args)
+    if peer is None:  # no ratio to measure: the second rounds would be wasted
+        return
     rounds(args.repeat, walls, last)
-    if peer is None or not walls:
+    if not walls:
         return
     walls.sort()
     smallest, median = walls[0], walls[len(walls) // 2]

@@ -147,6 +147,14 @@ def run_peer(args) -> dict | None:
     return result
 
 
+def print_agreement(peer: dict, last: dict) -> None:
+    """PyElastica's end state (a full run's result) against supercoil's last point."""
+    print(f"  extension {peer['extension']:.4f} (supercoil {last['extension']:.4f}), "
+          f"writhe {peer['writhe']:.4f} (supercoil {last['writhe']:.4f}), "
+          f"overlap {100 * peer['overlap_over_diameter']:.2f} % of D, "
+          f"largest speed {peer['largest_speed']:.2e}")
+
+
 def peer_against_repeats(cmd_for, args) -> None:
     """``--repeat K --pyelastica PYTHON``: the command K times, PyElastica once, the
     command K times again, all in one sitting, so that the wall-time ratio (PyElastica's
@@ -194,10 +202,7 @@ def peer_against_repeats(cmd_for, args) -> None:
     print(f"supercoil's smallest time on a host where PyElastica takes 400 s: "
           f"{400 * smallest / full:.2f} s (median {400 * median / full:.2f} s)")
     if measured and last:
-        print(f"  extension {peer['extension']:.4f} (supercoil {last[0]['extension']:.4f}), "
-              f"writhe {peer['writhe']:.4f} (supercoil {last[0]['writhe']:.4f}), "
-              f"overlap {100 * peer['overlap_over_diameter']:.2f} % of D, "
-              f"largest speed {peer['largest_speed']:.2e}")
+        print_agreement(peer, last[0])
 
 
 def main() -> None:
@@ -262,10 +267,7 @@ def main() -> None:
         print(f"PyElastica: {full:.0f} s ({measured}) for {peer_result['total_steps']} steps; "
               f"ratio {full / wall:.1f}")
         if peer_result["steps"] == peer_result["total_steps"]:
-            print(f"  extension {peer_result['extension']:.4f} (supercoil {last['extension']:.4f}), "
-                  f"writhe {peer_result['writhe']:.4f} (supercoil {last['writhe']:.4f}), "
-                  f"overlap {100 * peer_result['overlap_over_diameter']:.2f} % of D, "
-                  f"largest speed {peer_result['largest_speed']:.2e}")
+            print_agreement(peer_result, last)
 
 
 if __name__ == "__main__":

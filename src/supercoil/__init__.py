@@ -1,14 +1,84 @@
-"""supercoil: equilibria, branches, bifurcations and stability of self-avoiding elastic rods."""
+"""supercoil: equilibria, branches, bifurcations and stability of self-avoiding elastic rods.
+
+Describe a problem, call a verb, read an immutable result::
+
+    import supercoil as sc
+
+    rod = sc.Rod(twist_ratio=2 / 3, nodes=132)
+    ring = sc.Ring(rod, excess_link=2.5, contact=sc.Barrier(length_over_diameter=122))
+    eq = sc.equilibrium(ring)        # eq.status, eq.writhe, eq.stability, eq.contacts
+
+Units are nondimensional: bending stiffness A = 1 and rod length L = 1.
+"""
 
 from supercoil._version import __version__
+from supercoil.api.energy import Energy, continuation, switch_branch
+from supercoil.api.model import (
+    AugmentedLagrangian,
+    Barrier,
+    Contact,
+    ExactContact,
+    Penalty,
+    Ring,
+    Rod,
+    Tweezers,
+)
+from supercoil.api.results import (
+    Diagram,
+    Equilibrium,
+    EquilibriumStatus,
+    RunStatus,
+    Stability,
+)
+from supercoil.api.verbs import equilibrium, ring_diagram, stability, tweezers
+from supercoil.continuation import (
+    Branch,
+    ContinuationOptions,
+    ContinuationStatus,
+    SpecialPoint,
+    UserEvent,
+)
+from supercoil.errors import InputError
+from supercoil.topology import linking_number, writhe
+from supercoil.topology import twist_from_frames as twist
 
-__all__ = ["__version__", "load"]
+__all__ = [
+    "AugmentedLagrangian",
+    "Barrier",
+    "Branch",
+    "Contact",
+    "ContinuationOptions",
+    "ContinuationStatus",
+    "Diagram",
+    "Energy",
+    "Equilibrium",
+    "EquilibriumStatus",
+    "ExactContact",
+    "InputError",
+    "Penalty",
+    "Ring",
+    "Rod",
+    "RunStatus",
+    "SpecialPoint",
+    "Stability",
+    "Tweezers",
+    "UserEvent",
+    "__version__",
+    "continuation",
+    "equilibrium",
+    "linking_number",
+    "load",
+    "ring_diagram",
+    "stability",
+    "switch_branch",
+    "tweezers",
+    "twist",
+    "writhe",
+]
 
 
 def load(path):
-    """Read a result file (``supercoil run``'s ``result.h5``) into a
-    :class:`supercoil.io.store.Result`: branches as ``Branch`` objects, settings,
-    per-point records (see ``docs/results.md``)."""
-    from supercoil.io.store import load as _load
+    """Read a result file (``result.h5``) or the output folder that holds it."""
+    from supercoil.io.store import load as read
 
-    return _load(path)
+    return read(path)

@@ -1,0 +1,227 @@
+"""How problems are solved: the verbs of the public API.
+
+* :func:`equilibrium` of a :class:`~supercoil.api.model.Ring`;
+* :func:`stability` of a computed state, with as many eigenpairs as asked;
+* :func:`ring_diagram`: the circle, its Michell bifurcations and the branches off it,
+  with self-contact (Coleman & Swigon 2000);
+* :func:`tweezers`: the branches of a rod in magnetic tweezers as it is turned.
+
+Each verb builds its own numerical problem from the immutable description it is
+given, so a result never depends on earlier calls. Numerical failures are
+returned as statuses; only invalid input raises
+(:class:`~supercoil.errors.InputError`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import numpy as np
+
+from supercoil.api.model import Barrier, Contact, Ring, Rod, Tweezers
+from supercoil.api.results import (
+    Diagram,
+    Equilibrium,
+    EquilibriumStatus,
+    RunStatus,
+    Stability,
+)
+from supercoil.errors import InputError
+
+RING_TOLERANCE = 1e-10  # Newton's residual for a ring without contact
+CONTACT_RING_TOLERANCE = 1e-9  # and with contact (the barrier's conditioning)
+
+
+def _equilibrium_status(converged: bool, stability) -> EquilibriumStatus:
+    if not converged:
+        return EquilibriumStatus.NOT_CONVERGED
+    if stability.unstable_count > 0:
+        return EquilibriumStatus.UNSTABLE
+    if stability.zero_modes > 0:
+        return EquilibriumStatus.MARGINAL
+    return EquilibriumStatus.STABLE
+
+
+def _stability(report, n_nodes: int) -> Stability:
+    modes = np.asarray(report.lowest_modes)[:, :3 * n_nodes]
+    return Stability(unstable_count=int(report.unstable_count),
+                     zero_modes=int(report.zero_modes),
+                     negative_count=int(report.negative_count),
+                     determinant_sign=int(report.determinant_sign),
+                     eigenvalues=np.asarray(report.lowest_eigenvalues, float),
+                     modes=modes.reshape(len(modes), n_nodes, 3),
+                     zero_tolerance=float(report.zero_tolerance),
+                     certified=bool(report.certified), message=report.message)
+
+
+def equilibrium(problem: Ring, *, tolerance: float | None = None,
+                max_iterations: int = 1000, n_modes: int = 6) -> Equilibrium:
+    """An equilibrium of ``problem`` and its stability.
+
+    Without contact: Newton from the twisted circle, which is an equilibrium at
+    every excess link; above Michell's threshold ``(A/C) sqrt(m^2 - 1)`` it is
+    returned with status ``UNSTABLE`` and its unstable count. With contact: the
+    circle if it is stable, otherwise the circle pushed along its lowest unstable
+    mode (or ``problem.initial``) relaxed by Newton minimisation under continuous
+    collision detection to an equilibrium with self-contact. ``tolerance``: Newton's
+    residual (default 1e-10 without contact, 1e-9 with); ``n_modes``: eigenpairs
+    kept beyond the negative ones.
+    """
+    from supercoil.problems.ring import solve_ring
+    from supercoil.problems.ring_contact import solve_supercoiled_ring
+
+    if not isinstance(problem, Ring):
+        raise InputError(f"equilibrium: expected a supercoil.Ring, got {type(problem).__name__}"
+                         "; for a rod in tweezers use supercoil.tweezers (a branch in turns)")
+    rod = problem.rod
+    if problem.contact is None:
+        result = solve_ring(rod.twist_ratio, problem.excess_link, n_nodes=rod.nodes,
+                            curvature=rod.curvature, n_modes=n_modes,
+                            tolerance=RING_TOLERANCE if tolerance is None else tolerance)
+    else:
+        result = solve_supercoiled_ring(
+            rod.twist_ratio, problem.excess_link, problem.contact.length_over_diameter,
+            n_nodes=rod.nodes, treatment=problem.contact.treatment, curvature=rod.curvature,
+            tolerance=CONTACT_RING_TOLERANCE if tolerance is None else tolerance,
+            n_modes=n_modes, max_iterations=max_iterations, initial_points=problem.initial)
+    # the eigenvalues the solve computed; their modes on request (stability())
+    stab = Stability(unstable_count=result.unstable_count, zero_modes=result.zero_modes,
+                     negative_count=result.negative_count,
+                     determinant_sign=result.determinant_sign,
+                     eigenvalues=result.lowest_eigenvalues,
+                     modes=np.zeros((0, rod.nodes, 3)), zero_tolerance=result.zero_tolerance,
+                     certified=result.stability_certified)
+    return Equilibrium(problem=problem, status=_equilibrium_status(result.converged, stab),
+                       message=result.message, points=result.points,
+                       tensions=result.multipliers, energy=float(result.energy),
+                       twist=float(result.twist), writhe=float(result.writhe),
+                       link_error=float(result.link_error), residual=float(result.residual),
+                       iterations=int(result.iterations), stability=stab,
+                       contacts=result.contact, record=result.summary())
+
+
+def _ring_energy(problem: Ring, points: np.ndarray):
+    """The numerical problem of ``problem`` at the state ``points`` (its stability view)."""
+    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.rod.closed import ClosedRodEnergy
+    from supercoil.rod.closed import Rod as RodModel
+
+    rod = problem.rod
+    model = RodModel(n_nodes=rod.nodes, twist_stiffness=rod.twist_ratio, curvature=rod.curvature)
+    base = ClosedRodEnergy(model, np.asarray(points, float), problem.excess_link)
+    if problem.contact is None:
+        return base
+    options = ContactOptions(diameter=problem.contact.diameter,
+                             treatment=problem.contact.treatment)
+    return ContactProblem(base, options).stability_view()
+
+
+def _report_of(problem: Ring, points, tensions, n_modes: int, zero_tolerance: float):
+    from supercoil.stability.analysis import analyse
+
+    energy = _ring_energy(problem, points)
+    q = np.asarray(points, float).ravel()
+    return analyse(energy, q, np.asarray(tensions, float), n_modes=n_modes,
+                   zero_tolerance=zero_tolerance)
+
+
+def stability(state: Equilibrium, *, n_modes: int = 6,
+              zero_tolerance: float | None = None) -> Stability:
+    """The stability of a computed ring state, recomputed from the state alone.
+
+    ``n_modes``: eigenpairs wanted beyond the negative ones (their modes as node
+    displacements, (k, N, 3)); ``zero_tolerance``: eigenvalues with ``|lambda|`` at
+    most this are zero modes (default: the one the state was computed with).
+    """
+    if not isinstance(state, Equilibrium):
+        raise InputError(f"stability: expected a supercoil.Equilibrium, got "
+                         f"{type(state).__name__}")
+    if int(n_modes) != n_modes or not 1 <= n_modes <= 100:
+        raise InputError(f"n_modes: got {n_modes!r}; valid: an integer from 1 to 100")
+    tol = state.stability.zero_tolerance if zero_tolerance is None else float(zero_tolerance)
+    report = _report_of(state.problem, state.points, state.tensions, int(n_modes), tol)
+    return _stability(report, len(state.points))
+
+
+def _run_status(ok: bool, branches, notes) -> tuple[RunStatus, str]:
+    if ok:
+        return RunStatus.COMPLETE, "every branch ended where it was asked to"
+    stopped = [f"{b.name}: {b.status.name} ({b.message})" for b in branches if not b.ok]
+    failed = [n for n in notes if n.startswith(("failed:", "incomplete:"))]
+    return RunStatus.INCOMPLETE, "; ".join(stopped + failed) or "a step failed"
+
+
+def _settings(cls, fixed: dict, options: dict):
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(options) - (names - set(fixed)))
+    if unknown:
+        valid = ", ".join(sorted(names - set(fixed)))
+        raise InputError(f"unknown option(s) {', '.join(unknown)}; valid: {valid}")
+    try:
+        return cls(**fixed, **options)
+    except InputError:
+        raise
+    except (TypeError, ValueError) as exc:
+        raise InputError(str(exc)) from None
+
+
+def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: float = 6.0,
+                 modes: tuple[int, ...] = (2, 3), progress: Callable[[str], None] | None = None,
+                 **options) -> Diagram:
+    """The bifurcation diagram of a ring in its excess link, with self-contact.
+
+    The circle is followed in ``dLk`` through Michell's bifurcations; the primary
+    branches of ``modes`` are switched off it and followed without contact to their
+    first contact, then with ``contact`` (a :class:`~supercoil.api.model.Barrier` or
+    :class:`~supercoil.api.model.Penalty`; default ``Barrier(100)``) up to
+    ``max_excess_link`` (Coleman & Swigon 2000, Figures 1-4). Further ``options``
+    are those of :class:`supercoil.problems.ring_diagram.DiagramOptions`
+    (``branch_depth``, ``contact_max_points``, ``contact_max_step``, ...).
+    ``progress(message)`` is called as branches start.
+    """
+    from supercoil.problems.ring_diagram import DiagramOptions
+    from supercoil.problems.ring_diagram import ring_diagram as compute
+
+    if not isinstance(rod, Rod):
+        raise InputError(f"rod: expected a supercoil.Rod, got {rod!r}")
+    contact = Barrier(100.0) if contact is None else contact
+    if not isinstance(contact, Contact):
+        raise InputError(f"contact: expected a Barrier or Penalty, got {contact!r}")
+    settings = _settings(DiagramOptions, {
+        "twist_ratio": rod.twist_ratio, "length_over_diameter": contact.length_over_diameter,
+        "n_nodes": rod.nodes, "contact": contact.treatment}, {
+        "max_excess_link": max_excess_link, "modes": tuple(modes), **options})
+    computed = compute(settings, progress)
+    status, message = _run_status(computed.ok, computed.branches, computed.notes)
+    return Diagram(kind="ring_diagram", problem=Ring(rod, 0.0, contact), settings=settings,
+                   branches={b.name: b for b in computed.branches}, status=status,
+                   message=message, notes=tuple(computed.notes), computed=computed)
+
+
+def tweezers(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
+             progress: Callable[[str], None] | None = None, **options) -> Diagram:
+    """The branches of a rod in magnetic tweezers turned through ``turns = (start, stop)``.
+
+    The straight rod is followed from ``start`` turns to its buckling (Greenhill's
+    condition for a clamped rod), the buckled branch off it, and with contact the
+    plectoneme's branch (its hat curve: extension against turns). Further
+    ``options`` are those of :class:`supercoil.problems.tweezers.TweezersOptions`
+    (``max_points``, ``contact_max_step``, ...).
+    """
+    from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+
+    if not isinstance(problem, Tweezers):
+        raise InputError(f"tweezers: expected a supercoil.Tweezers, got "
+                         f"{type(problem).__name__}")
+    rod = problem.rod
+    lod = None if problem.contact is None else problem.contact.length_over_diameter
+    settings = _settings(TweezersOptions, {
+        "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
+        "tension": problem.tension, "end_distance": problem.end_distance}, {
+        "turns": tuple(turns), **options})
+    computed = tweezers_branches(settings, progress)
+    status, message = _run_status(computed.ok, computed.branches, computed.notes)
+    return Diagram(kind="tweezers", problem=problem, settings=settings,
+                   branches={b.name: b for b in computed.branches}, status=status,
+                   message=message, notes=tuple(computed.notes), computed=computed)

@@ -41,12 +41,14 @@ from supercoil.continuation import (
 from supercoil.errors import InputError
 from supercoil.topology import linking_number, writhe
 from supercoil.topology import twist_from_frames as twist
+from supercoil.units.dna import DNAPreset
 
 __all__ = [
     "AugmentedLagrangian",
     "Barrier",
     "Branch",
     "Contact",
+    "DNAPreset",
     "ContinuationOptions",
     "ContinuationStatus",
     "Diagram",

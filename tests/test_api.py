@@ -176,3 +176,12 @@ def test_tweezers_buckle_at_greenhills_threshold_and_keep_turns_equal_tw_plus_wr
     for b in result.branches.values():
         turns = b.parameter_values
         np.testing.assert_allclose(b.records["twist"] + b.records["writhe"], turns, atol=1e-6)
+
+
+def test_branch_and_special_point_reprs_are_short():
+    energy = pitchfork()
+    branch = sc.continuation(energy, [0.0, 0.0], start=-1.0, bounds=(-1.0, 1.0),
+                             options=sc.ContinuationOptions(max_step=0.1))
+    text = repr(branch)
+    assert text.count("\n") <= 2 and "array" not in text and "1 bifurcation" in text
+    assert repr(branch.special_points[0]).startswith("SpecialPoint(bifurcation")

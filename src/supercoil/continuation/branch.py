@@ -76,6 +76,11 @@ class SpecialPoint:
                 out[k] = jsonable(v)
         return out
 
+    def __repr__(self) -> str:
+        counts = "" if self.count_before < 0 else f", count {self.count_before} -> {self.count_after}"
+        return (f"SpecialPoint({self.kind} on {self.branch!r} at parameter "
+                f"{self.parameter:.8g}{counts})")
+
     def summary(self) -> dict:
         """JSON-serialisable description (no states)."""
         out = {"kind": self.kind, "label": self.label, "branch": self.branch,
@@ -138,6 +143,17 @@ class Branch:
 
     def __len__(self) -> int:
         return int(self.parameter_values.size)
+
+    def __repr__(self) -> str:
+        span = ("no points" if not len(self) else
+                f"{self.parameter} from {self.parameter_values[0]:.6g} to "
+                f"{self.parameter_values[-1]:.6g}")
+        kinds: dict[str, int] = {}
+        for p in self.special_points:
+            kinds[p.kind] = kinds.get(p.kind, 0) + 1
+        special = ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())) or "none"
+        return (f"Branch({self.name!r}: {len(self)} points, {span}, {self.status.name}\n"
+                f"  special points: {special}; records: {', '.join(self.records) or 'none'})")
 
     @property
     def ok(self) -> bool:

@@ -62,7 +62,7 @@ class Stability:
     removed (0 means stable); ``zero_modes``: eigenvalues with
     ``|lambda| <= zero_tolerance``, never given a sign; ``negative_count``: the
     inertia of the factorisation; ``determinant_sign``: the sign of the determinant
-    of the reduced Hessian (Chamekh, Mani-Aouadi & Moakher 2009's test; it misses
+    of the reduced Hessian (Chamekh, Mani-Aouadi & Moakher 2014's test; it misses
     eigenvalues that cross in pairs). ``eigenvalues`` (k,) ascending, in the lumped
     mass metric; ``modes`` (k, N, 3) the node displacements of each eigenvector.
     """

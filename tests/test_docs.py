@@ -128,5 +128,6 @@ def test_marked_snippets_run(path, marker, tmp_path, monkeypatch):
     script.write_text(marked_python(ROOT / path, marker), encoding="utf-8")
     namespace = runpy.run_path(str(script))
     eq = namespace["eq"]
-    assert abs(eq.twist + eq.writhe - 2.5) < 1e-8  # Lk = Tw + Wr, computed independently
+    assert abs(eq.twist + eq.writhe - 3) < 1e-8  # Lk = Tw + Wr, computed independently
+    assert eq.unstable_count == 0 and abs(eq.writhe) > 0.5  # above Michell: supercoiled, stable
     assert len(namespace["alpha"]) > 0

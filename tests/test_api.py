@@ -185,3 +185,23 @@ def test_branch_and_special_point_reprs_are_short():
     text = repr(branch)
     assert text.count("\n") <= 2 and "array" not in text and "1 bifurcation" in text
     assert repr(branch.special_points[0]).startswith("SpecialPoint(bifurcation")
+
+
+def test_save_and_load_round_trip_every_array(tmp_path, circle_states):
+    rod = sc.Rod(twist_ratio=2 / 3, nodes=24)
+    diagram = sc.ring_diagram(rod, sc.Barrier(length_over_diameter=40), modes=(2,),
+                              max_excess_link=2.8, free_max_points=40, contact_max_points=5)
+    path = sc.save(diagram, tmp_path / "diagram.h5")
+    with pytest.raises(sc.InputError):
+        sc.save(diagram, path)  # never overwritten unless asked
+    loaded = sc.load(path)
+    for name, branch in diagram.branches.items():
+        again = loaded.branch(name)
+        np.testing.assert_array_equal(again.states, branch.states)
+        np.testing.assert_array_equal(again.parameter_values, branch.parameter_values)
+        np.testing.assert_array_equal(again.unstable_count, branch.unstable_count)
+        assert [p.kind for p in again.special_points] == [p.kind for p in branch.special_points]
+    eq = circle_states[1]
+    loaded = sc.load(sc.save(eq, tmp_path / "ring.h5"))
+    np.testing.assert_array_equal(loaded.branch("ring").states[0], eq.points.ravel())
+    assert loaded.branch("ring").unstable_count[0] == 2

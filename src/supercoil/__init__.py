@@ -13,6 +13,7 @@ Units are nondimensional: bending stiffness A = 1 and rod length L = 1.
 
 from supercoil._version import __version__
 from supercoil.api.energy import Energy, continuation, switch_branch
+from supercoil.api.files import save
 from supercoil.api.model import (
     AugmentedLagrangian,
     Barrier,
@@ -71,6 +72,7 @@ __all__ = [
     "linking_number",
     "load",
     "ring_diagram",
+    "save",
     "stability",
     "switch_branch",
     "tweezers",

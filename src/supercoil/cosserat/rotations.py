@@ -149,7 +149,7 @@ def dexp_transpose_derivative(phi: np.ndarray, m: np.ndarray) -> np.ndarray:
     pm = np.sum(phi * m, axis=-1)
     cross = np.cross(phi, m)
     along = phi * pm[..., None] - (theta**2)[..., None] * m
-    outer = lambda u, v: u[..., :, None] * v[..., None, :]  # noqa: E731
+    outer = lambda u, v: u[..., :, None] * v[..., None, :]
     return (-ap[..., None, None] * outer(cross, phi) + a[..., None, None] * hat(m)
             + bp[..., None, None] * outer(along, phi)
             + b[..., None, None] * (pm[..., None, None] * np.eye(3) + outer(phi, m)

@@ -9,8 +9,10 @@ position linearly. The strains of Simo (1985) are then
 * shear and extension ``Gamma = R_m^T (x_b - x_a) / h - e_3`` at the element's
   midpoint rotation ``R_m = R_a exp(psi / 2)`` (one-point, reduced integration);
 
-and the energy is ``sum_e h (K.C_K K + Gamma.C_G Gamma) / 2`` with
-``C_K = diag(A, A, C)``, ``C_G = diag(GA, GA, EA)``.
+and the energy is ``sum_e h ((K - K0).C_K (K - K0) + Gamma.C_G Gamma) / 2`` with
+``C_K = diag(A, A, C)``, ``C_G = diag(GA, GA, EA)`` and ``K0 = (0, 0, tau0)`` the
+intrinsic twist (zero for the intrinsically straight, untwisted rod; for an isotropic
+section it only shifts the twist at rest, the rod stays straight at rest).
 
 Why this element. For two nodes the objective interpolation of Crisfield & Jelenic
 (1999) (the relative rotation interpolated from a reference rotation) is this
@@ -33,7 +35,7 @@ Derivatives. With spatial spins ``dR_i = hat(w_i) R_i`` and, in the midpoint fra
 * ``d Gamma = R_m^T dc / h + g x omega``, ``g = Gamma + e_3``, ``c = x_b - x_a``.
 
 So ``dW = F.dc + M_S.Sigma + M_D.Delta`` with ``F = R_m n``, ``n = C_G Gamma``,
-``M_S = h n x g``, ``M_D = S mu + (h t / 2) psi x (n x g)``, ``mu = C_K K``.
+``M_S = h n x g``, ``M_D = S mu + (h t / 2) psi x (n x g)``, ``mu = C_K (K - K0)``.
 The second variation along one-parameter subgroups ``exp(eps hat(w)) R`` (spins held
 fixed) is the Hessian ``H0`` of the energy in exponential coordinates centred at
 the state: it is symmetric, and it is the symmetric part of the consistent tangent
@@ -73,11 +75,13 @@ class ElementState:
 
     ``positions`` ``(n_nodes, 3)``, ``rotations`` ``(n_nodes, 3, 3)`` (columns: the
     directors ``d_1, d_2, d_3``), ``h`` the rest length of an element,
-    ``bending_moduli`` ``(3,) = (A, A, C)`` and ``shear_moduli`` ``(3,) = (GA, GA, EA)``.
+    ``bending_moduli`` ``(3,) = (A, A, C)``, ``shear_moduli`` ``(3,) = (GA, GA, EA)`` and
+    ``intrinsic_twist`` ``tau0`` (the curvature at rest is ``K0 = (0, 0, tau0)``).
     """
 
     def __init__(self, positions: np.ndarray, rotations: np.ndarray, h: float,
-                 bending_moduli: np.ndarray, shear_moduli: np.ndarray):
+                 bending_moduli: np.ndarray, shear_moduli: np.ndarray,
+                 intrinsic_twist: float = 0.0):
         x = np.asarray(positions, dtype=float)
         R = np.asarray(rotations, dtype=float)
         self.h = float(h)
@@ -90,13 +94,14 @@ class ElementState:
         self.g = np.einsum("nji,nj->ni", self.Rm, self.chord) / self.h
         self.curvature = self.psi / self.h  # K
         self.shear = self.g - E3  # Gamma (shear 1, 2; extension 3)
-        self.mu = self.ck * self.curvature
+        self.rest_curvature = np.array([0.0, 0.0, float(intrinsic_twist)])
+        self.mu = self.ck * (self.curvature - self.rest_curvature)
         self.n = self.cg * self.shear
         self.theta = np.linalg.norm(self.psi, axis=1)
 
     def energy_density(self) -> np.ndarray:
-        """``h (K.C_K K + Gamma.C_G Gamma) / 2`` per element, ``(n_elements,)``."""
-        return 0.5 * self.h * (np.sum(self.curvature * self.mu, axis=1)
+        """``h ((K - K0).C_K (K - K0) + Gamma.C_G Gamma) / 2`` per element, ``(n_elements,)``."""
+        return 0.5 * self.h * (np.sum((self.curvature - self.rest_curvature) * self.mu, axis=1)
                                + np.sum(self.shear * self.n, axis=1))
 
     def _S(self) -> np.ndarray:
@@ -120,6 +125,16 @@ class ElementState:
         out[:, 3:6] = np.einsum("nij,nj->ni", Rm, 0.5 * MS - MD)
         out[:, 6:9] = F
         out[:, 9:12] = np.einsum("nij,nj->ni", Rm, 0.5 * MS + MD)
+        return out
+
+    def intrinsic_twist_derivative(self) -> np.ndarray:
+        """``d local_gradient / d tau0`` ``(n_elements, 12)``: ``d mu = -C e_3``, so
+        ``d M_D = -C S e_3`` and the moments change by ``+-R_m S C e_3`` (exact: the
+        gradient is affine in ``tau0``)."""
+        dMD = -self.ck[2] * self._S()[:, :, 2]
+        out = np.zeros((len(dMD), 12))
+        out[:, 3:6] = -np.einsum("nij,nj->ni", self.Rm, dMD)
+        out[:, 9:12] = np.einsum("nij,nj->ni", self.Rm, dMD)
         return out
 
     def local_hessian(self) -> np.ndarray:

@@ -24,7 +24,7 @@ In this chart (``phi = theta - c``, ``T = dexp(phi)``, ``m`` the spatial moments
 
 The lumped metric (``mass``) is ``h`` per position coordinate and ``h A / EA`` (the
 section's squared radius of gyration times ``h``) per rotation coordinate (half
-at the ends), so that eigenvalues converge under refinement.
+at the ends of an open rod), so that eigenvalues converge under refinement.
 """
 
 from __future__ import annotations
@@ -70,7 +70,8 @@ class CosseratEnergy:
                        else np.array(forces, dtype=float).reshape(rod.n_nodes, 3))
         h = rod.element_length
         weights = np.full(rod.n_nodes, h)
-        weights[[0, -1]] = h / 2
+        if not rod.closed:
+            weights[[0, -1]] = h / 2
         radius2 = rod.bending_stiffness / rod.stretch_stiffness
         self.mass = np.repeat(weights, DOFS_PER_NODE) * np.tile(
             [1.0, 1.0, 1.0, radius2, radius2, radius2], rod.n_nodes)
@@ -135,7 +136,8 @@ class CosseratEnergy:
         J[:, :3, :3] = np.eye(3)
         J[:, 3:, 3:] = T
         Je = np.zeros((rod.n_elements, 12, 12))
-        Je[:, :6, :6], Je[:, 6:, 6:] = J[:-1], J[1:]
+        nodes = rod.element_nodes()
+        Je[:, :6, :6], Je[:, 6:, 6:] = J[nodes[:, 0]], J[nodes[:, 1]]
         local = np.swapaxes(Je, 1, 2) @ local @ Je
         H = block_csr(rod.element_dofs(), 0.5 * (local + np.swapaxes(local, 1, 2)), self.n_dofs)
         if np.any(phi):

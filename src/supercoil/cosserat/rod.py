@@ -2,7 +2,9 @@
 
 The configuration is a pair ``(positions, rotations)``: ``(n_nodes, 3)`` centreline
 points and ``(n_nodes, 3, 3)`` rotations whose columns are the directors
-``d_1, d_2, d_3`` (``d_3`` the unsheared tangent). The configuration space is
+``d_1, d_2, d_3`` (``d_3`` the unsheared tangent). An open rod has
+``n_elements + 1`` nodes; a closed one (a ring) ``n_elements``, its last element
+joining the last node back to node 0 (nodes and rotations periodic). The configuration space is
 ``(R^3 x SO(3))^n``, not a vector space: a tangent vector is ``v`` ``(6 n_nodes,)``,
 node ``i`` owning ``v[6i:6i+3]`` (a displacement) and ``v[6i+3:6i+6]`` (a spatial
 spin ``w``), and :func:`retract` moves along it, ``x + dx``, ``exp(hat(w)) R``.
@@ -37,6 +39,8 @@ class CosseratRod:
     ``bending_stiffness`` A (both principal axes), ``twist_stiffness`` C,
     ``shear_stiffness`` GA (both shear directions) and ``stretch_stiffness`` EA.
     As GA and EA grow the rod tends to the inextensible, unshearable Kirchhoff rod.
+    ``intrinsic_twist`` ``tau0``: the twist at rest (curvature at rest ``(0, 0, tau0)``;
+    the rod is straight at rest). ``closed``: a ring of ``n_elements`` nodes.
     """
 
     n_elements: int
@@ -45,10 +49,19 @@ class CosseratRod:
     twist_stiffness: float = 1.0
     shear_stiffness: float = 1e4
     stretch_stiffness: float = 1e4
+    intrinsic_twist: float = 0.0
+    closed: bool = False
 
     def __post_init__(self) -> None:
-        if not isinstance(self.n_elements, (int, np.integer)) or self.n_elements < 2:
-            raise InputError(f"n_elements must be an integer >= 2, got {self.n_elements!r}")
+        smallest = 3 if self.closed else 2
+        if not isinstance(self.n_elements, (int, np.integer)) or self.n_elements < smallest:
+            raise InputError(f"n_elements must be an integer >= {smallest} for "
+                             f"{'a closed' if self.closed else 'an open'} rod, got "
+                             f"{self.n_elements!r}")
+        if not (isinstance(self.intrinsic_twist, (int, float, np.floating, np.integer))
+                and np.isfinite(self.intrinsic_twist)):
+            raise InputError(f"intrinsic_twist must be a finite number, got "
+                             f"{self.intrinsic_twist!r}")
         for name in ("length", "bending_stiffness", "twist_stiffness", "shear_stiffness",
                      "stretch_stiffness"):
             value = getattr(self, name)
@@ -76,7 +89,7 @@ class CosseratRod:
 
     @property
     def n_nodes(self) -> int:
-        return self.n_elements + 1
+        return self.n_elements if self.closed else self.n_elements + 1
 
     @property
     def n_dofs(self) -> int:
@@ -104,12 +117,21 @@ class CosseratRod:
             raise InputError(f"positions must have shape ({n}, 3), got {positions.shape}")
         if rotations.shape != (n, 3, 3):
             raise InputError(f"rotations must have shape ({n}, 3, 3), got {rotations.shape}")
+        if self.closed:  # the last element joins the last node to node 0
+            positions = np.concatenate([positions, positions[:1]])
+            rotations = np.concatenate([rotations, rotations[:1]])
         return ElementState(positions, rotations, self.element_length, self.bending_moduli,
-                            self.shear_moduli)
+                            self.shear_moduli, self.intrinsic_twist)
+
+    def element_nodes(self) -> np.ndarray:
+        """``(n_elements, 2)``: the nodes ``a, b`` of each element (``b = 0`` closes a ring)."""
+        a = np.arange(self.n_elements)
+        return np.stack([a, (a + 1) % self.n_nodes], axis=1)
 
     def element_dofs(self) -> np.ndarray:
         """``(n_elements, 12)`` tangent-space indices of each element's two nodes."""
-        return DOFS_PER_NODE * np.arange(self.n_elements)[:, None] + np.arange(12)[None, :]
+        nodes = self.element_nodes()
+        return (DOFS_PER_NODE * nodes[:, :, None] + np.arange(DOFS_PER_NODE)).reshape(-1, 12)
 
     # -- energy and derivatives on the manifold -----------------------------------------
     def energy(self, positions: np.ndarray, rotations: np.ndarray) -> float:
@@ -145,7 +167,9 @@ class CosseratRod:
 
     def straight(self, twist_turns: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """The unstressed straight rod along ``+z`` from the origin (``twist_turns = 0``),
-        or one twisted uniformly by ``twist_turns`` turns about its axis."""
+        or one twisted uniformly by ``twist_turns`` turns about its axis (open rods)."""
+        if self.closed:
+            raise InputError("a closed rod has no straight state")
         s = np.linspace(0.0, self.length, self.n_nodes)
         positions = np.stack([np.zeros_like(s), np.zeros_like(s), s], axis=1)
         angles = 2 * np.pi * twist_turns * s / self.length

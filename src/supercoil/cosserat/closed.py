@@ -130,10 +130,14 @@ class ClosedCosseratEnergy(CosseratEnergy):
             raise InputError(f"excess_link must be a finite number, got {excess_link!r}")
         if positions is None and rotations is None:
             link = int(np.rint(excess_link)) if link is None else link
-            exact = circle_state(rod.twist_stiffness / rod.bending_stiffness,
-                                 excess_link, _nondimensional(rod, rod.stretch_stiffness),
-                                 _nondimensional(rod, rod.shear_stiffness))
-            positions, rotations = twisted_circle(rod, link, exact.tilt, exact.stretch)
+            try:
+                exact = circle_state(rod.twist_stiffness / rod.bending_stiffness,
+                                     excess_link, _nondimensional(rod, rod.stretch_stiffness),
+                                     _nondimensional(rod, rod.shear_stiffness))
+                tilt, stretch = exact.tilt, exact.stretch
+            except InputError:  # a shear stiffness too small for a slightly tilted circle
+                tilt, stretch = 0.0, 0.0
+            positions, rotations = twisted_circle(rod, link, tilt, stretch)
         elif positions is None or rotations is None:
             raise InputError("give both positions and rotations, or neither")
         super().__init__(rod, positions, rotations)
@@ -223,7 +227,8 @@ class ClosedCosseratEnergy(CosseratEnergy):
         lk = self._linking_number(x, R)
         if abs(lk - self.link) > 0.5:
             raise LinkingError(f"the ribbon's linking number changed from {self.link} to "
-                               f"{lk:.3f} (the centreline passed through itself)")
+                               f"{int(np.rint(lk))} (the centreline passed through itself, or "
+                               f"the sections turned by whole turns between accepted states)")
 
     # -- symmetries ---------------------------------------------------------------------
     def _to_chart(self, q: np.ndarray, spatial: np.ndarray) -> np.ndarray:

@@ -6,6 +6,7 @@ shift by shear and extension)."""
 import numpy as np
 import pytest
 
+from supercoil.continuation import ContinuationOptions, continuation, switch_branch
 from supercoil.cosserat import circle
 from supercoil.cosserat.closed import (
     ClosedCosseratEnergy,
@@ -242,3 +243,43 @@ def test_invalid_rings_are_refused():
         circle.michell_threshold(1.0, 1, 1e4, 1e4)
     with pytest.raises(InputError, match="straight"):
         rod.straight()
+
+
+def test_continuation_finds_michell_and_the_buckled_branch_keeps_the_link():
+    # the generic continuation in excess_link follows the relaxed circle and detects the
+    # pair crossing where the bisection puts it; switching onto the buckled branch gives
+    # non-planar equilibria (Michell's branch, subcritical: dLk falls as the writhe
+    # grows), on which Lk = Tw + Wr holds to round-off until the centreline passes
+    # through itself (a phantom ring), which accept refuses
+    C, stiffness, n = 0.8, 1e4, 40
+    problem = ring_problem(C, 1.8, n, stiffness, stiffness)
+    state = circle.circle_state(C, 1.8, stiffness, stiffness)
+    q0 = problem.state(*relax_circle(problem.rod, problem.link, state.tilt, state.stretch)[:2])
+    problem.accept(q0)
+
+    def records(q, multipliers, excess_link):
+        tw, wr = problem.frame_twist(q), problem.writhe(q)
+        return {"link_error": tw + wr - problem.link, "writhe": wr}
+
+    options = ContinuationOptions(parameter_bounds=(1.5, 2.6), initial_step=0.1, max_step=0.2,
+                                  max_points=30)
+    branch = continuation(problem, q0, parameter="excess_link", options=options,
+                          records=records)
+    (point,) = branch.points_of_kind("bifurcation")
+    assert (point.count_before, point.count_after) == (0, 2)
+    assert point.parameter == pytest.approx(michell_threshold(C, n, 2, stiffness, stiffness),
+                                            rel=1e-8)
+    options = ContinuationOptions(parameter_bounds=(1.0, 3.0), initial_step=0.05,
+                                  max_step=0.1, max_points=25)
+    buckled = switch_branch(problem, branch, point, options, records=records,
+                            stop=lambda q: "writhe" if abs(problem.writhe(q)) > 0.6 else None)
+    writhes = np.abs(buckled.records["writhe"])
+    assert len(buckled) >= 10 and writhes[-1] > 0.5
+    assert np.all(np.diff(writhes) > 0) and np.all(np.diff(buckled.parameter_values) < 0)
+    assert np.max(np.abs(buckled.records["link_error"])) < 1e-8
+    assert np.all(buckled.unstable_count == 1)
+    # on along the branch from its last point (the state accepted last: the chart's)
+    onwards = ContinuationOptions(parameter_bounds=(0.5, 3.0), initial_step=0.05,
+                                  max_step=0.1, max_points=30, direction=-1)
+    with pytest.raises(LinkingError, match="passed through itself"):
+        continuation(problem, buckled.states[-1], parameter="excess_link", options=onwards)

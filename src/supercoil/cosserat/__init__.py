@@ -6,9 +6,13 @@ two-node elements with geodesic rotation interpolation and one-point shear
 :class:`ClampedCosseratEnergy` are :class:`~supercoil.solvers.problem.ConstrainedEnergy`
 problems, so Newton, stability and continuation work on them unchanged;
 :func:`solve_equilibrium` is Newton on the configuration manifold itself.
+:class:`ClosedCosseratEnergy` is the ring at fixed excess link and
+:func:`solve_cosserat_ring` its entry point (:mod:`supercoil.cosserat.circle`: the
+continuous twisted circle, exact).
 """
 
 from supercoil.cosserat.clamped import ClampedCosseratEnergy
+from supercoil.cosserat.closed import ClosedCosseratEnergy, LinkingError
 from supercoil.cosserat.newton import (
     ManifoldNewtonOptions,
     ManifoldNewtonResult,
@@ -16,15 +20,20 @@ from supercoil.cosserat.newton import (
     solve_incrementally,
 )
 from supercoil.cosserat.problem import CosseratEnergy
+from supercoil.cosserat.ring import CosseratRingResult, solve_cosserat_ring
 from supercoil.cosserat.rod import CosseratRod, retract
 
 __all__ = [
     "ClampedCosseratEnergy",
+    "ClosedCosseratEnergy",
     "CosseratEnergy",
+    "CosseratRingResult",
     "CosseratRod",
+    "LinkingError",
     "ManifoldNewtonOptions",
     "ManifoldNewtonResult",
     "retract",
+    "solve_cosserat_ring",
     "solve_equilibrium",
     "solve_incrementally",
 ]

@@ -127,7 +127,7 @@ def read_contents(path: Path) -> Contents:
             contents = _read_snapshot(path)
         except ResultFileError:
             raise
-        except Exception as exc:  # anything else the damaged bytes made h5py or json say
+        except Exception as exc:  # noqa: BLE001 (whatever damaged bytes make h5py raise)
             raise ResultFileError(f"{path}: damaged result file ({_one_line(exc)})") from None
         try:
             generation, records = read_journal(journal_path(path))
@@ -184,8 +184,9 @@ class Result:
     extras: Mapping[str, Mapping[str, np.ndarray]] = field(default_factory=dict)
 
     def __repr__(self) -> str:
-        lines = [f"Result({str(self.path)!r}, problem={self.problem!r}, "
-                 f"status={self.status!r}, units={self.units!r})"]
+        head = (f"Result({str(self.path)!r}, problem={self.problem!r}, "
+                f"status={self.status!r}, units={self.units!r})")
+        lines = [head]
         names = list(self.branches)
         shown = [f"{n} ({len(self.branches[n])} points)" for n in names[:8]]
         if len(names) > 8:

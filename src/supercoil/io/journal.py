@@ -14,12 +14,14 @@ A record::
     magic  b"SCJRNL01"                 8 bytes
     length of the payload              8 bytes, little-endian
     SHA-256 of the payload             32 bytes
+    SHA-256 of the 48 bytes above      its first 8 bytes
     payload: header length (4 bytes, little-endian), the header (JSON: op, args,
              arrays = [[name, dtype, shape, offset, nbytes], ...]), the arrays' bytes
 
 The first record (op ``journal``) holds the generation. A record cut short at
-the end of the file is a write the process did not finish (it was killed):
-it is ignored. A complete record whose hash does not match is damage.
+the end of the file (its header whole and right, its payload short) is a
+write the process did not finish (it was killed): it is ignored. Any other
+mismatch (a header or a payload whose hash does not match) is damage.
 """
 
 from __future__ import annotations
@@ -32,10 +34,9 @@ from pathlib import Path
 import numpy as np
 
 MAGIC = b"SCJRNL01"
-_HEAD = struct.Struct("<8sQ32s")
+_HEAD = struct.Struct("<8sQ32s8s")
 _DTYPES = ("<f8", "<i8", "|b1")
 SUFFIX = ".journal"
-MAX_RECORD = 1 << 34  # 16 GiB: a larger length is damage, not a record
 
 
 class JournalError(ValueError):
@@ -70,7 +71,14 @@ def encode(op: str, args: dict, arrays: dict | None = None) -> bytes:
     header = json.dumps({"op": op, "args": args, "arrays": table},
                         separators=(",", ":")).encode("utf-8")
     payload = struct.pack("<I", len(header)) + header + b"".join(blobs)
-    return _HEAD.pack(MAGIC, len(payload), hashlib.sha256(payload).digest()) + payload
+    digest = hashlib.sha256(payload).digest()
+    return _HEAD.pack(MAGIC, len(payload), digest, _check(len(payload), digest)) + payload
+
+
+def _check(length: int, digest: bytes) -> bytes:
+    import hashlib
+
+    return hashlib.sha256(MAGIC + struct.pack("<Q", length) + digest).digest()[:8]
 
 
 def _decode(payload: bytes, where: str) -> tuple[str, dict, dict]:
@@ -100,10 +108,10 @@ def read_journal(path: Path) -> tuple[str | None, list[tuple[str, dict, dict]]]:
         return None, []
     records, at = [], 0
     while len(data) - at >= _HEAD.size:
-        magic, length, digest = _HEAD.unpack_from(data, at)
-        where = f"{path}: record {len(records)} (byte {at})"
-        if magic != MAGIC or length > MAX_RECORD:
-            raise JournalError(f"{where}: not a journal record")
+        magic, length, digest, check = _HEAD.unpack_from(data, at)
+        where = f"{path}: damaged journal: record {len(records)} (byte {at})"
+        if magic != MAGIC or check != _check(length, digest):
+            raise JournalError(f"{where}: not a journal record, or its header was altered")
         if len(data) - at - _HEAD.size < length:
             break  # the last write was cut short by the end of the process
         payload = data[at + _HEAD.size:at + _HEAD.size + length]
@@ -118,7 +126,8 @@ def read_journal(path: Path) -> tuple[str | None, list[tuple[str, dict, dict]]]:
         return None, []
     op, args, _ = records[0]
     if op != "journal":
-        raise JournalError(f"{path}: does not start with its generation record")
+        raise JournalError(f"{path}: damaged journal: it does not start with its generation "
+                           "record")
     return str(args["generation"]), records[1:]
 
 

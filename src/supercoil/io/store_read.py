@@ -132,7 +132,7 @@ def read_contents(path: Path) -> Contents:
         try:
             generation, records = read_journal(journal_path(path))
         except JournalError as exc:
-            raise ResultFileError(f"damaged journal {exc}") from None
+            raise ResultFileError(str(exc)) from None
         if generation is None or generation == contents.header["journal_generation"]:
             break
         # a writer replaced the file between the two reads, or an old journal was left

@@ -59,13 +59,13 @@ def _record_array(branch_name: str, name: str, values) -> np.ndarray:
         raise TypeError(f"branch {branch_name}: record {name!r} is not numeric (dtype "
                         f"{values.dtype}); records must be numbers")
     dtype = {"b": np.bool_, "i": np.int64, "u": np.int64}.get(values.dtype.kind, np.float64)
-    return np.ascontiguousarray(values, dtype=dtype)
+    return np.asarray(values, dtype=dtype, order="C")
 
 
 def _special(prefix: str, p: SpecialPoint, groups: dict, arrays: dict) -> None:
     groups[prefix] = {name: kind(getattr(p, name)) for name, kind in SPECIAL_SCALARS.items()}
     for name in SPECIAL_ARRAYS:
-        arrays[f"{prefix}/{name}"] = np.ascontiguousarray(getattr(p, name), dtype=float)
+        arrays[f"{prefix}/{name}"] = np.asarray(getattr(p, name), dtype=float, order="C")
     for name, value in p.records.items():
         arrays[f"{prefix}/records/{key(name)}"] = _record_array(p.branch, name, value)
 
@@ -85,14 +85,14 @@ def flatten(branch: Branch, start: int = 0, special_start: int = 0,
     arrays: dict[str, np.ndarray] = {}
     for name in POINT_ARRAYS:
         dtype = np.int64 if name in INT_ARRAYS else np.float64
-        arrays[name] = np.ascontiguousarray(getattr(branch, name)[start:], dtype=dtype)
+        arrays[name] = np.asarray(getattr(branch, name)[start:], dtype=dtype, order="C")
     for name, values in branch.records.items():
         arrays[f"records/{key(name)}"] = _record_array(branch.name, name,
                                                        np.asarray(values)[start:])
     phase = np.asarray(branch.phase_modes, float)
     arrays["phase_modes"] = (phase.reshape(-1, n_dofs) if phase.size
                              else np.zeros((0, n_dofs)))
-    arrays["phase_state"] = np.ascontiguousarray(branch.phase_state, dtype=float)
+    arrays["phase_state"] = np.asarray(branch.phase_state, dtype=float, order="C")
     groups: dict[str, dict] = {}
     for i in range(special_start, len(branch.special_points)):
         _special(f"special_points/{i:04d}", branch.special_points[i], groups, arrays)

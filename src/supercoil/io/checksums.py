@@ -20,7 +20,7 @@ import numpy as np
 
 def array_digest(array: np.ndarray) -> str:
     """Hex SHA-256 of ``array``'s dtype, shape and values (C order)."""
-    a = np.ascontiguousarray(array)
+    a = np.asarray(array, order="C")
     h = hashlib.sha256()
     h.update(f"{a.dtype.str}{a.shape}".encode())
     h.update(a.tobytes())

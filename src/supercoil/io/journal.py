@@ -57,7 +57,7 @@ def encode(op: str, args: dict, arrays: dict | None = None) -> bytes:
 
     table, blobs, offset = [], [], 0
     for name, a in (arrays or {}).items():
-        a = np.ascontiguousarray(a)
+        a = np.asarray(a, order="C")
         if a.dtype.kind == "b":
             a = a.astype(np.bool_)
         elif a.dtype.kind in "iu":

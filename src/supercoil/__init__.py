@@ -6,9 +6,11 @@ __all__ = ["__version__", "load"]
 
 
 def load(path):
-    """Read a result file (``supercoil run``'s ``result.h5``) into a
-    :class:`supercoil.io.store.Result`: branches as ``Branch`` objects, settings,
-    per-point records (see ``docs/results.md``)."""
+    """Read a result -- ``result.h5``, or the output folder of any command that computes
+    (``demo``, ``diagram ring``, ``tweezers``, ``run``, ``ring --out``) -- into a
+    :class:`supercoil.io.store.Result`: ``.branches`` maps names to ``Branch`` objects,
+    with the settings, status and summary (see ``docs/results.md``). A damaged or
+    truncated file raises :class:`supercoil.errors.InputError`."""
     from supercoil.io.store import load as _load
 
     return _load(path)

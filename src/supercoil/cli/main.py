@@ -38,6 +38,7 @@ from supercoil.cli._common import (
     warning_in,
     write_json_or_fail,
 )
+from supercoil.errors import InputError
 from supercoil.units.dna import (  # plain constants (math only): cheap at start-up
     BENDING_PERSISTENCE_NM,
     DEFAULT_SALT_MM,
@@ -952,6 +953,9 @@ def run(argv: Sequence[str] | None = None) -> int:
     except Abort:
         print("error: aborted", file=sys.stderr, flush=True)
         return 1
+    except InputError as exc:  # e.g. a damaged result file met past the command's checks
+        print(f"error: {_one_line(exc)}", file=sys.stderr, flush=True)
+        return EXIT_BAD_INPUT
     except Exception as exc:
         if debug:
             raise

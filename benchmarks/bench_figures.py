@@ -12,7 +12,7 @@ one in that process, each timed in process CPU time (``time.process_time``). Pri
 smallest and the median of each figure and of all of them.
 
 * ``--run DIR``: the output folder of one run of the command (``branch.json``,
-  ``branches/*.npz``); without it the command is run once into a temporary folder.
+  ``result.h5``); without it the command is run once into a temporary folder.
 * ``--against SRC``: alternates every run of this tree with one of the source tree
   ``SRC`` (a ``src`` folder, e.g. ``git archive <commit> src | tar -x -C /tmp/old``),
   the order swapped every round, and compares the PNGs of the two trees' last runs
@@ -57,8 +57,10 @@ from supercoil.plotting.tweezers import figure_jobs, pick_configurations
 
 run, out, shared = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3] == "shared"
 payload = json.loads((run / "branch.json").read_text())
-states = {b["name"]: np.load(run / "branches" / f"{b['name']}.npz")["states"]
-          for b in payload["branches"] if (run / "branches" / f"{b['name']}.npz").exists()}
+from supercoil import load
+stored = load(run)
+states = {b["name"]: np.asarray(stored.branches[b["name"]].states)
+          for b in payload["branches"] if b["name"] in stored.branches}
 jobs = figure_jobs(payload, pick_configurations(payload, states), out)
 if len(sys.argv) > 4:
     jobs = jobs[:int(sys.argv[4])]  # --instructions: the first k jobs

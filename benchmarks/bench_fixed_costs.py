@@ -116,7 +116,10 @@ def _jobs(folder: str) -> list:
     subprocess.run([sys.executable, "-m", "supercoil.cli.main", *COMMAND, "--out",
                     str(run)], check=True, capture_output=True, env=_env(None))
     payload = json.loads((run / "branch.json").read_text())
-    states = {b["name"]: np.load(run / "branches" / f"{b['name']}.npz")["states"]
+    from supercoil import load
+
+    stored = load(run)
+    states = {b["name"]: np.asarray(stored.branch(b["name"]).states)
               for b in payload["branches"]}
     return figure_jobs(payload, pick_configurations(payload, states), folder)
 

@@ -71,12 +71,13 @@ ZERO_TOLERANCE = 1e-6  # analyse's default: eigenvalues within it are zero modes
 def branches(nodes: int, folder: Path, max_points: int = 90):
     """β with contact and both halves of β_II from P, as bench_beta_secondary.py computes
     them; saved under ``folder`` and read from there when present."""
-    from supercoil.continuation.branch import Branch
+    from supercoil.io.store import load, save
 
     names = ("beta_contact", "beta_II+", "beta_II-")
-    paths = {name: folder / f"{name}_{nodes}.npz" for name in names}
-    if all(p.exists() for p in paths.values()):
-        return {name: Branch.load(p) for name, p in paths.items()}
+    path = folder / f"branches_{nodes}.h5"
+    if path.exists():
+        stored = load(path)
+        return {name: stored.branch(name) for name in names}
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
     from supercoil.problems.ring_secondary import follow_bifurcating_branch
 
@@ -92,8 +93,7 @@ def branches(nodes: int, folder: Path, max_points: int = 90):
         name = f"beta_II{'+' if side > 0 else '-'}"
         out[name] = follow_bifurcating_branch(diagram, beta, p, side, max_points=max_points,
                                               name=name)
-    for name, branch in out.items():
-        branch.save(paths[name])
+    save(path, list(out.values()))
     print(f"branches computed in {time.perf_counter() - start:.1f} s, saved to {folder}")
     return out
 

@@ -4,8 +4,8 @@ Run: ``python benchmarks/compare_tweezers_trees.py OLD_SRC NEW_SRC`` (each the `
 folder of a tree, e.g. ``OLD_SRC=/tmp/old/src`` from ``git archive <commit> src`` and
 ``NEW_SRC=src``). Runs ``supercoil tweezers --twist-ratio 4/3 --length-over-diameter 33
 --tension 75 --turns 0:5 --nodes 100`` with each tree on ``PYTHONPATH`` and prints
-whether ``branch.json``'s points and special points and every saved state of
-``branches/*.npz`` are identical bit for bit, else the largest differences. A change
+whether ``branch.json``'s points and special points and every stored array of
+``result.h5`` (both trees writing result files) are identical bit for bit, else the largest differences. A change
 meant to cut overhead only (session 13's) must print ``IDENTICAL``. About 10 s with
 warm numba caches (a minute or two when a tree compiles its kernels first).
 """
@@ -62,18 +62,21 @@ def main() -> int:
     # both lists compared (and their differences printed) before any verdict
     verdicts = [compare_lists(key, old[key], new[key]) for key in ("points", "special_points")]
     same = all(verdicts)
-    branches = os.path.join(folder, "old", "branches")
-    for name in sorted(os.listdir(branches)):
-        a = np.load(os.path.join(branches, name))
-        b = np.load(os.path.join(folder, "new", "branches", name))
-        for key in a.files:
-            if key not in b.files or a[key].dtype.kind != "f":
-                continue
-            if a[key].shape != b[key].shape:
-                print(f"{name}:{key}: shapes {a[key].shape} against {b[key].shape}")
+    from supercoil import load
+
+    stored_old = load(os.path.join(folder, "old"))
+    stored_new = load(os.path.join(folder, "new"))
+    for name, a_branch in stored_old.branches.items():
+        b_branch = stored_new.branches.get(name)
+        for key in ("parameter_values", "states", "multipliers", "tangents", "arclength"):
+            a = np.asarray(getattr(a_branch, key))
+            b = None if b_branch is None else np.asarray(getattr(b_branch, key))
+            if b is None or a.shape != b.shape:
+                print(f"{name}:{key}: shapes {a.shape} against "
+                      f"{None if b is None else b.shape}")
                 same = False
-            elif not np.array_equal(a[key], b[key], equal_nan=True):
-                print(f"{name}:{key}: largest difference {np.nanmax(np.abs(a[key] - b[key])):.3e}")
+            elif not np.array_equal(a, b, equal_nan=True):
+                print(f"{name}:{key}: largest difference {np.nanmax(np.abs(a - b)):.3e}")
                 same = False
     print("IDENTICAL bit for bit" if same else "DIFFERENT (see above)")
     return 0 if same else 1

@@ -1,7 +1,7 @@
 """Small result folders for the figure and viewer tests, made without computing.
 
 :func:`write_ring_result` writes what ``supercoil diagram ring`` writes
-(``diagram.json`` + ``branches/<name>.npz`` through :meth:`Branch.save`) for
+(``result.h5`` through :func:`supercoil.io.store.save`, ``diagram.json`` beside it) for
 two made-up branches: a circle (planar, stable below ΔLk = 2) and a
 "contact" branch of non-planar rings with contact points and intervals. The
 numbers are invented: plotting must show them as they are, whatever they are.
@@ -16,6 +16,7 @@ import numpy as np
 
 from supercoil.continuation import Branch
 from supercoil.continuation.options import ContinuationStatus
+from supercoil.io.store import save
 
 N_NODES = 24
 DIAMETER = 0.025
@@ -44,7 +45,7 @@ def _branch(name: str, parent: str | None, values: np.ndarray, states: np.ndarra
 
 def write_ring_result(folder: Path, *, shift: float = 0.0) -> Path:
     """The result folder; ``shift`` moves the last contact state (to change a picture)."""
-    (folder / "branches").mkdir(parents=True, exist_ok=True)
+    folder.mkdir(parents=True, exist_ok=True)
     circle_dlk = np.linspace(0.0, 3.0, 7)
     circle_states = np.array([ring_state(0.0).ravel() for _ in circle_dlk])
     circle_unstable = np.where(circle_dlk < 2.0, 0, 2)
@@ -57,8 +58,6 @@ def write_ring_result(folder: Path, *, shift: float = 0.0) -> Path:
                         np.zeros_like(circle_dlk)),
                 _branch("loop_contact", "circle", contact_dlk, contact_states,
                         contact_unstable, 0.8 * contact_t)]
-    for b in branches:
-        b.save(folder / "branches" / f"{b.name}.npz")
     points = []
     for i, dlk in enumerate(circle_dlk):
         points.append({"branch": "circle", "index": i, "excess_link": float(dlk),
@@ -85,14 +84,18 @@ def write_ring_result(folder: Path, *, shift: float = 0.0) -> Path:
         "length_over_diameter": 1 / DIAMETER, "diameter": DIAMETER, "n_nodes": N_NODES,
         "branches": [
             {"name": "circle", "parent": None, "origin": None, "contact": False,
-             "file": "branches/circle.npz"},
+             "file": "result.h5"},
             {"name": "loop_contact", "parent": "circle", "origin": None, "contact": True,
-             "file": "branches/loop_contact.npz"}],
+             "file": "result.h5"}],
         "special_points": [
             {"kind": "bifurcation", "branch": "circle", "excess_link": 2.0, "writhe": 0.0},
             {"kind": "fold", "branch": "loop_contact", "excess_link": 2.2,
              "writhe": 0.48}],
         "points": points, "notes": [], "ok": True, "conventions": {}, "provenance": {}}
+    save(folder / "result.h5", branches, problem="ring_diagram", summary=payload,
+         attributes={"twist_ratio": 0.6667, "length_over_diameter": 1 / DIAMETER,
+                     "diameter": DIAMETER, "n_nodes": N_NODES, "closed": True},
+         overwrite=True)
     (folder / "diagram.json").write_text(json.dumps(payload), encoding="utf-8")
     return folder
 
@@ -120,12 +123,12 @@ def write_tweezers_result(folder: Path, *, with_states: bool = False) -> Path:
     if with_states:
         states = np.array([open_rod_state(abs(n) / 6.0).ravel() for n in turns])
         branch = _branch("plectoneme", None, turns, states, unstable, 0.5 * turns)
-        (folder / "branches").mkdir(exist_ok=True)
-        branch.save(folder / "branches" / "plectoneme.npz")
         for p in points:
             p["branch"] = "plectoneme"
         payload.update(n_nodes=N_NODES, diameter=DIAMETER, branches=[
-            {"name": "plectoneme", "parent": None, "contact": True,
-             "file": "branches/plectoneme.npz"}])
+            {"name": "plectoneme", "parent": None, "contact": True, "file": "result.h5"}])
+        save(folder / "result.h5", [branch], problem="tweezers", summary=payload,
+             attributes={"n_nodes": N_NODES, "diameter": DIAMETER, "closed": False},
+             overwrite=True)
     (folder / "branch.json").write_text(json.dumps(payload), encoding="utf-8")
     return folder

@@ -149,7 +149,7 @@ def test_help_does_not_import_the_numerics():
                 "knot",
             ],
         ),
-        ("demo", ["--out", "--force", "2/3", "122"]),
+        ("demo", ["--out", "--overwrite", "--resume", "2/3", "122"]),
     ],
 )
 def test_help_explains_parameters_and_units(runner, command, words):
@@ -998,9 +998,9 @@ def test_demo_writes_files_and_never_overwrites(runner, tmp_path, monkeypatch):
         assert "incomplete: branch(es) " + ", ".join(stopped) in first.stderr
     assert all(b["ok"] for b in data["branches"] if b["name"] in ("circle", "alpha"))
     names = sorted(p.name for p in out.iterdir())
-    assert names == sorted([*diagram_output.DIAGRAM_FILES, "branches"])
+    assert names == sorted(diagram_output.DIAGRAM_FILES)
     assert str(out.resolve()) in first.stdout
-    for name in diagram_output.DIAGRAM_FILES[1:]:
+    for name in diagram_output.DIAGRAM_FILES[2:]:
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
     for key in ENVELOPE:
@@ -1030,14 +1030,15 @@ def test_demo_writes_files_and_never_overwrites(runner, tmp_path, monkeypatch):
 
     before = {p: p.read_bytes() for p in out.rglob('*') if p.is_file()}
     second = invoke(runner, "demo", "--out", out)
-    assert_one_line_error(second, "--out", "not empty", "--force")
+    assert_one_line_error(second, "--out", "not empty", "--overwrite")
     assert {p: p.read_bytes() for p in out.rglob('*') if p.is_file()} == before
 
-    # --force reuses the folder (the computation itself is stubbed: it ran above).
+    # --overwrite reuses the folder (the computation itself is stubbed: it ran above).
     calls = []
-    monkeypatch.setattr(demo_module, "run_demo", lambda folder, quiet=False: calls.append(folder) or True)
+    monkeypatch.setattr(demo_module, "run_demo",
+                        lambda folder, quiet=False, stored=None: calls.append(folder) or True)
     (out / "notes.txt").write_text("mine")
-    forced = invoke(runner, "demo", "--out", out, "--force")
+    forced = invoke(runner, "demo", "--out", out, "--overwrite")
     assert forced.exit_code == 0, forced.stderr
     assert calls == [out]
     assert (out / "notes.txt").read_text() == "mine"
@@ -1045,7 +1046,7 @@ def test_demo_writes_files_and_never_overwrites(runner, tmp_path, monkeypatch):
 
 def test_demo_default_folder_is_always_new(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    made = [demo_module.prepare_folder(None, force=False) for _ in range(3)]
+    made = [demo_module.prepare_folder(None, overwrite=False)[0] for _ in range(3)]
     assert [p.name for p in made] == ["supercoil-demo", "supercoil-demo-2", "supercoil-demo-3"]
     assert all(p.is_dir() for p in made)
 

@@ -4,7 +4,7 @@ Bratu's fold (independent Moore-Spence solve, observed order 2, Richardson
 against the continuum value), pitchforks of a diagonal problem at known
 parameter values (branch switching onto the known branches), a double
 eigenvalue crossing under O(2) symmetry, a constrained point on a sphere
-(multipliers), save/load and the consistency checker.
+(multipliers), storing in a result file and the consistency checker.
 """
 
 import dataclasses
@@ -35,6 +35,7 @@ from supercoil.continuation import (
     switch_branch,
 )
 from supercoil.continuation.system import ExtendedSystem
+from supercoil.io.store import load, save
 
 
 def assert_consistent(branch, problem):
@@ -418,7 +419,7 @@ def test_the_corrector_respects_the_problems_step_bound():
 def test_branch_runs_merged_once_then_extended_equal_the_merge_of_all_runs(tmp_path):
     """The tweezers' follow() reports merge(merge(runs so far), partial run) (fast path)
     instead of merge(runs so far + partial run): the same branch, bit for bit; and a
-    branch saved uncompressed (in-progress saves) loads as the compressed one."""
+    result file stores the merged branch bit for bit."""
     from supercoil.problems.tweezers import merge_branches
 
     p = Bratu(16, 3.0)
@@ -448,10 +449,10 @@ def test_branch_runs_merged_once_then_extended_equal_the_merge_of_all_runs(tmp_p
             else:
                 assert a == c, f.name
     merged = merge_branches(runs, "merged")
-    packed = Branch.load(merged.save(tmp_path / "packed.npz"))
-    plain = Branch.load(merged.save(tmp_path / "plain.npz", compressed=False))
-    assert np.array_equal(packed.states, plain.states)
-    assert packed.summary() == plain.summary()
+    save(tmp_path / "merged.h5", [merged])
+    stored = load(tmp_path / "merged.h5").branch("merged")
+    assert np.array_equal(stored.states, merged.states)
+    assert stored.summary() == merged.summary()
 
 
 def test_save_load_round_trip_and_the_checker_catches_corruption(tmp_path):
@@ -461,8 +462,8 @@ def test_save_load_round_trip_and_the_checker_catches_corruption(tmp_path):
                      options=ContinuationOptions(parameter_bounds=(3.0, 4.0), max_step=0.5),
                      records=lambda q, mu, lam: {"u_mid": q[8], "profile": q[::4]})
     assert len(b.special_points) == 2
-    path = b.save(tmp_path / "bratu.npz")
-    loaded = Branch.load(path)
+    save(tmp_path / "bratu.h5", [b])
+    loaded = load(tmp_path / "bratu.h5").branch(b.name)
     for f in dataclasses.fields(Branch):
         if f.name in ("special_points", "origin", "records", "status"):
             continue

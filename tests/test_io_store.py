@@ -1,9 +1,11 @@
-"""Result files (supercoil.io.store): round trips, partial branches, interrupted writers."""
+"""Result files (supercoil.io.store): round trips, partial branches, interrupted writers,
+damaged files (random byte flips and truncations with fixed seeds)."""
 
 from __future__ import annotations
 
 import dataclasses
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -16,7 +18,8 @@ import pytest
 
 import supercoil
 from supercoil.continuation import Branch, ContinuationStatus, SpecialPoint
-from supercoil.io.store import ResultFileError, ResultWriter, load
+from supercoil.errors import InputError
+from supercoil.io.store import ResultFileError, ResultWriter, load, save
 
 POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")
@@ -189,25 +192,32 @@ def test_write_branch_replaces_a_partial_one_and_keeps_its_order(tmp_path):
         writer.write_branch(second)
         final = prefix(first, 5)
         writer.write_branch(final)
-        with h5py.File(path, "r") as raw:
-            assert sorted(raw["branches"]) == ["alpha", "circle"]
+    with h5py.File(path, "r") as raw:
+        assert sorted(raw["branches"]) == ["alpha", "circle"]
     result = load(path)
     assert result.branch_names == ("circle", "alpha")
     assert_branch_equal(final, result.branch("circle"))
     assert "circle" in result.complete_branches
 
 
-def test_rows_beyond_n_points_are_ignored(tmp_path):
-    """A write interrupted between the rows and the count: the reader trusts n_points."""
+def test_a_torn_journal_record_is_ignored(tmp_path):
+    """A write cut short by the end of the process (its record incomplete at the end of
+    the journal): the reader returns the points before it; a resumed writer drops it."""
     path = tmp_path / "r.h5"
     branch = make_branch(seed=6)
-    with new_writer(path) as writer:
-        writer.append(prefix(branch, 4))
-    with h5py.File(path, "r+") as raw:
-        group = raw["branches/alpha"]
-        group["states"].resize((6, 12))  # half of a later append
-        group["states"][4:6] = 99.0
+    writer = new_writer(path)
+    writer.append(prefix(branch, 4))
+    journal = path.with_name("r.h5.journal")
+    whole = journal.read_bytes()
+    writer.append(prefix(branch, 5))
+    grown = journal.read_bytes()
+    writer._journal.close()  # as a killed process: no final snapshot
+    journal.write_bytes(grown[:len(whole) + (len(grown) - len(whole)) // 2])
     assert_branch_equal(prefix(branch, 4), load(path).branch("alpha"))
+    with ResultWriter.reopen(path) as again:
+        again.append(branch)
+    assert_branch_equal(branch, load(path).branch("alpha"))
+    assert not journal.exists()
 
 
 @pytest.mark.parametrize("content, words", [
@@ -215,7 +225,7 @@ def test_rows_beyond_n_points_are_ignored(tmp_path):
     (b"not hdf5 at all", "not a readable HDF5"),
     ("foreign", "not a supercoil result file"),
     ("version", "schema version '9.9'"),
-    ("folder", "is a folder"),
+    ("folder", "folder has no result.h5"),
 ])
 def test_bad_files_are_one_line_errors(tmp_path, content, words):
     path = tmp_path / "x.h5"
@@ -242,8 +252,9 @@ def test_damaged_file_is_reported(tmp_path):
         writer.append(make_branch())
     with h5py.File(path, "r+") as f:
         del f["branches/alpha/states"]
-    with pytest.raises(ResultFileError, match="damaged result file"):
+    with pytest.raises(ResultFileError, match="damaged result file") as info:
         load(path)
+    assert isinstance(info.value, InputError)
 
 
 def test_create_refuses_an_existing_file(tmp_path):
@@ -354,3 +365,121 @@ def test_killed_writer_leaves_a_readable_file(tmp_path, sig):
     assert_branch_equal(prefix(make_branch(k=1000, n_dofs=300, m=100, seed=7), len(stored)),
                         stored)
     assert result.status == ("interrupted" if sig == signal.SIGINT else "running")
+
+
+# ------------------------------------------------------------------------- damage
+def assert_same_result(a, b):
+    assert list(a.branches) == list(b.branches)
+    for name in a.branches:
+        assert_branch_equal(a.branch(name), b.branch(name))
+    for key in ("status", "message", "settings", "attributes", "summary", "study_text",
+                "complete_branches", "contact_branches", "provenance", "conventions"):
+        assert getattr(a, key) == getattr(b, key), key
+
+
+def flipped(source, target, rng) -> tuple[int, int]:
+    """Copy ``source`` to ``target`` with one byte at a random place XORed with a random
+    non-zero value."""
+    data = bytearray(source.read_bytes())
+    at = int(rng.integers(len(data)))
+    data[at] ^= int(rng.integers(1, 256))
+    target.write_bytes(bytes(data))
+    return at, data[at]
+
+
+@pytest.fixture(scope="module")
+def stored(tmp_path_factory):
+    """A closed result file and one left with a journal (its writer killed)."""
+    folder = tmp_path_factory.mktemp("stored")
+    whole = folder / "whole" / "result.h5"
+    whole.parent.mkdir()
+    save(whole, [make_branch(name="circle", origin=False, seed=1), make_branch(seed=2)],
+         problem="ring_diagram", settings={"rod": {"nodes": 4}},
+         attributes={"n_nodes": 4, "diameter": 0.025}, summary={"ok": True, "x": [1.5]})
+    live = folder / "live" / "result.h5"
+    live.parent.mkdir()
+    branch = make_branch(k=9, seed=3)
+    writer = new_writer(live)
+    writer.write_branch(make_branch(name="circle", origin=False, seed=1))
+    for k in range(1, len(branch) + 1):
+        writer.append(prefix(branch, k))
+    writer.set_summary({"ok": False})
+    writer._journal.close()  # as a killed process: the journal stays
+    return whole, live
+
+
+def test_byte_flips_in_a_result_file_load_the_same_data_or_fail_cleanly(tmp_path, stored):
+    """Every flip either loads bit-identical data or is a one-line ResultFileError naming
+    the file (never altered data, never another exception)."""
+    whole, _ = stored
+    original = load(whole)
+    target = tmp_path / "result.h5"
+    rng = np.random.default_rng(20240)
+    outcomes = {"same": 0, "error": 0}
+    for _ in range(150):
+        flipped(whole, target, rng)
+        try:
+            result = load(target)
+        except ResultFileError as exc:
+            assert str(target) in str(exc) and "\n" not in str(exc)
+            outcomes["error"] += 1
+            continue
+        assert_same_result(result, original)
+        outcomes["same"] += 1
+    assert outcomes["error"] > 0  # the data and metadata are most of the file
+
+
+def test_byte_flips_in_a_journal_load_the_same_data_or_fail_cleanly(tmp_path, stored):
+    _, live = stored
+    original = load(live)
+    assert len(original.branch("alpha")) == 9 and original.status == "running"
+    journal = live.with_name("result.h5.journal")
+    target = tmp_path / "result.h5"
+    shutil.copy(live, target)
+    rng = np.random.default_rng(20241)
+    errors = 0
+    for _ in range(100):
+        flipped(journal, tmp_path / "result.h5.journal", rng)
+        try:
+            result = load(target)
+        except ResultFileError as exc:
+            assert "result.h5" in str(exc) and "\n" not in str(exc)
+            errors += 1
+            continue
+        assert_same_result(result, original)
+    assert errors > 90  # the journal is all records: nearly every byte is checked
+
+
+def test_truncated_files(tmp_path, stored):
+    """A truncated result file is an error; a truncated journal is a write cut short:
+    the points of its whole records, a prefix of every branch."""
+    whole, live = stored
+    original, running = load(whole), load(live)
+    target = tmp_path / "result.h5"
+    data = whole.read_bytes()
+    for size in np.random.default_rng(7).integers(0, len(data), 20):
+        target.write_bytes(data[:size])
+        with pytest.raises(ResultFileError, match=str(target)):
+            load(target)
+    target.write_bytes(live.read_bytes())
+    journal = live.with_name("result.h5.journal").read_bytes()
+    counts = set()
+    for size in sorted(np.random.default_rng(8).integers(0, len(journal), 30)):
+        (tmp_path / "result.h5.journal").write_bytes(journal[:size])
+        result = load(target)
+        for name, b in result.branches.items():
+            ref = running.branch(name)
+            assert_branch_equal(prefix(ref, len(b)) if name == "alpha" else ref, b)
+        counts.add(len(result.branches.get("alpha", ())))
+    assert len(counts) > 3
+    assert original.summary == {"ok": True, "x": [1.5]}
+
+
+def test_load_reads_a_folder_and_prints_briefly(tmp_path, stored):
+    whole, _ = stored
+    result = supercoil.load(whole.parent)
+    assert result.path == whole
+    text = repr(result)
+    assert len(text.splitlines()) <= 4 and "circle (7 points)" in text and "[" not in text
+    text = repr(result.branch("alpha"))
+    assert len(text.splitlines()) <= 3 and "7 points" in text and "array" not in text

@@ -66,15 +66,17 @@ def test_configurations_change_with_the_state(tmp_path):
     two = write_ring_result(tmp_path / "two", shift=0.0)
     moved = write_ring_result(tmp_path / "moved", shift=0.0)
     # move one node of the last contact state: only the third panel may change
-    from supercoil.continuation import Branch
-
-    path = moved / "branches" / "loop_contact.npz"
-    b = Branch.load(path)
-    states = np.array(b.states)
-    states[-1, 3 * 5:3 * 6] += 0.05
     from dataclasses import replace
 
-    replace(b, states=states).save(path)
+    from supercoil.io.store import load, save
+
+    stored = load(moved)
+    b = stored.branch("loop_contact")
+    states = np.array(b.states)
+    states[-1, 3 * 5:3 * 6] += 0.05
+    save(moved / "result.h5", [stored.branch("circle"), replace(b, states=states)],
+         problem="ring_diagram", summary=stored.summary, attributes=stored.attributes,
+         overwrite=True)
     images = {}
     for name, folder in (("one", one), ("two", two), ("moved", moved)):
         out = tmp_path / f"out_{name}"
@@ -170,8 +172,9 @@ def test_bad_input_is_one_line_and_exit_2(ring, tmp_path, capsys):
     assert run(["plot", str(bad / "diagram.json"), "--out", str(out)]) == 2
     assert "no 'points' list" in _error(capsys)
     assert not out.exists()
+    (ring / "notes.txt").write_text("x", encoding="utf-8")
     with pytest.raises(ResultError, match="unknown result type"):
-        load_result(ring / "branches" / "circle.npz")
+        load_result(ring / "notes.txt")
 
 
 def test_existing_figures_are_not_overwritten(ring, tmp_path, capsys):
@@ -182,9 +185,9 @@ def test_existing_figures_are_not_overwritten(ring, tmp_path, capsys):
     assert run(["plot", str(ring), "--out", str(out), "--kind", "diagram"]) == 2
     assert "diagram.png exists" in _error(capsys)
     assert (out / "diagram.svg").read_text(encoding="utf-8") == "mine"
-    # another kind into the same folder is fine; --force overwrites
+    # another kind into the same folder is fine; --overwrite replaces
     assert run(["plot", str(ring), "--out", str(out), "--kind", "contact-map"]) == 0
-    assert run(["plot", str(ring), "--out", str(out), "--kind", "diagram", "--force"]) == 0
+    assert run(["plot", str(ring), "--out", str(out), "--kind", "diagram", "--overwrite"]) == 0
     assert (out / "diagram.svg").read_bytes() == before
     (tmp_path / "file").write_text("x", encoding="utf-8")
     assert run(["plot", str(ring), "--out", str(tmp_path / "file")]) == 2
@@ -199,7 +202,7 @@ def test_a_contact_free_child_branch_ends_before_its_contact_onset(ring):
     data = json.loads(path.read_text(encoding="utf-8"))
     data["branches"][1]["contact"] = False
     path.write_text(json.dumps(data), encoding="utf-8")
-    result = load_result(ring)
+    result = load_result(path)
     stored = [p for p in data["points"] if p["branch"] == "loop_contact"]
     assert list(result.branch("loop_contact").points) == stored[:-1]
     assert result.branch("loop_contact").states().shape == (len(stored) - 1, 24, 3)
@@ -207,8 +210,7 @@ def test_a_contact_free_child_branch_ends_before_its_contact_onset(ring):
 
 
 def _store(ring, path, *, summary: bool, extra: dict | None = None):
-    from supercoil.continuation import Branch
-    from supercoil.io.store import ResultWriter
+    from supercoil.io.store import ResultWriter, load
 
     data = json.loads((ring / "diagram.json").read_text(encoding="utf-8"))
     attributes = {k: data[k] for k in ("twist_ratio", "length_over_diameter", "diameter",
@@ -217,7 +219,7 @@ def _store(ring, path, *, summary: bool, extra: dict | None = None):
                              attributes={**attributes, "closed": True, **(extra or {})}) \
             as writer:
         for entry in data["branches"]:
-            writer.write_branch(Branch.load(ring / entry["file"]), contact=entry["contact"])
+            writer.write_branch(load(ring).branch(entry["name"]), contact=entry["contact"])
         if summary:
             writer.set_summary(data)
         writer.set_status("complete" if summary else "interrupted")
@@ -273,9 +275,8 @@ def test_tweezers_configurations_are_open_tubes(tmp_path):
     assert ylim[0] < starts[:, 1].min() and starts[:, 1].max() < ylim[1]
 
 
-def test_without_branch_files_no_configurations(ring, tmp_path, capsys):
-    (ring / "branches" / "loop_contact.npz").unlink()
-    (ring / "branches" / "circle.npz").unlink()
+def test_without_the_result_file_no_configurations(ring, tmp_path, capsys):
+    (ring / "result.h5").unlink()
     assert supported_kinds(load_result(ring)) == ("diagram", "contact-map")
     out = tmp_path / "figs"
     assert run(["plot", str(ring), "--out", str(out), "--kind", "configurations"]) == 2
@@ -283,12 +284,15 @@ def test_without_branch_files_no_configurations(ring, tmp_path, capsys):
     assert not out.exists()
 
 
-def test_a_damaged_branch_file_is_one_line(ring, tmp_path, capsys):
-    (ring / "branches" / "loop_contact.npz").write_bytes(b"PK\x03\x04 broken")
+def test_a_damaged_result_file_in_a_folder_is_one_line(ring, tmp_path, capsys):
+    data = bytearray((ring / "result.h5").read_bytes())
+    (ring / "result.h5").write_bytes(bytes(data[:len(data) // 2]))
     assert run(["plot", str(ring), "--out", str(tmp_path / "figs")]) == 2
-    assert "loop_contact.npz: cannot read the branch file" in _error(capsys)
+    assert "result.h5: cannot read the result file" in _error(capsys)
     assert run(["view", str(ring)]) == 2
-    assert "loop_contact.npz: cannot read the branch file" in _error(capsys)
+    assert "result.h5: cannot read the result file" in _error(capsys)
+    assert run(["plot", str(ring / "diagram.json"), "--out", str(tmp_path / "figs")]) == 2
+    assert "result.h5: cannot read the result file" in _error(capsys)
     assert not (ring / "viewer.html").exists() and not (tmp_path / "figs").exists()
 
 

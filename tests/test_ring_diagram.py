@@ -17,7 +17,8 @@ import pytest
 
 from supercoil.cli.main import run
 from supercoil.contact.problem import ContactOptions, ContactProblem
-from supercoil.continuation import Branch, consistency_check
+from supercoil.continuation import consistency_check
+from supercoil.io.store import load, save
 from supercoil.problems.ring_branches import twisted_circle_problem
 from supercoil.problems.ring_diagram import DiagramOptions, parse_modes, ring_diagram
 
@@ -168,7 +169,8 @@ def test_payload_keys_and_branch_files(diagram, tmp_path):
     assert [tuple(p["dofs"]) for p in pins] == [d for _, d in diagram.pins["alpha_contact"]]
     json.dumps(payload["rigid_pins"])  # plain data
     contact = diagram.branch("alpha_contact")
-    loaded = Branch.load(contact.save(tmp_path / "c.npz"))
+    save(tmp_path / "c.h5", [contact])
+    loaded = load(tmp_path / "c.h5").branch("alpha_contact")
     assert np.array_equal(loaded.states, contact.states)
     assert [p.kind for p in loaded.special_points] == [p.kind for p in contact.special_points]
 
@@ -185,15 +187,21 @@ def test_cli_writes_the_diagram(tmp_path, capsys):
         assert key in data
     for name in ("link_writhe.png", "contact_map.png", "configurations.png"):
         assert (out / name).stat().st_size > 1000
+    stored = load(out)
     for b in data["branches"]:
-        assert len(Branch.load(out / b["file"])) == b["n_points"]
-    assert not list((out / "branches").glob(".*"))  # no temporary file left
+        assert b["file"] == "result.h5" and len(stored.branch(b["name"])) == b["n_points"]
+    assert stored.summary == data and stored.status == ("complete" if data["ok"]
+                                                          else "incomplete")
+    assert sorted(p.name for p in out.iterdir()) == [
+        "configurations.png", "contact_map.png", "diagram.json", "link_writhe.png",
+        "result.h5"]  # no journal or temporary file left
 
 
-def test_cli_interrupt_keeps_the_branches_saved_so_far(tmp_path, capsys, monkeypatch):
+def test_cli_interrupt_keeps_every_point_computed(tmp_path, capsys, monkeypatch):
     """Ctrl-C during alpha: the circle (final) and alpha up to its last computed point
-    (the one the interrupt came at, not its last 10-point save) are kept and load;
-    exit 1, one line; no diagram.json."""
+    (the one the interrupt came at) are kept in result.h5; exit 1, one line naming
+    them and how to continue; no diagram.json."""
+    import supercoil
     from supercoil.problems import ring_diagram as rd
 
     original = rd.ring_diagram
@@ -216,14 +224,16 @@ def test_cli_interrupt_keeps_the_branches_saved_so_far(tmp_path, capsys, monkeyp
     status = run(["diagram", "ring", "--twist-ratio", str(2 / 3), "--length-over-diameter",
                   "40", "--nodes", "40", "--modes", "2", "--out", str(out), "--quiet"])
     err = capsys.readouterr().err.strip().splitlines()
-    assert status == 1 and err[-1].startswith("interrupted: kept alpha.npz, circle.npz")
-    alpha = Branch.load(out / "branches" / "alpha.npz")
-    assert len(last["alpha"]) % 10 != 0  # between two periodic saves
+    assert status == 1 and err[-1].startswith("interrupted: kept circle (") and \
+        "--resume" in err[-1]
+    result = supercoil.load(out)
+    assert result.status == "interrupted" and result.complete_branches == {"circle"}
+    alpha = result.branch("alpha")
     assert len(alpha) == len(last["alpha"])
     assert np.array_equal(alpha.parameter_values, last["alpha"].parameter_values)
     assert np.allclose(alpha.records["twist"] + alpha.records["writhe"],
                        alpha.parameter_values, atol=1e-8)
-    assert len(Branch.load(out / "branches" / "circle.npz")) > 2
+    assert len(result.branch("circle")) > 2
     assert not (out / "diagram.json").exists()
 
 
@@ -253,7 +263,7 @@ def test_cli_refuses_existing_folder(tmp_path, capsys):
             "--out", str(tmp_path)]
     assert run(argv) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("error:") and "--force" in err and "\n" not in err
+    assert err.startswith("error:") and "--overwrite" in err and "\n" not in err
 
 
 def test_options_validate():

@@ -262,7 +262,7 @@ def test_ring_study_stores_one_state(tmp_path, capsys):
     assert cli(["run", str(study), "--out", str(out), "--quiet"]) == 0
     result = supercoil.load(out / "result.h5")
     assert result.problem == "ring" and result.status == "complete"
-    (branch,) = result.branches
+    (branch,) = result.branches.values()
     assert len(branch) == 1 and branch.parameter_values[0] == 0.5
     data = json.loads((out / "ring.json").read_text())
     assert data == result.summary
@@ -287,16 +287,16 @@ def test_json_to_standard_output(tmp_path, capsys):
     assert "does not exist" in line and not (tmp_path / "p").exists()
 
 
-def test_force_replaces_the_run_files_only(tmp_path, capsys):
+def test_overwrite_replaces_the_run_files_only(tmp_path, capsys):
     study = write_study(tmp_path, RING)
     out = tmp_path / "o"
     out.mkdir()
     (out / "keep.txt").write_text("mine")
     (out / "result.h5").write_bytes(b"old")
-    assert cli(["run", str(study), "--out", str(out), "--force", "--quiet"]) == 0
+    assert cli(["run", str(study), "--out", str(out), "--overwrite", "--quiet"]) == 0
     assert (out / "keep.txt").read_text() == "mine"
     assert supercoil.load(out / "result.h5").status == "complete"
-    line = one_line_error(capsys, cli(["run", str(study), "--out", str(out), "--force",
+    line = one_line_error(capsys, cli(["run", str(study), "--out", str(out), "--overwrite",
                                        "--resume"]))
     assert "exclude each other" in line
 
@@ -329,7 +329,7 @@ class InterruptAt:
 
 def assert_same_branches(a, b, atol=1e-10):
     assert a.branch_names == b.branch_names
-    for x, y in zip(a.branches, b.branches):
+    for x, y in zip(a.branches.values(), b.branches.values()):
         assert len(x) == len(y), x.name
         np.testing.assert_allclose(x.states, y.states, atol=atol, err_msg=x.name)
         np.testing.assert_allclose(x.parameter_values, y.parameter_values, atol=atol)
@@ -341,14 +341,14 @@ def test_interrupted_run_keeps_a_valid_file_and_resume_completes_it(tmp_path, ca
     full_dir, full = run_diagram(tmp_path, "full")
     assert full["status"] == "complete", full
     reference = supercoil.load(full_dir / "result.h5")
-    assert [b.name for b in reference.branches] == ["circle", "alpha", "alpha_contact"]
+    assert list(reference.branches) == ["circle", "alpha", "alpha_contact"]
     assert json.loads((full_dir / "diagram.json").read_text()) == reference.summary
     # interrupt while the contact branch is computed
     out, outcome = run_diagram(tmp_path, "cut", progress=InterruptAt(4))
     assert outcome["status"] == "interrupted"
     cut = supercoil.load(out / "result.h5")
     assert cut.status == "interrupted" and cut.summary is None
-    for b in cut.branches:  # whatever was saved is a prefix of the uninterrupted run
+    for b in cut.branches.values():  # whatever was saved is a prefix of the uninterrupted run
         ref = reference.branch(b.name)
         np.testing.assert_allclose(b.states, ref.states[:len(b)], atol=1e-10)
     # saved point by point: the circle and the start of alpha_contact's run

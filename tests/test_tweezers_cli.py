@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
+import supercoil
 from supercoil.cli.main import run
-from supercoil.continuation import Branch
 from supercoil.problems.greenhill import critical_turns
 
 POINT_KEYS = ("turns", "extension", "torque", "writhe", "twist", "energy", "load_potential",
@@ -51,8 +51,12 @@ def test_files_and_stored_states(folder):
     for name in ("hat_curve.png", "torque.png", "writhe.png", "configurations.png"):
         assert (folder / name).stat().st_size > 1000
     data = json.loads((folder / "branch.json").read_text())
+    stored = supercoil.load(folder)
+    assert stored.summary == data and stored.status == "complete" and stored.problem == "tweezers"
+    assert not stored.closed and stored.n_nodes == 40
     for b in data["branches"]:
-        branch = Branch.load(folder / b["file"])
+        assert b["file"] == "result.h5"
+        branch = stored.branch(b["name"])
         rows = [p for p in data["points"] if p["branch"] == b["name"]]
         assert len(branch) == len(rows) == b["n_points"]
         assert np.allclose(branch.records["extension"], [p["extension"] for p in rows])
@@ -75,7 +79,7 @@ def test_contact_lists_are_those_of_the_stored_states(folder):
                                             formulation=options.contact_formulation))
     listed = 0
     for b in data["branches"]:
-        branch = Branch.load(folder / b["file"])
+        branch = supercoil.load(folder / b["file"]).branch(b["name"])
         rows = [p for p in data["points"] if p["branch"] == b["name"]]
         for i, row in enumerate(rows):
             if b["contact"]:
@@ -115,10 +119,10 @@ def test_bad_input_is_one_line_exit_2(tmp_path, capsys, args, words):
     assert len(err) == 1 and err[0].startswith("error:") and words in err[0]
 
 
-def test_existing_folder_needs_force(folder, capsys):
+def test_existing_folder_needs_overwrite(folder, capsys):
     status = run(["tweezers", "--twist-ratio", "1", "--tension", "1", "--turns", "0:1",
                   "--out", str(folder)])
-    assert status == 2 and "--force" in capsys.readouterr().err
+    assert status == 2 and "--overwrite" in capsys.readouterr().err
 
 
 def test_up_down_writes_the_path(tmp_path):
@@ -133,7 +137,9 @@ def test_up_down_writes_the_path(tmp_path):
     assert path[0]["turns"] == 0.0 and path[-1]["turns"] == 0.0
     jumps = [s for s in data["special_points"] if s["kind"] == "jump"]
     assert jumps and all(s["branch"] == "path" and "extension" in s for s in jumps)
-    assert (out / "branches" / "path.npz").exists()
+    stored = supercoil.load(out).extras["path"]
+    assert stored["states"].shape[0] == len(path) == stored["turns"].shape[0]
+    assert list(stored["turns"]) == [p["turns"] for p in path]
 
 
 def test_up_down_needs_tension(tmp_path, capsys):
@@ -208,119 +214,3 @@ def test_displacement_control_cli(tmp_path):
         assert p["extension"] == pytest.approx(0.7, abs=1e-9) and p["load_potential"] == 0.0
     assert data["points"][0]["tension"] < 0  # the clamped buckle is compressed at 0 turns
     assert (out / "tension.png").exists() and not (out / "hat_curve.png").exists()
-
-
-def test_each_final_branch_file_is_written_once(tmp_path, monkeypatch):
-    """run_saving writes every branch when it becomes final, uncompressed (the command's
-    critical path); write_tweezers writes each of those branch objects once more,
-    compressed, while the figures are drawn, and no other. The files end compressed
-    and hold the computed branches."""
-    import zipfile
-
-    writes, computed = [], {}
-    original_save = Branch.save
-
-    def counted_save(self, path, compressed=True):
-        if compressed:
-            writes.append(f"{self.name}.npz")
-            assert computed.setdefault(f"{self.name}.npz", self) is self  # that very object
-        return original_save(self, path, compressed)
-
-    monkeypatch.setattr(Branch, "save", counted_save)
-    out = tmp_path / "once"
-    status = run(["tweezers", "--twist-ratio", "1.3333333333333333", "--length-over-diameter",
-                  "20", "--tension", "20", "--turns", "0:1.6", "--nodes", "30", "--out",
-                  str(out), "--quiet"])
-    assert status == 0
-    names = ["straight.npz", "buckled.npz", "buckled_contact.npz"]
-    assert sorted(writes) == sorted(names)  # compressed once each
-    assert sorted(p.name for p in (out / "branches").iterdir()) == sorted(names)  # no temp
-    for name in names:
-        with zipfile.ZipFile(out / "branches" / name) as archive:
-            assert {i.compress_type for i in archive.infolist()} == {zipfile.ZIP_DEFLATED}
-        stored, branch = Branch.load(out / "branches" / name), computed[name]
-        assert np.array_equal(stored.states, branch.states)
-        assert np.array_equal(stored.parameter_values, branch.parameter_values)
-        assert [p.kind for p in stored.special_points] == [p.kind for p in branch.special_points]
-
-
-def test_final_branches_are_saved_uncompressed_when_final(tmp_path):
-    """run_saving(compress_final=False): each final branch is on disk, stored without
-    deflation, as soon as on_branch returns (what an interrupt of the figures leaves)."""
-    import zipfile
-
-    from supercoil.cli import diagram_output
-
-    class Fake:
-        def __init__(self, name):
-            self.name = name
-
-        def save(self, path, compressed=True):
-            with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED if compressed
-                                 else zipfile.ZIP_STORED) as archive:
-                archive.writestr("x.npy", b"0" * 100)
-
-    seen = []
-
-    def compute(message, on_point, on_branch):
-        for name in ("a", "b"):
-            on_branch(Fake(name), False)
-            with zipfile.ZipFile(tmp_path / "branches" / f"{name}.npz") as archive:
-                seen.append({i.compress_type for i in archive.infolist()})
-        return "done"
-
-    assert diagram_output.run_saving(compute, tmp_path, quiet=True,
-                                     compress_final=False) == "done"
-    assert seen == [{zipfile.ZIP_STORED}] * 2
-
-
-def test_in_progress_saves_every_ten_points_at_most_every_interval(tmp_path, monkeypatch):
-    """run_saving writes a branch in progress after SAVE_EVERY new points, but not sooner
-    than SAVE_INTERVAL seconds after the previous in-progress save (a fake clock); the
-    final save always; an interrupt saves the branch up to its last point."""
-    import types
-
-    from supercoil.cli import diagram_output
-
-    clock = [0.0]
-    monkeypatch.setattr(diagram_output, "time", types.SimpleNamespace(monotonic=lambda: clock[0]))
-    saves = []
-
-    class FakeBranch:
-        parameter = "turns"
-
-        def __init__(self, name, k):
-            self.name, self.k = name, k
-            self.parameter_values = np.arange(k, dtype=float)
-            self.arclength = np.arange(k, dtype=float)
-
-        def __len__(self):
-            return self.k
-
-        def save(self, path, compressed=True):
-            saves.append((self.name, self.k, compressed))
-            path.write_bytes(b"")
-
-    def compute(message, on_point, on_branch, seconds_per_point, interrupt_at=None):
-        for k in range(1, 46):
-            clock[0] += seconds_per_point
-            if k == interrupt_at:
-                raise KeyboardInterrupt
-            on_point(FakeBranch("a", k))
-        on_branch(FakeBranch("a", 45), True)
-        return "done"
-
-    # fast points: 0.05 s each, so ten points take 0.5 s < SAVE_INTERVAL (2 s)
-    assert diagram_output.run_saving(lambda *a: compute(*a, 0.05), tmp_path / "fast",
-                                     quiet=True) == "done"
-    assert saves == [("a", 40, False), ("a", 45, True)]  # 2 s passed at point 40
-    saves.clear()
-    # slow points (1 s each): every ten points, as before
-    diagram_output.run_saving(lambda *a: compute(*a, 1.0), tmp_path / "slow", quiet=True)
-    assert saves == [("a", 10, False), ("a", 20, False), ("a", 30, False), ("a", 40, False),
-                     ("a", 45, True)]
-    saves.clear()
-    # an interrupt at point 13: the branch saved up to point 12, uncompressed
-    assert diagram_output.run_saving(lambda *a: compute(*a, 0.05, interrupt_at=13),
-                                     tmp_path / "cut", quiet=True) is None
-    assert saves == [("a", 12, False)]

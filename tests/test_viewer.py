@@ -112,7 +112,7 @@ def test_page_is_one_offline_file(page):
 
 
 def test_page_holds_the_result_as_stored(page):
-    from supercoil.continuation import Branch
+    import supercoil
 
     data = _payload(page)
     stored = json.loads((page.parent / "diagram.json").read_text(encoding="utf-8"))
@@ -121,7 +121,7 @@ def test_page_holds_the_result_as_stored(page):
     for b in data["branches"]:
         rows = [p for p in stored["points"] if p["branch"] == b["name"]]
         assert b["points"] == rows  # numbers exactly as stored
-        states = Branch.load(page.parent / "branches" / f"{b['name']}.npz").states
+        states = supercoil.load(page.parent).branch(b["name"]).states
         assert np.max(np.abs(np.array(b["states"]) - states)) <= 0.5e-5 + 1e-12
     assert {s["kind"] for s in data["special_points"]} == {"bifurcation", "fold"}
     assert data["style"]["branch_colors"] == list(style.BRANCH_COLORS)
@@ -163,7 +163,7 @@ def test_bad_input_is_one_line_and_exit_2(page, tmp_path, capsys):
     assert run(["view", str(broken)]) == 2
     assert "point 0 lacks writhe" in _error(capsys)
     assert not (broken / "viewer.html").exists()
-    assert run(["view", str(folder), "--out", str(page), "--force"]) == 0
+    assert run(["view", str(folder), "--out", str(page), "--overwrite"]) == 0
 
 
 # -------------------------------------------------------------- the browser
@@ -254,14 +254,14 @@ def test_screenshots_show_the_selected_state(browser, page, tmp_path):
 
 
 def test_tweezers_page_shows_the_open_rod(tmp_path):
-    from supercoil.continuation import Branch
+    import supercoil
 
     folder = write_tweezers_result(tmp_path / "tw", with_states=True)
     assert run(["view", str(folder)]) == 0
     data = _payload(folder / "viewer.html")
     assert data["closed"] is False and data["diameter"] == 0.025
     (branch,) = data["branches"]
-    stored = Branch.load(folder / "branches" / "plectoneme.npz").states
+    stored = supercoil.load(folder).branch("plectoneme").states
     assert np.max(np.abs(np.array(branch["states"]) - stored)) <= 0.5e-5 + 1e-12
 
 
@@ -273,7 +273,7 @@ def test_drawn_line_is_stable_up_to_the_located_bifurcation(tmp_path):
     stored["special_points"][0].update(excess_link=1.8, index=3, count_before=0,
                                        count_after=2)
     (folder / "diagram.json").write_text(json.dumps(stored), encoding="utf-8")
-    assert run(["view", str(folder), "--out", str(tmp_path / "page.html")]) == 0
+    assert run(["view", str(folder / "diagram.json"), "--out", str(tmp_path / "page.html")]) == 0
     circle = _payload(tmp_path / "page.html")["branches"][0]
     line = circle["line"]
     assert len(circle["points"]) == 7 and len(line["y"]) == 9

@@ -82,7 +82,11 @@ __all__ = [
 
 
 def load(path):
-    """Read a result file (``result.h5``) or the output folder that holds it."""
-    from supercoil.io.store import load as read
+    """Read a result -- ``result.h5``, or the output folder of any command that computes
+    (``demo``, ``diagram ring``, ``tweezers``, ``run``, ``ring --out``) -- into a
+    :class:`supercoil.io.store.Result`: ``.branches`` maps names to ``Branch`` objects,
+    with the settings, status and summary (see ``docs/results.md``). A damaged or
+    truncated file raises :class:`supercoil.errors.InputError`."""
+    from supercoil.io.store import load as _load
 
-    return read(path)
+    return _load(path)

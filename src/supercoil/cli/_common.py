@@ -184,19 +184,3 @@ def write_json_or_fail(data: dict, path: str) -> None:
             f"--json {path}: cannot write ({exc.strerror or exc}); give a path in a "
             "writable folder, or - for standard output"
         )
-
-
-def prepare_output_folder(out, force: bool, what: str) -> None:
-    """``--out DIR`` of a command that writes a folder with ``branches/``: one-line errors
-    (exit 2) for a file, a non-empty folder without ``--force`` (naming ``what`` would be
-    overwritten) or a folder that cannot be created; nothing is written before."""
-    if out.exists() and not out.is_dir():
-        fail(f"--out {out}: is a file, not a folder; give a new folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        fail(f"--out {out}: folder exists and is not empty; give a new folder, or add --force "
-             f"to overwrite {what} in it")
-    try:
-        (out / "branches").mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
-             "writable location")

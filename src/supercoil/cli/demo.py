@@ -36,8 +36,15 @@ CONTACT_CURVE = "spline"
 DEFAULT_FOLDER = "supercoil-demo"
 
 
-def prepare_folder(out: Path | None, force: bool) -> Path:
-    """Create (or, with ``force``, reuse) the output folder; exit 2 if it is refused."""
+def prepare_folder(out: Path | None, overwrite: bool, resume: bool = False):
+    """``(folder, stored)``: the output folder, created (or, with ``overwrite``, reused),
+    and with ``resume`` the stored result to continue (None otherwise); exit 2 if it
+    is refused."""
+    from supercoil.cli.diagram_output import diagram_settings
+    from supercoil.cli.saving import prepare_folder as prepare
+
+    if out is None and resume:
+        out = Path(DEFAULT_FOLDER)
     if out is None:
         for index in range(1, 10_000):
             candidate = Path(DEFAULT_FOLDER if index == 1 else f"{DEFAULT_FOLDER}-{index}")
@@ -50,23 +57,12 @@ def prepare_folder(out: Path | None, force: bool) -> Path:
                     f"cannot create the demo folder {candidate.resolve()} ({exc.strerror}); "
                     "run from a writable folder or give --out DIR"
                 )
-            return candidate
+            return candidate, None
         fail(f"too many {DEFAULT_FOLDER}-* folders here; give --out DIR")
-    if out.exists() and not out.is_dir():
-        fail(f"--out {out}: is a file, not a folder; give a new folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        fail(
-            f"--out {out}: folder exists and is not empty; give a new folder, or add --force "
-            "to overwrite the demo's files in it"
-        )
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail(
-            f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
-            "writable location"
-        )
-    return out
+    stored = prepare(out, overwrite=overwrite, resume=resume, problem="ring_diagram",
+                     settings=diagram_settings(demo_options(), "demo"),
+                     what="the demo's files", same_as="this version of the demo")
+    return out, stored
 
 
 def demo_options():
@@ -79,16 +75,19 @@ def demo_options():
                           contact_formulation=CONTACT_FORMULATION, contact_curve=CONTACT_CURVE)
 
 
-def run_demo(folder: Path, quiet: bool = False) -> bool:
+def run_demo(folder: Path, quiet: bool = False, stored=None) -> bool:
     """Compute the diagram, write it into ``folder`` and say where; True if every branch
-    ended as asked (False after an interrupt too: what was saved is kept)."""
+    ended as asked (False after an interrupt too: what was saved is kept). ``stored``:
+    the interrupted result to continue (``--resume``)."""
     from supercoil.cli.diagram_output import incomplete_message, run_diagram
 
     options = demo_options()
     print(f"supercoil demo: bifurcation diagram of a twisted ring with self-contact, "
           f"C/A = 2/3, L/D = {LENGTH_OVER_DIAMETER:g} (seed 001's DNA example), N = {N_NODES}, "
           f"modes {', '.join(map(str, MODES))}, dLk <= {MAX_EXCESS_LINK:g}", flush=True)
-    payload = run_diagram(options, folder, quiet)
+    payload = run_diagram(options, folder, quiet, resume=stored, command="demo",
+                          resume_hint=f"continue with 'supercoil demo --out {folder} "
+                          "--resume'")
     if payload is None:
         return False
     message = incomplete_message(payload, folder)

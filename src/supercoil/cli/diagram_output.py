@@ -1,137 +1,91 @@
-"""Run and write branch computations of the CLI (``diagram ring``, ``demo``, ``tweezers``).
+"""Run and write ring diagrams of the CLI (``diagram ring``, ``demo``).
 
-No numerics: :func:`run_saving` runs a computation it is given with a
-progress display and saves its branches as they come; :func:`run_diagram`
-computes a ring diagram and writes it; :func:`write_diagram`
-saves a ring diagram's branches, puts the payload of
-:meth:`~supercoil.problems.ring_diagram.RingDiagram.payload` into
-``diagram.json`` (with the JSON envelope) and draws the three figures of
+No numerics: :func:`run_diagram` computes a ring diagram through
+:func:`~supercoil.cli.saving.run_saving` (every accepted point appended to
+``result.h5`` as it comes), and :func:`write_diagram` stores the final
+branches and the summary, closes the result, writes ``diagram.json`` (the
+payload of :meth:`~supercoil.problems.ring_diagram.RingDiagram.payload` with
+the JSON envelope) and then draws the three figures of
 :mod:`supercoil.plotting.ring_diagram` from it.
 """
 
 from __future__ import annotations
 
-import os
-import time
+import dataclasses
 from pathlib import Path
 
-from supercoil.cli._common import warn
+import typer
 
-DIAGRAM_FILES = ("diagram.json", "link_writhe.png", "contact_map.png", "configurations.png")
-# Points between saves of a branch in progress: a save rewrites the branch (53 ms
-# for 126 points at N = 128, measured, compressed; in-progress saves are now
-# written uncompressed, 29 ms for 559 points at N = 100), so saving every point
-# would cost as much as computing it on long branches; 'supercoil run' appends
-# every point instead.
-SAVE_EVERY = 10
-# ... and not sooner than this many seconds after the previous in-progress save: on a
-# short run the saves were overhead on the critical path (issue 5's benchmark: 9 saves of
-# the contact branch, about 0.1 s of its 3-4 s under py-spy), while a kill without an
-# interrupt now loses at most this long or SAVE_EVERY points, whichever is more
-SAVE_INTERVAL = 2.0
+from supercoil.cli._common import EXIT_NOT_CONVERGED, warn
+from supercoil.cli.saving import RESULT_FILE, figures_interrupted
+
+DIAGRAM_FILES = (RESULT_FILE, "diagram.json", "link_writhe.png", "contact_map.png",
+                 "configurations.png")
 
 
-def save_branch(branch, folder: Path, compressed: bool = True) -> None:
-    """Write ``branch`` to ``folder/<name>.npz`` atomically (a temporary file renamed):
-    an interrupt or a crash leaves the previous file or the new one, never a part."""
-    target = folder / f"{branch.name}.npz"
-    temporary = folder / f".{branch.name}.partial.npz"
-    branch.save(temporary, compressed)
-    os.replace(temporary, target)
+def diagram_settings(options, command: str) -> dict:
+    """What a resumed run must share with the stored one: the command and its options."""
+    return {"command": command, "options": dataclasses.asdict(options)}
 
 
-def run_saving(compute, out: Path, quiet: bool = False, saved: dict | None = None,
-               compress_final: bool = True):
-    """Run ``compute(message, on_point, on_branch)`` with a progress display, saving
-    branches into ``out/branches`` as they come.
-
-    Every branch is written to ``out/branches/<name>.npz`` when it is final,
-    and a branch in progress every ``SAVE_EVERY`` points but at most once per
-    ``SAVE_INTERVAL`` seconds (atomically: a temporary file renamed) and when an
-    interrupt (Ctrl-C) ends the run, so that the interrupt loses no point computed
-    (a kill without an interrupt loses at most ``SAVE_EVERY`` points or
-    ``SAVE_INTERVAL`` seconds of points, whichever is more). ``saved`` (a dict, if given) gets ``name -> branch`` for every final
-    branch written, so that a later writer need not write it again. Returns what
-    ``compute`` returns, or None after an interrupt (the message says what was kept).
-    ``compress_final=False`` writes the final branches without deflating them too, for a
-    caller that compresses them later, off its critical path (``supercoil tweezers``,
-    while its figures are drawn: the deflation of issue 5's three branches took 0.05 s of
-    the command, the plain writes 0.01 s).
-    """
-    from supercoil.cli.progress import Progress
-
-    folder = out / "branches"
-    folder.mkdir(parents=True, exist_ok=True)
-
-    def save(branch, compressed: bool = True) -> None:
-        save_branch(branch, folder, compressed)
-
-    unsaved = {}  # name -> the last state of each branch in progress
-    saved_at = {}  # name -> the number of points of its last in-progress save
-    last_save = [time.monotonic()]  # when the last in-progress save was written
-
-    with Progress(quiet) as progress:
-        def on_point(branch) -> None:
-            unsaved[branch.name] = branch
-            k = len(branch)
-            step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
-            progress.point(branch.name, branch.parameter, float(branch.parameter_values[-1]),
-                           step, k)
-            if k - saved_at.get(branch.name, 0) >= SAVE_EVERY and \
-                    time.monotonic() - last_save[0] >= SAVE_INTERVAL:
-                # uncompressed: deflating a long branch's arrays took most of a save
-                # (the final save, below, is compressed)
-                save(branch, compressed=False)
-                saved_at[branch.name] = k
-                last_save[0] = time.monotonic()
-
-        def on_branch(branch, contact) -> None:
-            save(branch, compressed=compress_final)
-            unsaved.pop(branch.name, None)
-            if saved is not None:
-                saved[branch.name] = branch
-
-        try:
-            return compute(progress.message, on_point, on_branch)
-        except KeyboardInterrupt:
-            for branch in unsaved.values():  # every point computed so far
-                save(branch, compressed=False)
-            kept = sorted(p.name for p in folder.glob("*.npz") if not p.name.startswith("."))
-            warn(f"interrupted: kept {', '.join(kept) or 'no branch'} in {folder.resolve()} "
-                 f"(branches in progress up to their last point); the "
-                 "summary and the figures were not written")
-            return None
+def diagram_attributes(options) -> dict:
+    return {"twist_ratio": options.twist_ratio, "n_nodes": options.n_nodes, "closed": True,
+            "length_over_diameter": options.length_over_diameter,
+            "diameter": options.diameter}
 
 
-def compute_diagram(options, out: Path, quiet: bool = False, saved: dict | None = None):
-    """:func:`ring_diagram` through :func:`run_saving` (None after an interrupt)."""
+def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
+                command: str = "diagram ring", resume_hint: str = "") -> dict | None:
+    """Compute ``options``' ring diagram into ``out`` (``result.h5``, ``diagram.json``, the
+    figures); the payload, or None after an interrupt. ``resume``: the stored
+    :class:`~supercoil.io.store.Result` to continue. The figures' helper process
+    (:class:`~supercoil.plotting.painter.Painter`) is started first, so that it
+    imports matplotlib while the diagram is computed."""
+    from supercoil._gc import imports_done
+    from supercoil.cli.saving import open_writer, run_saving, stored_for_resume
+    from supercoil.plotting.painter import Painter
     from supercoil.problems.ring_diagram import ring_diagram
 
-    return run_saving(lambda message, on_point, on_branch: ring_diagram(
-        options, progress=message, on_point=on_point, on_branch=on_branch), out, quiet, saved)
-
-
-def run_diagram(options, out: Path, quiet: bool = False) -> dict | None:
-    """:func:`compute_diagram` then :func:`write_diagram`; the payload, or None after an
-    interrupt. The figures' helper process (:class:`~supercoil.plotting.painter.Painter`)
-    is started first, so that it imports matplotlib while the diagram is computed."""
-    from supercoil._gc import imports_done
-    from supercoil.plotting.painter import Painter
-    from supercoil.problems.ring_diagram import ring_diagram  # noqa: F401 (before the freeze)
-
     imports_done()
-    saved: dict = {}
+    writer = open_writer(out, resume=resume is not None, problem="ring_diagram",
+                         settings=diagram_settings(options, command),
+                         attributes=diagram_attributes(options),
+                         provenance={"contact_treatment": options.contact,
+                                     "n_nodes": options.n_nodes})
     with Painter() as painter:
-        diagram = compute_diagram(options, out, quiet, saved)
+        def compute(message, on_point, on_branch):
+            stored = None if resume is None else stored_for_resume(resume, message)
+            return ring_diagram(options, progress=message, on_point=on_point,
+                                on_branch=on_branch, resume=stored)
+
+        diagram = run_saving(compute, writer, quiet, resume_hint)
         if diagram is None:
             return None
-        return write_diagram(diagram, out, options.contact, saved, painter)
+        return write_diagram(diagram, out, options.contact, writer, painter)
 
 
-def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None,
-                  painter=None) -> dict:
-    """Save ``diagram`` (a RingDiagram) into ``out``, print a summary; return the payload.
-    Branches that ``saved`` holds (:func:`run_saving`'s record) are already written.
+def store_diagram(diagram, writer, summary: dict) -> None:
+    """Store the final branches of ``diagram`` and ``summary`` (``diagram.json``'s data)
+    in ``writer``, set the run's status and close it."""
+    for branch in diagram.branches:
+        writer.write_branch(branch, complete=True,
+                            contact=branch.name in diagram.contact_branches)
+    for name in set(writer.branch_names()) - {b.name for b in diagram.branches}:
+        writer.remove_branch(name)
+    writer.set_summary(summary)
+    if diagram.ok:
+        writer.set_status("complete", f"{len(diagram.branches)} branches computed")
+    else:
+        failed = [b.name for b in diagram.branches if not b.ok]
+        writer.set_status("incomplete", f"branch(es) {', '.join(failed)} stopped early")
+    writer.close()
+
+
+def write_diagram(diagram, out: Path, contact: str, writer, painter=None) -> dict:
+    """Store ``diagram`` (a RingDiagram) in ``writer`` (then closed) and ``diagram.json``,
+    print a summary, draw the figures; return the payload. The data are complete
+    before the first figure is drawn: an interrupt while drawing leaves them whole
+    (exit status 1, with a hint to draw them with ``supercoil plot``).
     ``painter``: a started :class:`~supercoil.plotting.painter.Painter` whose helper
     draws the figures (what it does not draw is drawn here)."""
     from supercoil.io.results import envelope, write_json
@@ -140,11 +94,11 @@ def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None,
     from supercoil.plotting.style import generation_style
 
     options = diagram.options
-    (out / "branches").mkdir(parents=True, exist_ok=True)
-    for branch in diagram.branches:
-        if saved is None or saved.get(branch.name) is not branch:
-            branch.save(out / "branches" / f"{branch.name}.npz")
     payload = diagram.payload()
+    data = envelope(payload, n_nodes=options.n_nodes, tolerances=options.tolerances,
+                    contact_treatment=contact)
+    store_diagram(diagram, writer, data)
+    write_json(data, out / "diagram.json")
     points = payload["points"]
     by_branch = {b["name"]: [p for p in points if p["branch"] == b["name"]]
                  for b in payload["branches"]}
@@ -180,16 +134,18 @@ def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None,
     jobs.append((out / "configurations.png", "ring:configurations",
                  {"configurations": configurations, "diameter": options.diameter,
                   "title": title}))
-    draw_jobs(jobs, painter)
-    write_json(envelope(payload, n_nodes=options.n_nodes, tolerances=options.tolerances,
-                        contact_treatment=contact), out / "diagram.json")
+    try:
+        draw_jobs(jobs, painter)
+    except KeyboardInterrupt:
+        figures_interrupted(out)
+        raise typer.Exit(EXIT_NOT_CONVERGED) from None
     where = out.resolve()
     for b in payload["branches"]:
         specials = [p for p in payload["special_points"] if p["branch"] == b["name"]]
         kinds = ", ".join(f"{p['kind']} at dLk {p['excess_link']:.4f}" for p in specials)
         print(f"  {b['name']}: {b['n_points']} points, {b['seconds']:.1f} s, "
               f"{b['status'].lower()}" + (f"; {kinds}" if kinds else ""))
-    print(f"wrote {', '.join(DIAGRAM_FILES)} and branches/*.npz to {where}", flush=True)
+    print(f"wrote {', '.join(DIAGRAM_FILES)} to {where}", flush=True)
     for note in payload["notes"]:
         warn(f"note: {note}")
     return payload

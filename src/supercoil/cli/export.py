@@ -22,11 +22,12 @@ def register(app: typer.Typer) -> None:
 
 
 def export_command(
-    result: Annotated[Path, typer.Argument(metavar="RESULT", help="A result file (result.h5 "
-                                           "of 'supercoil run') or its folder.",
+    result: Annotated[Path, typer.Argument(metavar="RESULT", help="A result: the --out "
+                                           "folder of any command that computes, its "
+                                           "result.h5, or its diagram.json or branch.json.",
                                            show_default=False)],
     out: Annotated[Path, typer.Option("--out", metavar="FILE", help="The file to write; an "
-                                      "existing file is refused unless --force.",
+                                      "existing file is refused unless --overwrite.",
                                       show_default=False)],
     branch: Annotated[str | None, typer.Option(
         "--branch", metavar="NAME", help="Branch name (default: the only branch, or the "
@@ -42,15 +43,15 @@ def export_command(
     bp: Annotated[int | None, typer.Option(
         "--bp", metavar="N", help="pdb of a nondimensional result: read the rod as N base "
         "pairs of DNA (L = N x 0.34 nm).", show_default=False)] = None,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite an existing --out "
-                                        "file.")] = False,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out "
+                                            "file.")] = False,
 ) -> None:
     """Export one state of a result file: VTK, XYZ, PDB (DNA beads) or OBJ tube.
 
     VTK polydata with the tube radius (ParaView), XYZ, PDB-style coarse-grained DNA
     (one bead per base pair) or an OBJ tube mesh, in the result's units (nm for DNA)."""
     from supercoil.io.exports import SUFFIXES, export_state
-    from supercoil.io.store import RESULT_NAME, ResultFileError, load
+    from supercoil.io.store import ResultFileError, load
     from supercoil.units.dna import RISE_NM_PER_BP
 
     if fmt is None:
@@ -66,16 +67,18 @@ def export_command(
         fail(f"--bp {bp}: give a whole number of base pairs >= 12")
     if out.is_dir():
         fail(f"--out {out}: is a folder; give a file path")
-    if out.exists() and not force:
-        fail(f"--out {out}: exists; give another path or add --force to overwrite it")
+    if out.exists() and not overwrite:
+        fail(f"--out {out}: exists; give another path or add --overwrite to replace it")
     if not out.parent.is_dir():
         fail(f"--out {out}: folder {out.parent} does not exist; give a path in an existing "
              "folder")
-    path = result / RESULT_NAME if result.is_dir() else result
+    # a summary (diagram.json, branch.json) names the result file beside it
+    path = result.parent if result.suffix == ".json" and result.is_file() else result
     try:
         data = load(path)
     except ResultFileError as exc:
         fail(str(exc))
+    path = data.path
     names = data.branch_names
     if not names:
         fail(f"{path}: has no branch yet (the run stopped before its first point)")

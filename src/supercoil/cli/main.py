@@ -28,7 +28,6 @@ from supercoil.cli._common import (
     fail,
     parse_ratio,
     parse_vector,
-    prepare_output_folder,
     raised_while_solving,
     require_count,
     require_finite,
@@ -39,6 +38,7 @@ from supercoil.cli._common import (
     warning_in,
     write_json_or_fail,
 )
+from supercoil.errors import InputError
 from supercoil.units.dna import (  # plain constants (math only): cheap at start-up
     BENDING_PERSISTENCE_NM,
     DEFAULT_SALT_MM,
@@ -368,6 +368,18 @@ def ring(
                      show_default=False),
     ] = None,
     json_path: JsonOption = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", metavar="DIR", help="Also write the result into folder DIR: "
+                     "result.h5 (the state, read with supercoil.load) and ring.json; an "
+                     "existing non-empty DIR is refused unless --overwrite.",
+                     show_default=False),
+    ] = None,
+    overwrite: Annotated[
+        bool,
+        typer.Option("--overwrite", help="With --out: write into an existing non-empty DIR, "
+                     "replacing this command's files (other files are left alone)."),
+    ] = False,
 ) -> None:
     """Equilibrium of a closed twisted ring and its stability.
 
@@ -442,6 +454,12 @@ def ring(
     treatment = DEFAULT_CONTACT_TREATMENT if contact is None else contact
     check_json_target(json_path)
     initial_points = None if initial is None else _read_initial_curve(initial)
+    if overwrite and out is None:
+        fail("--overwrite needs --out DIR (the folder whose files it replaces)")
+    if out is not None:
+        from supercoil.cli.saving import prepare_folder
+
+        prepare_folder(out, overwrite=overwrite, resume=False, what="the ring's files")
 
     try:
         if length_over_diameter is None:
@@ -469,7 +487,8 @@ def ring(
         from supercoil.units.dna import ring_summary_in_dna_units
 
         summary = ring_summary_in_dna_units(summary, preset)
-    if json_path is not None:
+    if json_path is not None or out is not None:
+        from supercoil.cli.ring_output import ring_payload
         from supercoil.io.results import envelope
 
         payload = {**summary, "curvature_form": result.curvature}
@@ -491,7 +510,12 @@ def ring(
         if preset is not None:
             data["conventions"].update(preset.conventions())
             data["provenance"]["units_preset"] = preset.record()
-        write_json_or_fail(data, json_path)
+        if json_path is not None:
+            write_json_or_fail(data, json_path)
+        if out is not None:
+            _write_ring_folder(out, result, summary, data, ring_payload, preset,
+                               twist_ratio, excess_link, length_over_diameter, nodes,
+                               treatment_name, initial, announce=json_path != "-")
     if json_path != "-":
         from rich.console import Console
 
@@ -514,6 +538,33 @@ def ring(
             f"({summary['message']}); {where}"
         )
         raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _write_ring_folder(out, result, summary, data, ring_payload, preset, twist_ratio,
+                       excess_link, length_over_diameter, nodes, treatment, initial, *,
+                       announce: bool = True) -> None:
+    """``supercoil ring --out DIR``: result.h5 and ring.json (the --json data with the
+    one point)."""
+    from supercoil.cli.ring_output import ring_branch, write_ring
+
+    envelope_keys = ("schema_version", "units", "conventions", "provenance")
+    data = {**{k: v for k, v in data.items() if k not in envelope_keys},
+            **{k: v for k, v in ring_payload(summary, result.curvature).items()
+               if k in ("branch", "points")},
+            **{k: data[k] for k in envelope_keys}}
+    attributes = {"twist_ratio": twist_ratio, "n_nodes": nodes, "closed": True}
+    if length_over_diameter is not None:
+        attributes.update(length_over_diameter=length_over_diameter,
+                          diameter=1.0 / length_over_diameter)
+    settings = {"command": "ring", "twist_ratio": twist_ratio, "excess_link": excess_link,
+                "length_over_diameter": length_over_diameter, "nodes": nodes,
+                "contact": treatment, "initial": None if initial is None else str(initial),
+                "dna": None if preset is None else preset.record()}
+    write_ring(out, ring_branch(result, excess_link, summary), data, settings=settings,
+               attributes=attributes, provenance=data["provenance"], units=data["units"],
+               converged=bool(summary["converged"]))
+    if announce:
+        print(f"wrote result.h5 and ring.json to {out.resolve()}")
 
 
 def _dna_preset(twist_ratio, excess_link, length_over_diameter, bp, sigma, salt_mM,
@@ -611,19 +662,24 @@ def demo(
         typer.Option(
             "--out",
             metavar="DIR",
-            help="Folder for the figure and data. Default: ./supercoil-demo, or "
+            help="Folder for the result and figures. Default: ./supercoil-demo, or "
             "./supercoil-demo-2, -3, ... if that exists. An existing non-empty DIR is "
-            "refused unless --force.",
+            "refused unless --overwrite or --resume.",
             show_default=False,
         ),
     ] = None,
-    force: Annotated[
+    overwrite: Annotated[
         bool,
         typer.Option(
-            "--force",
+            "--overwrite",
             help="Write into an existing non-empty --out DIR, "
-            "overwriting the demo's own files (other files are left alone).",
+            "replacing the demo's own files (other files are left alone).",
         ),
+    ] = False,
+    resume: Annotated[
+        bool,
+        typer.Option("--resume", help="Continue the interrupted demo in --out DIR (default "
+                     "./supercoil-demo) from its result.h5: finished branches are kept."),
     ] = False,
     quiet: Annotated[
         bool,
@@ -637,16 +693,19 @@ def demo(
     the circle and its Michell bifurcations, the alpha and beta branches
     without contact up to their first contact, then with self-contact up to
     dLk = 3.5 (at most 150 points each). Writes what 'supercoil diagram ring'
-    writes (diagram.json, branches/*.npz, link_writhe.png, contact_map.png,
+    writes (result.h5, diagram.json, link_writhe.png, contact_map.png,
     configurations.png) into a new folder and says where. About 30 s. Exit
     status 1 when a branch stopped before dLk = 3.5 (today beta's contact
     branch does, at a point the continuation cannot pass yet): what was
     computed is written all the same.
     """
     from supercoil.cli.demo import prepare_folder, run_demo
+    from supercoil.cli.saving import nothing_to_resume
 
-    folder = prepare_folder(out, force)
-    converged = run_demo(folder, quiet)
+    folder, stored = prepare_folder(out, overwrite, resume)
+    if nothing_to_resume(stored):
+        return
+    converged = run_demo(folder, quiet, stored)
     if not converged:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
@@ -679,9 +738,9 @@ def diagram_ring(
     ],
     out: Annotated[
         Path,
-        typer.Option("--out", metavar="DIR", help="Folder for diagram.json, branches/*.npz "
-                     "and the figures; an existing non-empty DIR is refused unless --force.",
-                     show_default=False),
+        typer.Option("--out", metavar="DIR", help="Folder for result.h5, diagram.json and "
+                     "the figures; an existing non-empty DIR is refused unless --overwrite "
+                     "or --resume.", show_default=False),
     ],
     nodes: Annotated[
         int,
@@ -737,10 +796,16 @@ def diagram_ring(
     contact_formulation: Annotated[
         str, typer.Option("--contact-formulation", metavar="FORM", help=FORMULATION_HELP),
     ] = "integral",
-    force: Annotated[
+    overwrite: Annotated[
         bool,
-        typer.Option("--force", help="Write into an existing non-empty --out DIR, "
-                     "overwriting the diagram's own files (other files are left alone)."),
+        typer.Option("--overwrite", help="Write into an existing non-empty --out DIR, "
+                     "replacing the diagram's own files (other files are left alone)."),
+    ] = False,
+    resume: Annotated[
+        bool,
+        typer.Option("--resume", help="Continue the interrupted diagram in --out DIR from its "
+                     "result.h5 (the same options): finished branches are kept, the others "
+                     "continued from their last point."),
     ] = False,
     quiet: Annotated[
         bool,
@@ -753,8 +818,8 @@ def diagram_ring(
     The circle and its Michell bifurcations, the primary branches of --modes
     without contact up to the first contact (contact_onset), then with
     self-contact up to --max-excess-link; contact events and stability along
-    them. Writes diagram.json, branches/<name>.npz (reloadable with
-    supercoil.continuation.Branch.load), link_writhe.png (dLk against Wr,
+    them. Writes result.h5 (every branch with its states, saved point by point;
+    read it with supercoil.load), diagram.json, link_writhe.png (dLk against Wr,
     stable parts heavy), contact_map.png (s/L of the contacts against Wr) and
     configurations.png (tubes of diameter D) into --out.
     """
@@ -782,8 +847,8 @@ def diagram_ring(
     require_count("--secondary-max-points", secondary_max_points, 2, 100_000)
     require_count("--secondary-max-branches", secondary_max_branches, 0, 1000)
     check_contact_choice(contact_curve, contact_formulation)
-    prepare_output_folder(out, force, "the diagram's files")
-    from supercoil.cli.diagram_output import incomplete_message, run_diagram
+    from supercoil.cli.diagram_output import diagram_settings, incomplete_message, run_diagram
+    from supercoil.cli.saving import nothing_to_resume, prepare_folder
     from supercoil.problems.ring_diagram import DiagramOptions
 
     try:
@@ -796,9 +861,15 @@ def diagram_ring(
                                  secondary_max_branches=secondary_max_branches)
     except ValueError as exc:
         fail(str(exc))
+    stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="ring_diagram",
+                            settings=diagram_settings(options, "diagram ring"),
+                            what="the diagram's files")
+    if nothing_to_resume(stored):
+        return
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "
           f"N = {nodes}, modes {', '.join(words)}, dLk <= {max_excess_link:g}", flush=True)
-    payload = run_diagram(options, out, quiet)
+    payload = run_diagram(options, out, quiet, resume=stored,
+                          resume_hint="continue with the same command and --resume")
     if payload is None:
         raise typer.Exit(EXIT_NOT_CONVERGED)
     message = incomplete_message(payload, out)
@@ -882,6 +953,9 @@ def run(argv: Sequence[str] | None = None) -> int:
     except Abort:
         print("error: aborted", file=sys.stderr, flush=True)
         return 1
+    except InputError as exc:  # e.g. a damaged result file met past the command's checks
+        print(f"error: {_one_line(exc)}", file=sys.stderr, flush=True)
+        return EXIT_BAD_INPUT
     except Exception as exc:
         if debug:
             raise

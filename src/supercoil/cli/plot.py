@@ -21,16 +21,15 @@ FORMATS = ("png", "svg")
 def plot(
     result: Annotated[
         Path,
-        typer.Argument(metavar="RESULT", help="A result: a result file (result.h5 of "
-                       "'supercoil run') or its folder, or the --out folder of 'supercoil "
-                       "diagram ring' (or its diagram.json) or of 'supercoil tweezers' (or "
-                       "its branch.json).", show_default=False),
+        typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
+                       "that computes (demo, diagram ring, tweezers, run, ring --out), its "
+                       "result.h5, or its diagram.json or branch.json.", show_default=False),
     ],
     out: Annotated[
         Path,
         typer.Option("--out", metavar="DIR", help="Folder for the figures (created if "
                      "missing). Existing figure files of the same names are refused "
-                     "unless --force; other files are left alone.", show_default=False),
+                     "unless --overwrite; other files are left alone.", show_default=False),
     ],
     kind: Annotated[
         list[str] | None,
@@ -44,9 +43,9 @@ def plot(
         str,
         typer.Option("--format", metavar="FMT,FMT", help="File formats: png, svg or both."),
     ] = "png,svg",
-    force: Annotated[
+    overwrite: Annotated[
         bool,
-        typer.Option("--force", help="Overwrite existing figure files of the same names."),
+        typer.Option("--overwrite", help="Replace existing figure files of the same names."),
     ] = False,
 ) -> None:
     """Publication figures of a result as PNG and SVG, in one style, axes with units.
@@ -80,9 +79,9 @@ def plot(
              f"has: {', '.join(available) or 'none'}")
     targets = [out / f"{output_stem(k)}.{f}" for k in kinds for f in fmts]
     existing = [t for t in targets if t.exists()]
-    if existing and not force:
-        fail(f"--out {out}: {existing[0].name} exists; give a new folder, or add --force to "
-             "overwrite the figures")
+    if existing and not overwrite:
+        fail(f"--out {out}: {existing[0].name} exists; give a new folder, or add --overwrite to "
+             "replace the figures")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

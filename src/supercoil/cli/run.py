@@ -1,11 +1,11 @@
-"""``supercoil run STUDY.toml``: run a study file, saving as it goes (issue 6).
+"""``supercoil run STUDY.toml``: run a study file, saving as it goes.
 
 Writes into ``--out DIR`` (default: the study file's name without ``.toml``,
 in the current folder):
 
 * ``result.h5``: the result file (:mod:`supercoil.io.store`, ``docs/results.md``),
   written point by point where the problem reports points, so an interrupted
-  run leaves every point computed so far;
+  or killed run leaves every point computed so far;
 * the JSON summary (``[outputs] json``): ``diagram.json`` for a ring diagram
   (the keys of ``supercoil diagram ring``), ``ring.json`` for a single ring;
 * the figures (``[outputs] figures``), drawn from the result file by
@@ -45,14 +45,14 @@ def run_command(
                                           "see examples/*.toml.", show_default=False)],
     out: Annotated[Path | None, typer.Option(
         "--out", metavar="DIR", help="Output folder (default: the study's file name without "
-        ".toml); an existing non-empty DIR is refused unless --force or --resume.",
+        ".toml); an existing non-empty DIR is refused unless --overwrite or --resume.",
         show_default=False)] = None,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in DIR (its result.h5): completed "
         "branches are kept. The study must be the same (presentation keys aside).")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress output.")] = False,
-    force: Annotated[bool, typer.Option(
-        "--force", help="Write into an existing non-empty DIR, replacing its result.h5, "
+    overwrite: Annotated[bool, typer.Option(
+        "--overwrite", help="Write into an existing non-empty DIR, replacing its result.h5, "
         "summary and figures (other files are left alone).")] = False,
     json_path: Annotated[str | None, typer.Option(
         "--json", metavar="PATH", help="Also write the JSON summary to PATH ('-' = standard "
@@ -75,12 +75,12 @@ def run_command(
         spec = load_study(study, overrides or ())
     except StudyError as exc:
         fail(str(exc))
-    if resume and force:
-        fail("--resume and --force exclude each other: --resume continues DIR's result, "
-             "--force replaces it")
+    if resume and overwrite:
+        fail("--resume and --overwrite exclude each other: --resume continues DIR's result, "
+             "--overwrite replaces it")
     out = Path(study.stem) if out is None else out
     result_path = out / RESULT_FILE
-    stored = _prepare_folder(out, spec, resume, force)
+    stored = _prepare_folder(out, spec, resume, overwrite)
     if stored is not None and stored.status == "complete":
         if not quiet:
             print(f"nothing to resume: {result_path} is complete ({stored.message})")
@@ -104,12 +104,13 @@ def run_command(
         # --resume continues interrupted branches; an incomplete run's branches all
         # ended (a branch stopped early), and resuming would change nothing
         hint = (f"; continue with 'supercoil run {study} --out {out} --resume'"
-                if outcome["status"] == "interrupted" else "")
+                if outcome["status"] == "interrupted" and outcome.get("resumable", True)
+                else "")
         warn(f"{outcome['status']}: {outcome['message']} (saved in {result_path}{hint})")
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def _prepare_folder(out: Path, spec, resume: bool, force: bool):
+def _prepare_folder(out: Path, spec, resume: bool, overwrite: bool):
     """The folder checks (one-line errors, nothing written before they pass); with
     ``resume`` the stored result (a :class:`~supercoil.io.store.Result`), else None."""
     from supercoil.io.store import ResultFileError, load
@@ -128,11 +129,12 @@ def _prepare_folder(out: Path, spec, resume: bool, force: bool):
         mismatch = settings_mismatch(stored, spec)
         if mismatch:
             fail(f"--resume: {result_path} was computed with another study ({mismatch}); "
-                 "resume with the same study, or start anew with --force or another --out")
+                 "resume with the same study, or start anew with --overwrite or another "
+                 "--out")
         return stored
-    if out.is_dir() and any(out.iterdir()) and not force:
+    if out.is_dir() and any(out.iterdir()) and not overwrite:
         fail(f"--out {out}: folder exists and is not empty; give a new folder, add --resume "
-             "to continue its run, or --force to replace its results")
+             "to continue its run, or --overwrite to replace its results")
     try:
         out.mkdir(parents=True, exist_ok=True)
         probe = out / ".supercoil-write-test"
@@ -185,6 +187,7 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
     the file closed) or ``failed`` (an exception: recorded, then re-raised).
     """
     from supercoil.cli.progress import Progress
+    from supercoil.cli.saving import terminate_as_interrupt
     from supercoil.io.store import ResultWriter
 
     progress = progress or Progress(quiet=True)
@@ -198,12 +201,13 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
                                      overwrite=True)
     saved = {"points": 0}
     try:
-        if spec.kind == "ring_diagram":
-            outcome = _run_ring_diagram(spec, writer, progress, saved, resume)
-        elif spec.kind == "tweezers":
-            outcome = _run_tweezers(spec, writer, progress, resume, saved)
-        else:
-            outcome = _run_ring(spec, writer, progress)
+        with terminate_as_interrupt():
+            if spec.kind == "ring_diagram":
+                outcome = _run_ring_diagram(spec, writer, progress, saved, resume)
+            elif spec.kind == "tweezers":
+                outcome = _run_tweezers(spec, writer, progress, resume, saved)
+            else:
+                outcome = _run_ring(spec, writer, progress)
     except KeyboardInterrupt:
         message = (f"interrupted by the user; {saved['points']} continuation points saved "
                    "so far")
@@ -226,15 +230,15 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
         name = SUMMARY_FILES[spec.kind]
         write_json(summary, out / name)
         files.append(name)
-        if spec.kind != "ring":  # the summary's branches[].file, as diagram ring / tweezers
-            from supercoil.io.store import load
-
-            (out / "branches").mkdir(exist_ok=True)
-            for branch in load(result_path).branches:
-                branch.save(out / "branches" / f"{branch.name}.npz")
-            files.append("branches/*.npz")
     if spec.settings["outputs"]["figures"]:
-        files += _figures(result_path, out, outcome["notes"])
+        try:
+            files += _figures(result_path, out, outcome["notes"])
+        except KeyboardInterrupt:
+            from supercoil.cli.saving import figures_interrupted
+
+            figures_interrupted(out)
+            return {**outcome, "status": "interrupted", "files": files, "resumable": False,
+                    "message": "interrupted while drawing the figures (the data are complete)"}
     return {**outcome, "files": files}
 
 
@@ -432,8 +436,6 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
 
 def _run_ring(spec, writer, progress) -> dict:
     """A single ring solve (``supercoil ring``), stored as a one-point branch ``ring``."""
-    from supercoil.continuation import Branch, ContinuationStatus
-
     s = spec.settings
     rod, problem = s["rod"], s["problem"]
     progress.message(f"ring: C/A = {rod['twist_ratio']:.6g}, dLk = "
@@ -462,34 +464,12 @@ def _run_ring(spec, writer, progress) -> dict:
         from supercoil.units.dna import ring_summary_in_dna_units
 
         summary = ring_summary_in_dna_units(summary, preset)
-    import numpy as np
+    from supercoil.cli.ring_output import ring_branch, ring_payload
 
-    q = np.asarray(result.points, float).ravel()
-    mu = np.asarray(result.multipliers, float).ravel()
-    records = {k: np.array([summary[k]], dtype=float)
-               for k in ("excess_link", "writhe", "twist", "energy", "link_error",
-                         "min_gap_over_diameter", "n_contact_points", "n_contact_intervals")
-               if isinstance(summary.get(k), (int, float)) and not isinstance(summary[k], bool)}
-    eig = np.asarray(result.lowest_eigenvalues, float)
-    branch = Branch(
-        name="ring", parent=None, origin=None, parameter="excess_link",
-        parameter_values=np.array([problem["excess_link"]]), states=q[None, :],
-        multipliers=mu[None, :], unstable_count=np.array([result.unstable_count]),
-        zero_modes=np.array([result.zero_modes]),
-        determinant_sign=np.array([result.determinant_sign]),
-        nearest_eigenvalue=np.array([eig[np.argmin(np.abs(eig))] if eig.size else math.nan]),
-        tangents=np.zeros((1, q.size + mu.size + 1)), arclength=np.zeros(1),
-        special_points=(),
-        status=(ContinuationStatus.MAX_POINTS if result.converged
-                else ContinuationStatus.START_FAILED),
-        message=f"one state (a single solve, not a continuation): {result.message}",
-        records=records)
+    branch = ring_branch(result, problem["excess_link"], summary)
     writer.write_branch(branch, complete=True,
                         contact="length_over_diameter" in rod)
-    payload = {**summary, "curvature_form": result.curvature, "branch": "ring",
-               "points": [{"branch": "ring", "index": 0, **{k: v for k, v in summary.items()
-                                                              if not isinstance(v, dict)}}]}
-    data = _envelope(spec, payload, tolerances)
+    data = _envelope(spec, ring_payload(summary, result.curvature), tolerances)
     status = "complete" if result.converged else "incomplete"
     message = ("converged" if result.converged else
                f"not converged: Newton stopped with status {result.status} ({result.message})")

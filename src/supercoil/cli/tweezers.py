@@ -1,9 +1,10 @@
 """``supercoil tweezers``: a clamped rod pulled and turned (magnetic tweezers).
 
 Thin: parses and checks the options, calls
-:func:`supercoil.problems.tweezers.tweezers_branches`, writes ``branch.json``
-(with the JSON envelope), ``branches/<name>.npz`` and the figures of
-:mod:`supercoil.plotting.tweezers` into ``--out``.
+:func:`supercoil.problems.tweezers.tweezers_branches` through
+:func:`~supercoil.cli.saving.run_saving` (every accepted point appended to
+``result.h5`` as it comes), then writes ``branch.json`` (with the JSON
+envelope) and the figures of :mod:`supercoil.plotting.tweezers` into ``--out``.
 """
 
 from __future__ import annotations
@@ -19,7 +20,6 @@ from supercoil.cli._common import (
     check_contact_choice,
     fail,
     parse_ratio,
-    prepare_output_folder,
     require_count,
     require_magnitude,
     require_nodes,
@@ -28,7 +28,7 @@ from supercoil.cli._common import (
 )
 
 PROTOCOLS = ("up", "up-down", "force-ramp")
-OUTPUT_FILES = ("branch.json", "hat_curve.png", "torque.png", "writhe.png",
+OUTPUT_FILES = ("result.h5", "branch.json", "hat_curve.png", "torque.png", "writhe.png",
                 "configurations.png")
 
 
@@ -51,8 +51,8 @@ def tweezers(
         "--turns", metavar="START:STOP", help="Turns of the end, from START to STOP "
         "(0 <= START < STOP), e.g. 0:5.", show_default=False)],
     out: Annotated[Path, typer.Option(
-        "--out", metavar="DIR", help="Folder for branch.json, branches/*.npz and the "
-        "figures; an existing non-empty DIR is refused unless --force.",
+        "--out", metavar="DIR", help="Folder for result.h5, branch.json and the figures; "
+        "an existing non-empty DIR is refused unless --overwrite or --resume.",
         show_default=False)],
     twist_ratio: Annotated[float | None, typer.Option(
         "--twist-ratio", metavar="C/A", parser=parse_ratio, help="Twist stiffness over bending stiffness, "
@@ -97,9 +97,13 @@ def tweezers(
         "integral (a double integral over the strands, which counts a contact once wherever "
         "it lies; default) or pairs (over segment pairs: a sawtooth of fold pairs along the "
         "plectoneme; docs/benchmarks.md).")] = "integral",
-    force: Annotated[bool, typer.Option(
-        "--force", help="Write into an existing non-empty --out DIR, overwriting this "
+    overwrite: Annotated[bool, typer.Option(
+        "--overwrite", help="Write into an existing non-empty --out DIR, replacing this "
         "command's own files (other files are left alone).")] = False,
+    resume: Annotated[bool, typer.Option(
+        "--resume", help="Continue the interrupted run in --out DIR from its result.h5 (the "
+        "same options): finished branches are kept, the others continued from their last "
+        "point.")] = False,
     dna: Annotated[bool, typer.Option(
         "--dna", help="A DNA molecule in physical units (--bp, --force-pN, --salt-mM or "
         "--diameter-nm, --temperature-K) instead of --twist-ratio, --tension and "
@@ -132,7 +136,8 @@ def tweezers(
     buckle at 0 turns. Writes branch.json (points with turns, extension,
     torque, writhe, twist, energy, load_potential, unstable_count, zero_modes,
     contact counts, min_gap_over_diameter; special_points; path for the
-    protocols), branches/*.npz, hat_curve.png (extension against turns; under
+    protocols), result.h5 (every branch with its states, saved point by
+    point; read it with supercoil.load), hat_curve.png (extension against turns; under
     displacement control tension.png), torque.png, writhe.png,
     configurations.png (tubes) and, for force-ramp, force_extension.png into
     --out.
@@ -192,7 +197,19 @@ def tweezers(
         fail(f"--step {step:g}: give a positive number of turns up to STOP - START")
     require_count("--max-points", max_points, 2, 100_000)
     check_contact_choice(contact_curve, contact_formulation)
-    prepare_output_folder(out, force, "this command's files")
+    from supercoil.cli.saving import nothing_to_resume, prepare_folder
+
+    settings = {"command": "tweezers", "twist_ratio": twist_ratio,
+                "length_over_diameter": length_over_diameter, "tension": tension,
+                "end_distance": end_distance, "turns": [start, stop], "nodes": nodes,
+                "max_points": max_points, "contact_curve": contact_curve,
+                "contact_formulation": contact_formulation, "protocol": protocol,
+                "step": step, "force_range": ramp, "force_step": force_step,
+                "dna": None if preset is None else preset.record()}
+    stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="tweezers",
+                            settings=settings)
+    if nothing_to_resume(stored):
+        return
     from supercoil.plotting.painter import Painter
 
     # started before the numerical imports (0.4-0.5 s) and the computation: the figure
@@ -215,15 +232,27 @@ def tweezers(
         print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
               f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
               f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
-        from supercoil.cli.diagram_output import run_saving
+        from supercoil.cli.saving import (
+            interrupted,
+            open_writer,
+            run_saving,
+            stored_for_resume,
+            terminate_as_interrupt,
+        )
+
+        writer = open_writer(out, resume=stored is not None, problem="tweezers",
+                             settings=settings, attributes=_attributes(options, preset),
+                             provenance={"contact_treatment": "barrier" if length_over_diameter
+                                         else "none", "n_nodes": nodes},
+                             units="nondimensional" if preset is None else preset.name)
+        hint = "continue with the same command and --resume"
 
         def compute(message, on_point, on_branch):
+            previous = None if stored is None else stored_for_resume(stored, message)
             return tweezers_branches(options, progress=message, on_point=on_point,
-                                     on_branch=on_branch)
+                                     on_branch=on_branch, resume=previous)
 
-        # each final branch written uncompressed as it comes; write_tweezers writes them
-        # compressed while the figures are drawn
-        result = run_saving(compute, out, quiet, compress_final=False)
+        result = run_saving(compute, writer, quiet, hint)
         if result is None:
             raise typer.Exit(EXIT_NOT_CONVERGED)
         path = None
@@ -233,9 +262,14 @@ def tweezers(
             what = ("and back" if protocol == "up-down" else
                     f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
             warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
-            path = quasistatic_path(options, protocol, step=step, force_range=ramp,
-                                    force_step=force_step)
-        payload = write_tweezers(result, out, path, preset, painter=painter)
+            try:
+                with terminate_as_interrupt():
+                    path = quasistatic_path(options, protocol, step=step, force_range=ramp,
+                                            force_step=force_step)
+            except KeyboardInterrupt:
+                interrupted(writer, hint + " (the quasi-static path is computed again)")
+                raise typer.Exit(EXIT_NOT_CONVERGED) from None
+        payload = write_tweezers(result, out, writer, path, preset, painter=painter)
     if not payload["ok"] or (path is not None and not path.ok):
         if path is not None and not path.ok:
             payload["notes"].append(f"path: {path.message}")
@@ -245,32 +279,42 @@ def tweezers(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def write_tweezers(result, out: Path, path=None, preset=None, painter=None) -> dict:
-    """Save the branches, branch.json (with the envelope) and the figures; return the payload.
+def _attributes(options, preset) -> dict:
+    out = {"twist_ratio": options.twist_ratio, "n_nodes": options.n_nodes, "closed": False}
+    for key in ("tension", "end_distance", "length_over_diameter"):
+        value = getattr(options, key)
+        if value is not None:
+            out[key] = value
+    if options.length_over_diameter is not None:
+        out["diameter"] = 1.0 / options.length_over_diameter
+    if preset is not None:
+        out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
+                   diameter_nm=preset.effective_diameter_nm,
+                   temperature_K=float(preset.temperature_K), relaxed_link=preset.relaxed_link)
+    return out
 
-    Every branch is written compressed to ``out/branches`` while the figures are drawn
-    (three compressed saves, about 0.05 s at N = 100, off the command's critical path);
-    the command's :func:`~supercoil.cli.diagram_output.run_saving` wrote each uncompressed
-    when it became final, which an interrupt before the figures leaves (they load the same).
+
+def write_tweezers(result, out: Path, writer, path=None, preset=None, painter=None) -> dict:
+    """Store the branches and the summary in ``writer`` (then closed), write branch.json
+    (with the envelope), then the figures; return the payload. The data are complete
+    before the first figure is drawn: an interrupt while drawing leaves them whole.
 
     ``path``: the quasi-static path (:class:`~supercoil.problems.tweezers_protocol.PathResult`)
     of the up-down protocol, written as the list ``path`` with its jumps among the special
-    points, and its states as ``branches/path.npz``. ``preset``: a
-    :class:`~supercoil.units.dna.DNAPreset`; its suffixed keys are added to every point,
-    special point and path point, and ``units`` is ``dna``. ``painter``: a
+    points, and its states as the result's extra ``path`` (``states``, ``turns``).
+    ``preset``: a :class:`~supercoil.units.dna.DNAPreset`; its suffixed keys are added to
+    every point, special point and path point, and ``units`` is ``dna``. ``painter``: a
     :class:`~supercoil.plotting.painter.Painter` whose helper draws the figures.
     """
-    from supercoil.cli.diagram_output import save_branch
+    from supercoil.cli.saving import figures_interrupted
     from supercoil.io.results import envelope, write_json
-    from supercoil.plotting.tweezers import pick_configurations, picked_points, write_figures
+    from supercoil.plotting.tweezers import pick_configurations, write_figures
     from supercoil.problems.tweezers_output import (
         TWEEZERS_CONVENTIONS,
         add_contact_lists,
         result_payload,
     )
 
-    # the points' contact lists (0.05 s at N = 100) are made while the figures are drawn,
-    # but for the states drawn as tubes, which show them
     payload = result_payload(result, contacts=False)
     states = {b.name: b.states for b in result.branches}
     if path is not None:
@@ -280,38 +324,47 @@ def write_tweezers(result, out: Path, path=None, preset=None, painter=None) -> d
         payload["path_ok"] = path.ok
         payload["path_message"] = path.message
         payload["special_points"] += list(path.jumps)
-        np.savez_compressed(out / "branches" / "path.npz", states=path.states,
-                            turns=np.array([p["turns"] for p in path.points]))
-    add_contact_lists(result, [entry for _, _, entry in picked_points(payload, states)])
+        writer.set_extra("path", {"states": np.asarray(path.states, float),
+                                  "turns": np.array([p["turns"] for p in path.points],
+                                                    float)})
+    add_contact_lists(result, payload["points"])
     configurations = pick_configurations(payload, states)
+    data = dict(payload)
+    if preset is not None:
+        from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
 
-    def write_payload() -> None:
-        """branch.json, written while the figures are drawn."""
-        add_contact_lists(result, payload["points"])
-        if preset is not None:
-            from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
-
-            for key in ("points", "special_points", "path"):
-                if key in payload:
-                    payload[key] = [tweezers_point_in_dna_units(p, preset)
-                                    for p in payload[key]]
-            payload.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                           diameter_nm=preset.effective_diameter_nm,
-                           force_pN=preset.force_to_pN(result.options.tension),
-                           relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
-        data = envelope(payload, n_nodes=result.options.n_nodes,
-                        tolerances=result.options.tolerances,
-                        units="nondimensional" if preset is None else preset.name,
-                        contact_treatment="barrier" if result.contact_problem else "none")
-        data["conventions"].update(TWEEZERS_CONVENTIONS)
-        if preset is not None:
-            data["conventions"].update(preset.conventions())
-            data["provenance"]["units_preset"] = preset.record()
-        write_json(data, out / "branch.json")
-        for branch in result.branches:
-            save_branch(branch, out / "branches")
-
-    write_figures(payload, configurations, out, painter, meanwhile=write_payload)
+        for key in ("points", "special_points", "path"):
+            if key in data:
+                data[key] = [tweezers_point_in_dna_units(p, preset) for p in data[key]]
+        data.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
+                    diameter_nm=preset.effective_diameter_nm,
+                    force_pN=preset.force_to_pN(result.options.tension),
+                    relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
+    data = envelope(data, n_nodes=result.options.n_nodes, tolerances=result.options.tolerances,
+                    units="nondimensional" if preset is None else preset.name,
+                    contact_treatment="barrier" if result.contact_problem else "none")
+    data["conventions"].update(TWEEZERS_CONVENTIONS)
+    if preset is not None:
+        data["conventions"].update(preset.conventions())
+        data["provenance"]["units_preset"] = preset.record()
+    for branch in result.branches:
+        writer.write_branch(branch, complete=True, contact=branch.name in result.contact_branches)
+    for name in set(writer.branch_names()) - {b.name for b in result.branches}:
+        writer.remove_branch(name)
+    writer.set_summary(data)
+    complete = payload["ok"] and (path is None or path.ok)
+    writer.set_status("complete" if complete else "incomplete",
+                      f"{len(result.branches)} branches computed" if complete else
+                      "; ".join([b["message"] for b in payload["branches"] if not b["ok"]]
+                                + ([] if path is None or path.ok else [path.message])))
+    writer.close()
+    write_json(data, out / "branch.json")
+    try:
+        write_figures(payload, configurations, out, painter)
+    except KeyboardInterrupt:
+        figures_interrupted(out)
+        raise typer.Exit(EXIT_NOT_CONVERGED) from None
+    payload = data
     for b in payload["branches"]:
         specials = [p for p in payload["special_points"] if p["branch"] == b["name"]
                     and p["kind"] != "fold"]
@@ -338,7 +391,7 @@ def write_tweezers(result, out: Path, path=None, preset=None, painter=None) -> d
               f"state: extension {last['extension_nm']:.4g} nm, torque "
               f"{last['torque_pN_nm']:.4g} pN nm")
         warn(f"note: {payload['athermal']}")
-    print(f"wrote branch.json, branches/*.npz and figures to {out.resolve()}", flush=True)
+    print(f"wrote result.h5, branch.json and figures to {out.resolve()}", flush=True)
     for note in payload["notes"]:
         warn(f"note: {note}")
     return payload

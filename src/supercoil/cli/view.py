@@ -17,20 +17,19 @@ from supercoil.cli._common import fail
 def view(
     result: Annotated[
         Path,
-        typer.Argument(metavar="RESULT", help="A result: a result file (result.h5 of "
-                       "'supercoil run') or its folder, or the --out folder of 'supercoil "
-                       "diagram ring' (or its diagram.json) or of 'supercoil tweezers' (or "
-                       "its branch.json).", show_default=False),
+        typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
+                       "that computes (demo, diagram ring, tweezers, run, ring --out), its "
+                       "result.h5, or its diagram.json or branch.json.", show_default=False),
     ],
     out: Annotated[
         Path | None,
         typer.Option("--out", metavar="FILE.html", help="The page to write. Default: "
                      "viewer.html in the result's folder. An existing file is refused "
-                     "unless --force.", show_default=False),
+                     "unless --overwrite.", show_default=False),
     ] = None,
-    force: Annotated[
+    overwrite: Annotated[
         bool,
-        typer.Option("--force", help="Overwrite an existing --out file."),
+        typer.Option("--overwrite", help="Replace an existing --out file."),
     ] = False,
 ) -> None:
     """One self-contained HTML page (no server, works offline) to explore a result.
@@ -54,8 +53,8 @@ def view(
         out = (result if result.is_dir() else result.parent) / "viewer.html"
     if out.is_dir():
         fail(f"--out {out}: is a folder; give a file name ending in .html")
-    if out.exists() and not force:
-        fail(f"--out {out}: file exists; give a new file name, or add --force to overwrite it")
+    if out.exists() and not overwrite:
+        fail(f"--out {out}: file exists; give a new file name, or add --overwrite to replace it")
     if not out.parent.is_dir():
         fail(f"--out {out}: folder {out.parent} does not exist; give a file in an existing "
              "folder")

@@ -1,16 +1,13 @@
-"""Results of continuation: :class:`SpecialPoint` and :class:`Branch` (save / load).
+"""Results of continuation: :class:`SpecialPoint` and :class:`Branch`.
 
-A branch file is one ``.npz`` archive: the per-point arrays, the special
-points' arrays under ``special_<i>_<field>``, and a JSON header
-(``header``) with ``schema_version``, names, status and message. States are
-kept in full (every DOF), so that any point can be redrawn or continued from.
+States are kept in full (every DOF), so that any point can be redrawn or
+continued from. Branches are stored in result files
+(:func:`supercoil.io.store.save`, :func:`supercoil.load`).
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field, fields
-from pathlib import Path
 
 import numpy as np
 
@@ -27,7 +24,7 @@ def _frozen(a) -> np.ndarray:
     return a
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class SpecialPoint:
     """A located event on a branch.
 
@@ -63,7 +60,7 @@ class SpecialPoint:
     records: dict = field(default_factory=dict)
 
     def entry(self, parameter_key: str) -> dict:
-        """The special point in a result file's ``special_points`` (DESIGN.md keys): the
+        """The special point in a result file's ``special_points`` (the keys of docs/model.md): the
         parameter value under ``parameter_key`` (``excess_link``, ``turns``, ...), its
         place on the branch, counts, localisation, and its records."""
         out = {"kind": self.kind, "label": self.label, "branch": self.branch,
@@ -99,7 +96,7 @@ def jsonable(v):
     return a.item() if a.ndim == 0 else a.tolist()
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Branch:
     """A computed branch (immutable; arrays are read-only).
 
@@ -184,73 +181,3 @@ class Branch:
                 "parameter": self.parameter, "status": self.status.name,
                 "message": self.message, "points": points,
                 "special_points": [p.summary() for p in self.special_points]}
-
-    # -- files ----------------------------------------------------------------------------
-    def save(self, path: str | Path, compressed: bool = True) -> Path:
-        """Write the branch to ``path`` (``.npz``); returns the path written.
-
-        ``compressed=False`` stores the arrays without deflating them (the same
-        file for :meth:`load`, about 15 % larger): 29 ms against 194 ms for a
-        contact branch of 559 points at N = 100, for saves of a branch in progress.
-        """
-        path = Path(path)
-        arrays: dict[str, np.ndarray] = {}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, np.ndarray):
-                arrays[f.name] = value
-        for k, v in self.records.items():
-            arrays[f"record_{k}"] = v
-        specials = list(self.special_points)
-        header_specials = []
-        for i, p in enumerate([*specials, *([self.origin] if self.origin else [])]):
-            meta = {}
-            for f in fields(p):
-                value = getattr(p, f.name)
-                if isinstance(value, np.ndarray):
-                    arrays[f"special_{i}_{f.name}"] = value
-                elif f.name == "records":
-                    for k, v in value.items():
-                        arrays[f"special_{i}_record_{k}"] = np.asarray(v)
-                    meta["records"] = list(value)
-                else:
-                    meta[f.name] = value
-            header_specials.append(meta)
-        header = {"schema_version": SCHEMA_VERSION, "name": self.name, "parent": self.parent,
-                  "parameter": self.parameter, "status": self.status.name,
-                  "message": self.message, "records": list(self.records),
-                  "special_points": header_specials[:len(specials)],
-                  "origin": header_specials[len(specials)] if self.origin else None}
-        arrays["header"] = np.array(json.dumps(header))
-        with open(path, "wb") as fh:
-            (np.savez_compressed if compressed else np.savez)(fh, **arrays)
-        return path
-
-    @classmethod
-    def load(cls, path: str | Path) -> Branch:
-        """Read a branch written by :meth:`save` (checks the schema version)."""
-        with np.load(Path(path), allow_pickle=False) as data:
-            header = json.loads(str(data["header"]))
-            if header.get("schema_version") != SCHEMA_VERSION:
-                raise ValueError(f"{path}: branch schema version {header.get('schema_version')}"
-                                 f", this supercoil reads version {SCHEMA_VERSION}")
-
-            def special(i, meta):
-                kwargs = {k: v for k, v in meta.items() if k != "records"}
-                for f in fields(SpecialPoint):
-                    key = f"special_{i}_{f.name}"
-                    if key in data:
-                        kwargs[f.name] = data[key]
-                kwargs["records"] = {k: data[f"special_{i}_record_{k}"]
-                                     for k in meta.get("records", [])}
-                return SpecialPoint(**kwargs)
-
-            n_special = len(header["special_points"])
-            specials = tuple(special(i, meta) for i, meta in enumerate(header["special_points"]))
-            origin = (special(n_special, header["origin"]) if header["origin"] is not None
-                      else None)
-            kwargs = {f.name: data[f.name] for f in fields(cls) if f.name in data}
-            return cls(name=header["name"], parent=header["parent"], origin=origin,
-                       parameter=header["parameter"], special_points=specials,
-                       status=ContinuationStatus[header["status"]], message=header["message"],
-                       records={k: data[f"record_{k}"] for k in header["records"]}, **kwargs)

@@ -2,31 +2,32 @@
 
 Plotting never computes: this module only reads. :func:`load_result` turns a
 result on disk into a :class:`ResultData` (branches of per-point numbers, the
-special points, a lazy loader of the centrelines). It reads today
+special points, a lazy loader of the centrelines). It reads
 
-* the output folder of ``supercoil diagram ring`` (``diagram.json`` and
-  ``branches/<name>.npz``), given as the folder or as its ``diagram.json``;
-* the output folder of ``supercoil tweezers`` (``branch.json``, points keyed
-  by ``turns``, and ``branches/<name>.npz``), or its ``branch.json``;
-* a result file of :func:`supercoil.load` (``result.h5``, written by
-  ``supercoil run``), or a folder holding one (preferred to the JSON beside it:
-  it holds every state). :func:`_from_loaded` is the one place that knows
-  that API.
+* a result file of :func:`supercoil.load` (``result.h5``, written by every
+  command that computes), or the output folder holding one (preferred to the
+  JSON beside it: it holds every state, and the points of a run that was
+  stopped). :func:`_from_loaded` is the one place that knows that API;
+* the JSON summary beside it (``diagram.json`` of ``supercoil diagram ring``
+  and ``demo``, ``branch.json`` of ``supercoil tweezers``, points keyed by
+  ``turns``), whose ``branches[].file`` names the result file holding the
+  states.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import zipfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from supercoil.errors import InputError
 
-class ResultError(ValueError):
+
+class ResultError(InputError):
     """A result that cannot be read; the message is one line naming the file."""
 
 
@@ -228,8 +229,8 @@ def _from_payload(path: Path, data: dict, states: StatesFor | None) -> ResultDat
                                                 for b in entries):
         entries = [{"name": n, "contact": kind == "tweezers"}
                    for n in dict.fromkeys(p["branch"] for p in points)]
-    n_nodes = data.get("n_nodes") if isinstance(data.get("n_nodes"), int) else None
     folder = path.parent
+    opened: dict = {}  # result files read by the loaders, each once
     branches = []
     for entry in entries:
         name = str(entry["name"])
@@ -244,8 +245,8 @@ def _from_payload(path: Path, data: dict, states: StatesFor | None) -> ResultDat
         file = entry.get("file")
         if states is not None:
             loader = states(name, keep)
-        elif isinstance(file, str):
-            loader = _npz_states(folder / file, keep, n_nodes)
+        elif isinstance(file, str) and Path(file).suffix in _STORE_SUFFIXES:
+            loader = _stored_states(folder / file, name, keep, opened)
         elif rows and all("centreline" in p for p in rows):
             loader = _inline_states(rows)
         else:
@@ -291,26 +292,26 @@ def _inline_states(rows: Sequence[Mapping]) -> Callable[[], np.ndarray]:
     return load
 
 
-def _npz_states(file: Path, keep: int, n_nodes: int | None) -> Callable[[], np.ndarray | None]:
-    """Loader of the first ``keep`` centrelines in a :meth:`Branch.save` archive: the
-    first ``3 n_nodes`` entries of each state (a ring's state is all coordinates)."""
+def _stored_states(file: Path, name: str, keep: int,
+                   opened: dict) -> Callable[[], np.ndarray | None]:
+    """Loader of the first ``keep`` centrelines of branch ``name`` in the result file
+    ``file`` (None when the file or the branch is not there); ``opened`` keeps the
+    files read."""
     def load() -> np.ndarray | None:
         if not file.is_file():
             return None
-        try:
-            # our own handle: np.load leaks its file when the archive is damaged
-            with open(file, "rb") as fh, np.load(fh, allow_pickle=False) as archive:
-                if "states" not in archive.files:
-                    return None
-                states = np.asarray(archive["states"], float)
-        except (OSError, ValueError, EOFError, KeyError, TypeError, zipfile.BadZipFile) as exc:
-            raise ResultError(f"{file}: cannot read the branch file ({_one_line(exc)})") \
-                from None
-        width = 3 * n_nodes if n_nodes else states.shape[-1]
-        if states.ndim != 2 or len(states) < keep or states.shape[1] < width or width % 3:
-            raise ResultError(f"{file}: states of shape {states.shape}; expected at least "
-                              f"{keep} rows of 3 n_nodes coordinates")
-        return states[:keep, :width]
+        from supercoil import load as load_result_file
+
+        if file not in opened:
+            try:
+                opened[file] = load_result_file(file)
+            except ValueError as exc:
+                raise ResultError(f"{file}: cannot read the result file ({_one_line(exc)})") \
+                    from None
+        result = opened[file]
+        if name not in result.branches or len(result.branches[name]) < keep:
+            return None
+        return np.array([result.centreline(name, i) for i in range(keep)])
     return load
 
 

@@ -408,7 +408,7 @@ class RingDiagram:
                 "parameter": b.parameter, "n_points": len(b), "status": b.status.name,
                 "ok": b.ok, "message": b.message,
                 "seconds": round(self.seconds.get(b.name, float("nan")), 3),
-                "file": f"branches/{b.name}.npz"})
+                "file": "result.h5"})
         return {
             "description": "bifurcation diagram of a twisted ring with self-contact: the "
             "circle, its bifurcations, the primary branches without contact up to first "

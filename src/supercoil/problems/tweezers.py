@@ -323,7 +323,9 @@ def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
                "torque": 2 * math.pi * rod.rod.twist_ratio * tw, "twist": tw, "writhe": wr,
                "closure_error": error, "closure_failed": bool(error > TAIL_WRAP),
                "energy": rod.elastic_energy(q), "load_potential": rod.load_potential(q),
-               "tension": axial_force(rod, multipliers)}
+               "tension": axial_force(rod, multipliers),
+               # the azimuth pin the point was computed with (a resumed run keeps it)
+               "azimuth_pin": int(rod.gauge_dofs[0]) if rod.gauge_dofs.size == 1 else -1}
         if contact:
             summary = contact_summary(problem, q, multipliers, COUNT_KEYS)
             gap = summary["min_gap_over_diameter"]
@@ -627,10 +629,9 @@ def tweezers_branches(options: TweezersOptions,
     onset): e.g. to save them as they come (``supercoil run``). ``resume`` maps
     branch names to ``(branch, complete)`` of an interrupted run with the same
     options: complete branches are taken as they are, an incomplete one with at
-    least two points is continued from its last point (the azimuth pin picked
-    there: the rotation about the axis is an exact symmetry, so any pin is a
-    gauge) by :func:`~supercoil.continuation.resume.resume_branch`, then in
-    segments as usual.
+    least two points is continued from its last point with the azimuth pin its
+    points were computed with (the record ``azimuth_pin``) by
+    :func:`~supercoil.continuation.resume.resume_branch`, then in segments as usual.
     """
     opts = options
     final = on_branch or (lambda branch, contact: None)
@@ -644,7 +645,15 @@ def tweezers_branches(options: TweezersOptions,
         q = old.states[-1]
         problem.turns = float(old.parameter_values[-1])
         problem.accept(q)
-        set_pin(problem, rod, q)
+        pin = int(old.records["azimuth_pin"][-1]) if "azimuth_pin" in old.records else -1
+        if pin >= 0:  # the pin the stored points were computed with: the same gauge
+            clamps = np.setdiff1d(rod.fixed, rod.gauge_dofs)
+            rod.gauge_dofs = np.array([pin], dtype=np.int64)
+            rod.fixed = np.array(sorted(set(clamps.tolist()) | {pin}), dtype=np.int64)
+            if problem is not rod:
+                problem.fixed = rod.fixed
+        else:
+            set_pin(problem, rod, q)
         return resume_branch(problem, old, dataclasses.replace(
             segment_opts, max_points=len(old) + segment_opts.max_points - 1),
             records=records, events=events, on_point=on_point, stop=stop)

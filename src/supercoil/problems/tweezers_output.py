@@ -84,7 +84,7 @@ def result_payload(result: TweezersResult, contacts: bool = True) -> dict:
             "seconds": round(result.seconds.get(b.name, float("nan")), 3),
             "azimuth_pins": [{"from_index": i, "dofs": list(d)}
                              for i, d in result.pins.get(b.name, ())],
-            "file": f"branches/{b.name}.npz"})
+            "file": "result.h5"})
     payload = {
         "description": "rod clamped at both ends on the pulling axis, turned at one end: the "
         "straight rod, its buckling, the buckled branch without contact up to first contact, "

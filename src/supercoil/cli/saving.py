@@ -1,0 +1,210 @@
+"""Output folders and result files of the computing commands (``demo``, ``diagram ring``,
+``tweezers``, ``run``, ``ring --out``).
+
+:func:`prepare_folder` checks ``--out``, ``--overwrite`` and ``--resume``
+before anything is written (one-line errors, exit 2); :func:`open_writer`
+starts or continues the folder's ``result.h5``; :func:`run_saving` runs a
+branch computation with a progress display, appending every accepted point
+to the result as it comes (:class:`~supercoil.io.store.ResultWriter`: one
+write to the operating system per point), and turns Ctrl-C and SIGTERM into
+an ``interrupted`` result that ``--resume`` continues.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import signal
+import threading
+from pathlib import Path
+
+from supercoil.cli._common import fail, warn
+
+RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt():
+    """Within the block, SIGTERM raises KeyboardInterrupt as Ctrl-C does (main thread)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def plain(value):
+    """``value`` as JSON would give it back (tuples as lists, numpy numbers as numbers)."""
+    import json
+
+    from supercoil.io.results import to_jsonable
+
+    return json.loads(json.dumps(to_jsonable(value)))
+
+
+def settings_mismatch(have, want, where: str = "") -> str | None:
+    """The first difference between stored settings ``have`` and ``want`` (plain data;
+    floats equal to 1e-12 relative), or None."""
+    if isinstance(have, dict) and isinstance(want, dict):
+        for key in sorted(set(have) | set(want)):
+            found = settings_mismatch(have.get(key), want.get(key), f"{where}.{key}"
+                                      if where else str(key))
+            if found:
+                return found
+        return None
+    if isinstance(have, float) or isinstance(want, float):
+        try:
+            if math.isclose(float(have), float(want), rel_tol=1e-12, abs_tol=0.0):
+                return None
+        except (TypeError, ValueError):
+            pass
+    elif have == want:
+        return None
+    return f"{where} = {have!r} in the file, {want!r} now"
+
+
+def prepare_folder(out: Path, *, overwrite: bool, resume: bool, problem: str | None = None,
+                   settings: dict | None = None, what: str = "this command's files",
+                   same_as: str = "the same options"):
+    """Check ``--out`` before anything is written; with ``resume`` return the stored
+    :class:`~supercoil.io.store.Result` (refused when its ``problem`` or ``settings``
+    differ from the given ones), else None. One-line errors, exit 2."""
+    if resume and overwrite:
+        fail("--resume and --overwrite exclude each other: --resume continues DIR's result, "
+             "--overwrite replaces it")
+    if out.exists() and not out.is_dir():
+        fail(f"--out {out}: is a file, not a folder; give a new folder")
+    result_path = out / RESULT_FILE
+    if resume:
+        from supercoil.io.store import ResultFileError, load
+
+        if not result_path.is_file():
+            fail(f"--resume: {result_path} does not exist; nothing to resume (run without "
+                 "--resume to start)")
+        try:
+            stored = load(result_path)
+        except ResultFileError as exc:
+            fail(f"--resume: {exc}")
+        if problem is not None and stored.problem != problem:
+            fail(f"--resume: {result_path} holds a {stored.problem!r} result, not a "
+                 f"{problem!r} one; give its folder to the command that wrote it")
+        if settings is not None:
+            mismatch = settings_mismatch(stored.settings, plain(settings))
+            if mismatch:
+                fail(f"--resume: {result_path} was computed with other settings ({mismatch});"
+                     f" resume with {same_as}, or start anew with --overwrite or another "
+                     "--out")
+        return stored
+    if out.is_dir() and any(out.iterdir()) and not overwrite:
+        fail(f"--out {out}: folder exists and is not empty; give a new folder, add --resume "
+             f"to continue its result, or --overwrite to replace {what} in it")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".supercoil-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        fail(f"--out {out}: cannot write there ({exc.strerror or exc}); give a folder in a "
+             "writable location")
+    return None
+
+
+def open_writer(out: Path, *, resume: bool, problem: str, settings: dict,
+                attributes: dict | None = None, provenance: dict | None = None,
+                units: str = "nondimensional"):
+    """The folder's result writer: ``result.h5`` continued (``resume``) or started anew
+    (replacing one left by an earlier run). A result another process writes is a
+    one-line error."""
+    from supercoil.io.store import ResultFileError, ResultWriter
+
+    path = out / RESULT_FILE
+    try:
+        if resume:
+            return ResultWriter.reopen(path)
+        return ResultWriter.create(path, problem=problem, settings=plain(settings),
+                                   units=units, attributes=attributes, provenance=provenance,
+                                   overwrite=True)
+    except ResultFileError as exc:
+        fail(str(exc))
+
+
+def _close_as(writer, status: str, message: str) -> None:
+    writer.set_status(status, message)
+    writer.close()
+
+
+def run_saving(compute, writer, quiet: bool = False, resume_hint: str = ""):
+    """Run ``compute(message, on_point, on_branch)`` with a progress display, storing every
+    accepted point in ``writer`` as it comes and every final branch when it is final.
+
+    Returns what ``compute`` returns (the writer still open), or None after Ctrl-C or
+    SIGTERM: the result then has status ``interrupted`` and is closed, and a warning says
+    what was kept and how to continue (``resume_hint``). Another exception closes the
+    result with status ``failed`` and propagates.
+    """
+    from supercoil.cli.progress import Progress
+
+    saved = {"points": 0}
+    with Progress(quiet) as progress, terminate_as_interrupt():
+        def on_point(branch) -> None:
+            writer.append(branch, contact=branch.name.endswith("_contact"))
+            saved["points"] += 1
+            k = len(branch)
+            step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
+            progress.point(branch.name, branch.parameter, float(branch.parameter_values[-1]),
+                           step, k)
+
+        def on_branch(branch, contact) -> None:
+            writer.write_branch(branch, complete=True, contact=contact)
+
+        try:
+            return compute(progress.message, on_point, on_branch)
+        except KeyboardInterrupt:
+            interrupted(writer, resume_hint)
+            return None
+        except BaseException as exc:
+            _close_as(writer, "failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+            raise
+
+
+def interrupted(writer, resume_hint: str = "") -> None:
+    """Close ``writer`` as ``interrupted`` and say what was kept."""
+    stored = {name: len(b) for name, (b, _) in writer.stored_branches().items()}
+    kept = ", ".join(f"{name} ({k} points)" for name, k in stored.items()) or "no branch"
+    message = f"interrupted; kept {kept}"
+    _close_as(writer, "interrupted", message)
+    warn(f"interrupted: kept {kept} in {writer.path.resolve()}"
+         + (f"; {resume_hint}" if resume_hint else ""))
+
+
+def stored_for_resume(stored, progress_message=None) -> dict:
+    """name -> (branch, complete) of a stored result (``--resume``), announced."""
+    out = {name: (b, name in stored.complete_branches) for name, b in stored.branches.items()}
+    if progress_message is not None:
+        kept = [n for n, (b, done) in out.items() if done]
+        partial = [f"{n} ({len(b)} points)" for n, (b, done) in out.items() if not done and len(b)]
+        progress_message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
+                         f"{', '.join(partial) or 'no branch'}")
+    return out
+
+
+def figures_interrupted(out: Path) -> None:
+    """The warning for Ctrl-C while the figures are drawn (the data are complete)."""
+    warn(f"interrupted while drawing the figures: the data are complete in "
+         f"{(out / RESULT_FILE).resolve()}; draw the figures with 'supercoil plot {out} "
+         f"--out {out}'")
+
+
+def nothing_to_resume(stored) -> bool:
+    """True (and says so) when the stored result of ``--resume`` is already complete."""
+    if stored is None or stored.status != "complete":
+        return False
+    print(f"nothing to resume: {stored.path} is complete ({stored.message})")
+    return True

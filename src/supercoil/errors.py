@@ -11,7 +11,24 @@ from __future__ import annotations
 
 
 class InputError(ValueError):
-    """An invalid input: which one, what is wrong, and what would be valid."""
+    """An invalid input: which one, what is wrong, and what would be valid.
+
+    ``name``: the input's name as the raising code knows it (``"twist_ratio"``),
+    when the message starts with it; :meth:`renamed` puts a caller's name for the
+    same input in its place (a command-line option, a key of a study file).
+    """
+
+    def __init__(self, message: str, *, name: str | None = None) -> None:
+        super().__init__(message)
+        self.name = name
+
+    def renamed(self, names: dict[str, str]) -> str:
+        """The message with its leading input name replaced by ``names[name]``, if given."""
+        message = str(self)
+        label = names.get(self.name) if self.name else None
+        if label is None or not message.startswith(self.name):
+            return message
+        return label + message[len(self.name):]
 
 
 __all__ = ["InputError"]

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from supercoil import checks
 from supercoil.geometry.curves import circle
 from supercoil.rod.closed import ClosedRodEnergy, Rod
 from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
@@ -115,6 +116,16 @@ def twisted_circle_problem(twist_ratio: float, excess_link: float, n_nodes: int,
     return problem, points.ravel()
 
 
+def check_ring_inputs(twist_ratio: float, excess_link: float, n_nodes: int) -> None:
+    """Raise InputError unless ``0 < C/A <= 1e6``, ``|dLk| <= 1e6`` and ``8 <= N <= 100000``."""
+    checks.number("twist_ratio", twist_ratio, 0.0, checks.MAX_MAGNITUDE, low_open=True,
+                  meaning="C/A")
+    checks.number("excess_link", excess_link, -checks.MAX_MAGNITUDE, checks.MAX_MAGNITUDE,
+                  meaning="dLk in turns")
+    checks.integer("n_nodes", n_nodes, checks.MIN_NODES, checks.MAX_NODES,
+                   meaning="nodes of the ring")
+
+
 def solve_ring(twist_ratio: float, excess_link: float, n_nodes: int = 100,
                curvature: str = "angle", tolerance: float = 1e-10,
                zero_tolerance: float = DEFAULT_ZERO_TOLERANCE, n_modes: int = 6) -> RingResult:
@@ -124,10 +135,7 @@ def solve_ring(twist_ratio: float, excess_link: float, n_nodes: int = 100,
     an unstable equilibrium and is reported as such (leaving it needs
     self-contact).
     """
-    if not np.isfinite(twist_ratio) or twist_ratio <= 0:
-        raise ValueError(f"twist_ratio (C/A) must be a positive finite number, got {twist_ratio!r}")
-    if not np.isfinite(excess_link):
-        raise ValueError(f"excess_link must be a finite number, got {excess_link!r}")
+    check_ring_inputs(twist_ratio, excess_link, n_nodes)
     problem, q0 = twisted_circle_problem(twist_ratio, excess_link, n_nodes, curvature)
     result = newton(problem, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
     stab = analyse(problem, result.q, result.multipliers, n_modes=n_modes,

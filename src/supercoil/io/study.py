@@ -47,6 +47,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from supercoil import checks
+from supercoil.errors import InputError
+
 PROBLEM_KINDS = ("ring_diagram", "ring", "tweezers")
 UNITS_PRESETS = ("nondimensional", "dna")
 DIAGRAM_TREATMENTS = ("barrier", "penalty")
@@ -55,7 +58,7 @@ MAX_NODES = 100_000
 MAX_MAGNITUDE = 1e6
 
 
-class StudyError(ValueError):
+class StudyError(InputError):
     """A study file that cannot be run; one line naming the file, the key and the problem."""
 
 

@@ -25,8 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
+from supercoil.errors import InputError
 
-class ResultError(ValueError):
+
+class ResultError(InputError):
     """A result that cannot be read; the message is one line naming the file."""
 
 

@@ -682,10 +682,10 @@ def test_jit_decorator_falls_back_without_a_cache_location() -> None:
 
 
 def figure_eight(n: int = 40, lift: float = 0.0) -> np.ndarray:
-    """(n, 3) planar lemniscate ``(sin 2t, sin t, lift sin t)``: with ``lift = 0`` its two
+    """(n, 3) lemniscate ``(sin 2t, sin t, lift cos t)``: with ``lift = 0`` its two
     lobes cross at the origin (vertices 0 and n/2)."""
     t = 2 * np.pi * np.arange(n) / n
-    return np.stack([np.sin(2 * t), np.sin(t), lift * np.sin(t)], axis=1)
+    return np.stack([np.sin(2 * t), np.sin(t), lift * np.cos(t)], axis=1)
 
 
 def test_writhe_of_a_self_intersecting_polygon_is_refused() -> None:

@@ -694,7 +694,7 @@ def test_writhe_of_a_self_intersecting_polygon_is_refused() -> None:
     side); at eps = 0 the input is refused instead of returning one of them."""
     from supercoil.errors import InputError
 
-    above, below = writhe(figure_eight(lift=1e-6)), writhe(figure_eight(lift=-1e-6))
+    above, below = writhe(figure_eight(lift=1e-9)), writhe(figure_eight(lift=-1e-9))
     assert abs(above - below) == pytest.approx(2.0, abs=1e-6)
     for closure in ("closed", "chord"):
         with pytest.raises(InputError, match="meet .*writhe is undefined"):

@@ -58,9 +58,13 @@ def check_initial_curve(points) -> np.ndarray:
     finite vertices, at most ``MAX_CURVE_VERTICES``, consecutive vertices distinct
     (the last is joined to the first), not all on one straight line."""
     x = np.asarray(points, dtype=float)
-    if x.ndim != 2 or x.shape[1] != 3 or not 3 <= len(x) <= checks.MAX_CURVE_VERTICES:
-        raise checks.refuse("initial_points", f"must be {3} to {checks.MAX_CURVE_VERTICES} "
-                            f"vertices (x, y, z) of a closed curve, got shape {x.shape}")
+    if x.ndim != 2 or x.shape[1] != 3:
+        raise checks.refuse("initial_points", f"must be vertices (x, y, z) of a closed curve, "
+                            f"an (m, 3) array; got shape {x.shape}")
+    if not 3 <= len(x) <= checks.MAX_CURVE_VERTICES:
+        raise checks.refuse("initial_points", f"has {len(x)} vertices; a closed curve needs "
+                            f"at least 3 vertices 'x y z' and at most "
+                            f"{checks.MAX_CURVE_VERTICES}")
     if not np.all(np.isfinite(x)):
         raise checks.refuse("initial_points", "has a non-finite coordinate; all must be "
                             "finite")
@@ -76,8 +80,8 @@ def check_initial_curve(points) -> np.ndarray:
     spread = x - x.mean(axis=0)
     singular = np.linalg.svd(spread, compute_uv=False)
     if singular[1] <= 1e-9 * singular[0]:
-        raise checks.refuse("initial_points", "lie on one straight line; a closed curve "
-                            "needs vertices that span a plane or space")
+        raise checks.refuse("initial_points", "has all its vertices on one straight line; a "
+                            "closed curve needs vertices that span a plane or space")
     return x
 
 

@@ -101,20 +101,22 @@ def _as_polygon(points: npt.ArrayLike, name: str, closed: bool) -> np.ndarray:
     except (TypeError, ValueError) as error:
         raise InputError(
             f"{name}: cannot be read as a float array ({error}); "
-            "expected an (n_vertices, 3) array of coordinates"
+            "expected an (n_vertices, 3) array of coordinates", name=name
         ) from None
     if array.ndim != 2 or array.shape[1] != 3:
         raise InputError(
-            f"{name} has shape {array.shape}; expected an (n_vertices, 3) array of coordinates"
-        )
+            f"{name} has shape {array.shape}; expected an (n_vertices, 3) array of coordinates",
+            name=name)
     minimum = 3 if closed else 2
     if array.shape[0] < minimum:
         count = "1 vertex" if array.shape[0] == 1 else f"{array.shape[0]} vertices"
         kind = "a closed" if closed else "an open"
-        raise InputError(f"{name} has {count}; {kind} polygon needs at least {minimum} vertices")
+        raise InputError(f"{name} has {count}; {kind} polygon needs at least {minimum} vertices",
+                         name=name)
     if not np.all(np.isfinite(array)):
         bad = int(np.argwhere(~np.isfinite(array))[0, 0])
-        raise InputError(f"{name} has a non-finite coordinate at vertex {bad}; all must be finite")
+        raise InputError(f"{name} has a non-finite coordinate at vertex {bad}; all must be finite",
+                         name=name)
     following = np.roll(array, -1, axis=0) if closed else array[1:]
     lengths = np.linalg.norm(following - array[: following.shape[0]], axis=1)
     zero = np.flatnonzero(lengths == 0.0)
@@ -128,7 +130,7 @@ def _as_polygon(points: npt.ArrayLike, name: str, closed: bool) -> np.ndarray:
         )
         raise InputError(
             f"{name} has a zero-length edge between vertices {k} and {k_next}; "
-            f"consecutive vertices must be distinct{hint}"
+            f"consecutive vertices must be distinct{hint}", name=name
         )
     return np.ascontiguousarray(array)
 
@@ -138,18 +140,21 @@ def _as_axis(axis: npt.ArrayLike) -> np.ndarray:
     try:
         vector = np.asarray(axis, dtype=np.float64)
     except (TypeError, ValueError):
-        raise InputError(f"axis {axis!r} is not a vector; expected 3 finite numbers") from None
+        raise InputError(f"axis {axis!r} is not a vector; expected 3 finite numbers",
+                         name="axis") from None
     if vector.shape != (3,) or not np.all(np.isfinite(vector)):
-        raise InputError(f"axis {axis!r} is not a finite 3-vector; expected 3 finite numbers")
+        raise InputError(f"axis {axis!r} is not a finite 3-vector; expected 3 finite numbers",
+                         name="axis")
     norm = float(np.linalg.norm(vector))
     if norm == 0.0:
-        raise InputError("axis is the zero vector; expected a non-zero direction")
+        raise InputError("axis is the zero vector; expected a non-zero direction", name="axis")
     return vector / norm
 
 
 def _check_closure(closure: str) -> None:
     if closure not in _CLOSURES:
-        raise InputError(f"closure {closure!r} is unknown; expected one of {', '.join(_CLOSURES)}")
+        raise InputError(f"closure {closure!r} is unknown; expected one of {', '.join(_CLOSURES)}",
+                         name="closure")
 
 
 def _prepare(

@@ -91,34 +91,42 @@ def test_diagram_options_follow_the_study():
     (("nodes = 24", "nodse = 24"), ["unknown key [rod] nodse", "did you mean 'nodes'",
                                      "valid keys: twist_ratio, length_over_diameter, nodes"]),
     (("[outputs]", "[output]"), ["unknown table [output]", "did you mean 'outputs'"]),
-    (("nodes = 24", 'nodes = "24"'), ["[rod] nodes must be an integer from 8", "'24'",
+    (("nodes = 24", 'nodes = "24"'), ["[rod] nodes must be an integer", "'24'",
                                       "a string"]),
     (("nodes = 24", "nodes = 24.0"), ["[rod] nodes must be an integer", "a number"]),
-    (("nodes = 24", "nodes = 3"), ["[rod] nodes must be an integer from 8"]),
-    (("modes = [2]", "modes = [1, 2]"), ["[problem] modes must be a list of distinct"]),
+    (("nodes = 24", "nodes = 3"), ["[rod] nodes", "must be a whole number from 8 to 100000",
+                                   "got 3"]),
+    (("modes = [2]", "modes = [1, 2]"), ["[problem] modes", "must be distinct whole numbers "
+                                         "from 2 to 12"]),
     (("length_over_diameter = 20", "length_over_diameter = 3"),
-     ["length_over_diameter must be L/D, a number above pi"]),
+     ["[rod] length_over_diameter (L/D) must be a number above pi"]),
     (('kind = "ring_diagram"', 'kind = "ring_diagramm"'),
      ["kind = 'ring_diagramm' is not a problem kind", "did you mean 'ring_diagram'"]),
     (("max_excess_link = 4.0", "excess_link = 4.0"),
      ["[problem] excess_link does not apply to a ring_diagram problem"]),
     (("max_excess_link = 4.0", 'contact = "exact"'),
-     ["contact = 'exact' is not a treatment a ring_diagram can use", "barrier, penalty"]),
+     ["[problem] contact must be one of barrier, penalty, got 'exact'"]),
     (("figures = false", "figures = 0"), ["[outputs] figures must be true or false"]),
     (("twist_ratio = 0.6667", "twist_ratio = true"), ["[rod] twist_ratio must be C/A",
                                                       "a boolean"]),
-    (("twist_ratio = 0.6667", "twist_ratio = inf"), ["[rod] twist_ratio must be"]),
+    (("twist_ratio = 0.6667", "twist_ratio = 2e6"), ["[rod] twist_ratio (C/A) must be a "
+                                                     "number above 0 and up to 1e6"]),
+    (("twist_ratio = 0.6667", "twist_ratio = inf"), ["[rod] twist_ratio (C/A) must be",
+                                                     "got inf"]),
     (("[rod]", "rod = 3\n[rodx]"), ["rod must be a table ([rod]), got an integer"]),
     (("twist_ratio = 0.6667", ""), ["[rod] twist_ratio is missing"]),
     (("[problem]", "[problem]\nkind2 = 1"), ["unknown key [problem] kind2"]),
     (("nodes = 24", "nodes = = 24"), ["not valid TOML"]),
     (("contact_max_points = 8", "branch_depth = 4"),
-     ["[continuation] branch_depth must be 1 (primary branches), 2 (and secondary)"]),
+     ["[continuation] branch_depth", "1 primary, 2 and secondary, 3 and tertiary",
+      "from 1 to 3"]),
     (("contact_max_points = 8", 'gauge = "nodes"'), ['gauge must be "node" or "integral"']),
     (("contact_max_points = 8", 'contact_formulation = "pair"'),
      ['contact_formulation must be "integral" or "pairs"']),
     (("contact_max_points = 8", 'contact_curve = "quintic"\ncontact_formulation = "pairs"'),
-     ["contact_curve 'quintic' needs contact_formulation 'integral'"]),
+     ["[continuation] contact_curve 'quintic' needs contact_formulation 'integral'"]),
+    (("contact_max_points = 8", "contact_max_points = 10000000"),
+     ["[continuation] contact_max_points", "from 2 to 100000"]),
 ])
 def test_bad_keys_and_types_are_one_line_errors(edit, words):
     old, new = edit
@@ -177,14 +185,87 @@ def test_dna_preset_derives_the_nondimensional_numbers():
     (("salt_mM = 100", "salt_mM = 100\ndiameter_nm = 4"), ["salt_mM and diameter_nm both"]),
     (("max_superhelical_density = 0.05", "max_excess_link = 3"),
      ["[problem] max_excess_link cannot be given with units preset 'dna'"]),
-    (("base_pairs = 600", "base_pairs = 12"), ["L/D = ", "give more base pairs"]),
-    (("salt_mM = 100", "salt_mM = 1e9"), ["[units]"]),
+    (("base_pairs = 600", "base_pairs = 12"), ["[units] base_pairs", "L/D = ",
+                                               "give base_pairs >= "]),
+    (("base_pairs = 600", "base_pairs = 100000000"), ["[units] base_pairs", "12 to 10000000"]),
+    (("salt_mM = 100", "salt_mM = 1e9"), ["[units] salt_mM", "10 to 200 mM"]),
+    (("max_superhelical_density = 0.05", "max_superhelical_density = 6"),
+     ["[problem] max_superhelical_density", "up to 1"]),
 ])
 def test_dna_errors(edit, words):
     old, new = edit
     message = error(DNA.replace(old, new, 1))
     for w in words:
         assert w in message, message
+
+
+TWEEZERS_STUDY = """
+[rod]
+twist_ratio = 1.3333
+length_over_diameter = 20
+nodes = 40
+[problem]
+kind = "tweezers"
+tension = 20.0
+turns = [0.0, 1.6]
+"""
+DNA_RING_STUDY = """
+[units]
+preset = "dna"
+base_pairs = 600
+[rod]
+nodes = 40
+[problem]
+kind = "ring"
+superhelical_density = -0.06
+"""
+
+
+@pytest.mark.parametrize("study, edit, option, value", [
+    (TWEEZERS_STUDY, ("turns = [0.0, 1.6]", "turns = [0, 1e300]"), "--turns", "0:1e300"),
+    (TWEEZERS_STUDY, ("tension = 20.0", "tension = -1.0"), "--tension", "-1"),
+    (TWEEZERS_STUDY, ("nodes = 40", "nodes = 11"), "--nodes", "11"),
+    (DNA_RING_STUDY, ("superhelical_density = -0.06", "superhelical_density = -6"), "--sigma",
+     "-6"),
+    (DNA_RING_STUDY, ("base_pairs = 600", "base_pairs = 20"), "--bp", "20"),
+    (RING_DIAGRAM, ("max_excess_link = 4.0", "max_excess_link = 1e300"), "--max-excess-link",
+     "1e300"),
+])
+def test_study_files_and_the_command_line_refuse_the_same_values(tmp_path, study, edit,
+                                                                 option, value):
+    """Oracle: one validation. The study's value is refused with the message of the options
+    (naming the study's key), and the command line refuses the same value with the same
+    message (naming its option), exit 2, writing nothing."""
+    from supercoil.cli.main import run
+
+    old, new = edit
+    assert old in study
+    message = error(study.replace(old, new, 1))
+    kind = parse_study(study).kind
+    args = {"tweezers": ["tweezers", "--twist-ratio", "4/3", "--length-over-diameter", "20",
+                         "--nodes", "40", "--tension", "20", "--turns", "0:1.6"],
+            "ring": ["ring", "--dna", "--bp", "600", "--sigma", "-0.06", "--nodes", "40"],
+            "ring_diagram": ["diagram", "ring", "--twist-ratio", "0.6667",
+                             "--length-over-diameter", "20", "--nodes", "24"]}[kind]
+    args = [a for a in args]
+    k = args.index(option) if option in args else None
+    if k is None:
+        args += [option, value]
+    else:
+        args[k + 1] = value
+    if kind != "ring":
+        args += ["--out", str(tmp_path / "out")]
+    import contextlib
+    import io
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        status = run(args)
+    line = err.getvalue().strip()
+    assert status == 2 and line.startswith(f"error: {option}"), (status, line)
+    # the same text after the input's name: what is wrong and what is valid
+    assert line.split(" ", 2)[2] == message.split("] ", 1)[1].split(" ", 1)[1], (line, message)
+    assert not (tmp_path / "out").exists()
 
 
 def test_dna_keys_need_the_preset():

@@ -60,6 +60,8 @@ class RingResult:
     determinant_sign: int
     lowest_eigenvalues: np.ndarray
     converged: bool
+    # the solver's status, and for a converged state that is not stable what it is:
+    # "converged; unstable equilibrium (2 unstable directions)", "...; marginal ..."
     status: str
     message: str
     residual: float
@@ -158,6 +160,12 @@ def ring_result(problem, q: np.ndarray, multipliers: np.ndarray, stab, *, conver
     points = q.reshape(-1, 3)
     if not stab.certified:
         message += "; warning: " + stab.message
+    if converged and stab.unstable_count > 0:  # the status says what the state is
+        status += (f"; unstable equilibrium ({stab.unstable_count} unstable "
+                   f"direction{'s' if stab.unstable_count > 1 else ''})")
+    elif converged and stab.zero_modes > 0:
+        status += (f"; marginal equilibrium ({stab.zero_modes} zero "
+                   f"mode{'s' if stab.zero_modes > 1 else ''})")
     # Modes m with (A/C) sqrt(m^2 - 1) < |dLk| have crossed; a mode needs about
     # eight nodes per wavelength to be resolved (measured error 1.8e-2 at N/m = 12.5).
     highest_mode = int(np.floor(np.sqrt((twist_ratio * excess_link) ** 2 + 1)))

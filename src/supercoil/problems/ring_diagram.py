@@ -358,10 +358,18 @@ class RingDiagram:
         tertiary (:mod:`supercoil.problems.ring_secondary`)."""
         return generation_of(branch.name, branch.parent, self.generations)
 
+    @staticmethod
+    def branch_ok(branch: Branch) -> bool:
+        """The branch is complete: it reached its bound, closed a loop, or was handed over
+        as designed (a contact-free branch cut at its first contact, status ``STOPPED``).
+        A branch stopped by its point limit, a step failure or an interrupt is not."""
+        return branch.status.complete
+
     @property
     def ok(self) -> bool:
-        """Every branch ended as asked, and no step failed (notes starting ``failed:``)."""
-        return (all(b.ok for b in self.branches)
+        """Every branch is complete (:meth:`branch_ok`), and no step failed (notes starting
+        ``failed:``)."""
+        return (all(self.branch_ok(b) for b in self.branches)
                 and not any(n.startswith("failed:") for n in self.notes))
 
     def branch(self, name: str) -> Branch:
@@ -413,7 +421,7 @@ class RingDiagram:
                 "contact": b.name in self.contact_branches,
                 "generation": self.generation(b),
                 "parameter": b.parameter, "n_points": len(b), "status": b.status.name,
-                "ok": b.ok, "message": b.message,
+                "ok": self.branch_ok(b), "message": b.message,
                 "seconds": round(self.seconds.get(b.name, float("nan")), 3),
                 "file": f"branches/{b.name}.npz"})
         return {

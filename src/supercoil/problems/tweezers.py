@@ -232,7 +232,10 @@ class TweezersResult:
     cut_at_contact: frozenset[str] = frozenset()
 
     def branch_ok(self, branch: Branch) -> bool:
-        return branch.ok or branch.name in self.cut_at_contact
+        """The branch is complete: it reached its bound (or closed a loop), or it is a
+        contact-free branch handed over at its first contact to the contact branch. A
+        branch stopped by the point limit, a step failure or an interrupt is not."""
+        return branch.status.complete or branch.name in self.cut_at_contact
 
     def pin_branch(self, name: str, index: int = 0):
         """Set the azimuth pin with which point ``index`` of branch ``name`` was computed.
@@ -695,8 +698,15 @@ def tweezers_branches(options: TweezersOptions,
         branches.append(straight)
         bifurcations = straight.points_of_kind("bifurcation")
         if not bifurcations:
-            notes.append(f"the straight rod does not buckle below {opts.turns[1]:g} turns "
-                         f"(exact threshold {critical_turns(opts.twist_ratio, opts.tension):.6g})")
+            exact = critical_turns(opts.twist_ratio, opts.tension)
+            if straight.status.complete:
+                notes.append(f"the straight rod does not buckle below {opts.turns[1]:g} turns "
+                             f"(exact threshold {exact:.6g})")
+            else:  # no conclusion beyond the last point computed
+                notes.append(f"incomplete: straight stopped at "
+                             f"{straight.parameter_values[-1]:.6g} turns ({straight.message}), "
+                             f"before {opts.turns[1]:g}; no buckling found up to there (exact "
+                             f"threshold {exact:.6g})")
             return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
                                   tuple(notes))
         point = bifurcations[0]
@@ -755,7 +765,7 @@ def tweezers_branches(options: TweezersOptions,
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
     if probe is None or not onsets:
-        if free.status.name == "MAX_POINTS":
+        if not free.status.complete:
             notes.append(f"incomplete: {free_name} stopped at "
                          f"{free.parameter_values[-1]:.6g} turns: {free.message}")
         elif probe is not None:

@@ -84,9 +84,10 @@ def number(name: str, value, low: float = -math.inf, high: float = math.inf, *,
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InputError(f"{label} must be {valid}, got {value!r}", name=name)
     x = float(value)
-    inside = (math.isfinite(x) and (x > low if low_open else x >= low)
-              and (x < high if high_open else x <= high))
-    if not inside:
+    if not math.isfinite(x):
+        raise InputError(f"{label} must be {valid}, got {value!r} (not a finite number)",
+                         name=name)
+    if not ((x > low if low_open else x >= low) and (x < high if high_open else x <= high)):
         raise InputError(f"{label} must be {valid}, got {value!r}", name=name)
     return x
 

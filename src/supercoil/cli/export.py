@@ -11,7 +11,8 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import fail, require_count
+from supercoil import checks
+from supercoil.cli._common import fail, path_kind, refused, require_count
 
 FORMATS = ("vtk", "xyz", "pdb", "obj")
 
@@ -62,16 +63,21 @@ def export_command(
     if fmt not in FORMATS:
         fail(f"--format {fmt!r}: give one of {', '.join(FORMATS)}")
     require_count("--sides", sides, 3, 256)
-    if bp is not None and bp < 12:
-        fail(f"--bp {bp}: give a whole number of base pairs >= 12")
-    if out.is_dir():
+    if bp is not None:
+        with refused({"base_pairs": "--bp"}):
+            checks.integer("base_pairs", bp, checks.MIN_BASE_PAIRS, checks.MAX_BASE_PAIRS)
+    kind = path_kind("--out", out)
+    if kind == "folder":
         fail(f"--out {out}: is a folder; give a file path")
-    if out.exists() and not force:
+    if kind != "missing" and not force:
         fail(f"--out {out}: exists; give another path or add --force to overwrite it")
-    if not out.parent.is_dir():
+    if len(out.name.encode()) > 255:
+        fail(f"--out {str(out)[:80]}...: the file name is longer than 255 bytes; give a "
+             "shorter name")
+    if path_kind("--out", out.parent) != "folder":
         fail(f"--out {out}: folder {out.parent} does not exist; give a path in an existing "
              "folder")
-    path = result / RESULT_NAME if result.is_dir() else result
+    path = result / RESULT_NAME if path_kind("RESULT", result) == "folder" else result
     try:
         data = load(path)
     except ResultFileError as exc:

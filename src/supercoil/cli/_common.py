@@ -67,6 +67,24 @@ def path_kind(option: str, path: Path) -> str:
              "shorter, valid path")
 
 
+MAX_NAME_BYTES = 255  # one file or folder name (the usual file systems' limit)
+MAX_PATH_BYTES = 4096  # a whole path (Linux's PATH_MAX)
+
+
+def checked_path(value: Path | None) -> Path | None:
+    """The ``callback`` of a path argument or option: a path with a name longer than 255
+    bytes, or longer than 4096 bytes in all, is refused with click's one-line error."""
+    if value is None:
+        return value
+    text = os.fsencode(str(value))
+    if len(text) > MAX_PATH_BYTES or any(len(os.fsencode(part)) > MAX_NAME_BYTES
+                                         for part in Path(value).parts):
+        raise typer.BadParameter(f"{_short(value)}: a name is longer than {MAX_NAME_BYTES} "
+                                 f"bytes or the path longer than {MAX_PATH_BYTES}; give a "
+                                 "shorter path")
+    return value
+
+
 def _short(path: Path, width: int = 80) -> str:
     """The path as quoted in a message, cut to ``width`` characters."""
     text = str(path)

@@ -12,7 +12,7 @@ from typing import Annotated
 import typer
 
 from supercoil import checks
-from supercoil.cli._common import fail, path_kind, refused, require_count
+from supercoil.cli._common import checked_path, fail, path_kind, refused, require_count
 
 FORMATS = ("vtk", "xyz", "pdb", "obj")
 
@@ -25,10 +25,10 @@ def register(app: typer.Typer) -> None:
 def export_command(
     result: Annotated[Path, typer.Argument(metavar="RESULT", help="A result file (result.h5 "
                                            "of 'supercoil run') or its folder.",
-                                           show_default=False)],
+                                           show_default=False, callback=checked_path)],
     out: Annotated[Path, typer.Option("--out", metavar="FILE", help="The file to write; an "
                                       "existing file is refused unless --force.",
-                                      show_default=False)],
+                                      show_default=False, callback=checked_path)],
     branch: Annotated[str | None, typer.Option(
         "--branch", metavar="NAME", help="Branch name (default: the only branch, or the "
         "last one computed).", show_default=False)] = None,

@@ -7,6 +7,7 @@ which validate them: an :class:`~supercoil.errors.InputError` becomes the comman
 
 from __future__ import annotations
 
+import errno
 import os
 import sys
 import warnings
@@ -23,6 +24,7 @@ from supercoil.cli._common import (
     FORMULATION_HELP,
     check_json_target,
     check_output_folder,
+    checked_path,
     fail,
     parse_ratio,
     parse_vector,
@@ -169,7 +171,7 @@ def writhe(
             "commas), each vertex once (a closed curve does not repeat its first vertex); "
             "'#' starts a comment; blank lines are ignored. Any length unit: the writhe is "
             "scale-free.",
-            show_default=False,
+            show_default=False, callback=checked_path
         ),
     ],
     closure: Annotated[
@@ -258,7 +260,8 @@ def ring(
             "--excess-link",
             metavar="TURNS",
             help="Excess linking number dLk = Lk - Lk0 of the closed rod, in turns "
-            f"(positive = right-handed, overwinding for DNA; |dLk| <= {_MAGNITUDE}). Required unless "
+            f"(positive = right-handed, overwinding for DNA; |dLk| <= {_MAGNITUDE}). Required "
+            "unless "
             "--dna.",
             show_default=False,
         ),
@@ -307,7 +310,7 @@ def ring(
             "itself (non-neighbouring points at least D apart). The excess link counts as for "
             "the circle (twist = dLk - writhe), so a knot of writhe about W carries "
             "little twist only near --excess-link W (a trefoil: about +3 or -3).",
-            show_default=False,
+            show_default=False, callback=checked_path
         ),
     ] = None,
     dna: Annotated[
@@ -530,7 +533,7 @@ def demo(
             help="Folder for the figure and data. Default: ./supercoil-demo, or "
             "./supercoil-demo-2, -3, ... if that exists. An existing non-empty DIR is "
             "refused unless --force.",
-            show_default=False,
+            show_default=False, callback=checked_path
         ),
     ] = None,
     force: Annotated[
@@ -595,7 +598,7 @@ def diagram_ring(
         Path,
         typer.Option("--out", metavar="DIR", help="Folder for diagram.json, branches/*.npz "
                      "and the figures; an existing non-empty DIR is refused unless --force.",
-                     show_default=False),
+                     show_default=False, callback=checked_path),
     ],
     nodes: Annotated[
         int,
@@ -784,6 +787,16 @@ def run(argv: Sequence[str] | None = None) -> int:
             return EXIT_NOT_CONVERGED
         print(f"error: {_one_line(exc)}", file=sys.stderr, flush=True)
         return EXIT_BAD_INPUT
+    except OSError as exc:
+        if debug:
+            raise
+        if exc.errno in (errno.ENAMETOOLONG, errno.ELOOP):  # a path the user gave
+            print(f"error: {exc.filename}: {exc.strerror}; give a shorter, valid path",
+                  file=sys.stderr, flush=True)
+            return EXIT_BAD_INPUT
+        print(f"error: internal error: {type(exc).__name__}: {_one_line(exc)} (please report)",
+              file=sys.stderr, flush=True)
+        return EXIT_NOT_CONVERGED
     except Exception as exc:
         if debug:
             raise

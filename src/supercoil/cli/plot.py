@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import fail
+from supercoil.cli._common import checked_path, fail
 
 KINDS = ("diagram", "contact-map", "hat-curve", "configurations")  # figures.KINDS
 FORMATS = ("png", "svg")
@@ -24,13 +24,14 @@ def plot(
         typer.Argument(metavar="RESULT", help="A result: a result file (result.h5 of "
                        "'supercoil run') or its folder, or the --out folder of 'supercoil "
                        "diagram ring' (or its diagram.json) or of 'supercoil tweezers' (or "
-                       "its branch.json).", show_default=False),
+                       "its branch.json).", show_default=False, callback=checked_path),
     ],
     out: Annotated[
         Path,
         typer.Option("--out", metavar="DIR", help="Folder for the figures (created if "
                      "missing). Existing figure files of the same names are refused "
-                     "unless --force; other files are left alone.", show_default=False),
+                     "unless --force; other files are left alone.", show_default=False,
+                     callback=checked_path),
     ],
     kind: Annotated[
         list[str] | None,

@@ -24,7 +24,7 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import EXIT_NOT_CONVERGED, fail, warn
+from supercoil.cli._common import EXIT_NOT_CONVERGED, checked_path, fail, warn
 
 RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
 SUMMARY_FILES = {"ring_diagram": "diagram.json", "ring": "ring.json",
@@ -42,11 +42,12 @@ def register(app: typer.Typer) -> None:
 def run_command(
     study: Annotated[Path, typer.Argument(metavar="STUDY.toml", help="The study file (TOML): "
                                           "rod, units, problem, continuation, outputs; "
-                                          "see examples/*.toml.", show_default=False)],
+                                          "see examples/*.toml.", show_default=False,
+                                          callback=checked_path)],
     out: Annotated[Path | None, typer.Option(
         "--out", metavar="DIR", help="Output folder (default: the study's file name without "
         ".toml); an existing non-empty DIR is refused unless --force or --resume.",
-        show_default=False)] = None,
+        show_default=False, callback=checked_path)] = None,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in DIR (its result.h5): completed "
         "branches are kept. The study must be the same (presentation keys aside).")] = False,
@@ -116,6 +117,9 @@ def _prepare_folder(out: Path, spec, resume: bool, force: bool):
 
     if out.exists() and not out.is_dir():
         fail(f"--out {out}: is a file, not a folder; give a new folder")
+    if (out / "branches").exists() and not (out / "branches").is_dir():
+        fail(f"--out {out}: {out / 'branches'} is a file, not a folder; remove it or give "
+             "another folder")
     result_path = out / RESULT_FILE
     if resume:
         if not result_path.is_file():

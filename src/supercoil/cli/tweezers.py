@@ -16,6 +16,7 @@ import typer
 from supercoil.cli._common import (
     EXIT_NOT_CONVERGED,
     check_output_folder,
+    checked_path,
     fail,
     parse_ratio,
     prepare_output_folder,
@@ -59,7 +60,7 @@ def tweezers(
     out: Annotated[Path, typer.Option(
         "--out", metavar="DIR", help="Folder for branch.json, branches/*.npz and the "
         "figures; an existing non-empty DIR is refused unless --force.",
-        show_default=False)],
+        show_default=False, callback=checked_path)],
     twist_ratio: Annotated[float | None, typer.Option(
         "--twist-ratio", metavar="C/A", parser=parse_ratio, help="Twist stiffness over bending stiffness, "
         "0 < C/A <= 1e6 (4/3 in the benchmark); not with --dna.", show_default=False)] = None,

@@ -11,7 +11,7 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import fail
+from supercoil.cli._common import checked_path, fail
 
 
 def view(
@@ -20,13 +20,13 @@ def view(
         typer.Argument(metavar="RESULT", help="A result: a result file (result.h5 of "
                        "'supercoil run') or its folder, or the --out folder of 'supercoil "
                        "diagram ring' (or its diagram.json) or of 'supercoil tweezers' (or "
-                       "its branch.json).", show_default=False),
+                       "its branch.json).", show_default=False, callback=checked_path),
     ],
     out: Annotated[
         Path | None,
         typer.Option("--out", metavar="FILE.html", help="The page to write. Default: "
                      "viewer.html in the result's folder. An existing file is refused "
-                     "unless --force.", show_default=False),
+                     "unless --force.", show_default=False, callback=checked_path),
     ] = None,
     force: Annotated[
         bool,

@@ -82,11 +82,14 @@ def run_command(
     out = Path(study.stem) if out is None else out
     result_path = out / RESULT_FILE
     stored = _prepare_folder(out, spec, resume, force)
-    if stored is not None and stored.status == "complete":
+    if stored is not None and stored.status in ("complete", "incomplete"):
+        # every branch ended (an incomplete one by its point limit): resuming changes nothing
         if not quiet:
-            print(f"nothing to resume: {result_path} is complete ({stored.message})")
+            print(f"nothing to resume: {result_path} is {stored.status} ({stored.message})")
         if json_path is not None and stored.summary is not None:
             write_json_or_fail(stored.summary, json_path)
+        if stored.status != "complete":
+            raise typer.Exit(EXIT_NOT_CONVERGED)
         return
     from supercoil.io.store import ResultFileError
 

@@ -613,8 +613,8 @@ def test_tweezers_study():
         (("tension = 20.0", ""), "exactly one of tension"),
         (("turns = [0, 1.6]", "turns = [2, 1]"),
          "[problem] turns must be (start, stop) turns with 0 <= start < stop <= 1000"),
-        (("nodes = 40", "nodes = 10"), "[rod] nodes (nodes of the clamped rod) must be a whole "
-         "number from 12"),
+        (("nodes = 40", "nodes = 10"), ("[rod] nodes (nodes of the clamped rod) must be a whole "
+         "number from 12")),
         (("tension = 20.0", 'tension = 20.0\ncontact = "barrier"'),
          "[problem] contact does not apply to a tweezers problem"),
         (("[problem]", "[continuation]\ncontact_max_points = 3\n[problem]"),

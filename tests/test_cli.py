@@ -462,7 +462,7 @@ def test_ring_with_contact_not_converged_exits_1_and_saves(runner, tmp_path, mon
     assert result.exit_code == 1
     assert "not converged" in result.stderr and str(target) in result.stderr
     data = json.loads(target.read_text())
-    from supercoil.cli.main import DEFAULT_CONTACT_TREATMENT
+    from supercoil.contact.problem import DEFAULT_TREATMENT as DEFAULT_CONTACT_TREATMENT
 
     assert data["converged"] is False
     assert data["contact_treatment"] == DEFAULT_CONTACT_TREATMENT

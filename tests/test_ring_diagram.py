@@ -228,7 +228,7 @@ def test_cli_interrupt_keeps_the_branches_saved_so_far(tmp_path, capsys, monkeyp
 
 
 @pytest.mark.parametrize("args, words", [
-    (["--length-over-diameter", "3"], "too small"),
+    (["--length-over-diameter", "3"], "above pi"),
     (["--modes", "1"], "--modes"),
     (["--modes", "alpha"], "--modes"),
     (["--contact-max-points", "1"], "--contact-max-points"),

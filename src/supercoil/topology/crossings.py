@@ -17,15 +17,16 @@ Detection", section 5.1.9); ``O(n1 n2)`` work, small next to the Gauss sum itsel
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from supercoil._numba import njit
 
 __all__ = ["RELATIVE_TOLERANCE", "first_crossing", "first_self_crossing"]
 
 RELATIVE_TOLERANCE = 1e-15  # edges closer than this times the curves' extent meet (a few ulps)
 
 
-@numba.njit(cache=True)
+@njit()
 def _distance2(px, py, pz, qx, qy, qz, rx, ry, rz, sx, sy, sz) -> float:
     """Squared closest distance of the segments p->q and r->s (both of non-zero length)."""
     d1x, d1y, d1z = qx - px, qy - py, qz - pz
@@ -53,7 +54,7 @@ def _distance2(px, py, pz, qx, qy, qz, rx, ry, rz, sx, sy, sz) -> float:
     return dx * dx + dy * dy + dz * dz
 
 
-@numba.njit(cache=True)
+@njit()
 def _first_pair(a: np.ndarray, b: np.ndarray, same: bool, closed: bool,
                 tolerance: float) -> tuple[int, int]:
     """First edge pair ``(i, j)`` of the extended vertex arrays ``a`` (``(n1 + 1, 3)``) and

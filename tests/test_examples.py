@@ -26,8 +26,8 @@ def run_example(tmp_path, name, *overrides, stopped=()):
     assert cli(args) == (1 if stopped else 0)
     result = supercoil.load(out / "result.h5")
     assert result.status == ("incomplete" if stopped else "complete"), result.message
-    for name in stopped:
-        assert name in result.message, result.message
+    for branch in stopped:
+        assert branch in result.message, result.message
     return out, result
 
 

@@ -238,7 +238,7 @@ def test_cli_interrupt_keeps_every_point_computed(tmp_path, capsys, monkeypatch)
 
 
 @pytest.mark.parametrize("args, words", [
-    (["--length-over-diameter", "3"], "too small"),
+    (["--length-over-diameter", "3"], "above pi"),
     (["--modes", "1"], "--modes"),
     (["--modes", "alpha"], "--modes"),
     (["--contact-max-points", "1"], "--contact-max-points"),

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -91,34 +92,42 @@ def test_diagram_options_follow_the_study():
     (("nodes = 24", "nodse = 24"), ["unknown key [rod] nodse", "did you mean 'nodes'",
                                      "valid keys: twist_ratio, length_over_diameter, nodes"]),
     (("[outputs]", "[output]"), ["unknown table [output]", "did you mean 'outputs'"]),
-    (("nodes = 24", 'nodes = "24"'), ["[rod] nodes must be an integer from 8", "'24'",
+    (("nodes = 24", 'nodes = "24"'), ["[rod] nodes must be an integer", "'24'",
                                       "a string"]),
     (("nodes = 24", "nodes = 24.0"), ["[rod] nodes must be an integer", "a number"]),
-    (("nodes = 24", "nodes = 3"), ["[rod] nodes must be an integer from 8"]),
-    (("modes = [2]", "modes = [1, 2]"), ["[problem] modes must be a list of distinct"]),
+    (("nodes = 24", "nodes = 3"), ["[rod] nodes", "must be a whole number from 8 to 100000",
+                                   "got 3"]),
+    (("modes = [2]", "modes = [1, 2]"), ["[problem] modes", ("must be distinct whole numbers "
+                                         "from 2 to 12")]),
     (("length_over_diameter = 20", "length_over_diameter = 3"),
-     ["length_over_diameter must be L/D, a number above pi"]),
+     ["[rod] length_over_diameter (L/D) must be a number above pi"]),
     (('kind = "ring_diagram"', 'kind = "ring_diagramm"'),
      ["kind = 'ring_diagramm' is not a problem kind", "did you mean 'ring_diagram'"]),
     (("max_excess_link = 4.0", "excess_link = 4.0"),
      ["[problem] excess_link does not apply to a ring_diagram problem"]),
     (("max_excess_link = 4.0", 'contact = "exact"'),
-     ["contact = 'exact' is not a treatment a ring_diagram can use", "barrier, penalty"]),
+     ["[problem] contact must be one of barrier, penalty, got 'exact'"]),
     (("figures = false", "figures = 0"), ["[outputs] figures must be true or false"]),
     (("twist_ratio = 0.6667", "twist_ratio = true"), ["[rod] twist_ratio must be C/A",
                                                       "a boolean"]),
-    (("twist_ratio = 0.6667", "twist_ratio = inf"), ["[rod] twist_ratio must be"]),
+    (("twist_ratio = 0.6667", "twist_ratio = 2e6"), [("[rod] twist_ratio (C/A) must be a "
+                                                     "number above 0 and up to 1e6")]),
+    (("twist_ratio = 0.6667", "twist_ratio = inf"), ["[rod] twist_ratio (C/A) must be",
+                                                     "got inf"]),
     (("[rod]", "rod = 3\n[rodx]"), ["rod must be a table ([rod]), got an integer"]),
     (("twist_ratio = 0.6667", ""), ["[rod] twist_ratio is missing"]),
     (("[problem]", "[problem]\nkind2 = 1"), ["unknown key [problem] kind2"]),
     (("nodes = 24", "nodes = = 24"), ["not valid TOML"]),
     (("contact_max_points = 8", "branch_depth = 4"),
-     ["[continuation] branch_depth must be 1 (primary branches), 2 (and secondary)"]),
+     ["[continuation] branch_depth", "1 primary, 2 and secondary, 3 and tertiary",
+      "from 1 to 3"]),
     (("contact_max_points = 8", 'gauge = "nodes"'), ['gauge must be "node" or "integral"']),
     (("contact_max_points = 8", 'contact_formulation = "pair"'),
      ['contact_formulation must be "integral" or "pairs"']),
     (("contact_max_points = 8", 'contact_curve = "quintic"\ncontact_formulation = "pairs"'),
-     ["contact_curve 'quintic' needs contact_formulation 'integral'"]),
+     ["[continuation] contact_curve 'quintic' needs contact_formulation 'integral'"]),
+    (("contact_max_points = 8", "contact_max_points = 10000000"),
+     ["[continuation] contact_max_points", "from 2 to 100000"]),
 ])
 def test_bad_keys_and_types_are_one_line_errors(edit, words):
     old, new = edit
@@ -177,14 +186,92 @@ def test_dna_preset_derives_the_nondimensional_numbers():
     (("salt_mM = 100", "salt_mM = 100\ndiameter_nm = 4"), ["salt_mM and diameter_nm both"]),
     (("max_superhelical_density = 0.05", "max_excess_link = 3"),
      ["[problem] max_excess_link cannot be given with units preset 'dna'"]),
-    (("base_pairs = 600", "base_pairs = 12"), ["L/D = ", "give more base pairs"]),
-    (("salt_mM = 100", "salt_mM = 1e9"), ["[units]"]),
+    (("base_pairs = 600", "base_pairs = 12"), ["[units] base_pairs", "L/D = ",
+                                               "give base_pairs >= "]),
+    (("base_pairs = 600", "base_pairs = 100000000"), ["[units] base_pairs", "12 to 10000000"]),
+    (("salt_mM = 100", "salt_mM = 1e9"), ["[units] salt_mM", "10 to 200 mM"]),
+    (("max_superhelical_density = 0.05", "max_superhelical_density = 6"),
+     ["[problem] max_superhelical_density", "up to 1"]),
 ])
 def test_dna_errors(edit, words):
     old, new = edit
     message = error(DNA.replace(old, new, 1))
     for w in words:
         assert w in message, message
+
+
+TWEEZERS_STUDY = """
+[rod]
+twist_ratio = 1.3333
+length_over_diameter = 20
+nodes = 40
+[problem]
+kind = "tweezers"
+tension = 20.0
+turns = [0.0, 1.6]
+"""
+DNA_RING_STUDY = """
+[units]
+preset = "dna"
+base_pairs = 600
+[rod]
+nodes = 40
+[problem]
+kind = "ring"
+superhelical_density = -0.06
+"""
+
+
+@pytest.mark.parametrize("study, edit, option, value", [
+    (TWEEZERS_STUDY, ("turns = [0.0, 1.6]", "turns = [0, 1e300]"), "--turns", "0:1e300"),
+    (TWEEZERS_STUDY, ("tension = 20.0", "tension = -1.0"), "--tension", "-1"),
+    (TWEEZERS_STUDY, ("nodes = 40", "nodes = 11"), "--nodes", "11"),
+    (DNA_RING_STUDY, ("superhelical_density = -0.06", "superhelical_density = -6"), "--sigma",
+     "-6"),
+    (DNA_RING_STUDY, ("base_pairs = 600", "base_pairs = 20"), "--bp", "20"),
+    (RING_DIAGRAM, ("max_excess_link = 4.0", "max_excess_link = 1e300"), "--max-excess-link",
+     "1e300"),
+])
+def test_study_files_and_the_command_line_refuse_the_same_values(tmp_path, study, edit,
+                                                                 option, value):
+    """Oracle: one validation. The study's value is refused with the message of the options
+    (naming the study's key), and the command line refuses the same value with the same
+    message (naming its option), exit 2, writing nothing."""
+    from supercoil.cli.main import run
+
+    old, new = edit
+    assert old in study
+    message = error(study.replace(old, new, 1))
+    kind = parse_study(study).kind
+    args = {"tweezers": ["tweezers", "--twist-ratio", "4/3", "--length-over-diameter", "20",
+                         "--nodes", "40", "--tension", "20", "--turns", "0:1.6"],
+            "ring": ["ring", "--dna", "--bp", "600", "--sigma", "-0.06", "--nodes", "40"],
+            "ring_diagram": ["diagram", "ring", "--twist-ratio", "0.6667",
+                             "--length-over-diameter", "20", "--nodes", "24"]}[kind]
+    args = [a for a in args]
+    k = args.index(option) if option in args else None
+    if k is None:
+        args += [option, value]
+    else:
+        args[k + 1] = value
+    if kind != "ring":
+        args += ["--out", str(tmp_path / "out")]
+    import contextlib
+    import io
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        status = run(args)
+    line = err.getvalue().strip()
+    assert status == 2 and line.startswith(f"error: {option}"), (status, line)
+    # the same text after the input's name (what is wrong and what is valid), the names
+    # of inputs aside (an option on the command line, a key in the study)
+    def text(words: str) -> str:
+        return re.sub(r"--[a-z-]+|\b[a-z]+_[a-z_]+\b", "NAME", words)
+
+    assert text(line.split(" ", 2)[2]) == text(message.split("] ", 1)[1].split(" ", 1)[1]), \
+        (line, message)
+    assert not (tmp_path / "out").exists()
 
 
 def test_dna_keys_need_the_preset():
@@ -339,8 +426,10 @@ def assert_same_branches(a, b, atol=1e-10):
 
 def test_interrupted_run_keeps_a_valid_file_and_resume_completes_it(tmp_path, capsys):
     full_dir, full = run_diagram(tmp_path, "full")
-    assert full["status"] == "complete", full
+    # alpha_contact stops at contact_max_points = 8, before dLk 4: an incomplete run
+    assert full["status"] == "incomplete" and "alpha_contact" in full["message"], full
     reference = supercoil.load(full_dir / "result.h5")
+    assert reference.status == "incomplete"
     assert list(reference.branches) == ["circle", "alpha", "alpha_contact"]
     assert json.loads((full_dir / "diagram.json").read_text()) == reference.summary
     # interrupt while the contact branch is computed
@@ -361,14 +450,14 @@ def test_interrupted_run_keeps_a_valid_file_and_resume_completes_it(tmp_path, ca
     line = one_line_error(capsys, cli(["run", str(other), "--out", str(out), "--resume"]))
     assert "[problem] max_excess_link = 4.0 in the file, 3.0 in the study" in line
     assert (out / "result.h5").read_bytes() == before
-    assert cli(["run", str(study), "--out", str(out), "--resume", "--quiet"]) == 0
+    assert cli(["run", str(study), "--out", str(out), "--resume", "--quiet"]) == 1
     resumed = supercoil.load(out / "result.h5")
-    assert resumed.status == "complete"
+    assert resumed.status == "incomplete"
     assert_same_branches(resumed, reference)
     assert resumed.complete_branches == set(reference.branch_names)
-    # a complete result: nothing to do, nothing touched
+    # every branch ended: nothing to do, nothing touched (exit 1: still incomplete)
     before = (out / "result.h5").read_bytes()
-    assert cli(["run", str(study), "--out", str(out), "--resume"]) == 0
+    assert cli(["run", str(study), "--out", str(out), "--resume"]) == 1
     assert "nothing to resume" in capsys.readouterr().out
     assert (out / "result.h5").read_bytes() == before
 
@@ -378,7 +467,7 @@ def test_a_run_interrupted_in_the_contact_free_branch_resumes_to_the_same_result
     computed, then resumed: the same branches as the uninterrupted run (the resumed
     alpha stops past its onset too, and nothing of it is computed twice)."""
     full_dir, full = run_diagram(tmp_path, "full")
-    assert full["status"] == "complete", full
+    assert full["status"] == "incomplete", full  # alpha_contact stops at its point limit
     reference = supercoil.load(full_dir / "result.h5")
     assert reference.branch("alpha").message.endswith("the contact onset is located")
     out, outcome = run_diagram(tmp_path, "cut", progress=InterruptAt(8))
@@ -387,9 +476,9 @@ def test_a_run_interrupted_in_the_contact_free_branch_resumes_to_the_same_result
     assert 0 < len(cut.branch("alpha")) < len(reference.branch("alpha"))
     assert "alpha_contact" not in cut.branch_names
     assert cli(["run", str(write_study(tmp_path)), "--out", str(out), "--resume",
-                "--quiet"]) == 0
+                "--quiet"]) == 1
     resumed = supercoil.load(out / "result.h5")
-    assert resumed.status == "complete"
+    assert resumed.status == "incomplete"
     assert_same_branches(resumed, reference)
     assert "the contact onset is located (resumed after point" in resumed.branch("alpha").message
 
@@ -522,8 +611,10 @@ def test_tweezers_study():
     for edit, words in [
         (("tension = 20.0", "tension = 20.0\nend_distance = 0.5"), "exactly one of tension"),
         (("tension = 20.0", ""), "exactly one of tension"),
-        (("turns = [0, 1.6]", "turns = [2, 1]"), "[problem] turns must be [start, stop]"),
-        (("nodes = 40", "nodes = 10"), "at least 12 nodes"),
+        (("turns = [0, 1.6]", "turns = [2, 1]"),
+         "[problem] turns must be (start, stop) turns with 0 <= start < stop <= 1000"),
+        (("nodes = 40", "nodes = 10"), ("[rod] nodes (nodes of the clamped rod) must be a whole "
+         "number from 12")),
         (("tension = 20.0", 'tension = 20.0\ncontact = "barrier"'),
          "[problem] contact does not apply to a tweezers problem"),
         (("[problem]", "[continuation]\ncontact_max_points = 3\n[problem]"),

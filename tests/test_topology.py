@@ -676,3 +676,51 @@ def test_jit_decorator_falls_back_without_a_cache_location() -> None:
     source = compile("def double(x):\n    return 2.0 * x\n", "<string>", "exec")
     exec(source, namespace)  # noqa: S102 - a constant string, to get a function without a file
     assert _njit()(namespace["double"])(1.5) == 3.0
+
+
+# ------------------------------------------------ undefined writhe and linking number
+
+
+def figure_eight(n: int = 40, lift: float = 0.0) -> np.ndarray:
+    """(n, 3) lemniscate ``(sin 2t, sin t, lift cos t)``: with ``lift = 0`` its two
+    lobes cross at the origin (vertices 0 and n/2)."""
+    t = 2 * np.pi * np.arange(n) / n
+    return np.stack([np.sin(2 * t), np.sin(t), lift * np.cos(t)], axis=1)
+
+
+def test_writhe_of_a_self_intersecting_polygon_is_refused() -> None:
+    """Oracle: the writhe jumps by 2 across a crossing, so at the crossing it is undefined.
+    Lifted by +eps and -eps the lemniscate's writhes differ by 2 (the limits on either
+    side); at eps = 0 the input is refused instead of returning one of them."""
+    from supercoil.errors import InputError
+
+    above, below = writhe(figure_eight(lift=1e-9)), writhe(figure_eight(lift=-1e-9))
+    assert abs(above - below) == pytest.approx(2.0, abs=1e-6)
+    for closure in ("closed", "chord"):
+        with pytest.raises(InputError, match="meet .*writhe is undefined"):
+            writhe(figure_eight(), closure)
+    with pytest.raises(InputError, match="intersects itself"):
+        writhe_reference(figure_eight())
+    # an open polygon that retraces its last edge (a fold back onto itself)
+    retrace = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 0.5, 0]])
+    with pytest.raises(InputError, match="edges 1 and 2"):
+        writhe(retrace, "none")
+
+
+def test_linking_number_of_a_curve_with_itself_or_a_crossing_curve_is_refused() -> None:
+    """Oracle: the Hopf link has Lk = 1 and an unlinked pair 0; the curve with itself, and
+    two circles through each other's points, are refused (Lk jumps by 1 there)."""
+    from supercoil.errors import InputError
+
+    t = 2 * np.pi * np.arange(60) / 60
+    ring = np.stack([np.cos(t), np.sin(t), 0 * t], axis=1)
+    hopf = np.stack([1 + np.cos(t), 0 * t, np.sin(t)], axis=1)
+    assert abs(linking_number(ring, hopf)) == pytest.approx(1.0, abs=1e-9)
+    assert linking_number(ring, ring + [5.0, 0, 0]) == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(InputError, match="same vertices.*with itself is undefined"):
+        linking_number(ring, ring)
+    with pytest.raises(InputError, match="same vertices"):
+        linking_number(ring, ring.copy())
+    through = np.stack([np.cos(t), 0 * t, np.sin(t)], axis=1)  # shares two points with ring
+    with pytest.raises(InputError, match="meets edge .* undefined"):
+        linking_number(ring, through)

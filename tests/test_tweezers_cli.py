@@ -96,7 +96,10 @@ def test_contact_lists_are_those_of_the_stored_states(folder):
 
 
 @pytest.mark.parametrize("args, words", [
-    (["--turns", "5:1"], "--turns"),
+    (["--turns", "5:1", "--tension", "1"], "--turns"),
+    (["--turns", "0:1e300", "--tension", "1"], "0 <= start < stop <= 1000"),
+    (["--max-points", "1000000000", "--tension", "1"], "--max-points"),
+    (["--protocol", "up-down", "--step", "1e-12", "--tension", "1"], "at most 100000"),
     (["--turns", "abc"], "--turns"),
     (["--tension", "1", "--end-distance", "0.5"], "exactly one"),
     (["--end-distance", "1.5"], "--end-distance"),
@@ -117,6 +120,7 @@ def test_bad_input_is_one_line_exit_2(tmp_path, capsys, args, words):
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2
     assert len(err) == 1 and err[0].startswith("error:") and words in err[0]
+    assert not (tmp_path / "x").exists()  # refused before any write
 
 
 def test_existing_folder_needs_overwrite(folder, capsys):
@@ -175,7 +179,7 @@ def test_dna_units(tmp_path, capsys):
 @pytest.mark.parametrize("args, words", [
     (["--dna", "--bp", "300"], "--force-pN"),
     (["--dna", "--bp", "300", "--force-pN", "1", "--tension", "3"], "--tension"),
-    (["--dna", "--bp", "300", "--force-pN", "-1"], "force_pN"),
+    (["--dna", "--bp", "300", "--force-pN", "-1"], "--force-pN"),
     (["--bp", "300", "--twist-ratio", "1", "--tension", "1"], "--dna"),
     (["--tension", "1"], "--twist-ratio"),
 ])

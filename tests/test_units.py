@@ -9,7 +9,7 @@ Oracles used here:
 - the salt table: the tabulated points come back exactly, the geometric mean of two
   neighbouring concentrations gives the arithmetic mean of their diameters (linear in
   log c), and the diameter decreases monotonically with the concentration;
-- validation: bad input is a ValueError (TypeError for non-numbers) naming the field.
+- validation: bad input is an InputError (a ValueError) naming the field and its range.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import math
 
 import pytest
 
+from supercoil.errors import InputError
 from supercoil.units import (
     ATHERMAL_CAVEAT,
     DEFAULT_SALT_MM,
@@ -104,7 +105,7 @@ def test_temperature_scales_kT_only():
 @pytest.mark.parametrize("value", [-3.5, -1e-3, 0.0, 0.25, 1.0, 42.0, 1e6])
 @pytest.mark.parametrize("preset", [
     PLASMID,
-    DNAPreset(base_pairs=1, superhelical_density=0.1, salt_mM=10.0, temperature_K=277.0),
+    DNAPreset(base_pairs=200, superhelical_density=0.1, salt_mM=10.0, temperature_K=277.0),
     DNAPreset(base_pairs=48502, diameter_nm=2.0, twist_persistence_nm=110.0),
 ])
 def test_converters_round_trip(preset, value):
@@ -138,7 +139,7 @@ def test_scales_are_the_units_of_the_model():
 def test_salt_table_reproduces_its_points_exactly():
     for salt, diameter in EFFECTIVE_DIAMETER_TABLE:
         assert effective_diameter_nm(salt) == diameter
-        assert DNAPreset(base_pairs=100, salt_mM=salt).effective_diameter_nm == diameter
+        assert DNAPreset(base_pairs=300, salt_mM=salt).effective_diameter_nm == diameter
     assert SALT_RANGE_MM == (EFFECTIVE_DIAMETER_TABLE[0][0], EFFECTIVE_DIAMETER_TABLE[-1][0])
 
 
@@ -175,32 +176,37 @@ def test_salt_outside_the_table_is_refused(salt):
 @pytest.mark.parametrize(
     ("kwargs", "error", "words"),
     [
-        ({"base_pairs": 0}, ValueError, "base_pairs must be at least 1"),
-        ({"base_pairs": -5}, ValueError, "base_pairs must be at least 1"),
-        ({"base_pairs": 2.5}, ValueError, "whole number"),
-        ({"base_pairs": float("nan")}, ValueError, "whole number"),
-        ({"base_pairs": True}, TypeError, "whole number"),
-        ({"base_pairs": "100"}, TypeError, "whole number"),
-        ({"superhelical_density": float("nan")}, ValueError, "superhelical_density"),
-        ({"superhelical_density": float("inf")}, ValueError, "superhelical_density"),
-        ({"superhelical_density": "-0.06"}, TypeError, "superhelical_density"),
-        ({"temperature_K": 0.0}, ValueError, "temperature_K must be positive"),
-        ({"temperature_K": -273.0}, ValueError, "temperature_K must be positive"),
-        ({"temperature_K": float("nan")}, ValueError, "temperature_K"),
-        ({"salt_mM": float("nan")}, ValueError, "salt concentration"),
-        ({"salt_mM": 100.0, "diameter_nm": 5.0}, ValueError, "not both"),
-        ({"diameter_nm": 0.0}, ValueError, "diameter_nm must be positive"),
-        ({"diameter_nm": float("inf")}, ValueError, "diameter_nm"),
-        ({"bending_persistence_nm": 0.0}, ValueError, "bending_persistence_nm"),
-        ({"twist_persistence_nm": -95.0}, ValueError, "twist_persistence_nm"),
-        ({"rise_nm_per_bp": 0.0}, ValueError, "rise_nm_per_bp"),
-        ({"helical_repeat_bp": float("nan")}, ValueError, "helical_repeat_bp"),
+        ({"base_pairs": 0}, InputError, "base_pairs must be a whole number from 12 to"),
+        ({"base_pairs": -5}, InputError, "base_pairs must be a whole number from 12 to"),
+        ({"base_pairs": 10**8}, InputError, "from 12 to 10000000, got 100000000"),
+        ({"base_pairs": 2.5}, InputError, "whole number"),
+        ({"base_pairs": float("nan")}, InputError, "whole number"),
+        ({"base_pairs": True}, InputError, "whole number"),
+        ({"base_pairs": "100"}, InputError, "whole number"),
+        ({"base_pairs": 20}, InputError, r"base_pairs = 20 .* L/D > pi: give base_pairs >= "),
+        ({"superhelical_density": float("nan")}, InputError, "superhelical_density"),
+        ({"superhelical_density": float("inf")}, InputError, "superhelical_density"),
+        ({"superhelical_density": "-0.06"}, InputError, "superhelical_density"),
+        ({"superhelical_density": -6.0}, InputError, "from -1 to 1, got -6.0"),
+        ({"temperature_K": 0.0}, InputError, "temperature_K must be a number above 0"),
+        ({"temperature_K": -273.0}, InputError, "temperature_K must be a number above 0"),
+        ({"temperature_K": float("nan")}, InputError, "temperature_K"),
+        ({"salt_mM": float("nan")}, InputError, "salt concentration"),
+        ({"salt_mM": 100.0, "diameter_nm": 5.0}, InputError, "give one of them"),
+        ({"diameter_nm": 0.0}, InputError, "diameter_nm must be a number above 0"),
+        ({"diameter_nm": float("inf")}, InputError, "diameter_nm"),
+        ({"bending_persistence_nm": 0.0}, InputError, "bending_persistence_nm"),
+        ({"twist_persistence_nm": -95.0}, InputError, "twist_persistence_nm"),
+        ({"rise_nm_per_bp": 0.0}, InputError, "rise_nm_per_bp"),
+        ({"helical_repeat_bp": float("nan")}, InputError, "helical_repeat_bp"),
     ],
 )
 def test_bad_input_is_refused(kwargs, error, words):
+    """Every field is checked, with its valid range (an InputError, a ValueError)."""
     arguments = {"base_pairs": 1000, **kwargs}
-    with pytest.raises(error, match=words):
+    with pytest.raises(error, match=words) as info:
         DNAPreset(**arguments)
+    assert isinstance(info.value, ValueError)
 
 
 def test_whole_float_base_pairs_become_int_and_the_preset_is_immutable():

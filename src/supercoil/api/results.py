@@ -147,10 +147,10 @@ class Equilibrium:
         return self.status is EquilibriumStatus.STABLE
 
     def __repr__(self) -> str:
-        lines = [f"Equilibrium({self.status.name}: dLk = {self.excess_link:g}, "
-                 f"E = {self.energy:.8g}, Tw = {self.twist:.6g}, Wr = {self.writhe:.6g},",
-                 f"  unstable_count = {self.unstable_count}, zero_modes = "
-                 f"{self.stability.zero_modes}, N = {len(self.points)}"]
+        lines = [(f"Equilibrium({self.status.name}: dLk = {self.excess_link:g}, "
+                 f"E = {self.energy:.8g}, Tw = {self.twist:.6g}, Wr = {self.writhe:.6g},"),
+                 (f"  unstable_count = {self.unstable_count}, zero_modes = "
+                 f"{self.stability.zero_modes}, N = {len(self.points)}")]
         if self.contacts is not None:
             lines[-1] += (f", contact points {self.contacts.get('n_contact_points', 0)}, "
                           f"intervals {self.contacts.get('n_contact_intervals', 0)}, "

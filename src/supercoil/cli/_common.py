@@ -11,28 +11,22 @@ import math
 import os
 import re
 import sys
+from collections.abc import Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
 
 import typer
 
+from supercoil.errors import InputError
+
 EXIT_NOT_CONVERGED = 1
 EXIT_BAD_INPUT = 2
 
-# Bounds of the command-line inputs. The numerics would accept more, but beyond
-# these the run either exhausts memory (N = 1e9 asked for 24 GB before being
-# killed) or overflows (dLk = 1e300), so the command refuses them up front.
-MAX_NODES = 100_000
-CONTACT_CURVES = ("polygon", "spline", "quintic")  # supercoil.contact.problem.CURVES
-CONTACT_FORMULATIONS = ("pairs", "integral")  # supercoil.contact.problem.FORMULATIONS
 FORMULATION_HELP = ("How the contact potential is summed: integral (default: a double "
                     "integral over the strands, which counts a contact once wherever it lies; "
-                    "best with --contact-curve spline) or pairs (over segment pairs, the "
-                    "earlier default, whose count of one contact depends on the mesh; "
-                    "docs/benchmarks.md).")
-MIN_NODES = 8
-MAX_MAGNITUDE = 1e6  # |excess link| in turns, twist ratio C/A
-MAX_MAGNITUDE_TEXT = "1e6"
+                    "best with --contact-curve spline) or pairs (over segment pairs, whose "
+                    "count of one contact depends on the mesh).")
 
 
 def fail(message: str) -> NoReturn:
@@ -42,13 +36,59 @@ def fail(message: str) -> NoReturn:
     raise typer.Exit(EXIT_BAD_INPUT)
 
 
-def check_contact_choice(curve: str, formulation: str) -> None:
-    """``--contact-curve`` and ``--contact-formulation``: a one-line error (exit 2) unless valid."""
-    if curve not in CONTACT_CURVES:
-        fail(f"--contact-curve {curve!r}: give one of {', '.join(CONTACT_CURVES)}")
-    if formulation not in CONTACT_FORMULATIONS:
-        fail(f"--contact-formulation {formulation!r}: give one of "
-             f"{', '.join(CONTACT_FORMULATIONS)}")
+@contextmanager
+def refused(names: Mapping[str, str] | None = None, prefix: str = ""):
+    """Turn an :class:`~supercoil.errors.InputError` raised in the block into the command's
+    ``error:`` line (exit 2): the input's library name is replaced by ``names[name]`` (the
+    option, e.g. ``"twist_ratio"`` -> ``"--twist-ratio"``), ``prefix`` put before it.
+
+    An InputError raised inside a solve (Newton, stability, continuation) is a failure of
+    the numerics, not of the input: it is raised on, and reported as an internal error.
+    """
+    try:
+        yield
+    except InputError as exc:
+        if raised_while_solving(exc):
+            raise
+        fail(prefix + exc.renamed(dict(names or {})))
+
+
+def path_kind(option: str, path: Path) -> str:
+    """``"missing"``, ``"folder"``, ``"file"`` or ``"other"`` for ``path``; a one-line error
+    (exit 2) when the path cannot be looked at (a name too long, a loop of links, ...)."""
+    try:
+        if path.is_dir():
+            return "folder"
+        if path.is_file():
+            return "file"
+        return "other" if path.exists() else "missing"
+    except OSError as exc:
+        fail(f"{option} {_short(path)}: cannot be used ({exc.strerror or exc}); give a "
+             "shorter, valid path")
+
+
+MAX_NAME_BYTES = 255  # one file or folder name (the usual file systems' limit)
+MAX_PATH_BYTES = 4096  # a whole path (Linux's PATH_MAX)
+
+
+def checked_path(value: Path | None) -> Path | None:
+    """The ``callback`` of a path argument or option: a path with a name longer than 255
+    bytes, or longer than 4096 bytes in all, is refused with click's one-line error."""
+    if value is None:
+        return value
+    text = os.fsencode(str(value))
+    if len(text) > MAX_PATH_BYTES or any(len(os.fsencode(part)) > MAX_NAME_BYTES
+                                         for part in Path(value).parts):
+        raise typer.BadParameter(f"{_short(value)}: a name is longer than {MAX_NAME_BYTES} "
+                                 f"bytes or the path longer than {MAX_PATH_BYTES}; give a "
+                                 "shorter path")
+    return value
+
+
+def _short(path: Path, width: int = 80) -> str:
+    """The path as quoted in a message, cut to ``width`` characters."""
+    text = str(path)
+    return text if len(text) <= width else text[:width] + "..."
 
 
 def warn(message: str) -> None:
@@ -87,30 +127,6 @@ def raised_while_solving(exc: BaseException) -> bool:
             return True
         tb = tb.tb_next
     return False
-
-
-def require_finite(option: str, value: float, valid: str = "a finite number") -> None:
-    if not math.isfinite(value):
-        fail(f"{option} must be {valid}, got {value!r}")
-
-
-def require_positive(option: str, value: float, valid: str) -> None:
-    if not math.isfinite(value) or value <= 0:
-        fail(f"{option} must be {valid}, got {value!r}")
-
-
-def require_magnitude(option: str, value: float, valid: str) -> None:
-    """A finite number with ``|value| <= MAX_MAGNITUDE``."""
-    if not math.isfinite(value) or abs(value) > MAX_MAGNITUDE:
-        fail(f"{option} must be {valid}, got {value!r}")
-
-
-def require_nodes(option: str, value: int) -> None:
-    if not MIN_NODES <= value <= MAX_NODES:
-        fail(
-            f"{option} must be an integer from {MIN_NODES} to {MAX_NODES} "
-            f"(nodes of the discrete rod), got {value}"
-        )
 
 
 def require_count(option: str, value: int, low: int, high: int) -> None:
@@ -160,9 +176,12 @@ def check_json_target(path: str | None) -> None:
         return
     target = Path(path)
     folder = target.parent
-    if target.is_dir():
+    if len(target.name.encode()) > 255:
+        fail(f"--json {_short(target)}: the file name is longer than 255 bytes; give a "
+             "shorter name")
+    if path_kind("--json", target) == "folder":
         fail(f"--json {path}: is a folder; give a file path, or - for standard output")
-    if not folder.is_dir():
+    if path_kind("--json", folder) != "folder":
         fail(
             f"--json {path}: folder {folder} does not exist; give a path in an existing "
             "folder, or - for standard output"

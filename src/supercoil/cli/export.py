@@ -11,7 +11,8 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import fail, require_count
+from supercoil import checks
+from supercoil.cli._common import checked_path, fail, path_kind, refused, require_count
 
 FORMATS = ("vtk", "xyz", "pdb", "obj")
 
@@ -25,10 +26,10 @@ def export_command(
     result: Annotated[Path, typer.Argument(metavar="RESULT", help="A result: the --out "
                                            "folder of any command that computes, its "
                                            "result.h5, or its diagram.json or branch.json.",
-                                           show_default=False)],
+                                           show_default=False, callback=checked_path)],
     out: Annotated[Path, typer.Option("--out", metavar="FILE", help="The file to write; an "
                                       "existing file is refused unless --overwrite.",
-                                      show_default=False)],
+                                      show_default=False, callback=checked_path)],
     branch: Annotated[str | None, typer.Option(
         "--branch", metavar="NAME", help="Branch name (default: the only branch, or the "
         "last one computed).", show_default=False)] = None,
@@ -63,13 +64,18 @@ def export_command(
     if fmt not in FORMATS:
         fail(f"--format {fmt!r}: give one of {', '.join(FORMATS)}")
     require_count("--sides", sides, 3, 256)
-    if bp is not None and bp < 12:
-        fail(f"--bp {bp}: give a whole number of base pairs >= 12")
-    if out.is_dir():
+    if bp is not None:
+        with refused({"base_pairs": "--bp"}):
+            checks.integer("base_pairs", bp, checks.MIN_BASE_PAIRS, checks.MAX_BASE_PAIRS)
+    kind = path_kind("--out", out)
+    if kind == "folder":
         fail(f"--out {out}: is a folder; give a file path")
     if out.exists() and not overwrite:
         fail(f"--out {out}: exists; give another path or add --overwrite to replace it")
-    if not out.parent.is_dir():
+    if len(out.name.encode()) > 255:
+        fail(f"--out {str(out)[:80]}...: the file name is longer than 255 bytes; give a "
+             "shorter name")
+    if path_kind("--out", out.parent) != "folder":
         fail(f"--out {out}: folder {out.parent} does not exist; give a path in an existing "
              "folder")
     # a summary (diagram.json, branch.json) names the result file beside it

@@ -1,12 +1,13 @@
 """The ``supercoil`` command: thin, no numerics (parse, call the API, format, write).
 
-Numerical modules are imported inside the commands (JAX takes about a second
-to import), so that ``supercoil --help`` stays fast.
+The commands parse their options and construct the library's options and problems,
+which validate them: an :class:`~supercoil.errors.InputError` becomes the command's
+``error:`` line (exit 2), with the library's name of the input replaced by the option.
 """
 
 from __future__ import annotations
 
-import math
+import errno
 import os
 import sys
 import warnings
@@ -16,30 +17,26 @@ from typing import Annotated, NoReturn
 
 import typer
 
-from supercoil import __version__
+from supercoil import __version__, checks
 from supercoil.cli._common import (
     EXIT_BAD_INPUT,
     EXIT_NOT_CONVERGED,
     FORMULATION_HELP,
-    MAX_MAGNITUDE,
-    MAX_MAGNITUDE_TEXT,
-    check_contact_choice,
     check_json_target,
+    checked_path,
     fail,
     parse_ratio,
     parse_vector,
     raised_while_solving,
-    require_count,
-    require_finite,
-    require_magnitude,
-    require_nodes,
-    require_positive,
+    refused,
     warn,
     warning_in,
     write_json_or_fail,
 )
+from supercoil.contact.problem import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
 from supercoil.errors import InputError
-from supercoil.units.dna import (  # plain constants (math only): cheap at start-up
+from supercoil.problems.ring_diagram import CONTINUATION_TREATMENTS, MAX_MODE
+from supercoil.units.dna import (
     BENDING_PERSISTENCE_NM,
     DEFAULT_SALT_MM,
     HELICAL_REPEAT_BP,
@@ -77,16 +74,25 @@ app = typer.Typer(
 CLOSURES = ("closed", "none", "chord", "axis")
 NEWTON_TOLERANCE = 1e-10
 CONTACT_NEWTON_TOLERANCE = 1e-9  # residual of the contact solves (the default of the API)
-
-# Literal copies of supercoil.contact.problem.TREATMENTS, DEFAULT_TREATMENT and
-# of ContactOptions' default tolerances: importing that module pulls in numba
-# and scipy (about 0.6 s), too slow for ``supercoil --help``. tests/test_cli.py
-# asserts that the copies are equal to the originals.
-CONTACT_TREATMENTS = ("barrier", "augmented", "penalty", "exact")
-DEFAULT_CONTACT_TREATMENT = "barrier"
-BARRIER_ACTIVATION = 1e-2  # ContactOptions.barrier_activation, over D
-PENETRATION_TOLERANCE = 1e-4  # ContactOptions.penetration_tolerance, over D
-PENALTY_TOLERANCE = 5e-2  # ContactOptions.penalty_tolerance, over D
+_CONTACT_DEFAULTS = ContactOptions(diameter=1.0)  # the default tolerances, for the help
+_MAGNITUDE = f"{checks.MAX_MAGNITUDE:.0e}".replace("e+0", "e")  # 1e6, as the help says it
+# the library's names of the ring's inputs -> the options of 'supercoil ring'
+RING_OPTIONS = {"twist_ratio": "--twist-ratio", "excess_link": "--excess-link",
+                "n_nodes": "--nodes", "length_over_diameter": "--length-over-diameter",
+                "treatment": "--contact"}
+DNA_OPTIONS = {"base_pairs": "--bp", "superhelical_density": "--sigma",
+               "salt_mM": "--salt-mM", "diameter_nm": "--diameter-nm",
+               "temperature_K": "--temperature-K",
+               "twist_persistence_nm": "--twist-persistence-nm", "force_pN": "--force-pN"}
+DIAGRAM_OPTIONS = {"twist_ratio": "--twist-ratio",
+                   "length_over_diameter": "--length-over-diameter", "n_nodes": "--nodes",
+                   "modes": "--modes", "max_excess_link": "--max-excess-link",
+                   "contact": "--contact", "branch_depth": "--branch-depth",
+                   "contact_curve": "--contact-curve",
+                   "contact_formulation": "--contact-formulation",
+                   "contact_max_points": "--contact-max-points",
+                   "secondary_max_points": "--secondary-max-points",
+                   "secondary_max_branches": "--secondary-max-branches"}
 
 
 def _e(value: float) -> str:
@@ -96,22 +102,24 @@ def _e(value: float) -> str:
 
 
 _TREATMENT_HELP = {
-    "barrier": f"a barrier potential on gaps below {_e(BARRIER_ACTIVATION)} D that never lets "
+    "barrier": f"a barrier potential on gaps below {_e(_CONTACT_DEFAULTS.barrier_activation)} "
+    "D that never lets "
     "the tube touch (its forces are the contact forces)",
     "augmented": "augmented Lagrangian (penalty plus multiplier updates), penetration below "
-    f"{_e(PENETRATION_TOLERANCE)} D",
+    f"{_e(_CONTACT_DEFAULTS.penetration_tolerance)} D",
     "penalty": "quadratic penalty, which carries a force F only through a penetration F/k "
-    f"(accepted up to {_e(PENALTY_TOLERANCE)} D)",
+    f"(accepted up to {_e(_CONTACT_DEFAULTS.penalty_tolerance)} D)",
     "exact": "inequality constraints with an active set: the tube touches (penetration "
-    f"below {_e(PENETRATION_TOLERANCE)} D) and the contact forces are the multipliers",
+    f"below {_e(_CONTACT_DEFAULTS.penetration_tolerance)} D) and the contact forces are the "
+    "multipliers",
 }
 
 
 def _contact_help() -> str:
-    parts = "; ".join(f"{name} = {_TREATMENT_HELP[name]}" for name in CONTACT_TREATMENTS)
+    parts = "; ".join(f"{name} = {_TREATMENT_HELP[name]}" for name in TREATMENTS)
     return (
         f"How impenetrability is imposed (only with --length-over-diameter or --dna): {parts}. "
-        f"Default: {DEFAULT_CONTACT_TREATMENT}."
+        f"Default: {DEFAULT_TREATMENT}."
     )
 
 
@@ -161,7 +169,7 @@ def writhe(
             "commas), each vertex once (a closed curve does not repeat its first vertex); "
             "'#' starts a comment; blank lines are ignored. Any length unit: the writhe is "
             "scale-free.",
-            show_default=False,
+            show_default=False, callback=checked_path
         ),
     ],
     closure: Annotated[
@@ -205,25 +213,12 @@ def writhe(
     direction = parse_vector("--axis", axis)
     check_json_target(json_path)
 
-    from supercoil.io.curves import CurveFileError, read_curve
-
-    try:
-        points = read_curve(file)
-    except CurveFileError as exc:
-        fail(str(exc))
-    needed = 3 if closure in ("closed", "chord") else 2
-    if len(points) < needed:
-        fail(
-            f"curve file {file}: {len(points)} vertex(es); closure {closure!r} needs at least "
-            f"{needed} vertices"
-        )
-
+    from supercoil.io.curves import read_curve
     from supercoil.topology import writhe as compute_writhe
 
-    try:
+    with refused({"points": f"curve file {file}", "axis": "--axis", "closure": "--closure"}):
+        points = read_curve(file)
         value = compute_writhe(points, closure=closure, axis=direction)
-    except ValueError as exc:
-        fail(f"curve file {file}: {exc}")
 
     payload = {"writhe": value, "n_nodes": len(points), "closure": closure}
     if closure == "axis":
@@ -249,7 +244,7 @@ def ring(
             "--twist-ratio",
             metavar="C/A",
             parser=parse_ratio,
-            help="Twist stiffness over bending stiffness, 0 < C/A <= 1e6 (dimensionless; "
+            help=f"Twist stiffness over bending stiffness, 0 < C/A <= {_MAGNITUDE} (dimensionless; "
             "1/(1 + Poisson ratio) for an isotropic elastic rod; "
             f"{TWIST_PERSISTENCE_NM:g}/{BENDING_PERSISTENCE_NM:g} = "
             f"{TWIST_PERSISTENCE_NM / BENDING_PERSISTENCE_NM:g} for DNA with --dna). Required "
@@ -263,7 +258,8 @@ def ring(
             "--excess-link",
             metavar="TURNS",
             help="Excess linking number dLk = Lk - Lk0 of the closed rod, in turns "
-            "(positive = right-handed, overwinding for DNA; |dLk| <= 1e6). Required unless "
+            f"(positive = right-handed, overwinding for DNA; |dLk| <= {_MAGNITUDE}). Required "
+            "unless "
             "--dna.",
             show_default=False,
         ),
@@ -273,7 +269,8 @@ def ring(
         typer.Option(
             "--nodes",
             metavar="N",
-            help="Number of nodes (vertices) of the discrete ring, 8 <= N <= 100000; the "
+            help=f"Number of nodes (vertices) of the discrete ring, {checks.MIN_NODES} <= N <= "
+            f"{checks.MAX_NODES}; the "
             "discretisation error falls as 1/N^2.",
         ),
     ] = 100,
@@ -311,7 +308,7 @@ def ring(
             "itself (non-neighbouring points at least D apart). The excess link counts as for "
             "the circle (twist = dLk - writhe), so a knot of writhe about W carries "
             "little twist only near --excess-link W (a trefoil: about +3 or -3).",
-            show_default=False,
+            show_default=False, callback=checked_path
         ),
     ] = None,
     dna: Annotated[
@@ -421,47 +418,31 @@ def ring(
                 fail(f"Missing option '{option}' ({meaning}); give --twist-ratio C/A "
                      "--excess-link TURNS, or DNA units --dna --bp N --sigma S "
                      "(see 'supercoil ring --help')")
-    require_positive(
-        "--twist-ratio",
-        twist_ratio,
-        f"a positive finite number with 0 < C/A <= {MAX_MAGNITUDE_TEXT}",
-    )
-    require_magnitude(
-        "--twist-ratio",
-        twist_ratio,
-        f"a positive finite number with 0 < C/A <= {MAX_MAGNITUDE_TEXT}",
-    )
-    require_magnitude(
-        "--excess-link",
-        excess_link,
-        f"a finite number of turns with |dLk| <= {MAX_MAGNITUDE_TEXT}",
-    )
-    require_nodes("--nodes", nodes)
-    if contact is not None and contact not in CONTACT_TREATMENTS:
-        fail(f"--contact: unknown treatment {contact!r}; valid: {', '.join(CONTACT_TREATMENTS)}")
-    lod_valid = f"a finite number with pi < L/D <= {MAX_MAGNITUDE_TEXT}"
-    if length_over_diameter is None:
-        for option, given in (("--contact", contact), ("--initial", initial)):
-            if given is not None:
-                fail(f"{option} needs --length-over-diameter L/D (self-contact of a tube of "
-                     f"diameter D = L/(L/D)); give it, e.g. --length-over-diameter 100")
-    else:
-        require_positive("--length-over-diameter", length_over_diameter, lod_valid)
-        require_magnitude("--length-over-diameter", length_over_diameter, lod_valid)
-        if length_over_diameter <= math.pi:
-            fail(f"--length-over-diameter: got {length_over_diameter:g}, but a ring of tube "
-                 f"diameter D needs L > pi D; give L/D > {math.pi:.4f}")
-    treatment = DEFAULT_CONTACT_TREATMENT if contact is None else contact
+    if contact is not None and length_over_diameter is None:
+        fail("--contact needs --length-over-diameter L/D (self-contact of a tube of diameter "
+             "D = L/(L/D)); give it, e.g. --length-over-diameter 100")
+    if initial is not None and length_over_diameter is None:
+        fail("--initial needs --length-over-diameter L/D (self-contact of a tube of diameter "
+             "D = L/(L/D)); give it, e.g. --length-over-diameter 100")
+    treatment = DEFAULT_TREATMENT if contact is None else contact
     check_json_target(json_path)
-    initial_points = None if initial is None else _read_initial_curve(initial)
     if overwrite and out is None:
         fail("--overwrite needs --out DIR (the folder whose files it replaces)")
     if out is not None:
         from supercoil.cli.saving import prepare_folder
 
-        prepare_folder(out, overwrite=overwrite, resume=False, what="the ring's files")
+        prepare_folder(out, overwrite=overwrite, resume=False, what="the ring's files",
+                       create=False)
+    initial_points = None
+    names = dict(RING_OPTIONS)
+    if initial is not None:
+        from supercoil.io.curves import read_curve
 
-    try:
+        with refused(prefix="--initial: "):
+            initial_points = read_curve(initial)
+        names["initial_points"] = f"--initial {initial}"
+
+    with refused(names):
         if length_over_diameter is None:
             from supercoil.problems.ring import solve_ring
 
@@ -474,14 +455,6 @@ def ring(
                                             n_nodes=nodes, treatment=treatment,
                                             tolerance=CONTACT_NEWTON_TOLERANCE,
                                             initial_points=initial_points)
-    except ValueError as exc:
-        if raised_while_solving(exc):
-            raise  # a failure of the numerics, not of the input: run() reports it
-        if initial is None:
-            fail(str(exc))
-        hint = ("; give a larger --length-over-diameter (a thinner tube) or a curve whose "
-                "non-neighbouring points are farther apart" if "penetrat" in str(exc) else "")
-        fail(f"--initial {initial}: {exc}{hint}")
     summary = result.summary()
     if preset is not None:
         from supercoil.units.dna import ring_summary_in_dna_units
@@ -584,72 +557,17 @@ def _dna_preset(twist_ratio, excess_link, length_over_diameter, bp, sigma, salt_
     if missing:
         fail(f"--dna needs {' and '.join(missing)}, e.g. supercoil ring --dna --bp 3000 "
              "--sigma -0.06")
-    if bp < 1:
-        fail(f"--bp must be a whole number of base pairs >= 1, got {bp}")
-    require_finite("--sigma", sigma, "a finite superhelical density (e.g. -0.06)")
     if salt_mM is not None and diameter_nm is not None:
         fail("--salt-mM and --diameter-nm both set the tube diameter; give one of them")
-    if diameter_nm is not None:
-        require_positive("--diameter-nm", diameter_nm, "a positive diameter in nm (e.g. 5)")
-    if temperature_K is not None:
-        require_positive("--temperature-K", temperature_K,
-                         "a positive temperature in kelvin (e.g. 298)")
-    if twist_persistence_nm is not None:
-        require_positive("--twist-persistence-nm", twist_persistence_nm,
-                         "a positive length in nm (e.g. 95)")
-    from supercoil.units.dna import DNAPreset, effective_diameter_nm
+    from supercoil.units.dna import DNAPreset
 
-    if salt_mM is not None:
-        try:
-            effective_diameter_nm(salt_mM)
-        except ValueError as exc:
-            fail(f"--salt-mM: {exc}")
     options = {"salt_mM": salt_mM, "diameter_nm": diameter_nm}
     if temperature_K is not None:
         options["temperature_K"] = temperature_K
     if twist_persistence_nm is not None:
         options["twist_persistence_nm"] = twist_persistence_nm
-    try:
-        preset = DNAPreset(base_pairs=bp, superhelical_density=sigma, **options)
-    except ValueError as exc:
-        fail(f"--dna: {exc}")
-    if abs(preset.excess_link) > MAX_MAGNITUDE:
-        fail(f"--sigma {sigma:g} with --bp {bp} gives dLk = {preset.excess_link:.6g} turns; "
-             f"|dLk| must be <= {MAX_MAGNITUDE_TEXT}")
-    lod = preset.length_over_diameter
-    diameter = preset.effective_diameter_nm
-    if lod <= math.pi:
-        fail(f"--bp {bp}: a ring {preset.length_nm:g} nm long with tube diameter "
-             f"{diameter:.3g} nm has L/D = {lod:.3g}, but a ring needs L/D > pi; give "
-             f"--bp >= {math.floor(math.pi * diameter / preset.rise_nm_per_bp) + 1}")
-    if lod > MAX_MAGNITUDE or preset.twist_ratio > MAX_MAGNITUDE:
-        fail(f"--dna: L/D = {lod:.3g} and C/A = {preset.twist_ratio:.3g} must be <= "
-             f"{MAX_MAGNITUDE_TEXT}; give fewer --bp or a larger --twist-persistence-nm")
-    return preset
-
-
-def _read_initial_curve(path: Path):
-    """The vertices of ``--initial PATH`` (a closed polygon), or a one-line error."""
-    from supercoil.io.curves import CurveFileError, read_curve
-
-    try:
-        points = read_curve(path)
-    except CurveFileError as exc:
-        fail(f"--initial: {exc}")
-    if len(points) < 3:
-        fail(f"--initial: curve file {path}: {len(points)} vertex(es); a closed curve needs "
-             "at least 3 vertices 'x y z'")
-    import numpy as np
-
-    edges = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
-    zero = np.flatnonzero(edges == 0.0)
-    if zero.size:
-        k = int(zero[0])
-        hint = (" (do not repeat the first vertex at the end: the last vertex is joined "
-                "to the first)" if k == len(points) - 1 else "")
-        fail(f"--initial: curve file {path}: vertices {k} and {(k + 1) % len(points)} "
-             f"coincide; consecutive vertices must be distinct{hint}")
-    return points
+    with refused(DNA_OPTIONS):
+        return DNAPreset(base_pairs=bp, superhelical_density=sigma, **options)
 
 
 # ----------------------------------------------------------------------- demo
@@ -665,7 +583,7 @@ def demo(
             help="Folder for the result and figures. Default: ./supercoil-demo, or "
             "./supercoil-demo-2, -3, ... if that exists. An existing non-empty DIR is "
             "refused unless --overwrite or --resume.",
-            show_default=False,
+            show_default=False, callback=checked_path
         ),
     ] = None,
     overwrite: Annotated[
@@ -718,8 +636,6 @@ diagram_app = typer.Typer(
 )
 app.add_typer(diagram_app, name="diagram")
 
-DIAGRAM_TREATMENTS = ("barrier", "penalty")  # supercoil.problems.ring_diagram's
-
 
 @diagram_app.command("ring")
 def diagram_ring(
@@ -727,7 +643,7 @@ def diagram_ring(
         float,
         typer.Option("--twist-ratio", metavar="C/A", parser=parse_ratio,
                      help="Twist stiffness over bending "
-                     "stiffness, 0 < C/A <= 1e6 (2/3 in seed 001's DNA example).",
+                     f"stiffness, 0 < C/A <= {_MAGNITUDE} (2/3 in seed 001's DNA example).",
                      show_default=False),
     ],
     length_over_diameter: Annotated[
@@ -740,7 +656,7 @@ def diagram_ring(
         Path,
         typer.Option("--out", metavar="DIR", help="Folder for result.h5, diagram.json and "
                      "the figures; an existing non-empty DIR is refused unless --overwrite "
-                     "or --resume.", show_default=False),
+                     "or --resume.", show_default=False, callback=checked_path),
     ],
     nodes: Annotated[
         int,
@@ -760,8 +676,8 @@ def diagram_ring(
     contact: Annotated[
         str,
         typer.Option("--contact", metavar="TREATMENT", help="Self-contact treatment of the "
-                     "contact branches: barrier (default; never penetrates) or penalty "
-                     "(exact and augmented are not continued yet)."),
+                     f"contact branches: {' or '.join(CONTINUATION_TREATMENTS)} (barrier, the "
+                     "default, never penetrates; exact and augmented are not continued)."),
     ] = "barrier",
     contact_max_points: Annotated[
         int,
@@ -823,35 +739,15 @@ def diagram_ring(
     stable parts heavy), contact_map.png (s/L of the contacts against Wr) and
     configurations.png (tubes of diameter D) into --out.
     """
-    require_magnitude("--twist-ratio", twist_ratio, "a positive number up to 1e6")
-    require_positive("--twist-ratio", twist_ratio, "a positive number up to 1e6")
-    require_positive("--length-over-diameter", length_over_diameter,
-                     f"a finite number above pi ({math.pi:.4f})")
-    if length_over_diameter <= math.pi:
-        fail(f"--length-over-diameter {length_over_diameter:g} is too small: a ring of "
-             f"diameter D needs L/D > pi ({math.pi:.4f})")
-    require_nodes("--nodes", nodes)
-    require_positive("--max-excess-link", max_excess_link, "a positive number of turns")
-    require_magnitude("--max-excess-link", max_excess_link, "a positive number up to 1e6")
     words = modes.replace(",", " ").split()
-    if not words or not all(w.isdigit() and 2 <= int(w) <= 12 for w in words) \
-            or len(set(words)) != len(words):
-        fail(f"--modes {modes!r}: give distinct Michell modes from 2 to 12 separated by "
-             "commas, like 2,3 (2 = alpha, 3 = beta)")
-    if contact not in DIAGRAM_TREATMENTS:
-        fail(f"--contact {contact!r}: give one of {', '.join(DIAGRAM_TREATMENTS)}")
-    if branch_depth not in (1, 2, 3):
-        fail(f"--branch-depth {branch_depth}: give 1 (primary branches), 2 (and secondary) "
-             "or 3 (and tertiary)")
-    require_count("--contact-max-points", contact_max_points, 2, 100_000)
-    require_count("--secondary-max-points", secondary_max_points, 2, 100_000)
-    require_count("--secondary-max-branches", secondary_max_branches, 0, 1000)
-    check_contact_choice(contact_curve, contact_formulation)
+    if not words or not all(w.isdigit() for w in words):
+        fail(f"--modes {modes!r}: give distinct Michell modes from 2 to {MAX_MODE} separated "
+             "by commas, like 2,3 (2 = alpha, 3 = beta)")
     from supercoil.cli.diagram_output import diagram_settings, incomplete_message, run_diagram
     from supercoil.cli.saving import nothing_to_resume, prepare_folder
     from supercoil.problems.ring_diagram import DiagramOptions
 
-    try:
+    with refused(DIAGRAM_OPTIONS):
         options = DiagramOptions(twist_ratio, length_over_diameter, nodes,
                                  tuple(int(w) for w in words), max_excess_link, contact,
                                  branch_depth=branch_depth, contact_curve=contact_curve,
@@ -859,8 +755,6 @@ def diagram_ring(
                                  contact_max_points=contact_max_points,
                                  secondary_max_points=secondary_max_points,
                                  secondary_max_branches=secondary_max_branches)
-    except ValueError as exc:
-        fail(str(exc))
     stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="ring_diagram",
                             settings=diagram_settings(options, "diagram ring"),
                             what="the diagram's files")
@@ -953,9 +847,25 @@ def run(argv: Sequence[str] | None = None) -> int:
     except Abort:
         print("error: aborted", file=sys.stderr, flush=True)
         return 1
-    except InputError as exc:  # e.g. a damaged result file met past the command's checks
+    except InputError as exc:
+        if debug:
+            raise
+        if raised_while_solving(exc):  # a failure of the numerics, not of the input
+            print(f"error: internal error: {type(exc).__name__}: {_one_line(exc)} (please "
+                  "report)", file=sys.stderr, flush=True)
+            return EXIT_NOT_CONVERGED
         print(f"error: {_one_line(exc)}", file=sys.stderr, flush=True)
         return EXIT_BAD_INPUT
+    except OSError as exc:
+        if debug:
+            raise
+        if exc.errno in (errno.ENAMETOOLONG, errno.ELOOP):  # a path the user gave
+            print(f"error: {exc.filename}: {exc.strerror}; give a shorter, valid path",
+                  file=sys.stderr, flush=True)
+            return EXIT_BAD_INPUT
+        print(f"error: internal error: {type(exc).__name__}: {_one_line(exc)} (please report)",
+              file=sys.stderr, flush=True)
+        return EXIT_NOT_CONVERGED
     except Exception as exc:
         if debug:
             raise

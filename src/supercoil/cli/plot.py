@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import fail
+from supercoil.cli._common import checked_path, fail
 
 KINDS = ("diagram", "contact-map", "hat-curve", "configurations")  # figures.KINDS
 FORMATS = ("png", "svg")
@@ -23,13 +23,15 @@ def plot(
         Path,
         typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
                        "that computes (demo, diagram ring, tweezers, run, ring --out), its "
-                       "result.h5, or its diagram.json or branch.json.", show_default=False),
+                       "result.h5, or its diagram.json or branch.json.", show_default=False,
+                       callback=checked_path),
     ],
     out: Annotated[
         Path,
         typer.Option("--out", metavar="DIR", help="Folder for the figures (created if "
                      "missing). Existing figure files of the same names are refused "
-                     "unless --overwrite; other files are left alone.", show_default=False),
+                     "unless --overwrite; other files are left alone.", show_default=False,
+                       callback=checked_path),
     ],
     kind: Annotated[
         list[str] | None,

@@ -48,9 +48,10 @@ def ring_payload(summary: dict, curvature) -> dict:
 def write_ring(out: Path, branch, data: dict, *, settings: dict, attributes: dict,
                provenance: dict, units: str, converged: bool) -> None:
     """``out/result.h5`` (the branch, ``data`` as its summary) and ``out/ring.json``."""
-    from supercoil.cli.saving import open_writer
+    from supercoil.cli.saving import create_folder, open_writer
     from supercoil.io.results import write_json
 
+    create_folder(out)
     writer = open_writer(out, resume=False, problem="ring", settings=settings,
                          attributes=attributes, provenance=provenance, units=units)
     writer.write_branch(branch, complete=True, contact="diameter" in attributes)

@@ -24,7 +24,7 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import EXIT_NOT_CONVERGED, fail, warn
+from supercoil.cli._common import EXIT_NOT_CONVERGED, checked_path, fail, warn
 
 RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
 SUMMARY_FILES = {"ring_diagram": "diagram.json", "ring": "ring.json",
@@ -42,11 +42,12 @@ def register(app: typer.Typer) -> None:
 def run_command(
     study: Annotated[Path, typer.Argument(metavar="STUDY.toml", help="The study file (TOML): "
                                           "rod, units, problem, continuation, outputs; "
-                                          "see examples/*.toml.", show_default=False)],
+                                          "see examples/*.toml.", show_default=False,
+                                          callback=checked_path)],
     out: Annotated[Path | None, typer.Option(
         "--out", metavar="DIR", help="Output folder (default: the study's file name without "
         ".toml); an existing non-empty DIR is refused unless --overwrite or --resume.",
-        show_default=False)] = None,
+        show_default=False, callback=checked_path)] = None,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in DIR (its result.h5): completed "
         "branches are kept. The study must be the same (presentation keys aside).")] = False,
@@ -81,11 +82,14 @@ def run_command(
     out = Path(study.stem) if out is None else out
     result_path = out / RESULT_FILE
     stored = _prepare_folder(out, spec, resume, overwrite)
-    if stored is not None and stored.status == "complete":
+    if stored is not None and stored.status in ("complete", "incomplete"):
+        # every branch ended (an incomplete one by its point limit): resuming changes nothing
         if not quiet:
-            print(f"nothing to resume: {result_path} is complete ({stored.message})")
+            print(f"nothing to resume: {result_path} is {stored.status} ({stored.message})")
         if json_path is not None and stored.summary is not None:
             write_json_or_fail(stored.summary, json_path)
+        if stored.status != "complete":
+            raise typer.Exit(EXIT_NOT_CONVERGED)
         return
     from supercoil.io.store import ResultFileError
 
@@ -111,39 +115,19 @@ def run_command(
 
 
 def _prepare_folder(out: Path, spec, resume: bool, overwrite: bool):
-    """The folder checks (one-line errors, nothing written before they pass); with
-    ``resume`` the stored result (a :class:`~supercoil.io.store.Result`), else None."""
-    from supercoil.io.store import ResultFileError, load
+    """The folder checks of :func:`supercoil.cli.saving.prepare_folder` (one-line errors,
+    nothing written before they pass); with ``resume`` the stored result (a
+    :class:`~supercoil.io.store.Result`) computed from the same study, else None."""
+    from supercoil.cli.saving import prepare_folder
 
-    if out.exists() and not out.is_dir():
-        fail(f"--out {out}: is a file, not a folder; give a new folder")
-    result_path = out / RESULT_FILE
-    if resume:
-        if not result_path.is_file():
-            fail(f"--resume: {result_path} does not exist; nothing to resume (run without "
-                 "--resume to start)")
-        try:
-            stored = load(result_path)
-        except ResultFileError as exc:
-            fail(f"--resume: {exc}")
+    stored = prepare_folder(out, overwrite=overwrite, resume=resume, what="its results")
+    if stored is not None:
         mismatch = settings_mismatch(stored, spec)
         if mismatch:
-            fail(f"--resume: {result_path} was computed with another study ({mismatch}); "
+            fail(f"--resume: {out / RESULT_FILE} was computed with another study ({mismatch}); "
                  "resume with the same study, or start anew with --overwrite or another "
                  "--out")
-        return stored
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
-        fail(f"--out {out}: folder exists and is not empty; give a new folder, add --resume "
-             "to continue its run, or --overwrite to replace its results")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".supercoil-write-test"
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as exc:
-        fail(f"--out {out}: cannot write there ({exc.strerror or exc}); give a folder in a "
-             "writable location")
-    return None
+    return stored
 
 
 def settings_mismatch(stored, spec) -> str | None:

@@ -18,7 +18,7 @@ import signal
 import threading
 from pathlib import Path
 
-from supercoil.cli._common import fail, warn
+from supercoil.cli._common import MAX_NAME_BYTES, fail, path_kind, warn
 
 RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
 
@@ -72,16 +72,23 @@ def settings_mismatch(have, want, where: str = "") -> str | None:
 
 def prepare_folder(out: Path, *, overwrite: bool, resume: bool, problem: str | None = None,
                    settings: dict | None = None, what: str = "this command's files",
-                   same_as: str = "the same options"):
+                   same_as: str = "the same options", create: bool = True):
     """Check ``--out`` before anything is written; with ``resume`` return the stored
     :class:`~supercoil.io.store.Result` (refused when its ``problem`` or ``settings``
-    differ from the given ones), else None. One-line errors, exit 2."""
+    differ from the given ones), else None. One-line errors, exit 2. The folder is
+    created (and tried for writing) unless ``create`` is False: call it after every
+    other input passed, so that a refused input leaves nothing behind."""
     if resume and overwrite:
         fail("--resume and --overwrite exclude each other: --resume continues DIR's result, "
              "--overwrite replaces it")
-    if out.exists() and not out.is_dir():
+    if any(len(part.encode()) > MAX_NAME_BYTES for part in out.parts):
+        fail(f"--out {str(out)[:80]}...: a folder name is longer than {MAX_NAME_BYTES} bytes; "
+             "give a shorter name")
+    if path_kind("--out", out) not in ("missing", "folder"):
         fail(f"--out {out}: is a file, not a folder; give a new folder")
     result_path = out / RESULT_FILE
+    if path_kind("--out", result_path) not in ("missing", "file"):
+        fail(f"--out {out}: {result_path} is not a file; remove it or give another folder")
     if resume:
         from supercoil.io.store import ResultFileError, load
 
@@ -105,6 +112,13 @@ def prepare_folder(out: Path, *, overwrite: bool, resume: bool, problem: str | N
     if out.is_dir() and any(out.iterdir()) and not overwrite:
         fail(f"--out {out}: folder exists and is not empty; give a new folder, add --resume "
              f"to continue its result, or --overwrite to replace {what} in it")
+    if create:
+        create_folder(out)
+    return None
+
+
+def create_folder(out: Path) -> None:
+    """Create ``--out`` and try writing in it; a one-line error (exit 2) if it cannot be."""
     try:
         out.mkdir(parents=True, exist_ok=True)
         probe = out / ".supercoil-write-test"
@@ -113,7 +127,6 @@ def prepare_folder(out: Path, *, overwrite: bool, resume: bool, problem: str | N
     except OSError as exc:
         fail(f"--out {out}: cannot write there ({exc.strerror or exc}); give a folder in a "
              "writable location")
-    return None
 
 
 def open_writer(out: Path, *, resume: bool, problem: str, settings: dict,

@@ -9,7 +9,6 @@ envelope) and the figures of :mod:`supercoil.plotting.tweezers` into ``--out``.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated
 
@@ -17,13 +16,10 @@ import typer
 
 from supercoil.cli._common import (
     EXIT_NOT_CONVERGED,
-    check_contact_choice,
+    checked_path,
     fail,
     parse_ratio,
-    require_count,
-    require_magnitude,
-    require_nodes,
-    require_positive,
+    refused,
     warn,
 )
 
@@ -32,18 +28,28 @@ OUTPUT_FILES = ("result.h5", "branch.json", "hat_curve.png", "torque.png", "writ
                 "configurations.png")
 
 
+# the library's names of the inputs -> the options of 'supercoil tweezers'
+TWEEZERS_OPTIONS = {"twist_ratio": "--twist-ratio",
+                    "length_over_diameter": "--length-over-diameter", "tension": "--tension",
+                    "end_distance": "--end-distance", "turns": "--turns", "n_nodes": "--nodes",
+                    "max_points": "--max-points", "contact_curve": "--contact-curve",
+                    "contact_formulation": "--contact-formulation", "protocol": "--protocol",
+                    "step": "--step", "force_range": "--force-range",
+                    "force_step": "--force-step", "base_pairs": "--bp",
+                    "force_pN": "--force-pN", "salt_mM": "--salt-mM",
+                    "diameter_nm": "--diameter-nm", "temperature_K": "--temperature-K"}
+
+
 def parse_turns(text: str) -> tuple[float, float]:
-    """``"START:STOP"`` -> ``(start, stop)``, ``0 <= start < stop``; one-line error otherwise."""
+    """``"START:STOP"`` -> ``(start, stop)``; a one-line error unless two numbers (their
+    range is checked by :class:`~supercoil.problems.tweezers.TweezersOptions`)."""
     words = text.split(":")
     try:
         if len(words) != 2:
             raise ValueError
-        start, stop = float(words[0]), float(words[1])
+        return float(words[0]), float(words[1])
     except ValueError:
         fail(f"--turns {text!r}: give START:STOP in turns, like 0:5")
-    if not (math.isfinite(start) and math.isfinite(stop) and 0 <= start < stop <= 1e3):
-        fail(f"--turns {text!r}: need 0 <= START < STOP <= 1000 (turns), like 0:5")
-    return start, stop
 
 
 def tweezers(
@@ -53,7 +59,7 @@ def tweezers(
     out: Annotated[Path, typer.Option(
         "--out", metavar="DIR", help="Folder for result.h5, branch.json and the figures; "
         "an existing non-empty DIR is refused unless --overwrite or --resume.",
-        show_default=False)],
+        show_default=False, callback=checked_path)],
     twist_ratio: Annotated[float | None, typer.Option(
         "--twist-ratio", metavar="C/A", parser=parse_ratio, help="Twist stiffness over bending stiffness, "
         "0 < C/A <= 1e6 (4/3 in the benchmark); not with --dna.", show_default=False)] = None,
@@ -157,48 +163,35 @@ def tweezers(
         if twist_ratio is None:
             fail("--twist-ratio C/A is missing; give it (e.g. --twist-ratio 1.3333), or use "
                  "--dna --bp N --force-pN F")
-    require_magnitude("--twist-ratio", twist_ratio, "a positive number up to 1e6")
-    require_positive("--twist-ratio", twist_ratio, "a positive number up to 1e6")
     start, stop = parse_turns(turns)
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
              "--end-distance Z/L (displacement control, 0 < z/L < 1)")
-    if tension is not None and not (math.isfinite(tension) and 0 <= tension <= 1e6):
-        fail(f"--tension {tension:g}: give a force F L^2/A from 0 to 1e6")
-    if end_distance is not None and not (math.isfinite(end_distance)
-                                         and 0 < end_distance < 1):
-        fail(f"--end-distance {end_distance:g}: give z/L strictly between 0 and 1 (an "
-             "inextensible rod of length L)")
-    if length_over_diameter is not None:
-        require_positive("--length-over-diameter", length_over_diameter,
-                         f"a finite number above pi ({math.pi:.4f})")
-        if length_over_diameter <= math.pi:
-            fail(f"--length-over-diameter {length_over_diameter:g} is too small: a tube of "
-                 f"diameter D needs L/D > pi ({math.pi:.4f})")
-    require_nodes("--nodes", nodes)
-    if nodes < 12:
-        fail(f"--nodes {nodes}: a clamped rod needs at least 12 nodes")
     if protocol not in PROTOCOLS:
-        fail(f"--protocol {protocol!r}: give up or up-down (force-ramp is not implemented "
-             "yet)")
+        fail(f"--protocol {protocol!r}: give one of {', '.join(PROTOCOLS)}")
     if protocol != "up" and tension is None:
         fail(f"--protocol {protocol} needs --tension (load control, the tweezers experiment)")
     ramp = None
     if protocol == "force-ramp":
         ramp = _force_range(force_range, tension, preset)
-        if force_step is not None:
-            if not (math.isfinite(force_step) and force_step > 0):
-                fail(f"--force-step {force_step:g}: give a positive force step")
-            if preset is not None:
+        if force_step is not None and preset is not None:
+            with refused(TWEEZERS_OPTIONS):
                 force_step = preset.force_from_pN(force_step)
     elif force_range is not None or force_step is not None:
         fail("--force-range and --force-step need --protocol force-ramp")
-    if not (math.isfinite(step) and 0 < step <= stop - start):
-        fail(f"--step {step:g}: give a positive number of turns up to STOP - START")
-    require_count("--max-points", max_points, 2, 100_000)
-    check_contact_choice(contact_curve, contact_formulation)
     from supercoil.cli.saving import nothing_to_resume, prepare_folder
+    from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+    from supercoil.problems.tweezers_protocol import check_path
 
+    with refused(TWEEZERS_OPTIONS):
+        options = TweezersOptions(twist_ratio=twist_ratio,
+                                  length_over_diameter=length_over_diameter, tension=tension,
+                                  end_distance=end_distance, turns=(start, stop),
+                                  n_nodes=nodes, max_points=max_points,
+                                  contact_curve=contact_curve,
+                                  contact_formulation=contact_formulation)
+        if protocol != "up":
+            check_path(options, protocol, step, force_range=ramp, force_step=force_step)
     settings = {"command": "tweezers", "twist_ratio": twist_ratio,
                 "length_over_diameter": length_over_diameter, "tension": tension,
                 "end_distance": end_distance, "turns": [start, stop], "nodes": nodes,
@@ -212,22 +205,9 @@ def tweezers(
         return
     from supercoil.plotting.painter import Painter
 
-    # started before the numerical imports (0.4-0.5 s) and the computation: the figure
-    # helper imports matplotlib meanwhile, on the other core
+    # started before the computation: the figure helper imports matplotlib meanwhile, on
+    # the other core
     with Painter() as painter:
-        from supercoil._gc import imports_done
-        from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
-
-        imports_done()
-        try:
-            options = TweezersOptions(twist_ratio=twist_ratio,
-                                      length_over_diameter=length_over_diameter, tension=tension,
-                                      end_distance=end_distance, turns=(start, stop),
-                                      n_nodes=nodes, max_points=max_points,
-                                      contact_curve=contact_curve,
-                                      contact_formulation=contact_formulation)
-        except ValueError as exc:
-            fail(str(exc))
         control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")
         print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
               f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
@@ -408,10 +388,9 @@ def _force_range(text, tension, preset) -> tuple[float, float]:
         low, high = float(words[0]), float(words[1])
     except ValueError:
         fail(f"--force-range {text!r}: give LOW:HIGH, like 0:100")
-    if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high <= 1e6):
-        fail(f"--force-range {text!r}: need 0 <= LOW < HIGH <= 1e6")
     if preset is not None:
-        low, high = preset.force_from_pN(low), preset.force_from_pN(high)
+        with refused(TWEEZERS_OPTIONS):
+            low, high = preset.force_from_pN(low), preset.force_from_pN(high)
     return low, high
 
 
@@ -434,10 +413,8 @@ def _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp, fo
     kwargs = {"base_pairs": bp, "salt_mM": salt_mM, "diameter_nm": diameter_nm}
     if temperature_K is not None:
         kwargs["temperature_K"] = temperature_K
-    try:
+    with refused(TWEEZERS_OPTIONS):
         preset = DNAPreset(**kwargs)
         numbers = tweezers_parameters(preset, force_pN)
-    except (TypeError, ValueError) as exc:
-        fail(f"--dna: {exc}")
     return (preset, numbers["twist_ratio"], numbers["tension"],
             numbers["length_over_diameter"])

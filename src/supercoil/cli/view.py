@@ -11,7 +11,7 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import fail
+from supercoil.cli._common import checked_path, fail
 
 
 def view(
@@ -19,13 +19,15 @@ def view(
         Path,
         typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
                        "that computes (demo, diagram ring, tweezers, run, ring --out), its "
-                       "result.h5, or its diagram.json or branch.json.", show_default=False),
+                       "result.h5, or its diagram.json or branch.json.", show_default=False,
+                       callback=checked_path),
     ],
     out: Annotated[
         Path | None,
         typer.Option("--out", metavar="FILE.html", help="The page to write. Default: "
                      "viewer.html in the result's folder. An existing file is refused "
-                     "unless --overwrite.", show_default=False),
+                     "unless --overwrite.", show_default=False,
+                       callback=checked_path),
     ] = None,
     overwrite: Annotated[
         bool,

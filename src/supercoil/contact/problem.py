@@ -73,6 +73,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from supercoil import checks
 from supercoil.contact import potentials
 from supercoil.contact.broadphase import candidate_pairs, verlet_displacement
 from supercoil.contact.ccd import (
@@ -124,15 +125,13 @@ DEFAULT_TREATMENT = "barrier"
 
 def validate_contact_choice(curve: str, formulation: str) -> None:
     """The drivers' check of ``contact_curve`` and ``contact_formulation`` (their key names
-    in the messages); raises ValueError."""
-    if curve not in CURVES:
-        raise ValueError(f"contact_curve must be one of {', '.join(CURVES)}, got {curve!r}")
-    if formulation not in FORMULATIONS:
-        raise ValueError(f"contact_formulation must be one of {', '.join(FORMULATIONS)}, "
-                         f"got {formulation!r}")
+    in the messages); raises :class:`~supercoil.errors.InputError`."""
+    checks.choice("contact_curve", curve, CURVES)
+    checks.choice("contact_formulation", formulation, FORMULATIONS)
     if curve == "quintic" and formulation != "integral":
-        raise ValueError(f"contact_curve 'quintic' needs contact_formulation 'integral' "
-                         f"(got {formulation!r})")
+        raise checks.refuse("contact_curve", f"'quintic' needs contact_formulation "
+                            f"'integral', got {formulation!r}; valid: spline or polygon with "
+                            "pairs, any curve with integral")
 
 
 @dataclass(frozen=True)
@@ -189,45 +188,35 @@ class ContactOptions:
     samples_per_segment: int | None = None
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.diameter) and self.diameter > 0):
-            raise ValueError(f"the tube diameter D must be positive and finite, got {self.diameter!r}")
-        if self.treatment not in TREATMENTS:
-            raise ValueError(f"contact treatment must be one of {', '.join(TREATMENTS)}; "
-                             f"got {self.treatment!r}")
-        if self.exclusion is not None and not (np.isfinite(self.exclusion) and self.exclusion >= 0):
-            raise ValueError(f"exclusion must be a non-negative arc length, got {self.exclusion!r}")
-        if self.stiffness is not None and not (np.isfinite(self.stiffness) and self.stiffness > 0):
-            raise ValueError(f"contact stiffness must be positive, got {self.stiffness!r}")
-        for name in ("stiffness_scale", "penetration_tolerance", "penalty_tolerance",
-                     "barrier_activation", "force_tolerance"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be positive, got {value!r}")
-        if self.max_outer_iterations < 1:
-            raise ValueError("max_outer_iterations must be >= 1")
+        checks.number("diameter", self.diameter, 0.0, low_open=True, meaning="tube diameter D")
+        checks.choice("treatment", self.treatment, TREATMENTS, meaning="contact treatment")
+        checks.optional_number("exclusion", self.exclusion, 0.0,
+                               meaning="arc length of neighbours")
+        checks.optional_number("stiffness", self.stiffness, 0.0, low_open=True,
+                               meaning="contact stiffness")
+        checks.number("stiffness_scale", self.stiffness_scale, 0.0, low_open=True)
+        for name in ("penetration_tolerance", "penalty_tolerance", "barrier_activation"):
+            checks.number(name, getattr(self, name), 0.0, 1.0, low_open=True,
+                          meaning="over D")
+        checks.number("force_tolerance", self.force_tolerance, 0.0, low_open=True)
+        checks.integer("max_outer_iterations", self.max_outer_iterations, 1, 100_000)
+        checks.flag("count_local_minima", self.count_local_minima)
+        checks.choice("formulation", self.formulation, FORMULATIONS,
+                      meaning="a sum over segment pairs or a double integral over the strands")
+        checks.choice("curve", self.curve, CURVES,
+                      meaning="the polygon's segments, the cubic or the quintic B-spline")
         if self.count_local_minima and self.curve != "spline":
-            raise ValueError("count_local_minima needs curve='spline'")
-        if self.formulation not in FORMULATIONS:
-            raise ValueError(f"contact formulation must be one of {', '.join(FORMULATIONS)} "
-                             f"(a sum over segment pairs or a double integral over the "
-                             f"strands); got {self.formulation!r}")
+            raise checks.refuse("count_local_minima", "needs curve='spline'")
         if self.formulation == "integral" and self.treatment not in ("barrier", "penalty"):
-            raise ValueError(f"the integral contact formulation takes the barrier or the "
-                             f"penalty treatment, not {self.treatment!r}")
+            raise checks.refuse("formulation", f"'integral' takes the barrier or the penalty "
+                                f"treatment, not {self.treatment!r}")
         if self.formulation == "integral" and self.count_local_minima:
-            raise ValueError("count_local_minima belongs to the pairs formulation")
-        if self.samples_per_segment is not None and not (
-                isinstance(self.samples_per_segment, (int, np.integer))
-                and self.samples_per_segment >= 1):
-            raise ValueError(f"samples_per_segment must be an integer >= 1, got "
-                             f"{self.samples_per_segment!r}")
-        if self.curve not in CURVES:
-            raise ValueError(f"contact curve must be one of {', '.join(CURVES)} (the polygon's "
-                             f"segments, the cubic or the quintic B-spline of the nodes); got "
-                             f"{self.curve!r}")
+            raise checks.refuse("count_local_minima", "belongs to the pairs formulation")
+        if self.samples_per_segment is not None:
+            checks.integer("samples_per_segment", self.samples_per_segment, 1, 1000)
         if self.curve == "quintic" and self.formulation != "integral":
-            raise ValueError("the quintic contact curve needs formulation='integral' (its "
-                             "distance is only sampled)")
+            raise checks.refuse("curve", "'quintic' needs formulation='integral' (its "
+                                "distance is only sampled)")
 
     @property
     def tolerance(self) -> float:

@@ -6,6 +6,8 @@ import enum
 import math
 from dataclasses import dataclass
 
+from supercoil.errors import InputError
+
 
 class ContinuationStatus(enum.Enum):
     """How a continuation run ended; :attr:`ok` runs ended where they were asked to."""
@@ -23,6 +25,13 @@ class ContinuationStatus(enum.Enum):
         return self in (ContinuationStatus.PARAMETER_BOUND, ContinuationStatus.MAX_POINTS,
                         ContinuationStatus.MAX_ARCLENGTH, ContinuationStatus.CLOSED_LOOP,
                         ContinuationStatus.STOPPED)
+
+    @property
+    def complete(self) -> bool:
+        """The run reached what it was asked to reach: a bound of the parameter or of the
+        arclength, a closed loop, or the caller's stop (a hand-over designed by the
+        caller). A run stopped by its point limit is :attr:`ok` but not complete."""
+        return self.ok and self is not ContinuationStatus.MAX_POINTS
 
 
 @dataclass(frozen=True)
@@ -188,44 +197,44 @@ class ContinuationOptions:
         def positive(name):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0):
-                raise ValueError(f"{name} must be positive, got {value!r}")
+                raise InputError(f"{name} must be positive, got {value!r}")
 
         for name in ("initial_step", "min_step", "max_step", "tolerance", "parameter_weight",
                      "zero_tolerance", "event_tolerance", "switch_below", "max_arclength",
                      "finite_difference_step", "max_turn_degrees", "closed_loop_tolerance"):
             positive(name)
         if not self.min_step <= self.initial_step <= self.max_step:
-            raise ValueError(f"need min_step <= initial_step <= max_step, got {self.min_step}, "
+            raise InputError(f"need min_step <= initial_step <= max_step, got {self.min_step}, "
                              f"{self.initial_step}, {self.max_step}")
         if not self.growth >= 1.0:
-            raise ValueError(f"growth must be >= 1, got {self.growth!r}")
+            raise InputError(f"growth must be >= 1, got {self.growth!r}")
         if not 0.0 < self.shrink < 1.0:
-            raise ValueError(f"shrink must be in (0, 1), got {self.shrink!r}")
+            raise InputError(f"shrink must be in (0, 1), got {self.shrink!r}")
         low, high = self.parameter_bounds
         if not low < high:
-            raise ValueError(f"parameter_bounds must be (low, high) with low < high, got "
+            raise InputError(f"parameter_bounds must be (low, high) with low < high, got "
                              f"{self.parameter_bounds!r}")
         if self.max_points < 2:
-            raise ValueError(f"max_points must be >= 2, got {self.max_points!r}")
+            raise InputError(f"max_points must be >= 2, got {self.max_points!r}")
         if self.fast_iterations < 0 or self.max_corrector_iterations < 1:
-            raise ValueError("fast_iterations must be >= 0 and max_corrector_iterations >= 1")
+            raise InputError("fast_iterations must be >= 0 and max_corrector_iterations >= 1")
         if self.direction not in (1, -1):
-            raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
+            raise InputError(f"direction must be +1 or -1, got {self.direction!r}")
         if self.gauge not in ("node", "integral"):
-            raise ValueError(f"gauge must be 'node' or 'integral', got {self.gauge!r}")
+            raise InputError(f"gauge must be 'node' or 'integral', got {self.gauge!r}")
         if self.rephase and self.gauge != "integral":
-            raise ValueError("rephase re-anchors the integral phase condition: it needs "
+            raise InputError("rephase re-anchors the integral phase condition: it needs "
                              f"gauge='integral', got gauge={self.gauge!r}")
         if self.predictor not in ("tangent", "secant", "quadratic"):
-            raise ValueError(f"predictor must be 'tangent', 'secant' or 'quadratic', "
+            raise InputError(f"predictor must be 'tangent', 'secant' or 'quadratic', "
                              f"got {self.predictor!r}")
         if self.n_modes < 1:
-            raise ValueError(f"n_modes must be >= 1, got {self.n_modes!r}")
+            raise InputError(f"n_modes must be >= 1, got {self.n_modes!r}")
         if self.max_corrector_distance is not None and not (
                 isinstance(self.max_corrector_distance, (int, float))
                 and math.isfinite(self.max_corrector_distance)
                 and self.max_corrector_distance > 0):
-            raise ValueError(f"max_corrector_distance must be None or a positive finite number, "
+            raise InputError(f"max_corrector_distance must be None or a positive finite number, "
                              f"got {self.max_corrector_distance!r}")
         if self.max_turn_degrees >= 180.0:
-            raise ValueError(f"max_turn_degrees must be below 180, got {self.max_turn_degrees!r}")
+            raise InputError(f"max_turn_degrees must be below 180, got {self.max_turn_degrees!r}")

@@ -133,7 +133,12 @@ def write_xyz(path, points, *, comment: str = "", element: str = "C") -> Path:
 def write_pdb(path, points_nm, *, closed: bool, rise_nm: float = 0.34, title: str = ""
               ) -> Path:
     """One bead per base pair (see the module docstring); ``points_nm`` in nm."""
-    beads = resample(points_nm, closed, rise_nm)
+    p = _points(points_nm)
+    length = float(arc_length(np.vstack([p, p[:1]]) if closed else p, False)[-1])
+    if not rise_nm > 0 or length / rise_nm > PDB_MAX_BEADS:  # before any bead is made
+        raise ValueError(f"about {length / rise_nm:.3g} beads: PDB atom numbers have five "
+                         f"digits (at most {PDB_MAX_BEADS} beads); export xyz or vtk instead")
+    beads = resample(p, closed, rise_nm)
     if len(beads) > PDB_MAX_BEADS:
         raise ValueError(f"{len(beads)} beads: PDB atom numbers have five digits (at most "
                          f"{PDB_MAX_BEADS} beads); export xyz or vtk instead")

@@ -25,9 +25,14 @@ displacement control) ("dna": ``force_pN``), ``turns`` = [start, stop];
 without ``[rod] length_over_diameter`` the rod has no self-contact.
 
 Every key is checked: an unknown or misspelled key, a key of another problem
-kind, a wrong type or a value out of range is a :class:`StudyError` whose
-message is one line naming the file, the table and key, what is wrong, what
-is valid, and the closest valid key (``difflib``).
+kind or a wrong type here; a value out of range by the options and problems
+the study constructs (:class:`~supercoil.problems.ring_diagram.DiagramOptions`,
+:class:`~supercoil.problems.tweezers.TweezersOptions`, the ring's solver,
+:class:`~supercoil.units.dna.DNAPreset`), so that a study and the command line
+accept the same values. Either is a :class:`StudyError` (an
+:class:`~supercoil.errors.InputError`) whose message is one line naming the
+file, the table and key, what is wrong, what is valid, and the closest valid
+key (``difflib``).
 
 :func:`load_study` returns a frozen :class:`Study`; its ``settings`` are the
 validated tables with every default filled in and, under the DNA preset, the
@@ -40,22 +45,21 @@ from __future__ import annotations
 
 import copy
 import difflib
-import math
 import tomllib
 from collections.abc import Callable, Iterable, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from supercoil import checks
+from supercoil.errors import InputError
+
 PROBLEM_KINDS = ("ring_diagram", "ring", "tweezers")
 UNITS_PRESETS = ("nondimensional", "dna")
-DIAGRAM_TREATMENTS = ("barrier", "penalty")
-RING_TREATMENTS = ("barrier", "augmented", "penalty", "exact")
-MAX_NODES = 100_000
-MAX_MAGNITUDE = 1e6
 
 
-class StudyError(ValueError):
+class StudyError(InputError):
     """A study file that cannot be run; one line naming the file, the key and the problem."""
 
 
@@ -94,35 +98,28 @@ class _Key:
     convert: Callable[[Any], Any] = lambda v: v
 
 
-def _number(low=-math.inf, high=math.inf, low_open=False, what="a number"):
-    def check(v):
-        if not _is_number(v) or not math.isfinite(v) or v > high:
-            return False
-        return v > low if low_open else v >= low
-    return check
-
-
-_POSITIVE = _number(0.0, MAX_MAGNITUDE, low_open=True)
+def _real(v) -> bool:
+    return _is_number(v)
 
 
 def _choice(options: tuple[str, ...]):
     return lambda v: isinstance(v, str) and v in options
 
 
-def _modes(v) -> bool:
-    return (isinstance(v, list) and len(v) > 0 and all(_is_int(m) and 2 <= m <= 12 for m in v)
-            and len(set(v)) == len(v))
+def _integers(v) -> bool:
+    return isinstance(v, list) and all(_is_int(m) for m in v)
 
 
-def _turns(v) -> bool:
-    return (isinstance(v, list) and len(v) == 2 and all(_is_number(x) and math.isfinite(x)
-                                                         for x in v) and 0 <= v[0] < v[1])
+def _numbers(v) -> bool:
+    return isinstance(v, list) and all(_is_number(x) for x in v)
 
 
-def _count(low: int, high: int):
-    return lambda v: _is_int(v) and low <= v <= high
+_NUMBER, _INTEGER = "a number", "an integer"
+_TURNS = "a list [start, stop] of numbers of turns"
 
-
+# Types only: the ranges are checked by the options and problems the study constructs
+# (DiagramOptions, TweezersOptions, the ring's solver, DNAPreset), which name the input;
+# their messages are given here with the study's table and key.
 _SCHEMA: dict[str, dict[str, _Key]] = {
     "study": {
         "name": _Key("a string", lambda v: isinstance(v, str), ""),
@@ -131,89 +128,77 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
     "units": {
         "preset": _Key(f"one of {', '.join(UNITS_PRESETS)}", _choice(UNITS_PRESETS),
                        "nondimensional"),
-        "base_pairs": _Key("a whole number of base pairs >= 12", _count(12, 10**7),
-                           presets=("dna",)),
-        "salt_mM": _Key("a monovalent salt concentration in mM (a positive number)",
-                        _POSITIVE, presets=("dna",), convert=float),
-        "diameter_nm": _Key("a tube diameter in nm (a positive number)", _POSITIVE,
+        "base_pairs": _Key("a whole number of base pairs", _is_int, presets=("dna",)),
+        "salt_mM": _Key("a monovalent salt concentration in mM (a number)", _real,
+                        presets=("dna",), convert=float),
+        "diameter_nm": _Key("a tube diameter in nm (a number)", _real,
                             presets=("dna",), convert=float),
-        "temperature_K": _Key("a temperature in kelvin (a positive number)", _POSITIVE,
+        "temperature_K": _Key("a temperature in kelvin (a number)", _real,
                               298.0, presets=("dna",), convert=float),
-        "twist_persistence_nm": _Key("a twist persistence length in nm (a positive number)",
-                                     _POSITIVE, 95.0, presets=("dna",), convert=float),
+        "twist_persistence_nm": _Key("a twist persistence length in nm (a number)",
+                                     _real, 95.0, presets=("dna",), convert=float),
     },
     "rod": {
-        "twist_ratio": _Key(f"C/A, a positive number up to {MAX_MAGNITUDE:g}", _POSITIVE,
-                            presets=("nondimensional",), convert=float),
-        "length_over_diameter": _Key(
-            f"L/D, a number above pi ({math.pi:.4f}) up to {MAX_MAGNITUDE:g}",
-            _number(math.pi, MAX_MAGNITUDE, low_open=True), presets=("nondimensional",),
-            convert=float),
-        "nodes": _Key(f"an integer from 8 to {MAX_NODES} (12 for tweezers)",
-                      _count(8, MAX_NODES), 100),
+        "twist_ratio": _Key("C/A, a number", _real, presets=("nondimensional",),
+                            convert=float),
+        "length_over_diameter": _Key("L/D, a number", _real, presets=("nondimensional",),
+                                     convert=float),
+        "nodes": _Key("an integer", _is_int, 100),
     },
     "problem": {
         "kind": _Key(f"one of {', '.join(PROBLEM_KINDS)}", _choice(PROBLEM_KINDS)),
-        "modes": _Key("a list of distinct Michell modes from 2 to 12, like [2, 3]", _modes,
+        "modes": _Key("a list of Michell modes (integers), like [2, 3]", _integers,
                       [2, 3], kinds=("ring_diagram",), convert=lambda v: sorted(v)),
-        "max_excess_link": _Key(f"a positive number of turns up to {MAX_MAGNITUDE:g}",
-                                _POSITIVE, 6.0, kinds=("ring_diagram",),
+        "max_excess_link": _Key("a number of turns", _real, 6.0, kinds=("ring_diagram",),
                                 presets=("nondimensional",), convert=float),
-        "max_superhelical_density": _Key("a positive superhelical density (e.g. 0.06)",
-                                         _number(0.0, 10.0, low_open=True), 0.06,
+        "max_superhelical_density": _Key("a positive superhelical density up to 1 (e.g. "
+                                         "0.06)", lambda v: _real(v) and 0 < v <= 1, 0.06,
                                          kinds=("ring_diagram",), presets=("dna",),
                                          convert=float),
-        "excess_link": _Key(f"a number of turns with |dLk| <= {MAX_MAGNITUDE:g}",
-                            _number(-MAX_MAGNITUDE, MAX_MAGNITUDE), kinds=("ring",),
+        "excess_link": _Key("a number of turns", _real, kinds=("ring",),
                             presets=("nondimensional",), convert=float),
-        "superhelical_density": _Key("a superhelical density (e.g. -0.06)",
-                                     _number(-10.0, 10.0), kinds=("ring",),
-                                     presets=("dna",), convert=float),
+        "superhelical_density": _Key("a superhelical density (e.g. -0.06)", _real,
+                                     kinds=("ring",), presets=("dna",), convert=float),
         "contact": _Key("a contact treatment", lambda v: isinstance(v, str), None,
                         kinds=("ring_diagram", "ring")),
-        "tension": _Key(f"a force F L^2/A from 0 to {MAX_MAGNITUDE:g} (load control)",
-                        _number(0.0, MAX_MAGNITUDE), kinds=("tweezers",),
+        "tension": _Key("a force F L^2/A (load control)", _real, kinds=("tweezers",),
                         presets=("nondimensional",), convert=float),
-        "end_distance": _Key("z/L strictly between 0 and 1 (displacement control)",
-                             _number(0.0, 1.0, low_open=True), kinds=("tweezers",),
+        "end_distance": _Key("z/L (displacement control)", _real, kinds=("tweezers",),
                              presets=("nondimensional",), convert=float),
-        "force_pN": _Key("a pulling force in pN (a number >= 0)", _number(0.0, 1e4),
+        "force_pN": _Key("a pulling force in pN (a number)", _real,
                          kinds=("tweezers",), presets=("dna",), convert=float),
-        "turns": _Key("[start, stop] turns with 0 <= start < stop", _turns, [0.0, 5.0],
-                      kinds=("tweezers",), convert=lambda v: [float(x) for x in v]),
+        "turns": _Key(_TURNS, _numbers, [0.0, 5.0], kinds=("tweezers",),
+                      convert=lambda v: [float(x) for x in v]),
     },
     "continuation": {
-        "free_max_step": _Key("a positive arclength step (units of L)", _POSITIVE,
+        "free_max_step": _Key("a number (an arclength step, units of L)", _real,
                               {"ring_diagram": 0.1, "tweezers": 0.1},
                               kinds=("ring_diagram", "tweezers"), convert=float),
-        "free_max_points": _Key("an integer >= 2", _count(2, 100_000), 80,
-                                kinds=("ring_diagram",)),
-        "contact_max_step": _Key("a positive arclength step (units of D)", _POSITIVE, 0.5,
+        "free_max_points": _Key(_INTEGER, _is_int, 80, kinds=("ring_diagram",)),
+        "contact_max_step": _Key("a number (an arclength step, units of D)", _real, 0.5,
                                  kinds=("ring_diagram", "tweezers"), convert=float),
-        "contact_max_points": _Key("an integer >= 2", _count(2, 100_000), 150,
-                                   kinds=("ring_diagram",)),
-        "max_points": _Key("an integer >= 2 (points per branch)", _count(2, 100_000), 400,
+        "contact_max_points": _Key(_INTEGER, _is_int, 150, kinds=("ring_diagram",)),
+        "max_points": _Key("an integer (points per branch)", _is_int, 400,
                            kinds=("tweezers",)),
-        "segment_points": _Key("an integer >= 2 (the most points per continuation run; the "
-                               "azimuth pin is checked at every point)",
-                               _count(2, 100_000), 2000, kinds=("tweezers",)),
-        "event_tolerance": _Key("a positive arclength tolerance", _POSITIVE, 1e-8,
+        "segment_points": _Key("an integer (the most points per continuation run; the "
+                               "azimuth pin is checked at every point)", _is_int, 2000,
+                               kinds=("tweezers",)),
+        "event_tolerance": _Key("a number (an arclength tolerance)", _real, 1e-8,
                                 kinds=("ring_diagram", "tweezers"), convert=float),
-        "contact_event_tolerance": _Key("a positive arclength tolerance", _POSITIVE, 1e-6,
+        "contact_event_tolerance": _Key("a number (an arclength tolerance)", _real, 1e-6,
                                         kinds=("ring_diagram", "tweezers"), convert=float),
-        "contact_tolerance": _Key("a positive residual tolerance", _POSITIVE, 1e-8,
+        "contact_tolerance": _Key("a number (a residual tolerance)", _real, 1e-8,
                                   kinds=("ring_diagram", "tweezers"), convert=float),
         "contact_gauge": _Key("true or false", lambda v: isinstance(v, bool), True,
                               kinds=("ring_diagram",)),
         "gauge": _Key('"node" or "integral"', _choice(("node", "integral")), "integral",
                       kinds=("ring_diagram",)),
         "branch_depth": _Key("1 (primary branches), 2 (and secondary) or 3 (and tertiary)",
-                             _count(1, 3), 1, kinds=("ring_diagram",)),
-        "secondary_max_points": _Key("an integer >= 2 (points per secondary half-branch)",
-                                     _count(2, 100_000), 40, kinds=("ring_diagram",)),
-        "secondary_max_branches": _Key("an integer >= 0 (secondary and tertiary "
-                                       "half-branches in all)", _count(0, 1000), 12,
-                                       kinds=("ring_diagram",)),
+                             _is_int, 1, kinds=("ring_diagram",)),
+        "secondary_max_points": _Key("an integer (points per secondary half-branch)",
+                                     _is_int, 40, kinds=("ring_diagram",)),
+        "secondary_max_branches": _Key("an integer (secondary and tertiary half-branches "
+                                       "in all)", _is_int, 12, kinds=("ring_diagram",)),
         "contact_formulation": _Key('"integral" or "pairs"', _choice(("integral", "pairs")),
                                     "integral", kinds=("ring_diagram",)),
         "contact_curve": _Key('"spline", "polygon" or "quintic"',
@@ -227,6 +212,19 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
         "figures": _Key("true or false", lambda v: isinstance(v, bool), True),
         "json": _Key("true or false", lambda v: isinstance(v, bool), True),
     },
+}
+# the names the options and problems give the study's keys -> "[table] key"
+_KEY_NAMES = {
+    "twist_ratio": "[rod] twist_ratio", "length_over_diameter": "[rod] length_over_diameter",
+    "n_nodes": "[rod] nodes", "treatment": "[problem] contact",
+    "superhelical_density": "[problem] superhelical_density",
+    "force_pN": "[problem] force_pN",
+    **{key: f"[problem] {key}" for key in ("modes", "max_excess_link", "contact",
+                                           "excess_link", "tension", "end_distance",
+                                           "turns")},
+    **{key: f"[units] {key}" for key in ("base_pairs", "salt_mM", "diameter_nm",
+                                         "temperature_K", "twist_persistence_nm")},
+    **{key: f"[continuation] {key}" for key in _SCHEMA["continuation"]},
 }
 REQUIRED_TABLES = ("rod", "problem")
 # the settings that do not change the computed numbers (ignored by --resume's comparison)
@@ -425,14 +423,9 @@ def _complete(s: dict, kind: str, preset: str, source: str) -> None:
         if kind == "ring" and "superhelical_density" not in problem:
             raise StudyError(f"{source}: [problem] superhelical_density is missing; a DNA ring "
                              "needs it, e.g. superhelical_density = -0.06")
-        try:
+        with _refused(source):
             dna = _dna_preset(units, problem)
-            lod = dna.length_over_diameter
-        except (ValueError, TypeError) as exc:
-            raise StudyError(f"{source}: [units] {exc}") from None
-        if lod <= math.pi:
-            raise StudyError(f"{source}: [units] base_pairs = {units['base_pairs']} gives "
-                             f"L/D = {lod:.3g}, but a ring needs L/D > pi; give more base pairs")
+        lod = dna.length_over_diameter
         if "diameter_nm" not in units:
             units["salt_mM"] = float(dna.salt_mM)  # the default salt when none was given
         units["effective_diameter_nm"] = dna.effective_diameter_nm
@@ -446,7 +439,10 @@ def _complete(s: dict, kind: str, preset: str, source: str) -> None:
             if "force_pN" not in problem:
                 raise StudyError(f"{source}: [problem] force_pN is missing; DNA tweezers need "
                                  "the pulling force, e.g. force_pN = 0.5")
-            problem["tension"] = dna.force_from_pN(problem["force_pN"])
+            from supercoil.units.dna import tweezers_parameters
+
+            with _refused(source):
+                problem["tension"] = tweezers_parameters(dna, problem["force_pN"])["tension"]
     else:
         if "twist_ratio" not in rod:
             raise StudyError(f"{source}: [rod] twist_ratio is missing; give C/A, e.g. "
@@ -460,36 +456,48 @@ def _complete(s: dict, kind: str, preset: str, source: str) -> None:
     if kind == "tweezers":
         _complete_tweezers(s, preset, source)
         return
-    treatments = DIAGRAM_TREATMENTS if kind == "ring_diagram" else RING_TREATMENTS
     contact = problem.get("contact")
     if contact is None:
         problem["contact"] = "barrier" if "length_over_diameter" in rod else None
-    elif contact not in treatments:
-        raise StudyError(f"{source}: [problem] contact = {contact!r} is not a treatment a "
-                         f"{kind} can use{_closest(contact, treatments)}; valid: "
-                         f"{', '.join(treatments)}")
     elif "length_over_diameter" not in rod:
         raise StudyError(f"{source}: [problem] contact needs [rod] length_over_diameter (the "
                          "tube diameter D = L/(L/D))")
     if problem["contact"] is None:
         del problem["contact"]
-    if kind == "ring_diagram":
-        try:
+    with _refused(source):
+        if kind == "ring_diagram":
             Study(source, "", s).diagram_options()
-        except ValueError as exc:
-            raise StudyError(f"{source}: {exc}") from None
+        else:
+            _check_ring(rod, problem)
+
+
+def _check_ring(rod: Mapping, problem: Mapping) -> None:
+    """The checks of :func:`~supercoil.problems.ring.solve_ring` and
+    :func:`~supercoil.problems.ring_contact.solve_supercoiled_ring` (InputError)."""
+    from supercoil.problems.ring import check_ring_inputs
+
+    check_ring_inputs(rod["twist_ratio"], problem["excess_link"], rod["nodes"])
+    if "length_over_diameter" in rod:
+        from supercoil.contact.problem import TREATMENTS
+        from supercoil.problems.ring_contact import validate_diameter
+
+        validate_diameter(rod["length_over_diameter"])
+        checks.choice("contact", problem["contact"], TREATMENTS, meaning="contact treatment")
+
+
+@contextmanager
+def _refused(source: str):
+    """An InputError of the options and problems as a StudyError naming the file and key."""
+    try:
+        yield
+    except InputError as exc:
+        raise StudyError(f"{source}: {exc.renamed(_KEY_NAMES)}") from None
 
 
 def _complete_tweezers(s: dict, preset: str, source: str) -> None:
-    rod, problem = s["rod"], s["problem"]
+    problem = s["problem"]
     if preset != "dna" and ("tension" in problem) == ("end_distance" in problem):
         raise StudyError(f"{source}: [problem] give exactly one of tension (F L^2/A, load "
                          "control) and end_distance (z/L, displacement control)")
-    if rod["nodes"] < 12:
-        raise StudyError(f"{source}: [rod] nodes = {rod['nodes']}: a clamped rod needs at least "
-                         "12 nodes")
-    study = Study(source, "", s)
-    try:
-        study.tweezers_options()
-    except ValueError as exc:
-        raise StudyError(f"{source}: {exc}") from None
+    with _refused(source):
+        Study(source, "", s).tweezers_options()

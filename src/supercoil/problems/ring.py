@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from supercoil import checks
 from supercoil.geometry.curves import circle
 from supercoil.rod.closed import ClosedRodEnergy, Rod
 from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
@@ -59,6 +60,8 @@ class RingResult:
     determinant_sign: int
     lowest_eigenvalues: np.ndarray
     converged: bool
+    # the solver's status, and for a converged state that is not stable what it is:
+    # "converged; unstable equilibrium (2 unstable directions)", "...; marginal ..."
     status: str
     message: str
     residual: float
@@ -115,6 +118,16 @@ def twisted_circle_problem(twist_ratio: float, excess_link: float, n_nodes: int,
     return problem, points.ravel()
 
 
+def check_ring_inputs(twist_ratio: float, excess_link: float, n_nodes: int) -> None:
+    """Raise InputError unless ``0 < C/A <= 1e6``, ``|dLk| <= 1e6`` and ``8 <= N <= 100000``."""
+    checks.number("twist_ratio", twist_ratio, 0.0, checks.MAX_MAGNITUDE, low_open=True,
+                  meaning="C/A")
+    checks.number("excess_link", excess_link, -checks.MAX_MAGNITUDE, checks.MAX_MAGNITUDE,
+                  meaning="dLk in turns")
+    checks.integer("n_nodes", n_nodes, checks.MIN_NODES, checks.MAX_NODES,
+                   meaning="nodes of the ring")
+
+
 def solve_ring(twist_ratio: float, excess_link: float, n_nodes: int = 100,
                curvature: str = "angle", tolerance: float = 1e-10,
                zero_tolerance: float = DEFAULT_ZERO_TOLERANCE, n_modes: int = 6) -> RingResult:
@@ -124,10 +137,7 @@ def solve_ring(twist_ratio: float, excess_link: float, n_nodes: int = 100,
     an unstable equilibrium and is reported as such (leaving it needs
     self-contact).
     """
-    if not np.isfinite(twist_ratio) or twist_ratio <= 0:
-        raise ValueError(f"twist_ratio (C/A) must be a positive finite number, got {twist_ratio!r}")
-    if not np.isfinite(excess_link):
-        raise ValueError(f"excess_link must be a finite number, got {excess_link!r}")
+    check_ring_inputs(twist_ratio, excess_link, n_nodes)
     problem, q0 = twisted_circle_problem(twist_ratio, excess_link, n_nodes, curvature)
     result = newton(problem, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
     stab = analyse(problem, result.q, result.multipliers, n_modes=n_modes,
@@ -150,6 +160,12 @@ def ring_result(problem, q: np.ndarray, multipliers: np.ndarray, stab, *, conver
     points = q.reshape(-1, 3)
     if not stab.certified:
         message += "; warning: " + stab.message
+    if converged and stab.unstable_count > 0:  # the status says what the state is
+        status += (f"; unstable equilibrium ({stab.unstable_count} unstable "
+                   f"direction{'s' if stab.unstable_count > 1 else ''})")
+    elif converged and stab.zero_modes > 0:
+        status += (f"; marginal equilibrium ({stab.zero_modes} zero "
+                   f"mode{'s' if stab.zero_modes > 1 else ''})")
     # Modes m with (A/C) sqrt(m^2 - 1) < |dLk| have crossed; a mode needs about
     # eight nodes per wavelength to be resolved (measured error 1.8e-2 at N/m = 12.5).
     highest_mode = int(np.floor(np.sqrt((twist_ratio * excess_link) ** 2 + 1)))

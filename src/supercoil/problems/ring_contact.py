@@ -17,14 +17,26 @@ number was kept (independent double-sum writhe plus frame twist).
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
-from supercoil.contact.problem import DEFAULT_TREATMENT, ContactOptions, ContactProblem
+from supercoil import checks
+from supercoil.contact.problem import (
+    DEFAULT_TREATMENT,
+    TREATMENTS,
+    ContactOptions,
+    ContactProblem,
+)
 from supercoil.contact.report import contact_summary
 from supercoil.contact.solve import solve_contact
 from supercoil.geometry.curves import resample_closed
-from supercoil.problems.ring import RingResult, ring_result, twisted_circle_problem
+from supercoil.problems.ring import (
+    RingResult,
+    check_ring_inputs,
+    ring_result,
+    twisted_circle_problem,
+)
 from supercoil.rod.closed import ClosedRodEnergy, Rod
 from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.stability.analysis import DEFAULT_ZERO_TOLERANCE, analyse
@@ -35,14 +47,42 @@ MAX_RESTARTS = 3
 
 
 def validate_diameter(length_over_diameter: float) -> float:
-    """The tube diameter D (units of L) of a ring, or a ValueError saying what is valid."""
-    lod = length_over_diameter
-    if not np.isfinite(lod) or lod <= 0:
-        raise ValueError(f"length_over_diameter (L/D) must be a positive finite number, got {lod!r}")
-    if lod <= np.pi:
-        raise ValueError(f"length_over_diameter (L/D) = {lod:g} is too small: a ring of "
-                         f"diameter D must have L > pi D (L/D > {np.pi:.4f})")
+    """The tube diameter D (units of L) of a ring, or an InputError saying what is valid."""
+    lod = checks.number("length_over_diameter", length_over_diameter, math.pi,
+                        checks.MAX_MAGNITUDE, low_open=True, meaning="L/D")
     return 1.0 / lod
+
+
+def check_initial_curve(points) -> np.ndarray:
+    """The vertices ``(m, 3)`` of a closed starting curve, or an InputError: at least 3
+    finite vertices, at most ``MAX_CURVE_VERTICES``, consecutive vertices distinct
+    (the last is joined to the first), not all on one straight line."""
+    x = np.asarray(points, dtype=float)
+    if x.ndim != 2 or x.shape[1] != 3:
+        raise checks.refuse("initial_points", f"must be vertices (x, y, z) of a closed curve, "
+                            f"an (m, 3) array; got shape {x.shape}")
+    if not 3 <= len(x) <= checks.MAX_CURVE_VERTICES:
+        raise checks.refuse("initial_points", f"has {len(x)} vertices; a closed curve needs "
+                            f"at least 3 vertices 'x y z' and at most "
+                            f"{checks.MAX_CURVE_VERTICES}")
+    if not np.all(np.isfinite(x)):
+        raise checks.refuse("initial_points", "has a non-finite coordinate; all must be "
+                            "finite")
+    edges = np.roll(x, -1, axis=0) - x
+    lengths = np.linalg.norm(edges, axis=1)
+    zero = np.flatnonzero(lengths == 0.0)
+    if zero.size:
+        k = int(zero[0])
+        hint = (" (do not repeat the first vertex at the end: the last vertex is joined "
+                "to the first)" if k == len(x) - 1 else "")
+        raise checks.refuse("initial_points", f"has vertices {k} and {(k + 1) % len(x)} "
+                            f"equal; consecutive vertices must be distinct{hint}")
+    spread = x - x.mean(axis=0)
+    singular = np.linalg.svd(spread, compute_uv=False)
+    if singular[1] <= 1e-9 * singular[0]:
+        raise checks.refuse("initial_points", "has all its vertices on one straight line; a "
+                            "closed curve needs vertices that span a plane or space")
+    return x
 
 
 def perturb_along_lowest_mode(problem, q: np.ndarray, multipliers: np.ndarray,
@@ -74,13 +114,13 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
     ``dLk = Tw + Wr`` with ``Tw`` the excess twist: the rod starts with the
     uniform twist ``dLk - Wr(curve)`` (a trefoil at ``dLk = 0`` carries about
     3 turns of twist, opposite to its writhe). A curve that already penetrates
-    itself is a ValueError.
+    itself is an :class:`~supercoil.errors.InputError`.
     """
-    if not np.isfinite(twist_ratio) or twist_ratio <= 0:
-        raise ValueError(f"twist_ratio (C/A) must be a positive finite number, got {twist_ratio!r}")
-    if not np.isfinite(excess_link):
-        raise ValueError(f"excess_link must be a finite number, got {excess_link!r}")
+    check_ring_inputs(twist_ratio, excess_link, n_nodes)
     diameter = validate_diameter(length_over_diameter)
+    checks.choice("treatment", treatment, TREATMENTS, meaning="contact treatment")
+    if initial_points is not None:
+        initial_points = check_initial_curve(initial_points)
     if initial_points is None:
         base, q0 = twisted_circle_problem(twist_ratio, excess_link, n_nodes, curvature)
         circle = newton(base, q0, NewtonOptions(tolerance=tolerance, mode="stationary"))
@@ -102,10 +142,12 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
     problem = ContactProblem(base, options)
     d0 = problem.min_distance(start)
     if not d0 > diameter * (1 - options.tolerance):
-        what = "the initial curve" if initial_points is not None else "the starting ring"
-        raise ValueError(f"{what} already penetrates itself: closest approach of "
-                         f"non-neighbouring points {d0 / diameter:.4f} D < D "
-                         f"(L/D = {length_over_diameter:g}, {n_nodes} nodes)")
+        what = "initial_points" if initial_points is not None else "length_over_diameter"
+        raise checks.refuse(what, f"gives a starting curve that already penetrates itself: "
+                            f"closest approach of non-neighbouring points "
+                            f"{d0 / diameter:.4f} D < D (L/D = {length_over_diameter:g}, "
+                            f"{n_nodes} nodes); a thinner tube (larger L/D) or a curve whose "
+                            "non-neighbouring points are farther apart is valid")
     options_newton = NewtonOptions(tolerance=tolerance, mode="minimize",
                                    max_iterations=max_iterations)
     res = solve_contact(problem, start, options_newton)

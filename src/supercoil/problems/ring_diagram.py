@@ -134,6 +134,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from supercoil import checks
 from supercoil.contact.problem import (
     DEFAULT_TREATMENT,
     ContactOptions,
@@ -180,6 +181,9 @@ SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1.5e-2)  # tried in turn, see _swit
 SWITCH_TRIAL_POINTS = 4
 # energy treatments whose equilibria are plain stationary points of E + sum psi
 CONTINUATION_TREATMENTS = ("barrier", "penalty")
+PREDICTORS = ("tangent", "secant", "quadratic")
+MAX_MODE = 12  # highest Michell mode whose primary branch is followed
+MAX_SECONDARY_BRANCHES = 1000
 CONTACT_KINDS = ("contact_onset", "contact_release", "contact_split", "contact_interval_onset")
 
 
@@ -249,43 +253,36 @@ class DiagramOptions:
     contact_predictor: str = "quadratic"
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.twist_ratio) and self.twist_ratio > 0):
-            raise ValueError(f"twist_ratio (C/A) must be positive and finite, got "
-                             f"{self.twist_ratio!r}")
+        set_ = object.__setattr__
+        set_(self, "twist_ratio", checks.number("twist_ratio", self.twist_ratio, 0.0,
+                                                checks.MAX_MAGNITUDE, low_open=True,
+                                                meaning="C/A"))
         validate_diameter(self.length_over_diameter)
-        if int(self.n_nodes) != self.n_nodes or self.n_nodes < 8:
-            raise ValueError(f"n_nodes must be an integer >= 8, got {self.n_nodes!r}")
-        modes = tuple(self.modes)
-        if not modes or any(int(m) != m or m < 2 for m in modes) or len(set(modes)) != len(modes):
-            raise ValueError(f"modes must be distinct integers >= 2, got {self.modes!r}")
-        object.__setattr__(self, "modes", tuple(sorted(int(m) for m in modes)))
-        if not (math.isfinite(self.max_excess_link) and self.max_excess_link > 0):
-            raise ValueError(f"max_excess_link must be positive and finite, got "
-                             f"{self.max_excess_link!r}")
+        set_(self, "length_over_diameter", float(self.length_over_diameter))
+        set_(self, "n_nodes", checks.integer("n_nodes", self.n_nodes, checks.MIN_NODES,
+                                             checks.MAX_NODES, meaning="nodes of the ring"))
+        set_(self, "modes", checks.distinct_integers("modes", self.modes, 2, MAX_MODE,
+                                                     meaning="Michell modes"))
+        set_(self, "max_excess_link", checks.number(
+            "max_excess_link", self.max_excess_link, 0.0, checks.MAX_MAGNITUDE,
+            low_open=True, meaning="largest dLk in turns"))
         if self.contact not in CONTINUATION_TREATMENTS:
-            raise ValueError(f"contact treatment {self.contact!r} cannot be continued: give one "
-                             f"of {', '.join(CONTINUATION_TREATMENTS)} (the exact and augmented "
-                             "treatments need their active-set or multiplier loops, which the "
-                             "continuation does not run)")
-        for name in ("free_max_step", "contact_max_step", "event_tolerance",
-                     "contact_event_tolerance", "contact_tolerance"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
-        validate_contact_choice(self.contact_curve, self.contact_formulation)
+            raise checks.refuse("contact", f"must be one of {', '.join(CONTINUATION_TREATMENTS)}"
+                                f", got {self.contact!r} (the exact and augmented treatments "
+                                "need their active-set or multiplier loops, which the "
+                                "continuation does not run)")
+        check_steps(self)
         for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
-            if getattr(self, name) < 2:
-                raise ValueError(f"{name} must be >= 2, got {getattr(self, name)!r}")
-        if self.contact_predictor not in ("tangent", "secant", "quadratic"):
-            raise ValueError(f"contact_predictor must be 'tangent', 'secant' or 'quadratic', "
-                             f"got {self.contact_predictor!r}")
-        if self.gauge not in ("node", "integral"):
-            raise ValueError(f"gauge must be 'node' or 'integral', got {self.gauge!r}")
-        if self.branch_depth not in (1, 2, 3):
-            raise ValueError(f"branch_depth must be 1 (primary branches), 2 (and secondary) "
-                             f"or 3 (and tertiary), got {self.branch_depth!r}")
-        if self.secondary_max_branches < 0:
-            raise ValueError(f"secondary_max_branches must be >= 0, got "
-                             f"{self.secondary_max_branches!r}")
+            checks.integer(name, getattr(self, name), 2, checks.MAX_POINTS,
+                           meaning="points of a branch")
+        checks.integer("secondary_max_branches", self.secondary_max_branches, 0,
+                       MAX_SECONDARY_BRANCHES, meaning="secondary and tertiary half-branches")
+        checks.choice("contact_predictor", self.contact_predictor, PREDICTORS)
+        checks.choice("gauge", self.gauge, ("node", "integral"))
+        checks.flag("contact_gauge", self.contact_gauge)
+        checks.integer("branch_depth", self.branch_depth, 1, 3,
+                       meaning="1 primary, 2 and secondary, 3 and tertiary branches")
+        validate_contact_choice(self.contact_curve, self.contact_formulation)
 
     @property
     def diameter(self) -> float:
@@ -300,6 +297,16 @@ class DiagramOptions:
         """The :class:`ContactOptions` of the contact branches, tube ``diameter`` (a length)."""
         return ContactOptions(diameter=diameter, treatment=self.contact, curve=self.contact_curve,
                               formulation=self.contact_formulation)
+
+
+def check_steps(options) -> None:
+    """The steps and tolerances shared by :class:`DiagramOptions` and the tweezers' options:
+    positive numbers, steps at most 1e3 (units of L or D), tolerances below 1."""
+    for name in ("free_max_step", "contact_max_step"):
+        checks.number(name, getattr(options, name), 0.0, 1e3, low_open=True,
+                      meaning="largest arclength step")
+    for name in ("event_tolerance", "contact_event_tolerance", "contact_tolerance"):
+        checks.number(name, getattr(options, name), 0.0, 1.0, low_open=True, high_open=True)
 
 
 def branch_tolerances(options) -> dict:
@@ -351,10 +358,18 @@ class RingDiagram:
         tertiary (:mod:`supercoil.problems.ring_secondary`)."""
         return generation_of(branch.name, branch.parent, self.generations)
 
+    @staticmethod
+    def branch_ok(branch: Branch) -> bool:
+        """The branch is complete: it reached its bound, closed a loop, or was handed over
+        as designed (a contact-free branch cut at its first contact, status ``STOPPED``).
+        A branch stopped by its point limit, a step failure or an interrupt is not."""
+        return branch.status.complete
+
     @property
     def ok(self) -> bool:
-        """Every branch ended as asked, and no step failed (notes starting ``failed:``)."""
-        return (all(b.ok for b in self.branches)
+        """Every branch is complete (:meth:`branch_ok`), and no step failed (notes starting
+        ``failed:``)."""
+        return (all(self.branch_ok(b) for b in self.branches)
                 and not any(n.startswith("failed:") for n in self.notes))
 
     def branch(self, name: str) -> Branch:
@@ -406,7 +421,7 @@ class RingDiagram:
                 "contact": b.name in self.contact_branches,
                 "generation": self.generation(b),
                 "parameter": b.parameter, "n_points": len(b), "status": b.status.name,
-                "ok": b.ok, "message": b.message,
+                "ok": self.branch_ok(b), "message": b.message,
                 "seconds": round(self.seconds.get(b.name, float("nan")), 3),
                 "file": "result.h5"})
         return {

@@ -61,6 +61,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from supercoil import checks
 from supercoil.contact.problem import ContactOptions, ContactProblem, validate_contact_choice
 from supercoil.contact.report import COUNT_KEYS, contact_summary
 from supercoil.continuation import (
@@ -73,7 +74,9 @@ from supercoil.continuation import (
 from supercoil.continuation.resume import resume_branch
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.ring_diagram import (
+    PREDICTORS,
     branch_tolerances,
+    check_steps,
     classify_contact_events,
     contact_count_event,
     onset_event,
@@ -156,41 +159,31 @@ class TweezersOptions:
     contact_formulation: str = "integral"
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.twist_ratio, (int, float)) and math.isfinite(self.twist_ratio)
-                and self.twist_ratio > 0):
-            raise ValueError(f"twist_ratio (C/A) must be positive and finite, got "
-                             f"{self.twist_ratio!r}")
-        if self.length_over_diameter is not None and not (
-                math.isfinite(self.length_over_diameter) and self.length_over_diameter > math.pi):
-            raise ValueError(f"length_over_diameter (L/D) must be a finite number > pi (a "
-                             f"longer tube cannot bend), got {self.length_over_diameter!r}")
+        set_ = object.__setattr__
+        set_(self, "twist_ratio", checks.number("twist_ratio", self.twist_ratio, 0.0,
+                                                checks.MAX_MAGNITUDE, low_open=True,
+                                                meaning="C/A"))
+        set_(self, "length_over_diameter", checks.optional_number(
+            "length_over_diameter", self.length_over_diameter, math.pi, checks.MAX_MAGNITUDE,
+            low_open=True, meaning="L/D; a thicker tube cannot bend"))
         if (self.tension is None) == (self.end_distance is None):
-            raise ValueError("give exactly one of tension (F L^2/A, load control) and "
-                             "end_distance (z/L, displacement control)")
-        if self.tension is not None and not (math.isfinite(self.tension) and self.tension >= 0):
-            raise ValueError(f"tension (F L^2/A) must be a finite number >= 0, got "
-                             f"{self.tension!r}")
-        if self.end_distance is not None and not (
-                math.isfinite(self.end_distance) and 0.0 < self.end_distance < 1.0):
-            raise ValueError(f"end_distance (z/L) must lie in (0, 1) (an inextensible rod "
-                             f"cannot be longer than L; at z/L = 1 it cannot deflect), got "
-                             f"{self.end_distance!r}")
-        start, stop = (float(v) for v in self.turns)
-        if not (math.isfinite(start) and math.isfinite(stop) and 0.0 <= start < stop):
-            raise ValueError(f"turns must be (start, stop) with 0 <= start < stop, got "
-                             f"{self.turns!r}")
-        object.__setattr__(self, "turns", (start, stop))
-        if int(self.n_nodes) != self.n_nodes or self.n_nodes < 12:
-            raise ValueError(f"n_nodes must be an integer >= 12, got {self.n_nodes!r}")
-        for name in ("free_max_step", "contact_max_step", "event_tolerance",
-                     "contact_event_tolerance", "contact_tolerance"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
-        if self.max_points < 2 or self.segment_points < 2:
-            raise ValueError("max_points and segment_points must be >= 2")
-        if self.contact_predictor not in ("tangent", "secant", "quadratic"):
-            raise ValueError(f"contact_predictor must be 'tangent', 'secant' or 'quadratic', "
-                             f"got {self.contact_predictor!r}")
+            raise checks.refuse("tension", "and end_distance: give exactly one of tension "
+                                "(F L^2/A, load control) and end_distance (z/L, displacement "
+                                "control)")
+        set_(self, "tension", checks.optional_number(
+            "tension", self.tension, 0.0, checks.MAX_MAGNITUDE, meaning="F L^2/A"))
+        set_(self, "end_distance", checks.optional_number(
+            "end_distance", self.end_distance, 0.0, 1.0, low_open=True, high_open=True,
+            meaning="z/L of an inextensible rod of length L"))
+        set_(self, "turns", check_turns(self.turns))
+        set_(self, "n_nodes", checks.integer("n_nodes", self.n_nodes, checks.MIN_CLAMPED_NODES,
+                                             checks.MAX_NODES,
+                                             meaning="nodes of the clamped rod"))
+        check_steps(self)
+        for name in ("max_points", "segment_points"):
+            checks.integer(name, getattr(self, name), 2, checks.MAX_POINTS,
+                           meaning="points of a branch")
+        checks.choice("contact_predictor", self.contact_predictor, PREDICTORS)
         validate_contact_choice(self.contact_curve, self.contact_formulation)
 
     @property
@@ -204,6 +197,21 @@ class TweezersOptions:
     @property
     def tolerances(self) -> dict:
         return branch_tolerances(self)
+
+
+def check_turns(turns) -> tuple[float, float]:
+    """``(start, stop)`` turns with ``0 <= start < stop <= 1000``, or an InputError."""
+    valid = (f"(start, stop) turns with 0 <= start < stop <= "
+             f"{checks.MAX_TURNS:g}")
+    try:
+        start, stop = turns
+        start = checks.number("turns", start, 0.0, checks.MAX_TURNS)
+        stop = checks.number("turns", stop, 0.0, checks.MAX_TURNS)
+    except (TypeError, ValueError):
+        raise checks.refuse("turns", f"must be {valid}, got {turns!r}") from None
+    if not start < stop:
+        raise checks.refuse("turns", f"must be {valid}, got {turns!r}")
+    return start, stop
 
 
 @dataclass(frozen=True)
@@ -224,7 +232,10 @@ class TweezersResult:
     cut_at_contact: frozenset[str] = frozenset()
 
     def branch_ok(self, branch: Branch) -> bool:
-        return branch.ok or branch.name in self.cut_at_contact
+        """The branch is complete: it reached its bound (or closed a loop), or it is a
+        contact-free branch handed over at its first contact to the contact branch. A
+        branch stopped by the point limit, a step failure or an interrupt is not."""
+        return branch.status.complete or branch.name in self.cut_at_contact
 
     def pin_branch(self, name: str, index: int = 0):
         """Set the azimuth pin with which point ``index`` of branch ``name`` was computed.
@@ -696,8 +707,15 @@ def tweezers_branches(options: TweezersOptions,
         branches.append(straight)
         bifurcations = straight.points_of_kind("bifurcation")
         if not bifurcations:
-            notes.append(f"the straight rod does not buckle below {opts.turns[1]:g} turns "
-                         f"(exact threshold {critical_turns(opts.twist_ratio, opts.tension):.6g})")
+            exact = critical_turns(opts.twist_ratio, opts.tension)
+            if straight.status.complete:
+                notes.append(f"the straight rod does not buckle below {opts.turns[1]:g} turns "
+                             f"(exact threshold {exact:.6g})")
+            else:  # no conclusion beyond the last point computed
+                notes.append(f"incomplete: straight stopped at "
+                             f"{straight.parameter_values[-1]:.6g} turns ({straight.message}), "
+                             f"before {opts.turns[1]:g}; no buckling found up to there (exact "
+                             f"threshold {exact:.6g})")
             return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
                                   tuple(notes))
         point = bifurcations[0]
@@ -756,7 +774,7 @@ def tweezers_branches(options: TweezersOptions,
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
     if probe is None or not onsets:
-        if free.status.name == "MAX_POINTS":
+        if not free.status.complete:
             notes.append(f"incomplete: {free_name} stopped at "
                          f"{free.parameter_values[-1]:.6g} turns: {free.message}")
         elif probe is not None:

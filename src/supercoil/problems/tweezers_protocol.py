@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from supercoil import checks
 from supercoil.contact.problem import ContactOptions, ContactProblem
 from supercoil.contact.solve import solve_contact
 from supercoil.problems.tweezers import (
@@ -91,6 +92,41 @@ def _schedule(options: TweezersOptions, protocol: str, step: float,
     return out
 
 
+def check_path(options: TweezersOptions, protocol: str, step: float,
+               force_range: tuple[float, float] | None = None,
+               force_step: float | None = None) -> None:
+    """Raise :class:`~supercoil.errors.InputError` unless the protocol's inputs are valid:
+    a known protocol under load control, positive finite steps, a force range
+    ``0 <= low < high <= 1e6`` and at most :data:`~supercoil.checks.MAX_POINTS` steps in
+    all (each step is a minimisation: a path of more would not end in any useful time)."""
+    checks.choice("protocol", protocol, PROTOCOLS)
+    if not options.load_control:
+        raise checks.refuse("protocol", f"{protocol!r} needs load control (a tension), not "
+                            "an end distance")
+    start, stop = options.turns
+    step = checks.number("step", step, 0.0, stop - start, low_open=True,
+                         meaning="turns per quasi-static step")
+    count = math.ceil((stop - start) / step) * (2 if protocol == "up-down" else 1)
+    if protocol == "force-ramp":
+        if force_range is None or len(force_range) != 2:
+            raise checks.refuse("force_range", f"must be (low, high) forces, got "
+                                f"{force_range!r}")
+        low = checks.number("force_range", force_range[0], 0.0, checks.MAX_MAGNITUDE)
+        high = checks.number("force_range", force_range[1], 0.0, checks.MAX_MAGNITUDE)
+        if not low < high:
+            raise checks.refuse("force_range", f"must be (low, high) with 0 <= low < high, "
+                                f"got {force_range!r}")
+        tension = float(options.tension)
+        df = (checks.number("force_step", force_step, 0.0, high - low, low_open=True)
+              if force_step is not None else (high - low) / 50)
+        count += sum(math.ceil(abs(b - a) / df)
+                     for a, b in ((tension, low), (low, high), (high, tension)))
+    if count > checks.MAX_POINTS:
+        what = "step" if protocol != "force-ramp" or force_step is None else "force_step"
+        raise checks.refuse(what, f"gives {count} quasi-static steps; at most "
+                            f"{checks.MAX_POINTS} are valid: give a larger {what}")
+
+
 def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: float = 0.02,
                      kick: float = 0.02, jump_distance: float | None = None,
                      max_kicks: int = 6, force_range: tuple[float, float] | None = None,
@@ -104,19 +140,7 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
     Each point has ``ramp`` (``turns`` or ``tension``) and ``direction`` (+1 the
     ramped parameter increases, -1 it decreases).
     """
-    if protocol not in PROTOCOLS:
-        raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
-    if not options.load_control:
-        raise ValueError("the quasi-static protocols need load control (a tension)")
-    if not (math.isfinite(step) and step > 0):
-        raise ValueError(f"step must be a positive number of turns, got {step!r}")
-    if protocol == "force-ramp":
-        if force_range is None or len(force_range) != 2 or not (
-                0 <= force_range[0] < force_range[1] < math.inf):
-            raise ValueError(f"force_range must be (low, high) with 0 <= low < high, got "
-                             f"{force_range!r}")
-        if force_step is not None and not (math.isfinite(force_step) and force_step > 0):
-            raise ValueError(f"force_step must be positive, got {force_step!r}")
+    check_path(options, protocol, step, force_range, force_step)
     schedule = _schedule(options, protocol, step, force_range, force_step)
     rod, q = clamped_problem(options)
     D = options.diameter

@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from supercoil.errors import InputError
 from supercoil.solvers.kkt import KKTFactor, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
@@ -81,16 +82,16 @@ class NewtonOptions:
 
     def __post_init__(self) -> None:
         if not (self.tolerance > 0):
-            raise ValueError(f"tolerance must be positive, got {self.tolerance!r}")
+            raise InputError(f"tolerance must be positive, got {self.tolerance!r}")
         if self.max_iterations < 1:
-            raise ValueError(f"max_iterations must be >= 1, got {self.max_iterations!r}")
+            raise InputError(f"max_iterations must be >= 1, got {self.max_iterations!r}")
         if self.mode not in ("minimize", "stationary"):
-            raise ValueError(f"mode must be 'minimize' or 'stationary', got {self.mode!r}")
+            raise InputError(f"mode must be 'minimize' or 'stationary', got {self.mode!r}")
         if self.inertia_test not in (None, "exact", "curvature"):
-            raise ValueError(f"inertia_test must be 'exact' or 'curvature', got "
+            raise InputError(f"inertia_test must be 'exact' or 'curvature', got "
                              f"{self.inertia_test!r}")
         if not (self.max_step_norm > 0):
-            raise ValueError(f"max_step_norm must be positive, got {self.max_step_norm!r}")
+            raise InputError(f"max_step_norm must be positive, got {self.max_step_norm!r}")
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,8 @@ import numpy as np
 import numpy.typing as npt
 
 from supercoil._numba import njit
+from supercoil.errors import InputError
+from supercoil.topology.crossings import first_crossing
 from supercoil.topology.writhe import _as_polygon, _components, _extended, _row_half_angles
 
 __all__ = ["linking_number"]
@@ -63,17 +65,28 @@ def linking_number(curve1: npt.ArrayLike, curve2: npt.ArrayLike) -> float:
     float
         ``Lk = (1/4π) Σ_{i,j} Ω_ij``, an integer up to rounding (about 1e-12)
         when the polygons are disjoint; returned unrounded so that callers can
-        check it. Undefined (a jump by ±1) if the polygons intersect, which is
-        not checked.
+        check it.
 
     Raises
     ------
-    ValueError
+    InputError
         A curve that is not ``(n, 3)``, non-finite, has fewer than 3 vertices
-        or a zero-length edge.
+        or a zero-length edge; the same curve twice; curves that meet (an edge
+        of one within ``1e-15`` of their extent of an edge of the other), where
+        the linking number is undefined (a jump by ±1).
     """
     first = _as_polygon(curve1, "curve1", closed=True)
     second = _as_polygon(curve2, "curve2", closed=True)
+    if first.shape == second.shape and np.array_equal(first, second):
+        raise InputError("curve2 is curve1 (the same vertices): the linking number of a "
+                         "curve with itself is undefined (its self-linking needs a framing, "
+                         "Lk = Tw + Wr); give two disjoint closed curves", name="curve2")
+    crossing = first_crossing(first, second)
+    if crossing is not None:
+        i, j = crossing
+        raise InputError(f"curve2: edge {j} meets edge {i} of curve1, where the linking "
+                         "number is undefined (it jumps by 1 across a crossing); give two "
+                         "disjoint closed curves", name="curve2")
     # a common translation and scale leave Lk unchanged and keep products in range
     centre = np.vstack([first, second]).mean(axis=0)
     scale = float(max(np.max(np.abs(first - centre)), np.max(np.abs(second - centre))))

@@ -66,6 +66,8 @@ import numpy as np
 import numpy.typing as npt
 
 from supercoil._numba import njit
+from supercoil.errors import InputError
+from supercoil.topology.crossings import first_self_crossing
 
 Closure = Literal["closed", "chord", "none", "axis"]
 
@@ -97,22 +99,24 @@ def _as_polygon(points: npt.ArrayLike, name: str, closed: bool) -> np.ndarray:
     try:
         array = np.asarray(points, dtype=np.float64)
     except (TypeError, ValueError) as error:
-        raise ValueError(
+        raise InputError(
             f"{name}: cannot be read as a float array ({error}); "
-            "expected an (n_vertices, 3) array of coordinates"
+            "expected an (n_vertices, 3) array of coordinates", name=name
         ) from None
     if array.ndim != 2 or array.shape[1] != 3:
-        raise ValueError(
-            f"{name} has shape {array.shape}; expected an (n_vertices, 3) array of coordinates"
-        )
+        raise InputError(
+            f"{name} has shape {array.shape}; expected an (n_vertices, 3) array of coordinates",
+            name=name)
     minimum = 3 if closed else 2
     if array.shape[0] < minimum:
         count = "1 vertex" if array.shape[0] == 1 else f"{array.shape[0]} vertices"
         kind = "a closed" if closed else "an open"
-        raise ValueError(f"{name} has {count}; {kind} polygon needs at least {minimum} vertices")
+        raise InputError(f"{name} has {count}; {kind} polygon needs at least {minimum} vertices",
+                         name=name)
     if not np.all(np.isfinite(array)):
         bad = int(np.argwhere(~np.isfinite(array))[0, 0])
-        raise ValueError(f"{name} has a non-finite coordinate at vertex {bad}; all must be finite")
+        raise InputError(f"{name} has a non-finite coordinate at vertex {bad}; all must be finite",
+                         name=name)
     following = np.roll(array, -1, axis=0) if closed else array[1:]
     lengths = np.linalg.norm(following - array[: following.shape[0]], axis=1)
     zero = np.flatnonzero(lengths == 0.0)
@@ -124,9 +128,9 @@ def _as_polygon(points: npt.ArrayLike, name: str, closed: bool) -> np.ndarray:
             if closed and k == array.shape[0] - 1
             else ""
         )
-        raise ValueError(
+        raise InputError(
             f"{name} has a zero-length edge between vertices {k} and {k_next}; "
-            f"consecutive vertices must be distinct{hint}"
+            f"consecutive vertices must be distinct{hint}", name=name
         )
     return np.ascontiguousarray(array)
 
@@ -136,18 +140,21 @@ def _as_axis(axis: npt.ArrayLike) -> np.ndarray:
     try:
         vector = np.asarray(axis, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"axis {axis!r} is not a vector; expected 3 finite numbers") from None
+        raise InputError(f"axis {axis!r} is not a vector; expected 3 finite numbers",
+                         name="axis") from None
     if vector.shape != (3,) or not np.all(np.isfinite(vector)):
-        raise ValueError(f"axis {axis!r} is not a finite 3-vector; expected 3 finite numbers")
+        raise InputError(f"axis {axis!r} is not a finite 3-vector; expected 3 finite numbers",
+                         name="axis")
     norm = float(np.linalg.norm(vector))
     if norm == 0.0:
-        raise ValueError("axis is the zero vector; expected a non-zero direction")
+        raise InputError("axis is the zero vector; expected a non-zero direction", name="axis")
     return vector / norm
 
 
 def _check_closure(closure: str) -> None:
     if closure not in _CLOSURES:
-        raise ValueError(f"closure {closure!r} is unknown; expected one of {', '.join(_CLOSURES)}")
+        raise InputError(f"closure {closure!r} is unknown; expected one of {', '.join(_CLOSURES)}",
+                         name="closure")
 
 
 def _prepare(
@@ -158,6 +165,13 @@ def _prepare(
     closed = closure in ("closed", "chord")
     vertices = _as_polygon(points, "points", closed)
     unit_axis = _as_axis(axis) if closure == "axis" else None
+    crossing = first_self_crossing(vertices, closed)
+    if crossing is not None:
+        i, j = crossing
+        raise InputError(
+            f"points: edges {i} and {j} of the polygon meet (it intersects itself), where its "
+            "writhe is undefined (it jumps by 2 across a crossing); a polygon whose "
+            "non-neighbouring edges are apart is valid", name="points")
     return vertices, closed, unit_axis
 
 
@@ -564,9 +578,11 @@ def writhe(
 
     Raises
     ------
-    ValueError
+    InputError
         Unknown ``closure``; ``points`` not ``(n_vertices, 3)``, non-finite,
         too few vertices (3 closed, 2 open) or with a zero-length edge; a
+        polygon that meets itself (two edges within ``1e-15`` of its extent, or
+        two consecutive edges folding back), where the writhe is undefined; a
         zero or non-finite ``axis``.
     """
     vertices, closed, unit_axis = _prepare(points, closure, axis)

@@ -38,6 +38,8 @@ import math
 from bisect import bisect_left
 from dataclasses import dataclass
 
+from supercoil import checks
+
 PRESET_NAME = "dna"
 
 # --- constants and their sources -------------------------------------------------
@@ -75,6 +77,7 @@ twist fluctuations), i.e. P_t = 410 / 4.11 = 100 nm; Moroz & Nelson 1997
 109 nm to Strick et al.'s extension data."""
 
 DEFAULT_SALT_MM = 150.0
+MAX_FORCE_PN = 1e4  # the largest pulling force (pN) of the tweezers
 """Monovalent salt concentration used when neither salt nor diameter is
 given (about physiological ionic strength)."""
 
@@ -135,11 +138,11 @@ def effective_diameter_nm(salt_mM: float) -> float:
     exactly and D decreases monotonically with c); a concentration outside the
     table is a ValueError (no extrapolation).
     """
-    c = _number("salt concentration (mM)", salt_mM)
+    c = checks.number("salt_mM", salt_mM, meaning="salt concentration in mM")
     lo, hi = SALT_RANGE_MM
     if not lo <= c <= hi:
-        raise ValueError(
-            f"salt concentration {c:g} mM is outside the tabulated range {lo:g}-{hi:g} mM of "
+        raise checks.refuse(
+            "salt_mM", f"{c:g} (salt concentration in mM) is outside the tabulated range {lo:g}-{hi:g} mM of "
             "monovalent salt (effective diameters are not extrapolated); give a concentration "
             f"from {lo:g} to {hi:g} mM, or the diameter itself in nm"
         )
@@ -154,26 +157,18 @@ def effective_diameter_nm(salt_mM: float) -> float:
 
 
 def _number(what: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"{what} must be a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{what} must be a finite number, got {value!r}")
-    return value
+    return checks.number(what, value)
 
 
 def _positive(what: str, value: object) -> float:
-    value = _number(what, value)
-    if value <= 0:
-        raise ValueError(f"{what} must be positive, got {value:g}")
-    return value
+    return checks.number(what, value, 0.0, low_open=True)
 
 
 @dataclass(frozen=True)
 class DNAPreset:
     """A DNA molecule in physical units and its nondimensional model (A = 1, L = 1).
 
-    ``base_pairs``: number of base pairs N_bp (an integer >= 1).
+    ``base_pairs``: number of base pairs N_bp (a whole number from 12 to 1e7).
     ``superhelical_density``: σ = ΔLk / Lk0 (finite; 0 = relaxed).
     ``salt_mM``: monovalent salt (mM) giving the tube diameter through
     :func:`effective_diameter_nm`; ``diameter_nm``: the diameter itself. At
@@ -181,8 +176,9 @@ class DNAPreset:
     ``temperature_K``: temperature of the kT unit (> 0).
     The remaining fields are the constants of the module, overridable.
 
-    Immutable and validated on construction: a ValueError naming the field for
-    a bad value, a TypeError for a value that is not a number.
+    Immutable and validated on construction: an :class:`~supercoil.errors.InputError`
+    naming the field, what is wrong and what is valid (``base_pairs`` from 12 to
+    1e7, ``superhelical_density`` from -1 to 1, a ring longer than pi diameters).
     """
 
     base_pairs: int
@@ -198,29 +194,39 @@ class DNAPreset:
     name = PRESET_NAME
 
     def __post_init__(self) -> None:
-        bp = self.base_pairs
-        if isinstance(bp, bool) or not isinstance(bp, (int, float)):
-            raise TypeError(f"base_pairs must be a whole number, got {bp!r}")
-        if not isinstance(bp, int):
-            if not (math.isfinite(bp) and bp == int(bp)):
-                raise ValueError(f"base_pairs must be a whole number, got {bp!r}")
-            object.__setattr__(self, "base_pairs", int(bp))
-        if self.base_pairs <= 0:
-            raise ValueError(f"base_pairs must be at least 1, got {self.base_pairs}")
-        _number("superhelical_density (sigma)", self.superhelical_density)
+        set_ = object.__setattr__
+        set_(self, "base_pairs", checks.integer("base_pairs", self.base_pairs,
+                                                checks.MIN_BASE_PAIRS, checks.MAX_BASE_PAIRS))
+        checks.number("superhelical_density", self.superhelical_density, -1.0, 1.0,
+                      meaning="sigma = dLk / Lk0; -1 unwinds the double helix completely")
         _positive("temperature_K", self.temperature_K)
         for field in ("bending_persistence_nm", "twist_persistence_nm", "rise_nm_per_bp",
                       "helical_repeat_bp"):
             _positive(field, getattr(self, field))
         if self.salt_mM is not None and self.diameter_nm is not None:
-            raise ValueError("give either salt_mM or diameter_nm, not both (the diameter "
-                             "comes from the salt unless given)")
+            raise checks.refuse("salt_mM", "and diameter_nm both set the tube diameter: give "
+                                "one of them (the diameter comes from the salt unless given)")
         if self.diameter_nm is not None:
             _positive("diameter_nm", self.diameter_nm)
         else:
             if self.salt_mM is None:
-                object.__setattr__(self, "salt_mM", DEFAULT_SALT_MM)
+                set_(self, "salt_mM", DEFAULT_SALT_MM)
             effective_diameter_nm(self.salt_mM)  # range check
+        lod, bp = self.length_over_diameter, self.base_pairs
+        if lod <= math.pi:
+            fewest = math.floor(math.pi * self.effective_diameter_nm / self.rise_nm_per_bp) + 1
+            raise checks.refuse("base_pairs", f"= {bp} gives a molecule {self.length_nm:g} nm "
+                                f"long, L/D = {lod:.3g} with a tube of diameter "
+                                f"{self.effective_diameter_nm:.3g} nm, but a ring needs L/D > "
+                                f"pi: give base_pairs >= {fewest}")
+        if lod > checks.MAX_MAGNITUDE:
+            raise checks.refuse("base_pairs", f"= {bp} gives L/D = {lod:.3g} with a tube of "
+                                f"diameter {self.effective_diameter_nm:.3g} nm; L/D must be "
+                                f"at most {checks.MAX_MAGNITUDE:g}: give fewer base pairs or a "
+                                "larger diameter")
+        if self.twist_ratio > checks.MAX_MAGNITUDE:
+            raise checks.refuse("twist_persistence_nm", f"gives C/A = {self.twist_ratio:.3g}; "
+                                f"C/A must be at most {checks.MAX_MAGNITUDE:g}")
 
     # --- physical quantities ---------------------------------------------------
 
@@ -442,9 +448,7 @@ def tweezers_parameters(preset: DNAPreset, force_pN: float) -> dict[str, float]:
     stiffnesses come from ``preset`` (its superhelical density is not used:
     the turns are the tweezers' own input, σ = turns / Lk0).
     """
-    force = _number("force_pN", force_pN)
-    if force < 0:
-        raise ValueError(f"force_pN must be >= 0 (a pulling force), got {force_pN!r}")
+    force = checks.number("force_pN", force_pN, 0.0, MAX_FORCE_PN, meaning="a pulling force")
     return {"twist_ratio": preset.twist_ratio, "tension": preset.force_from_pN(force),
             "length_over_diameter": preset.length_over_diameter}
 

@@ -38,7 +38,7 @@ RUN = r'''
 import json, sys, tempfile, time
 from pathlib import Path
 import numpy as np
-import supercoil.continuation.pseudo_arclength as pa
+from supercoil.continuation import pseudo_arclength as pa
 spent = [0.0]
 original = pa._Tracer.add_point
 def add_point(*args, **kwargs):

@@ -162,7 +162,10 @@ def test_ring_diagram_locates_michells_point():
     # O(h^2) discretisation error at N = 24
     assert first[0].parameter == pytest.approx(michell(2 / 3), rel=2e-2)
     assert (first[0].count_before, first[0].count_after) == (0, 2)
-    assert diagram.ok == all(b.ok for b in diagram.branches.values())
+    # the contact branch stopped at its point limit: the diagram says so, and why
+    assert diagram.status is sc.RunStatus.INCOMPLETE and not diagram.ok
+    assert diagram.branches["alpha_contact"].status is sc.ContinuationStatus.MAX_POINTS
+    assert "alpha_contact: MAX_POINTS" in diagram.message
     assert repr(diagram).count("\n") <= 3
 
 

@@ -990,7 +990,7 @@ def test_a_trust_region_of_one_step_keeps_the_branch_through_a_sharp_fold_with_f
     are refused by the turn test. With max_corrector_distance = 1 they stop after a
     Newton step or two: the same points, bit for bit, the same located fold, fewer
     corrector iterations."""
-    import supercoil.continuation.pseudo_arclength as pa
+    from supercoil.continuation import pseudo_arclength as pa
 
     a, delta = 0.8, 1e-4
     runs = {}

@@ -144,10 +144,14 @@ def stability(state: Equilibrium, *, n_modes: int = 6,
     return _stability(report, len(state.points))
 
 
-def _run_status(ok: bool, branches, notes) -> tuple[RunStatus, str]:
-    if ok:
+def _run_status(computed) -> tuple[RunStatus, str]:
+    """The run's status from the problem's own verdict (``computed.ok``), and the reasons:
+    each branch that did not end where it was asked to, and each failed step."""
+    if computed.ok:
         return RunStatus.COMPLETE, "every branch ended where it was asked to"
-    stopped = [f"{b.name}: {b.status.name} ({b.message})" for b in branches if not b.ok]
+    stopped = [f"{b.name}: {b.status.name} ({b.message})" for b in computed.branches
+               if not computed.branch_ok(b)]
+    notes = computed.notes
     failed = [n for n in notes if n.startswith(("failed:", "incomplete:"))]
     return RunStatus.INCOMPLETE, "; ".join(stopped + failed) or "a step failed"
 
@@ -193,7 +197,7 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
         "n_nodes": rod.nodes, "contact": contact.treatment}, {
         "max_excess_link": max_excess_link, "modes": tuple(modes), **options})
     computed = compute(settings, progress)
-    status, message = _run_status(computed.ok, computed.branches, computed.notes)
+    status, message = _run_status(computed)
     return Diagram(kind="ring_diagram", problem=Ring(rod, 0.0, contact), settings=settings,
                    branches={b.name: b for b in computed.branches}, status=status,
                    message=message, notes=tuple(computed.notes), computed=computed)
@@ -221,7 +225,7 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
         "tension": problem.tension, "end_distance": problem.end_distance}, {
         "turns": tuple(turns), **options})
     computed = tweezers_branches(settings, progress)
-    status, message = _run_status(computed.ok, computed.branches, computed.notes)
+    status, message = _run_status(computed)
     return Diagram(kind="tweezers", problem=problem, settings=settings,
                    branches={b.name: b for b in computed.branches}, status=status,
                    message=message, notes=tuple(computed.notes), computed=computed)

@@ -1220,24 +1220,3 @@ def test_twist_ratio_may_be_written_as_a_fraction(runner):
 def test_a_malformed_twist_ratio_is_a_one_line_error(capsys, bad, words):
     status, out, err = run_main(capsys, "ring", "--twist-ratio", bad, "--excess-link", "0.5")
     assert_one_line(status, out, err, 2, "--twist-ratio", *words)
-
-
-def test_the_garbage_collector_is_changed_only_in_a_commands_process():
-    """Invariants of supercoil._gc: in a test's (or script's) process imports_done
-    freezes nothing and the thresholds stay; in a process marked by collect_less (the
-    command's, main()) the first threshold is GC_THRESHOLD and imports_done freezes
-    the objects there (a fresh interpreter, so that this one is not changed)."""
-    import gc
-    import subprocess
-    import sys
-
-    from supercoil import _gc
-
-    before, thresholds = gc.get_freeze_count(), gc.get_threshold()
-    _gc.imports_done()
-    assert gc.get_freeze_count() == before and gc.get_threshold() == thresholds
-    code = ("import gc; from supercoil import _gc; _gc.collect_less(); _gc.imports_done(); "
-            "print(gc.get_threshold()[0], gc.get_freeze_count() > 0)")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          check=True)
-    assert done.stdout.split() == [str(_gc.GC_THRESHOLD), "True"]

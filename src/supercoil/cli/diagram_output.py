@@ -115,11 +115,8 @@ def run_diagram(options, out: Path, quiet: bool = False) -> dict | None:
     """:func:`compute_diagram` then :func:`write_diagram`; the payload, or None after an
     interrupt. The figures' helper process (:class:`~supercoil.plotting.painter.Painter`)
     is started first, so that it imports matplotlib while the diagram is computed."""
-    from supercoil._gc import imports_done
     from supercoil.plotting.painter import Painter
-    from supercoil.problems.ring_diagram import ring_diagram  # noqa: F401 (before the freeze)
 
-    imports_done()
     saved: dict = {}
     with Painter() as painter:
         diagram = compute_diagram(options, out, quiet, saved)

@@ -897,24 +897,15 @@ def run(argv: Sequence[str] | None = None) -> int:
 def main(argv: Sequence[str] | None = None) -> NoReturn:
     """Entry point of the ``supercoil`` console script.
 
-    The garbage collector of this process collects less often and not at the exit
-    (:mod:`supercoil._gc`), and continuation points are evaluated by a worker on the
-    other core where the process may fork (:func:`supercoil._fork.use_point_workers`;
-    the results are those of the serial computation), and scipy's copy of numpy's
-    namespace leaves numpy's unused submodules unimported (:mod:`supercoil._lazy_numpy`);
-    :func:`run`, which tests and scripts call in their own processes, leaves all three
-    alone.
+    Continuation points are evaluated by a worker on the other core where the process
+    may fork (:func:`supercoil._fork.use_point_workers`; the results are those of the
+    serial computation); :func:`run`, which tests and scripts call in their own
+    processes, leaves it alone.
     """
-    from supercoil import _lazy_numpy
     from supercoil._fork import use_point_workers
-    from supercoil._gc import collect_less, freeze
 
-    _lazy_numpy.install()
-    collect_less()
     use_point_workers()
-    status = run(argv)
-    freeze()
-    sys.exit(status)
+    sys.exit(run(argv))
 
 
 if __name__ == "__main__":

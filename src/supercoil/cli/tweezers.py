@@ -198,10 +198,8 @@ def tweezers(
     # started before the numerical imports (0.4-0.5 s) and the computation: the figure
     # helper imports matplotlib meanwhile, on the other core
     with Painter() as painter:
-        from supercoil._gc import imports_done
         from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
-        imports_done()
         try:
             options = TweezersOptions(twist_ratio=twist_ratio,
                                       length_over_diameter=length_over_diameter, tension=tension,

@@ -113,24 +113,17 @@ def compute_diagram(options, out: Path, quiet: bool = False, saved: dict | None 
 
 def run_diagram(options, out: Path, quiet: bool = False) -> dict | None:
     """:func:`compute_diagram` then :func:`write_diagram`; the payload, or None after an
-    interrupt. The figures' helper process (:class:`~supercoil.plotting.painter.Painter`)
-    is started first, so that it imports matplotlib while the diagram is computed."""
-    from supercoil.plotting.painter import Painter
-
+    interrupt."""
     saved: dict = {}
-    with Painter() as painter:
-        diagram = compute_diagram(options, out, quiet, saved)
-        if diagram is None:
-            return None
-        return write_diagram(diagram, out, options.contact, saved, painter)
+    diagram = compute_diagram(options, out, quiet, saved)
+    if diagram is None:
+        return None
+    return write_diagram(diagram, out, options.contact, saved)
 
 
-def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None,
-                  painter=None) -> dict:
+def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None) -> dict:
     """Save ``diagram`` (a RingDiagram) into ``out``, print a summary; return the payload.
-    Branches that ``saved`` holds (:func:`run_saving`'s record) are already written.
-    ``painter``: a started :class:`~supercoil.plotting.painter.Painter` whose helper
-    draws the figures (what it does not draw is drawn here)."""
+    Branches that ``saved`` holds (:func:`run_saving`'s record) are already written."""
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.figures import through_special_points
     from supercoil.plotting.ring_diagram import draw_jobs
@@ -177,7 +170,7 @@ def write_diagram(diagram, out: Path, contact: str, saved: dict | None = None,
     jobs.append((out / "configurations.png", "ring:configurations",
                  {"configurations": configurations, "diameter": options.diameter,
                   "title": title}))
-    draw_jobs(jobs, painter)
+    draw_jobs(jobs)
     write_json(envelope(payload, n_nodes=options.n_nodes, tolerances=options.tolerances,
                         contact_treatment=contact), out / "diagram.json")
     where = out.resolve()

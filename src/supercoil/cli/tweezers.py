@@ -193,47 +193,42 @@ def tweezers(
     require_count("--max-points", max_points, 2, 100_000)
     check_contact_choice(contact_curve, contact_formulation)
     prepare_output_folder(out, force, "this command's files")
-    from supercoil.plotting.painter import Painter
+    from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
-    # started before the numerical imports (0.4-0.5 s) and the computation: the figure
-    # helper imports matplotlib meanwhile, on the other core
-    with Painter() as painter:
-        from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+    try:
+        options = TweezersOptions(twist_ratio=twist_ratio,
+                                  length_over_diameter=length_over_diameter, tension=tension,
+                                  end_distance=end_distance, turns=(start, stop),
+                                  n_nodes=nodes, max_points=max_points,
+                                  contact_curve=contact_curve,
+                                  contact_formulation=contact_formulation)
+    except ValueError as exc:
+        fail(str(exc))
+    control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")
+    print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
+          f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
+          f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
+    from supercoil.cli.diagram_output import run_saving
 
-        try:
-            options = TweezersOptions(twist_ratio=twist_ratio,
-                                      length_over_diameter=length_over_diameter, tension=tension,
-                                      end_distance=end_distance, turns=(start, stop),
-                                      n_nodes=nodes, max_points=max_points,
-                                      contact_curve=contact_curve,
-                                      contact_formulation=contact_formulation)
-        except ValueError as exc:
-            fail(str(exc))
-        control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")
-        print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
-              f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
-              f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
-        from supercoil.cli.diagram_output import run_saving
+    def compute(message, on_point, on_branch):
+        return tweezers_branches(options, progress=message, on_point=on_point,
+                                 on_branch=on_branch)
 
-        def compute(message, on_point, on_branch):
-            return tweezers_branches(options, progress=message, on_point=on_point,
-                                     on_branch=on_branch)
+    # each final branch written uncompressed as it comes; write_tweezers writes them
+    # compressed
+    result = run_saving(compute, out, quiet, compress_final=False)
+    if result is None:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+    path = None
+    if protocol != "up":
+        from supercoil.problems.tweezers_protocol import quasistatic_path
 
-        # each final branch written uncompressed as it comes; write_tweezers writes them
-        # compressed while the figures are drawn
-        result = run_saving(compute, out, quiet, compress_final=False)
-        if result is None:
-            raise typer.Exit(EXIT_NOT_CONVERGED)
-        path = None
-        if protocol != "up":
-            from supercoil.problems.tweezers_protocol import quasistatic_path
-
-            what = ("and back" if protocol == "up-down" else
-                    f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
-            warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
-            path = quasistatic_path(options, protocol, step=step, force_range=ramp,
-                                    force_step=force_step)
-        payload = write_tweezers(result, out, path, preset, painter=painter)
+        what = ("and back" if protocol == "up-down" else
+                f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
+        warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
+        path = quasistatic_path(options, protocol, step=step, force_range=ramp,
+                                force_step=force_step)
+    payload = write_tweezers(result, out, path, preset)
     if not payload["ok"] or (path is not None and not path.ok):
         if path is not None and not path.ok:
             payload["notes"].append(f"path: {path.message}")
@@ -243,20 +238,18 @@ def tweezers(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
-def write_tweezers(result, out: Path, path=None, preset=None, painter=None) -> dict:
+def write_tweezers(result, out: Path, path=None, preset=None) -> dict:
     """Save the branches, branch.json (with the envelope) and the figures; return the payload.
 
-    Every branch is written compressed to ``out/branches`` while the figures are drawn
-    (three compressed saves, about 0.05 s at N = 100, off the command's critical path);
-    the command's :func:`~supercoil.cli.diagram_output.run_saving` wrote each uncompressed
-    when it became final, which an interrupt before the figures leaves (they load the same).
+    Every branch is written compressed to ``out/branches``; the command's
+    :func:`~supercoil.cli.diagram_output.run_saving` wrote each uncompressed when it
+    became final, which an interrupt before the figures leaves (they load the same).
 
     ``path``: the quasi-static path (:class:`~supercoil.problems.tweezers_protocol.PathResult`)
     of the up-down protocol, written as the list ``path`` with its jumps among the special
     points, and its states as ``branches/path.npz``. ``preset``: a
     :class:`~supercoil.units.dna.DNAPreset`; its suffixed keys are added to every point,
-    special point and path point, and ``units`` is ``dna``. ``painter``: a
-    :class:`~supercoil.plotting.painter.Painter` whose helper draws the figures.
+    special point and path point, and ``units`` is ``dna``.
     """
     from supercoil.cli.diagram_output import save_branch
     from supercoil.io.results import envelope, write_json
@@ -267,8 +260,7 @@ def write_tweezers(result, out: Path, path=None, preset=None, painter=None) -> d
         result_payload,
     )
 
-    # the points' contact lists (0.05 s at N = 100) are made while the figures are drawn,
-    # but for the states drawn as tubes, which show them
+    # the contact lists of the states drawn as tubes, which show them
     payload = result_payload(result, contacts=False)
     states = {b.name: b.states for b in result.branches}
     if path is not None:
@@ -284,7 +276,7 @@ def write_tweezers(result, out: Path, path=None, preset=None, painter=None) -> d
     configurations = pick_configurations(payload, states)
 
     def write_payload() -> None:
-        """branch.json, written while the figures are drawn."""
+        """branch.json and the compressed branch files."""
         add_contact_lists(result, payload["points"])
         if preset is not None:
             from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
@@ -309,7 +301,8 @@ def write_tweezers(result, out: Path, path=None, preset=None, painter=None) -> d
         for branch in result.branches:
             save_branch(branch, out / "branches")
 
-    write_figures(payload, configurations, out, painter, meanwhile=write_payload)
+    write_figures(payload, configurations, out)
+    write_payload()
     for b in payload["branches"]:
         specials = [p for p in payload["special_points"] if p["branch"] == b["name"]
                     and p["kind"] != "fold"]

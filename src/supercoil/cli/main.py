@@ -895,16 +895,7 @@ def run(argv: Sequence[str] | None = None) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> NoReturn:
-    """Entry point of the ``supercoil`` console script.
-
-    Continuation points are evaluated by a worker on the other core where the process
-    may fork (:func:`supercoil._fork.use_point_workers`; the results are those of the
-    serial computation); :func:`run`, which tests and scripts call in their own
-    processes, leaves it alone.
-    """
-    from supercoil._fork import use_point_workers
-
-    use_point_workers()
+    """Entry point of the ``supercoil`` console script."""
     sys.exit(run(argv))
 
 

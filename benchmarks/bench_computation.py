@@ -12,8 +12,10 @@ Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_computation.py WORKLOAD [-
 
 The workload runs once as a warm-up (numba's kernels loaded or compiled, every module
 imported), then ``K`` times in the same process; the smallest and the median wall time
-of those runs are printed, with a fingerprint of the result (points per branch, the
-last parameter value of each) to check that two trees compute the same branches.
+and CPU time (``time.process_time``: all threads of the process, less disturbed than
+the wall time by other jobs on a shared machine) of those runs are printed, with a
+fingerprint of the result (points per branch, the last parameter value of each) to
+check that two trees compute the same branches.
 
 ``--against SRC`` alternates the measurement with the source tree ``SRC`` (a ``src``
 folder): each round runs a fresh process for each tree, the warm-up and ``K`` runs in
@@ -64,12 +66,13 @@ def measure(workload: str, repeat: int) -> dict:
     start = time.perf_counter()
     result = run()
     warm_up = time.perf_counter() - start
-    times = []
+    times, cpu = [], []
     for _ in range(repeat):
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         result = run()
         times.append(time.perf_counter() - start)
-    return {"warm_up": warm_up, "times": times, "fingerprint": fingerprint(result)}
+        cpu.append(time.process_time() - start_cpu)
+    return {"warm_up": warm_up, "times": times, "cpu": cpu, "fingerprint": fingerprint(result)}
 
 
 def _in_process(source: str, workload: str, repeat: int) -> dict:
@@ -80,8 +83,9 @@ def _in_process(source: str, workload: str, repeat: int) -> dict:
     return json.loads(out.strip().splitlines()[-1])
 
 
-def _summary(label: str, times: list[float]) -> str:
-    return (f"{label}: min {min(times):.2f} s, median {statistics.median(times):.2f} s "
+def _summary(label: str, times: list[float], cpu: list[float]) -> str:
+    return (f"{label}: wall min {min(times):.2f} s, median {statistics.median(times):.2f} s; "
+            f"CPU min {min(cpu):.2f} s, median {statistics.median(cpu):.2f} s "
             f"({len(times)} runs)")
 
 
@@ -103,22 +107,25 @@ def main() -> None:
         data = measure(args.workload, args.repeat)
         print(f"{args.workload} ({os.path.dirname(supercoil.__file__)}): "
               f"warm-up {data['warm_up']:.2f} s")
-        print(_summary(args.workload, data["times"]))
+        print(_summary(args.workload, data["times"], data["cpu"]))
         print("fingerprint:", json.dumps(data["fingerprint"]))
         return
     here = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "src")
     trees = {"this tree": here, "against": os.path.abspath(args.against)}
     pooled: dict[str, list[float]] = {name: [] for name in trees}
+    pooled_cpu: dict[str, list[float]] = {name: [] for name in trees}
     prints = {}
     for index in range(args.rounds):
         for name, source in (trees.items() if index % 2 == 0 else reversed(trees.items())):
             data = _in_process(source, args.workload, args.repeat)
             pooled[name] += data["times"]
+            pooled_cpu[name] += data["cpu"]
             prints[name] = data["fingerprint"]
-            print(f"round {index + 1}, {name}: "
-                  + ", ".join(f"{t:.2f}" for t in data["times"]), flush=True)
+            print(f"round {index + 1}, {name}: wall "
+                  + ", ".join(f"{t:.2f}" for t in data["times"]) + "; CPU "
+                  + ", ".join(f"{t:.2f}" for t in data["cpu"]), flush=True)
     for name, source in trees.items():
-        print(_summary(f"{name} ({source})", pooled[name]))
+        print(_summary(f"{name} ({source})", pooled[name], pooled_cpu[name]))
     same = prints["this tree"] == prints["against"]
     print("same branches" if same else "different branches: "
           + json.dumps(prints))

@@ -880,6 +880,13 @@ def test_help_and_version_through_the_entry_point(capsys):
     assert status == 0 and json.loads(out)["converged"] is True
 
 
+@pytest.mark.parametrize("group, commands", [((), ("ring", "diagram")), (("diagram",), ("ring",))])
+def test_a_group_without_its_command_prints_its_help_and_exits_2(capsys, group, commands):
+    status, out, err = run_main(capsys, *group)
+    assert status == 2 and err == ""
+    assert "Usage" in out and all(command in out for command in commands)
+
+
 def test_unexpected_exception_is_one_line_internal_error(capsys, monkeypatch):
     """A bug ends as one line with exit status 1; SUPERCOIL_DEBUG=1 re-raises it."""
     from supercoil.problems import ring as ring_module

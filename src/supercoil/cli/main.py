@@ -50,12 +50,6 @@ from supercoil.units.dna import (  # plain constants (math only): cheap at start
     TWIST_PERSISTENCE_NM,
 )
 
-try:  # typer >= 0.25 vendors click as typer._click; older typer depends on click
-    from typer._click.exceptions import ClickException, NoArgsIsHelpError
-except ImportError:  # pragma: no cover - depends on the installed typer
-    from click.exceptions import ClickException, NoArgsIsHelpError
-from typer.exceptions import Abort
-
 UNITS_NOTE = (
     "Units are nondimensional: bending stiffness A = 1 and rod length L = 1, so energies are "
     "E*L/A, forces F*L^2/A, torques M*L/A; the twist ratio is C/A; link, twist and writhe "
@@ -68,7 +62,6 @@ app = typer.Typer(
     help="Equilibria and stability of elastic rods (Kirchhoff rods, closed rings, writhe). "
     + UNITS_NOTE
     + " Exit status: 0 done, 1 computed but not converged, 2 bad input.",
-    no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},
@@ -133,8 +126,16 @@ def _version_callback(value: bool) -> None:
         raise typer.Exit()
 
 
-@app.callback()
+def _help_without_command(ctx: typer.Context) -> None:
+    """A group called without a command: its help, exit status 2."""
+    if ctx.invoked_subcommand is None:
+        print(ctx.get_help())
+        raise typer.Exit(EXIT_BAD_INPUT)
+
+
+@app.callback(invoke_without_command=True)
 def _root(
+    ctx: typer.Context,
     version: Annotated[
         bool,
         typer.Option(
@@ -146,6 +147,7 @@ def _root(
     ] = False,
 ) -> None:
     """Equilibria and stability of elastic rods."""
+    _help_without_command(ctx)
 
 
 # --------------------------------------------------------------------- writhe
@@ -655,9 +657,9 @@ def demo(
 
 diagram_app = typer.Typer(
     help="Bifurcation diagrams with self-contact (branches, stability, contact events).",
-    no_args_is_help=True,
 )
 app.add_typer(diagram_app, name="diagram")
+diagram_app.callback(invoke_without_command=True)(_help_without_command)
 
 DIAGRAM_TREATMENTS = ("barrier", "penalty")  # supercoil.problems.ring_diagram's
 
@@ -867,10 +869,7 @@ def run(argv: Sequence[str] | None = None) -> int:
                 # happened, so they would only break the one-line stderr contract
                 warnings.simplefilter("ignore", RuntimeWarning)
             status = app(args=args, prog_name="supercoil", standalone_mode=False)
-    except NoArgsIsHelpError as exc:  # bare ``supercoil``: the help, as click does
-        print(exc.ctx.get_help())
-        return EXIT_BAD_INPUT
-    except ClickException as exc:
+    except typer.TyperException as exc:  # typer's parse errors (click's, in typer's copy)
         ctx = getattr(exc, "ctx", None)
         command = ctx.command_path if ctx is not None else "supercoil"
         print(
@@ -879,7 +878,7 @@ def run(argv: Sequence[str] | None = None) -> int:
             flush=True,
         )
         return exc.exit_code
-    except Abort:
+    except typer.Abort:
         print("error: aborted", file=sys.stderr, flush=True)
         return 1
     except Exception as exc:

@@ -1,9 +1,8 @@
-"""Fast paths of one corrector iteration against the former (scipy) computations.
+"""Pieces of one corrector iteration against direct computations.
 
-Oracles: the former code, restated or kept as the reference (``_kkt_order_scipy``:
-the pattern of ``|S| + |J^T J|`` formed by scipy.sparse; scipy's row sums for the
-round-off floor): the same arrays bit for bit, also on patterns with explicit
-zeros, exact cancellation in ``J^T J`` and entries scipy keeps or drops.
+Oracles: LAPACK's band LU of a band storage filled by fancy indexing, dense solves,
+scipy's row sums for the round-off floor: the same arrays bit for bit (or solves to
+round-off), also on patterns with explicit zeros and far couplings.
 """
 
 from __future__ import annotations
@@ -49,49 +48,6 @@ def contact_like_kkt(rng, nodes, pairs, zero_rows=0):
     return S, J
 
 
-@pytest.mark.parametrize("seed", range(8))
-def test_merged_kkt_order_equals_scipys_on_contact_patterns(seed):
-    rng = np.random.default_rng(700 + seed)
-    S, J = contact_like_kkt(rng, int(rng.integers(15, 60)), int(rng.integers(0, 12)),
-                            zero_rows=int(rng.integers(1, 6)) if seed % 2 else 0)
-    assert J.has_canonical_format and (not seed % 2 or np.any(J.data == 0.0))
-    merged = kkt._kkt_order_merged(S, J)
-    assert merged is not None  # the fast path takes these
-    assert np.array_equal(merged, kkt._kkt_order_scipy(S, J))
-    assert np.array_equal(kkt.kkt_order(S, J), merged)
-
-
-def test_merged_kkt_order_sees_exact_cancellation_and_refuses_near_cancellation():
-    """Two-term entries of ``J^T J`` that cancel exactly are dropped by scipy (and the
-    merged path); an entry of three terms that nearly cancels cannot be certified:
-    the merged path declines (None) and kkt_order takes scipy's, the same ordering."""
-    rng = np.random.default_rng(11)
-    n = 30
-    S = sp.csr_matrix(np.diag(rng.uniform(1.0, 2.0, n)) + np.diag(np.ones(n - 1), 1)
-                      + np.diag(np.ones(n - 1), -1))
-
-    def jacobian(rows):
-        J = np.zeros((len(rows), n))
-        for k, entries in enumerate(rows):
-            for col, value in entries:
-                J[k, col] = value
-        return sp.csr_matrix(J)
-
-    base = [[(a, 1.0), (a + 1, rng.standard_normal())] for a in range(0, n - 1, 3)]
-    cancelled = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, -1.0)]])
-    kept = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, -0.5)]])
-    for J in (cancelled, kept):
-        merged = kkt._kkt_order_merged(S, J)
-        assert merged is not None
-        assert np.array_equal(merged, kkt._kkt_order_scipy(S, J))
-    assert not np.array_equal(kkt._kkt_order_merged(S, cancelled),
-                              kkt._kkt_order_merged(S, kept))
-    three = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, 1.0)],
-                             [(2, 1.0), (20, -2.0 + 1e-12)]])
-    assert kkt._kkt_order_merged(S, three) is None
-    assert np.array_equal(kkt._kkt_order(S, three), kkt._kkt_order_scipy(S, three))
-
-
 def dense_bordered(hessian, J, column, row):
     n, m = hessian.sparse.shape[0], J.shape[0]
     B = np.zeros((n + m + 1, n + m + 1))
@@ -105,7 +61,7 @@ def dense_bordered(hessian, J, column, row):
 
 def test_band_layout_of_nonzeros_drops_far_stored_zeros():
     """Stored zeros far outside the nonzero band are dropped: the band LU is that of the
-    nonzero entries alone, bit for bit (the former band LU, fancy-indexed ``ab``); a
+    nonzero entries alone, bit for bit (LAPACK's band LU of a fancy-indexed ``ab``); a
     nonzero value at a dropped entry is not held."""
     from scipy.linalg import lapack
 
@@ -125,8 +81,8 @@ def test_band_layout_of_nonzeros_drops_far_stored_zeros():
     lub, piv, kl, ku, info = band_factor(layout, values)
     ab = np.zeros((2 * kl + ku + 1, n))
     ab[kl + ku + A.row - A.col, A.col] = A.data
-    former_lub, former_piv, _info = lapack.dgbtrf(ab, kl, ku)
-    assert info == 0 and np.array_equal(lub, former_lub) and np.array_equal(piv, former_piv)
+    reference_lub, reference_piv, _info = lapack.dgbtrf(ab, kl, ku)
+    assert info == 0 and np.array_equal(lub, reference_lub) and np.array_equal(piv, reference_piv)
     values[-1] = 1e-300
     assert not layout.holds(values)
 
@@ -186,7 +142,7 @@ def test_bordered_factor_takes_the_band_lu_on_stored_zeros_and_wide_bands():
 @pytest.mark.parametrize("seed", range(4))
 def test_roundoff_floor_equals_scipys_row_sums_bit_for_bit(seed):
     """The round-off floor from the stored entries against scipy's
-    ``abs(S).sum(axis=1).max()`` (the former formula): empty rows, stored zeros,
+    ``abs(S).sum(axis=1).max()`` (scipy's row sums): empty rows, stored zeros,
     duplicates (a non-canonical matrix) and rows of very different sizes."""
     from supercoil.solvers.newton import roundoff_floor
     from supercoil.solvers.problem import HessianParts
@@ -203,5 +159,5 @@ def test_roundoff_floor_equals_scipys_row_sums_bit_for_bit(seed):
         indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
         S = sp.csr_matrix((values[order], cols[order], indptr), shape=(n, n))
     q = rng.standard_normal(3 * n)
-    former = np.finfo(float).eps * float(abs(S).sum(axis=1).max()) * float(np.max(np.abs(q)))
-    assert roundoff_floor(HessianParts(S), q) == former
+    reference = np.finfo(float).eps * float(abs(S).sum(axis=1).max()) * float(np.max(np.abs(q)))
+    assert roundoff_floor(HessianParts(S), q) == reference

@@ -86,9 +86,10 @@ def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
 
 
 def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
-    """kkt_order remembers orderings by pattern (fast path); _kkt_order_scipy computes
-    them with scipy.sparse (the reference). Same pattern with other values: the same ordering; an entry of J^T J that cancels
-    exactly (scipy drops it, the pattern changes): the memo must not be used."""
+    """kkt_order remembers orderings by pattern; _kkt_order computes them with
+    scipy.sparse (the reference). Same pattern with other values: the same ordering; an
+    entry of J^T J that cancels exactly (scipy drops it, the pattern changes): the memo
+    must not be used."""
     from supercoil.solvers import kkt
 
     rng = np.random.default_rng(5)
@@ -109,28 +110,28 @@ def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
 
     kkt._ORDER_MEMO.clear()
     plain = kkt.kkt_order(S, jacobian(0.5))
-    assert np.array_equal(plain, kkt._kkt_order_scipy(S, jacobian(0.5)))
+    assert np.array_equal(plain, kkt._kkt_order(S, jacobian(0.5)))
     assert len(kkt._ORDER_MEMO) == 1
     again = kkt.kkt_order(S, jacobian(0.7))  # same pattern, remembered
-    assert np.array_equal(again, kkt._kkt_order_scipy(S, jacobian(0.7)))
+    assert np.array_equal(again, kkt._kkt_order(S, jacobian(0.7)))
     ((memo, *_arrays),) = kkt._ORDER_MEMO.values()
     assert memo.certifies(jacobian(0.7)) and not memo.certifies(jacobian(-1.0))
     cancelled = kkt.kkt_order(S, jacobian(-1.0))
-    assert np.array_equal(cancelled, kkt._kkt_order_scipy(S, jacobian(-1.0)))
+    assert np.array_equal(cancelled, kkt._kkt_order(S, jacobian(-1.0)))
     for seed in range(5):  # random KKT patterns, each asked twice
         H, J = random_kkt(np.random.default_rng(400 + seed), 60, 8, rank_one=0)
         for _ in range(2):
-            assert np.array_equal(kkt.kkt_order(H.sparse, J), kkt._kkt_order_scipy(H.sparse, J))
+            assert np.array_equal(kkt.kkt_order(H.sparse, J), kkt._kkt_order(H.sparse, J))
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
-    """KKTFactor forms the permuted KKT matrix from entry arrays (fast path); the
-    previous code factorised bmat(...)[order][:, order]: same LU, same solves, bit
-    for bit (explicit zeros of H and J kept)."""
+def test_superlu_factor_from_entries_equals_superlu_of_bmat(seed):
+    """The SuperLU factor of KKTFactor (wide bands) forms the permuted KKT matrix from
+    entry arrays; the reference factorises bmat(...)[order][:, order]: same LU, same
+    solves, bit for bit (explicit zeros of H and J kept)."""
     from scipy.sparse.linalg import splu
 
-    from supercoil.solvers.kkt import kkt_order
+    from supercoil.solvers.kkt import _kkt_entries, _OrderedLU, canonical, kkt_order
 
     rng = np.random.default_rng(500 + seed)
     n, m = int(rng.integers(30, 90)), int(rng.integers(1, 12))
@@ -141,16 +142,16 @@ def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
     J.data[::4] = 0.0
     if seed == 3:  # every entry stored as two halves (not canonical): bmat sums them
         S = split_into_halves(S)
-    factor = KKTFactor(HessianParts(S), J)
     order = kkt_order(S, J)
+    factor = _OrderedLU(n + m, *_kkt_entries(canonical(S), canonical(J)), order)
     lu = splu(sp.bmat([[S, J.T], [J, None]], format="csr")[order][:, order].tocsc(),
               permc_spec="NATURAL")
     rhs = rng.standard_normal(n + m)
     reference = np.empty(n + m)
     reference[order] = lu.solve(rhs[order])
     assert np.array_equal(factor.solve(rhs), reference)
-    assert np.array_equal(factor._lu.U.diagonal(), lu.U.diagonal())
-    assert np.array_equal(factor._lu.perm_r, lu.perm_r)
+    assert np.array_equal(factor.U.diagonal(), lu.U.diagonal())
+    assert np.array_equal(factor.perm_r, lu.perm_r)
 
 
 def _same_csr(mine, reference):

@@ -193,9 +193,6 @@ class _Tracer:
         only (measured on the ring's alpha branch at N = 200: at most 3e-16 of its
         largest entry, as much as assembling it twice at ``x`` with other states
         evaluated in between does).
-        The point's eigenvalues feed no event or switch (those are recomputed), so
-        they are computed by the faster path (``point_stability(fast=True)``: band
-        LU, standard-mode Lanczos; equal to round-off).
         """
         system = self.system
         system.set_parameter(x[-1])
@@ -203,7 +200,7 @@ class _Tracer:
         self._accepted_hessian = None
         full = system.full_hessian(x) if full_hessian is None else full_hessian
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
-                                    full, fast=True)
+                                    full)
         records = self._records(x)
         user = [user_values(ev, system, x) for ev in self.events]
         self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))
@@ -261,11 +258,7 @@ class _Tracer:
         system, opts = self.system, self.opts
         x = ev.x
         t = ev.tangent if ev.tangent is not None else self.ts[k + 1]
-        # the critical modes of folds and bifurcations feed branch switching: the
-        # reference eigensolver there; a user event keeps only its count (the fast
-        # path, as at regular points)
-        stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes,
-                               fast=ev.kind not in ("bifurcation", "fold"))
+        stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes)
         values = modes = np.zeros(0)
         if ev.kind in ("bifurcation", "fold"):
             n_critical = max(1, abs(ev.count_after - ev.count_before))

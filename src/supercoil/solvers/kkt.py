@@ -7,7 +7,9 @@ The saddle-point matrix of an energy ``E`` with constraints ``c`` is
 with ``S`` sparse (banded for a rod) and a few dense rank-one terms
 (treated with the Woodbury identity in both parts below).
 
-Solves use SuperLU with partial pivoting on ``K`` (stable for saddle points).
+Solves use an LU with partial pivoting on ``K`` in a banded ordering (stable for
+saddle points): LAPACK's band LU where the ordered band is narrow, SuperLU
+where it is wider than a quarter of the matrix (see :class:`KKTFactor`).
 
 Inertia. ``L D L^T`` without pivoting breaks down on saddle-point matrices
 (element growth; measured wrong counts on a ring), and an augmented Hessian
@@ -38,7 +40,6 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import lapack
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import splu
 
 from supercoil._numba import njit
@@ -50,7 +51,7 @@ from supercoil.solvers.band import (
     bandwidth_order,
     symmetric_inertia,
 )
-from supercoil.solvers.patterns import PatternMemo, _merge_kernel, csr_add, csr_from_arrays
+from supercoil.solvers.patterns import PatternMemo, csr_add
 from supercoil.solvers.problem import HessianParts
 
 
@@ -248,10 +249,7 @@ def kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
     same few patterns come back at every corrector iteration: orderings are
     remembered by the stored patterns of ``S`` and ``J`` and their zero
     entries (:class:`_OrderMemo`). Forming the pattern of ``S + J^T J`` with
-    scipy.sparse cost 0.6 ms of a 2 ms bordered factorisation at N = 100. A new
-    pattern (the integral contact's pairs change: 200 of the tweezers' 1098 orderings
-    at N = 100) is ordered from a compiled merge of the patterns
-    (:func:`_kkt_order_merged`, 0.1 ms against scipy's 0.4 ms, the same ordering).
+    scipy.sparse cost 0.6 ms of a 2 ms bordered factorisation at N = 100.
     """
     return remembered_order(S, J)[0]
 
@@ -272,7 +270,7 @@ def remembered_order(S: sp.spmatrix, J: sp.spmatrix) -> tuple[np.ndarray, _Order
     if memo is not None and memo[0].certifies(J):
         return memo[0].order.copy(), memo[0]
     pairs = _gram_pattern(J, j_key)
-    order = _kkt_order(S, J, pairs)
+    order = _kkt_order(S, J)
     memo = _OrderMemo.of(J, order, pairs) if pairs is not None else None
     if memo is not None and memo.certifies(J):
         _ORDER_MEMO.put(key, (memo, memo.order, memo._first, memo._second, memo._group,
@@ -385,15 +383,10 @@ class _GramPattern:
     ``first``, ``second`` index ``J.data``: every ordered pair of nonzero entries of
     one row, term ``J_ka J_kb`` of the entry ``(a, b)``; ``group`` numbers the
     entries (``n_groups`` of them) in the row-major order of their ``(a, b)``;
-    ``two_terms`` marks those with exactly two terms, ``one_term`` those with one.
-    ``slots`` are the entries of ``J^T J + I`` (row-major keys ``a n + b``, sorted),
-    ``slot_of_group`` each entry's slot and ``diagonal`` the slots on the diagonal.
-    ``rows``, ``columns`` are the nonzero entries of ``J`` (the multipliers'
-    places in :func:`kkt_order`).
+    ``two_terms`` marks those with exactly two terms.
     """
 
-    __slots__ = ("columns", "diagonal", "first", "group", "n_groups", "one_term", "rows",
-                 "second", "slot_of_group", "slots", "two_terms")
+    __slots__ = ("first", "group", "n_groups", "second", "two_terms")
 
     @property
     def nbytes(self) -> int:  # for PatternMemo's memory bound
@@ -431,69 +424,12 @@ def _gram_pattern(J: sp.csr_matrix, key: tuple | None = None) -> _GramPattern | 
     out.group = group.ravel()
     out.n_groups = keys.size
     terms = np.bincount(out.group, minlength=keys.size)
-    out.two_terms, out.one_term = terms == 2, terms == 1
-    out.slots = np.union1d(keys, np.arange(n, dtype=np.int64) * (n + 1))
-    out.slot_of_group = np.searchsorted(out.slots, keys)
-    out.diagonal = np.zeros(out.slots.size, dtype=bool)
-    out.diagonal[np.searchsorted(out.slots, np.arange(n, dtype=np.int64) * (n + 1))] = True
-    out.rows, out.columns = row, J.indices[stored].astype(np.int64)
+    out.two_terms = terms == 2
     _GRAM_MEMO.put(key, (out,))
     return out
 
 
 _GRAM_MEMO = PatternMemo()
-
-
-def _kkt_order(S: sp.spmatrix, J: sp.spmatrix, pairs: _GramPattern | None = None
-               ) -> np.ndarray:
-    """:func:`kkt_order` computed (not remembered): :func:`_kkt_order_merged` where it
-    applies, else :func:`_kkt_order_scipy` (the same ordering)."""
-    order = _kkt_order_merged(S, J, pairs)
-    return order if order is not None else _kkt_order_scipy(S, J)
-
-
-def _kkt_order_merged(S: sp.spmatrix, J: sp.spmatrix, pairs: _GramPattern | None = None
-                      ) -> np.ndarray | None:
-    """:func:`_kkt_order_scipy`'s ordering, the pattern of ``|S| + |J^T J| + I`` made by
-    one compiled merge (:func:`~supercoil.solvers.patterns._merge_kernel`) of ``|S|``
-    with the pattern of ``J^T J + I`` (:func:`_gram_pattern`), or None (then scipy's
-    path) for operands it does not take or a ``J^T J`` whose pattern it cannot certify.
-
-    The pattern is scipy's, so reverse Cuthill-McKee gets the same arrays: sorted rows
-    (scipy's sums of canonical matrices are sorted), every nonzero of ``S``, the
-    diagonal, and each entry of ``J^T J`` that scipy's product keeps, an entry whose sum
-    is not exactly zero. An entry of one or two terms has the same sum in any order
-    (``0 + t1 + t2``): kept exactly when that is not 0. An entry of more terms must
-    have ``|sum| > 1e-8 sum |terms|`` (then no order of summation gives 0), else None.
-    scipy's path spent 0.4 of its 0.41 ms forming that pattern (N = 100, a contact
-    state of the tweezers: 387 unknowns, 8451 entries of ``S``); the orderings of the
-    tweezers' contact branch are the same (tests).
-    """
-    if not (_is_canonical_float(S) and _is_canonical_float(J)) or S.shape[0] != S.shape[1] \
-            or J.shape[1] != S.shape[0] or S.shape[0] >= 2**31 - 1:
-        return None
-    n, m = S.shape[0], J.shape[0]
-    if pairs is None:
-        pairs = _gram_pattern(J)
-        if pairs is None:
-            return None
-    total, size = _pair_sums(J.data, pairs.first, pairs.second, pairs.group, pairs.n_groups)
-    exact = pairs.one_term | pairs.two_terms
-    if not np.all(exact | (np.abs(total) > 1e-8 * size)):
-        return None
-    present = pairs.diagonal.copy()
-    present[pairs.slot_of_group[(total != 0.0) | ~exact]] = True
-    keys = pairs.slots[present]
-    gram_indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(keys // n, minlength=n), out=gram_indptr[1:])
-    indptr, indices, _data = _merge_kernel(S.indptr, S.indices, np.abs(S.data), gram_indptr,
-                                           keys % n, np.ones(keys.size), n)
-    pattern = csr_from_arrays(np.ones(indices.size), indices.astype(np.int32),
-                              indptr.astype(np.int32), (n, n), canonical=True)
-    x_order = np.asarray(reverse_cuthill_mckee(pattern, symmetric_mode=True), dtype=np.int64)
-    if m == 0:
-        return x_order
-    return _place_multipliers(x_order, pairs.rows, pairs.columns, n, m)
 
 
 def _place_multipliers(x_order: np.ndarray, rows: np.ndarray, columns: np.ndarray, n: int,
@@ -543,8 +479,8 @@ def _is_canonical_float(A) -> bool:
         and A.has_canonical_format
 
 
-def _kkt_order_scipy(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
-    """:func:`kkt_order` computed with scipy.sparse (the reference of the merged path)."""
+def _kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
+    """:func:`kkt_order` computed (not remembered)."""
     n, m = S.shape[0], J.shape[0]
     J = sp.csr_matrix(J, copy=True)
     J.eliminate_zeros()  # a straight rod's constraints do not touch its lateral DOFs
@@ -745,12 +681,11 @@ class _BandLU:
 
     On the banded KKT ordering the two are the same elimination, rows pivoted
     within the band; solves agree to round-off (relative to the condition
-    number), not bit for bit. Measured at N = 200 on the ring's contact branch
-    (795 unknowns, half-bandwidths 43): 0.9 ms against 2.7 ms for
-    :class:`_OrderedLU`. :meth:`from_layout` (the factors' path) and :meth:`of` return
-    None (the caller takes SuperLU)
-    when the band is wider than a quarter of the matrix, as
-    :class:`~supercoil.continuation.bordered.BorderedFactor` does.
+    number), not bit for bit. The band LU is about three times faster on the
+    captured KKT matrices of the N = 200 ring (``OPENBLAS_NUM_THREADS=1 python
+    benchmarks/bench_kkt_factor.py``). :meth:`from_layout` and :meth:`of` return
+    None (the caller takes SuperLU) when the band is wider than a quarter of the
+    matrix, as :class:`~supercoil.continuation.bordered.BorderedFactor` does.
     """
 
     def __init__(self, order, lub, piv, kl, ku):
@@ -803,9 +738,8 @@ class KKTFactor:
     unknowns, ``jacobian`` is ``(m, n)``; ``shift`` and ``mass`` (diagonal,
     ``(n,)``) are for shift-invert eigenvalue computations; ``order`` reuses
     the :func:`kkt_order` of an earlier factor of the same pattern
-    (:attr:`order`); ``band`` factorises by LAPACK's band LU (:class:`_BandLU`:
-    solves equal to SuperLU's to round-off, three times faster on a ring's
-    contact states) when the ordered band is narrow, else by SuperLU. The inertia is
+    (:attr:`order`). The matrix is factorised by LAPACK's band LU (:class:`_BandLU`)
+    when the ordered band is narrow, else by SuperLU (:class:`_OrderedLU`). The inertia is
     computed on first use of :attr:`reduced_negative_count`, from the matrices given
     (referenced, not copied: a caller must not change their entries in place while
     it uses the factor; none in the package does). Dense rows of
@@ -818,8 +752,7 @@ class KKTFactor:
 
     def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix | None = None,
                  shift: float = 0.0, mass: np.ndarray | None = None,
-                 order: np.ndarray | None = None, band: bool = False):
-        self._band = band
+                 order: np.ndarray | None = None):
         S = hessian.sparse.tocsr()
         n = S.shape[0]
         if shift != 0.0:
@@ -851,13 +784,11 @@ class KKTFactor:
         self._order = kkt_order(S, J_factored) if order is None else order
         S, J_factored = canonical(S), canonical(J_factored)
         self._factored = (S, J_factored)
-        self._lu = None
-        if self._band:
-            # with the values: a straight rod stores zeros that couple far unknowns, whose
-            # stored band is too wide (SuperLU then) where its nonzero band is narrow
-            values = _kkt_values(S, J_factored)
-            layout = kkt_band_layout(S, J_factored, self._order, values=values)
-            self._lu = _BandLU.from_layout(self._order, layout, values)
+        # with the values: a straight rod stores zeros that couple far unknowns, whose
+        # stored band is too wide (SuperLU then) where its nonzero band is narrow
+        values = _kkt_values(S, J_factored)
+        layout = kkt_band_layout(S, J_factored, self._order, values=values)
+        self._lu = _BandLU.from_layout(self._order, layout, values)
         if self._lu is None:
             try:
                 self._lu = _OrderedLU(size, *_kkt_entries(S, J_factored), self._order)

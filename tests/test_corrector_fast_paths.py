@@ -1,8 +1,10 @@
 """Pieces of one corrector iteration against direct computations.
 
-Oracles: LAPACK's band LU of a band storage filled by fancy indexing, dense solves,
-scipy's row sums for the round-off floor: the same arrays bit for bit (or solves to
-round-off), also on patterns with explicit zeros and far couplings.
+Oracles: scipy's KKT ordering (``_kkt_order_scipy``: the pattern of ``|S| + |J^T J|``
+formed by scipy.sparse) for the merged one, LAPACK's band LU of a band storage filled
+by fancy indexing, dense solves, scipy's row sums for the round-off floor: the same
+arrays bit for bit (or solves to round-off), also on patterns with explicit zeros,
+exact cancellation in ``J^T J`` and entries scipy keeps or drops.
 """
 
 from __future__ import annotations
@@ -46,6 +48,49 @@ def contact_like_kkt(rng, nodes, pairs, zero_rows=0):
         v.append(1.0)
     J = sp.csr_matrix((v, (r, c)), shape=(nodes + 2, n))
     return S, J
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_merged_kkt_order_equals_scipys_on_contact_patterns(seed):
+    rng = np.random.default_rng(700 + seed)
+    S, J = contact_like_kkt(rng, int(rng.integers(15, 60)), int(rng.integers(0, 12)),
+                            zero_rows=int(rng.integers(1, 6)) if seed % 2 else 0)
+    assert J.has_canonical_format and (not seed % 2 or np.any(J.data == 0.0))
+    merged = kkt._kkt_order_merged(S, J)
+    assert merged is not None  # the fast path takes these
+    assert np.array_equal(merged, kkt._kkt_order_scipy(S, J))
+    assert np.array_equal(kkt.kkt_order(S, J), merged)
+
+
+def test_merged_kkt_order_sees_exact_cancellation_and_refuses_near_cancellation():
+    """Two-term entries of ``J^T J`` that cancel exactly are dropped by scipy (and the
+    merged path); an entry of three terms that nearly cancels cannot be certified:
+    the merged path declines (None) and kkt_order takes scipy's, the same ordering."""
+    rng = np.random.default_rng(11)
+    n = 30
+    S = sp.csr_matrix(np.diag(rng.uniform(1.0, 2.0, n)) + np.diag(np.ones(n - 1), 1)
+                      + np.diag(np.ones(n - 1), -1))
+
+    def jacobian(rows):
+        J = np.zeros((len(rows), n))
+        for k, entries in enumerate(rows):
+            for col, value in entries:
+                J[k, col] = value
+        return sp.csr_matrix(J)
+
+    base = [[(a, 1.0), (a + 1, rng.standard_normal())] for a in range(0, n - 1, 3)]
+    cancelled = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, -1.0)]])
+    kept = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, -0.5)]])
+    for J in (cancelled, kept):
+        merged = kkt._kkt_order_merged(S, J)
+        assert merged is not None
+        assert np.array_equal(merged, kkt._kkt_order_scipy(S, J))
+    assert not np.array_equal(kkt._kkt_order_merged(S, cancelled),
+                              kkt._kkt_order_merged(S, kept))
+    three = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, 1.0)],
+                             [(2, 1.0), (20, -2.0 + 1e-12)]])
+    assert kkt._kkt_order_merged(S, three) is None
+    assert np.array_equal(kkt._kkt_order(S, three), kkt._kkt_order_scipy(S, three))
 
 
 def dense_bordered(hessian, J, column, row):

@@ -86,7 +86,7 @@ def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
 
 
 def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
-    """kkt_order remembers orderings by pattern; _kkt_order computes them with
+    """kkt_order remembers orderings by pattern; _kkt_order_scipy computes them with
     scipy.sparse (the reference). Same pattern with other values: the same ordering; an
     entry of J^T J that cancels exactly (scipy drops it, the pattern changes): the memo
     must not be used."""
@@ -110,18 +110,18 @@ def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
 
     kkt._ORDER_MEMO.clear()
     plain = kkt.kkt_order(S, jacobian(0.5))
-    assert np.array_equal(plain, kkt._kkt_order(S, jacobian(0.5)))
+    assert np.array_equal(plain, kkt._kkt_order_scipy(S, jacobian(0.5)))
     assert len(kkt._ORDER_MEMO) == 1
     again = kkt.kkt_order(S, jacobian(0.7))  # same pattern, remembered
-    assert np.array_equal(again, kkt._kkt_order(S, jacobian(0.7)))
+    assert np.array_equal(again, kkt._kkt_order_scipy(S, jacobian(0.7)))
     ((memo, *_arrays),) = kkt._ORDER_MEMO.values()
     assert memo.certifies(jacobian(0.7)) and not memo.certifies(jacobian(-1.0))
     cancelled = kkt.kkt_order(S, jacobian(-1.0))
-    assert np.array_equal(cancelled, kkt._kkt_order(S, jacobian(-1.0)))
+    assert np.array_equal(cancelled, kkt._kkt_order_scipy(S, jacobian(-1.0)))
     for seed in range(5):  # random KKT patterns, each asked twice
         H, J = random_kkt(np.random.default_rng(400 + seed), 60, 8, rank_one=0)
         for _ in range(2):
-            assert np.array_equal(kkt.kkt_order(H.sparse, J), kkt._kkt_order(H.sparse, J))
+            assert np.array_equal(kkt.kkt_order(H.sparse, J), kkt._kkt_order_scipy(H.sparse, J))
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -60,7 +60,8 @@ def test_kkt_inertia_determinant_and_solve_match_dense(seed):
 def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
     """The Ruiz scaling on entry arrays (fast path) against diag(d) @ A @ diag(d) of
     scipy.sparse (the previous code), permuted: the same entries, the same bits."""
-    from supercoil.solvers.band import equilibrated_entries
+    from band_reference import equilibrated_entries
+
     from supercoil.solvers.kkt import kkt_order
 
     rng = np.random.default_rng(300 + seed)

@@ -1,5 +1,10 @@
 """The project's one ``numba.njit`` wrapper: numba's own on-disk cache (``cache=True``).
 
+Numba compiles a kernel at its first call and keeps the machine code in its cache:
+the ``__pycache__`` folder beside the module, or ``NUMBA_CACHE_DIR`` when set. A
+first run on a fresh install compiles every kernel it calls (minutes); later runs
+load them. :func:`announce_compilation` lets a command say so before it starts.
+
 Numba's cache checks only the file of the function it caches: a kernel that calls a
 compiled function of another module keeps that callee's code as it was when the kernel
 was cached (a documented numba limitation). Two do
@@ -11,7 +16,36 @@ files in its ``__pycache__`` (a fresh checkout has none).
 
 from __future__ import annotations
 
-import numba
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent
+_announce: Callable[[], None] | None = None
+
+
+def cache_is_cold() -> bool | None:
+    """Whether numba's on-disk cache holds no compiled kernel of this package yet (its
+    index files, ``*.nbi``): True on a fresh install, False once a run has compiled
+    kernels, None when the cache is where this cannot look (the package's folder is not
+    writable and ``NUMBA_CACHE_DIR`` is not set: numba then uses a folder of its own)."""
+    import numba
+
+    if numba.config.CACHE_DIR:
+        folder = Path(numba.config.CACHE_DIR)
+        return not any("supercoil" in p.parts for p in folder.rglob("*.nbi"))
+    if not os.access(PACKAGE, os.W_OK):
+        return None
+    return next(PACKAGE.rglob("__pycache__/*.nbi"), None) is None
+
+
+def announce_compilation(say: Callable[[], None]) -> None:
+    """Call ``say()`` once, when the first kernel module is imported and the cache is
+    cold (:func:`cache_is_cold`): before the first compilation. For a command's
+    process (the ``supercoil`` command says it on standard error); the library never
+    prints."""
+    global _announce
+    _announce = say
 
 
 def njit(**options: object):
@@ -19,8 +53,16 @@ def njit(**options: object):
 
     Numba raises ``RuntimeError`` at decoration time when neither the source tree's
     ``__pycache__`` nor a user-wide cache directory is writable; the kernels then
-    compile in memory in each new process.
+    compile in memory in each new process. (numba is imported here, not with this
+    module: :func:`announce_compilation` costs a command nothing.)
     """
+    import numba
+
+    global _announce
+    if _announce is not None:
+        say, _announce = _announce, None
+        if cache_is_cold():
+            say()
 
     def decorate(function):
         try:

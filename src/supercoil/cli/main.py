@@ -67,6 +67,8 @@ app = typer.Typer(
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
+# the first run's compilation, measured: 'supercoil demo' on a fresh install
+COMPILE_TIME = "about 2 minutes"
 CLOSURES = ("closed", "none", "chord", "axis")
 NEWTON_TOLERANCE = 1e-10
 CONTACT_NEWTON_TOLERANCE = 1e-9  # residual of the contact solves (the default of the API)
@@ -844,6 +846,11 @@ def _single_threaded_blas() -> None:
         os.environ.setdefault(name, "1")
 
 
+def _compiling() -> None:
+    print(f"supercoil: first run: compiling the numerical kernels ({COMPILE_TIME}; "
+          "cached for later runs)", file=sys.stderr, flush=True)
+
+
 def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
@@ -859,6 +866,9 @@ def run(argv: Sequence[str] | None = None) -> int:
     and shows the warnings.
     """
     _single_threaded_blas()
+    from supercoil._numba import announce_compilation
+
+    announce_compilation(_compiling)
     args = list(sys.argv[1:] if argv is None else argv)
     debug = os.environ.get("SUPERCOIL_DEBUG", "") not in ("", "0")
     try:

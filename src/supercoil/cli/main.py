@@ -68,7 +68,7 @@ app = typer.Typer(
 )
 
 # the first run's compilation, measured: 'supercoil demo' on a fresh install
-COMPILE_TIME = "about 2 minutes"
+COMPILE_TIME = "1 to 2 minutes"
 CLOSURES = ("closed", "none", "chord", "axis")
 NEWTON_TOLERANCE = 1e-10
 CONTACT_NEWTON_TOLERANCE = 1e-9  # residual of the contact solves (the default of the API)

@@ -490,8 +490,10 @@ def _kkt_order_merged(S: sp.spmatrix, J: sp.spmatrix, pairs: _GramPattern | None
     keys = pairs.slots[present]
     gram_indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(keys // n, minlength=n), out=gram_indptr[1:])
-    indptr, indices, _data = _merge_kernel(S.indptr, S.indices, np.abs(S.data), gram_indptr,
-                                           keys % n, np.ones(keys.size), n)
+    # the index dtypes of S (as csr_add's operands): one compiled specialisation
+    indptr, indices, _data = _merge_kernel(
+        S.indptr, S.indices, np.abs(S.data), gram_indptr.astype(S.indptr.dtype),
+        (keys % n).astype(S.indices.dtype), np.ones(keys.size), n)
     pattern = csr_from_arrays(np.ones(indices.size), indices.astype(np.int32),
                               indptr.astype(np.int32), (n, n), canonical=True)
     x_order = np.asarray(reverse_cuthill_mckee(pattern, symmetric_mode=True), dtype=np.int64)

@@ -6,16 +6,7 @@ Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_fixed_costs.py PART [--aga
 * ``imports``: a fresh interpreter imports ``supercoil.cli.main`` and the modules the
   tweezers command imports before it computes; wall time of the imports.
 * ``exit``: the whole command; time from its last output line ('wrote branch.json ...')
-  to the end of its process (the interpreter's exit, the figure helper's end), and the
-  whole wall time.
-* ``figures``: the four figures of one run of the command, drawn after a warm-up
-  (matplotlib imported, a small figure drawn, as the figure helper does) in one
-  process, then shared with a fork (:func:`supercoil.plotting.painter.draw_shared`);
-  this tree only.
-* ``fallback``: the same four figures drawn by a fresh interpreter that imported the
-  tweezers modules but not matplotlib (the command's own process when its helper
-  was not ready): one by one, or by ``draw_shared`` (the first, then a fork);
-  this tree only, the two alternated.
+  to the end of its process (the interpreter's exit), and the whole wall time.
 
 ``--against SRC`` alternates every run with the source tree ``SRC`` (a ``src`` folder,
 e.g. ``git archive <commit> src | tar -x -C /tmp/old``), for ``imports`` and ``exit``.
@@ -26,7 +17,6 @@ as an installed package has it.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -37,8 +27,8 @@ from pathlib import Path
 COMMAND = ["tweezers", "--twist-ratio", str(4 / 3), "--length-over-diameter", "33",
            "--tension", "75", "--turns", "0:5", "--nodes", "100", "--quiet"]
 IMPORTS = ("import time; t = time.perf_counter(); import supercoil.cli.main; "
-           "import supercoil.problems.tweezers, supercoil.cli.diagram_output, "
-           "supercoil.plotting.painter; print(time.perf_counter() - t)")
+           "import supercoil.problems.tweezers, supercoil.cli.diagram_output; "
+           "print(time.perf_counter() - t)")
 
 
 def _env(source: str | None) -> dict:
@@ -91,81 +81,12 @@ def _report(name: str, rows: list[tuple[float, ...]], labels: tuple[str, ...]) -
     print(f"{name}: " + "; ".join(parts))
 
 
-FALLBACK = """
-import pickle, sys, time
-import supercoil.problems.tweezers  # a process of the command's size
-from supercoil.plotting import painter
-jobs = pickle.loads(open(sys.argv[1], "rb").read())
-start = time.perf_counter()
-if sys.argv[2] == "shared":
-    painter.draw_shared(jobs)
-else:
-    for job in jobs:
-        painter._draw(job)
-print(time.perf_counter() - start)
-"""
-
-
-def _jobs(folder: str) -> list:
-    """The figure jobs of one run of the command (this tree), drawing into ``folder``."""
-    import numpy as np
-
-    from supercoil.plotting.tweezers import figure_jobs, pick_configurations
-
-    run = Path(folder) / "run"
-    subprocess.run([sys.executable, "-m", "supercoil.cli.main", *COMMAND, "--out",
-                    str(run)], check=True, capture_output=True, env=_env(None))
-    payload = json.loads((run / "branch.json").read_text())
-    from supercoil import load
-
-    stored = load(run)
-    states = {b["name"]: np.asarray(stored.branch(b["name"]).states)
-              for b in payload["branches"]}
-    return figure_jobs(payload, pick_configurations(payload, states), folder)
-
-
-def _fallback(repeat: int) -> None:
-    import pickle
-
-    rows: dict = {"one by one": [], "shared": []}
-    with tempfile.TemporaryDirectory() as folder:
-        jobs_file = Path(folder) / "jobs.pkl"
-        jobs_file.write_bytes(pickle.dumps(_jobs(folder)))
-        for _ in range(repeat):
-            for mode, values in rows.items():
-                out = subprocess.run([sys.executable, "-c", FALLBACK, str(jobs_file), mode],
-                                     check=True, capture_output=True, text=True,
-                                     env=_env(None)).stdout
-                values.append((float(out.strip().splitlines()[-1]),))
-    for mode, values in rows.items():
-        _report(mode, values, ("figures",))
-
-
-def _figures(repeat: int) -> None:
-    from supercoil.plotting.painter import _warm_up, draw_shared
-
-    with tempfile.TemporaryDirectory() as folder:
-        jobs = _jobs(folder)
-        _warm_up()
-        rows = {False: [], True: []}
-        for _ in range(repeat):
-            for fork in (False, True):
-                start = time.perf_counter()
-                draw_shared(jobs, fork=fork)
-                rows[fork].append((time.perf_counter() - start,))
-    _report("one process", rows[False], ("figures",))
-    _report("with a fork", rows[True], ("figures",))
-
-
 def main() -> None:
     parser = argparse.ArgumentParser()
-    parser.add_argument("part", choices=("imports", "exit", "figures", "fallback"))
+    parser.add_argument("part", choices=("imports", "exit"))
     parser.add_argument("--against", metavar="SRC", default=None)
     parser.add_argument("--repeat", type=int, default=5)
     args = parser.parse_args()
-    if args.part in ("figures", "fallback"):
-        (_figures if args.part == "figures" else _fallback)(args.repeat)
-        return
     trees = [None] + ([args.against] if args.against else [])
     for tree in trees:
         _compile(tree)

@@ -33,8 +33,8 @@ PROBLEM = {"twist_ratio": 1.3333, "length_over_diameter": 33, "tension": 75, "tu
 
 def breakdown(n_nodes: int, max_points: int) -> None:
     import supercoil.contact.problem as contact
-    from supercoil.continuation import pseudo_arclength as pa
     from supercoil.continuation import bordered, events, stability, system
+    from supercoil.continuation import pseudo_arclength as pa
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
     spent = collections.defaultdict(float)

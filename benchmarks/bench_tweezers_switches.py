@@ -3,8 +3,7 @@ C/A = 4/3, F L^2/A = 75, 0 -> 5 turns), each against its absence, alternated in 
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers_switches.py [--repeat K]
 [--only chord|derivative]``. Prints the smallest and the median process CPU time of
-:func:`~supercoil.problems.tweezers.tweezers_branches` (serial: no point worker, so
-that the CPU time is the whole computation's) with and without
+:func:`~supercoil.problems.tweezers.tweezers_branches` with and without
 
 * ``chord``: the corrector's chord steps (``pseudo_arclength.CHORD_BELOW`` set to 0
   turns them off: no iterate is then below the threshold);

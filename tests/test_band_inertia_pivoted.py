@@ -1,6 +1,6 @@
 """The L D L^T-first block elimination of solvers.band (_block_inertia_pivoted, what
 symmetric_inertia runs) against the dense eigenvalues' signs and the eigh-only Python
-reference (_block_inertia), on band and saddle-point matrices whose pivot blocks have
+reference (band_reference.block_inertia), on band and saddle-point matrices whose pivot blocks have
 near-null directions (deferred by the L D L^T, carried by the eigh step), and on two
 KKT matrices captured from the N = 200 ring continuation; its compiled Ruiz scaling
 and block building against the numpy ones, bit for bit."""
@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from band_reference import block_inertia, equilibrated_entries
 
 from supercoil.solvers import band
 
@@ -111,7 +112,7 @@ def test_pivoted_block_inertia_equals_the_dense_count_and_the_eigh_reference(see
     dense = _dense_count(A)
     assert dense is not None  # the generators make regular matrices (else no oracle)
     assert pivoted == dense
-    assert band._block_inertia(blocks, n, s) == dense
+    assert block_inertia(blocks, n, s) == dense
     assert band.symmetric_inertia(sp.csr_matrix(A)) == dense
 
 
@@ -154,7 +155,7 @@ def _captured(name):
 
 def _numpy_blocks(rows, cols, values, n):
     """The row blocks of the permuted scaled entries as the numpy reference builds them
-    (``_symmetric_inertia`` before the compiled build): ``(blocks, s)``."""
+    (the layout of ``_equilibrated_blocks``): ``(blocks, s)``."""
     s = max(int(np.max(np.abs(rows - cols))) if values.size else 0, 16)
     blocks = np.zeros((-(-n // s), s, 2 * s))
     block = rows // s
@@ -172,7 +173,7 @@ def test_captured_ring_kkt_matrices(name):
     eigh-only reference; the compiled blocks are those of the numpy scaling, bit for bit."""
     A, order = _captured(name)
     n = A.shape[0]
-    rows, cols, values = band.equilibrated_entries(A, order)
+    rows, cols, values = equilibrated_entries(A, order)
     scaled = sp.coo_matrix((values, (rows, cols)), shape=(n, n)).toarray()
     dense = _dense_count(0.5 * (scaled + scaled.T))
     assert dense is not None
@@ -182,7 +183,7 @@ def test_captured_ring_kkt_matrices(name):
     position[order] = np.arange(n)
     compiled, s_compiled = band._equilibrated_blocks(A.indptr, A.indices, A.data, position)
     assert s_compiled == s and compiled.tobytes() == blocks.tobytes()
-    assert band._block_inertia(blocks, n, s) == dense
+    assert block_inertia(blocks, n, s) == dense
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -197,7 +198,7 @@ def test_compiled_blocks_equal_the_numpy_ones_bit_for_bit(seed):
     A = (A + A.T).tocsr()
     A.data[rng.random(A.data.size) < 0.1] = 0.0  # stored zeros, dropped by both
     order = rng.permutation(n)
-    rows, cols, values = band.equilibrated_entries(A, order)
+    rows, cols, values = equilibrated_entries(A, order)
     blocks, s = _numpy_blocks(rows, cols, values, n)
     position = np.empty(n, dtype=np.int64)
     position[order] = np.arange(n)

@@ -83,39 +83,6 @@ def test_csr_add_blocks_is_csr_add_of_block_csr_bit_for_bit(seed):
                                atol=1e-13 * max(1.0, np.abs(reference.data).max()))
 
 
-def test_csr_from_arrays_is_the_matrix_scipy_makes():
-    """csr_from_arrays (scipy's checks skipped for trusted layouts): the same attributes
-    as scipy's csr_matrix((data, indices, indptr)), a valid matrix by scipy's full check,
-    the same products and flags; odd inputs (mixed index dtypes) go to scipy."""
-    from supercoil.solvers.patterns import csr_from_arrays, csr_restrict
-
-    rng = np.random.default_rng(3)
-    A = sp.random(40, 30, density=0.2, random_state=4, format="csr")
-    for index in (np.int32, np.int64):
-        args = (A.data.copy(), A.indices.astype(index), A.indptr.astype(index))
-        mine = csr_from_arrays(*args, A.shape)
-        ref = sp.csr_matrix(args, shape=A.shape)
-        mine.check_format(full_check=True)
-        assert type(mine) is type(ref) and mine.shape == ref.shape
-        assert mine.indices.dtype == ref.indices.dtype and mine.indptr.dtype == ref.indptr.dtype
-        assert mine.has_canonical_format == ref.has_canonical_format
-        assert set(vars(mine)) == set(vars(ref))
-        x = rng.standard_normal(30)
-        assert np.array_equal(mine @ x, ref @ x)
-        assert np.array_equal((mine.T @ mine).toarray(), (ref.T @ ref).toarray())
-    mixed = csr_from_arrays(A.data, A.indices.astype(np.int32), A.indptr.astype(np.int64),
-                            A.shape)
-    mixed.check_format(full_check=True)
-    # an unsorted row is found out lazily, as for a matrix scipy made
-    B = sp.csr_matrix(np.eye(3) + np.eye(3, k=1))
-    indices = B.indices.copy()
-    indices[0], indices[1] = indices[1], indices[0]
-    unsorted = csr_from_arrays(B.data.copy(), indices, B.indptr.copy(), B.shape)
-    assert not unsorted.has_canonical_format
-    keep = np.array([0, 2])
-    assert np.array_equal(csr_restrict(unsorted, keep).toarray(), B.toarray()[keep][:, keep])
-
-
 def test_merged_arrays_widen_indices_that_would_overflow():
     """_canonical_csr keeps the operands' index dtype unless the entry count or the
     shape exceeds it (then wider, as scipy upcasts; int8 operands stand in for int32

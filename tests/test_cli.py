@@ -877,6 +877,13 @@ def test_help_and_version_through_the_entry_point(capsys):
     assert status == 0 and json.loads(out)["converged"] is True
 
 
+@pytest.mark.parametrize("group, commands", [((), ("ring", "diagram")), (("diagram",), ("ring",))])
+def test_a_group_without_its_command_prints_its_help_and_exits_2(capsys, group, commands):
+    status, out, err = run_main(capsys, *group)
+    assert status == 2 and err == ""
+    assert "Usage" in out and all(command in out for command in commands)
+
+
 def test_unexpected_exception_is_one_line_internal_error(capsys, monkeypatch):
     """A bug ends as one line with exit status 1; SUPERCOIL_DEBUG=1 re-raises it."""
     from supercoil.problems import ring as ring_module
@@ -1219,24 +1226,3 @@ def test_twist_ratio_may_be_written_as_a_fraction(runner):
 def test_a_malformed_twist_ratio_is_a_one_line_error(capsys, bad, words):
     status, out, err = run_main(capsys, "ring", "--twist-ratio", bad, "--excess-link", "0.5")
     assert_one_line(status, out, err, 2, "--twist-ratio", *words)
-
-
-def test_the_garbage_collector_is_changed_only_in_a_commands_process():
-    """Invariants of supercoil._gc: in a test's (or script's) process imports_done
-    freezes nothing and the thresholds stay; in a process marked by collect_less (the
-    command's, main()) the first threshold is GC_THRESHOLD and imports_done freezes
-    the objects there (a fresh interpreter, so that this one is not changed)."""
-    import gc
-    import subprocess
-    import sys
-
-    from supercoil import _gc
-
-    before, thresholds = gc.get_freeze_count(), gc.get_threshold()
-    _gc.imports_done()
-    assert gc.get_freeze_count() == before and gc.get_threshold() == thresholds
-    code = ("import gc; from supercoil import _gc; _gc.collect_less(); _gc.imports_done(); "
-            "print(gc.get_threshold()[0], gc.get_freeze_count() > 0)")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          check=True)
-    assert done.stdout.split() == [str(_gc.GC_THRESHOLD), "True"]

@@ -1,9 +1,10 @@
-"""Fast paths of one corrector iteration against the former (scipy) computations.
+"""Pieces of one corrector iteration against direct computations.
 
-Oracles: the former code, restated or kept as the reference (``_kkt_order_scipy``:
-the pattern of ``|S| + |J^T J|`` formed by scipy.sparse; scipy's row sums for the
-round-off floor): the same arrays bit for bit, also on patterns with explicit
-zeros, exact cancellation in ``J^T J`` and entries scipy keeps or drops.
+Oracles: scipy's KKT ordering (``_kkt_order_scipy``: the pattern of ``|S| + |J^T J|``
+formed by scipy.sparse) for the merged one, LAPACK's band LU of a band storage filled
+by fancy indexing, dense solves, scipy's row sums for the round-off floor: the same
+arrays bit for bit (or solves to round-off), also on patterns with explicit zeros,
+exact cancellation in ``J^T J`` and entries scipy keeps or drops.
 """
 
 from __future__ import annotations
@@ -105,7 +106,7 @@ def dense_bordered(hessian, J, column, row):
 
 def test_band_layout_of_nonzeros_drops_far_stored_zeros():
     """Stored zeros far outside the nonzero band are dropped: the band LU is that of the
-    nonzero entries alone, bit for bit (the former band LU, fancy-indexed ``ab``); a
+    nonzero entries alone, bit for bit (LAPACK's band LU of a fancy-indexed ``ab``); a
     nonzero value at a dropped entry is not held."""
     from scipy.linalg import lapack
 
@@ -125,8 +126,8 @@ def test_band_layout_of_nonzeros_drops_far_stored_zeros():
     lub, piv, kl, ku, info = band_factor(layout, values)
     ab = np.zeros((2 * kl + ku + 1, n))
     ab[kl + ku + A.row - A.col, A.col] = A.data
-    former_lub, former_piv, _info = lapack.dgbtrf(ab, kl, ku)
-    assert info == 0 and np.array_equal(lub, former_lub) and np.array_equal(piv, former_piv)
+    reference_lub, reference_piv, _info = lapack.dgbtrf(ab, kl, ku)
+    assert info == 0 and np.array_equal(lub, reference_lub) and np.array_equal(piv, reference_piv)
     values[-1] = 1e-300
     assert not layout.holds(values)
 
@@ -186,7 +187,7 @@ def test_bordered_factor_takes_the_band_lu_on_stored_zeros_and_wide_bands():
 @pytest.mark.parametrize("seed", range(4))
 def test_roundoff_floor_equals_scipys_row_sums_bit_for_bit(seed):
     """The round-off floor from the stored entries against scipy's
-    ``abs(S).sum(axis=1).max()`` (the former formula): empty rows, stored zeros,
+    ``abs(S).sum(axis=1).max()`` (scipy's row sums): empty rows, stored zeros,
     duplicates (a non-canonical matrix) and rows of very different sizes."""
     from supercoil.solvers.newton import roundoff_floor
     from supercoil.solvers.problem import HessianParts
@@ -203,5 +204,5 @@ def test_roundoff_floor_equals_scipys_row_sums_bit_for_bit(seed):
         indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
         S = sp.csr_matrix((values[order], cols[order], indptr), shape=(n, n))
     q = rng.standard_normal(3 * n)
-    former = np.finfo(float).eps * float(abs(S).sum(axis=1).max()) * float(np.max(np.abs(q)))
-    assert roundoff_floor(HessianParts(S), q) == former
+    reference = np.finfo(float).eps * float(abs(S).sum(axis=1).max()) * float(np.max(np.abs(q)))
+    assert roundoff_floor(HessianParts(S), q) == reference

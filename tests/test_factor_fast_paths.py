@@ -1,11 +1,10 @@
-"""Fast paths of the bordered and KKT factorisations against the former ones.
+"""The bordered and KKT factorisations against direct constructions of their inputs.
 
-Oracles: the former formulas, restated here (LAPACK's band LU of a C-ordered
-``ab`` filled by fancy indexing, ``_permuted_bordered``'s entries of the pinned
-block, scipy's sums, differences, stacks and COO conversion): the same arrays
-bit for bit, also when the pattern changes between calls (the per-pattern
-memos must not hand out a stale layout); and dense solves of the bordered
-matrix for the solutions.
+Oracles: LAPACK's band LU of a C-ordered ``ab`` filled by fancy indexing,
+``_permuted_bordered``'s entries of the pinned block, scipy's sums, differences,
+stacks and COO conversion: the same arrays bit for bit, also when the pattern
+changes between calls (the per-pattern memos must not hand out a stale layout);
+and dense solves of the bordered matrix for the solutions.
 """
 
 from __future__ import annotations
@@ -29,9 +28,8 @@ from supercoil.solvers.patterns import (
 from supercoil.solvers.problem import HessianParts
 
 
-def former_band_lu(size, rows, cols, values):
-    """band_lu as it was: a C-ordered ``ab`` filled by 2-D fancy indexing, copied by
-    the wrapper."""
+def reference_band_lu(size, rows, cols, values):
+    """LAPACK's band LU of a C-ordered ``ab`` filled by 2-D fancy indexing."""
     kl = int(max(0, np.max(rows - cols)))
     ku = int(max(0, np.max(cols - rows)))
     ab = np.zeros((2 * kl + ku + 1, size))
@@ -50,24 +48,24 @@ def random_band(rng, n, lower, upper, density=0.6):
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_band_lu_equals_the_former_band_lu_bit_for_bit(seed):
+def test_band_lu_equals_the_reference_band_lu_bit_for_bit(seed):
     rng = np.random.default_rng(seed)
     n = int(rng.integers(20, 120))
     A = random_band(rng, n, int(rng.integers(0, 6)), int(rng.integers(0, 6)))
-    mine, former = band_lu(n, A.row, A.col, A.data, 1.0), former_band_lu(n, A.row, A.col, A.data)
-    assert mine[2:] == former[2:]
-    assert np.array_equal(mine[0], former[0]) and np.array_equal(mine[1], former[1])
+    mine, reference = band_lu(n, A.row, A.col, A.data, 1.0), reference_band_lu(n, A.row, A.col, A.data)
+    assert mine[2:] == reference[2:]
+    assert np.array_equal(mine[0], reference[0]) and np.array_equal(mine[1], reference[1])
     # the layout of the pattern, filled with other values, factorises those
     layout = band_layout(n, A.row, A.col, 1.0)
     other = rng.standard_normal(A.data.size)
-    refilled, fresh = band_factor(layout, other), former_band_lu(n, A.row, A.col, other)
+    refilled, fresh = band_factor(layout, other), reference_band_lu(n, A.row, A.col, other)
     assert np.array_equal(refilled[0], fresh[0]) and np.array_equal(refilled[1], fresh[1])
     assert band_layout(n, A.row, A.col, max_fraction=0.01) is None
 
 
-def former_band_entries(S, J, column, border_row, corner, order):
-    """The band block's entries as BorderedFactor took them before: those of the pinned
-    (or plain) KKT block from a second _permuted_bordered without the matrix."""
+def reference_band_entries(S, J, column, border_row, corner, order):
+    """The band block's entries: those of the pinned (or plain) KKT block from
+    _permuted_bordered without the matrix."""
     pinned = kkt.PinnedRows.of(J) if J.shape[0] else None
     J_banded = J if pinned is None else pinned.sparse
     _, entries = _permuted_bordered(S, J_banded, column, border_row, corner, order,
@@ -76,25 +74,25 @@ def former_band_entries(S, J, column, border_row, corner, order):
 
 
 def check_bordered(factor, hessian, J, column, row, rng):
-    """The factor's band LU is the former one bit for bit; its refinement matrix is
+    """The factor's band LU is the reference one bit for bit; its refinement matrix is
     _permuted_bordered's scipy matrix; its solves are those of the dense matrix."""
     S = kkt.canonical(hessian.sparse.tocsr())
     n, m = S.shape[0], J.shape[0]
     size = n + m + 1
     border_row = factor.row_scale * row[:-1]
     corner = row[-1] * factor.row_scale
-    entries = former_band_entries(S, kkt.canonical(J), column, border_row, corner,
+    entries = reference_band_entries(S, kkt.canonical(J), column, border_row, corner,
                                   factor.order)
-    lub, piv, kl, ku, _info = former_band_lu(size - 1, *entries)
+    lub, piv, kl, ku, _info = reference_band_lu(size - 1, *entries)
     assert isinstance(factor._lu, _BandBordered)
     assert (factor._lu._kl, factor._lu._ku) == (kl, ku)
     assert np.array_equal(factor._lu._lub, lub) and np.array_equal(factor._lu._piv, piv)
-    B_former, _ = _permuted_bordered(S, kkt.canonical(J), column, border_row, corner,
+    B_reference, _ = _permuted_bordered(S, kkt.canonical(J), column, border_row, corner,
                                      factor.order)
     B_mine = factor._lu._B
     assert isinstance(B_mine, CSRArrays)
     for name in ("data", "indices", "indptr"):
-        assert np.array_equal(getattr(B_mine, name), getattr(B_former, name))
+        assert np.array_equal(getattr(B_mine, name), getattr(B_reference, name))
     B = np.zeros((size, size))
     B[:n, :n] = hessian.dense()
     B[:n, n:-1] = J.toarray().T
@@ -109,12 +107,12 @@ def check_bordered(factor, hessian, J, column, row, rng):
     assert refined is not None and np.max(np.abs(refined - exact)) <= 1e-13 * scale
 
 
-def test_bordered_factor_equals_the_former_path_as_the_pattern_changes():
+def test_bordered_factor_equals_the_reference_as_the_pattern_changes():
     """Toy KKT matrices: one pattern, the same pattern with other values, other
     patterns of the same sizes (constraints elsewhere; an entry added to ``S`` that
     widens the band), others (more constraints, a dense phase row), then the first
-    again: every factor is the former one (the memos are keyed on the pattern, not
-    reused across patterns)."""
+    again: every factor is the reference one (the memos are keyed on the pattern,
+    not reused across patterns)."""
     rng = np.random.default_rng(5)
     n = 70
     problems = []
@@ -134,9 +132,9 @@ def test_bordered_factor_equals_the_former_path_as_the_pattern_changes():
         check_bordered(BorderedFactor(H, J, column, row), H, J, column, row, rng)
 
 
-def test_bordered_factor_on_ring_states_equals_the_former_path():
+def test_bordered_factor_on_ring_states_equals_the_reference():
     """A bent ring with its integral phase condition (a pinned dense row) at two
-    nearby states: the same band LU and refinement matrix as the former path."""
+    nearby states: the same band LU and refinement matrix as the reference."""
     from test_factor_refinement import _nearby
     from test_point_stability_paths import _system
 
@@ -150,15 +148,15 @@ def test_bordered_factor_on_ring_states_equals_the_former_path():
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_kkt_factor_band_and_inertia_inputs_equal_the_former_ones(seed):
-    """KKTFactor(band=True): its band LU is the former band_lu of the reordered KKT
+def test_kkt_factor_band_and_inertia_inputs_equal_the_reference(seed):
+    """KKTFactor: its band LU is the reference band LU of the reordered KKT
     entries and the matrix handed to the inertia count is scipy's COO conversion of
     them, bit for bit; with a shift, the shifted Hessian is scipy's difference."""
     rng = np.random.default_rng(40 + seed)
     n = 90
     H, J = banded_kkt(rng, n, 8, rank_one=seed % 2, dense_rows=int(seed == 2))
     shift, mass = (0.0, None) if seed == 0 else (-0.4, rng.uniform(0.5, 2.0, n))
-    factor = kkt.KKTFactor(H, J, shift=shift, mass=mass, band=True)
+    factor = kkt.KKTFactor(H, J, shift=shift, mass=mass)
     S = H.sparse.tocsr()
     if shift != 0.0:
         S = (S - shift * sp.diags(mass)).tocsr()
@@ -169,12 +167,12 @@ def test_kkt_factor_band_and_inertia_inputs_equal_the_former_ones(seed):
     size = n + J.shape[0]
     position = np.empty(size, dtype=np.int64)
     position[factor.order] = np.arange(size)
-    lub, piv, *_ = former_band_lu(size, position[rows], position[cols], values)
+    lub, piv, *_ = reference_band_lu(size, position[rows], position[cols], values)
     assert np.array_equal(factor._lu._lub, lub) and np.array_equal(factor._lu._piv, piv)
-    K_former = sp.csr_matrix((values, (rows, cols)), shape=(size, size))
+    K_reference = sp.csr_matrix((values, (rows, cols)), shape=(size, size))
     K_mine = kkt.kkt_csr(S_mine, J_mine)
     for name in ("data", "indices", "indptr"):
-        assert np.array_equal(getattr(K_mine, name), getattr(K_former, name))
+        assert np.array_equal(getattr(K_mine, name), getattr(K_reference, name))
     dense = np.block([[H.dense() - shift * np.diag(mass if mass is not None else np.ones(n)),
                        J.toarray().T], [J.toarray(), np.zeros((J.shape[0],) * 2)]])
     assert factor.negative_count == np.sum(np.linalg.eigvalsh(dense) < 0)
@@ -188,9 +186,9 @@ def test_shifted_hessian_with_zeros_and_cancellation_equals_scipys_difference():
     mass = np.array([1.0, 0.0, 1.5])
     for shift in (2.0, -0.5, 1e-300):
         mine = kkt._shifted(S, shift, mass)
-        former = (S - shift * sp.diags(mass)).tocsr()
+        scipys = (S - shift * sp.diags(mass)).tocsr()
         for name in ("data", "indices", "indptr"):
-            assert np.array_equal(getattr(mine, name), getattr(former, name)), (shift, name)
+            assert np.array_equal(getattr(mine, name), getattr(scipys, name)), (shift, name)
 
 
 def test_products_and_stacks_equal_scipys_bit_for_bit():
@@ -204,11 +202,11 @@ def test_products_and_stacks_equal_scipys_bit_for_bit():
         assert np.array_equal(csr_rmatvec(A.indptr, A.indices, A.data, u, 45), A.T @ u)
         B = sp.csr_matrix(rng.standard_normal((2, 45)))
         for blocks in ([A, B], [A], [A[5:17], B, A]):
-            mine, former = csr_vstack(blocks), sp.vstack(blocks, format="csr")
+            mine, scipys = csr_vstack(blocks), sp.vstack(blocks, format="csr")
             for name in ("data", "indices", "indptr"):
-                assert np.array_equal(getattr(mine, name), getattr(former, name))
+                assert np.array_equal(getattr(mine, name), getattr(scipys, name))
     # a wrong length is refused, as scipy's "dimension mismatch" (the compiled loops
-    # would read and write out of bounds: found by the session's review)
+    # would read and write out of bounds)
     with pytest.raises(ValueError, match="dimension mismatch"):
         csr_matvec(A.indptr, A.indices, A.data, x[:40], 45)
     with pytest.raises(ValueError, match="dimension mismatch"):
@@ -228,12 +226,12 @@ def test_csr_add_with_and_without_cancellation_on_one_pattern():
     B = sp.csr_matrix(np.array([[1.0, 0.0, 7.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]))
     for a_values in (A.data, np.array([1.0, 2.0, -1.0, 4.0, 5.0, 6.0])):
         A2 = sp.csr_matrix((a_values, A.indices, A.indptr), shape=A.shape)
-        mine, former = csr_add(A2, B), (A2 + B).tocsr()
+        mine, scipys = csr_add(A2, B), (A2 + B).tocsr()
         for name in ("data", "indices", "indptr"):
-            assert np.array_equal(getattr(mine, name), getattr(former, name))
+            assert np.array_equal(getattr(mine, name), getattr(scipys, name))
 
 
-def test_order_memo_sums_and_dense_rows_equal_the_former_formulas():
+def test_order_memo_sums_and_dense_rows_equal_numpys_counts():
     rng = np.random.default_rng(3)
     _H, J = banded_kkt(rng, 120, 15, dense_rows=2)
     J = sp.csr_matrix(J)

@@ -1,8 +1,7 @@
-"""KKTFactor(band=True): LAPACK's band LU in place of SuperLU (ring stability path).
+"""KKTFactor: LAPACK's band LU on a narrow ordered band, SuperLU on a wide one.
 
-Oracles: the SuperLU factor of the same matrix (solves to round-off, the same
-determinant sign and inertia) and the dense matrix (eigenvalues' signs and
-product, the solve's residual).
+Oracles: the dense matrix (eigenvalues' signs and product, numpy's solve and the
+solve's residual).
 """
 
 import numpy as np
@@ -32,30 +31,30 @@ def banded_kkt(rng, n, m, rank_one=0, dense_rows=0, width=3):
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_band_factor_equals_superlu_factor_and_the_dense_matrix(seed):
+def test_band_factor_equals_the_dense_matrix(seed):
     rng = np.random.default_rng(900 + seed)
     n, m = int(rng.integers(60, 160)), int(rng.integers(1, 12))
     H, J = banded_kkt(rng, n, m, rank_one=int(rng.integers(0, 3)),
                       dense_rows=int(seed % 3 == 2))
     shift, mass = (0.0, None) if seed % 2 else (-0.3, rng.uniform(0.5, 2.0, n))
-    band = KKTFactor(H, J, shift=shift, mass=mass, band=True)
-    reference = KKTFactor(H, J, shift=shift, mass=mass)
-    assert isinstance(band._lu, _BandLU) and isinstance(reference._lu, _OrderedLU)
+    band = KKTFactor(H, J, shift=shift, mass=mass)
+    assert isinstance(band._lu, _BandLU)
     k = J.shape[0]
     Hd = H.dense() - shift * np.diag(mass if mass is not None else np.ones(n))
     K = np.block([[Hd, J.toarray().T], [J.toarray(), np.zeros((k, k))]])
+    _assert_dense(band, K, rng.standard_normal((n + k, 2)))
+
+
+def _assert_dense(factor, K, rhs):
+    """The factor's inertia, determinant sign and solves are those of the dense ``K``
+    (solves relative to its condition)."""
     ev = np.linalg.eigvalsh(K)
-    assert band.negative_count == reference.negative_count == np.sum(ev < 0)
-    assert band.determinant_sign == reference.determinant_sign == int(np.prod(np.sign(ev)))
-    _assert_same_solves(band, reference, K, rng.standard_normal((n + k, 2)))
-
-
-def _assert_same_solves(band, reference, K, rhs):
-    """The band factor's solve equals SuperLU's and solves ``K`` (relative to its condition)."""
-    z_band, z_ref = band.solve(rhs), reference.solve(rhs)
+    assert factor.negative_count == np.sum(ev < 0)
+    assert factor.determinant_sign == int(np.prod(np.sign(ev)))
+    z, exact = factor.solve(rhs), np.linalg.solve(K, rhs)
     cond = np.linalg.cond(K)
-    assert np.max(np.abs(z_band - z_ref)) <= 1e-13 * cond * np.max(np.abs(z_ref))
-    assert np.max(np.abs(K @ z_band - rhs)) <= 1e-12 * cond * np.max(np.abs(rhs))
+    assert np.max(np.abs(z - exact)) <= 1e-13 * cond * np.max(np.abs(exact))
+    assert np.max(np.abs(K @ z - rhs)) <= 1e-12 * cond * np.max(np.abs(rhs))
 
 
 def test_band_determinant_sign_counts_row_swaps():
@@ -75,19 +74,26 @@ def test_band_determinant_sign_counts_row_swaps():
         assert lu.determinant_sign() == int(np.sign(np.linalg.det(A)))
 
 
-def test_band_falls_back_to_superlu_and_reports_singular_matrices():
+def test_wide_bands_go_to_superlu_and_singular_matrices_are_reported():
     rng = np.random.default_rng(3)
-    # a band wider than a quarter of the matrix: SuperLU
+    # a band wider than a quarter of the matrix: SuperLU, the dense matrix's results
     A = rng.standard_normal((20, 20))
     A = A + A.T
-    wide = KKTFactor(HessianParts(sp.csr_matrix(A)), band=True)
+    wide = KKTFactor(HessianParts(sp.csr_matrix(A)))
     assert isinstance(wide._lu, _OrderedLU)
-    # an exactly singular banded matrix: the error SuperLU gives
+    _assert_dense(wide, A, rng.standard_normal(20))
+    J = sp.csr_matrix(rng.standard_normal((3, 20)))
+    wide = KKTFactor(HessianParts(sp.csr_matrix(A)), J)
+    assert isinstance(wide._lu, _OrderedLU)
+    K = np.block([[A, J.toarray().T], [J.toarray(), np.zeros((3, 3))]])
+    _assert_dense(wide, K, rng.standard_normal(23))
+    # an exactly singular banded matrix (band LU) or a singular wide one (SuperLU)
     H = np.diag(np.r_[np.ones(30), 0.0, np.ones(29)])
     with pytest.raises(SingularMatrixError):
-        KKTFactor(HessianParts(sp.csr_matrix(H)), band=True)
-    with pytest.raises(SingularMatrixError):
         KKTFactor(HessianParts(sp.csr_matrix(H)))
+    A[:, 0] = A[0, :] = 0.0
+    with pytest.raises(SingularMatrixError):
+        KKTFactor(HessianParts(sp.csr_matrix(A)))
 
 
 def test_pinned_rows_from_the_remembered_layout_rebuild_the_jacobian():
@@ -173,9 +179,8 @@ def test_straight_rod_stored_zeros_take_the_band_of_the_nonzeros():
     """The clamped straight rod's Hessian and Jacobian store zeros that couple far
     unknowns (its lateral DOFs at rest): the stored band of its KKT matrix is wider than
     a quarter of it, its nonzero band narrow. The factor takes the band LU of the
-    nonzeros (before: SuperLU, 2 ms a factorisation against 0.1-0.3 ms at N = 100),
-    and agrees with SuperLU's and with the dense matrix (inertia, determinant sign,
-    solves)."""
+    nonzeros (SuperLU took 2 ms a factorisation against 0.1-0.3 ms at N = 100), and
+    agrees with the dense matrix (inertia, determinant sign, solves)."""
     from supercoil.continuation.system import ExtendedSystem
     from supercoil.problems.tweezers import TweezersOptions, clamped_problem
     from supercoil.solvers.kkt import kkt_band_layout, kkt_order
@@ -191,14 +196,9 @@ def test_straight_rod_stored_zeros_take_the_band_of_the_nonzeros():
     S, Jc = H.sparse.tocsr(), sp.csr_matrix(J)
     assert np.count_nonzero(Jc.data) < Jc.nnz  # stored zeros
     assert kkt_band_layout(S, Jc, kkt_order(S, Jc)) is None  # stored band too wide
-    band = KKTFactor(H, J, band=True)
-    reference = KKTFactor(H, J)
-    assert isinstance(band._lu, _BandLU) and isinstance(reference._lu, _OrderedLU)
-    assert band.negative_count == reference.negative_count
-    assert band.reduced_negative_count == reference.reduced_negative_count > 0
-    assert band.determinant_sign == reference.determinant_sign
+    band = KKTFactor(H, J)
+    assert isinstance(band._lu, _BandLU)
+    assert band.reduced_negative_count > 0
     k = J.shape[0]
     K = np.block([[H.dense(), J.toarray().T], [J.toarray(), np.zeros((k, k))]])
-    ev = np.linalg.eigvalsh(K)
-    assert band.negative_count == np.sum(ev < 0)
-    _assert_same_solves(band, reference, K, np.random.default_rng(4).standard_normal(K.shape[0]))
+    _assert_dense(band, K, np.random.default_rng(4).standard_normal(K.shape[0]))

@@ -1,7 +1,7 @@
 """The tracer's branch (also every partial branch handed to ``on_point``) from rows
-converted once per point, against the construction it replaces: every array of every
-partial branch equal bit for bit, through rephased tangents (the last point's tangent
-replaced after it was added) and records of several types."""
+converted once per point, against the direct conversion of every point at every call:
+every array of every partial branch equal bit for bit, through rephased tangents (the
+last point's tangent replaced after it was added) and records of several types."""
 
 from __future__ import annotations
 
@@ -14,8 +14,7 @@ from supercoil.problems.ring_branches import circle_branch
 
 
 def _reference(tracer) -> dict:
-    """The arrays of the branch as _Tracer.branch built them before (every point converted
-    at every call)."""
+    """The arrays of the branch, every point converted at this call."""
     system = tracer.system
     n_dofs, m, k = system.problem.n_dofs, system.m, len(tracer.xs)
     records = {name: np.array([np.asarray(r[name]) for r in tracer.recs])

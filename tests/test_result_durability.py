@@ -153,7 +153,7 @@ def test_interrupt_while_drawing_leaves_complete_data(tmp_path, reference, capsy
                                                       monkeypatch):
     from supercoil.plotting import ring_diagram as drawing
 
-    def interrupted(jobs, painter=None):
+    def interrupted(jobs):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(drawing, "draw_jobs", interrupted)

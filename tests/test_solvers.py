@@ -60,7 +60,8 @@ def test_kkt_inertia_determinant_and_solve_match_dense(seed):
 def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
     """The Ruiz scaling on entry arrays (fast path) against diag(d) @ A @ diag(d) of
     scipy.sparse (the previous code), permuted: the same entries, the same bits."""
-    from supercoil.solvers.band import equilibrated_entries
+    from band_reference import equilibrated_entries
+
     from supercoil.solvers.kkt import kkt_order
 
     rng = np.random.default_rng(300 + seed)
@@ -86,9 +87,10 @@ def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
 
 
 def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
-    """kkt_order remembers orderings by pattern (fast path); _kkt_order_scipy computes
-    them with scipy.sparse (the reference). Same pattern with other values: the same ordering; an entry of J^T J that cancels
-    exactly (scipy drops it, the pattern changes): the memo must not be used."""
+    """kkt_order remembers orderings by pattern; _kkt_order_scipy computes them with
+    scipy.sparse (the reference). Same pattern with other values: the same ordering; an
+    entry of J^T J that cancels exactly (scipy drops it, the pattern changes): the memo
+    must not be used."""
     from supercoil.solvers import kkt
 
     rng = np.random.default_rng(5)
@@ -124,13 +126,13 @@ def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
-    """KKTFactor forms the permuted KKT matrix from entry arrays (fast path); the
-    previous code factorised bmat(...)[order][:, order]: same LU, same solves, bit
-    for bit (explicit zeros of H and J kept)."""
+def test_superlu_factor_from_entries_equals_superlu_of_bmat(seed):
+    """The SuperLU factor of KKTFactor (wide bands) forms the permuted KKT matrix from
+    entry arrays; the reference factorises bmat(...)[order][:, order]: same LU, same
+    solves, bit for bit (explicit zeros of H and J kept)."""
     from scipy.sparse.linalg import splu
 
-    from supercoil.solvers.kkt import kkt_order
+    from supercoil.solvers.kkt import _kkt_entries, _OrderedLU, canonical, kkt_order
 
     rng = np.random.default_rng(500 + seed)
     n, m = int(rng.integers(30, 90)), int(rng.integers(1, 12))
@@ -141,16 +143,16 @@ def test_kkt_factor_from_entries_equals_superlu_of_bmat(seed):
     J.data[::4] = 0.0
     if seed == 3:  # every entry stored as two halves (not canonical): bmat sums them
         S = split_into_halves(S)
-    factor = KKTFactor(HessianParts(S), J)
     order = kkt_order(S, J)
+    factor = _OrderedLU(n + m, *_kkt_entries(canonical(S), canonical(J)), order)
     lu = splu(sp.bmat([[S, J.T], [J, None]], format="csr")[order][:, order].tocsc(),
               permc_spec="NATURAL")
     rhs = rng.standard_normal(n + m)
     reference = np.empty(n + m)
     reference[order] = lu.solve(rhs[order])
     assert np.array_equal(factor.solve(rhs), reference)
-    assert np.array_equal(factor._lu.U.diagonal(), lu.U.diagonal())
-    assert np.array_equal(factor._lu.perm_r, lu.perm_r)
+    assert np.array_equal(factor.U.diagonal(), lu.U.diagonal())
+    assert np.array_equal(factor.perm_r, lu.perm_r)
 
 
 def _same_csr(mine, reference):

@@ -38,30 +38,25 @@ def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
                 command: str = "diagram ring", resume_hint: str = "") -> dict | None:
     """Compute ``options``' ring diagram into ``out`` (``result.h5``, ``diagram.json``, the
     figures); the payload, or None after an interrupt. ``resume``: the stored
-    :class:`~supercoil.io.store.Result` to continue. The figures' helper process
-    (:class:`~supercoil.plotting.painter.Painter`) is started first, so that it
-    imports matplotlib while the diagram is computed."""
-    from supercoil._gc import imports_done
+    :class:`~supercoil.io.store.Result` to continue."""
     from supercoil.cli.saving import open_writer, run_saving, stored_for_resume
-    from supercoil.plotting.painter import Painter
     from supercoil.problems.ring_diagram import ring_diagram
 
-    imports_done()
     writer = open_writer(out, resume=resume is not None, problem="ring_diagram",
                          settings=diagram_settings(options, command),
                          attributes=diagram_attributes(options),
                          provenance={"contact_treatment": options.contact,
                                      "n_nodes": options.n_nodes})
-    with Painter() as painter:
-        def compute(message, on_point, on_branch):
-            stored = None if resume is None else stored_for_resume(resume, message)
-            return ring_diagram(options, progress=message, on_point=on_point,
-                                on_branch=on_branch, resume=stored)
 
-        diagram = run_saving(compute, writer, quiet, resume_hint)
-        if diagram is None:
-            return None
-        return write_diagram(diagram, out, options.contact, writer, painter)
+    def compute(message, on_point, on_branch):
+        stored = None if resume is None else stored_for_resume(resume, message)
+        return ring_diagram(options, progress=message, on_point=on_point,
+                            on_branch=on_branch, resume=stored)
+
+    diagram = run_saving(compute, writer, quiet, resume_hint)
+    if diagram is None:
+        return None
+    return write_diagram(diagram, out, options.contact, writer)
 
 
 def store_diagram(diagram, writer, summary: dict) -> None:
@@ -81,13 +76,11 @@ def store_diagram(diagram, writer, summary: dict) -> None:
     writer.close()
 
 
-def write_diagram(diagram, out: Path, contact: str, writer, painter=None) -> dict:
+def write_diagram(diagram, out: Path, contact: str, writer) -> dict:
     """Store ``diagram`` (a RingDiagram) in ``writer`` (then closed) and ``diagram.json``,
     print a summary, draw the figures; return the payload. The data are complete
     before the first figure is drawn: an interrupt while drawing leaves them whole
-    (exit status 1, with a hint to draw them with ``supercoil plot``).
-    ``painter``: a started :class:`~supercoil.plotting.painter.Painter` whose helper
-    draws the figures (what it does not draw is drawn here)."""
+    (exit status 1, with a hint to draw them with ``supercoil plot``)."""
     from supercoil.io.results import envelope, write_json
     from supercoil.plotting.figures import through_special_points
     from supercoil.plotting.ring_diagram import draw_jobs
@@ -135,7 +128,7 @@ def write_diagram(diagram, out: Path, contact: str, writer, painter=None) -> dic
                  {"configurations": configurations, "diameter": options.diameter,
                   "title": title}))
     try:
-        draw_jobs(jobs, painter)
+        draw_jobs(jobs)
     except KeyboardInterrupt:
         figures_interrupted(out)
         raise typer.Exit(EXIT_NOT_CONVERGED) from None

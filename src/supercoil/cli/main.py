@@ -47,12 +47,6 @@ from supercoil.units.dna import (
     TWIST_PERSISTENCE_NM,
 )
 
-try:  # typer >= 0.25 vendors click as typer._click; older typer depends on click
-    from typer._click.exceptions import ClickException, NoArgsIsHelpError
-except ImportError:  # pragma: no cover - depends on the installed typer
-    from click.exceptions import ClickException, NoArgsIsHelpError
-from typer.exceptions import Abort
-
 UNITS_NOTE = (
     "Units are nondimensional: bending stiffness A = 1 and rod length L = 1, so energies are "
     "E*L/A, forces F*L^2/A, torques M*L/A; the twist ratio is C/A; link, twist and writhe "
@@ -65,12 +59,13 @@ app = typer.Typer(
     help="Equilibria and stability of elastic rods (Kirchhoff rods, closed rings, writhe). "
     + UNITS_NOTE
     + " Exit status: 0 done, 1 computed but not converged, 2 bad input.",
-    no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
+# the first run's compilation, measured: 'supercoil demo' on a fresh install
+COMPILE_TIME = "1 to 2 minutes"
 CLOSURES = ("closed", "none", "chord", "axis")
 NEWTON_TOLERANCE = 1e-10
 CONTACT_NEWTON_TOLERANCE = 1e-9  # residual of the contact solves (the default of the API)
@@ -141,8 +136,16 @@ def _version_callback(value: bool) -> None:
         raise typer.Exit()
 
 
-@app.callback()
+def _help_without_command(ctx: typer.Context) -> None:
+    """A group called without a command: its help, exit status 2."""
+    if ctx.invoked_subcommand is None:
+        print(ctx.get_help())
+        raise typer.Exit(EXIT_BAD_INPUT)
+
+
+@app.callback(invoke_without_command=True)
 def _root(
+    ctx: typer.Context,
     version: Annotated[
         bool,
         typer.Option(
@@ -154,6 +157,7 @@ def _root(
     ] = False,
 ) -> None:
     """Equilibria and stability of elastic rods."""
+    _help_without_command(ctx)
 
 
 # --------------------------------------------------------------------- writhe
@@ -632,9 +636,9 @@ def demo(
 
 diagram_app = typer.Typer(
     help="Bifurcation diagrams with self-contact (branches, stability, contact events).",
-    no_args_is_help=True,
 )
 app.add_typer(diagram_app, name="diagram")
+diagram_app.callback(invoke_without_command=True)(_help_without_command)
 
 
 @diagram_app.command("ring")
@@ -807,6 +811,11 @@ def _single_threaded_blas() -> None:
         os.environ.setdefault(name, "1")
 
 
+def _compiling() -> None:
+    print(f"supercoil: first run: compiling the numerical kernels ({COMPILE_TIME}; "
+          "cached for later runs)", file=sys.stderr, flush=True)
+
+
 def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
@@ -822,6 +831,9 @@ def run(argv: Sequence[str] | None = None) -> int:
     and shows the warnings.
     """
     _single_threaded_blas()
+    from supercoil._numba import announce_compilation
+
+    announce_compilation(_compiling)
     args = list(sys.argv[1:] if argv is None else argv)
     debug = os.environ.get("SUPERCOIL_DEBUG", "") not in ("", "0")
     try:
@@ -832,10 +844,7 @@ def run(argv: Sequence[str] | None = None) -> int:
                 # happened, so they would only break the one-line stderr contract
                 warnings.simplefilter("ignore", RuntimeWarning)
             status = app(args=args, prog_name="supercoil", standalone_mode=False)
-    except NoArgsIsHelpError as exc:  # bare ``supercoil``: the help, as click does
-        print(exc.ctx.get_help())
-        return EXIT_BAD_INPUT
-    except ClickException as exc:
+    except typer.TyperException as exc:  # typer's parse errors (click's, in typer's copy)
         ctx = getattr(exc, "ctx", None)
         command = ctx.command_path if ctx is not None else "supercoil"
         print(
@@ -844,7 +853,7 @@ def run(argv: Sequence[str] | None = None) -> int:
             flush=True,
         )
         return exc.exit_code
-    except Abort:
+    except typer.Abort:
         print("error: aborted", file=sys.stderr, flush=True)
         return 1
     except InputError as exc:
@@ -879,26 +888,8 @@ def run(argv: Sequence[str] | None = None) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> NoReturn:
-    """Entry point of the ``supercoil`` console script.
-
-    The garbage collector of this process collects less often and not at the exit
-    (:mod:`supercoil._gc`), and continuation points are evaluated by a worker on the
-    other core where the process may fork (:func:`supercoil._fork.use_point_workers`;
-    the results are those of the serial computation), and scipy's copy of numpy's
-    namespace leaves numpy's unused submodules unimported (:mod:`supercoil._lazy_numpy`);
-    :func:`run`, which tests and scripts call in their own processes, leaves all three
-    alone.
-    """
-    from supercoil import _lazy_numpy
-    from supercoil._fork import use_point_workers
-    from supercoil._gc import collect_less, freeze
-
-    _lazy_numpy.install()
-    collect_less()
-    use_point_workers()
-    status = run(argv)
-    freeze()
-    sys.exit(status)
+    """Entry point of the ``supercoil`` console script."""
+    sys.exit(run(argv))
 
 
 if __name__ == "__main__":

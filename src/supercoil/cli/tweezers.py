@@ -203,53 +203,48 @@ def tweezers(
                             settings=settings)
     if nothing_to_resume(stored):
         return
-    from supercoil.plotting.painter import Painter
+    control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")
+    print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
+          f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
+          f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
+    from supercoil.cli.saving import (
+        interrupted,
+        open_writer,
+        run_saving,
+        stored_for_resume,
+        terminate_as_interrupt,
+    )
 
-    # started before the computation: the figure helper imports matplotlib meanwhile, on
-    # the other core
-    with Painter() as painter:
-        control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")
-        print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
-              f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
-              f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
-        from supercoil.cli.saving import (
-            interrupted,
-            open_writer,
-            run_saving,
-            stored_for_resume,
-            terminate_as_interrupt,
-        )
+    writer = open_writer(out, resume=stored is not None, problem="tweezers",
+                         settings=settings, attributes=_attributes(options, preset),
+                         provenance={"contact_treatment": "barrier" if length_over_diameter
+                                     else "none", "n_nodes": nodes},
+                         units="nondimensional" if preset is None else preset.name)
+    hint = "continue with the same command and --resume"
 
-        writer = open_writer(out, resume=stored is not None, problem="tweezers",
-                             settings=settings, attributes=_attributes(options, preset),
-                             provenance={"contact_treatment": "barrier" if length_over_diameter
-                                         else "none", "n_nodes": nodes},
-                             units="nondimensional" if preset is None else preset.name)
-        hint = "continue with the same command and --resume"
+    def compute(message, on_point, on_branch):
+        previous = None if stored is None else stored_for_resume(stored, message)
+        return tweezers_branches(options, progress=message, on_point=on_point,
+                                 on_branch=on_branch, resume=previous)
 
-        def compute(message, on_point, on_branch):
-            previous = None if stored is None else stored_for_resume(stored, message)
-            return tweezers_branches(options, progress=message, on_point=on_point,
-                                     on_branch=on_branch, resume=previous)
+    result = run_saving(compute, writer, quiet, hint)
+    if result is None:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+    path = None
+    if protocol != "up":
+        from supercoil.problems.tweezers_protocol import quasistatic_path
 
-        result = run_saving(compute, writer, quiet, hint)
-        if result is None:
-            raise typer.Exit(EXIT_NOT_CONVERGED)
-        path = None
-        if protocol != "up":
-            from supercoil.problems.tweezers_protocol import quasistatic_path
-
-            what = ("and back" if protocol == "up-down" else
-                    f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
-            warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
-            try:
-                with terminate_as_interrupt():
-                    path = quasistatic_path(options, protocol, step=step, force_range=ramp,
-                                            force_step=force_step)
-            except KeyboardInterrupt:
-                interrupted(writer, hint + " (the quasi-static path is computed again)")
-                raise typer.Exit(EXIT_NOT_CONVERGED) from None
-        payload = write_tweezers(result, out, writer, path, preset, painter=painter)
+        what = ("and back" if protocol == "up-down" else
+                f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
+        warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
+        try:
+            with terminate_as_interrupt():
+                path = quasistatic_path(options, protocol, step=step, force_range=ramp,
+                                        force_step=force_step)
+        except KeyboardInterrupt:
+            interrupted(writer, hint + " (the quasi-static path is computed again)")
+            raise typer.Exit(EXIT_NOT_CONVERGED) from None
+    payload = write_tweezers(result, out, writer, path, preset)
     if not payload["ok"] or (path is not None and not path.ok):
         if path is not None and not path.ok:
             payload["notes"].append(f"path: {path.message}")
@@ -274,7 +269,7 @@ def _attributes(options, preset) -> dict:
     return out
 
 
-def write_tweezers(result, out: Path, writer, path=None, preset=None, painter=None) -> dict:
+def write_tweezers(result, out: Path, writer, path=None, preset=None) -> dict:
     """Store the branches and the summary in ``writer`` (then closed), write branch.json
     (with the envelope), then the figures; return the payload. The data are complete
     before the first figure is drawn: an interrupt while drawing leaves them whole.
@@ -283,8 +278,7 @@ def write_tweezers(result, out: Path, writer, path=None, preset=None, painter=No
     of the up-down protocol, written as the list ``path`` with its jumps among the special
     points, and its states as the result's extra ``path`` (``states``, ``turns``).
     ``preset``: a :class:`~supercoil.units.dna.DNAPreset`; its suffixed keys are added to
-    every point, special point and path point, and ``units`` is ``dna``. ``painter``: a
-    :class:`~supercoil.plotting.painter.Painter` whose helper draws the figures.
+    every point, special point and path point, and ``units`` is ``dna``.
     """
     from supercoil.cli.saving import figures_interrupted
     from supercoil.io.results import envelope, write_json
@@ -340,7 +334,7 @@ def write_tweezers(result, out: Path, writer, path=None, preset=None, painter=No
     writer.close()
     write_json(data, out / "branch.json")
     try:
-        write_figures(payload, configurations, out, painter)
+        write_figures(payload, configurations, out)
     except KeyboardInterrupt:
         figures_interrupted(out)
         raise typer.Exit(EXIT_NOT_CONVERGED) from None

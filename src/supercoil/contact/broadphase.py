@@ -281,10 +281,11 @@ def candidate_pairs(
 
     keys = np.empty(block_a.size * members.shape[1] ** 2, dtype=np.int64)
     x, y, z = (np.ascontiguousarray(midpoints[:, axis]) for axis in range(3))
+    # writable arrays (a copy of a read-only one): one compiled specialisation
     count = _exact_tests(
-        block_a.astype(np.int64, copy=False),
-        block_b.astype(np.int64, copy=False),
-        members,
+        np.require(block_a, np.int64, "CW"),
+        np.require(block_b, np.int64, "CW"),
+        np.require(members, np.int64, "CW"),
         x,
         y,
         z,
@@ -569,5 +570,6 @@ def verlet_displacement(x: np.ndarray, x_ref: np.ndarray) -> tuple[float, float]
     (nan if some coordinate is nan), in one compiled call: a Verlet list's test of
     whether it still holds (``ContactProblem._candidates``, some 3000 calls on the
     tweezers' contact branch, 12 us each as numpy reductions at N = 100)."""
-    return _displacement_kernel(np.ascontiguousarray(x, dtype=np.float64),
-                                np.ascontiguousarray(x_ref, dtype=np.float64))
+    # writable arrays (a copy of a read-only one): one compiled specialisation
+    return _displacement_kernel(np.require(x, np.float64, "CW"),
+                                np.require(x_ref, np.float64, "CW"))

@@ -779,7 +779,8 @@ def sample_state(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray,
     points = np.empty((k, q, 3))
     centre = np.empty((k, 3))
     radius = np.empty(k)
-    deviation = _sample_state_kernel(np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3),
+    # a writable x (a copy of a read-only one): one compiled specialisation
+    deviation = _sample_state_kernel(np.require(x, np.float64, "CW").reshape(-1, 3),
                                      stencil, weights, segments, points, centre, radius)
     return points, float(deviation), centre, radius
 

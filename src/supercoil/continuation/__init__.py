@@ -16,18 +16,13 @@ a scalar attribute named by the caller (``excess_link``, ``turns``,
   eigenvalues included), user events (sign changes of named scalars).
 * Branch switching along the critical mode (Seydel 2010).
 * :class:`Branch` results with save / load and a :func:`consistency_check`.
-* Point workers (:func:`use_point_workers`, off by default; the ``supercoil``
-  command turns them on): each accepted point's stability, records and events
-  computed on the other core by a fork that mirrors the run, the results bit for
-  bit those of the serial computation.
 """
 
-from supercoil._fork import use_point_workers
 from supercoil.continuation.branch import SCHEMA_VERSION, Branch, SpecialPoint
 from supercoil.continuation.consistency import ConsistencyReport, consistency_check
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
-from supercoil.continuation.pseudo_arclength import continuation, watches_points
+from supercoil.continuation.pseudo_arclength import continuation
 from supercoil.continuation.switching import switch_branch
 
 __all__ = [
@@ -41,6 +36,4 @@ __all__ = [
     "consistency_check",
     "continuation",
     "switch_branch",
-    "use_point_workers",
-    "watches_points",
 ]

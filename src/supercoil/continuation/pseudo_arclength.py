@@ -24,15 +24,12 @@ folds, bifurcations and user events (:mod:`supercoil.continuation.events`).
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
-from supercoil._fork import Worker, point_workers
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.corrector import correct, tangent
@@ -72,23 +69,6 @@ REFINE_BELOW = 1e-2
 # factor (corrector.correct's chord_below; on the tweezers' branches 1e-2, 1e-1 and 1
 # tried the same steps, CHORD_REACH deciding, and 1e-3 12 fewer)
 CHORD_BELOW = 1e-2
-
-
-# points that may be pending in the worker while a state is judged, when the stop looks
-# at the state alone (see _Tracer.add_point). The worker falls behind where its event
-# localisations bunch up (20-60 ms each): on the tweezers' contact branch (N = 100) the
-# command's process waited for answers 0.23-0.30 s in all with 3, 0.16-0.18 s with 8,
-# 0.20-0.22 s with 16 and 0.32-0.35 s with 30 (the backlog then drained at the run's
-# end), two runs each, measured
-POINT_LAG = 8
-
-
-def watches_points(stop: Callable[[np.ndarray], str | None] | None) -> bool:
-    """Whether ``stop`` must be asked only once ``on_point`` has seen every earlier point
-    (with point workers, :meth:`_Tracer.add_point`): True unless it declares that it
-    looks at the state alone (the attribute ``watches_points = False``), e.g. a stop
-    that watches the located special points through ``on_point``."""
-    return stop is not None and bool(getattr(stop, "watches_points", True))
 
 
 def branch_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
@@ -153,35 +133,6 @@ def quadratic_term(system: ExtendedSystem, t_previous: np.ndarray, t_last: np.nd
     return term if system.norm(term) <= 0.5 * ds else np.zeros_like(t_last)
 
 
-@dataclass
-class _PendingPoint:
-    """A point handed to the tracer's worker (:meth:`_Tracer._hand_over`): its index,
-    whether its events are searched, the gauge's phase ``(phase_modes, q_phase_full)``
-    when it was added and its Hessian on all DOFs."""
-
-    index: int
-    search_events: bool
-    phase: tuple
-    full_hessian: object
-
-
-@dataclass
-class _PointRequest:
-    """What the worker needs to evaluate an accepted point as :meth:`_Tracer.add_point`
-    does here: the point and its tangent, whether its Hessian was assembled before
-    ``accept`` (the corrector's) or is to be after, whether to search events, the
-    last point and tangent as they are now (a regauge or rephase may have replaced
-    them), and the gauge's phase if it changed since the last request (else None)."""
-
-    x: np.ndarray
-    t: np.ndarray
-    hessian_before_accept: bool
-    search_events: bool
-    x_last: np.ndarray
-    t_last: np.ndarray
-    phase: tuple | None
-
-
 class _Tracer:
     """Follows one branch from a corrected point and tangent; collects points and events."""
 
@@ -216,11 +167,6 @@ class _Tracer:
         # ever appended)
         self._rows: list[tuple] = []
         self._columns: dict[str, list] = {}
-        # the points whose stability, records and events the worker is computing
-        # (:meth:`_hand_over`), oldest first, settled by :meth:`_settle`
-        self._pending: list[_PendingPoint] = []
-        self._worker: Worker | None = None
-        self._sent_phase: tuple | None = None  # the phase the worker has
 
     def _previous_tangent(self) -> tuple[np.ndarray, float] | None:
         """The tangent at the point before the last and the arclength between the two."""
@@ -247,53 +193,16 @@ class _Tracer:
         only (measured on the ring's alpha branch at N = 200: at most 3e-16 of its
         largest entry, as much as assembling it twice at ``x`` with other states
         evaluated in between does).
-        The point's eigenvalues feed no event or switch (those are recomputed), so
-        they are computed by the faster path (``point_stability(fast=True)``: band
-        LU, standard-mode Lanczos; equal to round-off).
-
-        With point workers (:func:`supercoil._fork.point_workers`), every point but a
-        run's first is handed to the tracer's worker, a fork of this process that
-        mirrors it (:meth:`_hand_over`): the worker computes from the same state what
-        this method would, while the caller corrects the next steps, and
-        :meth:`_settle` takes its answers in order (and calls ``on_point`` for each).
-        A state is judged (``stop``) once every earlier point is settled, unless the
-        stop declares that it looks at the state alone (``watches_points = False``,
-        :func:`watches_points`): then up to ``POINT_LAG`` points stay pending. A
-        point whose evaluation raised in the worker is dropped by :meth:`_settle`
-        with every later point, and the exception raised there, as here.
         """
-        self._settle(POINT_LAG - 1 if self._worker is not None else 0)
-        if self.xs and point_workers():
-            self._hand_over(x, t, full_hessian, search_events)
-            return
-        full = self._accept(x, full_hessian)
-        stability, records, user = self._evaluate(x, full)
-        self._append(x, t, stability, records, user, full)
-        if len(self.xs) >= 2 and search_events:
-            self._search_events()
-        if self.on_point is not None:
-            self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
-
-    def _accept(self, x: np.ndarray, full_hessian=None):
-        """Accept ``x`` in the problem; its Hessian on all DOFs (``full_hessian`` if given,
-        else assembled after the accept)."""
         system = self.system
         system.set_parameter(x[-1])
         system.problem.accept(system.q(x))
         self._accepted_hessian = None
-        return system.full_hessian(x) if full_hessian is None else full_hessian
-
-    def _evaluate(self, x: np.ndarray, full) -> tuple:
-        """``(stability, records, user values)`` of the accepted point ``x``."""
-        system = self.system
+        full = system.full_hessian(x) if full_hessian is None else full_hessian
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
-                                    full, fast=True)
+                                    full)
         records = self._records(x)
         user = [user_values(ev, system, x) for ev in self.events]
-        return stability, records, user
-
-    def _append(self, x, t, stability, records, user, full) -> None:
-        system = self.system
         self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))
         self.xs.append(x)
         self.ts.append(t)
@@ -301,145 +210,10 @@ class _Tracer:
         self.recs.append(records)
         self.user.append(user)
         self._accepted_hessian = (x, full)
-
-    # -- points computed in a fork ------------------------------------------------------------
-    def _hand_over(self, x: np.ndarray, t: np.ndarray, full_hessian, search_events: bool
-                   ) -> None:
-        """Send the point to the worker (forked now if there is none: it starts as this
-        process is, before the point's ``accept``), accept it here, and keep it with its
-        stability, records and user values pending (None) until :meth:`_settle`.
-
-        The worker mirrors this tracer: it receives every point added and every
-        change of the last point and of the gauge's phase (:class:`_PointRequest`), and
-        evaluates, accepts and searches events exactly as :meth:`add_point` does
-        here, so its problem goes through the same accepted states."""
-        system = self.system
-        if self._worker is None:
-            self._worker = Worker(self._serve)
-            self._sent_phase = (system.phase_modes, system.q_phase_full)
-        phase = (system.phase_modes, system.q_phase_full)
-        changed = phase[0] is not self._sent_phase[0] or phase[1] is not self._sent_phase[1]
-        request = self._worker.pack(_PointRequest(x, t, full_hessian is not None,
-                                                  search_events, self.xs[-1], self.ts[-1],
-                                                  phase if changed else None))
-        while self._worker is not None and self._pending and not self._worker.room(request):
-            self._settle(len(self._pending) - 1)  # a full pipe: answers first
-        if self._worker is None:  # it was killed meanwhile: this point goes to a new one
-            self._hand_over(x, t, full_hessian, search_events)
-            return
-        self._worker.submit(request)
-        self._sent_phase = phase
-        full = self._accept(x, full_hessian)
-        pending = _PendingPoint(len(self.xs), search_events, phase, full)
-        self._append(x, t, None, None, None, full)
-        self._pending.append(pending)
-
-    def _serve(self, request: _PointRequest) -> tuple:
-        """The worker's side of :meth:`_hand_over`: ``(stability, records, user values,
-        the special points found since the previous point)``."""
-        system, x = self.system, request.x
-        if request.phase is not None:
-            system.set_phase(*request.phase)
-        self.xs[-1], self.ts[-1] = request.x_last, request.t_last
-        system.set_parameter(x[-1])
-        # the corrector's Hessian was assembled before the accept, as here
-        full = self._accept(x, system.full_hessian(x) if request.hessian_before_accept
-                            else None)
-        stability, records, user = self._evaluate(x, full)
-        self._append(x, request.t, stability, records, user, full)
-        found = len(self.specials)
-        if len(self.xs) >= 2 and request.search_events:
+        if len(self.xs) >= 2 and search_events:
             self._search_events()
-        return stability, records, user, self.specials[found:]
-
-    def _close_worker(self) -> None:
-        if self._worker is not None:
-            self._worker.close()
-            self._worker = None
-
-    def _settle(self, keep: int = 0) -> None:
-        """Take the worker's answers for the oldest pending points until at most ``keep``
-        remain, calling ``on_point`` after each. An exception of the worker's is raised
-        here, its point and every later one dropped (the gauge's phase and the accepted
-        state as they were when the point was added, as when :meth:`add_point`
-        raises). If the worker ended without answering (killed), this process
-        evaluates the points it had."""
-        system = self.system
-        while len(self._pending) > (keep if self._worker is not None else 0):
-            pending = self._pending[0]
-            lam = getattr(system.problem, system.parameter)
-            done = False
-            if self._worker is not None:
-                try:
-                    done, answer = self._worker.result()
-                except KeyboardInterrupt:
-                    raise  # the worker goes on; a later _settle takes its answer
-                except BaseException:
-                    self._drop_pending(pending)
-                    self._close_worker()
-                    raise
-            if not done:  # the worker was killed: this process evaluates every point it
-                self._close_worker()  # had (a new worker follows at the next point)
-                answer = self._evaluate_again(pending)
-            del self._pending[0]
-            k = pending.index
-            stability, records, user, specials = answer
-            self.stabs[k], self.recs[k], self.user[k] = stability, records, user
-            self.specials.extend(specials)
-            if self.on_point is not None:
-                self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE,
-                                          k + 1))
-            system.set_parameter(lam)
-
-    def _drop_pending(self, pending: _PendingPoint) -> None:
-        """Forget ``pending`` and every later point; the phase and the accepted state
-        back to those of ``pending``."""
-        k, system = pending.index, self.system
-        x = self.xs[k]
-        for values in (self.s, self.xs, self.ts, self.stabs, self.recs, self.user,
-                       self._rows, *self._columns.values()):
-            del values[k:]
-        self._pending.clear()
-        self._accepted_hessian = None
-        phase_modes, q_phase = pending.phase
-        if phase_modes is not system.phase_modes:  # rephased since
-            system.set_phase(phase_modes, q_phase)
-        system.set_parameter(x[-1])
-        system.problem.accept(system.q(x))
-
-    def _evaluate_again(self, pending: _PendingPoint) -> tuple:
-        """This process's evaluation of a pending point (the worker was killed): the
-        later points set aside, the point accepted again in the gauge it was added in,
-        its events searched; then the last point accepted again, the gauge restored."""
-        system, k = self.system, pending.index
-        lists = (self.s, self.xs, self.ts, self.stabs, self.recs, self.user)
-        later = [values[k + 1:] for values in lists]
-        now = (system.phase_modes, system.q_phase_full)
-        rephased = pending.phase[0] is not now[0] or pending.phase[1] is not now[1]
-        found = len(self.specials)
-        try:
-            for values in lists:
-                del values[k + 1:]
-            if rephased:
-                system.set_phase(*pending.phase)
-            x = self.xs[k]
-            system.set_parameter(x[-1])
-            system.problem.accept(system.q(x))
-            stability, records, user = self._evaluate(x, pending.full_hessian)
-            self.stabs[k], self.recs[k], self.user[k] = stability, records, user
-            if k >= 1 and pending.search_events:
-                self._search_events()
-            specials = self.specials[found:]
-        finally:
-            del self.specials[found:]
-            for values, rest in zip(lists, later, strict=True):
-                values.extend(rest)
-            if rephased:
-                system.set_phase(*now)
-            last = self.xs[-1]
-            system.set_parameter(last[-1])
-            system.problem.accept(system.q(last))
-        return stability, records, user, specials
+        if self.on_point is not None:
+            self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
 
     # -- events between the last two points -------------------------------------------------
     def _search_events(self) -> None:
@@ -484,11 +258,7 @@ class _Tracer:
         system, opts = self.system, self.opts
         x = ev.x
         t = ev.tangent if ev.tangent is not None else self.ts[k + 1]
-        # the critical modes of folds and bifurcations feed branch switching: the
-        # reference eigensolver there; a user event keeps only its count (the fast
-        # path, as at regular points)
-        stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes,
-                               fast=ev.kind not in ("bifurcation", "fold"))
+        stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes)
         values = modes = np.zeros(0)
         if ev.kind in ("bifurcation", "fold"):
             n_critical = max(1, abs(ev.count_after - ev.count_before))
@@ -638,7 +408,6 @@ class _Tracer:
         close = np.flatnonzero(gaps <= reach)
         if close.size == 0:
             return None
-        self._settle()  # the counts of the last point
         count = self.stabs[-1].unstable_count
         for i in close:
             j = int(near[i])
@@ -665,25 +434,11 @@ class _Tracer:
 
     # -- the stepping loop ------------------------------------------------------------------
     def run(self, step: float) -> tuple[ContinuationStatus, str]:
-        """Step from the last point until a bound, a stop or a failure; ``(status, message)``.
-
-        Every point is settled on return (:meth:`_settle`): a point whose stability
-        failed in its fork ends the run there, as it would have when it was added. An
-        interrupt (KeyboardInterrupt) first settles the point in progress, so that
-        ``on_point`` has seen every point computed."""
+        """Step from the last point until a bound, a stop or a failure; ``(status, message)``."""
         try:
-            status, message = self._run(step)
-            self._settle()
+            return self._run(step)
         except (SingularMatrixError, InertiaError) as exc:
             return self._stability_failed(exc)
-        except KeyboardInterrupt:
-            with contextlib.suppress(Exception):
-                self._settle()
-            raise
-        finally:
-            self._pending.clear()  # settled, or abandoned with an unexpected exception
-            self._close_worker()
-        return status, message
 
     def _stability_failed(self, exc: Exception) -> tuple[ContinuationStatus, str]:
         return ContinuationStatus.STEP_TOO_SMALL, (
@@ -750,15 +505,6 @@ class _Tracer:
             if failure is None and t_new @ (system.weights * t_k) < cos_turn:
                 failure = (f"the tangent turned by more than {opts.max_turn_degrees} degrees "
                            f"(a jump to another branch?)")
-            if failure is None:
-                # the worker's answers for the earlier points (their events and
-                # on_point come before this state is judged, unless the stop looks
-                # at the state alone)
-                try:
-                    self._settle(POINT_LAG if self._worker is not None
-                                 and not watches_points(self.stop) else 0)
-                except (SingularMatrixError, InertiaError) as exc:
-                    return self._stability_failed(exc)
             if failure is None and self.stop is not None:
                 refusal = self.stop(system.q(x_new))
                 if refusal:
@@ -789,10 +535,6 @@ class _Tracer:
             if failure is not None:
                 log.debug("step %.3g rejected: %s", ds, failure)
                 if opts.regauge and system.r and not regauged:
-                    try:
-                        self._settle()
-                    except (SingularMatrixError, InertiaError) as exc:
-                        return self._stability_failed(exc)
                     try:
                         moved = self._regauge()
                     except (SingularMatrixError, InertiaError) as exc:
@@ -836,17 +578,14 @@ class _Tracer:
         return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"
 
     # -- result -------------------------------------------------------------------------------
-    def branch(self, status: ContinuationStatus, message: str, count: int | None = None
-               ) -> Branch:
+    def branch(self, status: ContinuationStatus, message: str) -> Branch:
         """The branch so far (also the partial branch handed to ``on_point`` at every
-        point), or its first ``count`` points (those settled while later ones are
-        pending): each point's full-DOF rows and each record's values are converted
-        once and kept (:meth:`_point_rows`, :attr:`_columns`), so that a partial branch
-        costs the arrays' stacking, not a conversion of every point (measured on the
-        tweezers benchmark's contact branch, 91 points: 1.5 ms a call before)."""
+        point): each point's full-DOF rows and each record's values are converted once
+        and kept (:meth:`_point_rows`, :attr:`_columns`), so that a partial branch costs
+        the arrays' stacking, not a conversion of every point."""
         system = self.system
         n_dofs, m = system.problem.n_dofs, system.m
-        k = len(self.xs) if count is None else count
+        k = len(self.xs)
         records = {}
         if k and self.recs[0]:
             for name in self.recs[0]:
@@ -877,7 +616,7 @@ class _Tracer:
         """Per point of the first ``count``, ``(x, t, stability, q, multipliers, full
         tangent, nearest eigenvalue)``, converted when the point's ``x``, ``t`` or
         stability object is new (a regauged point's ``x`` and a rephased point's tangent
-        are replaced; points dropped by :meth:`_drop_pending` are cut)."""
+        are replaced)."""
         system, rows = self.system, self._rows
         for i, (x, t, stab) in enumerate(zip(self.xs[:count], self.ts, self.stabs)):
             if i < len(rows) and rows[i][0] is x and rows[i][1] is t and rows[i][2] is stab:

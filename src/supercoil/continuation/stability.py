@@ -122,14 +122,14 @@ def _inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None
     H, J = _count_system(system, x, hessian, drop)
     dofs = np.delete(system.free, drop) if drop.size else system.free
     try:
-        factor = KKTFactor(H, J, band=True)
+        factor = KKTFactor(H, J)
         negative = factor.reduced_negative_count
         return negative, int(factor.determinant_sign * (-1) ** J.shape[0]), factor, dofs
     except (SingularMatrixError, InertiaError):
         if zero_tolerance is None:
             raise
         mass = system.mass[np.setdiff1d(np.arange(system.n), drop)]
-        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=mass, band=True)
+        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=mass)
         return factor.reduced_negative_count, 0, factor, dofs
 
 
@@ -180,15 +180,12 @@ def related_order(order: np.ndarray, dofs: np.ndarray, rows: int, new_dofs: np.n
 
 
 def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
-               full=None, fast: bool = False,
-               count: tuple[np.ndarray, np.ndarray, int] | None = None
+               full=None, count: tuple[np.ndarray, np.ndarray, int] | None = None
                ) -> tuple[np.ndarray, np.ndarray]:
-    """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``.
+    """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``
+    (:func:`~supercoil.stability.analysis._lowest_pairs`).
 
-    ``full``: ``system.full_hessian(x)`` if already assembled; ``fast``: the
-    shift-invert factor on the band LU and Lanczos in ARPACK's standard mode
-    (:func:`~supercoil.stability.analysis._lowest_pairs`), eigenvalues equal to
-    round-off, not bit for bit. ``count``: ``(dofs, order, rows)`` of the count's
+    ``full``: ``system.full_hessian(x)`` if already assembled. ``count``: ``(dofs, order, rows)`` of the count's
     factor at ``x`` (its DOFs, :attr:`~supercoil.solvers.kkt.KKTFactor.order` and
     number of rows, as :func:`_inertia` gives them): the shift-invert factor is then
     ordered by :func:`related_order` rather than by a new ``kkt_order`` (the same
@@ -207,7 +204,7 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
         if count is not None:
             order = related_order(count[1], count[0], count[2], dofs, m, H.sparse.tocsr())
         values, vectors = _lowest_pairs(H, J, mass, n_wanted=min(n_wanted, dim - 2), n=dofs.size,
-                                        m=m, symmetry=sym, force_sparse=True, fast=fast,
+                                        m=m, symmetry=sym, force_sparse=True,
                                         factor_order=order)
     modes = np.zeros((values.size, problem.n_dofs))
     modes[:, dofs] = vectors.T
@@ -215,18 +212,17 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
 
 
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
-                    n_modes: int, full=None, fast: bool = False) -> PointStability:
+                    n_modes: int, full=None) -> PointStability:
     """Stability report at the point ``x`` of the extended system (see module doc).
 
     ``full``: ``system.full_hessian(x)`` if already assembled (a converged
-    correction's); ``fast``: as :func:`eigenpairs`, whose shift-invert factor is then
-    also ordered from the count's (``eigenpairs(count=...)``).
+    correction's). The shift-invert factor of the eigenpairs is ordered from the
+    count's (``eigenpairs(count=...)``).
     """
     full = system.full_hessian(x) if full is None else full
     neg, det_sign, factor, dofs = _inertia(system, x, zero_tolerance,
                                            full.restrict(system.free))
-    count = (dofs, factor.order, factor.m) if fast else None
-    values, modes = eigenpairs(system, x, neg + n_modes, full, fast, count)
+    values, modes = eigenpairs(system, x, neg + n_modes, full, (dofs, factor.order, factor.m))
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # as analyse: at least what the eigensolver found below -tol, at least the

@@ -16,7 +16,6 @@ figure of a result and saves it as PNG and SVG.
 
 from __future__ import annotations
 
-import functools
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -54,59 +53,6 @@ def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping
         _draw_diagram(fig, ax, branches, special_points, title=title, x=x, y=y,
                       legend_title=legend_title)
     return fig
-
-
-class DiagramFigure:
-    """:func:`diagram_figure` made once and drawn again for each diagram: calling it with
-    the same arguments as :func:`diagram_figure` removes the previous diagram's lines and
-    legend, puts the axes back at their subplot position, draws the new diagram and lays
-    it out, and returns the same figure (save it before the next call). The figure, its
-    axes, axis and tick objects and its canvas are made once (a new figure is made when
-    the dpi of ``rcParams`` changed, or when a diagram has no line to draw), and its
-    texts are measured on the renderer it shares (:func:`_shared_canvas_class`).
-
-    For a caller that draws diagrams one after the other in one setting of
-    ``rcParams`` (the figure keeps those it was made with) and saves each before the
-    next: :func:`supercoil.plotting.tweezers.draw_job` and the figure helper's warm-up
-    (:mod:`supercoil.plotting.painter`), so that the helper and its fork each draw the
-    tweezers' line diagrams on the warm-up's figure. The files are those of
-    :func:`diagram_figure`, pixel for pixel (tests/test_plot.py), and on issue 5's run
-    byte for byte. Drawn after the warm-up in one process, the hat curve, torque and
-    writhe figures took 764, 765, 812 million instructions on a new figure each (with
-    the shared renderer) and 702, 696, 748 million on the warm-up's (``python
-    benchmarks/bench_figures.py --run DIR --instructions``, DIR a run of issue 5's
-    command); in CPU time 0.109, 0.108, 0.116 s -> 0.099, 0.096, 0.104 s (minima;
-    medians 0.113, 0.111, 0.125 -> 0.100, 0.099, 0.106 s; 14 alternated processes
-    each, ``--against`` the tree before).
-    """
-
-    def __init__(self):
-        self._fig = None
-
-    def __call__(self, branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
-                 title: str, x: str = "writhe", y: str = "excess_link",
-                 legend_title: str | None = None):
-        import matplotlib
-        from matplotlib.figure import Figure
-
-        fig, self._fig = self._fig, None  # none kept if this diagram fails half drawn
-        with style.styled():
-            if (fig is None or fig.dpi != matplotlib.rcParams["figure.dpi"]
-                    or not (len(branches) or len(special_points))):
-                fig = Figure(figsize=DIAGRAM_SIZE)
-                ax = fig.subplots()
-            else:
-                ax = fig.axes[0]
-                for line in list(ax.lines):
-                    line.remove()
-                for legend in list(fig.legends):
-                    legend.remove()
-                ax.relim()  # the data limits of no line: as a new axes'
-                ax.set_position(ax.get_subplotspec().get_position(fig))
-            _draw_diagram(fig, ax, branches, special_points, title=title, x=x, y=y,
-                          legend_title=legend_title)
-        self._fig = fig
-        return fig
 
 
 def _draw_diagram(fig, ax, branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
@@ -156,10 +102,12 @@ def _fit_beside_legend(fig, ax, legend) -> None:
     they fit with :data:`LAYOUT_PAD` around them, then measured again at the new
     position (the tick locator may choose other ticks for another length) and the
     margins widened where they grew. Constrained layout solves the same margins in two
-    passes of its own over the whole figure: measured on the tweezers' figures, 0.16 s
-    of the 0.29 s a figure took to save (docs/benchmarks.md, "Session 12").
+    passes of its own over the whole figure, about half of the time a figure takes to
+    save.
     """
-    renderer = _shared_canvas_class()(fig).get_renderer()
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    renderer = FigureCanvasAgg(fig).get_renderer()
     width, height = fig.bbox.width, fig.bbox.height
     pad = LAYOUT_PAD * fig.dpi / 72.0
     legend_width = legend.get_window_extent(renderer).width
@@ -184,110 +132,6 @@ def _fit_beside_legend(fig, ax, legend) -> None:
     box = ax.get_position().transformed(fig.transFigure)
     legend.set_bbox_to_anchor(((box.x1 + margins[1] + pad) / width, box.y1 / height),
                               transform=fig.transFigure)
-
-
-RENDERERS_KEPT = 4  # renderers kept by _shared_canvas_class's canvases (sizes and dpis)
-_RENDERERS: dict = {}  # (width px, height px, dpi) -> RendererAgg, the latest used last
-if hasattr(os, "register_at_fork"):
-    # a fork makes its own renderers: a renderer's cached mathtext parses hold its
-    # process's fonts (FT2Font), which read their font files through descriptors whose
-    # file position a fork shares with its parent. matplotlib empties its font cache in
-    # a fork for the same reason; with a parent's renderer, 4 of 20 forks drawing the
-    # tweezers' figures side by side with their parent failed ("FT_Load_Glyph failed:
-    # too many hints") or drew other pixels
-    os.register_at_fork(after_in_child=_RENDERERS.clear)
-
-
-@functools.cache
-def _shared_canvas_class():
-    """An Agg canvas class whose renderer is this process's for the figure's size in pixels
-    and dpi (a fork makes its own, see ``_RENDERERS``): figures of one size drawn one
-    after the other share it, and with it matplotlib's text metrics, which are cached
-    per renderer (``text.py``, ``_get_text_metrics_with_cache``; mathtext parses too,
-    per renderer's parser). A renderer is cleared at the start of each draw, so figures
-    drawn one after the other are drawn as on a canvas of their own, pixel for pixel;
-    the image of a canvas (``buffer_rgba``) is then its figure's only until another
-    figure of its size is drawn, and two threads must not draw on them at once (none
-    do: the figures are drawn by processes, :mod:`supercoil.plotting.painter`).
-
-    :func:`diagram_figure` lays out and draws on it: the three line diagrams of
-    ``supercoil tweezers`` (the same size, title, x axis and legend entries) and the
-    figure helper's warm-up then measure their common texts once per process. Each
-    line diagram drawn after the warm-up, one after the other in one process: 0.118,
-    0.117, 0.128 s CPU -> 0.111, 0.110, 0.118 s (minima; medians 0.123, 0.122, 0.134 ->
-    0.115, 0.114, 0.126 s), the four figures 0.480 / 0.507 -> 0.458 / 0.481 s (min /
-    median of 14 alternated processes each, ``OPENBLAS_NUM_THREADS=1 python
-    benchmarks/bench_figures.py --run DIR --against OLD/src --repeat 14``, DIR a run of
-    issue 5's command); the files identical byte for byte.
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
-    from matplotlib.font_manager import fontManager, get_font
-
-    class Renderer(RendererAgg):
-        """Agg's renderer that answers matplotlib's ``_get_font_height_metrics`` (see
-        :func:`_font_height_metrics`) from a memo kept for one layout pass or one draw
-        (emptied by each ``get_renderer`` of the canvas: the rcParams that choose a
-        text's font are those of one pass)."""
-
-        def __init__(self, width, height, dpi):
-            super().__init__(width, height, dpi)
-            self.font_heights: dict = {}
-
-        def _get_font_height_metrics(self, prop):
-            key = prop.copy()  # FontProperties hash by their mutable state
-            found = self.font_heights.get(key)
-            if found is None:
-                found = self.font_heights[key] = _font_height_metrics(
-                    get_font(fontManager._find_fonts_by_props(prop)), prop, self.dpi)
-            return found
-
-    class SharedRendererCanvas(FigureCanvasAgg):
-        def get_renderer(self):
-            width, height = self.get_width_height(physical=True)
-            key = (width, height, self.figure.dpi)
-            renderer = _RENDERERS.pop(key, None)
-            if renderer is None:
-                renderer = Renderer(width, height, self.figure.dpi)
-            renderer.font_heights.clear()
-            _RENDERERS[key] = renderer
-            while len(_RENDERERS) > RENDERERS_KEPT:
-                del _RENDERERS[next(iter(_RENDERERS))]
-            self.renderer = renderer
-            return renderer
-
-    return SharedRendererCanvas
-
-
-def _font_height_metrics(font, prop, dpi: float) -> tuple:
-    """``(ascent, descent, line gap)`` in pixels of ``font`` (an FT2Font) at the size of
-    ``prop`` and ``dpi``, from its OS/2 or else its hhea table; ``(None, None, None)``
-    without either (matplotlib then measures the text "lp").
-
-    matplotlib 3.11's ``Text._get_layout`` computes this for every text it lays out
-    (the font looked up from its properties, two tables read), unless the renderer has
-    a ``_get_font_height_metrics`` (the PDF and PS backends' hook for their AFM fonts),
-    whose answer it takes instead. This is the same computation, line for line, so
-    that :func:`_shared_canvas_class`'s renderer can answer from a memo: the three line
-    diagrams and the legend laid out and drawn look up some 600 texts' fonts, of half
-    a dozen font properties. Older matplotlib does not ask the renderer (no effect),
-    and a later one that computed otherwise would lay the texts out otherwise than on
-    its own renderer, which tests/test_plot.py compares text by text and pixel for
-    pixel. Measured on issue 5's run: each line diagram 0.087-0.096 -> 0.077-0.082 s
-    CPU (minima of 14 alternated processes, two sittings, ``benchmarks/
-    bench_figures.py``), the files identical byte for byte.
-    """
-    for table_name, linegap_key, ascent_key, descent_key in (
-            ("OS/2", "sTypoLineGap", "sTypoAscender", "sTypoDescender"),
-            ("hhea", "lineGap", "ascent", "descent")):
-        table = font.get_sfnt_table(table_name)
-        if table is None:
-            continue
-        fontsize = prop.get_size_in_points()
-        units_per_em = font.get_sfnt_table("head")["unitsPerEm"]
-        scale = 1 / units_per_em * fontsize * dpi / 72
-        return (table[ascent_key] * scale, -table[descent_key] * scale,
-                table[linegap_key] * scale)
-    return None, None, None
 
 
 def link_writhe_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,

@@ -14,8 +14,7 @@ calls.
   (Figure 3), as thick lines in projection (line width = D in data units).
 
 Each figure can also be a *job* ``(path, builder, keyword arguments)``, plain
-data that :mod:`supercoil.plotting.painter`'s helper process draws
-(:func:`draw_job`, builders named ``ring:...``) while the command computes.
+data that :func:`draw_job` draws (builders named ``ring:...``).
 """
 
 from __future__ import annotations
@@ -63,10 +62,7 @@ def draw_job(job: tuple[str | os.PathLike, str, dict]) -> Path:
     return Path(path)
 
 
-def draw_jobs(jobs: Sequence[tuple], painter=None) -> None:
-    """Draw ``jobs``: by ``painter``'s helper (a started
-    :class:`~supercoil.plotting.painter.Painter`) if given, those it did not draw here
-    (in this process and a fork of it, :func:`~supercoil.plotting.painter.draw_shared`)."""
-    from supercoil.plotting.painter import draw_shared
-
-    draw_shared(list(jobs) if painter is None else painter.draw(list(jobs)))
+def draw_jobs(jobs: Sequence[tuple]) -> None:
+    """Draw ``jobs`` one after the other (:func:`draw_job`)."""
+    for job in jobs:
+        draw_job(job)

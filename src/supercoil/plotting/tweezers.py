@@ -9,25 +9,21 @@ special points marked).
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from supercoil.plotting.figures import (
-    DiagramFigure,
     configurations_figure,
+    diagram_figure,
     through_special_points,
 )
 
 FIGURES = {"hat_curve.png": "extension", "torque.png": "torque", "writhe.png": "writhe"}
-# the figures' resolution; they are encoded by save_png (zlib level 1, as Pillow's
-# compress_level 1 before, which against Pillow's 6 gave the same pixels, files about
-# 17 % larger, the encoding of the four figures about 0.1-0.2 s shorter)
-SAVE_OPTIONS = {"dpi": 150}
-# the line diagrams of this process (and of the figure helper's warm-up): one figure
-# drawn again for each (figures.DiagramFigure)
-LINE_DIAGRAM = DiagramFigure()
+# the figures' resolution, and zlib level 1 for their PNG files (the pixels of the
+# default level, files about a sixth larger, encoded several times faster)
+SAVE_OPTIONS = {"dpi": 150, "pil_kwargs": {"compress_level": 1}}
 
 
 def _branches(payload: Mapping, y: str) -> list[dict]:
@@ -67,14 +63,11 @@ def _title(payload: Mapping) -> str:
 def figure_jobs(payload: Mapping, configurations: Sequence[Mapping],
                 folder: str | os.PathLike) -> list[tuple[Path, str, dict]]:
     """The PNG figures of :func:`write_figures`, each ``(path, builder, keyword
-    arguments)`` for :func:`draw_job` (plain data: a job can be pickled to a helper
-    process, :mod:`supercoil.plotting.painter`)."""
+    arguments)`` for :func:`draw_job`."""
     folder = Path(folder)
     jobs = []
     title = _title(payload)
     if configurations:
-        # first: the longest to draw (0.14 s of the four figures' 0.46 s, measured), so
-        # that the painter's two processes, taking jobs in this order, end together
         jobs.append((folder / "configurations.png", "configurations", {
             "configurations": list(configurations), "diameter": payload.get("diameter"),
             "title": title, "closed": False}))
@@ -106,77 +99,29 @@ def draw_job(job: tuple[Path, str, dict]) -> Path:
     import matplotlib
 
     path, builder, kwargs = job
-    build = LINE_DIAGRAM if builder == "diagram" else configurations_figure
     kwargs = dict(kwargs)
     # made at the resolution it is saved at: the layout's text measurements are then
-    # the drawing's (matplotlib caches them per dpi), and the save does not rescale the
-    # figure (measured on the four figures of the benchmark: 12 % less CPU)
+    # the drawing's, and the save does not rescale the figure
     with matplotlib.rc_context({"figure.dpi": SAVE_OPTIONS["dpi"]}):
         if builder == "diagram":
-            fig = build(kwargs.pop("branches"), kwargs.pop("special_points"), **kwargs)
+            fig = diagram_figure(kwargs.pop("branches"), kwargs.pop("special_points"),
+                                 **kwargs)
         else:
-            fig = build(kwargs.pop("configurations"), **kwargs)
-    save_png(fig, path)
+            fig = configurations_figure(kwargs.pop("configurations"), **kwargs)
+    fig.savefig(path, **SAVE_OPTIONS)
     return Path(path)
 
 
-def save_png(fig, target) -> None:
-    """Save ``fig`` as a PNG file at ``SAVE_OPTIONS['dpi']`` into ``target`` (a path or a
-    binary file): the pixels of ``fig.savefig(target, **SAVE_OPTIONS)``, drawn by it
-    (``format="rgba"``), encoded by :func:`supercoil.plotting.png.encode_png` instead of
-    Pillow (its module doc), with the chunks matplotlib writes (dpi, ``Software``)."""
-    import io
-
-    import matplotlib
-
-    from supercoil.plotting.png import encode_png
-
-    dpi = SAVE_OPTIONS["dpi"]
-    raw = io.BytesIO()
-    fig.savefig(raw, format="rgba", dpi=dpi)
-    pixels = raw.getbuffer().nbytes // 4
-    # the canvas's size: the inches times the dpi, truncated; a product that round-off
-    # puts a hair below an integer truncates one lower, hence the neighbours
-    w, h = (v * dpi for v in fig.get_size_inches())
-    sizes = [(int(w) + i, int(h) + j) for i in (0, -1, 1) for j in (0, -1, 1)]
-    width, height = next(((a, b) for a, b in sizes if a * b == pixels), (0, 0))
-    if width * height != pixels:
-        raise RuntimeError(f"a {w:.1f} x {h:.1f} pixel figure drew {pixels} pixels")
-    rgba = np.frombuffer(raw.getbuffer(), np.uint8).reshape(height, width, 4)
-    data = encode_png(rgba, dpi=dpi, text={
-        "Software": f"Matplotlib version{matplotlib.__version__}, https://matplotlib.org/"})
-    if hasattr(target, "write"):
-        target.write(data)
-    else:
-        Path(target).write_bytes(data)
-
-
 def write_figures(payload: Mapping, configurations: Sequence[Mapping],
-                  folder: str | os.PathLike, painter=None,
-                  meanwhile: Callable[[], None] | None = None) -> list[Path]:
+                  folder: str | os.PathLike) -> list[Path]:
     """Write the PNG figures into ``folder``; returns the paths written.
 
     Extension (load control) or the end's axial force (displacement control),
     torque and writhe against turns; extension against force for a force ramp;
-    tube pictures.
-
-    ``configurations``: ``{label, points (n, 3), contact_points, contact_intervals}``
-    of the states to draw as tubes. ``painter``: a started
-    :class:`~supercoil.plotting.painter.Painter`, whose helper processes draw the
-    figures (those it could not draw are drawn here); None: all drawn here. Here
-    means this process and a fork of it where
-    :func:`~supercoil.plotting.painter.draw_shared` forks. ``meanwhile``: called once
-    the figures are handed to the painter, before waiting for them (the caller's other
-    work, e.g. writing its data files; without a painter, before drawing here).
+    tube pictures. ``configurations``: ``{label, points (n, 3), contact_points,
+    contact_intervals}`` of the states to draw as tubes.
     """
-    from supercoil.plotting.painter import draw_shared
-
-    jobs = figure_jobs(payload, configurations, folder)
-    submitted = None if painter is None else painter.submit(jobs)
-    if meanwhile is not None:
-        meanwhile()
-    draw_shared(jobs if painter is None else painter.wait(submitted))
-    return [Path(job[0]) for job in jobs]
+    return [draw_job(job) for job in figure_jobs(payload, configurations, folder)]
 
 
 def pick_configurations(payload: Mapping, states: Mapping[str, np.ndarray],

@@ -28,7 +28,6 @@ from supercoil.continuation import (
     ContinuationStatus,
     UserEvent,
     continuation,
-    watches_points,
 )
 
 
@@ -92,7 +91,6 @@ def grip_stop(grip: Callable[[np.ndarray], float], q: np.ndarray, fraction: floa
             return f"the symmetry pins' grip fell to {now / held:.2g} of its value at the run's start"
         return None
 
-    refuse.watches_points = False  # the state alone (continuation.watches_points)
     return refuse
 
 
@@ -111,7 +109,6 @@ def either(*stops: Callable[[np.ndarray], str | None] | None
                 return message
         return None
 
-    refuse.watches_points = any(watches_points(stop) for stop in given)
     return refuse
 
 

@@ -412,7 +412,6 @@ def pin_stop(rod: ClampedRodEnergy) -> Callable[[np.ndarray], str | None]:
             return f"the azimuth pin's quality fell to {quality:.2g} (below {PIN_QUALITY:g})"
         return None
 
-    refuse.watches_points = False  # the state alone (continuation.watches_points)
     return refuse
 
 

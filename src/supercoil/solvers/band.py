@@ -27,8 +27,8 @@ goes through the eigh step above. Measured on the N = 200 ring's KKT matrices:
 15 of 19 pivot blocks have ``|mu|`` below ``max|mu| / 1e4`` (so a fast path for
 well-conditioned blocks only would rarely apply), while ``R`` has 0 to 6 rows;
 the Schur complements' largest entries are those of the eigh-only elimination
-(no extra growth), and the counts are the same (``_block_inertia``, the
-eigh-only reference, in the tests).
+(no extra growth), and the counts are the same (the eigh-only elimination is the
+tests' reference, ``tests/band_reference.py``).
 
 (LAPACK's band tridiagonalisation ``dsbtrd`` would also give the inertia,
 but it costs ``O(n^2 b)``: measured 77 s at n = 40 000.)
@@ -239,43 +239,12 @@ def _symmetric_inertia(A: sp.spmatrix, order: np.ndarray | None = None) -> tuple
     return int(neg), int(zero), int(pos)
 
 
-def equilibrated_entries(A: sp.csr_matrix, order: np.ndarray
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nonzero entries ``(rows, columns, values)`` of ``P D A D P^T``, ``D`` Ruiz's scaling.
-
-    Ruiz equilibration (8 sweeps; a congruence: inertia unchanged) balances
-    the stiff bending rows against the constraint rows of a KKT matrix;
-    ``P`` puts row ``order[k]`` at ``k``. The scaled entries are
-    ``(d_i a_ij) d_j``, the products ``diag(d) @ A @ diag(d)`` of
-    scipy.sparse form (which drop exact zeros), so the inertia is the same bit
-    for bit as with them; formed on the entry arrays they cost a tenth.
-    """
-    A = sp.csr_matrix(A, dtype=float, copy=True)
-    A.sum_duplicates()
-    n = A.shape[0]
-    row = np.repeat(np.arange(n), np.diff(A.indptr))
-    col, data = A.indices, A.data
-    d = np.ones(n)
-    filled = np.diff(A.indptr) > 0
-    starts = A.indptr[:-1][filled]
-    for _ in range(8):
-        row_max = np.zeros(n)
-        if data.size:
-            row_max[filled] = np.maximum.reduceat(np.abs((d[row] * data) * d[col]), starts)
-        d = d / np.sqrt(np.where(row_max > 0, row_max, 1.0))
-    values = (d[row] * data) * d[col]
-    stored = values != 0.0
-    position = np.empty(n, dtype=np.int64)
-    position[np.asarray(order, dtype=np.int64)] = np.arange(n)
-    return position[row[stored]], position[col[stored]], values[stored]
-
-
 @njit()
 def _equilibrated_blocks(indptr, indices, data, position):
     """The row blocks of :func:`_symmetric_inertia` from a csr matrix without
     duplicates, compiled: ``(blocks, s)``.
 
-    The entries are those of :func:`equilibrated_entries` (the same Ruiz sweeps,
+    The entries are those of the tests' ``equilibrated_entries`` (the same Ruiz sweeps,
     the same products ``(d_i a_ij) d_j`` in the same order, exact zeros dropped:
     the same bits), put by ``position`` (``position[order[k]] = k``) into
     ``blocks[k]`` of shape ``(s, 2 s)``, ``s = max(b, 16)`` for the half-bandwidth
@@ -309,56 +278,6 @@ def _equilibrated_blocks(indptr, indices, data, position):
             if value != 0.0 and col >= k * s:
                 blocks[k, row - k * s, col - k * s] = value
     return blocks, s
-
-
-def _block_inertia(blocks: np.ndarray, n: int, s: int) -> tuple[int, int, int]:
-    """Haynsworth's elimination (module doc) over the row blocks of a permuted matrix."""
-    neg = zero = pos = 0
-    start, stop = 0, min(s, n)
-    pending = blocks[0, :stop, :stop].copy()
-    carried = 0  # leading rows of ``pending`` that are carried near-null directions
-    while True:
-        values, vectors = np.linalg.eigh(pending)
-        if stop >= n:
-            neg += int(np.sum(values < 0))
-            pos += int(np.sum(values > 0))
-            zero += int(np.sum(values == 0))
-            return neg, zero, pos
-        biggest = float(np.max(np.abs(values))) if values.size else 0.0
-        small = np.abs(values) <= biggest / _MAX_CONDITION
-        if np.count_nonzero(small) > _MAX_CARRIED * s:
-            # keep only the smallest ones; the others are divided by (still >= round-off)
-            keep = np.argsort(np.abs(values))[: _MAX_CARRIED * s]
-            small = np.zeros_like(small)
-            small[keep] = True
-        nxt = min(stop + s, n)
-        k = start // s
-        coupling = np.zeros((pending.shape[0], nxt - stop))
-        coupling[carried:] = blocks[k, :stop - start, s:s + nxt - stop]
-        projected = vectors.T @ coupling
-        r = int(np.count_nonzero(small))
-        if r == 0:
-            # the usual block: every direction eliminated (the same products as
-            # below, without selecting all of them)
-            neg += int(np.count_nonzero(values < 0))
-            pos += int(np.count_nonzero(values > 0))
-            schur = blocks[k + 1, :nxt - stop, :nxt - stop] - projected.T @ (
-                projected / values[:, None])
-            pending, carried = 0.5 * (schur + schur.T), 0
-            start, stop = stop, nxt
-            continue
-        big = ~small
-        neg += int(np.sum(values[big] < 0))
-        pos += int(np.sum(values[big] > 0))
-        schur = blocks[k + 1, :nxt - stop, :nxt - stop] - projected[big].T @ (
-            projected[big] / values[big][:, None])
-        grown = np.zeros((r + nxt - stop, r + nxt - stop))
-        grown[:r, :r] = np.diag(values[small])
-        grown[:r, r:] = projected[small]
-        grown[r:, :r] = projected[small].T
-        grown[r:, r:] = 0.5 * (schur + schur.T)
-        pending, carried = grown, r
-        start, stop = stop, nxt
 
 
 @njit()
@@ -471,7 +390,7 @@ def _block_inertia_pivoted(blocks, n, s, max_condition, max_carried, min_pivot):
     """Haynsworth's elimination (module doc) with each pivot block first reduced by
     :func:`_partial_ldl`: pivots above ``min_pivot`` times the block's largest entry
     are eliminated by ``L D L^T``, the deferred rest ``R`` diagonalised by ``eigh``
-    and treated as :func:`_block_inertia` treats a whole block (eigen-directions
+    and treated as the eigh-only elimination (module doc) treats a whole block (eigen-directions
     with ``|mu| <= biggest / max_condition`` carried, ``biggest`` the largest
     pivot or eigenvalue magnitude of the congruent ``diag(D, R)``)."""
     neg = 0

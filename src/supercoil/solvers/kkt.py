@@ -7,7 +7,9 @@ The saddle-point matrix of an energy ``E`` with constraints ``c`` is
 with ``S`` sparse (banded for a rod) and a few dense rank-one terms
 (treated with the Woodbury identity in both parts below).
 
-Solves use SuperLU with partial pivoting on ``K`` (stable for saddle points).
+Solves use an LU with partial pivoting on ``K`` in a banded ordering (stable for
+saddle points): LAPACK's band LU where the ordered band is narrow, SuperLU
+where it is wider than a quarter of the matrix (see :class:`KKTFactor`).
 
 Inertia. ``L D L^T`` without pivoting breaks down on saddle-point matrices
 (element growth; measured wrong counts on a ring), and an augmented Hessian
@@ -251,7 +253,7 @@ def kkt_order(S: sp.spmatrix, J: sp.spmatrix) -> np.ndarray:
     scipy.sparse cost 0.6 ms of a 2 ms bordered factorisation at N = 100. A new
     pattern (the integral contact's pairs change: 200 of the tweezers' 1098 orderings
     at N = 100) is ordered from a compiled merge of the patterns
-    (:func:`_kkt_order_merged`, 0.1 ms against scipy's 0.4 ms, the same ordering).
+    (:func:`_kkt_order_merged`).
     """
     return remembered_order(S, J)[0]
 
@@ -465,9 +467,11 @@ def _kkt_order_merged(S: sp.spmatrix, J: sp.spmatrix, pairs: _GramPattern | None
     is not exactly zero. An entry of one or two terms has the same sum in any order
     (``0 + t1 + t2``): kept exactly when that is not 0. An entry of more terms must
     have ``|sum| > 1e-8 sum |terms|`` (then no order of summation gives 0), else None.
-    scipy's path spent 0.4 of its 0.41 ms forming that pattern (N = 100, a contact
-    state of the tweezers: 387 unknowns, 8451 entries of ``S``); the orderings of the
-    tweezers' contact branch are the same (tests).
+    The merge is 3 to 4 times faster than scipy's sums and products on the captured
+    KKT matrices of the N = 200 ring (``OPENBLAS_NUM_THREADS=1 python
+    benchmarks/bench_kkt_factor.py``), which spend most of their time forming that
+    pattern; it orders the tweezers' new contact patterns (about one factorisation in
+    five). :func:`_kkt_order_scipy` orders what the merge does not take.
     """
     if not (_is_canonical_float(S) and _is_canonical_float(J)) or S.shape[0] != S.shape[1] \
             or J.shape[1] != S.shape[0] or S.shape[0] >= 2**31 - 1:
@@ -486,8 +490,10 @@ def _kkt_order_merged(S: sp.spmatrix, J: sp.spmatrix, pairs: _GramPattern | None
     keys = pairs.slots[present]
     gram_indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(keys // n, minlength=n), out=gram_indptr[1:])
-    indptr, indices, _data = _merge_kernel(S.indptr, S.indices, np.abs(S.data), gram_indptr,
-                                           keys % n, np.ones(keys.size), n)
+    # the index dtypes of S (as csr_add's operands): one compiled specialisation
+    indptr, indices, _data = _merge_kernel(
+        S.indptr, S.indices, np.abs(S.data), gram_indptr.astype(S.indptr.dtype),
+        (keys % n).astype(S.indices.dtype), np.ones(keys.size), n)
     pattern = csr_from_arrays(np.ones(indices.size), indices.astype(np.int32),
                               indptr.astype(np.int32), (n, n), canonical=True)
     x_order = np.asarray(reverse_cuthill_mckee(pattern, symmetric_mode=True), dtype=np.int64)
@@ -745,12 +751,11 @@ class _BandLU:
 
     On the banded KKT ordering the two are the same elimination, rows pivoted
     within the band; solves agree to round-off (relative to the condition
-    number), not bit for bit. Measured at N = 200 on the ring's contact branch
-    (795 unknowns, half-bandwidths 43): 0.9 ms against 2.7 ms for
-    :class:`_OrderedLU`. :meth:`from_layout` (the factors' path) and :meth:`of` return
-    None (the caller takes SuperLU)
-    when the band is wider than a quarter of the matrix, as
-    :class:`~supercoil.continuation.bordered.BorderedFactor` does.
+    number), not bit for bit. The band LU is 2 to 10 times faster on the captured
+    KKT matrices of the N = 200 ring, with and without contact
+    (``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_kkt_factor.py``). :meth:`from_layout` and :meth:`of` return
+    None (the caller takes SuperLU) when the band is wider than a quarter of the
+    matrix, as :class:`~supercoil.continuation.bordered.BorderedFactor` does.
     """
 
     def __init__(self, order, lub, piv, kl, ku):
@@ -803,9 +808,8 @@ class KKTFactor:
     unknowns, ``jacobian`` is ``(m, n)``; ``shift`` and ``mass`` (diagonal,
     ``(n,)``) are for shift-invert eigenvalue computations; ``order`` reuses
     the :func:`kkt_order` of an earlier factor of the same pattern
-    (:attr:`order`); ``band`` factorises by LAPACK's band LU (:class:`_BandLU`:
-    solves equal to SuperLU's to round-off, three times faster on a ring's
-    contact states) when the ordered band is narrow, else by SuperLU. The inertia is
+    (:attr:`order`). The matrix is factorised by LAPACK's band LU (:class:`_BandLU`)
+    when the ordered band is narrow, else by SuperLU (:class:`_OrderedLU`). The inertia is
     computed on first use of :attr:`reduced_negative_count`, from the matrices given
     (referenced, not copied: a caller must not change their entries in place while
     it uses the factor; none in the package does). Dense rows of
@@ -818,8 +822,7 @@ class KKTFactor:
 
     def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix | None = None,
                  shift: float = 0.0, mass: np.ndarray | None = None,
-                 order: np.ndarray | None = None, band: bool = False):
-        self._band = band
+                 order: np.ndarray | None = None):
         S = hessian.sparse.tocsr()
         n = S.shape[0]
         if shift != 0.0:
@@ -851,13 +854,11 @@ class KKTFactor:
         self._order = kkt_order(S, J_factored) if order is None else order
         S, J_factored = canonical(S), canonical(J_factored)
         self._factored = (S, J_factored)
-        self._lu = None
-        if self._band:
-            # with the values: a straight rod stores zeros that couple far unknowns, whose
-            # stored band is too wide (SuperLU then) where its nonzero band is narrow
-            values = _kkt_values(S, J_factored)
-            layout = kkt_band_layout(S, J_factored, self._order, values=values)
-            self._lu = _BandLU.from_layout(self._order, layout, values)
+        # with the values: a straight rod stores zeros that couple far unknowns, whose
+        # stored band is too wide (SuperLU then) where its nonzero band is narrow
+        values = _kkt_values(S, J_factored)
+        layout = kkt_band_layout(S, J_factored, self._order, values=values)
+        self._lu = _BandLU.from_layout(self._order, layout, values)
         if self._lu is None:
             try:
                 self._lu = _OrderedLU(size, *_kkt_entries(S, J_factored), self._order)

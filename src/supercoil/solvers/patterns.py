@@ -170,48 +170,12 @@ def _is_canonical_csr(A) -> bool:
     return getattr(A, "format", None) == "csr" and A.has_canonical_format
 
 
-# The attributes scipy's csr_matrix sets from (data, indices, indptr) besides the arrays,
-# the shape and the (lazily computed) format flags; see csr_from_arrays.
-_CSR_ATTRIBUTES = {"data", "indices", "indptr", "_shape", "maxprint", "_has_canonical_format",
-                   "_has_sorted_indices"}
-_CSR_FLAGS = ("_has_canonical_format", "_has_sorted_indices")
-
-
-def _csr_template() -> dict | None:
-    """The attributes (beyond arrays, shape and flags) of a csr_matrix scipy made, or None
-    when scipy sets any attribute this module does not know (then scipy builds them)."""
-    made = sp.csr_matrix((np.zeros(1), np.zeros(1, dtype=np.int32),
-                          np.array([0, 1], dtype=np.int32)), shape=(1, 1))
-    if type(made) is not sp.csr_matrix or not set(vars(made)) <= _CSR_ATTRIBUTES:
-        return None
-    return {k: v for k, v in vars(made).items()
-            if k not in ("data", "indices", "indptr", "_shape") + _CSR_FLAGS}
-
-
-_TEMPLATE = _csr_template()
-
-
 def csr_from_arrays(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray,
                     shape: tuple[int, int], canonical: bool = False) -> sp.csr_matrix:
-    """``scipy.sparse.csr_matrix((data, indices, indptr), shape=shape)`` for arrays this
-    module (or a caller holding a fixed layout) guarantees to be valid CSR: float64
-    ``data``, int32 ``indices`` and ``indptr`` (the dtype scipy keeps; int64 ones, which
-    scipy narrows when they fit, go to scipy), ``indptr`` non-decreasing from 0 to
-    ``data.size``, indices in ``[0, shape[1])``. The object gets the attributes scipy gives it, without scipy's
-    index-dtype and format checks (9 µs a construction at N = 200, of which 7 µs are
-    the checks; some 10 000 constructions in the ring's diagram at N = 200). The
-    arrays are not copied (as scipy's ``copy=False``). ``canonical``: set the
-    canonical-format flag (sorted, no duplicates); otherwise scipy works it out when
-    asked, as for a matrix it made. Anything else goes to scipy's constructor."""
-    if _TEMPLATE is None or data.dtype != np.float64 or indices.dtype != np.int32 \
-            or indptr.dtype != np.int32 or indices.ndim != 1 \
-            or indptr.shape != (shape[0] + 1,) or max(shape) >= 2**31 - 1:
-        out = sp.csr_matrix((data, indices, indptr), shape=shape)
-    else:
-        out = sp.csr_matrix.__new__(sp.csr_matrix)
-        vars(out).update(_TEMPLATE)
-        out.data, out.indices, out.indptr = data, indices, indptr
-        out._shape = (int(shape[0]), int(shape[1]))
+    """``scipy.sparse.csr_matrix((data, indices, indptr), shape=shape)`` without copying the
+    arrays; ``canonical``: the caller guarantees sorted indices without duplicates, and
+    the matrix says so (``has_canonical_format``) without scipy checking every row."""
+    out = sp.csr_matrix((data, indices, indptr), shape=shape, copy=False)
     if canonical:
         out.has_canonical_format = True
     return out

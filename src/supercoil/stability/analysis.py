@@ -303,7 +303,7 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
 
 
 def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
-                  fast=False, factor_order=None):
+                  factor_order=None):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
@@ -316,13 +316,11 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
     an approximate symmetry does not: measured 3606 against the dense 3630 for
     the lowest eigenvalue on a contact branch at N = 200.)
 
-    ``fast``: the KKT factorisation by the band LU (``KKTFactor(band=True)``)
-    and Lanczos in ARPACK's standard mode on the symmetrically scaled operator
-    ``M^(1/2) (H - sigma M)^-1 M^(1/2)`` (constrained as above), whose
-    eigenvalues are ``1 / (mu - sigma)``: one callback per Lanczos step instead
-    of the generalised mode's two or three (measured at N = 200: 83 callbacks
-    per call, 22 of them solves). The same eigenpairs to round-off (``tol``).
-    ``factor_order``: the KKT factor's ordering (``KKTFactor(order=...)``), if known.
+    Lanczos runs in ARPACK's standard mode on the symmetrically scaled operator
+    ``M^(1/2) (H - sigma M)^-1 M^(1/2)`` (constrained as above), whose eigenvalues
+    are ``1 / (mu - sigma)``: one operator application per Lanczos step (the
+    generalised mode needs two or three). ``factor_order``: the KKT factor's
+    ordering (``KKTFactor(order=...)``), if known.
     """
     r = 0 if symmetry is None else symmetry.shape[1]
     dim = n - m - r
@@ -331,33 +329,22 @@ def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         return values[:k], vectors[:, :k]
     sigma = -1e-3
-    opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma, fast, factor_order)
-    if fast:
-        root = np.sqrt(mass)
-        scaled = spla.LinearOperator((n, n), matvec=lambda y: root * opinv(root * np.ravel(y)),
-                                     dtype=float)
-        rng = np.random.default_rng(12345)
-        y0 = root * opinv(mass * rng.standard_normal(n))  # M^(1/2) of the start below
-        # ncv: 12 Lanczos vectors (ARPACK's default 20) took 17 solves instead of 23
-        # per call at the ring's points (N = 200), about 10 % of the call, with
-        # the same eigenvalues to 2e-12 relative (docs/benchmarks.md, "Session 9")
-        nu, y = spla.eigsh(scaled, k=k, v0=y0, which="LM", tol=1e-12,
-                           ncv=min(n, max(2 * k + 1, 12)))
-        values, vectors = sigma + 1.0 / nu, y / root[:, None]
-        order = np.argsort(values)
-        return values[order], vectors[:, order]
-    Op = spla.LinearOperator((n, n), matvec=opinv, dtype=float)
-    A = spla.LinearOperator((n, n), matvec=H.matvec, dtype=float)
-    Mop = spla.LinearOperator((n, n), matvec=lambda x: mass * np.ravel(x), dtype=float)
+    opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma, factor_order)
+    root = np.sqrt(mass)
+    scaled = spla.LinearOperator((n, n), matvec=lambda y: root * opinv(root * np.ravel(y)),
+                                 dtype=float)
     rng = np.random.default_rng(12345)
-    v0 = opinv(mass * rng.standard_normal(n))
-    values, vectors = spla.eigsh(A, k=k, M=Mop, sigma=sigma, OPinv=Op, v0=v0, which="LM",
-                                 tol=1e-12)
+    y0 = root * opinv(mass * rng.standard_normal(n))  # M^(1/2) of a shift-inverted start
+    # ncv: 12 Lanczos vectors (ARPACK's default 20) took 17 solves instead of 23 per
+    # call at the ring's points (N = 200), with the same eigenvalues to 2e-12 relative
+    nu, y = spla.eigsh(scaled, k=k, v0=y0, which="LM", tol=1e-12,
+                       ncv=min(n, max(2 * k + 1, 12)))
+    values, vectors = sigma + 1.0 / nu, y / root[:, None]
     order = np.argsort(values)
     return values[order], vectors[:, order]
 
 
-def _constrained_shift_invert(H, J, mass, symmetry, sigma: float, band: bool = False,
+def _constrained_shift_invert(H, J, mass, symmetry, sigma: float,
                               order: np.ndarray | None = None):
     """``x -> v`` solving ``(H - sigma M) v + J^T a + M S b = x, J v = 0, S^T M v = 0``.
 
@@ -368,7 +355,7 @@ def _constrained_shift_invert(H, J, mass, symmetry, sigma: float, band: bool = F
     """
     n = mass.size
     m = J.shape[0] if J is not None else 0
-    factor = KKTFactor(H, J, shift=sigma, mass=mass, order=order, band=band)
+    factor = KKTFactor(H, J, shift=sigma, mass=mass, order=order)
     r = 0 if symmetry is None else symmetry.shape[1]
     if r:
         C = (mass[:, None] * symmetry).T  # (r, n)

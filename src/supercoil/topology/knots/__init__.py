@@ -15,7 +15,7 @@
 from supercoil.topology.knots.alexander import alexander_polynomial, knot_determinant
 from supercoil.topology.knots.builders import KNOT_CURVES, knot_curve, torus_knot
 from supercoil.topology.knots.diagram import Diagram
-from supercoil.topology.knots.identify import (
+from supercoil.topology.knots.knot_type import (
     KnotType,
     classify,
     identify,

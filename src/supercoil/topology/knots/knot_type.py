@@ -25,14 +25,15 @@ Naming:
   ``"5_1|10_132"`` (within the table: 5_1 and 10_132, 8_8 and 10_129, 8_16 and
   10_156, 10_25 and 10_56, 10_40 and 10_103; up to 8 crossings the Alexander
   polynomial alone separates every knot);
-* otherwise a connected sum of table knots: both polynomials are
-  multiplicative under ``#``, so products of table entries (either chirality)
-  are searched, ``"3_1#3_1"``; its ``chirality`` is the sign of the sum of its
-  factors' (the granny knot of two right-handed trefoils +1, the square knot
-  ``3_1 # mirror(3_1)`` 0: it is amphichiral), and :attr:`KnotType.factors`
-  gives each factor's;
-* ``None`` when nothing matches: a knot beyond the table, or a prime knot whose
-  polynomials are those of a sum.
+* a connected sum of table knots: both polynomials are multiplicative under
+  ``#``, so products of table entries (either chirality) are searched,
+  ``"3_1#3_1"``. Within the table one product has a prime knot's polynomials:
+  4_1 # 5_2 and 9_12, both named, ``"9_12|4_1#5_2"``. A sum's ``chirality``
+  is the sign of the sum of its factors' (the granny knot of two right-handed
+  trefoils +1, the square knot ``3_1 # mirror(3_1)`` 0: it is amphichiral), and
+  :attr:`KnotType.factors` gives each factor's; with several candidates
+  ``chirality`` is theirs if they agree, else 0;
+* ``None`` when nothing matches: a knot beyond the table and its sums.
 
 Prime knots of more than 10 crossings may share both polynomials with a table
 entry (the unknot's with none known: no non-trivial knot with ``V = 1`` is
@@ -41,6 +42,7 @@ known); such a knot is named as that entry.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass, field
 
@@ -49,7 +51,7 @@ from supercoil.topology.knots.diagram import Diagram
 from supercoil.topology.knots.jones import jones_polynomial
 from supercoil.topology.knots.polynomials import ONE, Laurent, divide, mirror
 from supercoil.topology.knots.projection import check_polygon, project
-from supercoil.topology.knots.table import KNOTS, TableKnot
+from supercoil.topology.knots.table import KNOTS, MAX_CROSSINGS, TableKnot
 
 Factors = tuple[tuple[str, int], ...]
 
@@ -118,6 +120,7 @@ _BY_ALEXANDER: dict[tuple[int, ...], list[TableKnot]] = {}
 for _knot in KNOTS:
     _BY_ALEXANDER.setdefault(_knot.alexander, []).append(_knot)
 _PRIMES = tuple(k for k in KNOTS if k.crossing_number > 0)
+_DETERMINANTS = tuple(knot_determinant(k.alexander) for k in _PRIMES)
 
 
 def _sums(alexander: Laurent, jones: Laurent, start: int, depth: int) -> list[Factors]:
@@ -128,9 +131,10 @@ def _sums(alexander: Laurent, jones: Laurent, start: int, depth: int) -> list[Fa
         return []
     found: list[Factors] = []
     width = len(alexander[1])
+    determinant = knot_determinant(alexander[1])  # multiplicative: factors' divide it
     for index in range(start, len(_PRIMES)):
         knot = _PRIMES[index]
-        if len(knot.alexander) > width:
+        if len(knot.alexander) > width or determinant % _DETERMINANTS[index]:
             continue
         rest_a = divide(alexander, (0, knot.alexander))
         if rest_a is None:
@@ -151,6 +155,19 @@ def _sums(alexander: Laurent, jones: Laurent, start: int, depth: int) -> list[Fa
 def classify(alexander: tuple[int, ...], jones: Laurent, crossings: int) -> KnotType:
     """Name a knot from its Alexander polynomial (normal form), Jones polynomial and the
     crossings of a diagram of it (module doc)."""
+    alexander = tuple(int(a) for a in alexander)
+    jones = (int(jones[0]), tuple(int(c) for c in jones[1]))
+    # prime candidates depend on the crossings only through the crossing-number filter
+    bound = min(int(crossings), MAX_CROSSINGS)
+    name, chirality, candidates = _named(alexander, jones, bound)
+    return KnotType(name=name, chirality=chirality, alexander=alexander,
+                    determinant=knot_determinant(alexander), jones=jones,
+                    candidates=candidates, crossings=int(crossings))
+
+
+@functools.lru_cache(maxsize=256)
+def _named(alexander: tuple[int, ...], jones: Laurent, crossings: int
+           ) -> tuple[str | None, int, tuple[Factors, ...]]:
     candidates: list[Factors] = []
     for knot in _BY_ALEXANDER.get(tuple(alexander), ()):
         if knot.crossing_number > crossings:
@@ -158,22 +175,17 @@ def classify(alexander: tuple[int, ...], jones: Laurent, crossings: int) -> Knot
         hand = _chirality_against(knot, jones)
         if hand is not None:
             candidates.append(((knot.name, hand),))
-    if not candidates:
-        sums = _sums((0, tuple(alexander)), jones, 0, _MAX_FACTORS)
-        unique = sorted(set(sums), key=lambda f: (
+    if len(alexander) > 1:  # the unknot is no sum
+        sums = {tuple(sorted(f, key=lambda x: (_ORDER[x[0]], -x[1])))
+                for f in _sums((0, tuple(alexander)), jones, 0, _MAX_FACTORS) if len(f) > 1}
+        candidates += sorted(sums, key=lambda f: (
             sum(int(name.split("_")[0]) for name, _ in f), [_ORDER[n] for n, _ in f]))
-        candidates = [f for f in unique if len(f) > 1]
     if not candidates:
-        name = None
-        chirality = 0
-    else:
-        names = list(dict.fromkeys("#".join(n for n, _ in f) for f in candidates))
-        name = "|".join(names)
-        hands = {_sign(sum(h for _, h in f)) for f in candidates}
-        chirality = hands.pop() if len(hands) == 1 else 0
-    return KnotType(name=name, chirality=chirality, alexander=tuple(alexander),
-                    determinant=knot_determinant(tuple(alexander)), jones=jones,
-                    candidates=tuple(candidates), crossings=crossings)
+        return None, 0, ()
+    names = list(dict.fromkeys("#".join(n for n, _ in f) for f in candidates))
+    hands = {_sign(sum(h for _, h in f)) for f in candidates}
+    chirality = hands.pop() if len(hands) == 1 else 0
+    return "|".join(names), chirality, tuple(candidates)
 
 
 _ORDER = {k.name: i for i, k in enumerate(KNOTS)}

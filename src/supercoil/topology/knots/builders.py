@@ -12,7 +12,10 @@
   5_1 = T(2, 5), 7_1 = T(2, 7), 8_19 = T(3, 4); 4_1 from the Fourier knot
   ``((2 + cos 2φ) cos 3φ, (2 + cos 2φ) sin 3φ, sin 4φ)`` (a Fourier knot:
   trigonometric polynomials in every coordinate); 5_2 from the Lissajous knot of frequencies
-  (3, 2, 7) and phases (0.7, 0.2, 0) (Bogle, Hearst, Jones & Stoilov 1994).
+  (3, 2, 7) and phases (0.7, 0.2, 0) (Bogle, Hearst, Jones & Stoilov 1994),
+  its coordinates scaled by (1, 1.5, 0.3): a linear map of positive determinant,
+  so the same knot, with its turns much less sharp (the largest turning angle
+  between chords at 300 nodes drops from about 1.2 to 0.36 rad).
   Every chiral knot is built in the table's chirality (the tests check it with
   the Jones polynomial, and with the sign of the writhe, positive for these
   positive knots); ``mirror=True`` reflects it ``z -> -z``.
@@ -62,13 +65,14 @@ def _figure_eight(phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return r, dr
 
 
-def _lissajous(frequencies, phases) -> Curve:
+def _lissajous(frequencies, phases, amplitudes=(1.0, 1.0, 1.0)) -> Curve:
     n = np.asarray(frequencies, dtype=float)
     ph = np.asarray(phases, dtype=float)
+    a = np.asarray(amplitudes, dtype=float)
 
     def curve(phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         arg = np.outer(phi, n) + ph
-        return np.cos(arg), -n * np.sin(arg)
+        return a * np.cos(arg), -a * n * np.sin(arg)
 
     return curve
 
@@ -84,7 +88,7 @@ KNOT_CURVES: dict[str, Curve] = {
     "3_1": torus_curve(2, 3),
     "4_1": _figure_eight,
     "5_1": torus_curve(2, 5),
-    "5_2": _lissajous((3, 2, 7), (0.7, 0.2, 0.0)),
+    "5_2": _lissajous((3, 2, 7), (0.7, 0.2, 0.0), amplitudes=(1.0, 1.5, 0.3)),
     "7_1": torus_curve(2, 7),
     "8_19": torus_curve(3, 4),
 }

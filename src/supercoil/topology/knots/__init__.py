@@ -15,6 +15,7 @@
 from supercoil.topology.knots.alexander import alexander_polynomial, knot_determinant
 from supercoil.topology.knots.builders import KNOT_CURVES, knot_curve, torus_knot
 from supercoil.topology.knots.diagram import Diagram
+from supercoil.topology.knots.jones import jones_polynomial
 from supercoil.topology.knots.knot_type import (
     KnotType,
     classify,
@@ -22,7 +23,6 @@ from supercoil.topology.knots.knot_type import (
     identify_diagram,
     simplified_diagram,
 )
-from supercoil.topology.knots.jones import jones_polynomial
 from supercoil.topology.knots.projection import project
 from supercoil.topology.knots.table import KNOTS, TableKnot
 

@@ -785,6 +785,10 @@ from supercoil.cli import view as _view_command
 _plot_command.register(app)
 _view_command.register(app)
 
+from supercoil.cli import knot as _knot_command
+
+_knot_command.register(app)
+
 from supercoil.cli.tweezers import tweezers as _tweezers_command
 
 app.command("tweezers")(_tweezers_command)

@@ -98,11 +98,11 @@ def test_toml_text_reads_back(study):
 BAD_TABLES = {
     "unknown key": ('"rod.twist_ration" = [0.5, 1.0]', "did you mean 'twist_ratio'"),
     "empty list": ('"problem.excess_link" = []', "list of values is empty"),
-    "zip of unequal lengths": ('"rod.twist_ratio" = [0.5, 1.0]\n"problem.excess_link" = [1, 2, 3]'
-                               '\nzip = [["rod.twist_ratio", "problem.excess_link"]]',
+    "zip of unequal lengths": (('"rod.twist_ratio" = [0.5, 1.0]\n"problem.excess_link" = '
+                                '[1, 2, 3]\nzip = [["rod.twist_ratio", "problem.excess_link"]]'),
                                "rod.twist_ratio has 2, problem.excess_link has 3 values"),
-    "zip of an unswept key": ('"rod.twist_ratio" = [0.5, 1.0]\n'
-                              'zip = [["rod.twist_ratio", "rod.nodes"]]',
+    "zip of an unswept key": (('"rod.twist_ratio" = [0.5, 1.0]\n'
+                               'zip = [["rod.twist_ratio", "rod.nodes"]]'),
                               "'rod.nodes' is not a swept key"),
     "value out of range": ('"rod.nodes" = [16, 4]', "[rod] nodes must be an integer from 8"),
     "range without num": ('"rod.twist_ratio" = {start = 0.5, stop = 1.0}', "num missing"),

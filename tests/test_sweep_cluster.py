@@ -25,12 +25,12 @@ import pytest
 pytest.importorskip("distributed")
 xr = pytest.importorskip("xarray")
 
-from supercoil import load  # noqa: E402
-from supercoil.cli.run import run_study  # noqa: E402
-from supercoil.io.study import parse_study  # noqa: E402
-from supercoil.sweeps.dataset import load_sweep  # noqa: E402
-from supercoil.sweeps.grid import load_sweep_study  # noqa: E402
-from supercoil.sweeps.summary import summarize  # noqa: E402
+from supercoil import load
+from supercoil.cli.run import run_study
+from supercoil.io.study import parse_study
+from supercoil.sweeps.dataset import load_sweep
+from supercoil.sweeps.grid import load_sweep_study
+from supercoil.sweeps.summary import summarize
 
 ROOT = Path(__file__).resolve().parents[1]
 TIMEOUT = 300

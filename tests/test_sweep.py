@@ -185,12 +185,7 @@ def test_dataset_cells_hold_their_tasks_and_read_back(tmp_path):
         load_sweep(tmp_path / "nowhere")
 
 
-def test_tweezers_summary(tmp_path):
-    from supercoil import load
-    from supercoil.cli.run import run_study
-    from supercoil.sweeps.summary import summarize
-
-    text = """
+TWEEZERS = """
 [rod]
 twist_ratio = 1.3333333333333333
 length_over_diameter = 20
@@ -202,15 +197,40 @@ turns = [0.0, 1.6]
 [outputs]
 figures = false
 json = false
+[sweep]
+"problem.tension" = [20.0]
 """
-    spec = parse_study(text, "t.toml")
-    assert run_study(spec, tmp_path)["status"] == "complete"
-    result = load(tmp_path / "result.h5")
-    s = summarize(result)
-    branches = {b.name: b for b in (result.branches.values() if isinstance(result.branches, dict)
-                                    else result.branches)}
-    straight = branches["straight"]
-    buckling = [p for p in straight.special_points if p.kind == "bifurcation"]
+
+
+@pytest.fixture(scope="module")
+def tweezers_sweep(tmp_path_factory):
+    """A one-task tweezers sweep run in this process: (folder, sweep, dataset, result)."""
+    from supercoil import load
+    from supercoil.cli.run import run_study
+    from supercoil.sweeps.summary import summarize
+
+    folder = tmp_path_factory.mktemp("tweezers")
+    sweep = parse_sweep_study(TWEEZERS, "t.toml")
+    (task,) = sweep.tasks
+    out = folder / "tasks" / task.key
+    out.mkdir(parents=True)
+    assert run_study(parse_study(task.text, "t.toml"), out)["status"] == "complete"
+    result = load(out / "result.h5")
+    outcome = {"status": "complete", "message": "", "values": summarize(result)}
+    write_dataset(build_dataset(sweep, {task.key: outcome}), folder / "sweep.nc")
+    return folder, sweep, load_sweep(folder), result
+
+
+def _branches(result) -> dict:
+    b = result.branches
+    return dict(b) if isinstance(b, dict) else {x.name: x for x in b}
+
+
+def test_tweezers_summary(tweezers_sweep):
+    _, _, dataset, result = tweezers_sweep
+    s = {name: dataset[name].values[0].item() for name in dataset.data_vars}
+    branches = _branches(result)
+    buckling = [p for p in branches["straight"].special_points if p.kind == "bifurcation"]
     assert s["buckling_turns"] == buckling[0].parameter
     assert s["straight.bifurcation"] == s["buckling_turns"]
     # at the buckling point the rod is still straight: extension = 1
@@ -221,5 +241,43 @@ json = false
     assert s["folds"] == sum(p.kind == "fold" for b in branches.values()
                              for p in b.special_points)
     assert s["first_contact_turns"] == s["buckled.contact_onset"]
-    assert s["buckled_contact.end.turns"] == 1.6 and s["buckled_contact.points"] == len(
-        branches["buckled_contact"])
+    assert s["buckled_contact.end.turns"] == 1.6
+    assert s["buckled_contact.points"] == len(branches["buckled_contact"])
+
+
+def test_sweep_figures_draw_the_stored_numbers(tweezers_sweep, tmp_path):
+    from supercoil.plotting.sweep import hat_curves_figure, map_figure, plot_sweep, sweep_kinds
+
+    folder, _, dataset, result = tweezers_sweep
+    assert sweep_kinds(dataset) == ("hat-curves", "map")
+    fig = hat_curves_figure(dataset, folder)
+    thin = [line for line in fig.axes[0].lines if line.get_linewidth() < 2]
+    branches = [b for b in _branches(result).values() if len(b)]
+    assert len(thin) == len(branches)
+    for line, branch in zip(thin, branches, strict=True):
+        np.testing.assert_array_equal(line.get_xdata(), branch.parameter_values)
+        np.testing.assert_array_equal(line.get_ydata(), branch.records["extension"])
+    fig = map_figure(dataset, "torque_plateau")
+    (line,) = fig.axes[0].lines
+    assert line.get_ydata()[0] == dataset["torque_plateau"].values[0]
+    with pytest.raises(ValueError, match="not a number of this sweep"):
+        map_figure(dataset, "status")
+    written = plot_sweep(folder, "hat-curves", tmp_path, ["png"])
+    assert [p.name for p in written] == ["hat_curves.png"] and written[0].stat().st_size > 0
+
+
+def test_map_of_two_dimensions_colours_each_cell():
+    from supercoil.plotting.sweep import map_figure
+
+    sweep = parse_sweep_study(sweep_text(
+        '"problem.excess_link" = [1.0, 2.0, 3.0]\n"rod.twist_ratio" = [0.5, 1.0]\n'))
+    outcomes = {t.key: {"status": "complete", "message": "",
+                        "values": {"writhe": 10 * t.index[0] + t.index[1]}}
+                for t in sweep.tasks[1:]}
+    dataset = build_dataset(sweep, outcomes)
+    fig = map_figure(dataset, "writhe")
+    mesh = fig.axes[0].collections[0]
+    cells = np.ma.masked_invalid(dataset["writhe"].values)
+    np.testing.assert_array_equal(np.ma.getmaskarray(mesh.get_array()).ravel(),
+                                  np.ma.getmaskarray(cells).ravel())
+    np.testing.assert_array_equal(mesh.get_array().compressed(), cells.compressed())

@@ -281,3 +281,28 @@ def test_map_of_two_dimensions_colours_each_cell():
     np.testing.assert_array_equal(np.ma.getmaskarray(mesh.get_array()).ravel(),
                                   np.ma.getmaskarray(cells).ravel())
     np.testing.assert_array_equal(mesh.get_array().compressed(), cells.compressed())
+
+
+def test_a_failing_task_is_an_outcome(tmp_path):
+    from supercoil.sweeps.driver import run_task, stored_outcome
+
+    outcome = run_task("0" * 16, "[rod]\nnodes = 3\n", "bad.toml", str(tmp_path / "t"))
+    assert outcome["status"] == "failed" and outcome["values"] == {}
+    assert outcome["message"].startswith("StudyError: bad.toml:") or "bad.toml" in outcome[
+        "message"]
+    assert stored_outcome(tmp_path / "t", "0" * 16) is None  # nothing to resume
+
+
+def test_the_command_exits_1_saying_how_many_failed(tmp_path, capsys, monkeypatch):
+    from supercoil.sweeps import driver
+
+    study = tmp_path / "s.toml"
+    study.write_text(sweep_text('"problem.excess_link" = [1.0, 2.0, 3.0]\n'), encoding="utf-8")
+
+    def fake(sweep, out, **kwargs):
+        return driver.SweepOutcome(Path(out) / "sweep.nc", 3, 3, 0, 2, False,
+                                   {"complete": 1, "failed": 1, "incomplete": 1})
+
+    monkeypatch.setattr(driver, "run_sweep", fake)
+    assert cli(["sweep", str(study), "--out", str(tmp_path / "o"), "-q"]) == 1
+    assert "2 of 3 tasks failed or stopped early" in capsys.readouterr().err

@@ -174,6 +174,7 @@ class SweepProgress:
 
     def __enter__(self):
         if self.live:
+            from rich.console import Console
             from rich.progress import (
                 BarColumn,
                 MofNCompleteColumn,
@@ -185,7 +186,8 @@ class SweepProgress:
             self._bar = Progress(TextColumn("tasks"), BarColumn(), MofNCompleteColumn(),
                                  TextColumn("{task.fields[running]} running, "
                                             "{task.fields[failed]} failed"),
-                                 TextColumn("time left"), TimeRemainingColumn())
+                                 TextColumn("time left"), TimeRemainingColumn(),
+                                 console=Console(stderr=True))
             self._bar.start()
         return self
 

@@ -212,8 +212,8 @@ def run_sweep(sweep, out: str | Path, *, workers: int | None = None,
     started = time.perf_counter()
     interrupted = False
     timings = {}
+    n_workers = None if scheduler is not None else max(1, min(workers or 1, len(todo)))
     if todo:
-        n_workers = None if scheduler is not None else max(1, min(workers or 1, len(todo)))
         token = _folder_token(out)
         with _client(n_workers, scheduler, retries) as client, client.as_current():
             futures = {}
@@ -246,7 +246,7 @@ def run_sweep(sweep, out: str | Path, *, workers: int | None = None,
                 client.cancel(list(pending))
     attrs = {"created": datetime.now(UTC).isoformat(timespec="seconds"),
              "host": socket.gethostname(),
-             "cluster": scheduler or f"LocalCluster, {workers or 1} worker(s)",
+             "cluster": scheduler or f"LocalCluster, {n_workers} worker(s)",
              "wall_seconds": round(time.perf_counter() - started, 3),
              "tasks_resumed": resumed, "task_timings": _json(timings)}
     from supercoil import __version__

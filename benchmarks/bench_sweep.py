@@ -27,8 +27,8 @@ FORCES = [5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0]
 
 def study_text() -> str:
     text = EXAMPLE.read_text(encoding="utf-8")
-    head, _ = text.split("[sweep]")
-    return head + f'[sweep]\n"problem.tension" = {FORCES}\n'
+    head, _ = text.split("\n[sweep]\n")
+    return head + f"\n[sweep]\n\"problem.tension\" = {FORCES}\n"
 
 
 def run(study: Path, out: Path, workers: int) -> float:

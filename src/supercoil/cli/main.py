@@ -798,9 +798,11 @@ app.command("tweezers")(_tweezers_command)
 
 from supercoil.cli import export as _export_command
 from supercoil.cli import run as _run_command
+from supercoil.cli import sweep as _sweep_command
 
 _run_command.register(app)
 _export_command.register(app)
+_sweep_command.register(app)
 
 
 def _single_threaded_blas() -> None:

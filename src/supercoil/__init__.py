@@ -42,6 +42,8 @@ from supercoil.continuation import (
 from supercoil.errors import InputError
 from supercoil.topology import linking_number, writhe
 from supercoil.topology import twist_from_frames as twist
+from supercoil.topology.knots import KnotType, knot_curve, torus_knot
+from supercoil.topology.knots import identify as knot_type
 from supercoil.units.dna import DNAPreset
 
 __all__ = [
@@ -58,6 +60,7 @@ __all__ = [
     "EquilibriumStatus",
     "ExactContact",
     "InputError",
+    "KnotType",
     "Penalty",
     "Ring",
     "Rod",
@@ -69,12 +72,15 @@ __all__ = [
     "__version__",
     "continuation",
     "equilibrium",
+    "knot_curve",
+    "knot_type",
     "linking_number",
     "load",
     "ring_diagram",
     "save",
     "stability",
     "switch_branch",
+    "torus_knot",
     "tweezers",
     "twist",
     "writhe",
@@ -85,8 +91,17 @@ def load(path):
     """Read a result -- ``result.h5``, or the output folder of any command that computes
     (``demo``, ``diagram ring``, ``tweezers``, ``run``, ``ring --out``) -- into a
     :class:`supercoil.io.store.Result`: ``.branches`` maps names to ``Branch`` objects,
-    with the settings, status and summary (see ``docs/results.md``). A damaged or
-    truncated file raises :class:`supercoil.errors.InputError`."""
+    with the settings, status and summary (see ``docs/results.md``). A sweep's folder
+    (``supercoil sweep``'s, holding ``sweep.nc``) or its ``sweep.nc`` is read as an
+    ``xarray.Dataset`` with one dimension per swept key. A damaged or truncated file
+    raises :class:`supercoil.errors.InputError`."""
+    from pathlib import Path
+
+    target = Path(path)
+    if target.suffix == ".nc" or (target / "sweep.nc").is_file():
+        from supercoil.sweeps import load_sweep
+
+        return load_sweep(target)
     from supercoil.io.store import load as _load
 
-    return _load(path)
+    return _load(target)

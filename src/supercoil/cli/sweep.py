@@ -78,7 +78,6 @@ def sweep_command(
     if resume and overwrite:
         fail("--resume and --overwrite exclude each other: --resume keeps DIR's tasks, "
              "--overwrite deletes them")
-    _check_extra()
     from supercoil.errors import InputError
     from supercoil.sweeps.grid import load_sweep_study
 
@@ -119,17 +118,6 @@ def sweep_command(
         warn(f"{outcome.failed} of {n_tasks} tasks failed or stopped early ({counts}); their "
              f"status and message are in {out / DATASET_NAME}")
         raise typer.Exit(EXIT_NOT_CONVERGED)
-
-
-def _check_extra() -> None:
-    """The sweep's optional dependencies (the ``sweep`` extra) are installed, or exit 2."""
-    import importlib.util
-
-    missing = [name for name in ("distributed", "xarray", "h5netcdf")
-               if importlib.util.find_spec(name) is None]
-    if missing:
-        fail(f"supercoil sweep needs {', '.join(missing)} (the 'sweep' extra): install them "
-             "with pip install 'supercoil[sweep]'")
 
 
 def _prepare_folder(out: Path, resume: bool, overwrite: bool) -> None:

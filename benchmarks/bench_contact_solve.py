@@ -31,7 +31,8 @@ def main(argv=None) -> int:
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args(argv)
 
-    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
     from supercoil.contact.solve import solve_contact
     from supercoil.problems.ring import twisted_circle_problem
     from supercoil.problems.ring_contact import perturb_along_lowest_mode

@@ -202,7 +202,8 @@ def hard_contact(base, q: np.ndarray, diameter: float, curve: str, attempts: int
     if ``minimise`` (asked only where the barrier's count is 0: a minimisation leaves a
     saddle), minimising; the mode that converged is returned with the result.
     """
-    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
     from supercoil.contact.solve import _active_set_loop, solve_contact
     from supercoil.solvers.newton import NewtonOptions
 
@@ -274,7 +275,8 @@ def check_state(branch, i: int, nodes: int,
     """The barrier and hard-contact counts and the checks of point ``i`` of ``branch`` (a
     ring of ``nodes`` nodes, C/A = 2/3; module docstring). The polygon's hard contact is
     tried only where the spline's is not solved (a line contact)."""
-    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
     from supercoil.problems.ring_branches import twisted_circle_problem
     from supercoil.stability.analysis import analyse
 

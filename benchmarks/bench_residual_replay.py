@@ -110,7 +110,7 @@ def replay(path: str, passes: int) -> None:
         system = pickle.loads(data["system"])
         problem = system.problem
         # memos whose layout a tree may have changed: recomputed at their first use
-        problem.__dict__.pop("_sample_memo", None)
+        problem.curve._sample_memo = None
         problem.base.__dict__.pop("_jacobian_layout", None)
         spent = {"residual": 0.0, "step_bound": 0.0}
         mismatches = 0

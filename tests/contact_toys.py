@@ -17,9 +17,10 @@ def assert_fresh_pair_state(problem, state: np.ndarray, cutoff: float, fast) -> 
     """``fast`` (a ``problem.pair_state(state, cutoff, ...)`` on the segments) equals a
     fresh broad phase and segment distances at ``state``, bit for bit: the oracle of
     the remembered neighbour lists."""
-    a, b = problem._endpoints(state)
-    cand = candidate_pairs(a, b, problem.s_start, problem.s_end, cutoff, problem.exclusion,
-                           period=problem.period)
+    curve = problem.curve
+    a, b = curve.endpoints(state)
+    cand = candidate_pairs(a, b, curve.s_start, curve.s_end, cutoff, curve.exclusion,
+                           period=curve.period)
     i, j = cand[:, 0], cand[:, 1]
     d, s, t = segment_distance(a[i], b[i], a[j], b[j])
     keep = d <= cutoff

@@ -368,7 +368,7 @@ CONTACT_KEYS = (
 def test_contact_help_states_the_library_defaults():
     """The help's treatments and tolerances are the library's (no copies of them)."""
     from supercoil.cli import main as cli_main
-    from supercoil.contact.problem import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
+    from supercoil.contact.options import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
 
     defaults = ContactOptions(diameter=1.0)
     help_text = " ".join(cli_main._contact_help().split())
@@ -462,7 +462,7 @@ def test_ring_with_contact_not_converged_exits_1_and_saves(runner, tmp_path, mon
     assert result.exit_code == 1
     assert "not converged" in result.stderr and str(target) in result.stderr
     data = json.loads(target.read_text())
-    from supercoil.contact.problem import DEFAULT_TREATMENT as DEFAULT_CONTACT_TREATMENT
+    from supercoil.contact.options import DEFAULT_TREATMENT as DEFAULT_CONTACT_TREATMENT
 
     assert data["converged"] is False
     assert data["contact_treatment"] == DEFAULT_CONTACT_TREATMENT

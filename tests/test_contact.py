@@ -7,7 +7,8 @@ import pytest
 from contact_toys import CrossedRods, assert_fresh_pair_state
 
 from supercoil.contact import potentials
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, PLACE_KEYS, contact_summary
 from supercoil.contact.solve import solve_contact
 from supercoil.solvers.newton import NewtonOptions
@@ -310,7 +311,7 @@ def test_a_state_that_changed_the_linking_number_is_refused():
     problem = ContactProblem(base, ContactOptions(diameter=0.005))
     assert problem.admissible(above.ravel())
     # the crossing change: carried and double-sum writhe differ by 2 turns
-    gap = problem.writhe_local(swapped.ravel()) - writhe(swapped)
+    gap = problem.base.writhe_local(swapped.ravel()) - writhe(swapped)
     assert abs(abs(gap) - 2.0) < 0.1
     assert not problem.admissible(swapped.ravel())
 
@@ -335,9 +336,9 @@ def test_pair_states_from_the_verlet_list_equal_a_new_broad_phase():
         x = x + scale * rng.standard_normal(x.shape)
         state = x.ravel()
         for cutoff in (D, 1.01 * D, D + 0.3 * D * rng.random(), 2.0 * D, 3.0 * D):
-            before = problem.__dict__.get("_verlet")
+            before = problem.curve._verlet
             fast = problem.pair_state(state, cutoff)
-            reused += problem.__dict__.get("_verlet") is before
+            reused += problem.curve._verlet is before
             assert_fresh_pair_state(problem, state, cutoff, fast)
     assert reused > 100  # the list did serve most states
 

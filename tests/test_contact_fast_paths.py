@@ -1,11 +1,11 @@
-"""Fast paths of ContactProblem against the code they replaced (session assembly9).
+"""Fast paths of ContactProblem against the code they replaced.
 
 * ``step_bound`` asks the segments' pair state at ``D/2 + 2.5 s`` (``s`` the step's
   largest node displacement) instead of ``D + 2.5 s`` when the threshold is
   ``min(0.9 d0, max(0.1 d0, D/2))``, and the sample points' state first; against
   the former code (copied below, on a fresh problem: a new broad phase for every
   pair state): the same bound, bit for bit, for steps from 0.03 to 3 edge lengths.
-* ``_candidates`` serves cutoffs above ``2 D`` from the last wide broad phase
+* ``ContactCurve._candidates`` serves cutoffs above ``2 D`` from the last wide broad phase
   (``_verlet_wide``) while no node has moved enough: against a new broad phase, the
   same pairs, distances and feet, bit for bit.
 * the sample points of the integral formulation are remembered per state: pair
@@ -20,7 +20,8 @@ from contact_toys import assert_fresh_pair_state, stadium_ring
 
 from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
 from supercoil.contact.integral import first_time_of_approach_samples
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 
 D = 0.02
 CHOICES = {
@@ -49,8 +50,8 @@ def _smooth_move(x, amplitude, rng):
 
 
 def _former_step_bound(problem: ContactProblem, q, dq) -> float:
-    """ContactProblem.step_bound before session assembly9 (pair states at ``D + 2.5 s``,
-    the segments' first), on a fresh problem (no remembered state or neighbour list)."""
+    """The former ContactProblem.step_bound (pair states at ``D + 2.5 s``, the segments'
+    first), on a fresh problem (no remembered state or neighbour list)."""
     self = ContactProblem(problem.base, problem.options)
     x0 = np.asarray(q, dtype=float).reshape(-1, 3)
     dx = np.asarray(dq, dtype=float).reshape(-1, 3)
@@ -68,19 +69,19 @@ def _former_step_bound(problem: ContactProblem, q, dq) -> float:
             threshold = D + 0.1 * np.maximum(d0 - D, 0.0)
         else:
             threshold = np.minimum(0.9 * d0, np.maximum(0.1 * d0, 0.5 * D))
-        t_hit, _k = first_time_of_approach(x0, cap * dx, self._pair_nodes(st.pairs), threshold)
+        t_hit, _k = first_time_of_approach(x0, cap * dx, self.curve.pair_nodes(st.pairs), threshold)
     if self.integral and self.treatment == "barrier":
         st = self.pair_state(q, reach)
         if len(st.pairs):
             gap = float(np.min(st.distance)) - D
             t_hit = min(t_hit, first_time_of_approach_samples(
-                x0, cap * dx, self.sample_stencil, self.sample_weights, st.pairs,
+                x0, cap * dx, self.curve.sample_stencil, self.curve.sample_weights, st.pairs,
                 D + 0.1 * max(gap, 0.0)))
     elif self.spline and self.treatment == "barrier":
         st = self.pair_state(q, reach, shadows=True)
         if len(st.pairs):
-            nodes = self.pieces.stencil[st.pairs].reshape(-1, 8)
-            pieces = (self.pieces.control[st.pairs], self.pieces.coefficients[st.pairs])
+            nodes = self.curve.pieces.stencil[st.pairs].reshape(-1, 8)
+            pieces = (self.curve.pieces.control[st.pairs], self.curve.pieces.coefficients[st.pairs])
             t_spline, _k = first_time_of_approach_pieces(
                 x0[nodes], cap * dx[nodes], pieces, D + 0.1 * np.maximum(st.distance - D, 0.0))
             t_hit = min(t_hit, t_spline)
@@ -124,9 +125,9 @@ def test_wide_cutoffs_from_the_last_wide_broad_phase_equal_a_new_one(name):
         x = _smooth_move(x if state % 6 else x0, D * (0.5 if state % 6 == 5 else 0.01), rng)
         q = x.ravel()
         for cutoff in (3.5 * D, 2.2 * D, 3.0 * D, 1.01 * D, 2.5 * D, 6.0 * D):
-            before = problem.__dict__.get("_verlet_wide")
+            before = problem.curve._verlet_wide
             fast = problem.pair_state(q, cutoff, polygon=True)
-            served += problem.__dict__.get("_verlet_wide") is before and cutoff > 2 * D
+            served += problem.curve._verlet_wide is before and cutoff > 2 * D
             assert_fresh_pair_state(problem, q, cutoff, fast)
             if problem.integral:  # the sample points' state against a fresh problem
                 fresh = ContactProblem(problem.base, problem.options)
@@ -186,7 +187,7 @@ def test_min_distance_from_remembered_states_equals_the_search(name):
         problem.gradient(q)
         problem.step_bound(q, 0.3 * problem.edge_length * rng.standard_normal(q.size))
         for polygon in (False, True):
-            answered += problem._remembered_min_distance(q, polygon) is not None
+            answered += problem.curve.remembered_min_distance(q, polygon) is not None
             fresh = ContactProblem(rod, problem.options)
             assert problem.min_distance(q, polygon) == fresh.min_distance(q, polygon)
     assert answered >= 6

@@ -26,7 +26,8 @@ from supercoil.contact.integral import (
     sample_parameters,
     spline_weights,
 )
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import contact_summary
 from supercoil.contact.solve import solve_contact
 from supercoil.contact.spline_distance import CurvePieces, bspline_pieces, piece_distance

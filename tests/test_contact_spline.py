@@ -254,7 +254,8 @@ def test_phase_ripple_order(curve):
 def _crossed_spline(treatment, **kw):
     from contact_toys import CrossedRods
 
-    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
 
     toy = CrossedRods(load=2.0)
     options = ContactOptions(diameter=0.05, treatment=treatment, curve="spline", **kw)
@@ -262,7 +263,7 @@ def _crossed_spline(treatment, **kw):
 
 
 def test_contact_curve_option_is_validated():
-    from supercoil.contact.problem import ContactOptions
+    from supercoil.contact.options import ContactOptions
 
     assert ContactOptions(diameter=0.1).curve == "polygon"
     with pytest.raises(ValueError, match="curve .* must be one of polygon, spline"):

@@ -249,7 +249,8 @@ def test_rephase_anchors_the_integral_condition_at_the_previous_point():
     satisfies the phase condition of the point before it, ``<M g(q_{k-1}), q_k - q_{k-1}>
     = 0`` on the free DOFs; and the gauge does not change the physics: the writhe of the
     contact-free alpha branch as a function of the excess link is the node gauge's."""
-    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
     from supercoil.problems.ring_branches import twisted_circle_problem
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
     from supercoil.solvers.problem import free_dofs

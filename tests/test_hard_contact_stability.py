@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 from scipy.linalg import eigh, null_space
 
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.contact.solve import _independent_pairs, solve_contact
 from supercoil.contact.spline_distance import local_minimum_pairs
 from supercoil.problems.ring_branches import ring_records, twisted_circle_problem

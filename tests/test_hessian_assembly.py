@@ -23,7 +23,8 @@ import scipy.sparse as sp
 from contact_toys import stadium_ring
 
 from supercoil.contact.integral import _psi, integral_terms, polygon_weights, spline_weights
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.contact.spline_distance import bspline_pieces
 from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.solvers.patterns import block_csr, csr_add, csr_add_blocks, csr_restrict

@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.geometry.curves import circle
 from supercoil.rod.closed import ClosedRodEnergy, Rod

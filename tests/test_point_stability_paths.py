@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from scipy.linalg import null_space
 
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.continuation.options import ContinuationOptions
 from supercoil.continuation.pseudo_arclength import branch_phase_modes
 from supercoil.continuation.stability import (

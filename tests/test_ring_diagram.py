@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from supercoil.cli.main import run
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import consistency_check
 from supercoil.io.store import load, save
 from supercoil.problems.ring_branches import twisted_circle_problem

@@ -66,7 +66,8 @@ def test_contact_lists_are_those_of_the_stored_states(folder):
     """Oracle: contact_summary of each saved state of the contact branch, recomputed
     here; branch.json's lists are made while the figures are drawn (the tubes' states
     before), and they must be the same, entry for entry."""
-    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
     from supercoil.contact.report import contact_summary
     from supercoil.problems.tweezers import TweezersOptions, clamped_problem
 

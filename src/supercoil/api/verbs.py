@@ -103,7 +103,8 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
 
 def _ring_energy(problem: Ring, points: np.ndarray):
     """The numerical problem of ``problem`` at the state ``points`` (its stability view)."""
-    from supercoil.contact.problem import ContactOptions, ContactProblem
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
     from supercoil.rod.closed import ClosedRodEnergy
     from supercoil.rod.closed import Rod as RodModel
 

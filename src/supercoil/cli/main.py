@@ -33,7 +33,7 @@ from supercoil.cli._common import (
     warning_in,
     write_json_or_fail,
 )
-from supercoil.contact.problem import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
+from supercoil.contact.options import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
 from supercoil.errors import InputError
 from supercoil.problems.ring_diagram import CONTINUATION_TREATMENTS, MAX_MODE
 from supercoil.units.dna import (
@@ -472,7 +472,7 @@ def ring(
         tolerances = {"newton_residual": NEWTON_TOLERANCE, "zero_modes": result.zero_tolerance}
         treatment_name = "none"
         if length_over_diameter is not None:
-            from supercoil.contact.problem import ContactOptions
+            from supercoil.contact.options import ContactOptions
 
             treatment_name = treatment
             payload["initial_curve"] = None if initial is None else str(initial)

@@ -426,7 +426,7 @@ def _run_ring(spec, writer, progress) -> dict:
                      f"{problem['excess_link']:.6g}, N = {rod['nodes']}")
     tolerances = {"newton_residual": NEWTON_TOLERANCE}
     if "length_over_diameter" in rod:
-        from supercoil.contact.problem import ContactOptions
+        from supercoil.contact.options import ContactOptions
         from supercoil.problems.ring_contact import solve_supercoiled_ring
 
         result = solve_supercoiled_ring(rod["twist_ratio"], problem["excess_link"],

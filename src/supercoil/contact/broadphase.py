@@ -568,7 +568,7 @@ def verlet_displacement(x: np.ndarray, x_ref: np.ndarray) -> tuple[float, float]
     """``(max |x|, largest node displacement |x_k - x_ref_k|)`` of nodes ``(n, 3)`` (n >= 1),
     the values of ``np.max(np.abs(x))`` and ``sqrt(max(sum((x - x_ref)**2, axis=1)))``
     (nan if some coordinate is nan), in one compiled call: a Verlet list's test of
-    whether it still holds (``ContactProblem._candidates``, some 3000 calls on the
+    whether it still holds (``ContactCurve._candidates``, some 3000 calls on the
     tweezers' contact branch, 12 us each as numpy reductions at N = 100)."""
     # writable arrays (a copy of a read-only one): one compiled specialisation
     return _displacement_kernel(np.require(x, np.float64, "CW"),

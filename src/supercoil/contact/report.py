@@ -1,7 +1,7 @@
 """Contact output of a state: touching pairs, contact points and contact intervals.
 
-Conventions (DESIGN.md): arc-length positions are fractions of L, forces are
-F·L²/A. ``contacts`` lists every touching segment pair as ``{s1, s2, force}``
+Conventions (docs/model.md, "Contacts in the output"): arc-length positions
+are fractions of L, forces are F·L²/A. ``contacts`` lists every touching segment pair as ``{s1, s2, force}``
 with ``s1 < s2``; pairs whose closest points coincide (both segments of a
 joint touching at the same node) are merged and their forces added.
 
@@ -19,7 +19,7 @@ segments). A contact is an unordered pair of positions, so each is linked in
 both orientations (across the seam s = 0 of a closed rod the order of its two
 positions flips); chains are the connected groups, read in one orientation.
 A chain that extends over more than two segment lengths on either strand is a
-contact interval (a line contact, seed 001's "contact line"):
+contact interval (a line contact, the "contact line" of Coleman & Swigon 2002):
 ``{s1_start, s1_end, s2_start, s2_end, force_per_length}`` (strand 1 is the
 one that starts first; on a closed rod an interval across the seam has
 ``start > end``) with the force per length =
@@ -27,7 +27,7 @@ total force / (extent + one segment length), the length the chain's contacts
 stand for. Any other chain is an isolated contact point ``{s1, s2, force}`` at
 the force-weighted mean position with the total force (a point contact is
 spread over one or two segment pairs by the discretisation). This is the data
-of seed 001's Figure 4.
+of Figure 4 of Coleman & Swigon 2002.
 """
 
 from __future__ import annotations
@@ -77,9 +77,8 @@ def _close_pairs(points: np.ndarray, reach: float, periodic: bool) -> list[tuple
     Up to ``TREE_ABOVE_POINTS`` points every pair is tested (numpy), beyond a
     `scipy.spatial.cKDTree` is asked (``query_pairs`` with ``p = inf`` and
     ``boxsize = 1``): the same pairs. A continuation point on a contact branch has a
-    few tens of contacts (twice as many points), and ``scipy.spatial`` took about
-    0.05 s of every command's start to import (docs/benchmarks.md, "Session 10
-    (fixed10)").
+    few tens of contacts (twice as many points), and ``scipy.spatial`` is imported
+    only when needed.
     """
     n = len(points)
     wrapped = np.mod(points, 1.0) if periodic else np.asarray(points, dtype=float)
@@ -154,7 +153,7 @@ def group_contacts(s1: np.ndarray, s2: np.ndarray, force: np.ndarray, spacing: f
 def contact_summary(problem: ContactProblem, q: np.ndarray,
                     multipliers: np.ndarray | None = None,
                     keys: Sequence[str] | None = None) -> dict:
-    """The contact keys of DESIGN.md for the state ``q`` (see the module docstring);
+    """The contact keys (docs/model.md, "Contacts in the output") for the state ``q``;
     with ``keys``, only those (a caller after the counts need not copy the list of
     every touching pair, ``contacts``: hundreds of entries on an interval contact).
 
@@ -169,8 +168,8 @@ def contact_summary(problem: ContactProblem, q: np.ndarray,
            None if multipliers is None else
            np.ascontiguousarray(multipliers, dtype=np.float64).tobytes(),
            problem.treatment, float(problem.stiffness), float(problem.diameter),
-           float(problem.exclusion))
-    memo = problem.__dict__.setdefault("_summary_memo", {})
+           float(problem.curve.exclusion))
+    memo = problem.summary_memo
     found = memo.get(key)
     if found is None:
         found = _contact_summary(problem, q, multipliers)
@@ -203,7 +202,7 @@ def _contact_summary(problem: ContactProblem, q: np.ndarray,
     contacts = [{"s1": a, "s2": b, "force": f} for (a, b), f in sorted(merged.items())]
     forces = np.array([c["force"] for c in contacts])
     largest = float(np.max(np.abs(forces))) if forces.size else 0.0
-    # Contact forces push apart (seed 001, eq. 10): a pulling one (possible
+    # Contact forces push apart (Coleman & Swigon 2002, eq. 10): a pulling one (possible
     # only for the exact treatment's multipliers) is not an admissible
     # equilibrium and is flagged, never dropped.
     negative = int(np.sum(forces < -problem.options.force_tolerance * max(1.0, largest)))

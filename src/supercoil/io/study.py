@@ -478,7 +478,7 @@ def _check_ring(rod: Mapping, problem: Mapping) -> None:
 
     check_ring_inputs(rod["twist_ratio"], problem["excess_link"], rod["nodes"])
     if "length_over_diameter" in rod:
-        from supercoil.contact.problem import TREATMENTS
+        from supercoil.contact.options import TREATMENTS
         from supercoil.problems.ring_contact import validate_diameter
 
         validate_diameter(rod["length_over_diameter"])

@@ -153,7 +153,7 @@ def ring_result(problem, q: np.ndarray, multipliers: np.ndarray, stab, *, conver
                 zero_tolerance: float, **extra) -> RingResult:
     """Assemble a :class:`RingResult`: topology from independent double sums and frames.
 
-    ``problem`` is a :class:`ClosedRodEnergy` (or a wrapper forwarding to one).
+    ``problem`` is the :class:`ClosedRodEnergy` (of a contact problem, its ``base``).
     """
     rod = problem.rod
     twist_ratio, excess_link, n_nodes = rod.twist_ratio, problem.excess_link, rod.n_nodes

@@ -22,12 +22,8 @@ import math
 import numpy as np
 
 from supercoil import checks
-from supercoil.contact.problem import (
-    DEFAULT_TREATMENT,
-    TREATMENTS,
-    ContactOptions,
-    ContactProblem,
-)
+from supercoil.contact.options import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import contact_summary
 from supercoil.contact.solve import solve_contact
 from supercoil.geometry.curves import resample_closed
@@ -191,7 +187,7 @@ def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_d
                     "negative: not an admissible equilibrium")
     if not res.admissible:
         message += "; warning: the state is not admissible (penetration beyond tolerance)"
-    result = ring_result(problem, res.q, res.multipliers, stab,
+    result = ring_result(problem.base, res.q, res.multipliers, stab,
                          converged=(res.converged and res.admissible
                                     and not contact["negative_contact_forces"]),
                          status=res.status,

@@ -135,12 +135,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from supercoil import checks
-from supercoil.contact.problem import (
-    DEFAULT_TREATMENT,
-    ContactOptions,
-    ContactProblem,
-    validate_contact_choice,
-)
+from supercoil.contact.options import DEFAULT_TREATMENT, ContactOptions, validate_contact_choice
+from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, PLACE_KEYS, contact_summary
 from supercoil.continuation import (
     Branch,
@@ -837,7 +833,7 @@ def _contact_branch(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
     "Rigid pins"), and its pins (:attr:`RingDiagram.pins`); the ring's construction pins
     are restored afterwards."""
     rod = cp.base
-    records = _contact_records(cp, ring_records(cp), free=False)
+    records = _contact_records(cp, ring_records(cp.base), free=False)
     events = (contact_count_event(cp),)
     first_opts = dataclasses.replace(options, max_points=min(CONTACT_SEGMENT_POINTS,
                                                              options.max_points))

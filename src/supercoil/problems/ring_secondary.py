@@ -131,7 +131,7 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
         return diagram
     D = opts.diameter
     base = _options(opts, max_points)
-    records = _contact_records(cp, ring_records(cp), free=False)
+    records = _contact_records(cp, ring_records(cp.base), free=False)
     added = 0
     # families: name stem -> branches of that family, one generation at a time
     families = []
@@ -224,7 +224,7 @@ def follow_bifurcating_branch(diagram, parent: Branch, point: SpecialPoint, side
         raise ValueError(f"side must be +1 or -1, got {side!r}")
     D = diagram.options.diameter
     label = name or f"{parent.name}/{point.kind}{point.index}{'+' if side > 0 else '-'}"
-    records = _contact_records(cp, ring_records(cp), free=False)
+    records = _contact_records(cp, ring_records(cp.base), free=False)
     branch = _switch(cp, parent, point, _options(diagram.options, max_points), side, label,
                      records, contact_count_event(cp), None, D)
     if branch is None:

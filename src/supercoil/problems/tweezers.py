@@ -62,7 +62,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from supercoil import checks
-from supercoil.contact.problem import ContactOptions, ContactProblem, validate_contact_choice
+from supercoil.contact.options import ContactOptions, validate_contact_choice
+from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, contact_summary
 from supercoil.continuation import (
     Branch,

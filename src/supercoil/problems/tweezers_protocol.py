@@ -33,7 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from supercoil import checks
-from supercoil.contact.problem import ContactOptions, ContactProblem
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.contact.solve import solve_contact
 from supercoil.problems.tweezers import (
     TweezersOptions,

@@ -11,7 +11,7 @@ raised by ``--step`` (0.02 turns by default) and the equilibrium is solved
 again from the previous one with :func:`supercoil.contact.solve.solve_contact`
 (Newton with the collision guard), as a continuation step would; the best and
 the median of ``--repeat`` such steps are reported (each from the same
-starting state), warm. Target (issue 3): at most 0.1 s at N = 200.
+starting state), warm. Target: at most 0.1 s at N = 200.
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def main(argv=None) -> int:
           f"{min(times):.3f} | {statistics.median(times):.3f} |")
     target = 0.1
     verdict = "meets" if statistics.median(times) <= target else "misses"
-    print(f"median {verdict} the {target} s target (N = 200 in issue 3)")
+    print(f"median {verdict} the {target} s target (at N = 200)")
     return 0
 
 

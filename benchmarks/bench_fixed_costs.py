@@ -1,4 +1,5 @@
-"""Fixed costs of ``supercoil tweezers`` (issue 5's command at N = 100), each part alone.
+"""Fixed costs of ``supercoil tweezers`` (the tweezers benchmark's command at N = 100), each
+part alone.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_fixed_costs.py PART [--against SRC]
 [--repeat K]`` with PART one of

@@ -1,4 +1,4 @@
-"""The fused contact kernels (session residual13) against the numpy steps they replaced.
+"""The fused contact kernels against the numpy steps they replaced.
 
 Each compiled call returns what a chain of numba calls and numpy steps returned
 before; the oracle is that chain, and the values must agree bit for bit:

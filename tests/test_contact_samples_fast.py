@@ -130,8 +130,8 @@ def test_sample_collision_time_matches_the_vectorised_quadratic(seed):
 
 
 def _former_hessian_loop(x, stencil, weights, pairs, diameter, stiffness, activation, scale):
-    """The pair Hessians of _integral_kernel (barrier) by its former loop nest (session
-    assembly9 reordered it), in plain Python: the same terms in the same order."""
+    """The pair Hessians of _integral_kernel (barrier) by its former loop nest, in plain
+    Python: the same terms in the same order."""
     from supercoil.contact.integral import _psi
 
     psi = _psi.py_func

@@ -1,4 +1,4 @@
-"""The rod's fused kernels (session residual13) against the steps they replaced.
+"""The rod's fused kernels against the steps they replaced.
 
 * ``kernels.gradient_terms``: the bending and reference-twist gradients of
   ``bending_terms`` / ``twist_terms`` at order 1 on ``q[dofs]``, scattered with

@@ -607,7 +607,7 @@ def test_tweezers_study():
     assert opts.free_max_step == 0.1  # TweezersOptions' default
     from supercoil.problems.tweezers import TweezersOptions
 
-    # runs as long as the library's (the pin is checked at every point since session 9)
+    # runs as long as the library's (the pin is checked at every point)
     assert opts.segment_points == TweezersOptions.segment_points == 2000
     assert study.settings["continuation"]["max_points"] == 400
     for edit, words in [

@@ -1,6 +1,6 @@
 """``supercoil view``: one self-contained HTML page, tested in a real headless browser.
 
-The browser is Debian's chromium. When it is missing, the session fixture
+The browser is Debian's chromium. When it is missing, the ``browser`` fixture
 installs it with apt-get (CI runs as root); the browser tests are skipped
 only where that is impossible (not root, no apt-get), and never under CI.
 """
@@ -55,7 +55,7 @@ def _install_chromium() -> str:
     return ""
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser() -> str:
     path = _find_browser()
     why = ""

@@ -3,8 +3,8 @@
 A rod is a tube of diameter ``D`` around a polygonal centreline. Self-contact
 needs the pairs of segments ``(i, j)`` whose distance is at most a cutoff
 (``D`` plus a margin) and that lie far enough apart *along the rod* (the
-arc-length neighbour exclusion; seed 001 excludes points closer than about
-``πD/2`` along the rod, which can never touch without a kink). The narrow phase
+arc-length neighbour exclusion; Coleman & Swigon 2002 exclude points closer
+than about ``πD/2`` along the rod, which can never touch without a kink). The narrow phase
 (`supercoil.contact.distance.segment_distance`) then measures the candidates.
 
 Segments are described generically, so closed rods, open rods and rods whose
@@ -53,52 +53,33 @@ Why blocks. When the cutoff is many segment lengths (a tube of diameter ``D``
 resolved by ``h ≪ D``), most pairs within the cutoff are neighbours along the
 rod that the exclusion drops. On the plectonemic ring of
 ``benchmarks/bench_contact.py`` at N = 10000 (``D/h ≈ 95``), a tree on the
-segment midpoints (``query_pairs`` with radius ``cutoff + 2 max(r)``) returns
-1.27 million pairs of which 0.28 million are kept; blocks drop the neighbours
-a block at a time before any segment pair is formed. Medians of warm calls,
-measured while writing this module on the machine of docs/benchmarks.md: 61,
-8.4, 7.1 and 7.3 ms with blocks of 1 (the plain tree), 4, 8 and 12 segments at
-N = 10000; 7.8, 2.4, 2.0 ms (1, 4, 8) at N = 3000; 1.5, 0.6, 0.6 ms at
-N = 1000. Blocks of 8 were also the fastest, or within 15 % of it, on a
-random walk and a tight helix of 10000 nodes. With blocks of 4 at
-N = 10000, the call took 20 ms with the exact tests as numpy expressions over
-the expanded pairs (about twenty passes over 0.5 million pairs) and 8.3 ms
-with the compiled loop. A block is
-only compact if consecutive arc lengths are close in space, as on any rod; a
-block much wider than the median (a gap in the data) is split into single
-segments.
+segment midpoints returns 1.27 million pairs of which 0.28 million are kept;
+blocks drop the neighbours a block at a time before any segment pair is formed,
+and blocks of 8 segments made the call several times faster than the plain tree
+there (and were the fastest, or within 15 % of it, on a random walk and a tight
+helix). A block is only compact if consecutive arc lengths are close in space,
+as on any rod; a block much wider than the median (a gap in the data) is split
+into single segments.
 
-Why a KD tree and not a cell list: a cell list in vectorised numpy (sort the
-midpoints by cell, match the ranges of the 13 neighbour cells of a half shell
-with ``searchsorted``, expand the pairs) returned the same pairs as
-``cKDTree.query_pairs`` for the same radius on that ring but took 2.6, 15 and
-135 ms at N = 1000, 3000 and 10000 against 0.25, 2.4 and 19 ms for the tree:
-the tree search is compiled C++, the cell list needs per-cell-pair
-temporaries. A compiled (numba) cell list was not tried: with the blocks, the
-tree query is 2 ms of the 7 ms call at N = 10000. The tree also needs no cell
-size. Its radius uses the largest
-block sphere, so one very long segment makes every query wider; rods with
-comparable segment lengths (every discretisation in this package) do not
-suffer from that.
+Why a KD tree and not a cell list: a cell list in vectorised numpy returned the
+same pairs but needs per-cell-pair temporaries and was an order of magnitude
+slower than the compiled tree search on that ring; the tree also needs no cell
+size. Its radius uses the largest block sphere, so one very long segment makes
+every query wider; rods with comparable segment lengths (every discretisation in
+this package) do not suffer from that.
 
 Small rods. Up to 32 blocks (256 segments) the block pairs are all tested at
 once in numpy instead (the same pairs: both keep a pair at most the radius
-apart). Measured on block centres along a random walk (best of 200 calls):
-9, 17, 47 us for 13, 25, 50 blocks against 14, 16, 20 us for the tree. The
-point is not the call but the import: ``scipy.spatial`` takes about 0.05 s
-to import (it brings ``scipy.special``), which every command paid at start,
-and a rod of 100 nodes (the tweezers benchmark) never needs it now
-(docs/benchmarks.md, "Session 10 (fixed10)"). Up to 128 segments the compiled exact
-tests run on all pairs without any prefilter (the same tests, so the same array):
-at the tweezers' contact states (N = 100, cutoffs 2-3 D, some 700 pairs kept) the
-call took 0.26 ms with the blocks' numpy steps and 0.1 ms so.
+apart), so that a small rod never imports ``scipy.spatial``. Up to 128 segments
+the compiled exact tests run on all pairs without any prefilter (the same tests,
+so the same array).
 
 Cost. The tree is O(N log N) to build and query plus the output. At a fixed
 geometry refined with N, the output itself grows faster than N: where two
 strands are in line contact (a plectoneme) the bounding test, which is ``h``
 wider than the cutoff, holds for O(sqrt(cutoff / h)) segments of the other
 strand per segment (the strands separate quadratically away from the closest
-point), so the answer has O(N^1.5) pairs (see docs/benchmarks.md, "Contact
+point), so the answer has O(N^1.5) pairs (docs/performance.md, "Contact
 detection").
 """
 

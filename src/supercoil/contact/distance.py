@@ -83,7 +83,7 @@ nearly parallel segments: the numerators are differences of products of size
 ``~ ε |w| / (ℓ sin^2 θ)`` (``ε`` the machine epsilon). With them a pair 1.2e-8
 apart at ``sin θ ≈ 1e-8`` came out 1.4 times too far, and coplanar segments
 crossing at small angles came out up to ``4e9 ε (|w| + |e_p| + |e_q|)`` (1e-6 of
-that size) apart instead of 0 (session 7). By Lagrange's identity the
+that size) apart instead of 0. By Lagrange's identity the
 numerators are the triple products ``n.(e_q x w)`` and ``n.(e_p x w)``, whose
 factors are formed from the coordinates directly: ``s*`` is then accurate to
 ``~ ε (1 + δ / (ℓ sin θ)) / sin θ`` (``δ`` the distance of the two lines).

@@ -6,10 +6,10 @@ returned together so that the equilibrium and its stability (the Hessian)
 come from one function. The normal contact force of a pair is ``-psi'(g)``
 (F·L²/A when A = L = 1), never negative.
 
-* penalty (Chamekh et al., seed 000, sec. 3): ``psi = k/2 min(g, 0)^2``;
+* penalty (Chamekh, Mani-Aouadi & Moakher 2014, sec. 3): ``psi = k/2 min(g, 0)^2``;
   C¹, the force ``k max(-g, 0)`` needs a penetration to exist.
-* augmented Lagrangian (seed 000; Nocedal & Wright 2006, eq. 17.65 for
-  inequalities): ``psi = -lam g + k/2 g^2`` where ``lam - k g > 0``, else
+* augmented Lagrangian (Chamekh, Mani-Aouadi & Moakher 2014; Nocedal & Wright
+  2006, eq. 17.65 for inequalities): ``psi = -lam g + k/2 g^2`` where ``lam - k g > 0``, else
   ``-lam^2 / (2k)``; with the multiplier update ``lam <- max(lam - k g, 0)``
   the penetration tends to zero at finite ``k``. We return it shifted by the
   constant ``lam^2 / (2k)``, i.e. ``k/2 min(g - lam/k, 0)^2``, which vanishes

@@ -1,4 +1,5 @@
-"""The JSON result envelope shared by every command and file (DESIGN.md, "Conventions").
+"""The JSON result envelope shared by every command and file (docs/model.md, "Files and
+exit statuses").
 
 Every JSON file written by supercoil carries, beside the payload of its
 command, four common keys:
@@ -49,7 +50,7 @@ CONVENTIONS: dict[str, str] = {
     "removing rigid motions and continuous symmetries (0 = stable)",
     "zero_modes": "eigenvalues with |mu| <= provenance.tolerances.zero_modes (mass-weighted, "
     "H v = mu M v), counted apart and never given a sign",
-    "determinant_sign": "sign of det of the reduced stiffness (seed 000's test); it sees only "
+    "determinant_sign": "sign of det of the reduced stiffness (the test of Chamekh, Mani-Aouadi & Moakher 2014); it sees only "
     "the parity of the count, so pair crossings at symmetric bifurcations keep it",
 }
 

@@ -7,8 +7,9 @@ Plotting never computes: every value drawn comes from the result
 figure of a result and saves it as PNG and SVG.
 
 * ``diagram``: the branch parameter against the writhe (ring: ΔLk against Wr,
-  seed 001 Figures 1-2), stable stretches heavy, special points by kind;
-* ``contact-map``: s/L of the contacts against the writhe (seed 001 Figure 4),
+  Coleman & Swigon 2002, Figures 1-2), stable stretches heavy, special points by kind;
+* ``contact-map``: s/L of the contacts against the writhe (Coleman & Swigon
+  2002, Figure 4),
   contact points as dots, contact intervals as bars;
 * ``hat-curve``: extension against end rotation (tweezers), stable heavy;
 * ``configurations``: a few centrelines as tubes of diameter D, contacts in red.
@@ -67,7 +68,7 @@ def _draw_diagram(fig, ax, branches: Sequence[Mapping], special_points: Sequence
         ys = np.asarray(b[y], float)
         stable = np.asarray(b["stable"], bool)
         color = b.get("color") or style.branch_color(index)
-        ls = b.get("linestyle", "-")  # secondary / tertiary branches dashed (seed 001)
+        ls = b.get("linestyle", "-")  # secondary / tertiary dashed (Coleman & Swigon 2002)
         ax.plot(xs, ys, ls=ls, lw=style.UNSTABLE_WIDTH, color=color)
         # a stable stretch includes the segments joining two stable points
         ax.plot(xs, np.where(stable, ys, np.nan), ls=ls, lw=style.STABLE_WIDTH, color=color)
@@ -136,7 +137,7 @@ def _fit_beside_legend(fig, ax, legend) -> None:
 
 def link_writhe_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
                        title: str):
-    """ΔLk against Wr (seed 001, Figures 1-2); see :func:`diagram_figure`."""
+    """ΔLk against Wr (Coleman & Swigon 2002, Figures 1-2); see :func:`diagram_figure`."""
     return diagram_figure(branches, special_points, title=title, x="writhe", y="excess_link")
 
 

@@ -33,8 +33,8 @@ class ResultError(InputError):
 
 @dataclass(frozen=True)
 class BranchData:
-    """One branch: ``points`` are the per-point numbers (the keys of DESIGN.md's
-    conventions: ``excess_link``, ``writhe``, ``twist``, ``energy``,
+    """One branch: ``points`` are the per-point numbers (the keys of docs/model.md,
+    "Contacts in the output" and "Special points and branches": ``excess_link``, ``writhe``, ``twist``, ``energy``,
     ``unstable_count``, ``contact_points``, ...), in branch order."""
 
     name: str
@@ -130,7 +130,7 @@ _STORE_SUFFIXES = (".h5", ".hdf5", ".nc")
 
 
 def _from_store(path: Path) -> ResultData:
-    """A result file of :func:`supercoil.load` (issue 6, item 2)."""
+    """A result file of :func:`supercoil.load`."""
     from supercoil import load
 
     try:

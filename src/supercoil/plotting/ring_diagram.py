@@ -1,4 +1,4 @@
-"""Figures of the ring's bifurcation diagram (seed 001, Figures 1-4), as PNG files.
+"""Figures of the ring's bifurcation diagram (Coleman & Swigon 2002, Figures 1-4), as PNG files.
 
 Plotting never computes: every value drawn is passed in (see
 :meth:`supercoil.problems.ring_diagram.RingDiagram.payload` for the data).

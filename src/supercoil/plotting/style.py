@@ -17,7 +17,8 @@ from pathlib import Path
 BRANCH_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9",
                  "#F0E442", "#000000")
 
-# special point kind -> (matplotlib marker, colour); kinds of DESIGN.md's conventions
+# special point kind -> (matplotlib marker, colour); the kinds of docs/model.md,
+# "Special points and branches"
 SPECIAL_MARKERS = {
     "bifurcation": ("o", "#C0392B"),
     "fold": ("s", "#1E8449"),
@@ -121,7 +122,7 @@ def viewer_style() -> dict:
             "stable_width": STABLE_WIDTH, "unstable_width": UNSTABLE_WIDTH}
 
 
-# seed 001, Figure 2: primary branches solid, secondary long dashes, tertiary short
+# Coleman & Swigon 2002, Figure 2: primary branches solid, secondary long dashes, tertiary short
 # dashes (the ring diagram's ``generation``: 0 circle, 1 primary, 2, 3)
 GENERATION_STYLES = {0: "-", 1: "-", 2: (0, (6, 3)), 3: (0, (2, 2))}
 

@@ -51,7 +51,7 @@ NUMBERS = (
     ("n_contact_points", "contact points"),
     ("n_contact_intervals", "contact intervals"),
     ("min_gap_over_diameter", "min gap / D"),
-    # the DNA preset's keys (DESIGN.md: suffixed, beside the nondimensional ones)
+    # the DNA preset's keys (suffixed, beside the nondimensional ones)
     ("superhelical_density", "superhelical density σ"),
     ("energy_kT", "energy (kT)"),
     ("extension_nm", "extension (nm)"),

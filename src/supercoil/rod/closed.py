@@ -563,8 +563,8 @@ class ClosedRodEnergy(RodEnergy):
     def near_symmetry_modes(self, q: np.ndarray) -> np.ndarray:
         """Sliding the material along the centreline, ``(x_{i+1} - x_{i-1}) / 2`` (shape
         ``(1, n_dofs)``): an exact symmetry of the continuous homogeneous ring,
-        broken only by the discretisation. DESIGN.md removes it from the
-        unstable count; on the circle it is a rigid rotation.
+        broken only by the discretisation. It is removed from the unstable count
+        (docs/model.md, "Stability"); on the circle it is a rigid rotation.
         """
         x = q.reshape(-1, 3)
         return (0.5 * (np.roll(x, -1, axis=0) - np.roll(x, 1, axis=0))).ravel()[None, :]

@@ -57,9 +57,7 @@ vertices (``d/dx_{i-1} = -d/de``, ``d/dx_i = d/de - d/df``, ``d/dx_{i+1} = d/df`
 :func:`reference_kernels` differentiates the formulas as first written above
 (``kb`` and the transport of the directors) with JAX autodiff: an independent
 route, used as the oracle for the hand-derived kernels (and imported only
-then: the runtime path does not need JAX). Measured: a jitted, vmapped JAX
-Hessian cost about 2 µs (bending) and 6–7 µs (twist) per stencil plus tens of
-µs per call; these loops cost 0.15–0.2 µs per stencil (docs/benchmarks.md).
+then: the runtime path does not need JAX).
 """
 
 from __future__ import annotations

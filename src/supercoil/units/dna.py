@@ -1,6 +1,6 @@
 """The DNA units preset: base pairs, nm, pN, kT, salt and superhelical density.
 
-The model is nondimensional (DESIGN.md, "Conventions"): bending stiffness
+The model is nondimensional (docs/model.md, "Nondimensional units"): bending stiffness
 A = 1 and contour length L = 1, so an energy is E·L/A, a force F·L²/A, a
 torque M·L/A and a length a fraction of L. :class:`DNAPreset` maps a DNA
 molecule onto those numbers and converts results back:
@@ -47,20 +47,20 @@ PRESET_NAME = "dna"
 KT_REFERENCE_PN_NM = 4.11
 """kT at the reference temperature, pN·nm. k_B = 1.380649e-23 J/K (SI, exact
 since 2019) gives k_B · 298 K = 4.114 pN·nm; 4.11 is the value conventionally
-used in single-molecule work and the one DESIGN.md fixes (0.1 % below)."""
+used in single-molecule work and the one this package fixes (0.1 % below)."""
 
 REFERENCE_TEMPERATURE_K = 298.0
 """The temperature at which kT = :data:`KT_REFERENCE_PN_NM` (25 °C)."""
 
 RISE_NM_PER_BP = 0.34
 """Rise per base pair of B-DNA, nm (3.4 Å: Watson & Crick 1953 from Franklin's
-and Wilkins' fibre diagrams; the seed paper 001 uses 3.4 Å; the extensible
+and Wilkins' fibre diagrams; Coleman & Swigon 2002 use 3.4 Å; the extensible
 worm-like-chain fit of PMC33432, Fig. 2, uses 0.34 nm/bp)."""
 
 HELICAL_REPEAT_BP = 10.5
 """Base pairs per helical turn of relaxed B-DNA in solution (Wang 1979, PNAS
 76:200, about 10.4-10.6 depending on conditions; 10.5 is the conventional
-value of DESIGN.md). Lk0 = N_bp / 10.5."""
+value). Lk0 = N_bp / 10.5."""
 
 BENDING_PERSISTENCE_NM = 50.0
 """Bending persistence length P_b, nm (A = P_b · kT). About 50 nm in 0.1 M
@@ -69,7 +69,7 @@ Bustamante et al. 1994 (Science 265:1599); PMC33432, Fig. 2, fits 50 nm at
 100 mM Na+."""
 
 TWIST_PERSISTENCE_NM = 95.0
-"""Twist persistence length P_t, nm (C = P_t · kT); DESIGN.md's 95 nm, an
+"""Twist persistence length P_t, nm (C = P_t · kT); 95 nm by default, an
 option of the preset. Published estimates range from about 75 to 120 nm, e.g. Bryant et al.
 2003 (Nature 424:338, Fig. 3) measure C = 4.1e2 pN·nm² (linear fit; 4.4e2 from
 twist fluctuations), i.e. P_t = 410 / 4.11 = 100 nm; Moroz & Nelson 1997
@@ -116,13 +116,13 @@ ATHERMAL_CAVEAT = (
 
 SOURCES: dict[str, str] = {
     "kT_pN_nm": "4.11 pN nm at 298 K (k_B T with k_B = 1.380649e-23 J/K gives 4.114; 4.11 "
-    "by convention, DESIGN.md); kT(T) = 4.11 * T / 298",
-    "rise_nm_per_bp": "B-DNA rise 3.4 A (Watson & Crick 1953; seed 001)",
+    "by convention); kT(T) = 4.11 * T / 298",
+    "rise_nm_per_bp": "B-DNA rise 3.4 A (Watson & Crick 1953; Coleman & Swigon 2002)",
     "helical_repeat_bp": "relaxed B-DNA in solution, about 10.5 bp per turn (Wang 1979, PNAS "
     "76:200)",
     "bending_persistence_nm": "about 50 nm (Hagerman 1988; Bustamante et al. 1994, Science "
     "265:1599)",
-    "twist_persistence_nm": "95 nm (DESIGN.md); measured 100 nm (Bryant et al. 2003, Nature "
+    "twist_persistence_nm": "95 nm (the default); measured 100 nm (Bryant et al. 2003, Nature "
     "424:338: C = 410 pN nm^2), 109-120 nm (Moroz & Nelson 1997, 1998)",
     "effective_diameter": "monovalent salt table, " + SALT_TABLE_NOTE,
 }

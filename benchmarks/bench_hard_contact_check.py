@@ -7,9 +7,9 @@ Run from the repository root:
 
 The continuation (``bench_beta_secondary.py``) finds stretches of the secondary
 branch β_II with unstable count 0 where Coleman & Swigon 2002 (ring diagrams with
-self-contact) find only β between B₁ and P stable. Its contact is the barrier (a smooth potential acting on gaps below
-1 % of D, ``ContactOptions.barrier_activation``, integrated over the cubic
-B-spline); theirs is a hard constraint. This script decides whether the
+self-contact) find only β between B₁ and P stable. Its contact is the barrier (a
+smooth potential acting on gaps below 1 % of D, ``ContactOptions.barrier_activation``,
+integrated over the cubic B-spline); theirs is a hard constraint. This script decides whether the
 barrier makes the difference: at states of β (between B₁ and P, the positive
 control, and beyond P) and of both halves of β_II (on their count-0 stretches and
 on neighbouring unstable ones) it solves the same ring at the same ΔLk with hard

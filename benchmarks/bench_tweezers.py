@@ -12,13 +12,14 @@ the ratio of the smallest times is printed: on a shared machine the smallest of
 alternated runs is the least disturbed comparison. ``--against-seconds S`` (with
 ``--against``): ``SRC``'s smallest wall time measured on a reference host; the host's
 slowdown against it (``SRC``'s smallest time now over ``S``) and this tree's time scaled
-to the reference host are printed too, a ruler for a host whose speed varies. Each round is preceded by a
-pure-Python probe (``probe``, printed), the host's speed at that moment. ``--bytecode`` first compiles the
-timed source trees' modules (``python -m compileall``), as an installed package has them:
-where the environment sets ``PYTHONDONTWRITEBYTECODE=1``, every run otherwise
-compiles supercoil's source again. With ``--pyelastica PYTHON`` (an interpreter with PyElastica installed,
-``pip install pyelastica`` or ``pip install -e ".[pyelastica]"``) the same problem is run
-by :mod:`bench_tweezers_pyelastica` (explicit dynamics to rest, 1.1 million steps at N = 100;
+to the reference host are printed too, a ruler for a host whose speed varies. Each
+round is preceded by a pure-Python probe (``probe``, printed), the host's speed at that
+moment. ``--bytecode`` first compiles the timed source trees' modules (``python -m
+compileall``), as an installed package has them: where the environment sets
+``PYTHONDONTWRITEBYTECODE=1``, every run otherwise compiles supercoil's source again.
+With ``--pyelastica PYTHON`` (an interpreter with PyElastica installed, ``pip install
+pyelastica`` or ``pip install -e ".[pyelastica]"``) the same problem is run by
+:mod:`bench_tweezers_pyelastica` (explicit dynamics to rest, 1.1 million steps at N = 100;
 ``--pyelastica-steps`` runs only that many and extrapolates the time) and the wall-time
 ratio and the agreement of extension and writhe are printed. With ``--repeat K`` too, the
 command runs K times before PyElastica and K times after it, in one sitting, and the ratio

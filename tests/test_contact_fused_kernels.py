@@ -21,12 +21,11 @@ import pytest
 from supercoil.contact.broadphase import candidate_pairs, verlet_displacement
 from supercoil.contact.ccd import largest_displacement
 from supercoil.contact.distance import segment_distance, segment_pairs_within
-from supercoil.contact.integral import (
-    _bounding_spheres,
+from supercoil.contact.integral import integral_terms
+from supercoil.contact.sample_pairs import closest_samples, closest_samples_within
+from supercoil.contact.samples import (
+    bounding_spheres,
     chord_deviation,
-    closest_samples,
-    closest_samples_within,
-    integral_terms,
     polygon_weights,
     sample_points,
     sample_state,
@@ -113,7 +112,7 @@ def test_sample_state_equals_points_deviation_and_spheres(spline, seed):
     dd = f[..., 0] * f[..., 0] + f[..., 1] * f[..., 1] + f[..., 2] * f[..., 2]
     assert deviation == float(np.sqrt(np.max(dd)))
     centre_slow, radius_slow = np.empty((90, 3)), np.empty(90)
-    _bounding_spheres(slow, centre_slow, radius_slow)
+    bounding_spheres(slow, centre_slow, radius_slow)
     assert centre.tobytes() == centre_slow.tobytes()
     assert radius.tobytes() == radius_slow.tobytes()
     # and the spheres themselves, against numpy: the samples' mean, the farthest sample

@@ -16,19 +16,18 @@ from contact_toys import CrossedRods
 from scipy.integrate import quad
 
 from supercoil.contact import potentials
-from supercoil.contact.integral import (
-    barrier,
+from supercoil.contact.integral import barrier, integral_terms
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
+from supercoil.contact.report import contact_summary
+from supercoil.contact.sample_pairs import first_time_of_approach_samples
+from supercoil.contact.samples import (
     default_samples,
-    first_time_of_approach_samples,
-    integral_terms,
     polygon_weights,
     quintic_samples,
     sample_parameters,
     spline_weights,
 )
-from supercoil.contact.options import ContactOptions
-from supercoil.contact.problem import ContactProblem
-from supercoil.contact.report import contact_summary
 from supercoil.contact.solve import solve_contact
 from supercoil.contact.spline_distance import CurvePieces, bspline_pieces, piece_distance
 from supercoil.solvers.newton import NewtonOptions

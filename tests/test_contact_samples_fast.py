@@ -10,10 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from supercoil.contact.integral import (
+from supercoil.contact.sample_pairs import closest_samples, first_time_of_approach_samples
+from supercoil.contact.samples import (
     chord_deviation,
-    closest_samples,
-    first_time_of_approach_samples,
     polygon_weights,
     sample_points,
     spline_weights,
@@ -211,7 +210,7 @@ def test_culled_sample_collision_time_equals_the_full_loop(seed):
     """_first_time_kernel_culled (sample pairs that provably stay apart skipped) against
     _first_time_kernel (every sample pair): the same time, bit for bit, for steps from
     far below to far above the gaps, thresholds below and above the closest samples."""
-    from supercoil.contact.integral import _first_time_kernel, _first_time_kernel_culled
+    from supercoil.contact.sample_pairs import _first_time_kernel, _first_time_kernel_culled
 
     x, segments, pieces = _coil(60, 10 + seed)
     rng = np.random.default_rng(seed)

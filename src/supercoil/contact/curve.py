@@ -46,15 +46,15 @@ from supercoil.contact.distance import (
     segment_distance_derivatives,
     segment_pairs_within,
 )
-from supercoil.contact.integral import (
-    closest_samples_within,
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.sample_pairs import closest_samples_within
+from supercoil.contact.samples import (
     default_samples,
     polygon_weights,
     quintic_samples,
     sample_state,
     spline_weights,
 )
-from supercoil.contact.options import ContactOptions
 from supercoil.contact.spline_distance import (
     bspline_pieces,
     local_minimum_pairs,
@@ -225,7 +225,7 @@ class ContactCurve:
         return self.sample_geometry(q)[0]
 
     def sample_geometry(self, q: np.ndarray):
-        """:func:`~supercoil.contact.integral.sample_state` at ``q``: the sample points,
+        """:func:`~supercoil.contact.samples.sample_state` at ``q``: the sample points,
         their largest distance from their segment's chord, and the bounding spheres of
         each segment's samples; the last state's are remembered (a residual and the
         step bound from the same iterate ask for them)."""

@@ -9,7 +9,8 @@ come from one function. The normal contact force of a pair is ``-psi'(g)``
 * penalty (Chamekh, Mani-Aouadi & Moakher 2014, sec. 3): ``psi = k/2 min(g, 0)^2``;
   C¹, the force ``k max(-g, 0)`` needs a penetration to exist.
 * augmented Lagrangian (Chamekh, Mani-Aouadi & Moakher 2014; Nocedal & Wright
-  2006, eq. 17.65 for inequalities): ``psi = -lam g + k/2 g^2`` where ``lam - k g > 0``, else
+  2006, eq. 17.65 for inequalities): ``psi = -lam g + k/2 g^2`` where
+  ``lam - k g > 0``, else
   ``-lam^2 / (2k)``; with the multiplier update ``lam <- max(lam - k g, 0)``
   the penetration tends to zero at finite ``k``. We return it shifted by the
   constant ``lam^2 / (2k)``, i.e. ``k/2 min(g - lam/k, 0)^2``, which vanishes

@@ -1,9 +1,10 @@
 """Contact output of a state: touching pairs, contact points and contact intervals.
 
-Conventions (docs/model.md, "Contacts in the output"): arc-length positions
-are fractions of L, forces are F·L²/A. ``contacts`` lists every touching segment pair as ``{s1, s2, force}``
-with ``s1 < s2``; pairs whose closest points coincide (both segments of a
-joint touching at the same node) are merged and their forces added.
+Conventions (docs/model.md, "Contacts in the output"): arc-length
+positions are fractions of L, forces are F·L²/A. ``contacts`` lists every
+touching segment pair as ``{s1, s2, force}`` with ``s1 < s2``; pairs whose
+closest points coincide (both segments of a joint touching at the same node)
+are merged and their forces added.
 
 A force below ``-force_tolerance * max(1, largest |force|)`` (only the exact
 treatment's multipliers can pull) is counted in ``negative_contact_forces``

@@ -3,9 +3,10 @@
 * ``penalty`` and ``barrier``: one Newton minimisation of ``E + sum psi``.
 * ``augmented``: Newton on the augmented Lagrangian, then the multiplier
   update ``lam <- max(lam - k g, 0)``, repeated until the largest
-  penetration is below ``penetration_tolerance * D`` (the scheme of Chamekh,
-  Mani-Aouadi & Moakher 2014 with a finite penalty; the penalty grows tenfold, at most to 1000 times its
-  default, whenever an update fails to cut the penetration fourfold).
+  penetration is below ``penetration_tolerance * D`` (the scheme of
+  Chamekh, Mani-Aouadi & Moakher 2014 with a finite penalty; the penalty
+  grows tenfold, at most to 1000 times its default, whenever an update
+  fails to cut the penetration fourfold).
 * ``exact``: an active-set method on the inequality constraints ``g >= 0``.
   The augmented-Lagrangian solution gives the first active set (or the
   previous solve's active set when there is one): a maximal set of its

@@ -50,8 +50,9 @@ CONVENTIONS: dict[str, str] = {
     "removing rigid motions and continuous symmetries (0 = stable)",
     "zero_modes": "eigenvalues with |mu| <= provenance.tolerances.zero_modes (mass-weighted, "
     "H v = mu M v), counted apart and never given a sign",
-    "determinant_sign": "sign of det of the reduced stiffness (the test of Chamekh, Mani-Aouadi & Moakher 2014); it sees only "
-    "the parity of the count, so pair crossings at symmetric bifurcations keep it",
+    "determinant_sign": "sign of det of the reduced stiffness (the test of Chamekh, "
+    "Mani-Aouadi & Moakher 2014); it sees only the parity of the count, so pair crossings at "
+    "symmetric bifurcations keep it",
 }
 
 

@@ -34,8 +34,9 @@ class ResultError(InputError):
 @dataclass(frozen=True)
 class BranchData:
     """One branch: ``points`` are the per-point numbers (the keys of docs/model.md,
-    "Contacts in the output" and "Special points and branches": ``excess_link``, ``writhe``, ``twist``, ``energy``,
-    ``unstable_count``, ``contact_points``, ...), in branch order."""
+    "Contacts in the output" and "Special points and branches": ``excess_link``,
+    ``writhe``, ``twist``, ``energy``, ``unstable_count``, ``contact_points``, ...), in
+    branch order."""
 
     name: str
     parent: str | None

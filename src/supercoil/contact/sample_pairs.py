@@ -1,0 +1,280 @@
+"""Closest sample points of segment pairs, and their first time of approach along a step.
+
+The integral formulation (:mod:`supercoil.contact.integral`) sees the curve only
+at its sample points (:mod:`supercoil.contact.samples`): its pair states are those
+of the closest sample points, and the barrier's step guard keeps every sample gap
+above a fraction of its value (conservative advancement on the sample points,
+:func:`first_time_of_approach_samples`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from supercoil._numba import njit
+from supercoil.contact.samples import bounding_spheres, sample_points
+
+
+@njit(inline="always")
+def _closest_sample_pair(points, centre, radius, i, j, cutoff, bounded):
+    """``(d, a, b)``: the closest sample points ``a`` of segment ``i`` and ``b`` of ``j``
+    (first in row-major order among equals) and their distance; with ``bounded``,
+    ``d = inf`` when all lie farther apart than ``cutoff`` (see
+    :func:`_closest_samples_kernel`)."""
+    q = points.shape[1]
+    best = np.inf
+    ba = 0
+    bb = 0
+    reach = np.inf
+    margin = 0.0
+    if bounded:
+        margin = 1e-9 * (cutoff + radius[i] + radius[j])
+        c0 = centre[i, 0] - centre[j, 0]
+        c1 = centre[i, 1] - centre[j, 1]
+        c2 = centre[i, 2] - centre[j, 2]
+        if math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) - radius[i] - radius[j] > cutoff + margin:
+            return np.inf, 0, 0
+        reach = cutoff + margin  # rows farther than this from sphere j hold no pair within it
+    for a in range(q):
+        if bounded:
+            e0 = points[i, a, 0] - centre[j, 0]
+            e1 = points[i, a, 1] - centre[j, 1]
+            e2 = points[i, a, 2] - centre[j, 2]
+            row_bound = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2) - radius[j]
+            limit = reach if best == np.inf else min(reach, math.sqrt(best) + margin)
+            if row_bound > limit:
+                continue
+        for b in range(q):
+            d0 = points[i, a, 0] - points[j, b, 0]
+            d1 = points[i, a, 1] - points[j, b, 1]
+            d2 = points[i, a, 2] - points[j, b, 2]
+            dd = d0 * d0 + d1 * d1 + d2 * d2
+            if dd < best:
+                best = dd
+                ba = a
+                bb = b
+    d = math.sqrt(best)
+    if bounded and d > cutoff:
+        d = np.inf
+    return d, ba, bb
+
+
+@njit()
+def _closest_samples_kernel(points, pairs, cutoff, d_out, a_out, b_out):
+    """Closest sample points of each pair (first in row-major order among equals).
+
+    With a finite ``cutoff``, pairs whose samples all lie farther apart report
+    ``inf``: a bounding sphere of each segment's samples rules out whole pairs, and
+    rows ``a`` whose distance to the other sphere exceeds the best distance so far,
+    with a margin far above round-off so that no row that could hold a closer (or
+    equally close, earlier) sample pair is skipped.
+    """
+    k = points.shape[0]
+    centre = np.empty((k, 3))
+    radius = np.empty(k)
+    bounded = cutoff < np.inf
+    if bounded:
+        bounding_spheres(points, centre, radius)
+    for p in range(pairs.shape[0]):
+        d_out[p], a_out[p], b_out[p] = _closest_sample_pair(points, centre, radius, pairs[p, 0],
+                                                            pairs[p, 1], cutoff, bounded)
+
+
+@njit()
+def _closest_samples_within_kernel(points, centre, radius, pairs, cutoff, pairs_out, d_out,
+                                   s_out, t_out):
+    """The pairs of ``pairs`` whose closest sample points are within the finite ``cutoff``,
+    in their order, written to the first ``count`` rows of the outputs (``s``, ``t``
+    the sample parameters ``(a + 1/2) / q``); returns ``count``. ``centre``, ``radius``:
+    :func:`~supercoil.contact.samples.bounding_spheres` of ``points``."""
+    q = points.shape[1]
+    count = 0
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        d, a, b = _closest_sample_pair(points, centre, radius, i, j, cutoff, True)
+        if d <= cutoff:
+            pairs_out[count, 0] = i
+            pairs_out[count, 1] = j
+            d_out[count] = d
+            s_out[count] = (a + 0.5) / q
+            t_out[count] = (b + 0.5) / q
+            count += 1
+    return count
+
+
+def closest_samples(points: np.ndarray, pairs: np.ndarray, cutoff: float = np.inf):
+    """``(d, s, t)`` ``(m,)``: the closest sample points of each pair of segments, their
+    distance and parameters along the segments; ``points`` ``(k, q, 3)``.
+
+    With a finite ``cutoff`` only pairs within it are resolved: the others report
+    ``d = inf`` (and parameters of no meaning), and are found faster (bounding spheres).
+    """
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    m = len(pairs)
+    d = np.zeros(m)
+    a = np.zeros(m, dtype=np.int64)
+    b = np.zeros(m, dtype=np.int64)
+    if m:
+        _closest_samples_kernel(np.ascontiguousarray(points, dtype=np.float64), pairs,
+                                float(cutoff), d, a, b)
+    q = points.shape[1]
+    return d, (a + 0.5) / q, (b + 0.5) / q
+
+
+def closest_samples_within(points: np.ndarray, centre: np.ndarray, radius: np.ndarray,
+                           pairs: np.ndarray, cutoff: float):
+    """``(pairs, d, s, t)`` of the pairs of ``pairs`` ``(m, 2)`` whose closest sample points
+    are within the finite ``cutoff``, in their order: the rows of :func:`closest_samples`
+    with ``d <= cutoff``, the same values, in one compiled pass (the filter and the
+    parameters as numpy steps cost about as much as the search at N = 100).
+    ``centre``, ``radius``: the bounding spheres of
+    :func:`~supercoil.contact.samples.sample_state`. The arrays are
+    views of buffers of ``m`` rows."""
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    m = len(pairs)
+    kept = np.empty((m, 2), dtype=np.int64)
+    d = np.empty(m)
+    s = np.empty(m)
+    t = np.empty(m)
+    count = _closest_samples_within_kernel(points, centre, radius, pairs, float(cutoff), kept,
+                                           d, s, t) if m else 0
+    return kept[:count], d[:count], s[:count], t[:count]
+
+
+@njit(inline="always")
+def _sample_pair_time(p0, v, i, a, j, b, t2):
+    """Smaller root ``tau`` of ``|r0 + tau v|^2 = t2`` for sample point ``a`` of ``i``
+    and ``b`` of ``j`` (positions ``p0``, displacements ``v``): -1.0 when they are
+    already within (``c <= 0``), inf when they do not approach that close."""
+    r0 = p0[i, a, 0] - p0[j, b, 0]
+    r1 = p0[i, a, 1] - p0[j, b, 1]
+    r2 = p0[i, a, 2] - p0[j, b, 2]
+    v0 = v[i, a, 0] - v[j, b, 0]
+    v1 = v[i, a, 1] - v[j, b, 1]
+    v2 = v[i, a, 2] - v[j, b, 2]
+    c = r0 * r0 + r1 * r1 + r2 * r2 - t2
+    if c <= 0.0:
+        return -1.0
+    aa = v0 * v0 + v1 * v1 + v2 * v2
+    bb = 2.0 * (r0 * v0 + r1 * v1 + r2 * v2)
+    if aa <= 0.0 or bb >= 0.0:
+        return math.inf
+    disc = bb * bb - 4.0 * aa * c
+    if disc < 0.0:
+        return math.inf
+    # smaller root of aa tau^2 + bb tau + c, in the stable form
+    return 2.0 * c / (-bb + math.sqrt(disc))
+
+
+@njit()
+def _first_time_kernel(p0, v, pairs, threshold):
+    """Smallest root over the sample pairs of ``pairs`` (see
+    :func:`first_time_of_approach_samples`); 0.0 as soon as one pair is within
+    ``threshold``, 1.0 when none comes that close."""
+    q = p0.shape[1]
+    t2 = threshold * threshold
+    best = 1.0
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        for a in range(q):
+            for b in range(q):
+                tau = _sample_pair_time(p0, v, i, a, j, b, t2)
+                if tau < 0.0:
+                    return 0.0
+                best = min(best, tau)
+    return best
+
+
+def first_time_of_approach_samples(x0: np.ndarray, dx: np.ndarray, stencil: np.ndarray,
+                                   weights: np.ndarray, pairs: np.ndarray,
+                                   threshold: float, points0: np.ndarray | None = None) -> float:
+    """Earliest ``tau`` in ``[0, 1]`` at which two sample points of ``pairs`` come
+    within ``threshold`` of each other, the nodes moving as ``x0 + tau dx``.
+
+    Sample points are linear in the nodes, so each pair of them moves on a
+    straight line relative to the other and ``|r0 + tau v|^2 = threshold^2`` is
+    a quadratic in ``tau``: the time is exact (no conservative advancement,
+    which crawls when strands slide along each other at small gaps). Returns
+    1.0 when no pair gets that close, 0.0 when one already is. ``points0``: the sample
+    points at ``x0`` if the caller has them (``sample_points(x0, stencil, weights)``,
+    the same values).
+    """
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if len(pairs) == 0:
+        return 1.0
+    p0 = sample_points(x0, stencil, weights) if points0 is None else points0
+    v = sample_points(dx, stencil, weights)
+    return float(_first_time_kernel_culled(p0, v, pairs, float(threshold)))
+
+
+# Relative margin of the culling bound of _first_time_kernel_culled (see there).
+_CULL_MARGIN = 1e-6
+
+
+@njit()
+def _first_time_kernel_culled(p0, v, pairs, threshold):
+    """:func:`_first_time_kernel` skipping the sample pairs that provably stay farther
+    than ``threshold`` during the step; the same value.
+
+    Segment ``i``'s sample points lie in the ball of centre ``c_i`` (their mean) and
+    radius ``rho_i`` and move at most ``V_i = max_a |v_a|``; two of them, one of
+    ``i`` and one of ``j``, stay at least ``|c_i - c_j| - rho_i - rho_j - V_i - V_j``
+    apart for ``tau`` in ``[0, 1]``, and a sample point ``p_a`` of ``i`` at least
+    ``|p_a - c_j| - rho_j - |v_a| - V_j`` from those of ``j``. Where that bound
+    exceeds the threshold by ``m = 1e-6 (threshold + max rho + max V)``, no sample
+    pair is within the threshold now (no early 0.0) and the first root of its
+    quadratic lies beyond ``tau = 1`` by far more than its rounding (at least about
+    ``sqrt(2 m threshold) / |v|`` after 1 where the approach is tangential, against
+    a relative rounding of ``sqrt(eps)`` there), so it could only have returned
+    ``min(best, tau) = best``: the pairs left give the same result. Measured at a
+    late state of the ring (N = 200, 18 samples a segment, random steps): 1.01 ->
+    0.36 ms for a step of one edge length (886 pairs within reach), 0.63 -> 0.31 ms
+    for 0.3 h (552 pairs), 0.23 -> 0.25 ms for 0.03 h (136 pairs in contact, none
+    culled: the pre-pass costs a tenth).
+    """
+    k, q = p0.shape[0], p0.shape[1]
+    centre = np.zeros((k, 3))
+    radius = np.zeros(k)
+    speed = np.zeros(k)
+    for i in range(k):
+        for a in range(q):
+            for c in range(3):
+                centre[i, c] += p0[i, a, c]
+        for c in range(3):
+            centre[i, c] /= q
+        for a in range(q):
+            e0 = p0[i, a, 0] - centre[i, 0]
+            e1 = p0[i, a, 1] - centre[i, 1]
+            e2 = p0[i, a, 2] - centre[i, 2]
+            radius[i] = max(radius[i], math.sqrt(e0 * e0 + e1 * e1 + e2 * e2))
+            speed[i] = max(speed[i], math.sqrt(v[i, a, 0] ** 2 + v[i, a, 1] ** 2
+                                               + v[i, a, 2] ** 2))
+    far = threshold + _CULL_MARGIN * (threshold + np.max(radius) + np.max(speed))
+    t2 = threshold * threshold
+    best = 1.0
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        g0 = centre[i, 0] - centre[j, 0]
+        g1 = centre[i, 1] - centre[j, 1]
+        g2 = centre[i, 2] - centre[j, 2]
+        if math.sqrt(g0 * g0 + g1 * g1 + g2 * g2) - radius[i] - radius[j] - speed[i] \
+                - speed[j] > far:
+            continue
+        for a in range(q):
+            h0 = p0[i, a, 0] - centre[j, 0]
+            h1 = p0[i, a, 1] - centre[j, 1]
+            h2 = p0[i, a, 2] - centre[j, 2]
+            va = math.sqrt(v[i, a, 0] ** 2 + v[i, a, 1] ** 2 + v[i, a, 2] ** 2)
+            if math.sqrt(h0 * h0 + h1 * h1 + h2 * h2) - radius[j] - va - speed[j] > far:
+                continue
+            for b in range(q):
+                tau = _sample_pair_time(p0, v, i, a, j, b, t2)
+                if tau < 0.0:
+                    return 0.0
+                best = min(best, tau)
+    return best

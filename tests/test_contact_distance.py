@@ -20,11 +20,8 @@ from hypothesis.extra.numpy import arrays
 from scipy.optimize import lsq_linear
 from scipy.spatial.transform import Rotation
 
-from supercoil.contact.distance import (
-    DistanceKind,
-    segment_distance,
-    segment_distance_derivatives,
-)
+from supercoil.contact.distance import segment_distance, segment_distance_derivatives
+from supercoil.contact.distance_kernels import DistanceKind
 
 jax.config.update("jax_enable_x64", True)  # as supercoil.rod.kernels does
 

@@ -21,7 +21,7 @@ from contact_toys import assert_fresh_pair_state, stadium_ring
 from supercoil.contact.ccd import first_time_of_approach, first_time_of_approach_pieces
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.contact.sample_pairs import first_time_of_approach_samples
+from supercoil.contact.sample_ccd import first_time_of_approach_samples
 
 D = 0.02
 CHOICES = {

@@ -22,16 +22,16 @@ from supercoil.contact.broadphase import candidate_pairs, verlet_displacement
 from supercoil.contact.ccd import largest_displacement
 from supercoil.contact.distance import segment_distance, segment_pairs_within
 from supercoil.contact.integral import integral_terms
-from supercoil.contact.sample_pairs import closest_samples, closest_samples_within
+from supercoil.contact.sample_weights import polygon_weights, spline_weights
 from supercoil.contact.samples import (
     bounding_spheres,
     chord_deviation,
-    polygon_weights,
+    closest_samples,
+    closest_samples_within,
     sample_points,
     sample_state,
-    spline_weights,
 )
-from supercoil.contact.spline_distance import bspline_pieces
+from supercoil.contact.spline_pieces import bspline_pieces
 
 
 def _coil(n: int, seed: int):

@@ -20,8 +20,8 @@ from supercoil.contact.integral import barrier, integral_terms
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import contact_summary
-from supercoil.contact.sample_pairs import first_time_of_approach_samples
-from supercoil.contact.samples import (
+from supercoil.contact.sample_ccd import first_time_of_approach_samples
+from supercoil.contact.sample_weights import (
     default_samples,
     polygon_weights,
     quintic_samples,
@@ -29,7 +29,8 @@ from supercoil.contact.samples import (
     spline_weights,
 )
 from supercoil.contact.solve import solve_contact
-from supercoil.contact.spline_distance import CurvePieces, bspline_pieces, piece_distance
+from supercoil.contact.spline_distance import piece_distance
+from supercoil.contact.spline_pieces import CurvePieces, bspline_pieces
 from supercoil.solvers.newton import NewtonOptions
 
 D = 1.0

@@ -10,14 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from supercoil.contact.sample_pairs import closest_samples, first_time_of_approach_samples
-from supercoil.contact.samples import (
-    chord_deviation,
-    polygon_weights,
-    sample_points,
-    spline_weights,
-)
-from supercoil.contact.spline_distance import bspline_pieces
+from supercoil.contact.sample_ccd import first_time_of_approach_samples
+from supercoil.contact.sample_weights import polygon_weights, spline_weights
+from supercoil.contact.samples import chord_deviation, closest_samples, sample_points
+from supercoil.contact.spline_pieces import bspline_pieces
 
 
 def _coil(n: int, seed: int):
@@ -210,7 +206,7 @@ def test_culled_sample_collision_time_equals_the_full_loop(seed):
     """_first_time_kernel_culled (sample pairs that provably stay apart skipped) against
     _first_time_kernel (every sample pair): the same time, bit for bit, for steps from
     far below to far above the gaps, thresholds below and above the closest samples."""
-    from supercoil.contact.sample_pairs import _first_time_kernel, _first_time_kernel_culled
+    from supercoil.contact.sample_ccd import _first_time_kernel, _first_time_kernel_culled
 
     x, segments, pieces = _coil(60, 10 + seed)
     rng = np.random.default_rng(seed)

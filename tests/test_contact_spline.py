@@ -1,4 +1,4 @@
-"""B-spline piece distance (supercoil.contact.spline_distance): oracles.
+"""B-spline piece distance (supercoil.contact.spline_distance, spline_pieces): oracles.
 
 Finite differences against the gradient and Hessian (every distance type,
 near-parallel pieces), dense sampling against the value, the chord reduction
@@ -11,15 +11,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from supercoil.contact.distance import DistanceKind, segment_distance_derivatives
-from supercoil.contact.spline_distance import (
-    CurvePieces,
-    bspline_pieces,
-    chord_pieces,
-    piece_distance,
-    piece_distance_derivatives,
-    sag_bound,
-)
+from supercoil.contact.distance import segment_distance_derivatives
+from supercoil.contact.distance_kernels import DistanceKind
+from supercoil.contact.spline_distance import piece_distance, piece_distance_derivatives
+from supercoil.contact.spline_pieces import CurvePieces, bspline_pieces, chord_pieces, sag_bound
 
 
 def _two_strands(p_nodes: np.ndarray, q_nodes: np.ndarray):
@@ -238,7 +233,7 @@ def _phase_ripple(n: int, curve: str, spline: bool) -> float:
 @pytest.mark.parametrize("curve", ["circle", "wobble"])
 def test_phase_ripple_order(curve):
     """The B-spline's contact distance depends on the sampling phase only at
-    O(h^4); the chords' at O(h^2) (module docstring of spline_distance)."""
+    O(h^4); the chords' at O(h^2) (module docstring of spline_pieces)."""
     ns = np.array([32, 64, 128])
     h = 2 * np.pi / ns
     spline = [_phase_ripple(n, curve, True) for n in ns]

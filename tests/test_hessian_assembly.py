@@ -25,8 +25,8 @@ from contact_toys import stadium_ring
 from supercoil.contact.integral import _psi, integral_terms
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.contact.samples import polygon_weights, spline_weights
-from supercoil.contact.spline_distance import bspline_pieces
+from supercoil.contact.sample_weights import polygon_weights, spline_weights
+from supercoil.contact.spline_pieces import bspline_pieces
 from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.solvers.patterns import block_csr, csr_add, csr_add_blocks, csr_restrict
 

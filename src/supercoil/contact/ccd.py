@@ -41,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 
 from supercoil._numba import njit
-from supercoil.contact.distance import _closest, _distance_kernel
+from supercoil.contact.distance_kernels import closest_pair, distance_kernel
 from supercoil.contact.spline_distance import piece_distance_of_nodes
 
 __all__ = ["first_time_of_approach", "first_time_of_approach_pieces", "largest_displacement",
@@ -58,7 +58,7 @@ def _pair_distance(x0: np.ndarray, dx: np.ndarray, tau: np.ndarray) -> np.ndarra
     d = np.empty(m)
     s = np.empty(m)
     t = np.empty(m)
-    _distance_kernel(np.ascontiguousarray(x[:, 0]), np.ascontiguousarray(x[:, 1]),
+    distance_kernel(np.ascontiguousarray(x[:, 0]), np.ascontiguousarray(x[:, 1]),
                      np.ascontiguousarray(x[:, 2]), np.ascontiguousarray(x[:, 3]), d, s, t)
     return d
 
@@ -156,7 +156,7 @@ def _segment_advance_kernel(x0, dx, pairs, threshold, max_iterations, tolerance)
                 largest = max(largest, math.sqrt(r0 * r0 + r1 * r1 + r2 * r2))
         speed[p] = largest
         _pair_ends(x0, dx, pairs, p, 0.0, P0, P1, Q0, Q1)
-        gap0[p] = _closest(P0, P1, Q0, Q1, 0, 0.0, True)[0] - threshold[p]
+        gap0[p] = closest_pair(P0, P1, Q0, Q1, 0, 0.0, True)[0] - threshold[p]
     first = 0
     for p in range(m):
         if gap0[p] < gap0[first]:
@@ -195,7 +195,7 @@ def _segment_advance_kernel(x0, dx, pairs, threshold, max_iterations, tolerance)
             p = active[i]
             tau[i] = tau[i] + (1.0 - _SAFETY) * gap[i] / speed[p]
             _pair_ends(x0, dx, pairs, p, tau[i], P0, P1, Q0, Q1)
-            gap[i] = _closest(P0, P1, Q0, Q1, 0, 0.0, True)[0] - threshold[p]
+            gap[i] = closest_pair(P0, P1, Q0, Q1, 0, 0.0, True)[0] - threshold[p]
             if gap[i] <= tolerance * gap0[p] and (j < 0 or tau[i] < earliest):
                 earliest = tau[i]
                 j = i

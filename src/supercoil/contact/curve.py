@@ -47,21 +47,19 @@ from supercoil.contact.distance import (
     segment_pairs_within,
 )
 from supercoil.contact.options import ContactOptions
-from supercoil.contact.sample_pairs import closest_samples_within
-from supercoil.contact.samples import (
+from supercoil.contact.sample_weights import (
     default_samples,
     polygon_weights,
     quintic_samples,
-    sample_state,
     spline_weights,
 )
+from supercoil.contact.samples import closest_samples_within, sample_state
 from supercoil.contact.spline_distance import (
-    bspline_pieces,
     local_minimum_pairs,
     piece_distance,
     piece_distance_derivatives,
-    sag_bound,
 )
+from supercoil.contact.spline_pieces import bspline_pieces, sag_bound
 
 _PAIR_MEMO = 8  # pair states remembered, see ContactCurve.pair_state
 # Verlet list of ContactCurve._candidates: broad phase reach beyond the asked
@@ -155,7 +153,7 @@ class ContactCurve:
         The distance is that of the contact curve (``options.curve``), or of the
         polygon's segments when ``polygon``. The broad phase runs on the
         segments; for the spline its cutoff is widened by twice the largest
-        distance of a piece from its chord (``spline_distance.sag_bound``).
+        distance of a piece from its chord (``spline_pieces.sag_bound``).
         ``shadows``: keep the pairs that ``count_local_minima`` drops.
 
         A pure function of its arguments, remembered for the last ``_PAIR_MEMO``

@@ -53,7 +53,7 @@ class ContactOptions:
     centreline whose self-distance is the contact distance, ``"polygon"``
     (segment pairs), ``"spline"`` (the uniform cubic B-spline of the nodes;
     see :mod:`supercoil.contact.curve`) or ``"quintic"`` (the quintic B-spline,
-    integral formulation only: :func:`~supercoil.contact.samples.quintic_samples`).
+    integral formulation only: :func:`~supercoil.contact.sample_weights.quintic_samples`).
     ``count_local_minima`` (spline only, experimental): sum the potential only
     over pairs whose closest points are a local minimum of the distance between
     the whole curves, dropping the *shadows* of a contact seen by the
@@ -69,7 +69,7 @@ class ContactOptions:
     (:mod:`supercoil.contact.integral`), so that a contact counts once wherever
     it lies relative to the nodes (barrier and penalty only).
     ``samples_per_segment``: quadrature points per segment of the integral,
-    default :func:`~supercoil.contact.samples.default_samples`.
+    default :func:`~supercoil.contact.sample_weights.default_samples`.
     """
 
     diameter: float

@@ -1,13 +1,13 @@
-"""The sample points of the double-integral contact energy.
+"""The sample points of the double-integral contact energy, and their closest pairs.
 
-Each segment (or curve piece) carries ``q`` sample points at the midpoint-rule
-parameters ``u_a = (a + 1/2) / q``; each point is a fixed linear combination of
-the nodes of a stencil (two on the polygon, four on the cubic B-spline, six on
-the quintic), given by ``weights`` ``(k, q, w)`` on ``stencil`` ``(k, w)``
-(:mod:`supercoil.contact.integral`). Beside the weights: the points themselves,
-the bounding sphere of each segment's points, and their largest distance from
-the segment's chord (what the broad phase on the segments must add to its
-cutoff).
+The points are ``weights`` ``(k, q, w)`` on ``stencil`` ``(k, w)``
+(:mod:`supercoil.contact.sample_weights`) summed over the nodes. Beside them: the
+bounding sphere of each segment's points, their largest distance from the
+segment's chord (what the broad phase on the segments must add to its cutoff),
+and the closest sample points of segment pairs (the integral formulation sees the
+curve only there, :mod:`supercoil.contact.integral`). Every kernel that calls
+another lives in this module (numba caches a kernel with the code of the compiled
+functions it calls).
 """
 
 from __future__ import annotations
@@ -17,44 +17,6 @@ import math
 import numpy as np
 
 from supercoil._numba import njit
-
-# quadrature spacing over the width sqrt(2 D g_hat) of a point contact's region
-SPACING_OVER_WIDTH = 0.25
-
-
-MIN_SAMPLES = 2
-
-
-def default_samples(edge_length: float, diameter: float, activation: float) -> int:
-    """Points per segment so that their spacing is ``SPACING_OVER_WIDTH sqrt(2 D g_hat)``.
-
-    ``activation`` is ``g_hat`` (a length). At least ``MIN_SAMPLES``.
-    """
-    width = math.sqrt(2.0 * diameter * activation)
-    return max(MIN_SAMPLES, math.ceil(edge_length / (SPACING_OVER_WIDTH * width)))
-
-
-def sample_parameters(samples: int) -> np.ndarray:
-    """Midpoint-rule parameters ``(a + 1/2) / q`` ``(q,)`` along a segment."""
-    return (np.arange(samples) + 0.5) / samples
-
-
-def polygon_weights(n_segments: int, samples: int) -> np.ndarray:
-    """``(k, q, 2)`` weights of a segment's two end nodes at its sample points."""
-    u = sample_parameters(samples)
-    w = np.stack([1.0 - u, u], axis=1)
-    return np.ascontiguousarray(np.broadcast_to(w, (n_segments, samples, 2)))
-
-
-def spline_weights(coefficients: np.ndarray, samples: int) -> np.ndarray:
-    """``(k, q, 4)`` weights of a B-spline piece's stencil nodes at its sample points.
-
-    ``coefficients`` ``(k, 4, 4)``: weight of stencil node ``l`` on ``u^p``
-    (:attr:`supercoil.contact.spline_distance.CurvePieces.coefficients`).
-    """
-    u = sample_parameters(samples)
-    powers = u[:, None] ** np.arange(4)[None, :]  # (q, 4)
-    return np.ascontiguousarray(np.einsum("ilp,ap->ial", coefficients, powers))
 
 
 @njit()
@@ -86,110 +48,6 @@ def sample_points(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray) -> np
                           np.ascontiguousarray(stencil, dtype=np.int64),
                           np.ascontiguousarray(weights, dtype=np.float64), out)
     return out
-
-
-# Uniform quintic B-spline: weight of control point k (of six) on u^p, times 120.
-QUINTIC_BASIS = np.array([
-    [1.0, -5.0, 10.0, -10.0, 5.0, -1.0],
-    [26.0, -50.0, 20.0, 20.0, -20.0, 5.0],
-    [66.0, 0.0, -60.0, 0.0, 30.0, -10.0],
-    [26.0, 50.0, 20.0, -20.0, -20.0, 10.0],
-    [1.0, 5.0, 10.0, 10.0, 5.0, -5.0],
-    [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-]) / 120.0
-
-
-def _quintic_controls(segments: np.ndarray, closed: bool) -> list[list[dict[int, float]]]:
-    """The six control points of every piece as ``{node: coefficient}`` combinations.
-
-    Piece ``i`` spans segment ``i = (a, b)``; its control points are the nodes
-    ``x_{-2}, x_{-1}, a, b, x_{+1}, x_{+2}`` along the chain of joined segments
-    (segment ``j`` follows ``i`` when ``segments[j, 0] == segments[i, 1]``, the
-    last follows the first when ``closed``). Past a free end the chain is
-    continued by odd reflection about the end node, ``x_{-k} = 2 x_0 - x_k``
-    (as the cubic pieces' ghosts, :func:`~supercoil.contact.spline_distance.bspline_pieces`),
-    so a straight end stays straight.
-    """
-    seg = np.asarray(segments, dtype=np.int64)
-    k = len(seg)
-
-    def prev_of(i):
-        j = (i - 1) % k if (closed or i > 0) else None
-        return j if j is not None and j != i and seg[j, 1] == seg[i, 0] else None
-
-    def next_of(i):
-        j = (i + 1) % k if (closed or i < k - 1) else None
-        return j if j is not None and j != i and seg[j, 0] == seg[i, 1] else None
-
-    def combo(*terms):
-        out: dict[int, float] = {}
-        for coefficient, node in terms:
-            out[int(node)] = out.get(int(node), 0.0) + coefficient
-        return out
-
-    def chain(i, step, toward):
-        """Nodes beyond the end ``toward`` (0: before a, 1: after b) of piece i, two deep,
-        as combinations; ``step`` finds the joined neighbour."""
-        near = seg[i, toward]
-        far = seg[i, 1 - toward]
-        j = step(i)
-        if j is None:  # near is a free end: reflect the chain through it
-            beyond = chain_inward(i, toward)
-            return [combo((2.0, near), (-1.0, far)), combo((2.0, near), *[(-c, n) for n, c in
-                                                                         beyond.items()])]
-        first = seg[j, toward]
-        jj = step(j)
-        if jj is None:  # first is a free end: x_{-2} = 2 first - near
-            return [combo((1.0, first)), combo((2.0, first), (-1.0, near))]
-        return [combo((1.0, first)), combo((1.0, seg[jj, toward]))]
-
-    def chain_inward(i, toward):
-        """The node two steps inward from the free end ``toward`` of piece i."""
-        step = next_of if toward == 0 else prev_of
-        j = step(i)
-        if j is None:  # a single-segment chain: continue the line
-            a, b = seg[i, toward], seg[i, 1 - toward]
-            return combo((2.0, b), (-1.0, a))
-        return combo((1.0, seg[j, 1 - toward]))
-
-    controls = []
-    for i in range(k):
-        a, b = seg[i]
-        before = chain(i, prev_of, 0)
-        after = chain(i, next_of, 1)
-        controls.append([before[1], before[0], combo((1.0, a)), combo((1.0, b)), after[0],
-                         after[1]])
-    return controls
-
-
-def quintic_samples(segments: np.ndarray, closed: bool, samples: int
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """``(stencil (k, 6), weights (k, q, 6))`` of the uniform quintic B-spline pieces.
-
-    Its sampling-phase ripple is O(h⁶) against the cubic's O(h⁴): the
-    approximation error of a uniform B-spline of degree ``p`` depends on where
-    the nodes sit along the curve only at order ``h^{p+1}``. Nodes of a piece
-    beyond six (none) are impossible; fewer are padded with zero weights.
-    """
-    u = sample_parameters(samples)
-    basis = (u[:, None] ** np.arange(6)[None, :]) @ QUINTIC_BASIS.T  # (q, 6 controls)
-    controls = _quintic_controls(segments, closed)
-    k = len(controls)
-    stencil = np.zeros((k, 6), dtype=np.int64)
-    weights = np.zeros((k, samples, 6))
-    for i, ctrl in enumerate(controls):
-        nodes = sorted({n for c in ctrl for n in c})
-        if len(nodes) > 6:
-            raise ValueError(f"piece {i} depends on {len(nodes)} nodes (at most 6)")
-        index = {n: j for j, n in enumerate(nodes)}
-        matrix = np.zeros((6, 6))  # control c -> stencil slot
-        for c, terms in enumerate(ctrl):
-            for n, coefficient in terms.items():
-                matrix[c, index[n]] += coefficient
-        stencil[i, :len(nodes)] = nodes
-        stencil[i, len(nodes):] = nodes[0]
-        weights[i] = basis @ matrix
-    return stencil, np.ascontiguousarray(weights)
 
 
 @njit()
@@ -261,7 +119,7 @@ def sample_state(x: np.ndarray, stencil: np.ndarray, weights: np.ndarray,
     bounding spheres of each segment's samples (centroid, largest distance), the same
     values as those functions, from one compiled call (four calls and numpy steps cost
     25 us at N = 100; the spheres serve
-    :func:`~supercoil.contact.sample_pairs.closest_samples_within`)."""
+    :func:`closest_samples_within`)."""
     k, q = weights.shape[0], weights.shape[1]
     points = np.empty((k, q, 3))
     centre = np.empty((k, 3))
@@ -287,3 +145,130 @@ def chord_deviation(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) ->
                             np.ascontiguousarray(starts, dtype=np.float64),
                             np.ascontiguousarray(ends, dtype=np.float64), out)
     return out
+
+
+@njit(inline="always")
+def _closest_sample_pair(points, centre, radius, i, j, cutoff, bounded):
+    """``(d, a, b)``: the closest sample points ``a`` of segment ``i`` and ``b`` of ``j``
+    (first in row-major order among equals) and their distance; with ``bounded``,
+    ``d = inf`` when all lie farther apart than ``cutoff`` (see
+    :func:`_closest_samples_kernel`)."""
+    q = points.shape[1]
+    best = np.inf
+    ba = 0
+    bb = 0
+    reach = np.inf
+    margin = 0.0
+    if bounded:
+        margin = 1e-9 * (cutoff + radius[i] + radius[j])
+        c0 = centre[i, 0] - centre[j, 0]
+        c1 = centre[i, 1] - centre[j, 1]
+        c2 = centre[i, 2] - centre[j, 2]
+        if math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) - radius[i] - radius[j] > cutoff + margin:
+            return np.inf, 0, 0
+        reach = cutoff + margin  # rows farther than this from sphere j hold no pair within it
+    for a in range(q):
+        if bounded:
+            e0 = points[i, a, 0] - centre[j, 0]
+            e1 = points[i, a, 1] - centre[j, 1]
+            e2 = points[i, a, 2] - centre[j, 2]
+            row_bound = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2) - radius[j]
+            limit = reach if best == np.inf else min(reach, math.sqrt(best) + margin)
+            if row_bound > limit:
+                continue
+        for b in range(q):
+            d0 = points[i, a, 0] - points[j, b, 0]
+            d1 = points[i, a, 1] - points[j, b, 1]
+            d2 = points[i, a, 2] - points[j, b, 2]
+            dd = d0 * d0 + d1 * d1 + d2 * d2
+            if dd < best:
+                best = dd
+                ba = a
+                bb = b
+    d = math.sqrt(best)
+    if bounded and d > cutoff:
+        d = np.inf
+    return d, ba, bb
+
+
+@njit()
+def _closest_samples_kernel(points, pairs, cutoff, d_out, a_out, b_out):
+    """Closest sample points of each pair (first in row-major order among equals).
+
+    With a finite ``cutoff``, pairs whose samples all lie farther apart report
+    ``inf``: a bounding sphere of each segment's samples rules out whole pairs, and
+    rows ``a`` whose distance to the other sphere exceeds the best distance so far,
+    with a margin far above round-off so that no row that could hold a closer (or
+    equally close, earlier) sample pair is skipped.
+    """
+    k = points.shape[0]
+    centre = np.empty((k, 3))
+    radius = np.empty(k)
+    bounded = cutoff < np.inf
+    if bounded:
+        bounding_spheres(points, centre, radius)
+    for p in range(pairs.shape[0]):
+        d_out[p], a_out[p], b_out[p] = _closest_sample_pair(points, centre, radius, pairs[p, 0],
+                                                            pairs[p, 1], cutoff, bounded)
+
+
+@njit()
+def _closest_samples_within_kernel(points, centre, radius, pairs, cutoff, pairs_out, d_out,
+                                   s_out, t_out):
+    """The pairs of ``pairs`` whose closest sample points are within the finite ``cutoff``,
+    in their order, written to the first ``count`` rows of the outputs (``s``, ``t``
+    the sample parameters ``(a + 1/2) / q``); returns ``count``. ``centre``, ``radius``:
+    :func:`bounding_spheres` of ``points``."""
+    q = points.shape[1]
+    count = 0
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        d, a, b = _closest_sample_pair(points, centre, radius, i, j, cutoff, True)
+        if d <= cutoff:
+            pairs_out[count, 0] = i
+            pairs_out[count, 1] = j
+            d_out[count] = d
+            s_out[count] = (a + 0.5) / q
+            t_out[count] = (b + 0.5) / q
+            count += 1
+    return count
+
+
+def closest_samples(points: np.ndarray, pairs: np.ndarray, cutoff: float = np.inf):
+    """``(d, s, t)`` ``(m,)``: the closest sample points of each pair of segments, their
+    distance and parameters along the segments; ``points`` ``(k, q, 3)``.
+
+    With a finite ``cutoff`` only pairs within it are resolved: the others report
+    ``d = inf`` (and parameters of no meaning), and are found faster (bounding spheres).
+    """
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    m = len(pairs)
+    d = np.zeros(m)
+    a = np.zeros(m, dtype=np.int64)
+    b = np.zeros(m, dtype=np.int64)
+    if m:
+        _closest_samples_kernel(np.ascontiguousarray(points, dtype=np.float64), pairs,
+                                float(cutoff), d, a, b)
+    q = points.shape[1]
+    return d, (a + 0.5) / q, (b + 0.5) / q
+
+
+def closest_samples_within(points: np.ndarray, centre: np.ndarray, radius: np.ndarray,
+                           pairs: np.ndarray, cutoff: float):
+    """``(pairs, d, s, t)`` of the pairs of ``pairs`` ``(m, 2)`` whose closest sample points
+    are within the finite ``cutoff``, in their order: the rows of :func:`closest_samples`
+    with ``d <= cutoff``, the same values, in one compiled pass (the filter and the
+    parameters as numpy steps cost about as much as the search at N = 100).
+    ``centre``, ``radius``: the bounding spheres of
+    :func:`sample_state`. The arrays are
+    views of buffers of ``m`` rows."""
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    m = len(pairs)
+    kept = np.empty((m, 2), dtype=np.int64)
+    d = np.empty(m)
+    s = np.empty(m)
+    t = np.empty(m)
+    count = _closest_samples_within_kernel(points, centre, radius, pairs, float(cutoff), kept,
+                                           d, s, t) if m else 0
+    return kept[:count], d[:count], s[:count], t[:count]

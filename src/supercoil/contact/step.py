@@ -26,7 +26,7 @@ from supercoil.contact.ccd import (
     largest_displacement,
 )
 from supercoil.contact.curve import ContactCurve
-from supercoil.contact.sample_pairs import first_time_of_approach_samples
+from supercoil.contact.sample_ccd import first_time_of_approach_samples
 from supercoil.topology import writhe
 
 LINK_CHECK_MAX_NODES = 2000  # see LinkGuard

@@ -1,10 +1,9 @@
-"""Closest sample points of segment pairs, and their first time of approach along a step.
+"""The first time of approach of sample points along a step (conservative advancement).
 
 The integral formulation (:mod:`supercoil.contact.integral`) sees the curve only
-at its sample points (:mod:`supercoil.contact.samples`): its pair states are those
-of the closest sample points, and the barrier's step guard keeps every sample gap
-above a fraction of its value (conservative advancement on the sample points,
-:func:`first_time_of_approach_samples`).
+at its sample points (:mod:`supercoil.contact.samples`): the barrier's step guard
+keeps every sample gap above a fraction of its value along the step
+(:func:`first_time_of_approach_samples`).
 """
 
 from __future__ import annotations
@@ -14,134 +13,7 @@ import math
 import numpy as np
 
 from supercoil._numba import njit
-from supercoil.contact.samples import bounding_spheres, sample_points
-
-
-@njit(inline="always")
-def _closest_sample_pair(points, centre, radius, i, j, cutoff, bounded):
-    """``(d, a, b)``: the closest sample points ``a`` of segment ``i`` and ``b`` of ``j``
-    (first in row-major order among equals) and their distance; with ``bounded``,
-    ``d = inf`` when all lie farther apart than ``cutoff`` (see
-    :func:`_closest_samples_kernel`)."""
-    q = points.shape[1]
-    best = np.inf
-    ba = 0
-    bb = 0
-    reach = np.inf
-    margin = 0.0
-    if bounded:
-        margin = 1e-9 * (cutoff + radius[i] + radius[j])
-        c0 = centre[i, 0] - centre[j, 0]
-        c1 = centre[i, 1] - centre[j, 1]
-        c2 = centre[i, 2] - centre[j, 2]
-        if math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) - radius[i] - radius[j] > cutoff + margin:
-            return np.inf, 0, 0
-        reach = cutoff + margin  # rows farther than this from sphere j hold no pair within it
-    for a in range(q):
-        if bounded:
-            e0 = points[i, a, 0] - centre[j, 0]
-            e1 = points[i, a, 1] - centre[j, 1]
-            e2 = points[i, a, 2] - centre[j, 2]
-            row_bound = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2) - radius[j]
-            limit = reach if best == np.inf else min(reach, math.sqrt(best) + margin)
-            if row_bound > limit:
-                continue
-        for b in range(q):
-            d0 = points[i, a, 0] - points[j, b, 0]
-            d1 = points[i, a, 1] - points[j, b, 1]
-            d2 = points[i, a, 2] - points[j, b, 2]
-            dd = d0 * d0 + d1 * d1 + d2 * d2
-            if dd < best:
-                best = dd
-                ba = a
-                bb = b
-    d = math.sqrt(best)
-    if bounded and d > cutoff:
-        d = np.inf
-    return d, ba, bb
-
-
-@njit()
-def _closest_samples_kernel(points, pairs, cutoff, d_out, a_out, b_out):
-    """Closest sample points of each pair (first in row-major order among equals).
-
-    With a finite ``cutoff``, pairs whose samples all lie farther apart report
-    ``inf``: a bounding sphere of each segment's samples rules out whole pairs, and
-    rows ``a`` whose distance to the other sphere exceeds the best distance so far,
-    with a margin far above round-off so that no row that could hold a closer (or
-    equally close, earlier) sample pair is skipped.
-    """
-    k = points.shape[0]
-    centre = np.empty((k, 3))
-    radius = np.empty(k)
-    bounded = cutoff < np.inf
-    if bounded:
-        bounding_spheres(points, centre, radius)
-    for p in range(pairs.shape[0]):
-        d_out[p], a_out[p], b_out[p] = _closest_sample_pair(points, centre, radius, pairs[p, 0],
-                                                            pairs[p, 1], cutoff, bounded)
-
-
-@njit()
-def _closest_samples_within_kernel(points, centre, radius, pairs, cutoff, pairs_out, d_out,
-                                   s_out, t_out):
-    """The pairs of ``pairs`` whose closest sample points are within the finite ``cutoff``,
-    in their order, written to the first ``count`` rows of the outputs (``s``, ``t``
-    the sample parameters ``(a + 1/2) / q``); returns ``count``. ``centre``, ``radius``:
-    :func:`~supercoil.contact.samples.bounding_spheres` of ``points``."""
-    q = points.shape[1]
-    count = 0
-    for p in range(pairs.shape[0]):
-        i = pairs[p, 0]
-        j = pairs[p, 1]
-        d, a, b = _closest_sample_pair(points, centre, radius, i, j, cutoff, True)
-        if d <= cutoff:
-            pairs_out[count, 0] = i
-            pairs_out[count, 1] = j
-            d_out[count] = d
-            s_out[count] = (a + 0.5) / q
-            t_out[count] = (b + 0.5) / q
-            count += 1
-    return count
-
-
-def closest_samples(points: np.ndarray, pairs: np.ndarray, cutoff: float = np.inf):
-    """``(d, s, t)`` ``(m,)``: the closest sample points of each pair of segments, their
-    distance and parameters along the segments; ``points`` ``(k, q, 3)``.
-
-    With a finite ``cutoff`` only pairs within it are resolved: the others report
-    ``d = inf`` (and parameters of no meaning), and are found faster (bounding spheres).
-    """
-    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
-    m = len(pairs)
-    d = np.zeros(m)
-    a = np.zeros(m, dtype=np.int64)
-    b = np.zeros(m, dtype=np.int64)
-    if m:
-        _closest_samples_kernel(np.ascontiguousarray(points, dtype=np.float64), pairs,
-                                float(cutoff), d, a, b)
-    q = points.shape[1]
-    return d, (a + 0.5) / q, (b + 0.5) / q
-
-
-def closest_samples_within(points: np.ndarray, centre: np.ndarray, radius: np.ndarray,
-                           pairs: np.ndarray, cutoff: float):
-    """``(pairs, d, s, t)`` of the pairs of ``pairs`` ``(m, 2)`` whose closest sample points
-    are within the finite ``cutoff``, in their order: the rows of :func:`closest_samples`
-    with ``d <= cutoff``, the same values, in one compiled pass (the filter and the
-    parameters as numpy steps cost about as much as the search at N = 100).
-    ``centre``, ``radius``: the bounding spheres of
-    :func:`~supercoil.contact.samples.sample_state`. The arrays are
-    views of buffers of ``m`` rows."""
-    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
-    m = len(pairs)
-    kept = np.empty((m, 2), dtype=np.int64)
-    d = np.empty(m)
-    s = np.empty(m)
-    t = np.empty(m)
-    count = _closest_samples_within_kernel(points, centre, radius, pairs, float(cutoff), kept,
-                                           d, s, t) if m else 0
-    return kept[:count], d[:count], s[:count], t[:count]
+from supercoil.contact.samples import sample_points
 
 
 @njit(inline="always")

@@ -518,7 +518,7 @@ def test_block_pairs_tested_at_once_equal_the_tree(count, monkeypatch):
     threshold, also for centres exactly ``reach`` apart on a lattice."""
     from scipy.spatial import cKDTree
 
-    from supercoil.contact import broadphase
+    from supercoil.contact import broadphase_blocks
 
     rng = np.random.default_rng(count)
     walk = np.cumsum(rng.normal(size=(count, 3)) * 0.01, axis=0)
@@ -527,7 +527,7 @@ def test_block_pairs_tested_at_once_equal_the_tree(count, monkeypatch):
         expected = {tuple(map(int, p)) for p in cKDTree(centres).query_pairs(reach)} \
             if count else set()
         for threshold in (0, 10**6):  # the tree always, numpy always
-            monkeypatch.setattr(broadphase, "_TREE_ABOVE_BLOCKS", threshold)
-            a, b = broadphase._close_block_pairs(centres, reach)
+            monkeypatch.setattr(broadphase_blocks, "_TREE_ABOVE_BLOCKS", threshold)
+            a, b = broadphase_blocks._close_block_pairs(centres, reach)
             assert np.all(a < b)
             assert set(zip(a.tolist(), b.tolist(), strict=True)) == expected

@@ -43,7 +43,8 @@ search, no distance regions, exact gradient and Hessian by the chain rule,
 ``n`` the unit vector between the two sample points, ``c`` their stencil
 weights (the second strand's negated). The quadrature resolves a point
 contact when its spacing ``h / q`` is small against the width ``sqrt(2 D
-g_hat)`` of the region where ``psi`` acts (:func:`~supercoil.contact.sample_weights.default_samples`).
+g_hat)`` of the region where ``psi`` acts
+(:func:`~supercoil.contact.sample_weights.default_samples`).
 
 The barrier only sees the sample points, and so do the formulation's pair
 states and the reported ``min_gap_over_diameter``: between samples the curve

@@ -48,7 +48,8 @@ import scipy
 import scipy.sparse as sp
 
 from supercoil.geometry.curves import circle
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 
 SIZES = (200, 1000, 10000)
 TWIST_RATIO, EXCESS_LINK = 2.0 / 3.0, 1.0

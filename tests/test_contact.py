@@ -296,7 +296,8 @@ def test_a_state_that_changed_the_linking_number_is_refused():
     by 2 while the writhe carried by the rod's frames does not: the second
     state is refused, the first is admissible."""
     from supercoil.geometry.curves import resample_closed
-    from supercoil.rod.closed import ClosedRodEnergy, Rod
+    from supercoil.rod.closed import ClosedRodEnergy
+    from supercoil.rod.model import Rod
     from supercoil.topology import writhe
 
     t = np.linspace(0, 2 * np.pi, 400, endpoint=False)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from supercoil.problems.ring import richardson
-from supercoil.rod.closed import Rod
+from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
 from supercoil.solvers.problem import free_dofs

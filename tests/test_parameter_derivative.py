@@ -17,7 +17,8 @@ from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.geometry.curves import circle
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 
 

@@ -26,7 +26,8 @@ from supercoil.continuation.stability import (
 )
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.geometry.curves import circle
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 from supercoil.solvers.kkt import KKTFactor, _BandLU
 
 

@@ -16,7 +16,8 @@ from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.solve import solve_contact
 from supercoil.problems.ring_contact import solve_supercoiled_ring, validate_diameter
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 from supercoil.solvers.newton import NewtonOptions
 
 TWIST_RATIO, EXCESS_LINK, LOD, NODES = 1.0, 3.0, 100.0, 100

@@ -7,7 +7,8 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 from supercoil.geometry.curves import circle
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 from supercoil.topology import writhe
 
 

@@ -19,7 +19,8 @@ import pytest
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.geometry.curves import circle
 from supercoil.rod import kernels
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 from supercoil.solvers.patterns import csr_columns
 

@@ -7,7 +7,8 @@ import pytest
 import scipy.sparse as sp
 
 from supercoil.geometry.curves import circle
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 
 
 def _coo_jacobian(rod, q):

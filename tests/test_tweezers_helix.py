@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from supercoil.geometry.curves import parallel_transport
-from supercoil.rod.closed import Rod
+from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from supercoil.problems.tweezers import tweezers_records
-from supercoil.rod.closed import Rod
+from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 
 

@@ -106,7 +106,7 @@ def _ring_energy(problem: Ring, points: np.ndarray):
     from supercoil.contact.options import ContactOptions
     from supercoil.contact.problem import ContactProblem
     from supercoil.rod.closed import ClosedRodEnergy
-    from supercoil.rod.closed import Rod as RodModel
+    from supercoil.rod.model import Rod as RodModel
 
     rod = problem.rod
     model = RodModel(n_nodes=rod.nodes, twist_stiffness=rod.twist_ratio, curvature=rod.curvature)

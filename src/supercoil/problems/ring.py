@@ -17,7 +17,8 @@ import numpy as np
 
 from supercoil import checks
 from supercoil.geometry.curves import circle
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 from supercoil.solvers.newton import NewtonOptions, least_squares_multipliers, newton
 from supercoil.solvers.problem import free_dofs
 from supercoil.stability.analysis import (

@@ -33,7 +33,8 @@ from supercoil.problems.ring import (
     ring_result,
     twisted_circle_problem,
 )
-from supercoil.rod.closed import ClosedRodEnergy, Rod
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
 from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.stability.analysis import DEFAULT_ZERO_TOLERANCE, analyse
 

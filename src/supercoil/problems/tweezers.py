@@ -85,7 +85,7 @@ from supercoil.problems.ring_diagram import (
     truncate_after,
 )
 from supercoil.problems.segments import either, follow, merge_branches, set_pin  # noqa: F401
-from supercoil.rod.closed import Rod
+from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.topology import writhe

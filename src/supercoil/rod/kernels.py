@@ -504,7 +504,7 @@ def edge_length_terms(x: np.ndarray, edges: np.ndarray, h: float, order: np.ndar
     nodes ``x`` ``(n, 3)``: the inextensibility constraints ``c_k = (|e_k|^2 - h^2) /
     (2 h)`` and their Jacobian's entries, row ``k`` the six values ``[-e_k / h, e_k /
     h]`` taken in the order ``order[k]`` ``(m, 6)`` (the same sums and quotients as
-    the numpy expressions of :class:`~supercoil.rod.closed.RodEnergy`), in one call.
+    the numpy expressions of :class:`~supercoil.rod.energy.RodEnergy`), in one call.
     """
     edges = np.ascontiguousarray(edges, dtype=np.int64)
     m = edges.shape[0]

@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from supercoil.rod.closed import Rod, RodEnergy
+from supercoil.rod.energy import RodEnergy
+from supercoil.rod.model import Rod
 
 AXIS = np.array([0.0, 0.0, 1.0])
 

@@ -160,7 +160,7 @@ def initial_active_set(hard, q: np.ndarray, reach: float = 0.01) -> np.ndarray:
     from supercoil.contact.spline_distance import local_minimum_pairs
 
     st = hard.pair_state(q, hard.diameter * (1.0 + reach))
-    keep = local_minimum_pairs(q.reshape(-1, 3), hard.pieces, st.pairs, st.s, st.t)
+    keep = local_minimum_pairs(q.reshape(-1, 3), hard.curve.pieces, st.pairs, st.s, st.t)
     active, _ = _independent_pairs(hard, q, st.pairs[keep], -st.distance[keep])
     return active
 

@@ -70,7 +70,7 @@ def hard_contact(branch, i):
     hard = ContactProblem(base, ContactOptions(OPTIONS.diameter, treatment="exact",
                                                curve="spline", formulation="pairs"))
     st = hard.pair_state(q, 1.01 * OPTIONS.diameter)
-    minima = local_minimum_pairs(q.reshape(-1, 3), hard.pieces, st.pairs, st.s, st.t)
+    minima = local_minimum_pairs(q.reshape(-1, 3), hard.curve.pieces, st.pairs, st.s, st.t)
     hard.active, _ = _independent_pairs(hard, q, st.pairs[minima], -st.distance[minima])
     res = solve_contact(hard, q, NewtonOptions(mode="stationary", tolerance=1e-10,
                                                max_iterations=100))

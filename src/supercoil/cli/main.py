@@ -86,7 +86,7 @@ CONTACT_TREATMENTS = ("barrier", "augmented", "penalty", "exact")
 DEFAULT_CONTACT_TREATMENT = "barrier"
 BARRIER_ACTIVATION = 1e-2  # ContactOptions.barrier_activation, over D
 PENETRATION_TOLERANCE = 1e-4  # ContactOptions.penetration_tolerance, over D
-PENALTY_TOLERANCE = 5e-2  # ContactOptions.penalty_tolerance, over D
+PENALTY_TOLERANCE = 1e-3  # ContactOptions.penalty_tolerance, over D
 
 
 def _e(value: float) -> str:
@@ -100,8 +100,8 @@ _TREATMENT_HELP = {
     "the tube touch (its forces are the contact forces)",
     "augmented": "augmented Lagrangian (penalty plus multiplier updates), penetration below "
     f"{_e(PENETRATION_TOLERANCE)} D",
-    "penalty": "quadratic penalty, which carries a force F only through a penetration F/k "
-    f"(accepted up to {_e(PENALTY_TOLERANCE)} D)",
+    "penalty": "quadratic penalty, which carries a force F only through a penetration F/k; "
+    f"k is raised until the penetration is below {_e(PENALTY_TOLERANCE)} D",
     "exact": "inequality constraints with an active set: the tube touches (penetration "
     f"below {_e(PENETRATION_TOLERANCE)} D) and the contact forces are the multipliers",
 }

@@ -13,14 +13,13 @@ protocols do):
 * from there ``dLk`` is raised in steps of at most ``winding_step``, the energy
   minimised at each from the previous state (Newton in minimisation mode, every
   step guarded by continuous collision detection). A step that changes the
-  writhe by more than ``JUMP_SLOPE * step + JUMP_WRITHE`` (along a branch the
-  writhe grows no faster than the excess link, ``dWr/dLk`` about 0 to 1, except
-  near a fold), or whose minimisation fails, is split in halves, down to
-  ``winding_step / 2**MAX_HALVINGS``; a change that stays larger at that size is
-  a jump (a fold of the branch). Node displacements would not do: the material
-  slides along the ring almost freely, far even where the shape hardly changes. A state
-  that is not stable (a saddle) is pushed along its unstable mode and minimised
-  again (``MAX_RESTARTS`` times at most): a jump as well;
+  writhe by more than ``WRITHE_STEP``, leaves a saddle, or whose minimisation
+  fails (``STEP_ITERATIONS``) is halved, down to ``winding_step / 2**MAX_HALVINGS``;
+  after a smooth step the step doubles again. A writhe change that stays larger
+  at the smallest step is a jump (the branch folded; the writhe, not the node
+  displacements, measures it: the material slides along the ring almost freely).
+  A state that is not stable (a saddle) is pushed along its unstable mode and
+  minimised again (``MAX_RESTARTS`` times at most);
 * the state at the requested ``dLk`` is the answer (branch ``contact``). If it is
   still a saddle, its status says ``unstable``, never ``converged``.
 
@@ -77,7 +76,8 @@ MAX_RESTARTS = 3
 SNAP_OFFSET = 1e-3  # the snap off the circle at dLk_c (1 + SNAP_OFFSET)
 WINDING_STEP = 0.1  # largest step of dLk along the path
 MAX_HALVINGS = 5  # a step is halved at most this many times before a move is a jump
-JUMP_SLOPE, JUMP_WRITHE = 2.0, 0.02  # a step changing Wr by more than the sum is halved
+WRITHE_STEP = 0.15  # a step changing the writhe by more is halved
+STEP_ITERATIONS = 300  # Newton iterations of a step (a step that needs more is halved)
 _SIGN_SEED = 20_000_101  # the fixed vector that signs a saddle's unstable mode
 
 log = logging.getLogger(__name__)
@@ -259,50 +259,63 @@ class _Winding:
                           f"and was pushed along its critical mode by "
                           f"{PERTURBATION_AMPLITUDE:g} L at dLk = {snap_at:.6g}")
         res, stab = self._accept_relaxed(problem, start)
-        q = res.q
-        level = snap_at
+        log.debug("snap at dLk %.6g: %s, writhe %.4g, unstable %d", snap_at, res.status,
+                  problem.writhe_local(res.q), stab.unstable_count)
+        level, size, jumped = snap_at, self.step, False
+        stepping = dataclasses.replace(self.newton, max_iterations=min(
+            self.newton.max_iterations, STEP_ITERATIONS))
         while res.converged and level < self.excess_link:
-            target = min(self.excess_link, level + self.step)
-            res, stab, level = self._advance(problem, q, level, target)
-            q = res.q
+            stop = min(self.excess_link, level + size)
+            problem.excess_link = stop
+            problem.accept(res.q)
+            trial, trial_stab, restarts = self._relax(problem, res.q, stepping)
+            change = abs(problem.writhe_local(trial.q) - problem.writhe_local(res.q))
+            smooth = trial.converged and change <= WRITHE_STEP and restarts == 0
+            log.debug("dLk %.6g -> %.6g: %s, %d Newton iterations, writhe %+.3g, "
+                      "%d restart(s), unstable %d", level, stop, trial.status,
+                      trial.newton_iterations, change, restarts, trial_stab.unstable_count)
+            if not smooth and stop - level > self.step / 2**MAX_HALVINGS:
+                size = 0.5 * (stop - level)
+                problem.excess_link = level
+                problem.accept(res.q)
+                continue
+            if not trial.converged:
+                # the smallest step failed within STEP_ITERATIONS (measured where a
+                # contact forms under the barrier): the whole remaining way is taken
+                # in one minimisation with the full iteration budget
+                stop = self.excess_link
+                problem.excess_link = stop
+                problem.accept(res.q)
+                trial, trial_stab, restarts = self._relax(problem, res.q)
+                self.notes.append(f"from dLk = {level:.6g} the path was taken in one "
+                                  f"minimisation (a step of {size:.2g} failed)")
+                log.debug("dLk %.6g -> %.6g in one: %s, %d Newton iterations", level, stop,
+                          trial.status, trial.newton_iterations)
+                smooth = False
+            if trial.converged and not smooth and not jumped:
+                self.jumps.append(float(stop))  # one jump, however many steps it spans
+            jumped = trial.converged and not smooth
+            self.steps += 1
+            self.restarts += restarts
+            res, stab, level = trial, trial_stab, stop
+            if smooth:
+                size = min(self.step, 2.0 * size)
         if not res.converged:
             self.notes.append(f"the path stopped at dLk = {level:.6g}")
         path = {"branch": "contact", "excess_link": level, "snap_at": snap_at,
                 "steps": self.steps, "jumps": list(self.jumps), "restarts": self.restarts}
         return self._result(problem, res, stab, path)
 
-    def _advance(self, problem, q, level, target):
-        """From the state ``q`` at ``level`` to ``target``; halved where a node moves far."""
-        size, halvings = target - level, 0
-        writhe = problem.writhe_local(q)
-        while True:
-            stop = min(target, level + size)
-            problem.excess_link = stop
-            problem.accept(q)
-            res, stab, restarts = self._relax(problem, q)
-            change = abs(problem.writhe_local(res.q) - writhe)
-            far = change > JUMP_SLOPE * (stop - level) + JUMP_WRITHE or restarts > 0
-            log.debug("dLk %.6g -> %.6g: %s, %d Newton iterations, writhe %+.3g, "
-                      "%d restart(s), unstable %d", level, stop, res.status,
-                      res.newton_iterations, change, restarts, stab.unstable_count)
-            if (res.converged and not far) or halvings >= MAX_HALVINGS:
-                break
-            size, halvings = 0.5 * size, halvings + 1
-        self.steps += 1
-        self.restarts += restarts
-        if res.converged and far:
-            self.jumps.append(float(stop))
-        return res, stab, stop
-
     def _accept_relaxed(self, problem, start):
         res, stab, restarts = self._relax(problem, start)
         self.restarts += restarts
         return res, stab
 
-    def _relax(self, problem, start):
+    def _relax(self, problem, start, options=None):
         """``(result, stability, restarts)``: minimise from ``start``; off a saddle along its unstable mode (module docstring)."""
         problem.accept(start)
-        res = solve_contact(problem, start, self.newton)
+        options = options or self.newton
+        res = solve_contact(problem, start, options)
         self.iterations += res.newton_iterations
         stab = self._analyse(problem, res)
         restarts = 0
@@ -318,7 +331,7 @@ class _Winding:
                 amplitude *= 0.5
                 trial = res.q + amplitude * step.ravel()
             problem.accept(trial)
-            again = solve_contact(problem, trial, self.newton)
+            again = solve_contact(problem, trial, options)
             if not again.converged:
                 break
             res = again

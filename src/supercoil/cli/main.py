@@ -514,6 +514,11 @@ def ring(
             f"({summary['message']}); {where}"
         )
         raise typer.Exit(EXIT_NOT_CONVERGED)
+    if summary["status"] == "unstable":
+        # with contact the answer is the state of a slow winding: a saddle is a failure
+        warn(f"unstable: the state reached has {summary['unstable_count']} negative "
+             f"eigenvalue(s) ({summary['message']})")
+        raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
 def _dna_preset(twist_ratio, excess_link, length_over_diameter, bp, sigma, salt_mM,

@@ -138,9 +138,11 @@ def mirror_result(result: RingResult) -> RingResult:
         **result.path, "excess_link": -result.path["excess_link"],
         "snap_at": None if result.path.get("snap_at") is None else -result.path["snap_at"],
         "jumps": [-j for j in result.path.get("jumps", [])]}
+    message = (f"computed at dLk = {result.excess_link:+.6g} and reflected (z -> -z), the "
+               f"mirror image: " + result.message)
     return dataclasses.replace(result, excess_link=-result.excess_link,
                                points=reflected(result.points), twist=-result.twist,
-                               writhe=-result.writhe, path=path)
+                               writhe=-result.writhe, path=path, message=message)
 
 
 def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_diameter: float,

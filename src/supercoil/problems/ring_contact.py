@@ -269,7 +269,9 @@ class _Winding:
         while res.converged and level < self.excess_link:
             stop = min(self.excess_link, level + size)
             problem.excess_link = stop
-            problem.accept(res.q)
+            # the reference frames at the last accepted state, restored after a refused
+            # step (carrying them back by transport can slip the tracked writhe by a turn)
+            frames = _frames_of(base)
             trial, trial_stab, restarts = self._relax(problem, res.q, stepping)
             change = abs(problem.writhe_local(trial.q) - problem.writhe_local(res.q))
             smooth = trial.converged and change <= WRITHE_STEP and restarts == 0
@@ -279,7 +281,7 @@ class _Winding:
             if not smooth and stop - level > self.step / 2**MAX_HALVINGS:
                 size = 0.5 * (stop - level)
                 problem.excess_link = level
-                problem.accept(res.q)
+                _restore_frames(base, frames)
                 continue
             if not trial.converged:
                 # the smallest step failed within STEP_ITERATIONS (measured where a
@@ -287,7 +289,7 @@ class _Winding:
                 # in one minimisation with the full iteration budget
                 stop = self.excess_link
                 problem.excess_link = stop
-                problem.accept(res.q)
+                _restore_frames(base, frames)
                 trial, trial_stab, restarts = self._relax(problem, res.q)
                 self.notes.append(f"from dLk = {level:.6g} the path was taken in one "
                                   f"minimisation (a step of {size:.2g} failed)")
@@ -395,3 +397,13 @@ class _Winding:
                 f"{result.link_error:.2e})")
         return result
 
+
+def _frames_of(base: ClosedRodEnergy):
+    """The reference frames a closed rod carries along (tangents, directors, ``Lk_u``)."""
+    return base._tangents, base._directors, base.reference_link
+
+
+def _restore_frames(base: ClosedRodEnergy, frames) -> None:
+    tangents, directors, reference_link = frames
+    base._set_frames(tangents, directors)
+    base.reference_link = reference_link

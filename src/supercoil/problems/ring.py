@@ -73,6 +73,10 @@ class RingResult:
     length_over_diameter: float | None = None
     contact_treatment: str | None = None
     contact: dict | None = None  # keys of supercoil.contact.report.contact_summary
+    # with self-contact: the branch the state is on ("circle", "contact" or "given
+    # curve") and the quasi-static path that reached it (problems.ring_contact)
+    branch: str | None = None
+    path: dict | None = None
 
     def summary(self) -> dict:
         """The JSON keys of ``supercoil ring`` (see DESIGN.md conventions)."""
@@ -104,6 +108,8 @@ class RingResult:
             out["length_over_diameter"] = self.length_over_diameter
             out["contact_treatment"] = self.contact_treatment
             out.update(self.contact or {})
+            out["branch"] = self.branch
+            out["path"] = self.path
         return out
 
 

@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.linalg import eigh, null_space
+from threadpoolctl import ThreadpoolController
 
 from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.newton import _hessian
@@ -39,6 +40,18 @@ from supercoil.solvers.patterns import csr_columns
 from supercoil.solvers.problem import ConstrainedEnergy, free_dofs
 
 DEFAULT_ZERO_TOLERANCE = 1e-6
+_CONTROLLER: ThreadpoolController | None = None
+
+
+def _one_blas_thread():
+    """A context with BLAS on one thread: LAPACK's ``eigh`` and ARPACK's dot products
+    split their sums over the threads, so eigenvectors (their sign, and the basis of a
+    double eigenvalue) and the last bits of eigenvalues would depend on the thread count.
+    The controller is made once per process (a new one re-scans the loaded libraries)."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER.limit(limits=1, user_api="blas")
 
 
 @dataclass(frozen=True)
@@ -304,6 +317,15 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
 
 def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
                   factor_order=None):
+    """See :func:`_lowest_pairs_threads`; computed with one BLAS thread (the same
+    eigenpairs, bit for bit, whatever the thread count of the process)."""
+    with _one_blas_thread():
+        return _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry, force_sparse,
+                                     factor_order)
+
+
+def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
+                          factor_order=None):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
@@ -388,11 +410,9 @@ def dense_constrained_eigenpairs(H, J, mass, symmetry=None):
         rows.append(J.toarray())
     if symmetry is not None and symmetry.shape[1]:
         rows.append((mass[:, None] * symmetry).T)
-    if rows:
-        Z = null_space(np.vstack(rows))
-    else:
-        Z = np.eye(Hd.shape[0])
-    A = Z.T @ Hd @ Z
-    B = Z.T @ (mass[:, None] * Z)
-    values, y = eigh(0.5 * (A + A.T), 0.5 * (B + B.T))
-    return values, Z @ y
+    with _one_blas_thread():
+        Z = null_space(np.vstack(rows)) if rows else np.eye(Hd.shape[0])
+        A = Z.T @ Hd @ Z
+        B = Z.T @ (mass[:, None] * Z)
+        values, y = eigh(0.5 * (A + A.T), 0.5 * (B + B.T))
+        return values, Z @ y

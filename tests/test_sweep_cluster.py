@@ -83,8 +83,7 @@ def _sweep(study: Path, out: Path, *args: str) -> subprocess.CompletedProcess:
 
 
 def _branches(result) -> list:
-    b = result.branches
-    return list(b.values()) if isinstance(b, dict) else list(b)
+    return list(result.branches.values())
 
 
 def _assert_same_result(a, b) -> None:

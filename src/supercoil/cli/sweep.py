@@ -13,6 +13,7 @@ with tasks failed, stopped early or not run (the dataset says which, and why);
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 import time
@@ -88,9 +89,8 @@ def sweep_command(
     out = Path(study.stem) if out is None else out
     _prepare_folder(out, resume, overwrite)
     if workers is None and scheduler is None:
-        from supercoil._fork import usable_cores
-
-        workers = usable_cores()
+        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
+            else (os.cpu_count() or 1)
 
     from supercoil.sweeps.driver import run_sweep
 

@@ -51,7 +51,7 @@ def ring_records(problem: ClosedRodEnergy):
 
     def records(q: np.ndarray, multipliers: np.ndarray, excess_link: float) -> dict:
         points = q.reshape(-1, 3)
-        wr = writhe(points)
+        wr = writhe(points, self_crossing="nan")  # a branch without contact may cross
         d1 = problem.material_directors(q)
         tw = twist_from_frames(points, d1, closed=True) - problem.reference_link + excess_link
         return {"excess_link": float(excess_link), "writhe": wr, "twist": tw,

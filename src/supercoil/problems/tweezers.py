@@ -327,12 +327,13 @@ def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
 
     def records(q: np.ndarray, multipliers: np.ndarray, turns: float) -> dict:
         x = q.reshape(-1, 3)
-        wr = writhe(x, closure="axis")
+        wr = writhe(x, closure="axis", self_crossing="nan")
         tw = rod.twist(q)
         error = abs(tw + wr - turns)
         out = {"turns": float(turns), "extension": rod.extension(q),
                "torque": 2 * math.pi * rod.rod.twist_ratio * tw, "twist": tw, "writhe": wr,
-               "closure_error": error, "closure_failed": bool(error > TAIL_WRAP),
+               "closure_error": error,
+               "closure_failed": bool(not error <= TAIL_WRAP),  # a crossing: NaN, failed
                "energy": rod.elastic_energy(q), "load_potential": rod.load_potential(q),
                "tension": axial_force(rod, multipliers),
                # the azimuth pin the point was computed with (a resumed run keeps it)

@@ -69,7 +69,7 @@ def main(argv=None) -> int:
         options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                                  max_excess_link=args.max_excess_link,
                                  contact_max_points=args.contact_max_points, gauge=gauge,
-                                 # the contact of the recorded measurement (session 5)
+                                 # pair-sum contact on the polygon, tangent predictor
                                  contact_formulation="pairs", contact_curve="polygon",
                                  contact_predictor="tangent")
         totals = defaultdict(lambda: [0.0, 0])

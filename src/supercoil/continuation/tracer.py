@@ -48,8 +48,8 @@ class Tracer:
                  on_point: PointCallback | None = None):
         self.system = system
         self.on_point = on_point
-        self.stop: Callable[[np.ndarray], str | None] | None = None  # see continuation()
-        # see continuation(); by default the problem's own admissible(q), if it has one
+        self.stop: Callable[[np.ndarray], str | None] | None = None  # see pseudo_arclength.continuation()
+        # see pseudo_arclength.continuation(); by default the problem's own admissible(q), if it has one
         self.admissible: Callable[[np.ndarray], bool] | None = getattr(
             system.problem, "admissible", None)
         self.opts = options

@@ -25,8 +25,9 @@ from contact_toys import stadium_ring
 from supercoil.contact.integral import _psi, integral_terms, polygon_weights, spline_weights
 from supercoil.contact.problem import ContactOptions, ContactProblem
 from supercoil.contact.spline_distance import bspline_pieces
+from supercoil.solvers.csr import csr_restrict
+from supercoil.solvers.csr_sum import block_csr, csr_add, csr_add_blocks
 from supercoil.solvers.newton import lagrangian_hessian
-from supercoil.solvers.patterns import block_csr, csr_add, csr_add_blocks, csr_restrict
 
 
 def _same_bits(mine, ref) -> bool:

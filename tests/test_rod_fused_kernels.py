@@ -21,7 +21,7 @@ from supercoil.geometry.curves import circle
 from supercoil.rod import kernels
 from supercoil.rod.closed import ClosedRodEnergy, Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
-from supercoil.solvers.patterns import csr_columns
+from supercoil.solvers.csr import csr_columns
 
 
 def _bent_ring(n: int, form: str):

@@ -103,7 +103,7 @@ from supercoil.contact.spline_distance import (
     piece_distance_derivatives,
     sag_bound,
 )
-from supercoil.solvers.patterns import block_csr, csr_add_blocks
+from supercoil.solvers.csr_sum import block_csr, csr_add_blocks
 from supercoil.solvers.problem import HessianParts
 from supercoil.topology import writhe
 

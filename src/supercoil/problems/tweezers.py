@@ -509,7 +509,7 @@ def straight_bifurcations(problem: ClampedRodEnergy, branch: Branch,
 
     from supercoil.continuation.stability import count_gauge, inertia, point_stability
     from supercoil.continuation.system import ExtendedSystem
-    from supercoil.solvers.kkt import InertiaError, SingularMatrixError
+    from supercoil.solvers.errors import InertiaError, SingularMatrixError
 
     n_points = len(branch)
     if n_points < 2 or branch.unstable_count[0] != 0 or branch.zero_modes[0] != 0:

@@ -33,7 +33,7 @@ from supercoil._numba import njit
 from supercoil.geometry.curves import edges, parallel_transport, perpendicular, signed_angle, unit
 from supercoil.rod import kernels
 from supercoil.rod.assembly import StencilPattern
-from supercoil.solvers.patterns import csr_from_arrays
+from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.problem import HessianParts
 
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from supercoil.continuation import bordered, pseudo_arclength
 from supercoil.problems import tweezers
+from supercoil.problems.tweezers import contact as contact_module
 
 PROBLEMS = ("75,33", "60,33", "90,33", "75,28", "75,40")
 
@@ -44,7 +45,8 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
     tension, length_over_diameter = (float(v) for v in problem.split(","))
     counter = Counter()
     factor_init, correct, options = (bordered.BorderedFactor.__init__,
-                                     pseudo_arclength.correct, tweezers.ContinuationOptions)
+                                     pseudo_arclength.correct,
+                                     contact_module.ContinuationOptions)
 
     def counted_factor(self, *args, **kwargs):
         counter.factors += 1
@@ -66,7 +68,7 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
 
     bordered.BorderedFactor.__init__ = counted_factor
     pseudo_arclength.correct = counted_correct
-    tweezers.ContinuationOptions = contact_options
+    contact_module.ContinuationOptions = contact_options
     try:
         start = time.process_time()
         result = tweezers.tweezers_branches(tweezers.TweezersOptions(
@@ -75,7 +77,7 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
     finally:
         bordered.BorderedFactor.__init__ = factor_init
         pseudo_arclength.correct = correct
-        tweezers.ContinuationOptions = options
+        contact_module.ContinuationOptions = options
     contact = [b for b in result.branches if b.name in result.contact_branches]
     counts = {
         "points": sum(len(b) for b in contact),

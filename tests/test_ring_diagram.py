@@ -336,7 +336,7 @@ def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, m
     import dataclasses
 
     from supercoil.continuation import SpecialPoint
-    from supercoil.problems import ring_diagram as rd
+    from supercoil.problems import contact_events
 
     base = diagram.branch("alpha_contact")
     k = 6
@@ -347,7 +347,7 @@ def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, m
     intervals = np.array([0, 0, 1, 1, 1, 0])
     positions = [[(0.2, 0.6)], [(0.19, 0.6), (0.21, 0.61)], [(0.2, 0.6)] * 3,
                  [(0.2, 0.6)] * 2, [(0.2, 0.6), (0.2, 0.6), (0.45, 0.9)], []]
-    monkeypatch.setattr(rd, "_positions", lambda problem, q, mu: np.array(
+    monkeypatch.setattr(contact_events, "_positions", lambda problem, q, mu: np.array(
         positions[int(np.flatnonzero(np.all(base.states[:k] == q, axis=1))[0])],
         dtype=float).reshape(-1, 2))
 
@@ -365,7 +365,7 @@ def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, m
     branch = dataclasses.replace(base, special_points=specials,
                                  records={"n_contact_points": points,
                                           "n_contact_intervals": intervals}, **arrays)
-    kinds = [p.kind for p in rd.classify_contact_events(branch, problem=None).special_points]
+    kinds = [p.kind for p in contact_events.classify_contact_events(branch, problem=None).special_points]
     assert kinds == ["contact_split", "contact_interval_onset", "contact_release",
                      "contact_onset", "contact_release"]
 

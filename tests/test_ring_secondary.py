@@ -15,7 +15,7 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import consistency_check
 from supercoil.problems.ring_branches import twisted_circle_problem
 from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
-from supercoil.problems.ring_secondary import AMPLITUDES, roman, secondary_branches
+from supercoil.problems.ring_diagram.secondary import AMPLITUDES, roman, secondary_branches
 
 # The integral contact on the B-spline: the pair sum's beta_contact leaves D_3 at N = 96
 # (docs/benchmarks.md, "Integral contact"), so its secondary branches depend on the mesh.
@@ -222,13 +222,13 @@ def test_beta_at_seed_001s_parameters_is_stable_from_b1_to_p(seed_diagram):
 
 
 def test_a_switch_that_keeps_the_parents_symmetry_fell_back():
-    """ring_secondary.fell_back: after a switch at a double eigenvalue (two critical modes)
+    """secondary.fell_back: after a switch at a double eigenvalue (two critical modes)
     a branch whose every point keeps the D_3 of the bifurcation point (or has the circle's
     O(2)) is the parent's family; one C_2 point makes it new; a simple eigenvalue is never
     judged (its branch may keep the symmetry)."""
     from types import SimpleNamespace
 
-    from supercoil.problems.ring_secondary import fell_back
+    from supercoil.problems.ring_diagram.secondary import fell_back
 
     n = 48
     s = 2 * np.pi * np.arange(n) / n
@@ -262,12 +262,12 @@ def test_a_tertiary_branch_breaks_the_two_fold_axis_of_beta_ii(seed_diagram):
     symmetry left. Oracles: the secondary states keep the axis through node 0 to
     round-off (the discrete problem is equivariant: on_mesh_direction, rigid_pins);
     S is a located change of the count by one whose single critical mode is odd under
-    that axis (a pitchfork: ring_secondary.mirror_axis); the tertiary half-branches
+    that axis (a pitchfork: secondary.mirror_axis); the tertiary half-branches
     on the two sides of S leave the symmetry (C_1 beyond the symmetry tolerance) and
     are each other's images under the axis, point by point (which is why
     secondary_branches computes one of them)."""
     from supercoil.geometry.symmetry import reversal_residuals
-    from supercoil.problems.ring_secondary import follow_bifurcating_branch, mirror_axis
+    from supercoil.problems.ring_diagram.secondary import follow_bifurcating_branch, mirror_axis
 
     beta = seed_diagram.branch("beta_contact")
     p = beta.points_of_kind("bifurcation")[-1]

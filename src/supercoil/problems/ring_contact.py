@@ -3,7 +3,8 @@
 Below Michell's threshold the twisted circle is stable and is the answer.
 Above it the circle is an unstable equilibrium; the ring is then pushed off
 it along the lowest unstable mode and relaxed by Newton minimisation with
-self-contact until it lands on a stable equilibrium with contact (seed 001).
+self-contact until it lands on a stable equilibrium with contact (Coleman &
+Swigon 2000).
 
 Perturbation: the M-normalised lowest eigenmode of the circle (symmetry
 modes removed), scaled so that the largest node displacement is

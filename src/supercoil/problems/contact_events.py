@@ -5,7 +5,8 @@ centreline points, ``d_min / D - 1`` (:func:`onset_event`): its sign change,
 located by Brent's method, is the special point ``contact_onset`` (label
 ``min_gap``); the branch is then cut after the first point beyond it
 (:func:`truncate_after`), the run stopped there (:func:`stop_after_onset`), and
-the branch goes on with self-contact.
+the branch goes on with self-contact from its last point that the contact
+terms do not reach yet (:func:`contact_start`).
 
 Contact events along a contact branch: the number of contact points and of
 contact intervals (:func:`supercoil.contact.report.contact_summary`) are

@@ -492,7 +492,7 @@ def test_buckled_run_ends_at_the_point_past_its_onset(small_run, monkeypatch):
 
 
 def _generic_straight(opts):
-    """The straight branch as before the pencil: the continuation's own localisation
+    """The straight branch without the pencil: the continuation's own localisation
     (bisection on the inertia count, then Brent's method on the eigenvalue nearest zero),
     with the same steps."""
     from supercoil.continuation import ContinuationOptions, continuation
@@ -640,7 +640,7 @@ def test_switch_pin_is_the_one_repin_picks_and_the_mode_does_not_move_it():
 def test_every_point_keeps_a_pin_of_quality(small_run):
     """The pin is checked at every point (``pin_stop``): each stored point of the buckled
     branches has, with the pin it was computed with, a pin quality of at least
-    ``PIN_QUALITY`` (checked only between runs of 30 points before)."""
+    ``PIN_QUALITY``."""
     from supercoil.problems.tweezers import pins
 
     for branch in small_run.branches[1:]:
@@ -651,7 +651,7 @@ def test_every_point_keeps_a_pin_of_quality(small_run):
 
 
 def test_long_runs_keep_the_branch_of_short_runs(small_run):
-    """Oracle: short runs between pin checks, as before (30 points at the benchmark's size;
+    """Oracle: short runs, the pin checked between them (30 points at the benchmark's size;
     8 here, so that the branches of this small run are cut into several). Runs as long
     as the pin holds (the default) give the same special points within their tolerances
     (two localisations, each to its tolerance in arclength, which weighs the parameter

@@ -33,7 +33,7 @@ from supercoil.rod.open import ClampedRodEnergy
 # corner converged 2-5 steps away from the predictor in 5-9 Newton iterations, then were
 # refused by the turn test; stopped at the first iterate beyond one step, the same points
 # came with 461 corrector iterations instead of 501 (benchmarks/bench_tweezers_steps.py
-# --problems 75,33 --against '{"max_corrector_distance": null}').
+# --problems 75,33, then with --set '{"max_corrector_distance": null}').
 CONTACT_CORRECTOR_DISTANCE = 1.0
 
 

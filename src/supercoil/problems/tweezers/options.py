@@ -32,8 +32,8 @@ class TweezersOptions:
     of the branch from the last two tangents: the barrier's stiffness makes
     the corrector's first residual large (5-80) even for short steps, and
     with the tangent predictor the steps stayed at a tenth of
-    ``contact_max_step`` (289 points from 0 to 5 turns at N = 100, L/D = 33,
-    F L^2/A = 75; 93 with ``"quadratic"``, the same events and end state;
+    ``contact_max_step`` (290 points on the contact branch from 0 to 5 turns at
+    N = 100, L/D = 33, F L^2/A = 75; 91 with ``"quadratic"``;
     ``benchmarks/bench_tweezers_steps.py --problems 75,33 --set
     '{"predictor": "tangent"}'``).
     Tolerances as in :class:`~supercoil.problems.ring_diagram.DiagramOptions`.

@@ -24,6 +24,7 @@ branch: the branch starts from the clamped planar Euler buckle at
 ``turns = 0`` (tangent angle ``a sin(2 pi s / L)`` with ``a`` chosen for the
 end distance, then Newton) and is followed in turns without, then with,
 contact as above (branch ``clamped``, ``clamped_contact``).
+
 The rotation about the axis is held by one pinned coordinate, picked again
 along a branch where needed (:mod:`~supercoil.problems.tweezers.pins`); the
 runs between are merged into one :class:`~supercoil.continuation.Branch`.

@@ -1,16 +1,15 @@
-"""Hard-contact second-order check of the stable stretches of seed 001's β_II.
+"""Hard-contact second-order check of the stable stretches of Coleman & Swigon's β_II.
 
 Run from the repository root:
 
     python benchmarks/bench_hard_contact_check.py [--nodes 132] [--branches /tmp/hc]
         [--stable 5 --unstable 2 | --all]
 
-The continuation (docs/benchmarks.md, "Session 7: exact mesh symmetry") finds
-stretches of the secondary branch β_II with unstable count 0 where seed 001
-(Coleman & Swigon, ring diagrams with self-contact) says only β between B₁ and P
-is stable. Its contact is the barrier (a smooth potential acting on gaps below
+The continuation (``bench_beta_secondary.py``) finds stretches of the secondary
+branch β_II with unstable count 0 where Coleman & Swigon 2002 say only β between
+B₁ and P is stable. Its contact is the barrier (a smooth potential acting on gaps below
 1 % of D, ``ContactOptions.barrier_activation``, integrated over the cubic
-B-spline); seed 001's is a hard constraint. This script decides whether the
+B-spline); Coleman & Swigon's is a hard constraint. This script decides whether the
 barrier makes the difference: at states of β (between B₁ and P, the positive
 control, and beyond P) and of both halves of β_II (on their count-0 stretches and
 on neighbouring unstable ones) it solves the same ring at the same ΔLk with hard
@@ -49,9 +48,9 @@ the distance moved from the barrier state, Lk = Tw + Wr (twist from the material
 frames, writhe from the double sum). Prints one table row per state (``--all``:
 every point of the three branches, 86 s at N = 132, 207 s at N = 204); the
 branches are computed as ``bench_beta_secondary.py`` computes them (20 to 40 s)
-and saved to ``--branches`` (read from there when present). docs/benchmarks.md,
-"Stability: hard contact agrees with the barrier; the disagreement with seed 001
-stands (session 8)", records the results at N = 132 and 204.
+and saved to ``--branches`` (read from there when present).
+benchmarks/results/beta_stability.md records the results at N = 132 and 204: hard
+contact agrees with the barrier, and the disagreement with Coleman & Swigon stands.
 """
 
 from __future__ import annotations
@@ -79,7 +78,7 @@ def branches(nodes: int, folder: Path, max_points: int = 90):
         stored = load(path)
         return {name: stored.branch(name) for name in names}
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
-    from supercoil.problems.ring_secondary import follow_bifurcating_branch
+    from supercoil.problems.ring_diagram.secondary import follow_bifurcating_branch
 
     folder.mkdir(parents=True, exist_ok=True)
     options = DiagramOptions(TWIST_RATIO, LENGTH_OVER_DIAMETER, n_nodes=nodes, modes=(3,),
@@ -240,7 +239,7 @@ def hard_contact_row(base, hard, res, q, barrier_positions: np.ndarray,
                      excess_link: float) -> dict:
     """Count, oracle and checks of a hard-contact equilibrium (module docstring)."""
     from supercoil.problems.ring_branches import ring_records
-    from supercoil.problems.ring_diagram import kkt_residual
+    from supercoil.problems.ring_diagram.records import kkt_residual
     from supercoil.stability.analysis import analyse
 
     forces = -res.multipliers[hard.n_equalities:]

@@ -1,4 +1,4 @@
-"""Benchmark: the ring's alpha branch from the circle through contact (issue 4's target).
+"""Benchmark: the ring's alpha branch from the circle through contact.
 
 Run from the repository root:
 
@@ -9,13 +9,13 @@ Run from the repository root:
     python benchmarks/bench_ring_diagram.py --command [--repeat K [--against SRC]]
 
 Times :func:`supercoil.problems.ring_diagram.ring_diagram` for C/A = 2/3,
-L/D = 122 (seed 001's DNA example), mode 2 only (the circle, alpha without
+L/D = 122 (Coleman & Swigon's DNA example), mode 2 only (the circle, alpha without
 contact to its first contact, alpha with barrier contact up to
 ``--max-excess-link``; defaults: those of ``DiagramOptions``) after one warm-up
 run at N = 48 (numba caches). It
 prints the wall time per branch, the points, the excess link and writhe
 reached, and the time per contact-branch point; with ``--profile`` the
-top of a cProfile by cumulative time. Target (issue 4): the whole alpha
+top of a cProfile by cumulative time. Target: the whole alpha
 branch to dLk = 6 at N = 200 in at most 10 s, for the whole command.
 
 ``--command`` times that command instead, ``supercoil diagram ring --twist-ratio

@@ -30,7 +30,7 @@ def main(argv=None) -> int:
 
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
-    # the pair sum with the node gauge and the tangent predictor, as measured (session 4)
+    # the pair sum with the node gauge and the tangent predictor: only the curve varies
     options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                              max_excess_link=args.max_excess_link,
                              contact_max_points=args.contact_max_points,

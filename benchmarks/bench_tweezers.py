@@ -1,5 +1,5 @@
-"""Benchmark of issue 5: the whole tweezers branch 0 -> 5 turns, N = 100, L/D = 33, C/A = 4/3,
-F L^2/A = 75 (the problem the issue quotes for PyElastica), timed for the whole command.
+"""Benchmark: the whole tweezers branch 0 -> 5 turns, N = 100, L/D = 33, C/A = 4/3,
+F L^2/A = 75 (the problem also run with PyElastica), timed for the whole command.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers.py [--nodes N] [--stop T]
 [--repeat K [--against SRC [--against-seconds S]]] [--bytecode] [--pyelastica PYTHON [--pyelastica-steps K] [--repeat K]]``.
@@ -13,8 +13,7 @@ alternated runs is the least disturbed comparison. ``--against-seconds S`` (with
 ``--against``): ``SRC``'s smallest wall time measured on a reference host; the host's
 slowdown against it (``SRC``'s smallest time now over ``S``) and this tree's time scaled
 to the reference host are printed too, a ruler for a host whose speed varies
-(docs/benchmarks.md, "Session 17": session 10's tree, ``git archive 1a51be0 src``,
-2.81 s on the quiet host of session 10). Each round is preceded by a
+(e.g. ``git archive 1a51be0 src``: 2.81 s on a quiet host of this machine). Each round is preceded by a
 pure-Python probe (``probe``, printed), the host's speed at that moment. ``--bytecode`` first compiles the
 timed source trees' modules (``python -m compileall``), as an installed package has them:
 where the environment sets ``PYTHONDONTWRITEBYTECODE=1`` (this machine's), every run
@@ -25,7 +24,7 @@ by :mod:`bench_tweezers_pyelastica` (explicit dynamics to rest, 1.1 million step
 ``--pyelastica-steps`` runs only that many and extrapolates the time) and the wall-time
 ratio and the agreement of extension and writhe are printed. With ``--repeat K`` too, the
 command runs K times before PyElastica and K times after it, in one sitting, and the ratio
-of PyElastica's time to the command's smallest (and median) is printed: the issue's
+of PyElastica's time to the command's smallest (and median) is printed: the
 target, 2 s where PyElastica needs about 400 s, is a ratio of at least 200, a figure that
 does not depend on the host's speed of the hour as an absolute time does.
 """
@@ -81,9 +80,9 @@ PROBE = compile("s = 0\nfor i in range(3_000_000):\n    s += i\n", "<probe>", "e
 
 def probe() -> float:
     """Process time of a fixed pure-Python loop, run at module level (globals, as the
-    ``python -c`` probe quoted in docs/benchmarks.md: in a function's locals it runs
-    about twice as fast): the host's speed, 0.15 s in the quiet hours of sessions 5-10,
-    0.26-0.29 s through session 16."""
+    ``python -c`` probe runs it: in a function's locals it runs about twice as fast):
+    the host's speed, 0.15 s on a quiet host of this machine, 0.26-0.29 s on a busy
+    one."""
     start = time.process_time()
     exec(PROBE, {})  # noqa: S102 (a constant loop)
     return time.process_time() - start
@@ -159,9 +158,9 @@ def peer_against_repeats(cmd_for, args) -> None:
     """``--repeat K --pyelastica PYTHON``: the command K times, PyElastica once, the
     command K times again, all in one sitting, so that the wall-time ratio (PyElastica's
     time over the command's smallest, and over its median) is measured on one host at one
-    speed. The issue's target (the whole command in at most 2 s where PyElastica needs
-    about 400 s) is a ratio of at least 200; session 3's full PyElastica run took 446 s
-    on the machine of the issue (ratio 223 for 2 s). Prints the agreement of the
+    speed. The target (the whole command in at most 2 s where PyElastica needs about
+    400 s) is a ratio of at least 200; a full PyElastica run took 446 s on this machine
+    (ratio 223 for 2 s). Prints the agreement of the
     extension and writhe at the last turn too (full PyElastica runs only)."""
     import json
 
@@ -197,7 +196,7 @@ def peer_against_repeats(cmd_for, args) -> None:
     print(f"supercoil: wall min {smallest:.2f} median {median:.2f} s over {len(walls)} runs")
     print(f"PyElastica: {full:.0f} s ({how}) for {peer['total_steps']} steps")
     print(f"ratio PyElastica / supercoil: {full / smallest:.0f} (smallest), "
-          f"{full / median:.0f} (median); the issue's target is a ratio of at least 200 "
+          f"{full / median:.0f} (median); the target is a ratio of at least 200 "
           f"(2 s against about 400 s)")
     print(f"supercoil's smallest time on a host where PyElastica takes 400 s: "
           f"{400 * smallest / full:.2f} s (median {400 * median / full:.2f} s)")

@@ -26,6 +26,7 @@ import numpy as np
 
 from supercoil.continuation import bordered, step
 from supercoil.problems import tweezers
+from supercoil.problems.tweezers import contact as contact_module
 
 PROBLEMS = ("75,33", "60,33", "90,33", "75,28", "75,40")
 
@@ -44,7 +45,7 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
     tension, length_over_diameter = (float(v) for v in problem.split(","))
     counter = Counter()
     factor_init, correct, options = (bordered.BorderedFactor.__init__,
-                                     step.correct, tweezers.ContinuationOptions)
+                                     step.correct, contact_module.ContinuationOptions)
 
     def counted_factor(self, *args, **kwargs):
         counter.factors += 1
@@ -66,7 +67,7 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
 
     bordered.BorderedFactor.__init__ = counted_factor
     step.correct = counted_correct
-    tweezers.ContinuationOptions = contact_options
+    contact_module.ContinuationOptions = contact_options
     try:
         start = time.process_time()
         result = tweezers.tweezers_branches(tweezers.TweezersOptions(
@@ -75,7 +76,7 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
     finally:
         bordered.BorderedFactor.__init__ = factor_init
         step.correct = correct
-        tweezers.ContinuationOptions = options
+        contact_module.ContinuationOptions = options
     contact = [b for b in result.branches if b.name in result.contact_branches]
     counts = {
         "points": sum(len(b) for b in contact),

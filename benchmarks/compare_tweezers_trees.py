@@ -1,4 +1,4 @@
-"""Issue 5's tweezers command run with two source trees, and their outputs compared.
+"""The tweezers command run with two source trees, and their outputs compared.
 
 Run: ``python benchmarks/compare_tweezers_trees.py OLD_SRC NEW_SRC`` (each the ``src``
 folder of a tree, e.g. ``OLD_SRC=/tmp/old/src`` from ``git archive <commit> src`` and
@@ -6,7 +6,7 @@ folder of a tree, e.g. ``OLD_SRC=/tmp/old/src`` from ``git archive <commit> src`
 --tension 75 --turns 0:5 --nodes 100`` with each tree on ``PYTHONPATH`` and prints
 whether ``branch.json``'s points and special points and every stored array of
 ``result.h5`` (both trees writing result files) are identical bit for bit, else the largest differences. A change
-meant to cut overhead only (session 13's) must print ``IDENTICAL``. About 10 s with
+meant to cut overhead only must print ``IDENTICAL``. About 10 s with
 warm numba caches (a minute or two when a tree compiles its kernels first).
 """
 

@@ -421,7 +421,7 @@ def test_branch_runs_merged_once_then_extended_equal_the_merge_of_all_runs(tmp_p
     """The tweezers' follow() reports merge(merge(runs so far), partial run) (fast path)
     instead of merge(runs so far + partial run): the same branch, bit for bit; and a
     result file stores the merged branch bit for bit."""
-    from supercoil.problems.tweezers import merge_branches
+    from supercoil.problems.segments import merge_branches
 
     p = Bratu(16, 3.0)
     user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[8] - 1.0})

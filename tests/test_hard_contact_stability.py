@@ -1,10 +1,10 @@
 """Stability with hard contact against the barrier's, on a small ring's β with contact.
 
 The ring diagram's contact is the barrier (a smooth potential on gaps below 1 % of D,
-integrated over the cubic B-spline); seed 001's is a hard constraint. Each state here
+integrated over the cubic B-spline); Coleman & Swigon's is a hard constraint. Each state here
 is solved again at the same ΔLk with the ``exact`` treatment on the same spline
 (active piece pairs held at ``g = d - D = 0``, multipliers minus the contact forces),
-as ``benchmarks/bench_hard_contact_check.py`` does at seed 001's L/D = 122.
+as ``benchmarks/bench_hard_contact_check.py`` does at Coleman & Swigon's L/D = 122.
 
 Oracles: the KKT residual, Lk = Tw + Wr and positive multipliers of the hard
 equilibrium; its unstable count (``stability.analysis.analyse``) equals the number of
@@ -12,7 +12,7 @@ negative eigenvalues of a dense reduced Hessian written out here (the Hessian of
 Lagrangian on a null-space basis of the active Jacobian and of the M-weighted rigid
 motions and sliding, no pins); the barrier's stored count equals the hard one on a
 clearly stable and a clearly unstable state. And where they differ
-(docs/benchmarks.md, "Stability: hard contact agrees with the barrier"): between the
+(benchmarks/results/beta_stability.md): between the
 contact onset and B₁ the barrier, whose spring is still soft there, keeps β's
 unstable modes, while the hard contact with a positive force has none.
 """
@@ -25,7 +25,8 @@ from supercoil.contact.problem import ContactOptions, ContactProblem
 from supercoil.contact.solve import _independent_pairs, solve_contact
 from supercoil.contact.spline_distance import local_minimum_pairs
 from supercoil.problems.ring_branches import ring_records, twisted_circle_problem
-from supercoil.problems.ring_diagram import DiagramOptions, kkt_residual, ring_diagram
+from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
+from supercoil.problems.ring_diagram.records import kkt_residual
 from supercoil.solvers.newton import NewtonOptions, lagrangian_hessian
 from supercoil.stability.analysis import analyse
 

@@ -5,7 +5,7 @@ nodes by up to ``h^2 kappa / 8``, and by nothing at the nodes, so a contact
 distance measured between chords depends on where the nodes sit relative to
 the contact: a ripple of period ``h`` that locks contacts to the mesh and
 breaks the material-sliding symmetry of a closed homogeneous rod
-(:mod:`supercoil.problems.ring_diagram`, "Material sliding"). The uniform
+(:mod:`supercoil.problems.ring_diagram.contact_branches`, "Material sliding"). The uniform
 cubic B-spline whose control points are the nodes has discrete moments that
 are shift invariant up to degree 3: for nodes ``x_k = x(s_0 + k h)`` sampled
 from a smooth curve, ``c(s) = x(s) + (h^2 / 6) x''(s) + O(h^4)`` whatever the

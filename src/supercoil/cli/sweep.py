@@ -28,10 +28,6 @@ TASKS_FOLDER = "tasks"
 MAX_WORKERS = 1024
 
 
-def register(app: typer.Typer) -> None:
-    """Add ``sweep`` to the ``supercoil`` command."""
-    app.command("sweep")(sweep_command)
-
 
 def sweep_command(
     study: Annotated[Path, typer.Argument(
@@ -42,7 +38,8 @@ def sweep_command(
         "examples/sweep_hat_curves.toml.", show_default=False)],
     workers: Annotated[int | None, typer.Option(
         "--workers", metavar="K", help="Worker processes of the local Dask cluster, one "
-        "thread each (default: the usable cores).", show_default=False)] = None,
+        f"thread each, 1 to {MAX_WORKERS} (default: the usable cores).",
+        show_default=False)] = None,
     scheduler: Annotated[str | None, typer.Option(
         "--scheduler", metavar="ADDRESS", help="Run on an existing Dask cluster instead, "
         "reached at its scheduler's address (tcp://HOST:PORT); its workers must import "

@@ -53,8 +53,9 @@ _TREATMENT_HELP = {
     " D that never lets the tube touch (its forces are the contact forces)",
     "augmented": "augmented Lagrangian (penalty plus multiplier updates), penetration below "
     f"{exponent(_CONTACT_DEFAULTS.penetration_tolerance)} D",
-    "penalty": "quadratic penalty, which carries a force F only through a penetration F/k "
-    f"(accepted up to {exponent(_CONTACT_DEFAULTS.penalty_tolerance)} D)",
+    "penalty": "quadratic penalty, which carries a force F only through a penetration F/k; "
+    f"k is raised until the penetration is below {exponent(_CONTACT_DEFAULTS.penalty_tolerance)}"
+    " D",
     "exact": "inequality constraints with an active set: the tube touches (penetration "
     f"below {exponent(_CONTACT_DEFAULTS.penetration_tolerance)} D) and the contact forces are "
     "the multipliers",
@@ -255,6 +256,11 @@ def ring(
             f"not converged: Newton stopped with status {summary['status']} "
             f"({summary['message']}); {where}"
         )
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+    if length_over_diameter is not None and summary["unstable_count"] > 0:
+        # with contact the answer is the state of a slow winding: a saddle is a failure
+        warn(f"unstable: the state reached has {summary['unstable_count']} negative "
+             f"eigenvalue(s) ({summary['message']})")
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 

@@ -121,8 +121,8 @@ def ring(
     length_over_diameter: Annotated[float | None, typer.Option(
         "--length-over-diameter", metavar="L/D",
         help=f"Rod length over tube diameter, pi < L/D <= {MAGNITUDE}: switches on "
-        "self-contact. Above Michell's threshold the circle is pushed off along its lowest "
-        "mode and relaxed to a supercoiled equilibrium that never passes through itself.",
+        "self-contact. Above Michell's threshold the ring leaves the circle for a "
+        "supercoiled equilibrium that never passes through itself.",
         show_default=False)] = None,
     contact: Annotated[str | None, typer.Option(
         "--contact", metavar="TREATMENT", help=contact_help(), show_default=False)] = None,
@@ -167,11 +167,10 @@ def ring(
     independent computations, and the unstable count. The circle loses
     stability at Michell's thresholds dLk = (A/C) sqrt(m^2 - 1), m = 2, 3, ...;
     without --length-over-diameter it is then reported as an unstable
-    equilibrium; with it, the ring is perturbed along its lowest mode (largest
-    node displacement 0.01 L) and relaxed to a stable supercoiled state with
-    self-contact (contacts, contact points and intervals, closest approach).
-    With --initial the relaxation starts from a given closed curve (a knot,
-    say) instead.
+    equilibrium; with it, the ring leaves the circle for a stable supercoiled
+    state with self-contact (contacts, contact points and intervals, closest
+    approach); a state that is not stable exits with status 1. With --initial
+    the ring is relaxed from a given closed curve (a knot, say) instead.
 
     With --dna the ring is a DNA plasmid: --bp N base pairs at superhelical
     density --sigma S, in monovalent salt --salt-mM (tube diameter D); the

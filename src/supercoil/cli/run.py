@@ -49,8 +49,9 @@ def run_command(
     quiet: Quiet = False,
     overwrite: Overwrite = False,
     json_path: Annotated[str | None, typer.Option(
-        "--json", metavar="PATH", help="Also write the JSON summary to PATH ('-' = standard "
-        "output, which silences the other output).", show_default=False)] = None,
+        "--json", metavar="PATH", help="Also write the JSON summary to PATH, replaced if it "
+        "exists ('-' = standard output, which silences the other output).",
+        show_default=False)] = None,
     overrides: Annotated[list[str] | None, typer.Option(
         "--set", metavar="TABLE.KEY=VALUE", help="Override one key of the study (a TOML "
         "value), e.g. --set rod.nodes=48; repeatable.", show_default=False)] = None,

@@ -13,6 +13,7 @@ with tasks failed, stopped early or not run (the dataset says which, and why);
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 import time
@@ -85,8 +86,6 @@ def sweep_command(
     out = Path(study.stem) if out is None else out
     _prepare_folder(out, resume, overwrite)
     if workers is None and scheduler is None:
-        from supercoil._fork import usable_cores
-
         workers = usable_cores()
 
     from supercoil.sweeps.driver import run_sweep
@@ -141,6 +140,14 @@ def _prepare_folder(out: Path, resume: bool, overwrite: bool) -> None:
     except OSError as exc:
         fail(f"--out {out}: cannot write there ({exc.strerror or exc}); give a folder in a "
              "writable location")
+
+
+def usable_cores() -> int:
+    """Cores this process may run on (the default number of local workers)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on every platform
+        return os.cpu_count() or 1
 
 
 class SweepProgress:

@@ -1,7 +1,7 @@
 """``supercoil knot FILE [--json PATH]``: the knot type of a closed curve.
 
 Thin: reads the curve as ``supercoil writhe`` does, calls
-:func:`supercoil.topology.knots.identify`, prints or writes the result with the
+:func:`supercoil.knot_type`, prints or writes the result with the
 JSON envelope.
 """
 
@@ -56,10 +56,10 @@ def knot(
     if len(points) < 3:
         fail(f"curve file {file}: {len(points)} vertex(es); a closed curve needs at least 3")
 
-    from supercoil.topology.knots import identify
+    from supercoil import knot_type
 
     try:
-        result = identify(points)
+        result = knot_type(points)
     except ValueError as exc:
         fail(f"curve file {file}: {exc}")
 

@@ -391,7 +391,7 @@ def test_overwrite_replaces_the_run_files_only(tmp_path, capsys):
 
 
 def run_diagram(tmp_path, name, progress=None, resume=False, text=RING_DIAGRAM):
-    from supercoil.cli.run import run_study
+    from supercoil.cli.study_runner import run_study
 
     out = tmp_path / name
     out.mkdir(exist_ok=True)
@@ -607,7 +607,7 @@ def test_tweezers_study():
     assert opts.free_max_step == 0.1  # TweezersOptions' default
     from supercoil.problems.tweezers import TweezersOptions
 
-    # runs as long as the library's (the pin is checked at every point since session 9)
+    # runs as long as the library's (the pin is checked at every point)
     assert opts.segment_points == TweezersOptions.segment_points == 2000
     assert study.settings["continuation"]["max_points"] == 400
     for edit, words in [

@@ -26,7 +26,7 @@ pytest.importorskip("distributed")
 xr = pytest.importorskip("xarray")
 
 from supercoil import load
-from supercoil.cli.run import run_study
+from supercoil.cli.study_runner import run_study
 from supercoil.io.study import parse_study
 from supercoil.sweeps.dataset import load_sweep
 from supercoil.sweeps.grid import load_sweep_study

@@ -9,8 +9,7 @@ Run from the repository root (``OPENBLAS_NUM_THREADS=1``):
         [--against SRC]
 
 ``tweezers``: the library call of ``supercoil tweezers`` (C/A = 4/3,
-L/D = 33, F L^2/A = 75, 0 -> 5 turns, N = 100) through the CLI's ``run_saving``
-(partial saves every 10 points), without figures. ``ring``: the ring diagram of
+L/D = 33, F L^2/A = 75, 0 -> 5 turns, N = 100), without saving or figures. ``ring``: the ring diagram of
 ``bench_ring_diagram.py`` (C/A = 2/3, L/D = 122, N = 200, mode 2, dLk to 6) after a
 warm-up at N = 48. Each run is a fresh process (the tree's ``src`` first on
 ``PYTHONPATH``; this tree when ``SRC`` is not given) that computes once to warm the
@@ -35,8 +34,7 @@ import sys
 import tempfile
 
 RUN = r'''
-import json, sys, tempfile, time
-from pathlib import Path
+import json, sys, time
 import numpy as np
 from supercoil.continuation import tracer
 spent = [0.0]
@@ -49,14 +47,10 @@ def add_point(*args, **kwargs):
         spent[0] += time.process_time() - start
 tracer.Tracer.add_point = add_point
 if sys.argv[1] == "tweezers":
-    from supercoil.cli.diagram_output import run_saving
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
     options = TweezersOptions(4 / 3, 33.0, tension=75.0, turns=(0, 5), n_nodes=100)
     def compute():
-        with tempfile.TemporaryDirectory() as folder:
-            return run_saving(lambda message, on_point, on_branch: tweezers_branches(
-                options, progress=message, on_point=on_point, on_branch=on_branch),
-                Path(folder), quiet=True).branches
+        return tweezers_branches(options).branches
 else:
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
     ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=48, modes=(2,), max_excess_link=2.0))

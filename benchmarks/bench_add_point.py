@@ -1,5 +1,5 @@
 """Benchmark: the cost of an accepted continuation point beyond the corrector
-(``_Tracer.add_point``: stability, records, event search, the partial branch for
+(``Tracer.add_point``: stability, records, event search, the partial branch for
 ``on_point`` and its saves), alternated between two source trees, with the results
 compared.
 
@@ -8,15 +8,14 @@ Run from the repository root (``OPENBLAS_NUM_THREADS=1``):
     python benchmarks/bench_add_point.py [--problem tweezers|ring] [--repeat K]
         [--against SRC]
 
-``tweezers``: the library call of ``supercoil tweezers`` of issue 5 (C/A = 4/3,
-L/D = 33, F L^2/A = 75, 0 -> 5 turns, N = 100) through the CLI's ``run_saving``
-(partial saves every 10 points), without figures. ``ring``: the ring diagram of
+``tweezers``: the library call of ``supercoil tweezers`` (C/A = 4/3,
+L/D = 33, F L^2/A = 75, 0 -> 5 turns, N = 100), without saving or figures. ``ring``: the ring diagram of
 ``bench_ring_diagram.py`` (C/A = 2/3, L/D = 122, N = 200, mode 2, dLk to 6) after a
 warm-up at N = 48. Each run is a fresh process (the tree's ``src`` first on
 ``PYTHONPATH``; this tree when ``SRC`` is not given) that computes once to warm the
 caches, then once timed: it prints the CPU time (``time.process_time``: less
 disturbed by other jobs on a shared machine than the wall time) of the whole
-computation and of ``_Tracer.add_point``. ``--against SRC`` alternates the runs with
+computation and of ``Tracer.add_point``. ``--against SRC`` alternates the runs with
 the tree ``SRC`` and prints the smallest and median times of each tree, their ratios,
 and the comparison of the last runs' results: per branch the unstable counts, zero
 modes and determinant signs (equal or not), the largest difference of the nearest
@@ -35,28 +34,23 @@ import sys
 import tempfile
 
 RUN = r'''
-import json, sys, tempfile, time
-from pathlib import Path
+import json, sys, time
 import numpy as np
-from supercoil.continuation import pseudo_arclength as pa
+from supercoil.continuation import tracer
 spent = [0.0]
-original = pa._Tracer.add_point
+original = tracer.Tracer.add_point
 def add_point(*args, **kwargs):
     start = time.process_time()
     try:
         return original(*args, **kwargs)
     finally:
         spent[0] += time.process_time() - start
-pa._Tracer.add_point = add_point
+tracer.Tracer.add_point = add_point
 if sys.argv[1] == "tweezers":
-    from supercoil.cli.diagram_output import run_saving
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
     options = TweezersOptions(4 / 3, 33.0, tension=75.0, turns=(0, 5), n_nodes=100)
     def compute():
-        with tempfile.TemporaryDirectory() as folder:
-            return run_saving(lambda message, on_point, on_branch: tweezers_branches(
-                options, progress=message, on_point=on_point, on_branch=on_branch),
-                Path(folder), quiet=True).branches
+        return tweezers_branches(options).branches
 else:
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
     ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=48, modes=(2,), max_excess_link=2.0))

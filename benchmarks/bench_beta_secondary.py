@@ -8,10 +8,11 @@ Run from the repository root:
 Computes the ring's mode-3 diagram (C/A = 2/3, L/D = 122, dLk <= 6: the circle,
 beta, beta with contact), then switches at beta's last bifurcation point (P) onto
 both halves of the secondary branch β_II and follows each with self-contact
-(:func:`supercoil.problems.ring_secondary.follow_bifurcating_branch`). Prints
+(:func:`supercoil.problems.ring_diagram.secondary.follow_bifurcating_branch`). Prints
 beta's bifurcation points, and for each half its folds and bifurcations (with the
 two-fold axis under which a pitchfork's critical mode is odd, as
-:func:`~supercoil.problems.ring_secondary.mirror_axis` finds it: Coleman & Swigon's S),
+:func:`~supercoil.problems.ring_diagram.secondary.mirror_axis` finds it: Coleman &
+Swigon's S),
 the stretch where its unstable count is 0 and condition E there, and the wall
 time. Use a multiple of 6 for ``--nodes`` (beta's three axes on the mesh).
 ``benchmarks/results/beta_stability.md`` records N = 132 and 204.
@@ -34,7 +35,7 @@ def main() -> None:
         link_writhe_slope_sign,
         ring_diagram,
     )
-    from supercoil.problems.ring_secondary import follow_bifurcating_branch, mirror_axis
+    from supercoil.problems.ring_diagram.secondary import follow_bifurcating_branch, mirror_axis
 
     options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(3,),
                              max_excess_link=6.0, contact_max_points=200)

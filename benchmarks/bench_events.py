@@ -7,13 +7,13 @@ Run from the repository root (``OPENBLAS_NUM_THREADS=1``):
     python benchmarks/bench_events.py ring [--nodes 200] [--json out.json]
     python benchmarks/bench_events.py compare old.json new.json
 
-``tweezers`` is the branch of issue 5 (C/A = 4/3, L/D = 33, F L^2/A = 75, 0 -> 5
+``tweezers`` is the tweezers' branch (C/A = 4/3, L/D = 33, F L^2/A = 75, 0 -> 5
 turns; the library call of ``supercoil tweezers``); ``ring`` the diagram
 ``DiagramOptions(2/3, 122.0, n_nodes=N, modes=(2,), max_excess_link=6.0,
 contact_max_points=400)``. The kernels the localisation calls (``correct``,
 ``tangent``, ``inertia``, ``eigenpairs``, ``user_values`` as seen from
 :mod:`supercoil.continuation.events`) are wrapped by counters, attributed to the
-``locate_*`` function running, and the time in ``_Tracer._search_events`` is
+``locate_*`` function running, and the time in ``Tracer._search_events`` is
 measured. Point ``PYTHONPATH`` at another source tree (a ``git archive`` of an
 older commit) to measure it; ``compare`` checks that two runs found the same
 special points (kind, label, branch, counts, located) at parameters within their
@@ -31,8 +31,7 @@ from pathlib import Path
 
 
 def instrumented(run) -> dict:
-    import supercoil.continuation.pseudo_arclength as pa
-    from supercoil.continuation import events
+    from supercoil.continuation import events, special_points, tracer
 
     counts: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
     active = ["search"]
@@ -56,7 +55,7 @@ def instrumented(run) -> dict:
         kernel(name)
 
     def locator(name):
-        function = getattr(pa, name)
+        function = getattr(special_points, name)
 
         def wrapper(*args, **kwargs):
             active.append(name)
@@ -71,11 +70,11 @@ def instrumented(run) -> dict:
                 counts[name]["located"] += 1
             return result
 
-        setattr(pa, name, wrapper)
+        setattr(special_points, name, wrapper)
 
     for name in ("locate_fold", "locate_count_change", "locate_user_event"):
         locator(name)
-    search = pa._Tracer._search_events
+    search = tracer.Tracer._search_events
 
     def timed_search(self):
         start = time.perf_counter()
@@ -84,7 +83,7 @@ def instrumented(run) -> dict:
         finally:
             spent["_search_events"] += time.perf_counter() - start
 
-    pa._Tracer._search_events = timed_search
+    tracer.Tracer._search_events = timed_search
     start = time.perf_counter()
     result = run()
     total = time.perf_counter() - start

@@ -9,7 +9,7 @@ Computes the ring's mode-2 diagram of :mod:`benchmarks.bench_ring_diagram`
 times in one process, after a short warm-up of both gauges at the same N: with ``gauge="node"``, with
 ``gauge="integral"`` (its dense phase row pinned and carried as extra borders,
 :mod:`supercoil.continuation.bordered`), and with ``gauge="integral"`` and the
-row left in the sparse matrix (``kkt.DENSE_ROW_MIN_ENTRIES`` raised: the path
+row left in the sparse matrix (``pinned_rows.DENSE_ROW_MIN_ENTRIES`` raised: the path
 before pinning, band too wide, SuperLU). Prints per branch the points, the
 seconds per point, and the mean time of one bordered factorisation
 (``corrector.bordered_factor``) and of one inertia count
@@ -49,7 +49,7 @@ def main(argv=None) -> int:
 
     from supercoil.continuation import corrector, events, stability
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
-    from supercoil.solvers import kkt
+    from supercoil.solvers import pinned_rows
 
     for gauge in ("node", "integral"):  # numba caches and pattern memos, at this N
         ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
@@ -57,18 +57,15 @@ def main(argv=None) -> int:
                                     contact_max_points=2, gauge=gauge,
                                     contact_formulation="pairs", contact_curve="polygon",
                                     contact_predictor="tangent"))
-    if hasattr(kkt, "PinnedRows"):
-        runs = (("node", "node", None), ("integral", "integral, pinned", None),
-                ("integral", "integral, dense row", 10**9))
-    else:  # a checkout from before pinning (e.g. PYTHONPATH=<older checkout>/src)
-        runs = (("node", "node", None), ("integral", "integral, dense row", None))
+    runs = (("node", "node", None), ("integral", "integral, pinned", None),
+            ("integral", "integral, dense row", 10**9))
     print(f"C/A = 2/3, L/D = 122, N = {args.nodes}, mode 2, dLk <= {args.max_excess_link:g}, "
           f"contact branch <= {args.contact_max_points} points")
     rows, per_call = [], []
-    limit = getattr(kkt, "DENSE_ROW_MIN_ENTRIES", None)
+    limit = pinned_rows.DENSE_ROW_MIN_ENTRIES
     for gauge, label, min_entries in runs:
         if min_entries is not None:
-            kkt.DENSE_ROW_MIN_ENTRIES = min_entries
+            pinned_rows.DENSE_ROW_MIN_ENTRIES = min_entries
         options = DiagramOptions(2 / 3, 122.0, n_nodes=args.nodes, modes=(2,),
                                  max_excess_link=args.max_excess_link,
                                  contact_max_points=args.contact_max_points, gauge=gauge,
@@ -86,7 +83,7 @@ def main(argv=None) -> int:
             for module, name, original in saved:
                 setattr(module, name, original)
             if limit is not None:
-                kkt.DENSE_ROW_MIN_ENTRIES = limit
+                pinned_rows.DENSE_ROW_MIN_ENTRIES = limit
         factor_ms = 1e3 * totals["bordered_factor"][0] / max(totals["bordered_factor"][1], 1)
         inertia_ms = 1e3 * totals["inertia"][0] / max(totals["inertia"][1], 1)
         per_call.append(f"| {label} | {factor_ms:.2f} ({totals['bordered_factor'][1]}) | "

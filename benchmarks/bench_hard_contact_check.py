@@ -77,7 +77,7 @@ def branches(nodes: int, folder: Path, max_points: int = 90):
         stored = load(path)
         return {name: stored.branch(name) for name in names}
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
-    from supercoil.problems.ring_secondary import follow_bifurcating_branch
+    from supercoil.problems.ring_diagram.secondary import follow_bifurcating_branch
 
     folder.mkdir(parents=True, exist_ok=True)
     options = DiagramOptions(TWIST_RATIO, LENGTH_OVER_DIAMETER, n_nodes=nodes, modes=(3,),
@@ -239,7 +239,7 @@ def hard_contact_row(base, hard, res, q, barrier_positions: np.ndarray,
                      excess_link: float) -> dict:
     """Count, oracle and checks of a hard-contact equilibrium (module docstring)."""
     from supercoil.problems.ring_branches import ring_records
-    from supercoil.problems.ring_diagram import kkt_residual
+    from supercoil.problems.ring_diagram.records import kkt_residual
     from supercoil.stability.analysis import analyse
 
     forces = -res.multipliers[hard.n_equalities:]

@@ -1,4 +1,4 @@
-"""Benchmark: the exact inertia count of a KKT matrix (``solvers.band``), per call.
+"""Benchmark: the exact inertia count of a KKT matrix (``solvers.inertia``), per call.
 
 Run from the repository root:
 
@@ -9,9 +9,10 @@ Each ``MATRIX.pkl`` holds ``(A, order)`` (a sparse symmetric matrix and its
 bandwidth-reducing order, as ``kkt_negative_count`` passes them); a ``.npz``
 holds ``n``, csr ``indptr``, ``indices``, ``data`` and ``order`` (the two of
 ``tests/data/kkt_ring200_*.npz``, captured from the N = 200 ring). Times
-``band._symmetric_inertia(A, order)`` warm, ``--calls`` calls per round; with
+``inertia._symmetric_inertia(A, order)`` warm, ``--calls`` calls per round; with
 ``--against SRC`` (a ``src`` folder, e.g. ``git archive main src | tar -x -C
-/tmp/old``) the ``solvers/band.py`` of that tree is loaded beside this one and
+/tmp/old``) the ``solvers/inertia.py`` of that tree (its ``solvers/band.py`` in
+a tree that had no ``inertia.py``) is loaded beside this one and
 the two are timed in alternating rounds (the host's speed drifts). Prints the
 counts of both (they must agree), the smallest and median milliseconds per call,
 and their ratios.
@@ -56,12 +57,14 @@ def main(argv=None) -> int:
     parser.add_argument("--calls", type=int, default=50)
     args = parser.parse_args(argv)
 
-    from supercoil.solvers import band
+    from supercoil.solvers import inertia
 
-    versions = {"this": band}
+    versions = {"this": inertia}
     if args.against:
-        versions["against"] = _load(Path(args.against) / "supercoil" / "solvers" / "band.py",
-                                    "band_against")
+        solvers = Path(args.against) / "supercoil" / "solvers"
+        module = solvers / "inertia.py"
+        versions["against"] = _load(module if module.exists() else solvers / "band.py",
+                                    "inertia_against")
     with threadpool_limits(limits=1, user_api="blas"):
         for path in args.matrices:
             A, order = _matrix(path)

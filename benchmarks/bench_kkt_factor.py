@@ -6,7 +6,7 @@ On the KKT matrices of the N = 200 ring captured in ``tests/data/kkt_ring200_*.n
 (with and without contact; ``S`` the leading ``n x n`` block, ``J`` the rows below):
 
 * the factorisation of ``[[S, J^T], [J, 0]]`` in its banded ordering by LAPACK's band
-  LU (``supercoil.solvers.kkt._BandLU``) and by SuperLU (``_OrderedLU``);
+  LU (``supercoil.solvers.lu.BandLU``) and by SuperLU (``OrderedLU``);
 * the banded ordering of a new pattern (``kkt_order`` without its memo) from the
   compiled merge of the patterns (``_kkt_order_merged``) and from scipy's sums and
   products (``_kkt_order_scipy``; the two give the same ordering, checked here).
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.solvers import kkt
+from supercoil.solvers import kkt_matrix, lu, ordering
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 
@@ -34,9 +34,9 @@ def _blocks(path: Path) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray]:
     n = int(z["n"])
     size = z["indptr"].size - 1
     K = sp.csr_matrix((z["data"], z["indices"], z["indptr"]), shape=(size, size))
-    S = kkt.canonical(sp.csr_matrix(K[:n, :n]))
-    J = kkt.canonical(sp.csr_matrix(K[n:, :n]))
-    return S, J, kkt._kkt_order(S, J)
+    S = kkt_matrix.canonical(sp.csr_matrix(K[:n, :n]))
+    J = kkt_matrix.canonical(sp.csr_matrix(K[n:, :n]))
+    return S, J, ordering._kkt_order(S, J)
 
 
 def _timed(function, calls: int, rounds: int = 7) -> list[float]:
@@ -59,15 +59,15 @@ def _line(label: str, fast: list[float], slow: list[float], names: tuple[str, st
 def measure(path: Path, calls: int) -> None:
     S, J, order = _blocks(path)
     size = S.shape[0] + J.shape[0]
-    values = kkt._kkt_values(S, J)
-    layout = kkt.kkt_band_layout(S, J, order, values=values)
-    entries = kkt._kkt_entries(S, J)
-    band = _timed(lambda: kkt._BandLU.from_layout(order, layout, values), calls)
-    superlu = _timed(lambda: kkt._OrderedLU(size, *entries, order), calls)
+    values = kkt_matrix.kkt_values(S, J)
+    layout = kkt_matrix.kkt_band_layout(S, J, order, values=values)
+    entries = kkt_matrix.kkt_entries(S, J)
+    band = _timed(lambda: lu.BandLU.from_layout(order, layout, values), calls)
+    superlu = _timed(lambda: lu.OrderedLU(size, *entries, order), calls)
     print(_line(f"{path.stem} factor", band, superlu, ("band LU", "SuperLU")))
-    assert np.array_equal(kkt._kkt_order_merged(S, J), kkt._kkt_order_scipy(S, J))
-    merged = _timed(lambda: kkt._kkt_order_merged(S, J), calls)
-    scipys = _timed(lambda: kkt._kkt_order_scipy(S, J), calls)
+    assert np.array_equal(ordering._kkt_order_merged(S, J), ordering._kkt_order_scipy(S, J))
+    merged = _timed(lambda: ordering._kkt_order_merged(S, J), calls)
+    scipys = _timed(lambda: ordering._kkt_order_scipy(S, J), calls)
     print(_line(f"{path.stem} ordering", merged, scipys, ("merged", "scipy")))
 
 

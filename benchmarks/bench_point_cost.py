@@ -5,7 +5,7 @@ Run from the repository root (``OPENBLAS_NUM_THREADS=1``):
     python benchmarks/bench_point_cost.py [--nodes 100] [--max-points 2000]
     python benchmarks/bench_point_cost.py --per-call 100 200 400
 
-The first form runs the tweezers branches of issue 5 (C/A = 4/3, L/D = 33,
+The first form runs the tweezers branches (C/A = 4/3, L/D = 33,
 F L^2/A = 75, 0 -> 5 turns; the library call of ``supercoil tweezers``
 without saving and figures) and prints a markdown table of wall time per
 phase of the continuation (corrector steps, tangents, stability, event search
@@ -33,8 +33,7 @@ PROBLEM = {"twist_ratio": 1.3333, "length_over_diameter": 33, "tension": 75, "tu
 
 def breakdown(n_nodes: int, max_points: int) -> None:
     import supercoil.contact.problem as contact
-    from supercoil.continuation import bordered, events, stability, system
-    from supercoil.continuation import pseudo_arclength as pa
+    from supercoil.continuation import bordered, events, phase, stability, step, system, tracer
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
     spent = collections.defaultdict(float)
@@ -60,12 +59,13 @@ def breakdown(n_nodes: int, max_points: int) -> None:
 
         setattr(owner, name, wrapper)
 
-    timed(pa, "correct", "P corrector (the steps)", True)
-    timed(pa, "tangent", "P tangents", True)
-    timed(pa, "point_stability", "P stability (inertia + eigenpairs)", True)
-    timed(pa._Tracer, "_records", "P records", True)
-    timed(pa._Tracer, "_search_events", "P event search and localisation", True)
-    timed(pa, "user_values", "P user events", True)
+    timed(step, "correct", "P corrector (the steps)", True)
+    timed(step, "tangent", "P tangents", True)
+    timed(phase, "tangent", "P tangents", True)
+    timed(tracer, "point_stability", "P stability (inertia + eigenpairs)", True)
+    timed(tracer.Tracer, "_records", "P records", True)
+    timed(tracer.Tracer, "_search_events", "P event search and localisation", True)
+    timed(tracer, "user_values", "P user events", True)
     for module in (stability, events):
         timed(module, "inertia", "K inertia count (KKT LU + block inertia)")
         timed(module, "eigenpairs", "K eigenpairs (shift-invert Lanczos)")

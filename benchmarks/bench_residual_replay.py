@@ -6,7 +6,7 @@ Run from the repository root (``OPENBLAS_NUM_THREADS=1``):
     PYTHONPATH=OLD/src python benchmarks/bench_residual_replay.py replay FILE [--passes 4]
     PYTHONPATH=NEW/src python benchmarks/bench_residual_replay.py replay FILE [--passes 4]
 
-``capture`` runs the tweezers branches of issue 5 (C/A = 4/3, L/D = 33, F L^2/A = 75,
+``capture`` runs the tweezers branches (C/A = 4/3, L/D = 33, F L^2/A = 75,
 0 -> 5 turns, N = 100) and records, from the first residual of the contact branch
 on, every call of ``ExtendedSystem.residual`` (its ``x``), ``ContactProblem.step_bound``
 (its ``q, dq``) and ``ContactProblem.accept`` with their results, and the extended

@@ -1,6 +1,6 @@
 """Work of the tweezers' contact branch in counts: continuation points, corrections, Newton
 iterations and bordered factorisations (they do not depend on the machine's load, unlike
-times on a shared host), for issue 5's problem (C/A = 4/3, N = 100, 0 -> 5 turns, F L^2/A
+times on a shared host), for the tweezers' problem (C/A = 4/3, N = 100, 0 -> 5 turns, F L^2/A
 = 75, L/D = 33) and neighbours of it.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers_steps.py [--problems 75,33
@@ -24,8 +24,9 @@ import time
 
 import numpy as np
 
-from supercoil.continuation import bordered, pseudo_arclength
+from supercoil.continuation import bordered, step
 from supercoil.problems import tweezers
+from supercoil.problems.tweezers import contact as contact_module
 
 PROBLEMS = ("75,33", "60,33", "90,33", "75,28", "75,40")
 
@@ -44,7 +45,7 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
     tension, length_over_diameter = (float(v) for v in problem.split(","))
     counter = Counter()
     factor_init, correct, options = (bordered.BorderedFactor.__init__,
-                                     pseudo_arclength.correct, tweezers.ContinuationOptions)
+                                     step.correct, contact_module.ContinuationOptions)
 
     def counted_factor(self, *args, **kwargs):
         counter.factors += 1
@@ -65,8 +66,8 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
         return options(**kwargs)
 
     bordered.BorderedFactor.__init__ = counted_factor
-    pseudo_arclength.correct = counted_correct
-    tweezers.ContinuationOptions = contact_options
+    step.correct = counted_correct
+    contact_module.ContinuationOptions = contact_options
     try:
         start = time.process_time()
         result = tweezers.tweezers_branches(tweezers.TweezersOptions(
@@ -74,8 +75,8 @@ def run(problem: str, overrides: dict) -> tuple[dict, list[np.ndarray], np.ndarr
         cpu = time.process_time() - start
     finally:
         bordered.BorderedFactor.__init__ = factor_init
-        pseudo_arclength.correct = correct
-        tweezers.ContinuationOptions = options
+        step.correct = correct
+        contact_module.ContinuationOptions = options
     contact = [b for b in result.branches if b.name in result.contact_branches]
     counts = {
         "points": sum(len(b) for b in contact),

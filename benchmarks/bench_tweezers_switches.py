@@ -1,11 +1,11 @@
-"""Two of session 12's changes measured alone on issue 5's problem (N = 100, L/D = 33,
+"""Two speed-ups of the continuation measured alone on the tweezers' problem (N = 100, L/D = 33,
 C/A = 4/3, F L^2/A = 75, 0 -> 5 turns), each against its absence, alternated in one process.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_tweezers_switches.py [--repeat K]
 [--only chord|derivative]``. Prints the smallest and the median process CPU time of
 :func:`~supercoil.problems.tweezers.tweezers_branches` with and without
 
-* ``chord``: the corrector's chord steps (``pseudo_arclength.CHORD_BELOW`` set to 0
+* ``chord``: the corrector's chord steps (``step.CHORD_BELOW`` set to 0
   turns them off: no iterate is then below the threshold);
 * ``derivative``: the clamped rod's exact ``parameter_derivative`` (without it the
   continuation takes its central difference of two residuals).
@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from supercoil.continuation import pseudo_arclength
+from supercoil.continuation import step
 from supercoil.problems import tweezers
 from supercoil.rod.open import ClampedRodEnergy
 
@@ -31,10 +31,10 @@ def main() -> None:
     options = tweezers.TweezersOptions(twist_ratio=4 / 3, length_over_diameter=33,
                                        tension=75, turns=(0, 5), n_nodes=100)
     exact = ClampedRodEnergy.parameter_derivative
-    chord_below = pseudo_arclength.CHORD_BELOW
+    chord_below = step.CHORD_BELOW
 
     def setting(chord: bool, derivative: bool) -> None:
-        pseudo_arclength.CHORD_BELOW = chord_below if chord else 0.0
+        step.CHORD_BELOW = chord_below if chord else 0.0
         ClampedRodEnergy.parameter_derivative = exact if derivative else (
             lambda self, q, multipliers, parameter: None)
 

@@ -1,4 +1,4 @@
-"""References of :mod:`supercoil.solvers.band` for the tests: the eigh-only block
+"""References of :mod:`supercoil.solvers.inertia` for the tests: the eigh-only block
 elimination (Haynsworth's inertia additivity, every pivot block diagonalised) and the
 Ruiz-scaled entries built with numpy, which the compiled kernels must reproduce."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.solvers.band import _MAX_CARRIED, _MAX_CONDITION
+from supercoil.solvers.inertia import _MAX_CARRIED, _MAX_CONDITION
 
 
 def equilibrated_entries(A: sp.csr_matrix, order: np.ndarray

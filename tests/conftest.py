@@ -5,7 +5,7 @@ import pytest
 from hypothesis import settings
 from threadpoolctl import threadpool_limits
 
-# One BLAS thread for the whole session, as the CLI uses
+# One BLAS thread for the whole test run, as the CLI uses
 # (supercoil.cli.main._single_threaded_blas): results then do not depend on the
 # machine's core count (a penalty solve landed on another state with two threads
 # than with one) and the many small dense solves run faster on a loaded machine.

@@ -162,6 +162,11 @@ def test_ring_diagram_locates_michells_point():
     # O(h^2) discretisation error at N = 24
     assert first[0].parameter == pytest.approx(michell(2 / 3), rel=2e-2)
     assert (first[0].count_before, first[0].count_after) == (0, 2)
+    # the contact-free branch ends at its located first contact: no state of it lies
+    # inside the tube (its closest approach is D at the last point, above D before)
+    gaps = diagram.branches["alpha"].records["min_gap_over_diameter"]
+    assert np.all(gaps[:-1] > 1.0) and abs(gaps[-1] - 1.0) < 1e-6
+    assert diagram.branches["alpha"].special_points[-1].kind == "contact_onset"
     # the contact branch stopped at its point limit: the diagram says so, and why
     assert diagram.status is sc.RunStatus.INCOMPLETE and not diagram.ok
     assert diagram.branches["alpha_contact"].status is sc.ContinuationStatus.MAX_POINTS

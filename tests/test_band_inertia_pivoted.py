@@ -1,4 +1,4 @@
-"""The L D L^T-first block elimination of solvers.band (_block_inertia_pivoted, what
+"""The L D L^T-first block elimination of solvers.inertia (_block_inertia_pivoted, what
 symmetric_inertia runs) against the dense eigenvalues' signs and the eigh-only Python
 reference (band_reference.block_inertia), on band and saddle-point matrices whose pivot blocks have
 near-null directions (deferred by the L D L^T, carried by the eigh step), and on two
@@ -12,7 +12,7 @@ import pytest
 import scipy.sparse as sp
 from band_reference import block_inertia, equilibrated_entries
 
-from supercoil.solvers import band
+from supercoil.solvers import inertia
 
 DATA = Path(__file__).parent / "data"
 
@@ -107,13 +107,13 @@ def test_pivoted_block_inertia_equals_the_dense_count_and_the_eigh_reference(see
         s = max(b, 16)
     n = A.shape[0]
     blocks = _blocks(A, s)
-    pivoted = tuple(int(v) for v in band._block_inertia_pivoted(
-        blocks, n, s, band._MAX_CONDITION, band._MAX_CARRIED, band._MIN_PIVOT))
+    pivoted = tuple(int(v) for v in inertia._block_inertia_pivoted(
+        blocks, n, s, inertia._MAX_CONDITION, inertia._MAX_CARRIED, inertia._MIN_PIVOT))
     dense = _dense_count(A)
     assert dense is not None  # the generators make regular matrices (else no oracle)
     assert pivoted == dense
     assert block_inertia(blocks, n, s) == dense
-    assert band.symmetric_inertia(sp.csr_matrix(A)) == dense
+    assert inertia.symmetric_inertia(sp.csr_matrix(A)) == dense
 
 
 def test_near_null_pivot_blocks_are_deferred_not_divided_by():
@@ -125,8 +125,8 @@ def test_near_null_pivot_blocks_are_deferred_not_divided_by():
     A = _near_null_blocks(rng, 3, s, 1e-12)
     P = A[:s, :s]
     M = np.hstack([P, A[:s, s:2 * s]])
-    tol = band._MIN_PIVOT * np.max(np.abs(P))
-    e, widths, neg, pos, biggest = band._partial_ldl(M, s, tol)
+    tol = inertia._MIN_PIVOT * np.max(np.abs(P))
+    e, widths, neg, pos, biggest = inertia._partial_ldl(M, s, tol)
     small = int(np.sum(np.abs(np.linalg.eigvalsh(P)) < 1e-9))
     assert small >= 1 and s - e >= small
     p, largest = 0, 0.0
@@ -177,11 +177,11 @@ def test_captured_ring_kkt_matrices(name):
     scaled = sp.coo_matrix((values, (rows, cols)), shape=(n, n)).toarray()
     dense = _dense_count(0.5 * (scaled + scaled.T))
     assert dense is not None
-    assert band.symmetric_inertia(A, order) == dense
+    assert inertia.symmetric_inertia(A, order) == dense
     blocks, s = _numpy_blocks(rows, cols, values, n)
     position = np.empty(n, dtype=np.int64)
     position[order] = np.arange(n)
-    compiled, s_compiled = band._equilibrated_blocks(A.indptr, A.indices, A.data, position)
+    compiled, s_compiled = inertia._equilibrated_blocks(A.indptr, A.indices, A.data, position)
     assert s_compiled == s and compiled.tobytes() == blocks.tobytes()
     assert block_inertia(blocks, n, s) == dense
 
@@ -202,5 +202,5 @@ def test_compiled_blocks_equal_the_numpy_ones_bit_for_bit(seed):
     blocks, s = _numpy_blocks(rows, cols, values, n)
     position = np.empty(n, dtype=np.int64)
     position[order] = np.arange(n)
-    compiled, s_compiled = band._equilibrated_blocks(A.indptr, A.indices, A.data, position)
+    compiled, s_compiled = inertia._equilibrated_blocks(A.indptr, A.indices, A.data, position)
     assert s_compiled == s and compiled.tobytes() == blocks.tobytes()

@@ -1,4 +1,4 @@
-"""solvers.patterns.block_csr (the integral contact's Hessian assembly) against scipy's
+"""solvers.csr_sum.block_csr (the integral contact's Hessian assembly) against scipy's
 COO path: the same pattern (explicit zeros too) and stored order, values equal to
 round-off (duplicates summed in another order), exactly where there are none; and
 csr_add_blocks (the blocks merged into the rod's Hessian) against
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from supercoil.solvers.patterns import block_csr, csr_add, csr_add_blocks
+from supercoil.solvers.csr_sum import block_csr, csr_add, csr_add_blocks
 
 
 def _scipy(dofs, blocks, n):
@@ -87,7 +87,7 @@ def test_merged_arrays_widen_indices_that_would_overflow():
     """_canonical_csr keeps the operands' index dtype unless the entry count or the
     shape exceeds it (then wider, as scipy upcasts; int8 operands stand in for int32
     ones past 2^31 entries)."""
-    from supercoil.solvers.patterns import _canonical_csr
+    from supercoil.solvers.csr_sum import _canonical_csr
 
     A = sp.random(200, 200, density=0.01, format="csr", random_state=3)
     A.sum_duplicates()

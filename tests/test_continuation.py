@@ -201,8 +201,9 @@ def test_bratu_through_the_fold_comes_back_down_the_upper_branch():
     i = fold.index
     assert np.all(np.diff(lam[:i + 1]) > 0) and np.all(np.diff(lam[i + 1:]) < 0)
     assert np.all(np.diff(u_mid) > 0)  # |u| grows all along, through the fold
-    # the lower branch is stable, the upper one has one unstable mode; seed 000's
-    # determinant sign changes with the count (a single eigenvalue crosses)
+    # the lower branch is stable, the upper one has one unstable mode; the
+    # determinant sign (Chamekh, Mani-Aouadi & Moakher 2014) changes with the count
+    # (one eigenvalue crosses)
     assert np.all(b.unstable_count[:i + 1] == 0) and np.all(b.unstable_count[i + 1:] == 1)
     assert np.all(b.determinant_sign == (-1) ** b.unstable_count)
     assert not b.points_of_kind("bifurcation")  # the count change is the fold's
@@ -245,7 +246,7 @@ def test_band_bordered_solve_is_accurate_when_the_kkt_matrix_is_nearly_singular(
     """
     import scipy.sparse as sp
 
-    from supercoil.continuation import bordered
+    from supercoil.continuation import band_bordered
 
     rng = np.random.default_rng(7)
     n, band = 120, 3
@@ -261,7 +262,7 @@ def test_band_bordered_solve_is_accurate_when_the_kkt_matrix_is_nearly_singular(
     c, r = rng.standard_normal(n), rng.standard_normal(n + 1)
     B = np.block([[A, c[:, None]], [r[None, :]]])
     rhs = rng.standard_normal(n + 1)
-    factor = bordered._BandBordered.factor(sp.csc_matrix(B))
+    factor = band_bordered.BandBordered.factor(sp.csc_matrix(B))
     exact = np.linalg.solve(B, rhs)
     assert factor is not None or singular_scale == 0.0
     if factor is not None:
@@ -278,8 +279,8 @@ def test_permuted_bordered_matrix_equals_bmat_and_fancy_indexing(seed):
     import scipy.sparse as sp
     from conftest import split_into_halves
 
-    from supercoil.continuation.bordered import _permuted_bordered
-    from supercoil.solvers.kkt import kkt_order
+    from supercoil.continuation.bordered_matrix import permuted_bordered
+    from supercoil.solvers.ordering import kkt_order
 
     rng = np.random.default_rng(seed)
     n, m = 50, 12
@@ -302,7 +303,7 @@ def test_permuted_bordered_matrix_equals_bmat_and_fancy_indexing(seed):
     reference.sort_indices()
     K = reference[:n + m, :n + m].tocoo()
     for _ in range(2):  # the second call takes the remembered layout
-        mine, (k_rows, k_cols, k_values) = _permuted_bordered(H, J, column, row, corner, order)
+        mine, (k_rows, k_cols, k_values) = permuted_bordered(H, J, column, row, corner, order)
         for attribute in ("indptr", "indices", "data"):
             assert np.array_equal(getattr(mine, attribute), getattr(reference, attribute))
         assert sorted(zip(K.row, K.col, K.data)) == sorted(zip(k_rows, k_cols, k_values))
@@ -353,7 +354,7 @@ def test_a_double_eigenvalue_crossing_under_o2_symmetry_is_seen_by_the_count_not
     (pt,) = b.points_of_kind("bifurcation")
     assert pt.parameter == pytest.approx(1.0, abs=1e-9)
     assert (pt.count_before, pt.count_after) == (0, 2)
-    assert np.all(b.determinant_sign == 1)  # seed 000's test sees nothing
+    assert np.all(b.determinant_sign == 1)  # the determinant's sign sees nothing
     assert set(np.unique(b.unstable_count)) == {0, 2}
     # the two critical modes span the (x_0, x_1) plane
     modes = pt.critical_modes
@@ -420,7 +421,7 @@ def test_branch_runs_merged_once_then_extended_equal_the_merge_of_all_runs(tmp_p
     """The tweezers' follow() reports merge(merge(runs so far), partial run) (fast path)
     instead of merge(runs so far + partial run): the same branch, bit for bit; and a
     result file stores the merged branch bit for bit."""
-    from supercoil.problems.tweezers import merge_branches
+    from supercoil.problems.segments import merge_branches
 
     p = Bratu(16, 3.0)
     user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[8] - 1.0})
@@ -684,7 +685,7 @@ class _StubSegment:
         self.x_b = np.ones(3)
 
     def point(self, u):
-        from supercoil.continuation.events import LocationFailed
+        from supercoil.continuation.zeroin import LocationFailed
         if float(u) in self.failing:
             raise LocationFailed(f"trial correction at u = {u} failed")
         return np.full(3, float(u))
@@ -802,7 +803,7 @@ def test_segment_warm_start_locates_the_same_user_event_in_fewer_iterations():
 def test_quadratic_predictor_term_is_the_curvature_of_a_circle():
     """On the unit circle x(s) = (cos s, sin s) the term is ds^2/2 x''(s) to first order
     in the last step (the difference quotient of the tangents)."""
-    from supercoil.continuation.pseudo_arclength import quadratic_term
+    from supercoil.continuation.step import quadratic_term
 
     class Plane:
         weights = np.ones(2)
@@ -841,7 +842,8 @@ def test_user_event_bracket_from_corrected_points_gives_the_same_root():
     transition are located where Brent's method on the whole segment puts them, and the
     second costs a few corrections, not a whole localisation."""
     from supercoil.continuation import events
-    from supercoil.continuation.events import Segment, _brent, locate_user_event, user_values
+    from supercoil.continuation.events import Segment, locate_user_event, user_values
+    from supercoil.continuation.zeroin import brentq_reference
 
     p, b = bratu_branch(16)
     k = 3
@@ -855,8 +857,8 @@ def test_user_event_bracket_from_corrected_points_gives_the_same_root():
     segment = Segment(system, x_a, x_b, 1e-12, 10, 1e-6)
     xtol = 1e-6 / segment.length
     reference = Segment(system, x_a, x_b, 1e-12, 10, 1e-6)
-    exact = _brent(lambda u: user_values(event, system, reference.point(u))["first"], 0.0, 1.0,
-                   xtol)
+    exact = brentq_reference(
+        lambda u: user_values(event, system, reference.point(u))["first"], 0.0, 1.0, xtol)
     calls = []
     real_correct = events.correct
 
@@ -990,10 +992,12 @@ def test_a_trust_region_of_one_step_keeps_the_branch_through_a_sharp_fold_with_f
     are refused by the turn test. With max_corrector_distance = 1 they stop after a
     Newton step or two: the same points, bit for bit, the same located fold, fewer
     corrector iterations."""
+    from supercoil.continuation import closure, phase, step
     from supercoil.continuation import pseudo_arclength as pa
 
     a, delta = 0.8, 1e-4
     runs = {}
+    modules = (pa, step, phase, closure)  # every correction of the continuation
     for distance in (None, 1.0):
         calls = []
         original = pa.correct
@@ -1003,13 +1007,15 @@ def test_a_trust_region_of_one_step_keeps_the_branch_through_a_sharp_fold_with_f
             _calls.append(result)
             return result
 
-        monkeypatch.setattr(pa, "correct", counted)
+        for module in modules:
+            monkeypatch.setattr(module, "correct", counted)
         problem = Corner(a, delta, lam=1.0 - a * np.hypot(1.0, delta))
         opts = ContinuationOptions(initial_step=0.05, max_step=0.5, parameter_bounds=(-1.0, 1.0),
                                    max_corrector_distance=distance)
         branch = continuation(problem, np.array([1.0, 0.0, 0.0]), parameter="lam",
                               options=opts)
-        monkeypatch.setattr(pa, "correct", original)
+        for module in modules:
+            monkeypatch.setattr(module, "correct", original)
         runs[distance] = (branch, calls)
     (plain, plain_calls), (guarded, guarded_calls) = runs[None], runs[1.0]
     assert plain.status is guarded.status is ContinuationStatus.PARAMETER_BOUND

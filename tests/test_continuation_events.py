@@ -11,13 +11,12 @@ from supercoil.continuation import ContinuationOptions, continuation, events
 from supercoil.continuation.events import (
     Segment,
     UserEvent,
-    _brent,
-    _zeroin,
     locate_count_change,
     locate_fold,
     locate_user_event,
 )
 from supercoil.continuation.system import ExtendedSystem
+from supercoil.continuation.zeroin import RTOL, LocationFailed, brentq_reference, zeroin
 
 
 class Counted:
@@ -52,12 +51,12 @@ def test_zeroin_without_a_guess_is_brentq(xtol):
     result) and the exact roots; known end values are not evaluated again."""
     for f, root in SMOOTH:
         reference, counted = Counted(f), Counted(f)
-        x_ref = brentq(reference, 0.0, 1.0, xtol=xtol, rtol=events.RTOL)
-        x = _zeroin(counted, 0.0, 1.0, xtol)
+        x_ref = brentq(reference, 0.0, 1.0, xtol=xtol, rtol=RTOL)
+        x = zeroin(counted, 0.0, 1.0, xtol)
         assert x == x_ref and counted.points == reference.points
         assert abs(x - root) <= xtol and _bracket_closes(f, counted.points, x, xtol)
         known = Counted(f)
-        assert _zeroin(known, 0.0, 1.0, xtol, f(0.0), f(1.0)) == x_ref
+        assert zeroin(known, 0.0, 1.0, xtol, f(0.0), f(1.0)) == x_ref
         assert known.points == reference.points[2:]
 
 
@@ -66,18 +65,18 @@ def test_zeroin_from_a_guess_within_the_tolerance_needs_two_evaluations():
     for f, root in SMOOTH:
         for offset in (-0.4, 0.3):
             counted = Counted(f)
-            x = _zeroin(counted, 0.0, 1.0, xtol, f(0.0), f(1.0), root + offset * xtol)
+            x = zeroin(counted, 0.0, 1.0, xtol, f(0.0), f(1.0), root + offset * xtol)
             assert len(counted.points) == 2
             assert abs(x - root) <= xtol and _bracket_closes(f, counted.points, x, xtol)
         # a poor guess still ends with the guarantee
         counted = Counted(f)
-        x = _zeroin(counted, 0.0, 1.0, xtol, f(0.0), f(1.0), 0.5 * (root + 1.0))
+        x = zeroin(counted, 0.0, 1.0, xtol, f(0.0), f(1.0), 0.5 * (root + 1.0))
         assert abs(x - root) <= xtol and _bracket_closes(f, counted.points, x, xtol)
     # a step function: bisection, as brentq
     step = Counted(lambda u: 0.5 if u > 0.4321 else -0.5)
     reference = Counted(step.f)
-    x = _zeroin(step, 0.0, 1.0, 1e-6)
-    brentq(reference, 0.0, 1.0, xtol=1e-6, rtol=events.RTOL)
+    x = zeroin(step, 0.0, 1.0, 1e-6)
+    brentq(reference, 0.0, 1.0, xtol=1e-6, rtol=RTOL)
     assert abs(x - 0.4321) <= 1e-6 and len(step.points) == len(reference.points)
 
 
@@ -108,7 +107,7 @@ def test_bratu_fold_is_located_as_by_brentq_with_fewer_corrections():
             reference = Segment(system, x_a, x_b, 1e-10, 10, 1e-6)
             segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-6)
             xtol = tolerance / segment.length
-            u_ref = _brent(lambda u, r=reference: r.tangent(u)[-1], 0.0, 1.0, xtol)
+            u_ref = brentq_reference(lambda u, r=reference: r.tangent(u)[-1], 0.0, 1.0, xtol)
             located = locate_fold(segment, xtol)
             assert located.located
             # both within xtol of the zero of dlambda/ds
@@ -124,25 +123,25 @@ def test_bratu_fold_is_located_as_by_brentq_with_fewer_corrections():
 
 def test_pitchfork_of_the_diagonal_problem_at_its_exact_parameter():
     """Oracle: lambda = d_0 exactly (the trivial branch x = 0, eigenvalue d_0 - lambda);
-    the localisation with brentq in place of _zeroin (the previous algorithm) uses at
+    the localisation with brentq in place of zeroin (the previous algorithm) uses at
     least as many eigenproblems."""
     d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
     p = DiagonalQuartic(d)
     system = ExtendedSystem(p, "lam", np.zeros(6))
     calls = {}
-    for name, finder in (("new", None), ("brentq", lambda f, lo, hi, xtol, *a: _brent(
-            f, lo, hi, xtol))):
+    for name, finder in (("new", None), ("brentq", lambda f, lo, hi, xtol, *a:
+                                         brentq_reference(f, lo, hi, xtol))):
         for lam_a, lam_b in ((0.8, 1.3), (0.55, 1.7)):
             x_a = system.pack(np.zeros(6), np.zeros(0), lam_a)
             x_b = system.pack(np.zeros(6), np.zeros(0), lam_b)
             segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
-            original = events._zeroin
+            original = events.zeroin
             if finder is not None:
-                events._zeroin = finder
+                events.zeroin = finder
             try:
                 located = locate_count_change(segment, 1e-10 / segment.length, 1e-3)
             finally:
-                events._zeroin = original
+                events.zeroin = original
             assert located.located and (located.count_before, located.count_after) == (0, 1)
             assert abs(located.x[-1] - 1.0) <= 1e-10 * (1 + 1e-6)
             calls[name, lam_a] = len(segment._nearest)
@@ -189,7 +188,7 @@ def test_user_event_labels_share_evaluations_and_locate_an_exact_threshold():
     assert len(calls) == n_up == len(segment.corrected) - 2  # "down": no new evaluation
     # brentq on the same function (the previous algorithm, one label) evaluated more
     counted = Counted(lambda u: reference.point(u)[-1] - star)
-    brentq(counted, 0.0, 1.0, xtol=xtol, rtol=events.RTOL)
+    brentq(counted, 0.0, 1.0, xtol=xtol, rtol=RTOL)
     assert n_up <= len(counted.points) - 2
 
 
@@ -221,18 +220,18 @@ def test_warm_start_is_the_quadratic_through_the_nearest_corrected_points():
 
 def test_zeroin_bisects_where_interpolation_divides_by_zero():
     """Found by review: values of order 1e-110 underflow the interpolation's differences
-    to zero; brentq (C arithmetic) bisects there, and so must _zeroin (it raised
+    to zero; brentq (C arithmetic) bisects there, and so must zeroin (it raised
     ZeroDivisionError). Oracle: brentq's zero."""
     for scale in (1e-110, 1e-150, 1e-200):
         def f(x, s=scale):
             return s * ((x - 0.3) ** 3 + 0.1 * (x - 0.3))
 
-        x_ref = brentq(f, 0.0, 1.0, xtol=1e-12, rtol=events.RTOL)
-        assert abs(_zeroin(f, 0.0, 1.0, 1e-12) - x_ref) <= 2e-12
+        x_ref = brentq(f, 0.0, 1.0, xtol=1e-12, rtol=RTOL)
+        assert abs(zeroin(f, 0.0, 1.0, 1e-12) - x_ref) <= 2e-12
 
 
 def test_zeroin_that_does_not_converge_says_so():
     """After maxiter steps without a bracket within xtol: LocationFailed (the callers'
     'not located'), not an unconverged point reported as located."""
-    with pytest.raises(events.LocationFailed, match="no zero located"):
-        _zeroin(lambda x: np.exp(x) - 1.5, 0.0, 1.0, 1e-14, maxiter=2)
+    with pytest.raises(LocationFailed, match="no zero located"):
+        zeroin(lambda x: np.exp(x) - 1.5, 0.0, 1.0, 1e-14, maxiter=2)

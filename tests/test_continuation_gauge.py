@@ -18,8 +18,9 @@ from test_continuation import assert_consistent
 from test_continuation_toys import DiagonalQuartic, LoadedSphere
 
 from supercoil.continuation import ContinuationOptions, continuation, switch_branch
-from supercoil.continuation.bordered import BorderedFactor, _BandBordered
-from supercoil.solvers import kkt
+from supercoil.continuation.band_bordered import BandBordered
+from supercoil.continuation.bordered import BorderedFactor
+from supercoil.solvers import kkt, pinned_rows
 from supercoil.solvers.problem import HessianParts
 
 
@@ -53,7 +54,7 @@ def test_k_bordered_band_solve_equals_the_dense_solve(seed, singular_scale):
     rows, cols = np.nonzero(K)
     C, R, D = rng.standard_normal((n, k)), rng.standard_normal((n, k)), rng.standard_normal((k, k))
     E = np.block([[K, C], [R.T, D]])
-    factor = _BandBordered.from_parts(sp.csr_matrix(E), rows, cols, K[rows, cols], C, R, D)
+    factor = BandBordered.from_parts(sp.csr_matrix(E), rows, cols, K[rows, cols], C, R, D)
     assert factor is not None
     rhs = rng.standard_normal((n + k, 2))
     assert _relative_error(factor.solve(rhs), np.linalg.solve(E, rhs)) < 1e-10
@@ -64,7 +65,7 @@ def test_k_bordered_band_solve_equals_the_dense_solve(seed, singular_scale):
     C = np.column_stack([c, u])
     R = np.column_stack([r, v])
     D = np.diag([d, -1.0])
-    factor = _BandBordered.from_parts(sp.csr_matrix(B), rows, cols, K[rows, cols], C, R, D)
+    factor = BandBordered.from_parts(sp.csr_matrix(B), rows, cols, K[rows, cols], C, R, D)
     assert factor is not None
     rhs = rng.standard_normal(n + 1)
     z = factor.solve(rhs)
@@ -83,7 +84,7 @@ def test_k_bordered_solve_with_borders_of_very_different_scales_stays_on_the_ban
     R = rng.standard_normal((n, 3)) * np.array([1e8, 1e-3, 1.0])
     D = np.diag([1e8, -1.0, -1.0])
     E = np.block([[K, C], [R.T, D]])
-    factor = _BandBordered.from_parts(sp.csr_matrix(E), rows, cols, K[rows, cols], C, R, D)
+    factor = BandBordered.from_parts(sp.csr_matrix(E), rows, cols, K[rows, cols], C, R, D)
     assert factor is not None
     rhs = rng.standard_normal(n + 3)
     z = factor.solve(rhs)
@@ -114,12 +115,12 @@ def test_bordered_factor_with_dense_rows_keeps_the_band_and_equals_the_dense_sol
         seed, singular_scale):
     rng = np.random.default_rng(10 + seed)
     H, J, K = _kkt_with_dense_rows(rng, singular_scale=singular_scale)
-    assert kkt.dense_rows(J).tolist() == [8, 9]
+    assert pinned_rows.dense_rows(J).tolist() == [8, 9]
     size = K.shape[0]
     column, row = rng.standard_normal(size), rng.standard_normal(size + 1)
     B = np.block([[K, column[:, None]], [row[None, :]]])
     factor = BorderedFactor(H, J, column, row)
-    assert isinstance(factor._lu, _BandBordered)  # not SuperLU
+    assert isinstance(factor._lu, BandBordered)  # not SuperLU
     rhs = rng.standard_normal(size + 1)
     assert _relative_error(factor.solve(rhs), np.linalg.solve(B, rhs)) < 1e-10
 
@@ -154,7 +155,7 @@ def test_a_pin_that_misses_the_null_mode_falls_back_to_the_unpinned_factors():
     dense[0, 0] = 0.1  # regularises K, but the pin goes to the largest entry
     H = HessianParts(sp.diags(diagonal, format="csr"), np.zeros((0, n)), np.zeros(0))
     J = sp.csr_matrix(dense)
-    assert kkt.PinnedRows.of(J).pins[0] != 0
+    assert pinned_rows.PinnedRows.of(J).pins[0] != 0
     K = np.block([[np.diag(diagonal), dense.T], [dense, np.zeros((1, 1))]])
     values = np.linalg.eigvalsh(K)
     factor = kkt.KKTFactor(H, J)
@@ -175,22 +176,22 @@ def test_dense_rows_follow_the_documented_rule():
     J[1, 7] = 1.0  # a node gauge
     J[2, :40] = 1.0  # max(32, 0.1 n) = 40 entries: not more than the limit
     J[3, ::2] = 1.0  # a mode over every other DOF
-    assert kkt.dense_rows(J.tocsr()).tolist() == [3]
+    assert pinned_rows.dense_rows(J.tocsr()).tolist() == [3]
 
 
 @pytest.fixture
 def rows_left_dense(monkeypatch):
     """The path before pinning: no row is dense enough."""
     def apply():
-        monkeypatch.setattr(kkt, "DENSE_ROW_MIN_ENTRIES", 10**9)
+        monkeypatch.setattr(pinned_rows, "DENSE_ROW_MIN_ENTRIES", 10**9)
     return apply
 
 
 @pytest.fixture
 def every_row_pinned(monkeypatch):
     def apply():
-        monkeypatch.setattr(kkt, "DENSE_ROW_MIN_ENTRIES", 0)
-        monkeypatch.setattr(kkt, "DENSE_ROW_FRACTION", 0.0)
+        monkeypatch.setattr(pinned_rows, "DENSE_ROW_MIN_ENTRIES", 0)
+        monkeypatch.setattr(pinned_rows, "DENSE_ROW_FRACTION", 0.0)
     return apply
 
 
@@ -223,7 +224,7 @@ def test_toy_branches_are_the_same_with_every_constraint_row_pinned(every_row_pi
 
     before = run()
     every_row_pinned()
-    assert kkt.dense_rows(sp.csr_matrix([[1.0, 0.0]])).size == 1
+    assert pinned_rows.dense_rows(sp.csr_matrix([[1.0, 0.0]])).size == 1
     for (old, _), (new, problem) in zip(before, run()):
         _assert_same_branch(old, new, 1e-10)
         assert_consistent(new, problem)
@@ -302,26 +303,25 @@ class _NearlySymmetric(DiagonalQuartic):
 
 
 def test_a_tangent_recomputed_in_a_new_gauge_is_oriented_without_the_slide():
-    """``_Tracer._orientation``: the old tangent minus its M-orthogonal projection on the
+    """``phase.orientation``: the old tangent minus its M-orthogonal projection on the
     approximate-symmetry modes. Oracle: a tangent whose slide part points against the old
     one but whose remaining part agrees with it (what a moved gauge produces: measured on
     the ring's alpha branch, where the plain product turned the branch back) is oriented
     along the old one; the row is M-orthogonal to the slide and leaves a slide-free
     tangent as it was."""
-    from supercoil.continuation.pseudo_arclength import _Tracer
+    from supercoil.continuation.phase import orientation
     from supercoil.continuation.system import ExtendedSystem
 
     problem = _NearlySymmetric(np.array([1.0, 1.0 + 1e-6, 3.0, 4.0]))
     q = np.array([0.6, 0.8, 0.0, 0.0])
     system = ExtendedSystem(problem, "lam", q)
-    tracer = _Tracer(system, ContinuationOptions(), "toy", None, None, None, ())
     x = system.pack(q, np.zeros(0), 2.0)
     slide = np.concatenate([[-0.8, 0.6, 0.0, 0.0], [0.0]])  # the rotation at q
     body = np.array([0.0, 0.0, 0.3, 0.1, 0.05])  # dlambda > 0
     t_old = body + 5.0 * slide
     t_new = body - 5.0 * slide
     assert t_new @ (system.weights * t_old) < 0  # the plain product flips it
-    row = tracer._orientation(x, t_old)
+    row = orientation(system, x, t_old)
     assert t_new @ row > 0
     assert abs(row[:4] @ slide[:4]) < 1e-12
-    np.testing.assert_allclose(tracer._orientation(x, body), system.weights * body, atol=1e-15)
+    np.testing.assert_allclose(orientation(system, x, body), system.weights * body, atol=1e-15)

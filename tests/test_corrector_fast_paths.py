@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from supercoil.solvers import kkt
+from supercoil.solvers import kkt_matrix, ordering
 
 
 def contact_like_kkt(rng, nodes, pairs, zero_rows=0):
@@ -56,10 +56,10 @@ def test_merged_kkt_order_equals_scipys_on_contact_patterns(seed):
     S, J = contact_like_kkt(rng, int(rng.integers(15, 60)), int(rng.integers(0, 12)),
                             zero_rows=int(rng.integers(1, 6)) if seed % 2 else 0)
     assert J.has_canonical_format and (not seed % 2 or np.any(J.data == 0.0))
-    merged = kkt._kkt_order_merged(S, J)
+    merged = ordering._kkt_order_merged(S, J)
     assert merged is not None  # the fast path takes these
-    assert np.array_equal(merged, kkt._kkt_order_scipy(S, J))
-    assert np.array_equal(kkt.kkt_order(S, J), merged)
+    assert np.array_equal(merged, ordering._kkt_order_scipy(S, J))
+    assert np.array_equal(ordering.kkt_order(S, J), merged)
 
 
 def test_merged_kkt_order_sees_exact_cancellation_and_refuses_near_cancellation():
@@ -82,15 +82,15 @@ def test_merged_kkt_order_sees_exact_cancellation_and_refuses_near_cancellation(
     cancelled = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, -1.0)]])
     kept = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, -0.5)]])
     for J in (cancelled, kept):
-        merged = kkt._kkt_order_merged(S, J)
+        merged = ordering._kkt_order_merged(S, J)
         assert merged is not None
-        assert np.array_equal(merged, kkt._kkt_order_scipy(S, J))
-    assert not np.array_equal(kkt._kkt_order_merged(S, cancelled),
-                              kkt._kkt_order_merged(S, kept))
+        assert np.array_equal(merged, ordering._kkt_order_scipy(S, J))
+    assert not np.array_equal(ordering._kkt_order_merged(S, cancelled),
+                              ordering._kkt_order_merged(S, kept))
     three = jacobian(base + [[(2, 1.0), (20, 1.0)], [(2, 1.0), (20, 1.0)],
                              [(2, 1.0), (20, -2.0 + 1e-12)]])
-    assert kkt._kkt_order_merged(S, three) is None
-    assert np.array_equal(kkt._kkt_order(S, three), kkt._kkt_order_scipy(S, three))
+    assert ordering._kkt_order_merged(S, three) is None
+    assert np.array_equal(ordering._kkt_order(S, three), ordering._kkt_order_scipy(S, three))
 
 
 def dense_bordered(hessian, J, column, row):
@@ -137,7 +137,8 @@ def test_bordered_factor_takes_the_band_lu_on_stored_zeros_and_wide_bands():
     contact-like one whose band is 0.25-1/3 of its size went to SuperLU before: both
     now take the band LU, and solve as the dense matrix does; with a nonzero where the
     layout dropped a stored zero, the same pattern goes to SuperLU, as correct."""
-    from supercoil.continuation.bordered import BAND_FRACTION, BorderedFactor, _BandBordered
+    from supercoil.continuation.band_bordered import BandBordered
+    from supercoil.continuation.bordered import BAND_FRACTION, BorderedFactor
     from supercoil.solvers.problem import HessianParts
 
     rng = np.random.default_rng(31)
@@ -150,9 +151,9 @@ def test_bordered_factor_takes_the_band_lu_on_stored_zeros_and_wide_bands():
     assert far.nnz > S.nnz
     cases.append((far, J, "zeros"))
     S, J = contact_like_kkt(np.random.default_rng(5), 30, 1)  # one far pair
-    order = kkt.kkt_order(S, J)
+    order = ordering.kkt_order(S, J)
     size = S.shape[0] + J.shape[0]
-    rows, cols, _values = kkt._kkt_entries(S, J)
+    rows, cols, _values = kkt_matrix.kkt_entries(S, J)
     position = np.empty(size, dtype=np.int64)
     position[order] = np.arange(size)
     width = np.max(position[rows] - position[cols]) + np.max(position[cols] - position[rows]) + 1
@@ -163,7 +164,7 @@ def test_bordered_factor_takes_the_band_lu_on_stored_zeros_and_wide_bands():
         size = S.shape[0] + J.shape[0] + 1
         column, row = rng.standard_normal(size - 1), rng.standard_normal(size)
         factor = BorderedFactor(hessian, J, column, row)
-        assert isinstance(factor._lu, _BandBordered)
+        assert isinstance(factor._lu, BandBordered)
         B = dense_bordered(hessian, J, column, row)
         rhs = rng.standard_normal(size)
         exact = np.linalg.solve(B, rhs)
@@ -175,8 +176,8 @@ def test_bordered_factor_takes_the_band_lu_on_stored_zeros_and_wide_bands():
     filled.data[((row_of == 1) & (S.indices == 80)) | ((row_of == 80) & (S.indices == 1))] = 1e-3
     hessian = HessianParts(filled)
     column, row = rng.standard_normal(size - 1), rng.standard_normal(size)
-    factor = BorderedFactor(hessian, J, column, row, order=kkt.kkt_order(S, J))
-    assert not isinstance(factor._lu, _BandBordered)
+    factor = BorderedFactor(hessian, J, column, row, order=ordering.kkt_order(S, J))
+    assert not isinstance(factor._lu, BandBordered)
     B = dense_bordered(hessian, J, column, row)
     rhs = rng.standard_normal(size)
     exact = np.linalg.solve(B, rhs)

@@ -1,7 +1,7 @@
 """The bordered and KKT factorisations against direct constructions of their inputs.
 
 Oracles: LAPACK's band LU of a C-ordered ``ab`` filled by fancy indexing,
-``_permuted_bordered``'s entries of the pinned block, scipy's sums, differences,
+``permuted_bordered``'s entries of the pinned block, scipy's sums, differences,
 stacks and COO conversion: the same arrays bit for bit, also when the pattern
 changes between calls (the per-pattern memos must not hand out a stale layout);
 and dense solves of the bordered matrix for the solutions.
@@ -15,16 +15,13 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 from test_kkt_band import banded_kkt
 
-from supercoil.continuation.bordered import BorderedFactor, _BandBordered, _permuted_bordered
-from supercoil.solvers import kkt
+from supercoil.continuation.band_bordered import BandBordered
+from supercoil.continuation.bordered import BorderedFactor
+from supercoil.continuation.bordered_matrix import permuted_bordered
+from supercoil.solvers import kkt, kkt_matrix, ordering, pinned_rows
 from supercoil.solvers.band import band_factor, band_layout, band_lu
-from supercoil.solvers.patterns import (
-    CSRArrays,
-    csr_add,
-    csr_matvec,
-    csr_rmatvec,
-    csr_vstack,
-)
+from supercoil.solvers.csr import CSRArrays, csr_matvec, csr_rmatvec, csr_vstack
+from supercoil.solvers.csr_sum import csr_add
 from supercoil.solvers.problem import HessianParts
 
 
@@ -65,29 +62,29 @@ def test_band_lu_equals_the_reference_band_lu_bit_for_bit(seed):
 
 def reference_band_entries(S, J, column, border_row, corner, order):
     """The band block's entries: those of the pinned (or plain) KKT block from
-    _permuted_bordered without the matrix."""
-    pinned = kkt.PinnedRows.of(J) if J.shape[0] else None
+    permuted_bordered without the matrix."""
+    pinned = pinned_rows.PinnedRows.of(J) if J.shape[0] else None
     J_banded = J if pinned is None else pinned.sparse
-    _, entries = _permuted_bordered(S, J_banded, column, border_row, corner, order,
+    _, entries = permuted_bordered(S, J_banded, column, border_row, corner, order,
                                     matrix=False)
     return entries
 
 
 def check_bordered(factor, hessian, J, column, row, rng):
     """The factor's band LU is the reference one bit for bit; its refinement matrix is
-    _permuted_bordered's scipy matrix; its solves are those of the dense matrix."""
-    S = kkt.canonical(hessian.sparse.tocsr())
+    permuted_bordered's scipy matrix; its solves are those of the dense matrix."""
+    S = kkt_matrix.canonical(hessian.sparse.tocsr())
     n, m = S.shape[0], J.shape[0]
     size = n + m + 1
     border_row = factor.row_scale * row[:-1]
     corner = row[-1] * factor.row_scale
-    entries = reference_band_entries(S, kkt.canonical(J), column, border_row, corner,
+    entries = reference_band_entries(S, kkt_matrix.canonical(J), column, border_row, corner,
                                   factor.order)
     lub, piv, kl, ku, _info = reference_band_lu(size - 1, *entries)
-    assert isinstance(factor._lu, _BandBordered)
+    assert isinstance(factor._lu, BandBordered)
     assert (factor._lu._kl, factor._lu._ku) == (kl, ku)
     assert np.array_equal(factor._lu._lub, lub) and np.array_equal(factor._lu._piv, piv)
-    B_reference, _ = _permuted_bordered(S, kkt.canonical(J), column, border_row, corner,
+    B_reference, _ = permuted_bordered(S, kkt_matrix.canonical(J), column, border_row, corner,
                                      factor.order)
     B_mine = factor._lu._B
     assert isinstance(B_mine, CSRArrays)
@@ -143,7 +140,7 @@ def test_bordered_factor_on_ring_states_equals_the_reference():
     row = system.weights * np.linspace(1.0, 2.0, system.size)
     for y in (x, _nearby(system, x, 1e-4)):
         H, J, column = system.hessian(y), system.jacobian(y), system.parameter_derivative(y)
-        assert kkt.dense_rows(J).size == 1
+        assert pinned_rows.dense_rows(J).size == 1
         check_bordered(BorderedFactor(H, J, column, row), H, J, column, row, rng)
 
 
@@ -163,14 +160,14 @@ def test_kkt_factor_band_and_inertia_inputs_equal_the_reference(seed):
     S_mine, J_mine = factor._factored
     for name in ("data", "indices", "indptr"):
         assert np.array_equal(getattr(S_mine, name), getattr(S, name))
-    rows, cols, values = kkt._kkt_entries(S, J_mine)
+    rows, cols, values = kkt_matrix.kkt_entries(S, J_mine)
     size = n + J.shape[0]
     position = np.empty(size, dtype=np.int64)
     position[factor.order] = np.arange(size)
     lub, piv, *_ = reference_band_lu(size, position[rows], position[cols], values)
     assert np.array_equal(factor._lu._lub, lub) and np.array_equal(factor._lu._piv, piv)
     K_reference = sp.csr_matrix((values, (rows, cols)), shape=(size, size))
-    K_mine = kkt.kkt_csr(S_mine, J_mine)
+    K_mine = kkt_matrix.kkt_csr(S_mine, J_mine)
     for name in ("data", "indices", "indptr"):
         assert np.array_equal(getattr(K_mine, name), getattr(K_reference, name))
     dense = np.block([[H.dense() - shift * np.diag(mass if mass is not None else np.ones(n)),
@@ -185,7 +182,7 @@ def test_shifted_hessian_with_zeros_and_cancellation_equals_scipys_difference():
     S.data[S.data == 1.0] = 0.0  # explicit zeros off the diagonal
     mass = np.array([1.0, 0.0, 1.5])
     for shift in (2.0, -0.5, 1e-300):
-        mine = kkt._shifted(S, shift, mass)
+        mine = kkt_matrix.shifted(S, shift, mass)
         scipys = (S - shift * sp.diags(mass)).tocsr()
         for name in ("data", "indices", "indptr"):
             assert np.array_equal(getattr(mine, name), getattr(scipys, name)), (shift, name)
@@ -239,13 +236,13 @@ def test_order_memo_sums_and_dense_rows_equal_numpys_counts():
     J.data[J.indptr[-2]:J.indptr[-1]][:100] = 0.0  # the last dense row falls below the limit
     row_of = np.repeat(np.arange(J.shape[0]), np.diff(J.indptr))
     counts = np.bincount(row_of[J.data != 0], minlength=J.shape[0])
-    limit = max(kkt.DENSE_ROW_MIN_ENTRIES, kkt.DENSE_ROW_FRACTION * J.shape[1])
-    assert np.array_equal(kkt.dense_rows(J), np.flatnonzero(counts > limit))
+    limit = max(pinned_rows.DENSE_ROW_MIN_ENTRIES, pinned_rows.DENSE_ROW_FRACTION * J.shape[1])
+    assert np.array_equal(pinned_rows.dense_rows(J), np.flatnonzero(counts > limit))
     _H, J = banded_kkt(rng, 120, 15)
     J = sp.csr_matrix(J)
-    memo = kkt._OrderMemo.of(J, np.arange(135))
+    memo = ordering.OrderMemo.of(J, np.arange(135))
     terms = J.data[memo._first] * J.data[memo._second]
-    total, size = kkt._pair_sums(J.data, memo._first, memo._second, memo._group,
+    total, size = ordering._pair_sums(J.data, memo._first, memo._second, memo._group,
                                  memo._n_groups)
     assert np.array_equal(total, np.bincount(memo._group, terms, minlength=memo._n_groups))
     assert np.array_equal(size, np.bincount(memo._group, np.abs(terms),

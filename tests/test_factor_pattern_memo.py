@@ -17,15 +17,16 @@ import scipy.sparse as sp
 from test_corrector_fast_paths import contact_like_kkt
 from test_kkt_band import banded_kkt
 
-from supercoil.continuation import bordered
-from supercoil.continuation.bordered import BorderedFactor, _BandBordered
-from supercoil.solvers import band, kkt, patterns
+from supercoil.continuation import band_bordered, bordered, bordered_matrix
+from supercoil.continuation.band_bordered import BandBordered
+from supercoil.continuation.bordered import BorderedFactor
+from supercoil.solvers import band, csr, kkt_matrix, ordering, patterns, pinned_rows
 from supercoil.solvers.problem import HessianParts
 
 
 def clear_memos():
-    for memo in (bordered._PATTERNS, bordered._LAYOUTS, kkt._ORDER_MEMO, kkt._GRAM_MEMO,
-                 kkt._BAND_MEMO, kkt._CUT_MEMO):
+    for memo in (bordered._PATTERNS, bordered_matrix._LAYOUTS, ordering._ORDER_MEMO, ordering._GRAM_MEMO,
+                 kkt_matrix._BAND_MEMO, pinned_rows._CUT_MEMO):
         memo.clear()
 
 
@@ -33,7 +34,7 @@ def factor_arrays(factor):
     """Everything a factor holds that its solves use."""
     lu = factor._lu
     out = [factor.order, factor.kkt_order, np.float64(factor.row_scale)]
-    if isinstance(lu, _BandBordered):
+    if isinstance(lu, BandBordered):
         out += [lu._lub, lu._piv, lu._B.data, lu._B.indices, lu._B.indptr, lu._C, lu._R,
                 lu._D, lu._KC, np.float64(lu._b_max), np.asarray(lu._schur[0])]
         # max |B| as the former __init__ took it
@@ -116,12 +117,12 @@ def test_remembered_patterns_give_the_factor_of_the_memo_free_path_bit_for_bit(m
         mine = BorderedFactor(hessian, J, column, row)
         if len(ordered) == before:
             hits.append(k)
-        state = [dict(memo._items) for memo in (bordered._PATTERNS, bordered._LAYOUTS,
-                 kkt._ORDER_MEMO, kkt._GRAM_MEMO, kkt._BAND_MEMO, kkt._CUT_MEMO)]
+        state = [dict(memo._items) for memo in (bordered._PATTERNS, bordered_matrix._LAYOUTS,
+                 ordering._ORDER_MEMO, ordering._GRAM_MEMO, kkt_matrix._BAND_MEMO, pinned_rows._CUT_MEMO)]
         clear_memos()
         fresh = BorderedFactor(hessian, J, column, row)
-        for memo, items in zip((bordered._PATTERNS, bordered._LAYOUTS, kkt._ORDER_MEMO,
-                                kkt._GRAM_MEMO, kkt._BAND_MEMO, kkt._CUT_MEMO), state,
+        for memo, items in zip((bordered._PATTERNS, bordered_matrix._LAYOUTS, ordering._ORDER_MEMO,
+                                ordering._GRAM_MEMO, kkt_matrix._BAND_MEMO, pinned_rows._CUT_MEMO), state,
                                strict=True):
             memo.clear()
             for key, value in items.items():
@@ -191,7 +192,7 @@ def test_pattern_words_differ_exactly_when_the_patterns_or_zeros_do():
 
 
 def former_bordered_layout(S, J, col_at, row_at, has_corner, order):
-    """bordered._bordered_layout as it was (numpy: row-major keys sorted by argsort)."""
+    """bordered_matrix.bordered_layout as it was (numpy: row-major keys sorted by argsort)."""
     n, m = S.shape[0], J.shape[0]
     size = n + m + 1
     s_rows = np.repeat(np.arange(n), np.diff(S.indptr))
@@ -224,9 +225,9 @@ def test_sorted_layout_equals_the_former_argsort(seed):
     col_at = np.sort(rng.choice(n + m, size=int(rng.integers(0, n + m)), replace=False))
     row_at = np.sort(rng.choice(n + m, size=int(rng.integers(0, n + m)), replace=False))
     order = rng.permutation(size) if seed % 2 else np.concatenate(
-        [kkt.kkt_order(S, J), [size - 1]])
+        [ordering.kkt_order(S, J), [size - 1]])
     for has_corner in (True, False):
-        mine = bordered._bordered_layout(S, J, col_at, row_at, has_corner, order)
+        mine = bordered_matrix.bordered_layout(S, J, col_at, row_at, has_corner, order)
         former = former_bordered_layout(S, J, col_at, row_at, has_corner, order)
         for a, b in zip(mine, former, strict=True):
             assert a.dtype == b.dtype and np.array_equal(a, b)
@@ -248,7 +249,7 @@ def test_placed_multipliers_equal_the_former_stable_sort(seed):
     keys = np.concatenate([2 * np.arange(n), 2 * first + 1])
     items = np.concatenate([x_order, n + np.arange(m)])
     former = items[np.argsort(keys, kind="stable")]
-    mine = kkt._place_multipliers(x_order, rows, columns, n, m)
+    mine = ordering._place_multipliers(x_order, rows, columns, n, m)
     assert mine.dtype == former.dtype and np.array_equal(mine, former)
 
 
@@ -274,7 +275,7 @@ def test_band_layout_offsets_equal_numpys(seed):
 
 
 def former_certifies(memo, J):
-    total, size = kkt._pair_sums(J.data, memo._first, memo._second, memo._group,
+    total, size = ordering._pair_sums(J.data, memo._first, memo._second, memo._group,
                                  memo._n_groups)
     nonzero = np.abs(total) > 1e-8 * size
     if memo._cancelled is None:
@@ -295,7 +296,7 @@ def test_compiled_certificate_equals_the_former_one():
     J[5, [20, 21]] = 0.5, 0.25
     J = sp.csr_matrix(J)
     order = np.arange(n + 6)
-    memo = kkt._OrderMemo.of(J, order)
+    memo = ordering.OrderMemo.of(J, order)
     trials = [J]
     for _ in range(30):
         other = J.copy()
@@ -314,7 +315,7 @@ def test_compiled_certificate_equals_the_former_one():
             expected = former_certifies(memo, J_trial)
             assert memo.certifies(J_trial) == expected
             seen.add(expected)
-        memo._cancelled = kkt._OrderMemo.of(J, order)._cancelled
+        memo._cancelled = ordering.OrderMemo.of(J, order)._cancelled
     assert seen == {True, False}
 
 
@@ -325,20 +326,20 @@ def test_refinement_residual_equals_the_sparse_product(p):
     A.data = rng.standard_normal(A.data.size) * 10.0 ** rng.uniform(-5, 5, A.data.size)
     shape = (50,) if p is None else (50, p)
     rhs, z = rng.standard_normal(shape), rng.standard_normal(shape)
-    res, norm, z_max, rhs_max = bordered._refinement_residual(A.indptr, A.indices, A.data,
+    res, norm, z_max, rhs_max = band_bordered._refinement_residual(A.indptr, A.indices, A.data,
                                                               rhs, z)
-    former = rhs - patterns.csr_matvec(A.indptr, A.indices, A.data, z, 50)
+    former = rhs - csr.csr_matvec(A.indptr, A.indices, A.data, z, 50)
     assert np.array_equal(res, former) and res.shape == former.shape
     assert norm == float(np.max(np.abs(former), initial=0.0))
     assert z_max == float(np.max(np.abs(z))) and rhs_max == float(np.max(np.abs(rhs)))
     z[7] = np.nan
-    _res, norm, z_max, _ = bordered._refinement_residual(A.indptr, A.indices, A.data, rhs, z)
+    _res, norm, z_max, _ = band_bordered._refinement_residual(A.indptr, A.indices, A.data, rhs, z)
     assert np.isnan(z_max) and np.isnan(norm) == np.isnan(np.max(np.abs(
-        rhs - patterns.csr_matvec(A.indptr, A.indices, A.data, z, 50))))
+        rhs - csr.csr_matvec(A.indptr, A.indices, A.data, z, 50))))
 
 
 def former_schur_test(D, R, KC, schur):
-    """_BandBordered._from_factor's test of Sigma as it was (arrays): kept or not."""
+    """BandBordered._from_factor's test of Sigma as it was (arrays): kept or not."""
     if not np.all(np.isfinite(schur)):
         return False
     bound = np.abs(D) + np.outer(np.linalg.norm(R, axis=0), np.linalg.norm(KC, axis=0))
@@ -368,7 +369,7 @@ def test_one_border_schur_test_equals_the_array_formula():
               (np.full((1, 1), np.inf), zero, zero, np.array([[1.0]]))]
     kept = []
     for D, R, KC, schur in cases:
-        factor = _BandBordered.__new__(_BandBordered)
+        factor = BandBordered.__new__(BandBordered)
         factor._D, factor._R, factor._KC = D, R, KC
         mine = factor._one_border(schur) is not None
         with np.errstate(invalid="ignore"):  # inf / inf: the former arrays warned
@@ -379,7 +380,7 @@ def test_one_border_schur_test_equals_the_array_formula():
 
 @pytest.mark.parametrize("seed", range(3))
 def test_permuted_kkt_entries_equal_the_gathered_entries(seed):
-    """kkt_band_layout's places of the KKT entries against _kkt_entries gathered by the
+    """kkt_band_layout's places of the KKT entries against kkt_entries gathered by the
     positions (the former code), also without constraints."""
     rng = np.random.default_rng(120 + seed)
     S, J = contact_like_kkt(rng, int(rng.integers(4, 30)), int(rng.integers(0, 3)))
@@ -387,8 +388,8 @@ def test_permuted_kkt_entries_equal_the_gathered_entries(seed):
         J = sp.csr_matrix((0, S.shape[0]))
     size = S.shape[0] + J.shape[0]
     position = rng.permutation(size)
-    rows, cols, _values = kkt._kkt_entries(S, J, values=False)
-    mine = kkt._permuted_kkt_entries(S.indptr, S.indices, J.indptr, J.indices, position)
+    rows, cols, _values = kkt_matrix.kkt_entries(S, J, values=False)
+    mine = kkt_matrix.permuted_kkt_entries(S.indptr, S.indices, J.indptr, J.indices, position)
     for a, b in zip(mine, (position[rows], position[cols]), strict=True):
         assert a.dtype == b.dtype and np.array_equal(a, b)
 
@@ -407,12 +408,12 @@ def test_dense_rows_with_the_long_row_check_follow_the_rule():
         J = sp.csr_matrix(J)
         if trial % 2:
             J.data[::3] = 0.0  # stored zeros: long rows of few nonzeros
-        limit = max(kkt.DENSE_ROW_MIN_ENTRIES, kkt.DENSE_ROW_FRACTION * n)
+        limit = max(pinned_rows.DENSE_ROW_MIN_ENTRIES, pinned_rows.DENSE_ROW_FRACTION * n)
         rule = [k for k in range(5) if np.count_nonzero(J[k].data) > limit]
-        assert kkt.dense_rows(J).tolist() == rule
-        assert kkt.has_long_rows(J) == bool(np.max(np.diff(J.indptr)) > limit)
-        assert not rule or kkt.has_long_rows(J)
-    assert not kkt.has_long_rows(sp.csr_matrix((0, n)))
+        assert pinned_rows.dense_rows(J).tolist() == rule
+        assert pinned_rows.has_long_rows(J) == bool(np.max(np.diff(J.indptr)) > limit)
+        assert not rule or pinned_rows.has_long_rows(J)
+    assert not pinned_rows.has_long_rows(sp.csr_matrix((0, n)))
 
 
 def test_pattern_memo_counts_the_layouts_it_keeps():

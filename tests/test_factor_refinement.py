@@ -84,7 +84,7 @@ def test_newton_steps_by_refinement_converge_as_with_new_factors(monkeypatch):
     from supercoil.continuation import bordered
     from supercoil.continuation.corrector import correct
     from supercoil.continuation.options import ContinuationOptions
-    from supercoil.continuation.pseudo_arclength import branch_phase_modes
+    from supercoil.continuation.phase import branch_phase_modes
     from supercoil.continuation.system import ExtendedSystem
     from supercoil.problems.ring import twisted_circle_problem
 
@@ -142,7 +142,7 @@ def test_rephased_tangents_by_refinement_equal_those_of_new_factors(monkeypatch)
     corrector factor under that factor's row and oriented by the orientation row. Oracle:
     the same run with a new factor for every solve (factor_refinement=False): the same
     points and tangents to round-off, with fewer tangent factorisations."""
-    from supercoil.continuation import pseudo_arclength
+    from supercoil.continuation import phase, step
     from supercoil.continuation.options import ContinuationOptions
     from supercoil.continuation.switching import switch_branch
     from supercoil.problems.ring_branches import circle_branch
@@ -150,13 +150,14 @@ def test_rephased_tangents_by_refinement_equal_those_of_new_factors(monkeypatch)
     circle, problem = circle_branch(2 / 3, 24, 3.0)
     point = circle.points_of_kind("bifurcation")[0]
     calls = []
-    original = pseudo_arclength.tangent
+    original = step.tangent
 
     def counted(*args, **kwargs):
         calls.append(1)
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(pseudo_arclength, "tangent", counted)
+    for module in (step, phase):  # the tangents of the steps and of the moved gauges
+        monkeypatch.setattr(module, "tangent", counted)
     runs = {}
     for refine in (False, True):
         calls.clear()

@@ -26,7 +26,8 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.contact.solve import _independent_pairs, solve_contact
 from supercoil.contact.spline_distance import local_minimum_pairs
 from supercoil.problems.ring_branches import ring_records, twisted_circle_problem
-from supercoil.problems.ring_diagram import DiagramOptions, kkt_residual, ring_diagram
+from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
+from supercoil.problems.ring_diagram.records import kkt_residual
 from supercoil.solvers.newton import NewtonOptions, lagrangian_hessian
 from supercoil.stability.analysis import analyse
 

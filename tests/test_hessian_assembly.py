@@ -27,8 +27,9 @@ from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.sample_weights import polygon_weights, spline_weights
 from supercoil.contact.spline_pieces import bspline_pieces
+from supercoil.solvers.csr import csr_restrict
+from supercoil.solvers.csr_sum import block_csr, csr_add, csr_add_blocks
 from supercoil.solvers.newton import lagrangian_hessian
-from supercoil.solvers.patterns import block_csr, csr_add, csr_add_blocks, csr_restrict
 
 
 def _same_bits(mine, ref) -> bool:

@@ -9,7 +9,9 @@ import pytest
 import scipy.sparse as sp
 from conftest import with_rank_one_terms
 
-from supercoil.solvers.kkt import KKTFactor, SingularMatrixError, _BandLU, _OrderedLU
+from supercoil.solvers.errors import SingularMatrixError
+from supercoil.solvers.kkt import KKTFactor
+from supercoil.solvers.lu import BandLU, OrderedLU
 from supercoil.solvers.problem import HessianParts
 
 
@@ -38,7 +40,7 @@ def test_band_factor_equals_the_dense_matrix(seed):
                       dense_rows=int(seed % 3 == 2))
     shift, mass = (0.0, None) if seed % 2 else (-0.3, rng.uniform(0.5, 2.0, n))
     band = KKTFactor(H, J, shift=shift, mass=mass)
-    assert isinstance(band._lu, _BandLU)
+    assert isinstance(band._lu, BandLU)
     k = J.shape[0]
     Hd = H.dense() - shift * np.diag(mass if mass is not None else np.ones(n))
     K = np.block([[Hd, J.toarray().T], [J.toarray(), np.zeros((k, k))]])
@@ -69,7 +71,7 @@ def test_band_determinant_sign_counts_row_swaps():
             A += np.diag(d, k) + (np.diag(d, -k) if k else 0.0)
         A[np.arange(0, n, 3), np.arange(0, n, 3)] = 0.0  # forces pivoting
         coo = sp.coo_matrix(A)
-        lu = _BandLU.of(n, coo.row, coo.col, coo.data, np.arange(n))
+        lu = BandLU.of(n, coo.row, coo.col, coo.data, np.arange(n))
         assert np.any(lu._piv != np.arange(n))
         assert lu.determinant_sign() == int(np.sign(np.linalg.det(A)))
 
@@ -80,11 +82,11 @@ def test_wide_bands_go_to_superlu_and_singular_matrices_are_reported():
     A = rng.standard_normal((20, 20))
     A = A + A.T
     wide = KKTFactor(HessianParts(sp.csr_matrix(A)))
-    assert isinstance(wide._lu, _OrderedLU)
+    assert isinstance(wide._lu, OrderedLU)
     _assert_dense(wide, A, rng.standard_normal(20))
     J = sp.csr_matrix(rng.standard_normal((3, 20)))
     wide = KKTFactor(HessianParts(sp.csr_matrix(A)), J)
-    assert isinstance(wide._lu, _OrderedLU)
+    assert isinstance(wide._lu, OrderedLU)
     K = np.block([[A, J.toarray().T], [J.toarray(), np.zeros((3, 3))]])
     _assert_dense(wide, K, rng.standard_normal(23))
     # an exactly singular banded matrix (band LU) or a singular wide one (SuperLU)
@@ -100,7 +102,7 @@ def test_pinned_rows_from_the_remembered_layout_rebuild_the_jacobian():
     """PinnedRows.of remembers where the kept entries go per pattern: with other values
     on the same pattern (the second call) the split still satisfies
     J = sparse + I[:, rows] delta, each dense row cut to its pin."""
-    from supercoil.solvers.kkt import PinnedRows
+    from supercoil.solvers.pinned_rows import PinnedRows
 
     rng = np.random.default_rng(11)
     _, J = banded_kkt(rng, 120, 10, dense_rows=2)
@@ -118,10 +120,10 @@ def test_pinned_rows_from_the_remembered_layout_rebuild_the_jacobian():
 
 
 def test_permuted_bordered_entries_without_the_matrix_are_the_same():
-    """BorderedFactor asks _permuted_bordered for the pinned K's entries only
+    """BorderedFactor asks permuted_bordered for the pinned K's entries only
     (matrix=False): the same entries as with the matrix built, bit for bit."""
-    from supercoil.continuation.bordered import _permuted_bordered
-    from supercoil.solvers.kkt import kkt_order
+    from supercoil.continuation.bordered_matrix import permuted_bordered
+    from supercoil.solvers.ordering import kkt_order
 
     rng = np.random.default_rng(21)
     H, J = banded_kkt(rng, 80, 9)
@@ -129,8 +131,8 @@ def test_permuted_bordered_entries_without_the_matrix_are_the_same():
     n, m = 80, J.shape[0]
     column, row = rng.standard_normal(n + m), rng.standard_normal(n + m)
     order = np.concatenate([kkt_order(S, J), [n + m]])
-    B, with_matrix = _permuted_bordered(S, J, column, row, 1.5, order)
-    none, entries = _permuted_bordered(S, J, column, row, 1.5, order, matrix=False,
+    B, with_matrix = permuted_bordered(S, J, column, row, 1.5, order)
+    none, entries = permuted_bordered(S, J, column, row, 1.5, order, matrix=False,
                                        s_bytes=(S.indptr.tobytes(), S.indices.tobytes()))
     assert B is not None and none is None
     for a, b in zip(with_matrix, entries):
@@ -142,7 +144,7 @@ def test_remembered_kkt_order_with_two_term_entries_that_cancel_or_nearly():
     not 0 (the same in either order), however small: the memo certifies it when it
     is stored or dropped as when the ordering was computed (exactly symmetric
     states), and only then. Oracle: the computed ordering, every time."""
-    from supercoil.solvers import kkt
+    from supercoil.solvers import ordering
 
     rng = np.random.default_rng(8)
     n = 40
@@ -163,16 +165,16 @@ def test_remembered_kkt_order_with_two_term_entries_that_cancel_or_nearly():
 
     tiny = -(1.0 - 2.0**-52)  # 1 + tiny = 2^-52: stored, far below the 1e-8 bound
     for first, others in ((-1.0, (-1.0, tiny, 0.3)), (tiny, (-(1.0 - 2.0**-51), -1.0))):
-        kkt._ORDER_MEMO.clear()
-        computed = kkt.kkt_order(S, jacobian(first))
-        assert np.array_equal(computed, kkt._kkt_order(S, jacobian(first)))
-        assert len(kkt._ORDER_MEMO) == 1  # remembered despite the (near) cancellation
-        ((memo, *_arrays),) = kkt._ORDER_MEMO.values()
+        ordering._ORDER_MEMO.clear()
+        computed = ordering.kkt_order(S, jacobian(first))
+        assert np.array_equal(computed, ordering._kkt_order(S, jacobian(first)))
+        assert len(ordering._ORDER_MEMO) == 1  # remembered despite the (near) cancellation
+        ((memo, *_arrays),) = ordering._ORDER_MEMO.values()
         for second in others:
             J = jacobian(second, scale=1.3)
             same = (1.0 + second == 0.0) == (1.0 + first == 0.0)
             assert memo.certifies(J) == same
-            assert np.array_equal(kkt.kkt_order(S, J), kkt._kkt_order(S, J))
+            assert np.array_equal(ordering.kkt_order(S, J), ordering._kkt_order(S, J))
 
 
 def test_straight_rod_stored_zeros_take_the_band_of_the_nonzeros():
@@ -183,7 +185,8 @@ def test_straight_rod_stored_zeros_take_the_band_of_the_nonzeros():
     agrees with the dense matrix (inertia, determinant sign, solves)."""
     from supercoil.continuation.system import ExtendedSystem
     from supercoil.problems.tweezers import TweezersOptions, clamped_problem
-    from supercoil.solvers.kkt import kkt_band_layout, kkt_order
+    from supercoil.solvers.kkt_matrix import kkt_band_layout
+    from supercoil.solvers.ordering import kkt_order
 
     options = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=33, tension=75,
                               turns=(0, 5), n_nodes=40)
@@ -197,7 +200,7 @@ def test_straight_rod_stored_zeros_take_the_band_of_the_nonzeros():
     assert np.count_nonzero(Jc.data) < Jc.nnz  # stored zeros
     assert kkt_band_layout(S, Jc, kkt_order(S, Jc)) is None  # stored band too wide
     band = KKTFactor(H, J)
-    assert isinstance(band._lu, _BandLU)
+    assert isinstance(band._lu, BandLU)
     assert band.reduced_negative_count > 0
     k = J.shape[0]
     K = np.block([[H.dense(), J.toarray().T], [J.toarray(), np.zeros((k, k))]])

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from supercoil.continuation import pseudo_arclength
+from supercoil.continuation import tracer as tracing
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.switching import switch_branch
 from supercoil.problems.ring_branches import circle_branch
@@ -33,7 +33,7 @@ def test_partial_branches_equal_the_per_point_conversion(monkeypatch):
     circle, problem = circle_branch(2 / 3, 24, 3.0)
     point = circle.points_of_kind("bifurcation")[0]
     checked = []
-    original_branch = pseudo_arclength._Tracer.branch
+    original_branch = tracing.Tracer.branch
 
     def compared(tracer, status, message):
         built = original_branch(tracer, status, message)
@@ -53,7 +53,7 @@ def test_partial_branches_equal_the_per_point_conversion(monkeypatch):
         return {"excess_link": excess_link, "big": bool(excess_link > 3.5),
                 "count": round(10 * excess_link), "end": q[:3].copy()}
 
-    monkeypatch.setattr(pseudo_arclength._Tracer, "branch", compared)
+    monkeypatch.setattr(tracing.Tracer, "branch", compared)
     partial = []
     opts = ContinuationOptions(initial_step=0.01, max_step=0.05, max_points=8,
                                gauge="integral", rephase=True)

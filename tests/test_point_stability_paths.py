@@ -17,7 +17,7 @@ from scipy.linalg import null_space
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation.options import ContinuationOptions
-from supercoil.continuation.pseudo_arclength import branch_phase_modes
+from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.stability import (
     _count_system,
     eigenpairs,
@@ -28,7 +28,8 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.geometry.curves import circle
 from supercoil.rod.closed import ClosedRodEnergy
 from supercoil.rod.model import Rod
-from supercoil.solvers.kkt import KKTFactor, _BandLU
+from supercoil.solvers.kkt import KKTFactor
+from supercoil.solvers.lu import BandLU
 
 
 def _system(n: int = 60, amplitude: float = 0.03, excess_link: float = 2.5):
@@ -64,7 +65,7 @@ def test_point_stability_equals_the_fresh_count_and_eigenpairs(excess_link):
     stab = point_stability(system, x, tol, n_modes)
     # the count on a freshly assembled Hessian, and the dense oracle
     H, J = _count_system(system, x)
-    assert isinstance(KKTFactor(H, J)._lu, _BandLU)  # a narrow band: LAPACK's band LU
+    assert isinstance(KKTFactor(H, J)._lu, BandLU)  # a narrow band: LAPACK's band LU
     neg, det_sign = inertia(system, x, tol)
     assert stab.negative_count == neg
     assert stab.determinant_sign == det_sign
@@ -162,7 +163,7 @@ def test_eigen_factor_ordered_from_the_count_equals_the_fresh_ordering(excess_li
     assert np.array_equal(np.sort(order), np.arange(eigen_dofs.size + J.shape[0]))
     derived = KKTFactor(H, J, shift=-1e-3, mass=mass, order=order)._lu
     fresh = KKTFactor(H, J, shift=-1e-3, mass=mass)._lu
-    assert isinstance(derived, _BandLU) and isinstance(fresh, _BandLU)
+    assert isinstance(derived, BandLU) and isinstance(fresh, BandLU)
     assert derived._kl <= fresh._kl and derived._ku <= fresh._ku
 
 

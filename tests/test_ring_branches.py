@@ -1,6 +1,6 @@
 """The ring's contact-free bifurcation diagram: the circle, Michell's points, alpha and beta.
 
-Oracles: Michell's thresholds (A/C) sqrt(m^2 - 1); seed 001's shapes
+Oracles: Michell's thresholds (A/C) sqrt(m^2 - 1); Coleman & Swigon's shapes
 (subcritical alpha at C/A = 2/3 tending to the planar figure-eight,
 supercritical at C/A = 2; D_m symmetry of the primary branch of mode m);
 Lk = Tw + Wr with Tw from the material frames and Wr from the double sum;
@@ -24,7 +24,7 @@ from supercoil.topology import writhe
 
 @pytest.fixture(scope="module")
 def dna():
-    """C/A = 2/3 (seed 001's DNA), N = 48 (a lattice with D_2 and D_3 symmetry)."""
+    """C/A = 2/3 (Coleman & Swigon's DNA), N = 48 (a lattice with D_2 and D_3 symmetry)."""
     return ring_branches(2 / 3, 48, modes=(2, 3), max_points=30,
                          excess_link_bounds={2: (1.05, 3.0), 3: (0.5, 5.0)})
 

@@ -1,11 +1,11 @@
-"""The ring's bifurcation diagram with self-contact (issue 4, item 6).
+"""The ring's bifurcation diagram with self-contact.
 
 Oracles: Lk = Tw + Wr at every point (twist from the material frames, writhe
 from the double sum); no penetration on contact branches (barrier); the alpha
 branch's first special point is the geometric contact onset, where the
 closest approach of non-neighbouring points is D; special points lie between
 their neighbours and stored stability equals the recomputed inertia
-(consistency_check); the JSON carries DESIGN.md's keys; the CLI refuses bad
+(consistency_check); the JSON carries the keys of docs/model.md; the CLI refuses bad
 input with exit status 2 and one line.
 """
 
@@ -146,7 +146,7 @@ def test_contact_branch_states_are_equilibria_without_the_gauge(diagram):
 
 
 def test_stable_points_satisfy_condition_e(diagram):
-    """Seed 001 (Tobias, Swigon & Coleman): a stable configuration of a family with
+    """Coleman & Swigon 2000 (condition E): a stable configuration of a family with
     dLk a function of Wr needs d(dLk)/d(Wr) >= 0 ("condition E"). Off the circle,
     every point with unstable_count 0 must have condition_e >= 0; and condition E
     must fail somewhere (the subcritical alpha branch has dLk falling as Wr grows)."""
@@ -327,7 +327,7 @@ def test_sparse_constrained_eigenvalues_equal_the_dense_oracle_with_contact(diag
 
 
 def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, monkeypatch):
-    """Hand-made transitions between neighbouring points -> the kinds of DESIGN.md.
+    """Hand-made transitions between neighbouring points -> the kinds of docs/model.md.
 
     Counts (points, intervals) at six points: (1, 0) -> (2, 0) split (the new
     contacts lie next to the old one), -> (2, 1) interval onset, -> (1, 1) release,
@@ -337,7 +337,7 @@ def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, m
     import dataclasses
 
     from supercoil.continuation import SpecialPoint
-    from supercoil.problems import ring_diagram as rd
+    from supercoil.problems import contact_events
 
     base = diagram.branch("alpha_contact")
     k = 6
@@ -348,7 +348,7 @@ def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, m
     intervals = np.array([0, 0, 1, 1, 1, 0])
     positions = [[(0.2, 0.6)], [(0.19, 0.6), (0.21, 0.61)], [(0.2, 0.6)] * 3,
                  [(0.2, 0.6)] * 2, [(0.2, 0.6), (0.2, 0.6), (0.45, 0.9)], []]
-    monkeypatch.setattr(rd, "_positions", lambda problem, q, mu: np.array(
+    monkeypatch.setattr(contact_events, "_positions", lambda problem, q, mu: np.array(
         positions[int(np.flatnonzero(np.all(base.states[:k] == q, axis=1))[0])],
         dtype=float).reshape(-1, 2))
 
@@ -366,7 +366,8 @@ def test_contact_events_are_classified_from_the_counts_on_either_side(diagram, m
     branch = dataclasses.replace(base, special_points=specials,
                                  records={"n_contact_points": points,
                                           "n_contact_intervals": intervals}, **arrays)
-    kinds = [p.kind for p in rd.classify_contact_events(branch, problem=None).special_points]
+    classified = contact_events.classify_contact_events(branch, problem=None)
+    kinds = [p.kind for p in classified.special_points]
     assert kinds == ["contact_split", "contact_interval_onset", "contact_release",
                      "contact_onset", "contact_release"]
 
@@ -398,7 +399,7 @@ def test_contact_branch_counts_do_not_depend_on_the_rigid_pins(diagram):
     eigenvalues of the constrained Hessian with the rigid motions and the sliding
     projected out instead of pinned (stability.analysis: no pins at all). (At L/D = 122,
     N = 200 the construction pins gave a spurious count and fold pairs from dLk 3.40:
-    benchmarks/bench_ring_diagram.py, docs/benchmarks.md.)"""
+    benchmarks/bench_ring_diagram.py.)"""
     from supercoil.rod.closed import rigid_pins
     from supercoil.stability.analysis import _eigen_system, dense_constrained_eigenpairs
 

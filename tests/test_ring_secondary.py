@@ -1,9 +1,9 @@
-"""Secondary branches of the ring diagram (seed 001, Figures 2 and 3).
+"""Secondary branches of the ring diagram (Coleman & Swigon 2002, Figures 2 and 3).
 
-Oracles: the primary branch of mode 3 has D_3 symmetry (seed 001; Domokos 1995); the
-branches switched from its bifurcation points have C_2 symmetry, a single two-fold axis
-(seed 001, caption of Figure 3: "those on the secondary branches beta_I - beta_IV have C_2
-symmetry"); every switched branch passes the consistency checker (stored stability equal
+Oracles: the primary branch of mode 3 has D_3 symmetry (Coleman & Swigon 2002; Domokos
+1995); the branches switched from its bifurcation points have C_2 symmetry, a single
+two-fold axis (Coleman & Swigon 2002, caption of Figure 3: "those on the secondary
+branches beta_I - beta_IV have C_2 symmetry"); every switched branch passes the consistency checker (stored stability equal
 to the recomputed inertia, special points between their neighbours, Lk = Tw + Wr, no
 penetration) and starts at its origin.
 """
@@ -15,10 +15,10 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import consistency_check
 from supercoil.problems.ring_branches import twisted_circle_problem
 from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
-from supercoil.problems.ring_secondary import AMPLITUDES, roman, secondary_branches
+from supercoil.problems.ring_diagram.secondary import AMPLITUDES, roman, secondary_branches
 
-# The integral contact on the B-spline: the pair sum's beta_contact leaves D_3 at N = 96
-# (docs/benchmarks.md, "Integral contact"), so its secondary branches depend on the mesh.
+# The integral contact on the B-spline: the pair sum's beta_contact leaves D_3 at N = 96,
+# so its secondary branches depend on the mesh.
 OPTIONS = DiagramOptions(2 / 3, 40.0, n_nodes=48, modes=(3,), max_excess_link=3.0,
                          free_max_points=60, contact_max_points=80, branch_depth=2,
                          secondary_max_points=20, contact_formulation="integral",
@@ -54,11 +54,12 @@ def test_secondary_branches_start_at_a_bifurcation_point_of_beta(diagram):
 
 
 def test_beta_bifurcates_at_its_three_point_contact_onset_and_is_stable_after_it(diagram):
-    """Seed 001, Figure 2: B_1, where beta's three points of contact appear, is a
-    bifurcation point of beta, and beta is stable from B_1 on (the heavy interval from
-    B_1 to P). In the barrier model the E mode of D_3 (a double eigenvalue) crosses zero
-    just past the onset: one event, count 2 -> 0, two critical modes. The secondary
-    branches that start there are unstable (seed 001: no configuration on them is)."""
+    """Coleman & Swigon 2002, Figure 2: B_1, where beta's three points of contact appear,
+    is a bifurcation point of beta, and beta is stable from B_1 on (the heavy interval
+    from B_1 to P). In the barrier model the E mode of D_3 (a double eigenvalue) crosses
+    zero just past the onset: one event, count 2 -> 0, two critical modes. The secondary
+    branches that start there are unstable (Coleman & Swigon 2002: no configuration on
+    them is)."""
     beta = diagram.branch("beta_contact")
     (onset,) = [p for p in beta.points_of_kind("contact_onset")]
     (b1,) = beta.points_of_kind("bifurcation")
@@ -163,7 +164,7 @@ def test_beta_keeps_d3_at_n40_with_either_gauge():
 def test_secondary_branches_are_dashed_in_the_diagram_and_in_supercoil_plot(diagram, tmp_path,
                                                                            capsys):
     """diagram.json keeps each branch's generation; the figures draw generation 2 dashed
-    (seed 001, Figure 2) both when written and when redrawn from the file."""
+    (Coleman & Swigon 2002, Figure 2) both when written and when redrawn from the file."""
     from supercoil.cli.diagram_output import write_diagram
     from supercoil.cli.saving import open_writer
     from supercoil.plotting.figures import _branch_rows
@@ -179,26 +180,26 @@ def test_secondary_branches_are_dashed_in_the_diagram_and_in_supercoil_plot(diag
         assert rows[b.name]["linestyle"] == GENERATION_STYLES[2] != "-"
 
 
-SEED_OPTIONS = DiagramOptions(2 / 3, 122.0, n_nodes=132, modes=(3,), max_excess_link=6.0,
+DNA_OPTIONS = DiagramOptions(2 / 3, 122.0, n_nodes=132, modes=(3,), max_excess_link=6.0,
                               contact_max_points=150)
 
 
 @pytest.fixture(scope="module")
-def seed_diagram():
-    """Seed 001's DNA example (C/A = 2/3, L/D = 122), beta only, N = 132 (a multiple of 6:
-    D_3's axes through nodes)."""
-    return ring_diagram(SEED_OPTIONS)
+def dna_diagram():
+    """Coleman & Swigon's DNA example (C/A = 2/3, L/D = 122), beta only, N = 132 (a
+    multiple of 6: D_3's axes through nodes)."""
+    return ring_diagram(DNA_OPTIONS)
 
 
-def test_beta_at_seed_001s_parameters_is_stable_from_b1_to_p(seed_diagram):
-    """Seed 001, Figure 2 (C/A = 2/3, L/D = 122): "condition theta holds only for the
-    configurations in the heavily drawn interval of branch beta that runs from the
+def test_beta_at_the_dna_parameters_is_stable_from_b1_to_p(dna_diagram):
+    """Coleman & Swigon 2002, Figure 2 (C/A = 2/3, L/D = 122): "condition theta holds
+    only for the configurations in the heavily drawn interval of branch beta that runs from the
     bifurcation point B_1 to the bifurcation point P". Oracle: on beta_contact (N = 132,
     a multiple of 3) the unstable count is 0 exactly between two located bifurcation
     points, B_1 at the three-point contact onset (count 2 -> 0) and P (0 -> 2), both
     through a double eigenvalue (an E mode of D_3), and beta keeps D_3 throughout (the
     integral phase condition's reaction has no net torque: sliding_phase_modes)."""
-    diagram = seed_diagram
+    diagram = dna_diagram
     beta = diagram.branch("beta_contact")
     # measured with these options: the fold at the contact (count 3 -> 2) and B_1 lie in
     # one segment; the fold's own count change is not reported as a bifurcation
@@ -222,13 +223,13 @@ def test_beta_at_seed_001s_parameters_is_stable_from_b1_to_p(seed_diagram):
 
 
 def test_a_switch_that_keeps_the_parents_symmetry_fell_back():
-    """ring_secondary.fell_back: after a switch at a double eigenvalue (two critical modes)
+    """secondary.fell_back: after a switch at a double eigenvalue (two critical modes)
     a branch whose every point keeps the D_3 of the bifurcation point (or has the circle's
     O(2)) is the parent's family; one C_2 point makes it new; a simple eigenvalue is never
     judged (its branch may keep the symmetry)."""
     from types import SimpleNamespace
 
-    from supercoil.problems.ring_secondary import fell_back
+    from supercoil.problems.ring_diagram.secondary import fell_back
 
     n = 48
     s = 2 * np.pi * np.arange(n) / n
@@ -256,25 +257,25 @@ def _half_turn_image(points: np.ndarray, axis_node_0: np.ndarray) -> np.ndarray:
     return image
 
 
-def test_a_tertiary_branch_breaks_the_two_fold_axis_of_beta_ii(seed_diagram):
-    """Seed 001, Figures 2 and 3: beta_II, the secondary branch from P, has C_2 symmetry
-    and a bifurcation point S from which the tertiary branch beta*_II issues with no
+def test_a_tertiary_branch_breaks_the_two_fold_axis_of_beta_ii(dna_diagram):
+    """Coleman & Swigon 2002, Figures 2 and 3: beta_II, the secondary branch from P, has
+    C_2 symmetry and a bifurcation point S from which the tertiary branch beta*_II issues with no
     symmetry left. Oracles: the secondary states keep the axis through node 0 to
     round-off (the discrete problem is equivariant: on_mesh_direction, rigid_pins);
     S is a located change of the count by one whose single critical mode is odd under
-    that axis (a pitchfork: ring_secondary.mirror_axis); the tertiary half-branches
+    that axis (a pitchfork: secondary.mirror_axis); the tertiary half-branches
     on the two sides of S leave the symmetry (C_1 beyond the symmetry tolerance) and
     are each other's images under the axis, point by point (which is why
     secondary_branches computes one of them)."""
     from supercoil.geometry.symmetry import reversal_residuals
-    from supercoil.problems.ring_secondary import follow_bifurcating_branch, mirror_axis
+    from supercoil.problems.ring_diagram.secondary import follow_bifurcating_branch, mirror_axis
 
-    beta = seed_diagram.branch("beta_contact")
+    beta = dna_diagram.branch("beta_contact")
     p = beta.points_of_kind("bifurcation")[-1]
     assert 5.0 < p.parameter < 5.3 and p.critical_modes.shape[0] == 2
     found = []
     for side in (1, -1):
-        half = follow_bifurcating_branch(seed_diagram, beta, p, side, max_points=48)
+        half = follow_bifurcating_branch(dna_diagram, beta, p, side, max_points=48)
         assert half is not None and len(half) >= 2
         for q in half.states:
             assert reversal_residuals(q.reshape(-1, 3), [0.0], direct=True)[0] < 1e-9
@@ -285,8 +286,8 @@ def test_a_tertiary_branch_breaks_the_two_fold_axis_of_beta_ii(seed_diagram):
     assert abs(s.count_after - s.count_before) == 1 and s.critical_modes.shape[0] == 1
     assert s.located and p.parameter < s.parameter < 6.0
     axis = np.asarray(s.q).reshape(-1, 3)[0]
-    plus = follow_bifurcating_branch(seed_diagram, secondary, s, 1, max_points=12)
-    minus = follow_bifurcating_branch(seed_diagram, secondary, s, -1, max_points=12)
+    plus = follow_bifurcating_branch(dna_diagram, secondary, s, 1, max_points=12)
+    minus = follow_bifurcating_branch(dna_diagram, secondary, s, -1, max_points=12)
     assert len(plus) == len(minus) == 12
     # to the located S's own asymmetry (its image misfits by about 2e-7; measured: the
     # halves agree to 4e-7 in dLk and 1e-6 of the size in the states)
@@ -296,7 +297,7 @@ def test_a_tertiary_branch_breaks_the_two_fold_axis_of_beta_ii(seed_diagram):
     for a, b in zip(plus.states, minus.states):
         image = _half_turn_image(a.reshape(-1, 3), axis)
         assert np.max(np.abs(image - b.reshape(-1, 3))) < 1e-5 * size
-    tolerance = 0.05 * SEED_OPTIONS.diameter
+    tolerance = 0.05 * DNA_OPTIONS.diameter
     from supercoil.geometry.symmetry import curve_symmetry
 
     groups = [curve_symmetry(q.reshape(-1, 3), tolerance).group for q in plus.states]
@@ -304,7 +305,7 @@ def test_a_tertiary_branch_breaks_the_two_fold_axis_of_beta_ii(seed_diagram):
     assert reversal_residuals(plus.states[-1].reshape(-1, 3), [0.0], direct=True)[0] > tolerance
     # the consistency checker on the tertiary half-branch (the KKT residual holds the
     # sliding gauge's force: without an axis on the mesh the contact pushes the material)
-    report = consistency_check(plus, seed_diagram.contact_problem, residual_tolerance=1e-8)
+    report = consistency_check(plus, dna_diagram.contact_problem, residual_tolerance=1e-8)
     assert not [q for q in report.problems if "KKT residual" not in q], report.problems
     assert np.max(plus.records["link_error"]) < 1e-9
     assert np.min(plus.records["min_gap_over_diameter"]) > 1.0 - 1e-4

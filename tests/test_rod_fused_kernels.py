@@ -22,7 +22,7 @@ from supercoil.rod import kernels
 from supercoil.rod.closed import ClosedRodEnergy
 from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
-from supercoil.solvers.patterns import csr_columns
+from supercoil.solvers.csr import csr_columns
 
 
 def _bent_ring(n: int, form: str):

@@ -6,7 +6,7 @@ import scipy.sparse as sp
 from conftest import smooth_closed_curve, split_into_halves, with_rank_one_terms
 
 from supercoil.problems.ring import twisted_circle_problem
-from supercoil.solvers.band import symmetric_inertia
+from supercoil.solvers.inertia import symmetric_inertia
 from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.newton import NewtonOptions, Status, newton
 from supercoil.solvers.problem import HessianParts
@@ -62,7 +62,7 @@ def test_equilibrated_entries_equal_the_sparse_products_bit_for_bit(seed):
     scipy.sparse (the previous code), permuted: the same entries, the same bits."""
     from band_reference import equilibrated_entries
 
-    from supercoil.solvers.kkt import kkt_order
+    from supercoil.solvers.ordering import kkt_order
 
     rng = np.random.default_rng(300 + seed)
     n, m = int(rng.integers(20, 120)), int(rng.integers(1, 15))
@@ -91,7 +91,7 @@ def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
     scipy.sparse (the reference). Same pattern with other values: the same ordering; an
     entry of J^T J that cancels exactly (scipy drops it, the pattern changes): the memo
     must not be used."""
-    from supercoil.solvers import kkt
+    from supercoil.solvers import ordering
 
     rng = np.random.default_rng(5)
     n = 40
@@ -109,20 +109,20 @@ def test_remembered_kkt_order_equals_the_computed_one_and_sees_cancellation():
         J[0, 25], J[1, 25] = 1.0, sign  # sign = -1: the (0, 25) entry of J^T J is 0
         return sp.csr_matrix(J)
 
-    kkt._ORDER_MEMO.clear()
-    plain = kkt.kkt_order(S, jacobian(0.5))
-    assert np.array_equal(plain, kkt._kkt_order_scipy(S, jacobian(0.5)))
-    assert len(kkt._ORDER_MEMO) == 1
-    again = kkt.kkt_order(S, jacobian(0.7))  # same pattern, remembered
-    assert np.array_equal(again, kkt._kkt_order_scipy(S, jacobian(0.7)))
-    ((memo, *_arrays),) = kkt._ORDER_MEMO.values()
+    ordering._ORDER_MEMO.clear()
+    plain = ordering.kkt_order(S, jacobian(0.5))
+    assert np.array_equal(plain, ordering._kkt_order_scipy(S, jacobian(0.5)))
+    assert len(ordering._ORDER_MEMO) == 1
+    again = ordering.kkt_order(S, jacobian(0.7))  # same pattern, remembered
+    assert np.array_equal(again, ordering._kkt_order_scipy(S, jacobian(0.7)))
+    ((memo, *_arrays),) = ordering._ORDER_MEMO.values()
     assert memo.certifies(jacobian(0.7)) and not memo.certifies(jacobian(-1.0))
-    cancelled = kkt.kkt_order(S, jacobian(-1.0))
-    assert np.array_equal(cancelled, kkt._kkt_order_scipy(S, jacobian(-1.0)))
+    cancelled = ordering.kkt_order(S, jacobian(-1.0))
+    assert np.array_equal(cancelled, ordering._kkt_order_scipy(S, jacobian(-1.0)))
     for seed in range(5):  # random KKT patterns, each asked twice
         H, J = random_kkt(np.random.default_rng(400 + seed), 60, 8, rank_one=0)
         for _ in range(2):
-            assert np.array_equal(kkt.kkt_order(H.sparse, J), kkt._kkt_order_scipy(H.sparse, J))
+            assert np.array_equal(ordering.kkt_order(H.sparse, J), ordering._kkt_order_scipy(H.sparse, J))
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -132,7 +132,9 @@ def test_superlu_factor_from_entries_equals_superlu_of_bmat(seed):
     solves, bit for bit (explicit zeros of H and J kept)."""
     from scipy.sparse.linalg import splu
 
-    from supercoil.solvers.kkt import _kkt_entries, _OrderedLU, canonical, kkt_order
+    from supercoil.solvers.kkt_matrix import canonical, kkt_entries
+    from supercoil.solvers.lu import OrderedLU
+    from supercoil.solvers.ordering import kkt_order
 
     rng = np.random.default_rng(500 + seed)
     n, m = int(rng.integers(30, 90)), int(rng.integers(1, 12))
@@ -144,7 +146,7 @@ def test_superlu_factor_from_entries_equals_superlu_of_bmat(seed):
     if seed == 3:  # every entry stored as two halves (not canonical): bmat sums them
         S = split_into_halves(S)
     order = kkt_order(S, J)
-    factor = _OrderedLU(n + m, *_kkt_entries(canonical(S), canonical(J)), order)
+    factor = OrderedLU(n + m, *kkt_entries(canonical(S), canonical(J)), order)
     lu = splu(sp.bmat([[S, J.T], [J, None]], format="csr")[order][:, order].tocsc(),
               permc_spec="NATURAL")
     rhs = rng.standard_normal(n + m)
@@ -165,10 +167,11 @@ def _same_csr(mine, reference):
 
 @pytest.mark.parametrize("seed", range(6))
 def test_pattern_sums_and_restrictions_equal_scipy_bit_for_bit(seed):
-    """solvers.patterns (index maps remembered per pattern) against scipy's A + B and
+    """solvers.csr and solvers.csr_sum (index maps remembered per pattern) against scipy's A + B and
     A[keep][:, keep]: cancelling entries dropped, explicit zeros and -0.0 as scipy has
     them, the same stored order; every call twice (the second from the memo)."""
-    from supercoil.solvers.patterns import csr_add, csr_columns, csr_restrict
+    from supercoil.solvers.csr import csr_columns, csr_restrict
+    from supercoil.solvers.csr_sum import csr_add
 
     rng = np.random.default_rng(600 + seed)
     n = int(rng.integers(5, 80))
@@ -356,8 +359,8 @@ def test_stationary_mode_converges_to_the_saddle_it_starts_next_to():
 
 
 def test_permutation_parity_by_pointer_jumping_equals_cycle_walking():
-    """kkt._permutation_parity (vectorised, fast path) against walking the cycles."""
-    from supercoil.solvers.kkt import _permutation_parity
+    """lu.permutation_parity (vectorised, fast path) against walking the cycles."""
+    from supercoil.solvers.lu import permutation_parity
 
     def walked(perm):
         seen = np.zeros(perm.size, dtype=bool)
@@ -374,8 +377,8 @@ def test_permutation_parity_by_pointer_jumping_equals_cycle_walking():
     for n in [*range(12), 63, 64, 65, 387, 1000]:
         for _ in range(5):
             perm = rng.permutation(n)
-            assert _permutation_parity(perm) == walked(perm)
-    assert _permutation_parity(np.array([1, 0, 2])) == -1  # one transposition
+            assert permutation_parity(perm) == walked(perm)
+    assert permutation_parity(np.array([1, 0, 2])) == -1  # one transposition
 
 
 def test_pattern_memo_keeps_the_newest_entries_within_its_bounds():

@@ -391,7 +391,7 @@ def test_overwrite_replaces_the_run_files_only(tmp_path, capsys):
 
 
 def run_diagram(tmp_path, name, progress=None, resume=False, text=RING_DIAGRAM):
-    from supercoil.cli.run import run_study
+    from supercoil.cli.study_runner import run_study
 
     out = tmp_path / name
     out.mkdir(exist_ok=True)

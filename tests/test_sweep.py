@@ -104,7 +104,7 @@ BAD_TABLES = {
     "zip of an unswept key": (('"rod.twist_ratio" = [0.5, 1.0]\n'
                                'zip = [["rod.twist_ratio", "rod.nodes"]]'),
                               "'rod.nodes' is not a swept key"),
-    "value out of range": ('"rod.nodes" = [16, 4]', "[rod] nodes must be an integer from 8"),
+    "value out of range": ('"rod.nodes" = [16, 4]', "[rod] nodes (nodes of the ring) must be a whole number from 8"),
     "range without num": ('"rod.twist_ratio" = {start = 0.5, stop = 1.0}', "num missing"),
     "key without a table": ('twist_ratio = [0.5, 1.0]', "TABLE.KEY"),
     "values of two types": ('"problem.excess_link" = [1.0, "two"]', "mix"),
@@ -206,7 +206,7 @@ json = false
 def tweezers_sweep(tmp_path_factory):
     """A one-task tweezers sweep run in this process: (folder, sweep, dataset, result)."""
     from supercoil import load
-    from supercoil.cli.run import run_study
+    from supercoil.cli.study_runner import run_study
     from supercoil.sweeps.summary import summarize
 
     folder = tmp_path_factory.mktemp("tweezers")
@@ -222,8 +222,7 @@ def tweezers_sweep(tmp_path_factory):
 
 
 def _branches(result) -> dict:
-    b = result.branches
-    return dict(b) if isinstance(b, dict) else {x.name: x for x in b}
+    return dict(result.branches)
 
 
 def test_tweezers_summary(tweezers_sweep):

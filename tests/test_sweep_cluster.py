@@ -26,7 +26,7 @@ pytest.importorskip("distributed")
 xr = pytest.importorskip("xarray")
 
 from supercoil import load
-from supercoil.cli.run import run_study
+from supercoil.cli.study_runner import run_study
 from supercoil.io.study import parse_study
 from supercoil.sweeps.dataset import load_sweep
 from supercoil.sweeps.grid import load_sweep_study
@@ -83,8 +83,7 @@ def _sweep(study: Path, out: Path, *args: str) -> subprocess.CompletedProcess:
 
 
 def _branches(result) -> list:
-    b = result.branches
-    return list(b.values()) if isinstance(b, dict) else list(b)
+    return list(result.branches.values())
 
 
 def _assert_same_result(a, b) -> None:

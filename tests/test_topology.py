@@ -30,6 +30,7 @@ from hypothesis import strategies as st
 from numpy.polynomial.legendre import leggauss
 
 from supercoil._numba import njit as _njit
+from supercoil.errors import InputError
 from supercoil.topology import (
     linking_number,
     parallel_transport,
@@ -724,3 +725,15 @@ def test_linking_number_of_a_curve_with_itself_or_a_crossing_curve_is_refused() 
     through = np.stack([np.cos(t), 0 * t, np.sin(t)], axis=1)  # shares two points with ring
     with pytest.raises(InputError, match="meets edge .* undefined"):
         linking_number(ring, through)
+
+
+def test_writhe_of_a_self_crossing_polygon_is_nan_when_asked():
+    """A figure eight lying in a plane meets itself: an error by default, NaN on request
+    (the records of a rod that may pass through itself)."""
+    t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    eight = np.c_[np.sin(t), np.sin(t) * np.cos(t), 0 * t]
+    with pytest.raises(InputError):
+        writhe(eight)
+    assert np.isnan(writhe(eight, self_crossing="nan"))
+    lifted = eight + np.c_[0 * t, 0 * t, 0.1 * np.cos(t)]
+    assert writhe(lifted, self_crossing="nan") == writhe(lifted)

@@ -16,10 +16,10 @@ from supercoil.problems.ring import richardson
 from supercoil.problems.tweezers import (
     TweezersOptions,
     clamped_problem,
-    straight_branch,
     tweezers_branches,
     tweezers_records,
 )
+from supercoil.problems.tweezers.straight import straight_branch
 
 
 def clamped_determinant(M, T, L=1.0, A=1.0):
@@ -241,7 +241,8 @@ def test_displacement_control_starts_from_the_clamped_elastica():
     from scipy.optimize import brentq
     from scipy.special import ellipe, ellipk
 
-    from supercoil.problems.tweezers import axial_force, set_pin
+    from supercoil.problems.segments import set_pin
+    from supercoil.problems.tweezers.problem import axial_force
     from supercoil.solvers.newton import NewtonOptions, newton
 
     m = brentq(lambda m: 2 * ellipe(m) / ellipk(m) - 1 - 0.7, 1e-9, 0.999)
@@ -348,7 +349,7 @@ def test_continuation_in_force_locates_the_buckling_force():
     from scipy.optimize import brentq
 
     from supercoil.problems.greenhill import critical_moment
-    from supercoil.problems.tweezers import straight_force_branch
+    from supercoil.problems.tweezers.straight import straight_force_branch
 
     turns, ratio = 2.0, 4 / 3
     exact = brentq(lambda t: critical_moment(t) - 2 * np.pi * ratio * turns, 1e-3, 500.0)
@@ -443,7 +444,7 @@ def test_straight_branch_bifurcations_do_not_depend_on_its_step():
     steps of up to one turn, the bifurcations (and the counts between them) are those
     of steps of a quarter turn, within the event tolerance."""
     from supercoil.continuation import ContinuationOptions, continuation
-    from supercoil.problems import tweezers
+    from supercoil.problems.tweezers import straight
 
     opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
                            turns=(0.0, 4.0), n_nodes=40)
@@ -453,7 +454,7 @@ def test_straight_branch_bifurcations_do_not_depend_on_its_step():
     fine = continuation(problem, q0, parameter="turns", name="straight", options=(
         ContinuationOptions(initial_step=0.05, max_step=0.25, parameter_bounds=opts.turns,
                             max_points=opts.max_points, event_tolerance=opts.event_tolerance)))
-    assert tweezers.STRAIGHT_MAX_STEP > 0.25 and len(coarse) < len(fine)
+    assert straight.STRAIGHT_MAX_STEP > 0.25 and len(coarse) < len(fine)
     a, b = coarse.points_of_kind("bifurcation"), fine.points_of_kind("bifurcation")
     assert len(a) == len(b) >= 3
     for p, r in zip(a, b):
@@ -468,7 +469,7 @@ def test_buckled_run_ends_at_the_point_past_its_onset(small_run, monkeypatch):
     """Oracle for the contact-free runs' stop after a located onset: without it (the run
     going on to its segment's end, then cut by ``truncate_after``) the buckled branch has
     the same points and onset to round-off, and the run computed points past the cut."""
-    from supercoil.problems import tweezers
+    from supercoil.problems.tweezers import compute
 
     buckled = small_run.branch("buckled")
     onset = buckled.points_of_kind("contact_onset")[0]
@@ -480,7 +481,7 @@ def test_buckled_run_ends_at_the_point_past_its_onset(small_run, monkeypatch):
         if branch.name == "buckled":
             computed.append(len(branch))
 
-    monkeypatch.setattr(tweezers, "stop_after_onset", lambda on_point: (on_point, None))
+    monkeypatch.setattr(compute, "stop_after_onset", lambda on_point: (on_point, None))
     old = tweezers_branches(small_run.options, on_point=counting).branch("buckled")
     assert max(computed) > len(old)  # the old run went past the point kept
     old_onset = old.points_of_kind("contact_onset")[0]
@@ -491,15 +492,15 @@ def test_buckled_run_ends_at_the_point_past_its_onset(small_run, monkeypatch):
 
 
 def _generic_straight(opts):
-    """The straight branch as before the pencil: the continuation's own localisation
+    """The straight branch without the pencil: the continuation's own localisation
     (bisection on the inertia count, then Brent's method on the eigenvalue nearest zero),
     with the same steps."""
     from supercoil.continuation import ContinuationOptions, continuation
-    from supercoil.problems import tweezers
+    from supercoil.problems.tweezers import straight
 
     problem, q0 = clamped_problem(opts)
     return continuation(problem, q0, parameter="turns", name="straight", options=(
-        ContinuationOptions(initial_step=0.05, max_step=tweezers.STRAIGHT_MAX_STEP,
+        ContinuationOptions(initial_step=0.05, max_step=straight.STRAIGHT_MAX_STEP,
                             parameter_bounds=opts.turns, max_points=opts.max_points,
                             event_tolerance=opts.event_tolerance)))
 
@@ -553,11 +554,11 @@ def test_straight_pencil_matches_the_continuations_localisation():
 def test_straight_pencil_falls_back_when_not_certified(monkeypatch):
     """A pencil that fails its check (here: linearity asked to better than exactly)
     gives way to the continuation's localisation: the generic branch, bit for bit."""
-    from supercoil.problems import tweezers
+    from supercoil.problems.tweezers import straight
 
     opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
                            turns=(0.0, 2.0), n_nodes=30)
-    monkeypatch.setattr(tweezers, "PENCIL_LINEARITY", -1.0)
+    monkeypatch.setattr(straight, "PENCIL_LINEARITY", -1.0)
     problem, q0 = clamped_problem(opts)
     fallback = straight_branch(opts, problem, q0, None)
     slow = _generic_straight(opts)
@@ -572,16 +573,16 @@ def test_straight_pencil_is_certified_between_roots_not_at_them(monkeypatch):
     (at N = 1000 the eigenvalues 1e-8 turns from it are 1e-17 of the largest; simulated
     here by a count that lies there) do not matter, a wrong count halfway does."""
     from supercoil.continuation import ContinuationOptions, continuation, stability
-    from supercoil.problems import tweezers
+    from supercoil.problems.tweezers import straight
 
     opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
                            turns=(0.0, 4.0), n_nodes=40)
     problem, q0 = clamped_problem(opts)
-    cont = ContinuationOptions(initial_step=0.05, max_step=tweezers.STRAIGHT_MAX_STEP,
+    cont = ContinuationOptions(initial_step=0.05, max_step=straight.STRAIGHT_MAX_STEP,
                                parameter_bounds=opts.turns, event_tolerance=opts.event_tolerance,
                                detect_bifurcations=False)
     branch = continuation(problem, q0, parameter="turns", options=cont, name="straight")
-    honest = tweezers.straight_bifurcations(problem, branch, cont)
+    honest = straight.straight_bifurcations(problem, branch, cont)
     roots = np.array([p.parameter for p in honest])
     assert roots.size >= 3
     true_inertia = stability.inertia
@@ -593,7 +594,7 @@ def test_straight_pencil_is_certified_between_roots_not_at_them(monkeypatch):
         return (neg + 1, sign) if np.min(np.abs(roots - x[-1])) < 1e-3 else (neg, sign)
 
     monkeypatch.setattr(stability, "inertia", lying_near_roots)
-    again = tweezers.straight_bifurcations(problem, branch, cont)
+    again = straight.straight_bifurcations(problem, branch, cont)
     assert [p.parameter for p in again] == roots.tolist()
     stops = [0.0, *roots.tolist(), branch.parameter_values[-1]]
     away = [t for t in checked if np.min(np.abs(roots - t)) >= 1e-3]  # the others: the
@@ -605,14 +606,14 @@ def test_straight_pencil_is_certified_between_roots_not_at_them(monkeypatch):
         return (neg + 1, sign) if abs(x[-1] - away[1]) < 1e-12 else (neg, sign)
 
     monkeypatch.setattr(stability, "inertia", lying_halfway)
-    assert tweezers.straight_bifurcations(problem, branch, cont) is None
+    assert straight.straight_bifurcations(problem, branch, cont) is None
 
 
 def test_switch_pin_is_the_one_repin_picks_and_the_mode_does_not_move_it():
     """``_pin_node`` pins what ``repin(q* + 1e-3 mode)`` picks when one node is farthest
     (the mode's symmetric tie broken by a small bump), and the rotated mode has no
     component on the pinned coordinate whichever of two tied nodes is taken."""
-    from supercoil.problems import tweezers
+    from supercoil.problems.tweezers import pins
 
     opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=None, tension=20.0,
                            turns=(0.0, 2.0), n_nodes=30)
@@ -625,32 +626,32 @@ def test_switch_pin_is_the_one_repin_picks_and_the_mode_does_not_move_it():
     for bump in (1.0 + 1e-3, 1.0 / (1.0 + 1e-3)):
         bumped = mode.copy().reshape(-1, 3)
         bumped[tied[1], :2] *= bump
-        direction, node = tweezers._rotated_mode(bumped.ravel())
+        direction, node = pins.rotated_mode(bumped.ravel())
         assert node == (tied[1] if bump > 1 else tied[0])
-        tweezers._pin_node(problem, node)
+        pins.pin_node(problem, node)
         pinned = problem.gauge_dofs.copy()
         problem.repin(point.q + 1e-3 * direction)
         np.testing.assert_array_equal(problem.gauge_dofs, pinned)
         assert direction[pinned[0]] == pytest.approx(0.0, abs=1e-14)
-    direction, node = tweezers._rotated_mode(mode)
+    direction, node = pins.rotated_mode(mode)
     assert node == tied[0] and direction[3 * node + 1] == pytest.approx(0.0, abs=1e-14)
 
 
 def test_every_point_keeps_a_pin_of_quality(small_run):
     """The pin is checked at every point (``pin_stop``): each stored point of the buckled
     branches has, with the pin it was computed with, a pin quality of at least
-    ``PIN_QUALITY`` (checked only between runs of 30 points before)."""
-    from supercoil.problems import tweezers
+    ``PIN_QUALITY``."""
+    from supercoil.problems.tweezers import pins
 
     for branch in small_run.branches[1:]:
         for i, q in enumerate(branch.states):
             small_run.pin_branch(branch.name, i)
-            assert small_run.rod_problem.pin_quality(q) >= tweezers.PIN_QUALITY, (branch.name, i)
+            assert small_run.rod_problem.pin_quality(q) >= pins.PIN_QUALITY, (branch.name, i)
     small_run.pin_branch("straight")
 
 
 def test_long_runs_keep_the_branch_of_short_runs(small_run):
-    """Oracle: short runs between pin checks, as before (30 points at the benchmark's size;
+    """Oracle: short runs, the pin checked between them (30 points at the benchmark's size;
     8 here, so that the branches of this small run are cut into several). Runs as long
     as the pin holds (the default) give the same special points within their tolerances
     (two localisations, each to its tolerance in arclength, which weighs the parameter
@@ -679,17 +680,17 @@ def test_pin_stop_refuses_a_state_its_pin_does_not_hold(small_run):
     """``pin_stop`` refuses exactly the states whose pin quality is below PIN_QUALITY: a
     stored state is accepted, the same state turned a quarter turn about the axis (the
     pinned node's rotation then moves across its pinned coordinate) refused."""
-    from supercoil.problems import tweezers
+    from supercoil.problems.tweezers import pins
 
     branch = small_run.branch("buckled_contact")
     small_run.pin_branch(branch.name, len(branch) - 1)
     rod = small_run.rod_problem
     q = branch.states[-1]
-    stop = tweezers.pin_stop(rod)
-    assert rod.pin_quality(q) >= tweezers.PIN_QUALITY and stop(q) is None
+    stop = pins.pin_stop(rod)
+    assert rod.pin_quality(q) >= pins.PIN_QUALITY and stop(q) is None
     x = q.reshape(-1, 3)
     turned = np.column_stack([-x[:, 1], x[:, 0], x[:, 2]]).ravel()
-    assert rod.pin_quality(turned) < tweezers.PIN_QUALITY
+    assert rod.pin_quality(turned) < pins.PIN_QUALITY
     assert "pin's quality fell" in stop(turned)
     small_run.pin_branch("straight")
 

@@ -9,7 +9,8 @@ Numba's cache checks only the file of the function it caches: a kernel that call
 compiled function of another module keeps that callee's code as it was when the kernel
 was cached (a documented numba limitation). Two do
 (``contact.ccd._segment_advance_kernel`` calls ``contact.distance_kernels.closest_pair``;
-``continuation.bordered._sorted_entries`` calls ``solvers.kkt._permuted_kkt_entries``):
+``continuation.bordered_matrix._sorted_entries`` calls
+``solvers.kkt_matrix.permuted_kkt_entries``):
 after editing such a callee, delete the caller module's cached ``*.nbi`` / ``*.nbc``
 files in its ``__pycache__`` (a fresh checkout has none).
 """

@@ -19,36 +19,9 @@ from typing import ClassVar
 
 import numpy as np
 
+from supercoil import checks
 from supercoil.errors import InputError
 from supercoil.rod.kernels import CURVATURE_FORMS
-
-MAX_NODES = 20_000  # the largest discretisation accepted (memory grows like N)
-MAX_MAGNITUDE = 1e6  # bound of the scalar inputs (twist ratio, excess link, tension)
-
-
-def _finite(name: str, value, *, low: float | None = None, high: float | None = None,
-            low_open: bool = True, valid: str) -> float:
-    """``value`` as a float, or an InputError naming ``name`` and what is ``valid``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputError(f"{name}: expected a number, got {value!r}; valid: {valid}")
-    x = float(value)
-    bad = not math.isfinite(x)
-    if low is not None:
-        bad = bad or (x <= low if low_open else x < low)
-    if high is not None:
-        bad = bad or x > high
-    if bad:
-        raise InputError(f"{name}: got {value!r}; valid: {valid}")
-    return x
-
-
-def _nodes(name: str, value, minimum: int) -> int:
-    valid = f"an integer with {minimum} <= N <= {MAX_NODES}"
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise InputError(f"{name}: expected an integer, got {value!r}; valid: {valid}")
-    if not minimum <= int(value) <= MAX_NODES:
-        raise InputError(f"{name}: got {value!r}; valid: {valid}")
-    return int(value)
 
 
 @dataclass(frozen=True)
@@ -69,13 +42,13 @@ class Rod:
     curvature: str = "angle"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "twist_ratio", _finite(
-            "twist_ratio", self.twist_ratio, low=0.0, high=MAX_MAGNITUDE,
-            valid=f"a finite C/A with 0 < C/A <= {MAX_MAGNITUDE:g}"))
-        object.__setattr__(self, "nodes", _nodes("nodes", self.nodes, 8))
-        if self.curvature not in CURVATURE_FORMS:
-            raise InputError(f"curvature: got {self.curvature!r}; valid: "
-                             f"{', '.join(map(repr, CURVATURE_FORMS))}")
+        object.__setattr__(self, "twist_ratio", checks.number(
+            "twist_ratio", self.twist_ratio, 0.0, checks.MAX_MAGNITUDE, low_open=True,
+            meaning="C/A"))
+        object.__setattr__(self, "nodes", checks.integer(
+            "nodes", self.nodes, checks.MIN_NODES, checks.MAX_NODES, meaning="nodes of the rod"))
+        checks.choice("curvature", self.curvature, CURVATURE_FORMS,
+                      meaning="form of the discrete curvature")
 
 
 @dataclass(frozen=True)
@@ -95,11 +68,10 @@ class Contact:
         if type(self) is Contact:
             raise InputError("Contact is abstract: use Barrier, Penalty, AugmentedLagrangian "
                              "or ExactContact")
-        object.__setattr__(self, "length_over_diameter", _finite(
-            "length_over_diameter", self.length_over_diameter, low=math.pi,
-            high=MAX_MAGNITUDE,
-            valid=f"a finite L/D with pi < L/D <= {MAX_MAGNITUDE:g} (a tube of diameter D "
-                  "closes into a ring only if L > pi D)"))
+        # a tube of diameter D closes into a ring only if L > pi D
+        object.__setattr__(self, "length_over_diameter", checks.number(
+            "length_over_diameter", self.length_over_diameter, math.pi,
+            checks.MAX_MAGNITUDE, low_open=True, meaning="L/D"))
 
     @property
     def diameter(self) -> float:
@@ -141,15 +113,14 @@ class ExactContact(Contact):
     treatment: ClassVar[str] = "exact"
 
 
-CONTACTS = {c.treatment: c for c in (Barrier, Penalty, AugmentedLagrangian, ExactContact)}
+# in the order of supercoil.contact.options.TREATMENTS (the command line lists them so)
+CONTACTS = {c.treatment: c for c in (Barrier, AugmentedLagrangian, Penalty, ExactContact)}
 
 
 def contact_from_name(treatment: str, length_over_diameter: float) -> Contact:
-    """The contact object of a treatment's name (``barrier``, ``penalty``, ``augmented``,
+    """The contact object of a treatment's name (``barrier``, ``augmented``, ``penalty``,
     ``exact``), as the command line and study files name them."""
-    if treatment not in CONTACTS:
-        raise InputError(f"contact treatment: got {treatment!r}; valid: "
-                         f"{', '.join(CONTACTS)}")
+    checks.choice("treatment", treatment, tuple(CONTACTS), meaning="contact treatment")
     return CONTACTS[treatment](length_over_diameter)
 
 
@@ -160,8 +131,15 @@ def _contact_or_none(value) -> Contact | None:
     return value
 
 
-def _read_only(points) -> np.ndarray:
-    a = np.array(points, dtype=float)
+def _initial_curve(points) -> np.ndarray:
+    """The vertices of a starting curve as a read-only array, checked as the solve checks
+    them (:func:`~supercoil.problems.ring_contact.check_initial_curve`), named ``initial``."""
+    from supercoil.problems.ring_contact import check_initial_curve
+
+    try:
+        a = np.array(check_initial_curve(points), dtype=float)
+    except InputError as exc:
+        raise InputError(exc.renamed({"initial_points": "initial"}), name="initial") from None
     a.setflags(write=False)
     return a
 
@@ -186,24 +164,16 @@ class Ring:
     def __post_init__(self) -> None:
         if not isinstance(self.rod, Rod):
             raise InputError(f"rod: expected a supercoil.Rod, got {self.rod!r}")
-        object.__setattr__(self, "excess_link", _finite(
-            "excess_link", self.excess_link, high=MAX_MAGNITUDE,
-            valid=f"a finite number of turns with |dLk| <= {MAX_MAGNITUDE:g}"))
-        if abs(self.excess_link) > MAX_MAGNITUDE:
-            raise InputError(f"excess_link: got {self.excess_link!r}; valid: a finite number "
-                             f"of turns with |dLk| <= {MAX_MAGNITUDE:g}")
+        object.__setattr__(self, "excess_link", checks.number(
+            "excess_link", self.excess_link, -checks.MAX_MAGNITUDE, checks.MAX_MAGNITUDE,
+            meaning="dLk in turns"))
         _contact_or_none(self.contact)
         if self.initial is not None:
             if self.contact is None:
-                raise InputError("initial: a starting curve needs contact (e.g. "
-                                 "contact=supercoil.Barrier(length_over_diameter=100)); "
-                                 "without it the ring relaxes to the circle")
-            points = _read_only(self.initial)
-            if points.ndim != 2 or points.shape[1] != 3 or len(points) < 4 \
-                    or not np.isfinite(points).all():
-                raise InputError(f"initial: expected a finite array of shape (m, 3) with "
-                                 f"m >= 4 points, got shape {points.shape}")
-            object.__setattr__(self, "initial", points)
+                raise checks.refuse("initial", "(a starting curve) needs contact, e.g. "
+                                    "contact=supercoil.Barrier(length_over_diameter=100); "
+                                    "without it the ring relaxes to the circle")
+            object.__setattr__(self, "initial", _initial_curve(self.initial))
 
     def __repr__(self) -> str:
         start = "" if self.initial is None else f", initial=<{len(self.initial)} points>"
@@ -230,24 +200,20 @@ class Tweezers:
     def __post_init__(self) -> None:
         if not isinstance(self.rod, Rod):
             raise InputError(f"rod: expected a supercoil.Rod, got {self.rod!r}")
-        if self.rod.nodes < 12:
+        if self.rod.nodes < checks.MIN_CLAMPED_NODES:
             raise InputError(f"rod.nodes: got {self.rod.nodes}; valid: a clamped rod needs "
-                             f"at least 12 nodes")
+                             f"at least {checks.MIN_CLAMPED_NODES} nodes")
         if (self.tension is None) == (self.end_distance is None):
             raise InputError("give exactly one of tension (F L^2/A, load control) and "
                              "end_distance (z/L, displacement control)")
         if self.tension is not None:
-            object.__setattr__(self, "tension", _finite(
-                "tension", self.tension, low=0.0, low_open=False, high=MAX_MAGNITUDE,
-                valid=f"a finite F L^2/A with 0 <= F L^2/A <= {MAX_MAGNITUDE:g}"))
+            object.__setattr__(self, "tension", checks.number(
+                "tension", self.tension, 0.0, checks.MAX_MAGNITUDE, meaning="F L^2/A"))
         else:
-            value = _finite("end_distance", self.end_distance, low=0.0, high=1.0,
-                            valid="a number z/L with 0 < z/L < 1 (an inextensible rod cannot "
-                                  "be longer than L)")
-            if value >= 1.0:
-                raise InputError(f"end_distance: got {self.end_distance!r}; valid: 0 < z/L < 1 "
-                                 "(at z/L = 1 the rod cannot deflect)")
-            object.__setattr__(self, "end_distance", value)
+            # an inextensible rod is not longer than L, and at z/L = 1 it cannot deflect
+            object.__setattr__(self, "end_distance", checks.number(
+                "end_distance", self.end_distance, 0.0, 1.0, low_open=True, high_open=True,
+                meaning="z/L"))
         _contact_or_none(self.contact)
         if self.contact is not None and self.contact.treatment not in ("barrier", "penalty"):
             raise InputError(f"contact: {type(self.contact).__name__} cannot be continued along "

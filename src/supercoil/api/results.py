@@ -105,7 +105,9 @@ class Equilibrium:
     (``contact_points``, ``contact_intervals``, ``contacts``,
     ``n_contact_points``, ``n_contact_intervals``, ``min_gap_over_diameter``, ...),
     None without contact. ``record``: every key of the ``supercoil ring --json``
-    output.
+    output. ``tolerances``: those the state was computed with (``newton_residual``,
+    ``zero_modes`` and with contact ``penetration_over_diameter``), as result files
+    record them.
     """
 
     problem: object
@@ -122,11 +124,13 @@ class Equilibrium:
     stability: Stability
     contacts: Mapping | None = None
     record: Mapping = field(default_factory=dict)
+    tolerances: Mapping = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _read_only(self.points))
         object.__setattr__(self, "tensions", _read_only(self.tensions))
         object.__setattr__(self, "record", MappingProxyType(dict(self.record)))
+        object.__setattr__(self, "tolerances", MappingProxyType(dict(self.tolerances)))
         if self.contacts is not None:
             object.__setattr__(self, "contacts", MappingProxyType(dict(self.contacts)))
 

@@ -76,15 +76,23 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
                          "; for a rod in tweezers use supercoil.tweezers (a branch in turns)")
     rod = problem.rod
     if problem.contact is None:
+        tolerance = RING_TOLERANCE if tolerance is None else tolerance
         result = solve_ring(rod.twist_ratio, problem.excess_link, n_nodes=rod.nodes,
-                            curvature=rod.curvature, n_modes=n_modes,
-                            tolerance=RING_TOLERANCE if tolerance is None else tolerance)
+                            curvature=rod.curvature, n_modes=n_modes, tolerance=tolerance)
     else:
+        tolerance = CONTACT_RING_TOLERANCE if tolerance is None else tolerance
         result = solve_supercoiled_ring(
             rod.twist_ratio, problem.excess_link, problem.contact.length_over_diameter,
             n_nodes=rod.nodes, treatment=problem.contact.treatment, curvature=rod.curvature,
-            tolerance=CONTACT_RING_TOLERANCE if tolerance is None else tolerance,
-            n_modes=n_modes, max_iterations=max_iterations, initial_points=problem.initial)
+            tolerance=tolerance, n_modes=n_modes, max_iterations=max_iterations,
+            initial_points=problem.initial)
+    tolerances = {"newton_residual": tolerance, "zero_modes": result.zero_tolerance}
+    if problem.contact is not None:
+        from supercoil.contact.options import ContactOptions
+
+        # the penetration the treatment accepts (its default, as the solve uses it)
+        tolerances["penetration_over_diameter"] = ContactOptions(
+            diameter=problem.contact.diameter, treatment=problem.contact.treatment).tolerance
     # the eigenvalues the solve computed; their modes on request (stability())
     stab = Stability(unstable_count=result.unstable_count, zero_modes=result.zero_modes,
                      negative_count=result.negative_count,
@@ -98,7 +106,8 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
                        twist=float(result.twist), writhe=float(result.writhe),
                        link_error=float(result.link_error), residual=float(result.residual),
                        iterations=int(result.iterations), stability=stab,
-                       contacts=result.contact, record=result.summary())
+                       contacts=result.contact, record=result.summary(),
+                       tolerances=tolerances)
 
 
 def _ring_energy(problem: Ring, points: np.ndarray):

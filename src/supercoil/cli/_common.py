@@ -1,8 +1,8 @@
 """Helpers of the ``supercoil`` command: input checks, one-line errors, JSON output.
 
-Exit statuses (DESIGN.md): 0 done; 1 computed but not converged (what was
-done is saved, and the message says where); 2 bad input. Errors are one line
-on standard error starting with ``error:``, never a traceback.
+Exit statuses (docs/model.md, "Files and exit statuses"): 0 done; 1 computed but not
+converged (what was done is saved, and the message says where); 2 bad input. Errors
+are one line on standard error starting with ``error:``, never a traceback.
 """
 
 from __future__ import annotations
@@ -118,7 +118,7 @@ def raised_while_solving(exc: BaseException) -> bool:
 
     The API raises ValueError for bad input while it sets a problem up; a
     ValueError from inside the numerics is a failure of theirs (a solve should
-    return a status, DESIGN.md), which the command must not report as bad input.
+    return a status), which the command must not report as bad input.
     """
     tb = exc.__traceback__
     while tb is not None:

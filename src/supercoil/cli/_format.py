@@ -50,7 +50,7 @@ def ring_table(summary: dict, initial: str | None = None) -> Table:
                 f"zero_modes {summary['zero_modes']}"
             ),
         ),
-        ("determinant sign (seed 000)", f"{summary['determinant_sign']:+d}"),
+        ("determinant sign (Chamekh et al. 2014)", f"{summary['determinant_sign']:+d}"),
         ("lowest eigenvalues", eigenvalues),
         ("Michell threshold (A/C)sqrt(3)", _number(summary["michell_threshold_exact"])),
         (

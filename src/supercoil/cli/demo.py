@@ -1,39 +1,79 @@
 """``supercoil demo``: the bifurcation diagram of a DNA-like ring with self-contact.
 
-Seed 001's DNA example (Coleman & Swigon, Figures 1-4): C/A = 2/3, L/D = 122.
-Calls :func:`supercoil.problems.ring_diagram.ring_diagram` with the settings
-below and writes its files with :mod:`supercoil.cli.diagram_output`. No
-numerics here.
+Coleman & Swigon's DNA example (Coleman & Swigon 2000; its diagram in Coleman &
+Swigon 2002, Figures 1-4): C/A = 2/3, L/D = 122. Calls
+:func:`supercoil.problems.ring_diagram.ring_diagram` with the settings below and
+writes its files with :mod:`supercoil.cli.diagram_output`. No numerics here.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
-from supercoil.cli._common import fail, warn
+import typer
 
-TWIST_RATIO = 2.0 / 3.0  # C/A of DNA (seed 001)
-LENGTH_OVER_DIAMETER = 122.0  # seed 001's DNA example
+from supercoil.cli._common import EXIT_NOT_CONVERGED, checked_path, fail, warn
+from supercoil.cli._options import overwrite_option, quiet_option
+
+TWIST_RATIO = 2.0 / 3.0  # C/A of DNA
+LENGTH_OVER_DIAMETER = 122.0  # Coleman & Swigon's DNA example
 # 132 nodes: segments (L/132 = 0.92 D) shorter than the tube diameter, as contact
 # lines need, and a multiple of 4 and 3, so that the mesh has the D_2 and D_3
 # symmetries of the alpha and beta branches (at N = 128 the pinned sliding gauge
-# broke beta's D_3 before contact, which came at dLk 1.51 instead of 1.40).
-# dLk <= 3: one and two contact points on alpha, three on beta (seed 001); further
-# up, beta's contact branch stalls (measured at dLk 3.09 at N = 120) and
-# alpha reaches contact intervals (supercoil diagram ring --max-excess-link 3.5).
-# alpha's contact branch needs about 220 points to dLk 3 (its folds near 2.3-2.7);
-# the demo takes about 25 s on two cores.
+# breaks beta's D_3 before contact, which then comes at dLk 1.51 instead of 1.40).
+# dLk <= 3: one and two contact points on alpha, three on beta (Coleman & Swigon
+# 2002); further up, beta's contact branch stalls and alpha reaches contact
+# intervals (supercoil diagram ring --max-excess-link 3.5).
 N_NODES = 132
 MODES = (2, 3)
 MAX_EXCESS_LINK = 3.0
 CONTACT_MAX_POINTS = 300
-# The double-integral contact on the B-spline: alpha's contact branch to dLk 3 in 89
-# points with 3 folds, against 220 points and 9 folds (most of them artefacts of the
-# pair sum) with the diagram's default (docs/benchmarks.md, "Integral contact"). The
-# demo draws primary branches only, where the two formulations agree on the contacts.
+# The double-integral contact on the B-spline: alpha's contact branch to dLk 3 with
+# its physical folds only, where the pair sum adds artefact folds (docs/contact.md,
+# "Contact energy: pair sum or double integral"). The demo draws primary branches
+# only, where the two formulations agree on the contacts.
 CONTACT_FORMULATION = "integral"
 CONTACT_CURVE = "spline"
 DEFAULT_FOLDER = "supercoil-demo"
+
+DEMO_HELP = (
+    "The bifurcation diagram of a DNA-like ring with self-contact (Coleman & Swigon 2002)."
+    "\n\n"
+    f"C/A = 2/3 and L/D = {LENGTH_OVER_DIAMETER:g}, Coleman & Swigon's DNA example, at "
+    f"N = {N_NODES} nodes: the circle and its Michell bifurcations, the alpha and beta "
+    "branches without contact up to their first contact, then with self-contact up to "
+    f"dLk = {MAX_EXCESS_LINK:g} turns (at most {CONTACT_MAX_POINTS} points each). Writes "
+    "what 'supercoil diagram ring' writes (result.h5, diagram.json, link_writhe.png, "
+    "contact_map.png, configurations.png) into a new folder and says where. Exit status 1 "
+    f"when a branch stopped before dLk = {MAX_EXCESS_LINK:g}: what was computed is written "
+    "all the same, and --resume continues it."
+)
+
+Quiet = quiet_option()
+Overwrite = overwrite_option("Write into an existing non-empty --out DIR, replacing the demo's "
+                             "own files (other files are left alone).")
+
+
+def demo(
+    out: Annotated[Path | None, typer.Option(
+        "--out", metavar="DIR", help="Folder for the result and figures. Default: "
+        f"./{DEFAULT_FOLDER}, or ./{DEFAULT_FOLDER}-2, -3, ... if that exists. An existing "
+        "non-empty DIR is refused unless --overwrite or --resume.", show_default=False,
+        callback=checked_path)] = None,
+    overwrite: Overwrite = False,
+    resume: Annotated[bool, typer.Option(
+        "--resume", help=f"Continue the interrupted demo in --out DIR (default "
+        f"./{DEFAULT_FOLDER}) from its result.h5: finished branches are kept.")] = False,
+    quiet: Quiet = False,
+) -> None:
+    from supercoil.cli.saving import nothing_to_resume
+
+    folder, stored = prepare_folder(out, overwrite, resume)
+    if nothing_to_resume(stored):
+        return
+    if not run_demo(folder, quiet, stored):
+        raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
 def prepare_folder(out: Path | None, overwrite: bool, resume: bool = False):
@@ -83,7 +123,8 @@ def run_demo(folder: Path, quiet: bool = False, stored=None) -> bool:
 
     options = demo_options()
     print(f"supercoil demo: bifurcation diagram of a twisted ring with self-contact, "
-          f"C/A = 2/3, L/D = {LENGTH_OVER_DIAMETER:g} (seed 001's DNA example), N = {N_NODES}, "
+          f"C/A = 2/3, L/D = {LENGTH_OVER_DIAMETER:g} (Coleman & Swigon's DNA example), "
+          f"N = {N_NODES}, "
           f"modes {', '.join(map(str, MODES))}, dLk <= {MAX_EXCESS_LINK:g}", flush=True)
     payload = run_diagram(options, folder, quiet, resume=stored, command="demo",
                           resume_hint=f"continue with 'supercoil demo --out {folder} "

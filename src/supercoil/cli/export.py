@@ -13,13 +13,14 @@ import typer
 
 from supercoil import checks
 from supercoil.cli._common import checked_path, fail, path_kind, refused, require_count
+from supercoil.cli._options import overwrite_option, quiet_option
+from supercoil.units.dna import RISE_NM_PER_BP
 
 FORMATS = ("vtk", "xyz", "pdb", "obj")
+MIN_SIDES, MAX_SIDES = 3, 256  # vertices around the tube of an obj mesh
+Quiet = quiet_option("Print nothing on standard output; errors still go to standard error.")
+Overwrite = overwrite_option("Replace an existing --out file.")
 
-
-def register(app: typer.Typer) -> None:
-    """Add ``export`` to the ``supercoil`` command."""
-    app.command("export")(export_command)
 
 
 def export_command(
@@ -34,18 +35,20 @@ def export_command(
         "--branch", metavar="NAME", help="Branch name (default: the only branch, or the "
         "last one computed).", show_default=False)] = None,
     point: Annotated[int, typer.Option("--point", metavar="I", help="Point index on the "
-                                       "branch (negative counts from the end).")] = -1,
+                                       "branch, from -K to K - 1 for a branch of K points "
+                                       "(negative counts from the end).")] = -1,
     fmt: Annotated[str | None, typer.Option(
         "--format", metavar="FORMAT", help="vtk (polyline + TubeRadius, ParaView), xyz, pdb "
         "(one bead per base pair, DNA) or obj (tube mesh); default: from the --out suffix.",
         show_default=False)] = None,
     sides: Annotated[int, typer.Option("--sides", metavar="N", help="Vertices around the "
-                                       "tube (obj).")] = 16,
+                                       f"tube (obj), {MIN_SIDES} to {MAX_SIDES}.")] = 16,
     bp: Annotated[int | None, typer.Option(
         "--bp", metavar="N", help="pdb of a nondimensional result: read the rod as N base "
-        "pairs of DNA (L = N x 0.34 nm).", show_default=False)] = None,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out "
-                                            "file.")] = False,
+        f"pairs of DNA, {checks.MIN_BASE_PAIRS} to {checks.MAX_BASE_PAIRS} (L = N x "
+        f"{RISE_NM_PER_BP:g} nm).", show_default=False)] = None,
+    overwrite: Overwrite = False,
+    quiet: Quiet = False,
 ) -> None:
     """Export one state of a result file: VTK, XYZ, PDB (DNA beads) or OBJ tube.
 
@@ -53,8 +56,6 @@ def export_command(
     (one bead per base pair) or an OBJ tube mesh, in the result's units (nm for DNA)."""
     from supercoil.io.exports import SUFFIXES, export_state
     from supercoil.io.store import ResultFileError, load
-    from supercoil.units.dna import RISE_NM_PER_BP
-
     if fmt is None:
         by_suffix = {v: k for k, v in SUFFIXES.items()}
         fmt = by_suffix.get(out.suffix.lower())
@@ -63,7 +64,7 @@ def export_command(
                  f"{out.suffix or '(none)'!r}; give --format {'|'.join(FORMATS)}")
     if fmt not in FORMATS:
         fail(f"--format {fmt!r}: give one of {', '.join(FORMATS)}")
-    require_count("--sides", sides, 3, 256)
+    require_count("--sides", sides, MIN_SIDES, MAX_SIDES)
     if bp is not None:
         with refused({"base_pairs": "--bp"}):
             checks.integer("base_pairs", bp, checks.MIN_BASE_PAIRS, checks.MAX_BASE_PAIRS)
@@ -127,4 +128,5 @@ def export_command(
         fail(f"--format {fmt}: {exc}")
     except OSError as exc:
         fail(f"--out {out}: cannot write ({exc.strerror or exc})")
-    print(f"wrote {out} ({fmt}, branch {name}, point {index}, lengths in {unit})")
+    if not quiet:
+        print(f"wrote {out} ({fmt}, branch {name}, point {index}, lengths in {unit})")

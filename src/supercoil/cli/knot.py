@@ -1,7 +1,7 @@
 """``supercoil knot FILE [--json PATH]``: the knot type of a closed curve.
 
 Thin: reads the curve as ``supercoil writhe`` does, calls
-:func:`supercoil.topology.knots.identify`, prints or writes the result with the
+:func:`supercoil.knot_type`, prints or writes the result with the
 JSON envelope.
 """
 
@@ -12,9 +12,12 @@ from typing import Annotated
 
 import typer
 
-from supercoil.cli._common import check_json_target, fail, write_json_or_fail
+from supercoil.cli._common import check_json_target, checked_path, fail, write_json_or_fail
+from supercoil.cli._options import JsonOption, quiet_option
 
 _HANDS = {1: "+1", -1: "-1", 0: "0"}
+Quiet = quiet_option("Print nothing on standard output (but the JSON of --json -); errors "
+                     "still go to standard error.")
 
 
 def knot(
@@ -25,19 +28,11 @@ def knot(
             help="Text file of the closed curve: one vertex 'x y z' per line (spaces, tabs "
             "or commas), each vertex once (the last is joined to the first); '#' starts a "
             "comment; blank lines are ignored. Any length unit.",
-            show_default=False,
+            show_default=False, callback=checked_path,
         ),
     ],
-    json_path: Annotated[
-        str | None,
-        typer.Option(
-            "--json",
-            metavar="PATH",
-            help="Write the machine-readable result as JSON to PATH ('-' = standard "
-            "output, which suppresses the human-readable output). The file carries "
-            "schema_version, units, conventions and provenance.",
-        ),
-    ] = None,
+    json_path: JsonOption = None,
+    quiet: Quiet = False,
 ) -> None:
     """Knot type of a closed polygonal curve: name, chirality, Alexander polynomial.
 
@@ -61,10 +56,10 @@ def knot(
     if len(points) < 3:
         fail(f"curve file {file}: {len(points)} vertex(es); a closed curve needs at least 3")
 
-    from supercoil.topology.knots import identify
+    from supercoil import knot_type
 
     try:
-        result = identify(points)
+        result = knot_type(points)
     except ValueError as exc:
         fail(f"curve file {file}: {exc}")
 
@@ -84,7 +79,7 @@ def knot(
         from supercoil.io.results import envelope
 
         write_json_or_fail(envelope(payload, n_nodes=len(points), tolerances={}), json_path)
-    if json_path != "-":
+    if json_path != "-" and not quiet:
         from supercoil.topology.knots.polynomials import format_laurent
 
         name = result.name or "unknown"
@@ -96,7 +91,3 @@ def knot(
         print(f"alexander {alexander}")
         print(f"jones {jones}")
 
-
-def register(app: typer.Typer) -> None:
-    """Add ``knot`` to the ``supercoil`` command."""
-    app.command("knot")(knot)

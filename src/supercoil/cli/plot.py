@@ -13,9 +13,12 @@ from typing import Annotated
 import typer
 
 from supercoil.cli._common import checked_path, fail
+from supercoil.cli._options import overwrite_option, quiet_option
 
 KINDS = ("diagram", "contact-map", "hat-curve", "configurations")  # figures.KINDS
 FORMATS = ("png", "svg")
+Quiet = quiet_option("Print nothing on standard output; errors still go to standard error.")
+Overwrite = overwrite_option("Replace existing figure files of the same names.")
 
 
 def plot(
@@ -45,10 +48,8 @@ def plot(
         str,
         typer.Option("--format", metavar="FMT,FMT", help="File formats: png, svg or both."),
     ] = "png,svg",
-    overwrite: Annotated[
-        bool,
-        typer.Option("--overwrite", help="Replace existing figure files of the same names."),
-    ] = False,
+    overwrite: Overwrite = False,
+    quiet: Quiet = False,
 ) -> None:
     """Publication figures of a result as PNG and SVG, in one style, axes with units.
 
@@ -98,9 +99,6 @@ def plot(
         except OSError as exc:
             fail(f"--out {out}: cannot write the {k} figure ({exc.strerror or exc}); give a "
                  "writable folder")
-    print(f"wrote {', '.join(p.name for p in written)} to {out.resolve()}")
+    if not quiet:
+        print(f"wrote {', '.join(p.name for p in written)} to {out.resolve()}")
 
-
-def register(app: typer.Typer) -> None:
-    """Add ``plot`` to the ``supercoil`` command."""
-    app.command("plot")(plot)

@@ -1,4 +1,5 @@
-"""``supercoil run STUDY.toml``: run a study file, saving as it goes.
+"""``supercoil run STUDY.toml``: run a study file, saving as it goes (the running itself
+is :func:`supercoil.cli.study_runner.run_study`).
 
 Writes into ``--out DIR`` (default: the study file's name without ``.toml``,
 in the current folder):
@@ -25,18 +26,12 @@ from typing import Annotated
 import typer
 
 from supercoil.cli._common import EXIT_NOT_CONVERGED, checked_path, fail, warn
+from supercoil.cli._options import overwrite_option, quiet_option
+from supercoil.cli.saving import RESULT_FILE
 
-RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
-SUMMARY_FILES = {"ring_diagram": "diagram.json", "ring": "ring.json",
-                 "tweezers": "branch.json"}
-FIGURE_FORMATS = ("png",)
-NEWTON_TOLERANCE = 1e-10  # supercoil ring's (cli/main.py)
-CONTACT_NEWTON_TOLERANCE = 1e-9
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``run`` to the ``supercoil`` command."""
-    app.command("run")(run_command)
+Quiet = quiet_option("No progress output, and no list of the files written.")
+Overwrite = overwrite_option("Write into an existing non-empty DIR, replacing its result.h5, "
+                             "summary and figures (other files are left alone).")
 
 
 def run_command(
@@ -51,13 +46,12 @@ def run_command(
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in DIR (its result.h5): completed "
         "branches are kept. The study must be the same (presentation keys aside).")] = False,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress output.")] = False,
-    overwrite: Annotated[bool, typer.Option(
-        "--overwrite", help="Write into an existing non-empty DIR, replacing its result.h5, "
-        "summary and figures (other files are left alone).")] = False,
+    quiet: Quiet = False,
+    overwrite: Overwrite = False,
     json_path: Annotated[str | None, typer.Option(
-        "--json", metavar="PATH", help="Also write the JSON summary to PATH ('-' = standard "
-        "output, which silences the other output).", show_default=False)] = None,
+        "--json", metavar="PATH", help="Also write the JSON summary to PATH, replaced if it "
+        "exists ('-' = standard output, which silences the other output).",
+        show_default=False)] = None,
     overrides: Annotated[list[str] | None, typer.Option(
         "--set", metavar="TABLE.KEY=VALUE", help="Override one key of the study (a TOML "
         "value), e.g. --set rod.nodes=48; repeatable.", show_default=False)] = None,
@@ -68,6 +62,7 @@ def run_command(
     Ctrl-C stops it and keeps every point computed so far, --resume continues it."""
     from supercoil.cli._common import check_json_target, write_json_or_fail
     from supercoil.cli.progress import Progress
+    from supercoil.cli.study_runner import run_study
     from supercoil.io.study import StudyError, load_study
 
     quiet = quiet or json_path == "-"
@@ -160,325 +155,3 @@ def _same(x, y) -> bool:
         except (TypeError, ValueError):
             return False
     return x == y
-
-
-# ----------------------------------------------------------------------------- running
-def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
-    """Run ``spec`` (a :class:`~supercoil.io.study.Study`) into folder ``out``.
-
-    Returns ``{"status", "message", "files", "notes"}``; the result file's status is
-    ``complete``, ``incomplete``, ``interrupted`` (Ctrl-C: KeyboardInterrupt caught,
-    the file closed) or ``failed`` (an exception: recorded, then re-raised).
-    """
-    from supercoil.cli.progress import Progress
-    from supercoil.cli.saving import terminate_as_interrupt
-    from supercoil.io.store import ResultWriter
-
-    progress = progress or Progress(quiet=True)
-    result_path = out / RESULT_FILE
-    if resume:
-        writer = ResultWriter.reopen(result_path)
-    else:
-        writer = ResultWriter.create(result_path, problem=spec.kind, settings=spec.settings,
-                                     units=spec.units, provenance=_provenance(spec),
-                                     attributes=_attributes(spec), study_text=spec.text,
-                                     overwrite=True)
-    saved = {"points": 0}
-    try:
-        with terminate_as_interrupt():
-            if spec.kind == "ring_diagram":
-                outcome = _run_ring_diagram(spec, writer, progress, saved, resume)
-            elif spec.kind == "tweezers":
-                outcome = _run_tweezers(spec, writer, progress, resume, saved)
-            else:
-                outcome = _run_ring(spec, writer, progress)
-    except KeyboardInterrupt:
-        message = (f"interrupted by the user; {saved['points']} continuation points saved "
-                   "so far")
-        writer.set_status("interrupted", message)
-        writer.close()
-        return {"status": "interrupted", "message": message, "files": [RESULT_FILE],
-                "notes": []}
-    except BaseException as exc:
-        writer.set_status("failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
-        writer.close()
-        raise
-    summary = outcome["summary"]
-    writer.set_summary(summary)
-    writer.set_status(outcome["status"], outcome["message"])
-    writer.close()
-    files = [RESULT_FILE]
-    if spec.settings["outputs"]["json"]:
-        from supercoil.io.results import write_json
-
-        name = SUMMARY_FILES[spec.kind]
-        write_json(summary, out / name)
-        files.append(name)
-    if spec.settings["outputs"]["figures"]:
-        try:
-            files += _figures(result_path, out, outcome["notes"])
-        except KeyboardInterrupt:
-            from supercoil.cli.saving import figures_interrupted
-
-            figures_interrupted(out)
-            return {**outcome, "status": "interrupted", "files": files, "resumable": False,
-                    "message": "interrupted while drawing the figures (the data are complete)"}
-    return {**outcome, "files": files}
-
-
-def _attributes(spec) -> dict:
-    rod, problem = spec.settings["rod"], spec.settings["problem"]
-    out = {"twist_ratio": rod["twist_ratio"], "n_nodes": rod["nodes"],
-           "closed": spec.kind != "tweezers", "study_name": spec.name}
-    for key in ("tension", "end_distance"):
-        if key in problem:
-            out[key] = problem[key]
-    if "length_over_diameter" in rod:
-        out["length_over_diameter"] = rod["length_over_diameter"]
-        out["diameter"] = 1.0 / rod["length_over_diameter"]
-    preset = spec.dna_preset()
-    if preset is not None:
-        out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                   diameter_nm=preset.effective_diameter_nm,
-                   temperature_K=float(preset.temperature_K),
-                   relaxed_link=preset.relaxed_link)
-        if preset.salt_mM is not None:
-            out["salt_mM"] = float(preset.salt_mM)
-    return out
-
-
-def _treatment(spec) -> str:
-    if spec.kind == "tweezers":
-        return "barrier" if "length_over_diameter" in spec.settings["rod"] else "none"
-    return spec.settings["problem"].get("contact", "none")
-
-
-def _provenance(spec) -> dict:
-    out = {"study_file": spec.source, "contact_treatment": _treatment(spec),
-           "n_nodes": spec.settings["rod"]["nodes"]}
-    preset = spec.dna_preset()
-    if preset is not None:
-        out["units_preset"] = preset.record()
-    return out
-
-
-def _envelope(spec, payload: dict, tolerances: dict) -> dict:
-    from supercoil.io.results import envelope
-
-    preset = spec.dna_preset()
-    data = envelope(payload, n_nodes=spec.settings["rod"]["nodes"], tolerances=tolerances,
-                    contact_treatment=_treatment(spec),
-                    units=spec.units)
-    data["provenance"]["study_file"] = spec.source
-    if preset is not None:
-        data["conventions"].update(preset.conventions())
-        data["provenance"]["units_preset"] = preset.record()
-    return data
-
-
-def _point_saver(writer, progress, saved: dict, contact_names=()):
-    def on_point(branch) -> None:
-        writer.append(branch, contact=branch.name in contact_names
-                      or branch.name.endswith("_contact"))
-        saved["points"] += 1
-        k = len(branch)
-        step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
-        progress.point(branch.name, branch.parameter, float(branch.parameter_values[-1]), step,
-                       k)
-
-    return on_point
-
-
-def _stored_for_resume(writer, progress) -> dict:
-    """The stored branches (name -> (branch, complete)), announced on ``progress``."""
-    stored = writer.stored_branches()
-    kept = [n for n, (b, complete) in stored.items() if complete]
-    partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
-               if not complete and len(b)]
-    progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
-                     f"{', '.join(partial) or 'no branch'}")
-    return stored
-
-
-def _outcome(ok: bool, payload: dict, summary: dict, notes: list) -> dict:
-    """Status, message, summary and notes of a branch computation's run."""
-    if ok:
-        status, message = "complete", f"{len(payload['branches'])} branches computed"
-    else:
-        failed = [b["name"] for b in payload["branches"] if not b["ok"]]
-        status = "incomplete"
-        message = (f"branch(es) {', '.join(failed)} stopped early" if failed else
-                   "a step failed (see notes)")
-    return {"status": status, "message": message, "summary": summary,
-            "notes": notes + list(payload["notes"])}
-
-
-def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict:
-    from supercoil.problems.ring_diagram import ring_diagram
-
-    options = spec.diagram_options()
-    notes = []
-
-    def on_branch(branch, contact: bool) -> None:
-        writer.write_branch(branch, complete=True, contact=contact)
-
-    kwargs = {"progress": progress.message, "on_point": _point_saver(writer, progress, saved),
-              "on_branch": on_branch}
-    if resume:
-        kwargs["resume"] = _stored_for_resume(writer, progress)
-    s = spec.settings
-    progress.message(f"ring diagram: C/A = {s['rod']['twist_ratio']:.6g}, L/D = "
-                     f"{s['rod']['length_over_diameter']:.6g}, N = {s['rod']['nodes']}, modes "
-                     f"{', '.join(map(str, s['problem']['modes']))}, dLk <= "
-                     f"{s['problem']['max_excess_link']:.6g}")
-    diagram = ring_diagram(options, **kwargs)
-    stored_names = set(writer.branch_names())
-    for branch in diagram.branches:
-        writer.write_branch(branch, complete=True, contact=branch.name in diagram.contact_branches)
-    for name in stored_names - {b.name for b in diagram.branches}:
-        writer.remove_branch(name)
-    payload = diagram.payload()
-    preset = spec.dna_preset()
-    if preset is not None:
-        payload = diagram_in_dna_units(payload, preset, s["problem"]["max_superhelical_density"])
-    summary = _envelope(spec, payload, options.tolerances)
-    return _outcome(diagram.ok, payload, summary, notes)
-
-
-def diagram_in_dna_units(payload: dict, preset, max_sigma: float) -> dict:
-    """``diagram.json``'s payload with DNA keys added (the nondimensional ones unchanged):
-    plasmid constants at the top, ``superhelical_density`` and ``energy_kT`` per point and
-    per special point, ``force_pN`` / ``force_per_length_pN_per_nm`` in contact lists."""
-    out = dict(payload)
-    out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-               diameter_nm=preset.effective_diameter_nm,
-               salt_mM=None if preset.salt_mM is None else float(preset.salt_mM),
-               temperature_K=float(preset.temperature_K), kT_pN_nm=preset.kT_pN_nm,
-               relaxed_link=preset.relaxed_link, max_superhelical_density=max_sigma,
-               michell_superhelical_density={
-                   m: preset.superhelical_density_of(v)
-                   for m, v in payload["michell_excess_link"].items()})
-
-    def point(p: dict) -> dict:
-        q = dict(p)
-        if "excess_link" in p:
-            q["superhelical_density"] = preset.superhelical_density_of(p["excess_link"])
-        if isinstance(p.get("energy"), (int, float)):
-            q["energy_kT"] = preset.energy_to_kT(p["energy"])
-        if "contact_points" in p:
-            q["contact_points"] = [{**c, "force_pN": preset.force_to_pN(c["force"])}
-                                   for c in p["contact_points"]]
-        if "contact_intervals" in p:
-            q["contact_intervals"] = [
-                {**c, "force_per_length_pN_per_nm":
-                 preset.force_per_length_to_pN_per_nm(c["force_per_length"])}
-                for c in p["contact_intervals"]]
-        return q
-
-    out["points"] = [point(p) for p in payload["points"]]
-    out["special_points"] = [point(p) for p in payload["special_points"]]
-    return out
-
-
-def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
-    from supercoil.problems.tweezers import tweezers_branches
-    from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
-
-    options = spec.tweezers_options()
-    notes = []
-    stored = _stored_for_resume(writer, progress) if resume else None
-    control = (f"F L^2/A = {options.tension:.6g}" if options.load_control
-               else f"z/L = {options.end_distance:.6g}")
-    progress.message(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
-                     f"{options.length_over_diameter or 'no contact'}, N = {options.n_nodes}, "
-                     f"turns {options.turns[0]:g} to {options.turns[1]:g}")
-    result = tweezers_branches(
-        options, progress=progress.message, on_point=_point_saver(writer, progress, saved),
-        on_branch=lambda branch, contact: writer.write_branch(branch, complete=True,
-                                                              contact=contact),
-        resume=stored)
-    stored_names = set(writer.branch_names())
-    for branch in result.branches:
-        writer.write_branch(branch, complete=True, contact=branch.name in result.contact_branches)
-    for name in stored_names - {b.name for b in result.branches}:
-        writer.remove_branch(name)
-    payload = result_payload(result)
-    preset = spec.dna_preset()
-    if preset is not None:
-        from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
-
-        for key in ("points", "special_points"):
-            payload[key] = [tweezers_point_in_dna_units(p, preset) for p in payload[key]]
-        payload.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                       diameter_nm=preset.effective_diameter_nm,
-                       force_pN=spec.settings["problem"]["force_pN"],
-                       relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
-    summary = _envelope(spec, payload, options.tolerances)
-    summary["conventions"].update(TWEEZERS_CONVENTIONS)
-    return _outcome(result.ok, payload, summary, notes)
-
-
-def _run_ring(spec, writer, progress) -> dict:
-    """A single ring solve (``supercoil ring``), stored as a one-point branch ``ring``."""
-    s = spec.settings
-    rod, problem = s["rod"], s["problem"]
-    progress.message(f"ring: C/A = {rod['twist_ratio']:.6g}, dLk = "
-                     f"{problem['excess_link']:.6g}, N = {rod['nodes']}")
-    tolerances = {"newton_residual": NEWTON_TOLERANCE}
-    if "length_over_diameter" in rod:
-        from supercoil.contact.options import ContactOptions
-        from supercoil.problems.ring_contact import solve_supercoiled_ring
-
-        result = solve_supercoiled_ring(rod["twist_ratio"], problem["excess_link"],
-                                        rod["length_over_diameter"], n_nodes=rod["nodes"],
-                                        treatment=problem["contact"],
-                                        tolerance=CONTACT_NEWTON_TOLERANCE)
-        tolerances["newton_residual"] = CONTACT_NEWTON_TOLERANCE
-        tolerances["penetration_over_diameter"] = ContactOptions(
-            diameter=1.0 / rod["length_over_diameter"], treatment=problem["contact"]).tolerance
-    else:
-        from supercoil.problems.ring import solve_ring
-
-        result = solve_ring(rod["twist_ratio"], problem["excess_link"], n_nodes=rod["nodes"],
-                            tolerance=NEWTON_TOLERANCE)
-    tolerances["zero_modes"] = result.zero_tolerance
-    summary = result.summary()
-    preset = spec.dna_preset()
-    if preset is not None:
-        from supercoil.units.dna import ring_summary_in_dna_units
-
-        summary = ring_summary_in_dna_units(summary, preset)
-    from supercoil.cli.ring_output import ring_branch, ring_payload
-
-    branch = ring_branch(result, problem["excess_link"], summary)
-    writer.write_branch(branch, complete=True,
-                        contact="length_over_diameter" in rod)
-    data = _envelope(spec, ring_payload(summary, result.curvature), tolerances)
-    status = "complete" if result.converged else "incomplete"
-    message = ("converged" if result.converged else
-               f"not converged: Newton stopped with status {result.status} ({result.message})")
-    return {"status": status, "message": message, "summary": data, "notes": []}
-
-
-def _figures(result_path: Path, out: Path, notes: list) -> list[str]:
-    """PNG figures of every kind the result has data for (``supercoil plot``'s code)."""
-    try:
-        from supercoil.plotting.figures import plot_result, supported_kinds
-        from supercoil.plotting.result_data import ResultError, load_result
-    except ImportError:  # the figures module is not there: no figures
-        notes.append("figures skipped: supercoil.plotting.figures is not available")
-        return []
-    try:
-        data = load_result(result_path)
-    except ResultError as exc:
-        notes.append(f"figures skipped: {exc}")
-        return []
-    files = []
-    for kind in supported_kinds(data):
-        try:
-            written = plot_result(data, kind, out, formats=FIGURE_FORMATS)
-        except ValueError as exc:
-            notes.append(f"figure {kind} skipped: {exc}")
-            continue
-        files += [Path(p).name for p in written]
-    return files

@@ -13,6 +13,7 @@ with tasks failed, stopped early or not run (the dataset says which, and why);
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 import time
@@ -28,10 +29,6 @@ TASKS_FOLDER = "tasks"
 MAX_WORKERS = 1024
 
 
-def register(app: typer.Typer) -> None:
-    """Add ``sweep`` to the ``supercoil`` command."""
-    app.command("sweep")(sweep_command)
-
 
 def sweep_command(
     study: Annotated[Path, typer.Argument(
@@ -42,7 +39,8 @@ def sweep_command(
         "examples/sweep_hat_curves.toml.", show_default=False)],
     workers: Annotated[int | None, typer.Option(
         "--workers", metavar="K", help="Worker processes of the local Dask cluster, one "
-        "thread each (default: the usable cores).", show_default=False)] = None,
+        f"thread each, 1 to {MAX_WORKERS} (default: the usable cores).",
+        show_default=False)] = None,
     scheduler: Annotated[str | None, typer.Option(
         "--scheduler", metavar="ADDRESS", help="Run on an existing Dask cluster instead, "
         "reached at its scheduler's address (tcp://HOST:PORT); its workers must import "
@@ -88,8 +86,6 @@ def sweep_command(
     out = Path(study.stem) if out is None else out
     _prepare_folder(out, resume, overwrite)
     if workers is None and scheduler is None:
-        from supercoil._fork import usable_cores
-
         workers = usable_cores()
 
     from supercoil.sweeps.driver import run_sweep
@@ -144,6 +140,14 @@ def _prepare_folder(out: Path, resume: bool, overwrite: bool) -> None:
     except OSError as exc:
         fail(f"--out {out}: cannot write there ({exc.strerror or exc}); give a folder in a "
              "writable location")
+
+
+def usable_cores() -> int:
+    """Cores this process may run on (the default number of local workers)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on every platform
+        return os.cpu_count() or 1
 
 
 class SweepProgress:

@@ -3,8 +3,8 @@
 Thin: parses and checks the options, calls
 :func:`supercoil.problems.tweezers.tweezers_branches` through
 :func:`~supercoil.cli.saving.run_saving` (every accepted point appended to
-``result.h5`` as it comes), then writes ``branch.json`` (with the JSON
-envelope) and the figures of :mod:`supercoil.plotting.tweezers` into ``--out``.
+``result.h5`` as it comes), then writes ``branch.json`` and the figures into
+``--out`` (:mod:`supercoil.cli.tweezers_output`).
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from typing import Annotated
 
 import typer
 
+from supercoil import checks
 from supercoil.cli._common import (
     EXIT_NOT_CONVERGED,
     checked_path,
@@ -22,6 +23,8 @@ from supercoil.cli._common import (
     refused,
     warn,
 )
+from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
+from supercoil.units.dna import DEFAULT_SALT_MM, REFERENCE_TEMPERATURE_K, SALT_RANGE_MM
 
 PROTOCOLS = ("up", "up-down", "force-ramp")
 OUTPUT_FILES = ("result.h5", "branch.json", "hat_curve.png", "torque.png", "writhe.png",
@@ -38,6 +41,9 @@ TWEEZERS_OPTIONS = {"twist_ratio": "--twist-ratio",
                     "force_step": "--force-step", "base_pairs": "--bp",
                     "force_pN": "--force-pN", "salt_mM": "--salt-mM",
                     "diameter_nm": "--diameter-nm", "temperature_K": "--temperature-K"}
+Quiet = quiet_option()
+Overwrite = overwrite_option("Write into an existing non-empty --out DIR, replacing this "
+                             "command's own files (other files are left alone).")
 
 
 def parse_turns(text: str) -> tuple[float, float]:
@@ -55,26 +61,29 @@ def parse_turns(text: str) -> tuple[float, float]:
 def tweezers(
     turns: Annotated[str, typer.Option(
         "--turns", metavar="START:STOP", help="Turns of the end, from START to STOP "
-        "(0 <= START < STOP), e.g. 0:5.", show_default=False)],
+        f"(0 <= START < STOP <= {checks.MAX_TURNS:g}), e.g. 0:5.", show_default=False)],
     out: Annotated[Path, typer.Option(
         "--out", metavar="DIR", help="Folder for result.h5, branch.json and the figures; "
         "an existing non-empty DIR is refused unless --overwrite or --resume.",
         show_default=False, callback=checked_path)],
     twist_ratio: Annotated[float | None, typer.Option(
-        "--twist-ratio", metavar="C/A", parser=parse_ratio, help="Twist stiffness over bending stiffness, "
-        "0 < C/A <= 1e6 (4/3 in the benchmark); not with --dna.", show_default=False)] = None,
+        "--twist-ratio", metavar="C/A", parser=parse_ratio, help="Twist stiffness over "
+        f"bending stiffness, 0 < C/A <= {MAGNITUDE}; not with --dna.",
+        show_default=False)] = None,
     length_over_diameter: Annotated[float | None, typer.Option(
         "--length-over-diameter", metavar="L/D", help="Rod length over tube diameter, "
-        "L/D > pi; omit for a rod without self-contact.", show_default=False)] = None,
+        f"pi < L/D <= {MAGNITUDE}; omit for a rod without self-contact.",
+        show_default=False)] = None,
     tension: Annotated[float | None, typer.Option(
-        "--tension", metavar="F", help="Dead load F L^2/A >= 0 on the turned end (load "
-        "control, the magnetic tweezers).", show_default=False)] = None,
+        "--tension", metavar="F", help=f"Dead load F L^2/A, 0 <= F <= {MAGNITUDE}, on the "
+        "turned end (load control, the magnetic tweezers).", show_default=False)] = None,
     end_distance: Annotated[float | None, typer.Option(
         "--end-distance", metavar="Z/L", help="End-to-end distance z/L in (0, 1) held fixed "
         "(displacement control).", show_default=False)] = None,
     nodes: Annotated[int, typer.Option(
-        "--nodes", metavar="N", help="Nodes of the discrete rod; contact lines need "
-        "segments shorter than D (N >= L/D + 2).")] = 100,
+        "--nodes", metavar="N", help=f"Nodes of the discrete rod, {checks.MIN_CLAMPED_NODES} "
+        f"to {checks.MAX_NODES}; contact lines need segments shorter than D "
+        "(N >= L/D + 2).")] = 100,
     protocol: Annotated[str, typer.Option(
         "--protocol", metavar="P", help="up: the branches from START to STOP; up-down: "
         "also the quasi-static path of an experiment turning up to STOP and back (stable "
@@ -82,30 +91,29 @@ def tweezers(
         "--force-range and back.")] = "up",
     step: Annotated[float, typer.Option(
         "--step", metavar="DT", help="With --protocol up-down or force-ramp: turns per "
-        "quasi-static step.")] = 0.02,
+        "quasi-static step (0 < DT <= STOP - START).")] = 0.02,
     force_range: Annotated[str | None, typer.Option(
         "--force-range", metavar="LOW:HIGH", help="With --protocol force-ramp: the force "
         "F L^2/A (pN with --dna) is ramped from --tension down to LOW, up to HIGH and back "
         "(default 0:2F).", show_default=False)] = None,
     force_step: Annotated[float | None, typer.Option(
-        "--force-step", metavar="DF", help="With --protocol force-ramp: force per step "
-        "(default 1/50 of the range).", show_default=False)] = None,
+        "--force-step", metavar="DF", help="With --protocol force-ramp: force per step, "
+        "F L^2/A (pN with --dna), 0 < DF <= HIGH - LOW (default 1/50 of the range).",
+        show_default=False)] = None,
     max_points: Annotated[int, typer.Option(
-        "--max-points", metavar="K", help="Largest number of points per branch (a branch "
-        "stopped by it is incomplete: exit status 1).")] = 2000,
+        "--max-points", metavar="K", help=f"Largest number of points per branch, 2 to "
+        f"{checks.MAX_POINTS} (a branch stopped by it is incomplete: exit status 1).")] = 2000,
     contact_curve: Annotated[str, typer.Option(
         "--contact-curve", metavar="CURVE", help="Curve whose self-distance is the contact "
         "distance: spline (the cubic B-spline of the nodes, default), quintic (the quintic "
         "B-spline, integral formulation only) or polygon (the segments, whose sag ripples "
-        "with period h; docs/benchmarks.md).")] = "spline",
+        "with period h; docs/contact.md).")] = "spline",
     contact_formulation: Annotated[str, typer.Option(
         "--contact-formulation", metavar="FORM", help="How the contact potential is summed: "
         "integral (a double integral over the strands, which counts a contact once wherever "
         "it lies; default) or pairs (over segment pairs: a sawtooth of fold pairs along the "
-        "plectoneme; docs/benchmarks.md).")] = "integral",
-    overwrite: Annotated[bool, typer.Option(
-        "--overwrite", help="Write into an existing non-empty --out DIR, replacing this "
-        "command's own files (other files are left alone).")] = False,
+        "plectoneme; docs/contact.md).")] = "integral",
+    overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in --out DIR from its result.h5 (the "
         "same options): finished branches are kept, the others continued from their last "
@@ -115,23 +123,22 @@ def tweezers(
         "--diameter-nm, --temperature-K) instead of --twist-ratio, --tension and "
         "--length-over-diameter. The model is athermal.")] = False,
     bp: Annotated[int | None, typer.Option(
-        "--bp", metavar="N", help="With --dna: number of base pairs.",
-        show_default=False)] = None,
+        "--bp", metavar="N", help=f"With --dna: number of base pairs, "
+        f"{checks.MIN_BASE_PAIRS} to {checks.MAX_BASE_PAIRS}.", show_default=False)] = None,
     force_pN: Annotated[float | None, typer.Option(
         "--force-pN", metavar="F", help="With --dna: pulling force in pN (>= 0).",
         show_default=False)] = None,
     salt_mM: Annotated[float | None, typer.Option(
-        "--salt-mM", metavar="MM", help="With --dna: monovalent salt in mM, giving the "
-        "effective diameter (default 150 mM).", show_default=False)] = None,
+        "--salt-mM", metavar="MM", help=f"With --dna: monovalent salt in mM, from "
+        f"{SALT_RANGE_MM[0]:g} to {SALT_RANGE_MM[1]:g}, giving the effective diameter "
+        f"(default {DEFAULT_SALT_MM:g} mM).", show_default=False)] = None,
     diameter_nm: Annotated[float | None, typer.Option(
-        "--diameter-nm", metavar="D", help="With --dna: the effective diameter in nm "
+        "--diameter-nm", metavar="D", help="With --dna: the effective diameter in nm, > 0 "
         "(instead of --salt-mM).", show_default=False)] = None,
     temperature_K: Annotated[float | None, typer.Option(
-        "--temperature-K", metavar="T", help="With --dna: temperature in K of the kT "
-        "unit (default 298 K).", show_default=False)] = None,
-    quiet: Annotated[bool, typer.Option(
-        "--quiet", help="No progress display (by default a live line on a terminal, else a "
-        "plain line every 10 points on standard error).")] = False,
+        "--temperature-K", metavar="T", help="With --dna: temperature in K (> 0) of the "
+        f"kT unit (default {REFERENCE_TEMPERATURE_K:g} K).", show_default=False)] = None,
+    quiet: Quiet = False,
 ) -> None:
     """A rod clamped at both ends on the pulling axis, turned at one end.
 
@@ -214,9 +221,10 @@ def tweezers(
         stored_for_resume,
         terminate_as_interrupt,
     )
+    from supercoil.cli.tweezers_output import tweezers_attributes, write_tweezers
 
     writer = open_writer(out, resume=stored is not None, problem="tweezers",
-                         settings=settings, attributes=_attributes(options, preset),
+                         settings=settings, attributes=tweezers_attributes(options, preset),
                          provenance={"contact_treatment": "barrier" if length_over_diameter
                                      else "none", "n_nodes": nodes},
                          units="nondimensional" if preset is None else preset.name)
@@ -252,123 +260,6 @@ def tweezers(
                                           [b["message"] for b in payload["branches"]
                                            if not b["ok"]]))
         raise typer.Exit(EXIT_NOT_CONVERGED)
-
-
-def _attributes(options, preset) -> dict:
-    out = {"twist_ratio": options.twist_ratio, "n_nodes": options.n_nodes, "closed": False}
-    for key in ("tension", "end_distance", "length_over_diameter"):
-        value = getattr(options, key)
-        if value is not None:
-            out[key] = value
-    if options.length_over_diameter is not None:
-        out["diameter"] = 1.0 / options.length_over_diameter
-    if preset is not None:
-        out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                   diameter_nm=preset.effective_diameter_nm,
-                   temperature_K=float(preset.temperature_K), relaxed_link=preset.relaxed_link)
-    return out
-
-
-def write_tweezers(result, out: Path, writer, path=None, preset=None) -> dict:
-    """Store the branches and the summary in ``writer`` (then closed), write branch.json
-    (with the envelope), then the figures; return the payload. The data are complete
-    before the first figure is drawn: an interrupt while drawing leaves them whole.
-
-    ``path``: the quasi-static path (:class:`~supercoil.problems.tweezers_protocol.PathResult`)
-    of the up-down protocol, written as the list ``path`` with its jumps among the special
-    points, and its states as the result's extra ``path`` (``states``, ``turns``).
-    ``preset``: a :class:`~supercoil.units.dna.DNAPreset`; its suffixed keys are added to
-    every point, special point and path point, and ``units`` is ``dna``.
-    """
-    from supercoil.cli.saving import figures_interrupted
-    from supercoil.io.results import envelope, write_json
-    from supercoil.plotting.tweezers import pick_configurations, write_figures
-    from supercoil.problems.tweezers_output import (
-        TWEEZERS_CONVENTIONS,
-        add_contact_lists,
-        result_payload,
-    )
-
-    payload = result_payload(result, contacts=False)
-    states = {b.name: b.states for b in result.branches}
-    if path is not None:
-        import numpy as np
-
-        payload["path"] = list(path.points)
-        payload["path_ok"] = path.ok
-        payload["path_message"] = path.message
-        payload["special_points"] += list(path.jumps)
-        writer.set_extra("path", {"states": np.asarray(path.states, float),
-                                  "turns": np.array([p["turns"] for p in path.points],
-                                                    float)})
-    add_contact_lists(result, payload["points"])
-    configurations = pick_configurations(payload, states)
-    data = dict(payload)
-    if preset is not None:
-        from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
-
-        for key in ("points", "special_points", "path"):
-            if key in data:
-                data[key] = [tweezers_point_in_dna_units(p, preset) for p in data[key]]
-        data.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                    diameter_nm=preset.effective_diameter_nm,
-                    force_pN=preset.force_to_pN(result.options.tension),
-                    relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
-    data = envelope(data, n_nodes=result.options.n_nodes, tolerances=result.options.tolerances,
-                    units="nondimensional" if preset is None else preset.name,
-                    contact_treatment="barrier" if result.contact_problem else "none")
-    data["conventions"].update(TWEEZERS_CONVENTIONS)
-    if preset is not None:
-        data["conventions"].update(preset.conventions())
-        data["provenance"]["units_preset"] = preset.record()
-    for branch in result.branches:
-        writer.write_branch(branch, complete=True, contact=branch.name in result.contact_branches)
-    for name in set(writer.branch_names()) - {b.name for b in result.branches}:
-        writer.remove_branch(name)
-    writer.set_summary(data)
-    complete = payload["ok"] and (path is None or path.ok)
-    writer.set_status("complete" if complete else "incomplete",
-                      f"{len(result.branches)} branches computed" if complete else
-                      "; ".join([b["message"] for b in payload["branches"] if not b["ok"]]
-                                + ([] if path is None or path.ok else [path.message])))
-    writer.close()
-    write_json(data, out / "branch.json")
-    try:
-        write_figures(payload, configurations, out)
-    except KeyboardInterrupt:
-        figures_interrupted(out)
-        raise typer.Exit(EXIT_NOT_CONVERGED) from None
-    payload = data
-    for b in payload["branches"]:
-        specials = [p for p in payload["special_points"] if p["branch"] == b["name"]
-                    and p["kind"] != "fold"]
-        folds = sum(p["kind"] == "fold" for p in payload["special_points"]
-                    if p["branch"] == b["name"])
-        kinds = ", ".join(f"{p['kind']} at {p['turns']:.4f} turns" for p in specials[:6])
-        if len(specials) > 6:
-            kinds += f", ... ({len(specials)} in all)"
-        print(f"  {b['name']}: {b['n_points']} points, {b['seconds']:.1f} s, "
-              f"{b['status'].lower()}" + (f"; {kinds}" if kinds else "")
-              + (f"; {folds} folds" if folds else ""))
-    if payload.get("greenhill_turns") is not None:
-        print(f"  exact buckling of the straight rod (clamped Greenhill with tension): "
-              f"{payload['greenhill_turns']:.6f} turns")
-    if path is not None:
-        jumps = ", ".join(f"{j['turns']:.3f} ({'up' if j['direction'] > 0 else 'down'}, "
-                          f"z/L {j['extension']:.3f} -> {j['extension_after']:.3f})"
-                          for j in path.jumps)
-        print(f"  path: {len(path.points)} quasi-static steps; jumps at {jumps or 'none'}")
-    if preset is not None:
-        last = payload["points"][-1]
-        print(f"  DNA: {preset.base_pairs} bp = {preset.length_nm:.4g} nm, F = "
-              f"{payload['force_pN']:.4g} pN, D = {preset.effective_diameter_nm:.3g} nm; last "
-              f"state: extension {last['extension_nm']:.4g} nm, torque "
-              f"{last['torque_pN_nm']:.4g} pN nm")
-        warn(f"note: {payload['athermal']}")
-    print(f"wrote result.h5, branch.json and figures to {out.resolve()}", flush=True)
-    for note in payload["notes"]:
-        warn(f"note: {note}")
-    return payload
 
 
 def _force_range(text, tension, preset) -> tuple[float, float]:

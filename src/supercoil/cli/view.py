@@ -12,6 +12,10 @@ from typing import Annotated
 import typer
 
 from supercoil.cli._common import checked_path, fail
+from supercoil.cli._options import overwrite_option, quiet_option
+
+Quiet = quiet_option("Print nothing on standard output; errors still go to standard error.")
+Overwrite = overwrite_option("Replace an existing --out file.")
 
 
 def view(
@@ -29,10 +33,8 @@ def view(
                      "unless --overwrite.", show_default=False,
                        callback=checked_path),
     ] = None,
-    overwrite: Annotated[
-        bool,
-        typer.Option("--overwrite", help="Replace an existing --out file."),
-    ] = False,
+    overwrite: Overwrite = False,
+    quiet: Quiet = False,
 ) -> None:
     """One self-contained HTML page (no server, works offline) to explore a result.
 
@@ -70,10 +72,7 @@ def view(
     except OSError as exc:
         fail(f"--out {out}: cannot write ({exc.strerror or exc}); give a file in a writable "
              "folder")
-    size = out.stat().st_size
-    print(f"wrote {out.resolve()} ({size / 1e6:.1f} MB); open it in a web browser")
+    if not quiet:
+        size = out.stat().st_size
+        print(f"wrote {out.resolve()} ({size / 1e6:.1f} MB); open it in a web browser")
 
-
-def register(app: typer.Typer) -> None:
-    """Add ``view`` to the ``supercoil`` command."""
-    app.command("view")(view)

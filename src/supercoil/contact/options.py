@@ -47,8 +47,10 @@ class ContactOptions:
     ``penetration_tolerance``: largest accepted penetration over D (augmented,
     exact). ``penalty_tolerance``: the same for the penalty, which needs a
     penetration ``F / k`` to carry a force ``F`` (with the default ``k`` a few
-    per cent of D for DNA-like L/D at N = 100, falling like ``h^3``): states
-    beyond it are flagged, not returned silently. ``barrier_activation``: the
+    per cent of D for DNA-like L/D at N = 100, falling like ``h^3``): the solve
+    raises ``k`` until the penetration is within it
+    (:func:`~supercoil.contact.solve.solve_contact`); states beyond it (the
+    stiffness at its bound) are flagged, not returned silently. ``barrier_activation``: the
     barrier acts on gaps below ``barrier_activation * D``. ``curve``: the
     centreline whose self-distance is the contact distance, ``"polygon"``
     (segment pairs), ``"spline"`` (the uniform cubic B-spline of the nodes;
@@ -78,7 +80,7 @@ class ContactOptions:
     stiffness: float | None = None
     stiffness_scale: float = 1.0
     penetration_tolerance: float = 1e-4
-    penalty_tolerance: float = 5e-2
+    penalty_tolerance: float = 1e-3
     barrier_activation: float = 1e-2
     max_outer_iterations: int = 50
     force_tolerance: float = 1e-8

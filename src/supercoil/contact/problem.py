@@ -44,7 +44,7 @@ from supercoil.contact.curve import ContactCurve, PairState
 from supercoil.contact.integral import integral_terms
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.step import LinkGuard, step_bound
-from supercoil.solvers.patterns import block_csr, csr_add_blocks
+from supercoil.solvers.csr_sum import block_csr, csr_add_blocks
 from supercoil.solvers.problem import HessianParts
 
 

@@ -1,6 +1,12 @@
 """Equilibria with self-contact: the four treatments behind one call.
 
-* ``penalty`` and ``barrier``: one Newton minimisation of ``E + sum psi``.
+* ``barrier``: one Newton minimisation of ``E + sum psi``.
+* ``penalty``: Newton minimisations of ``E + sum psi``, the stiffness raised
+  between them until the largest penetration is below ``penalty_tolerance * D``
+  (Chamekh, Mani-Aouadi & Moakher 2009): a pair carries its force ``F`` through
+  the penetration ``F / k``, so at the reached forces the stiffness is multiplied
+  by twice the ratio of penetration to tolerance (between 2 and
+  ``PENALTY_GROWTH``), at most to ``MAX_PENALTY`` times its default.
 * ``augmented``: Newton on the augmented Lagrangian, then the multiplier
   update ``lam <- max(lam - k g, 0)``, repeated until the largest
   penetration is below ``penetration_tolerance * D`` (the scheme of
@@ -40,6 +46,9 @@ from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.solvers.problem import free_dofs
 
 log = logging.getLogger(__name__)
+
+PENALTY_GROWTH = 100.0  # largest factor of one raise of the penalty stiffness
+MAX_PENALTY = 1e6  # largest penalty stiffness over its default
 
 
 @dataclass(frozen=True)
@@ -92,9 +101,11 @@ def solve_contact(problem: ContactProblem, q0: np.ndarray,
         return _result(problem, q0, np.zeros(problem.n_constraints), False, "inadmissible start",
                        f"the initial state touches or penetrates (d_min/D = "
                        f"{d0 / problem.diameter:.6f}); the barrier needs a gap", 0, 0, np.nan)
-    if treatment in ("penalty", "barrier"):
+    if treatment == "barrier":
         res = newton(problem, q0, opts)
         return _finish(problem, res, 1, "")
+    if treatment == "penalty":
+        return _penalty(problem, q0, opts)
     if treatment == "augmented":
         return _augmented(problem, q0, opts)
     return _exact(problem, q0, opts)
@@ -114,10 +125,35 @@ def _finish(problem, res, outer, extra):
     admissible = pen <= tol
     if not admissible:
         message += (f"; warning: penetration {pen:.2e} D exceeds the tolerance {tol:.0e} D"
-                    + (" (raise the penalty stiffness or use 'augmented')"
+                    + (" (the penalty reached its largest stiffness: use 'augmented')"
                        if problem.treatment == "penalty" else ""))
     return ContactSolveResult(res.q, res.multipliers, res.converged, admissible,
                               res.status.value, message, res.iterations, outer, res.residual, pen)
+
+
+def _penalty(problem: ContactProblem, q0, opts):
+    """The penalty raised until the penetration is within tolerance (module docstring)."""
+    tol = problem.options.tolerance
+    k0 = problem.default_stiffness
+    q, total, pen = np.asarray(q0, float), 0, np.inf
+    for outer in range(1, problem.options.max_outer_iterations + 1):
+        res = newton(problem, q, opts)
+        total += res.iterations
+        if not res.converged:
+            return dataclasses.replace(
+                _finish(problem, res, outer, f" (penalty {problem.stiffness / k0:g} x the "
+                        f"default, solve {outer})"), newton_iterations=total)
+        q, pen = res.q, max_penetration(problem, res.q)
+        if pen <= tol or problem.stiffness >= MAX_PENALTY * k0:
+            break
+        factor = min(max(2.0 * pen / tol, 2.0), PENALTY_GROWTH)
+        problem.stiffness = min(problem.stiffness * factor, MAX_PENALTY * k0)
+        problem.invalidate()
+        log.debug("penalty: penetration %.3g D, stiffness raised to %.3g x the default",
+                  pen, problem.stiffness / k0)
+    extra = (f"; penalty {problem.stiffness / k0:g} x the default after {outer} solve(s): "
+             f"penetration {pen:.2e} D (tolerance {tol:.0e} D)")
+    return dataclasses.replace(_finish(problem, res, outer, extra), newton_iterations=total)
 
 
 def _augmented(problem: ContactProblem, q0, opts, max_outer=None):

@@ -10,7 +10,7 @@ a scalar attribute named by the caller (``excess_link``, ``turns``,
   regular points (Govaerts 2000, ch. 3), adaptive steps, both directions,
   landing exactly on parameter bounds.
 * Stability at every point: the exact unstable count from the KKT inertia,
-  zero modes, and seed 000's determinant sign beside it.
+  zero modes, and the determinant sign of Chamekh, Mani-Aouadi & Moakher 2014 beside it.
 * Events located along the branch: folds (sign of ``dlambda/ds``),
   bifurcations (a change of the unstable count that is not a fold, pairs of
   eigenvalues included), user events (sign changes of named scalars).

@@ -102,8 +102,8 @@ class Branch:
 
     Per point (``k`` points): ``parameter_values`` (k,), ``states`` (k, n_dofs),
     ``multipliers`` (k, m), ``unstable_count`` (k,), ``zero_modes`` (k,),
-    ``determinant_sign`` (k,) (seed 000's test), ``nearest_eigenvalue`` (k,)
-    (the signed eigenvalue nearest zero), ``tangents`` (k, n_dofs + m + 1)
+    ``determinant_sign`` (k,) (the test of Chamekh, Mani-Aouadi & Moakher 2014),
+    ``nearest_eigenvalue`` (k,) (the signed eigenvalue nearest zero), ``tangents`` (k, n_dofs + m + 1)
     (``[dq, dmu, dlambda]``, unit in the arclength metric), ``arclength``
     (k,), ``records`` (name -> (k, ...) arrays from the caller's record
     function). ``phase_modes`` (r, n_dofs) and ``phase_state`` (n_dofs,) are

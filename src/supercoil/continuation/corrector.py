@@ -21,7 +21,7 @@ import numpy as np
 
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.system import ExtendedSystem
-from supercoil.solvers.kkt import SingularMatrixError
+from supercoil.solvers.errors import SingularMatrixError
 from supercoil.solvers.newton import roundoff_floor
 
 BACKTRACKS = 4  # step halvings per corrector iteration (damped Newton)

@@ -12,8 +12,8 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
   through the ends (:func:`_fold_guess`);
 * a **bifurcation** is a change of the unstable count that a fold does not
   explain (a fold changes it by exactly one). Bisection on the exact inertia
-  count (seed 000; pairs of eigenvalues crossing together are seen, unlike
-  with the determinant's sign) down to ``switch_below``, then Brent's method
+  count (Chamekh, Mani-Aouadi & Moakher 2014; pairs of eigenvalues crossing
+  together are seen, unlike with the determinant's sign) down to ``switch_below``, then Brent's method
   on the signed eigenvalue nearest zero to ``event_tolerance``; each change
   on a segment in turn, a split double eigenvalue as one event
   (:func:`locate_count_change`);
@@ -24,7 +24,6 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
@@ -33,7 +32,8 @@ import numpy as np
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.stability import eigenpairs, inertia
 from supercoil.continuation.system import ExtendedSystem
-from supercoil.solvers.kkt import InertiaError, SingularMatrixError
+from supercoil.continuation.zeroin import LocationFailed, zeroin
+from supercoil.solvers.errors import InertiaError, SingularMatrixError
 
 
 @dataclass(frozen=True)
@@ -48,10 +48,6 @@ class UserEvent:
 
     kind: str
     function: Callable[[np.ndarray, np.ndarray, float], Mapping[str, float]]
-
-
-class LocationFailed(RuntimeError):
-    """A trial correction inside a bracket did not converge."""
 
 
 class Segment:
@@ -101,7 +97,8 @@ class Segment:
         quadratic, within ``O(width^3)`` where the branch is smooth, saves a third
         of what remains (measured, user events of the tweezers benchmark at N = 100
         and of the ring diagram at N = 200: 97 -> 65 and 103 -> 81 corrector
-        iterations; docs/benchmarks.md, Session 9 (events9)). Used for user events
+        iterations; ``python benchmarks/bench_events.py tweezers``, ``... ring``). Used
+        for user events
         (:func:`locate_user_event`); folds and bifurcations keep the segment's
         chord: a bifurcation point moved within the tolerance turns the critical
         mode of a double eigenvalue (the circle's), and the switched branch with it
@@ -186,98 +183,6 @@ class Located:
     resume: float | None = None  # where to search for a further count change
 
 
-RTOL = 4 * np.finfo(float).eps  # brentq's rtol here: the root's relative round-off
-
-
-def _brent(f, lo: float, hi: float, xtol: float) -> float:
-    """scipy's ``brentq`` with this module's tolerances (the reference for :func:`_zeroin`)."""
-    from scipy.optimize import brentq  # not at the top: scipy.optimize takes ~0.1 s to import
-
-    return float(brentq(f, lo, hi, xtol=xtol, rtol=RTOL, maxiter=200))
-
-
-def _zeroin(f: Callable[[float], float], lo: float, hi: float, xtol: float,
-            f_lo: float | None = None, f_hi: float | None = None,
-            guess: float | None = None, maxiter: int = 200) -> float:
-    """A zero of ``f`` in ``[lo, hi]`` by Brent's method, as scipy's ``brentq`` (the same
-    steps, the same result without ``guess``, and the same stopping rule: the returned
-    point ``x`` is the end with the smaller ``|f|`` of a bracket ``[x, x_other]`` with a
-    sign change and ``|x_other - x| < xtol + RTOL |x|``, or an exact zero), with two
-    differences.
-
-    * ``f_lo``, ``f_hi``: the values at the ends when they are known (accepted
-      points' user values, tangents), so that they are not evaluated.
-    * ``guess``: a first iterate inside the bracket (e.g. the zero of a Hermite
-      interpolant, :func:`_fold_guess`), evaluated before any other point. The
-      method then continues with inverse quadratic interpolation through the
-      guess and both ends (the guess being the current iterate, the end of its
-      sign the previous one, the other end the contrapoint), so a good guess
-      saves the first secant steps.
-
-    Raises ValueError when the end values have the same sign (as ``brentq``), and
-    :class:`LocationFailed` when ``maxiter`` steps did not close the bracket (``brentq``
-    raised RuntimeError).
-    """
-    f_lo = f(lo) if f_lo is None else f_lo
-    f_hi = f(hi) if f_hi is None else f_hi
-    if f_lo == 0:
-        return lo
-    if f_hi == 0:
-        return hi
-    if f_lo * f_hi > 0:
-        raise ValueError("f(lo) and f(hi) must have different signs")
-    x_pre, f_pre, x_cur, f_cur = lo, f_lo, hi, f_hi
-    x_blk, f_blk, s_pre, s_cur = 0.0, 0.0, 0.0, 0.0
-    if guess is not None and min(lo, hi) < guess < max(lo, hi):
-        f_g = f(guess)
-        if f_g == 0:
-            return guess
-        # the end of the guess's sign is the previous iterate, the other the contrapoint
-        same, other = ((lo, f_lo), (hi, f_hi)) if np.signbit(f_g) == np.signbit(f_lo) \
-            else ((hi, f_hi), (lo, f_lo))
-        x_pre, f_pre = same
-        x_blk, f_blk = other
-        x_cur, f_cur = guess, f_g
-        s_pre = s_cur = hi - lo  # as brentq's start: interpolation allowed at once
-    for _ in range(maxiter):
-        if f_pre != 0 and f_cur != 0 and np.signbit(f_pre) != np.signbit(f_cur):
-            x_blk, f_blk = x_pre, f_pre
-            s_pre = s_cur = x_cur - x_pre
-        if abs(f_blk) < abs(f_cur):
-            x_pre, x_cur, x_blk = x_cur, x_blk, x_cur
-            f_pre, f_cur, f_blk = f_cur, f_blk, f_cur
-        delta = 0.5 * (xtol + RTOL * abs(x_cur))
-        s_bis = 0.5 * (x_blk - x_cur)
-        if f_cur == 0 or abs(s_bis) < delta:
-            return x_cur
-        if abs(s_pre) > delta and abs(f_cur) < abs(f_pre):
-            try:
-                if x_pre == x_blk:  # secant
-                    s_try = -f_cur * (x_cur - x_pre) / (f_cur - f_pre)
-                else:  # inverse quadratic interpolation
-                    d_pre = (f_pre - f_cur) / (x_pre - x_cur)
-                    d_blk = (f_blk - f_cur) / (x_blk - x_cur)
-                    s_try = -f_cur * (f_blk * d_blk - f_pre * d_pre) / (
-                        d_blk * d_pre * (f_blk - f_pre))
-            except ZeroDivisionError:
-                # brentq's C arithmetic gives inf or nan here and bisects (measured: tiny
-                # values, |f| ~ 1e-110, underflow the differences to zero)
-                s_try = math.inf
-            if not math.isfinite(s_try):
-                s_try = math.inf
-            if 2 * abs(s_try) < min(abs(s_pre), 3 * abs(s_bis) - delta):
-                s_pre, s_cur = s_cur, s_try
-            else:
-                s_pre = s_cur = s_bis
-        else:
-            s_pre = s_cur = s_bis
-        x_pre, f_pre = x_cur, f_cur
-        x_cur += s_cur if abs(s_cur) > delta else (delta if s_bis > 0 else -delta)
-        f_cur = f(x_cur)
-    raise LocationFailed(f"no zero located to {xtol:.1e} in {maxiter} iterations "
-                         f"(bracket [{min(x_cur, x_blk):.10g}, {max(x_cur, x_blk):.10g}])")
-
-
 def _fold_guess(segment: Segment, t_a: np.ndarray, t_b: np.ndarray) -> float | None:
     """Zero in ``(0, 1)`` of ``dlambda/du`` of the cubic Hermite interpolant of
     ``lambda(u)`` through the segment's ends (None if there is none).
@@ -303,12 +208,12 @@ def _fold_guess(segment: Segment, t_a: np.ndarray, t_b: np.ndarray) -> float | N
 
 
 def locate_fold(segment: Segment, xtol: float) -> Located:
-    """Root of ``dlambda/ds`` on the segment: Brent's method (:func:`_zeroin`) started
-    from the zero of the Hermite interpolant of ``lambda`` (:func:`_fold_guess`)."""
+    """Root of ``dlambda/ds`` on the segment: Brent's method
+    (:func:`~supercoil.continuation.zeroin.zeroin`) started from the zero of the Hermite interpolant of ``lambda`` (:func:`_fold_guess`)."""
     try:
         t_a, t_b = segment.tangent(0.0), segment.tangent(1.0)
-        u = _zeroin(lambda u: segment.tangent(u)[-1], 0.0, 1.0, xtol, t_a[-1], t_b[-1],
-                    _fold_guess(segment, t_a, t_b))
+        u = zeroin(lambda u: segment.tangent(u)[-1], 0.0, 1.0, xtol, t_a[-1], t_b[-1],
+                   _fold_guess(segment, t_a, t_b))
         return Located("fold", "fold", u, segment.point(u), segment.tangent(u), True)
     except (LocationFailed, ValueError):
         return Located("fold", "fold", 1.0, segment.x_b, None, False)
@@ -410,7 +315,7 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
         lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, max(switch_below, xtol))
         f_lo, f_hi = segment.nearest_eigenvalue(lo), segment.nearest_eigenvalue(hi)
         if np.isfinite(f_lo) and np.isfinite(f_hi) and f_lo * f_hi < 0:
-            u = _zeroin(segment.nearest_eigenvalue, lo, hi, xtol, f_lo, f_hi)
+            u = zeroin(segment.nearest_eigenvalue, lo, hi, xtol, f_lo, f_hi)
         else:
             lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, xtol)
             u = hi  # the first point found with the new count (already corrected)
@@ -439,7 +344,7 @@ def user_values(event: UserEvent, system: ExtendedSystem, x: np.ndarray) -> dict
 def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: float,
                       ends: tuple[Mapping[str, float], Mapping[str, float]] | None = None
                       ) -> Located:
-    """Root of the event's value ``label`` on the segment (Brent's method, :func:`_zeroin`).
+    """Root of the event's value ``label`` on the segment (Brent's method, :func:`zeroin`).
 
     The bracket is first narrowed to the tightest pair of points already
     corrected on the segment (by earlier localisations) between which the
@@ -469,7 +374,7 @@ def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: floa
             if f_a * f_b < 0:
                 lo, hi = a, b
                 break
-        u = _zeroin(value, lo, hi, xtol)
+        u = zeroin(value, lo, hi, xtol)
         return Located(event.kind, label, u, segment.point(u), segment.tangent(u), True)
     except (LocationFailed, ValueError):
         return Located(event.kind, label, 1.0, segment.x_b, None, False)

@@ -57,7 +57,7 @@ class ContinuationOptions:
     * ``predictor``: ``"tangent"`` (Euler), ``"secant"`` (after two points) or
       ``"quadratic"``: the tangent predictor plus ``ds^2/2`` times the curvature
       estimated from the last two tangents (``(t_k - t_{k-1}) / (s_k - s_{k-1})``;
-      :func:`~supercoil.continuation.pseudo_arclength.quadratic_term`). The
+      :func:`~supercoil.continuation.step.quadratic_term`). The
       predictor's error falls from ``O(ds^2)`` to ``O(ds^3)`` where the branch is
       smooth: measured on the tweezers' contact branch, whose stiff barrier
       makes the corrector's iterations grow fast with the predictor's error,
@@ -78,7 +78,8 @@ class ContinuationOptions:
       (:func:`~supercoil.continuation.corrector.correct`'s ``chord_below``): the
       same iteration counts, the points the same below the tolerance. Measured
       on the tweezers' contact branch (N = 100): 60 of 67 tried landed, 633
-      factorisations instead of 693 (docs/benchmarks.md, "Session 12").
+      factorisations instead of 693 (``python benchmarks/bench_tweezers_steps.py
+      --problems 75,33 --against '{"chord_steps": false}'``).
     * ``zero_tolerance``: eigenvalues (of ``H v = mu M v`` on the constraint
       tangent space) with ``|mu|`` below it are ``zero_modes``, never signed.
     * ``n_modes``: eigenvalues computed at each point beyond the unstable ones.
@@ -88,7 +89,7 @@ class ContinuationOptions:
       to about ``curvature * event_tolerance^2``.
     * ``switch_below``: bisection on the unstable count stops at this fraction
       of a step; the signed eigenvalue nearest zero is then solved for by
-      Brent's method (seed 000 bisects only).
+      Brent's method (Chamekh, Mani-Aouadi & Moakher 2014 bisect only).
     * ``phase_conditions``: add ``<M s_k, q - q_start> = 0`` for each symmetry
       mode ``s_k`` of ``problem.symmetry_modes(q_start)`` (with a Lagrange
       unknown each), to follow branches whose continuous symmetry is not pinned
@@ -108,7 +109,7 @@ class ContinuationOptions:
       ``<M g, q - q_start> = 0`` with ``g`` the unit mode at the start (Doedel's
       integral phase condition; one dense row, which the linear algebra pins to
       one DOF and carries as extra borders, so it keeps the band LU and the
-      banded inertia: :func:`~supercoil.solvers.kkt.dense_rows`): its reaction
+      banded inertia: :func:`~supercoil.solvers.pinned_rows.dense_rows`): its reaction
       is spread along the mode, so a state invariant under a symmetry of the
       rod stays invariant.
     * ``regauge``: with ``near_symmetry_gauge``, when a step fails, pick the
@@ -127,10 +128,8 @@ class ContinuationOptions:
       integral phase condition relative to the previous solution), and the
       last point's tangent is recomputed in that gauge. A condition anchored at
       the branch start degrades as the state and its sliding mode move away
-      from it: measured on the ring's α contact branch (integral contact on
-      the spline, N = 200), the start's condition turned the branch back on
-      itself at ΔLk 2.247; re-anchored at every point it went on through
-      seed 001's sequence of contacts to ΔLk 3.4 (docs/benchmarks.md).
+      from it, and can turn the branch back on itself (on the ring's α contact
+      branch, before the sequence of contacts of Coleman & Swigon 2002).
     * ``detect_closed_loops``: stop with ``CLOSED_LOOP`` when the branch comes
       back to one of its own points: the last step's chord passes within
       ``closed_loop_tolerance`` times its length of an earlier point (at least
@@ -154,7 +153,8 @@ class ContinuationOptions:
       the corrector's distance as a step-control criterion). Measured on the
       tweezers' contact branch (N = 100, L/D = 33, F L^2/A = 75, 0 to 5 turns):
       the same points bit for bit, 461 corrector iterations against 501
-      (docs/benchmarks.md, "Session 10 (steps10)"). None: no limit.
+      (``python benchmarks/bench_tweezers_steps.py --problems 75,33 --against
+      '{"max_corrector_distance": null}'``). None: no limit.
     * ``finite_difference_step``: relative step of the central difference of
       the residual in the parameter when the problem has no
       ``parameter_derivative`` (error ``O(step^2)`` relative).

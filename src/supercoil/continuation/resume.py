@@ -22,14 +22,10 @@ from supercoil.continuation.branch import Branch
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
-from supercoil.continuation.pseudo_arclength import (
-    PointCallback,
-    RecordFunction,
-    _Tracer,
-    quadratic_term,
-)
+from supercoil.continuation.step import quadratic_term
 from supercoil.continuation.system import ExtendedSystem
-from supercoil.solvers.kkt import InertiaError, SingularMatrixError
+from supercoil.continuation.tracer import PointCallback, RecordFunction, Tracer
+from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
 
 _POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
@@ -160,7 +156,7 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     def joined(branch: Branch) -> None:
         on_point(join(before, branch, offset))
 
-    tracer = _Tracer(system, dataclasses.replace(opts, max_points=opts.max_points - (k - 1)),
+    tracer = Tracer(system, dataclasses.replace(opts, max_points=opts.max_points - (k - 1)),
                      partial.name, partial.parent, partial.origin, records, events,
                      None if on_point is None else joined)
     tracer.stop = stop

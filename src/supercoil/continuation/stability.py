@@ -12,7 +12,8 @@ there): dense below 100 unknowns, shift-invert Lanczos above (measured at
 N = 200 on a contact state: 10 ms against 81 ms dense, same eigenvalues). Those with ``|mu| <= zero_tolerance``
 are ``zero_modes`` and never signed, so ``unstable_count = max(found below
 -tol, inertia - zero_modes)`` (as :func:`~supercoil.stability.analysis.analyse`).
-``determinant_sign`` is the sign of ``det(Z^T H Z)``, seed 000's test: it is
+``determinant_sign`` is the sign of ``det(Z^T H Z)``, the test of
+Chamekh, Mani-Aouadi & Moakher 2014: it is
 the parity of the inertia and misses eigenvalues that cross in pairs.
 """
 
@@ -24,7 +25,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil.continuation.system import ExtendedSystem
-from supercoil.solvers.kkt import InertiaError, KKTFactor, SingularMatrixError
+from supercoil.solvers.errors import InertiaError, SingularMatrixError
+from supercoil.solvers.kkt import KKTFactor
 from supercoil.stability.analysis import (
     _eigen_system,
     _lowest_pairs,
@@ -146,7 +148,7 @@ def related_order(order: np.ndarray, dofs: np.ndarray, rows: int, new_dofs: np.n
 
     What for: the shift-invert factor of the eigenproblem (the gauge pins released,
     the dense phase rows left out) needs a banded ordering of its own pattern, which
-    :func:`~supercoil.solvers.kkt.kkt_order` computed anew (reverse Cuthill-McKee,
+    :func:`~supercoil.solvers.ordering.kkt_order` computed anew (reverse Cuthill-McKee,
     1-2 ms at N = 100) at every new contact pattern: 64 of its 135 calls along the
     tweezers benchmark; the count's factor of the same point has an ordering already.
     The ordering only decides the band LU's band (partial pivoting: solves equal to

@@ -32,14 +32,10 @@ from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
-from supercoil.continuation.pseudo_arclength import (
-    PointCallback,
-    RecordFunction,
-    _Tracer,
-    branch_phase_modes,
-)
+from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.system import ExtendedSystem
-from supercoil.solvers.kkt import InertiaError, SingularMatrixError
+from supercoil.continuation.tracer import PointCallback, RecordFunction, Tracer
+from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
 
 
@@ -138,7 +134,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
                             opts.parameter_weight, opts.finite_difference_step)
     v = np.concatenate([v[:n + m], np.zeros(system.r), v[-1:]])
     x_star = system.pack(q_star, special_point.multipliers, special_point.parameter)
-    tracer = _Tracer(system, opts, label, branch.name, special_point, records, events,
+    tracer = Tracer(system, opts, label, branch.name, special_point, records, events,
                      on_point)
     tracer.stop = stop
     if admissible is not None:

@@ -24,14 +24,14 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.solvers.newton import _hessian, lagrangian_hessian
-from supercoil.solvers.patterns import (
+from supercoil.solvers.csr import (
     csr_columns,
     csr_columns_map,
     csr_from_arrays,
     csr_rmatvec,
     csr_vstack,
 )
+from supercoil.solvers.newton import _hessian, lagrangian_hessian
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 

@@ -35,7 +35,7 @@ import scipy.sparse as sp
 from supercoil.cosserat.rod import DOFS_PER_NODE, CosseratRod, node_rotation_blocks
 from supercoil.cosserat.rotations import dexp, dexp_transpose_derivative, exp_so3, hat
 from supercoil.errors import InputError
-from supercoil.solvers.patterns import block_csr
+from supercoil.solvers.csr_sum import block_csr
 from supercoil.solvers.problem import HessianParts
 
 

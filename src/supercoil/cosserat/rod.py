@@ -26,7 +26,7 @@ import scipy.sparse as sp
 from supercoil.cosserat.element import ElementState
 from supercoil.cosserat.rotations import exp_so3, hat
 from supercoil.errors import InputError
-from supercoil.solvers.patterns import block_csr
+from supercoil.solvers.csr_sum import block_csr
 
 DOFS_PER_NODE = 6
 

@@ -1,4 +1,4 @@
-"""Symmetry group of a closed curve (seed 001: D_m on primary branches, C_2 on
+"""Symmetry group of a closed curve (Coleman & Swigon 2002: D_m on primary branches, C_2 on
 secondary ones, none on the tertiary branch).
 
 A rotation ``R`` about an axis through the centroid maps a closed curve onto
@@ -282,7 +282,7 @@ def axis_invariant_combination(points: np.ndarray, c: float, modes: np.ndarray,
     symmetrised matrix ``<v_i, g v_j>`` (weights ``mass`` per node) with the eigenvalue
     nearest +1. Returns ``a`` (k,). At a bifurcation of a D_m state through a double
     eigenvalue (an E mode), the direction that keeps one of its two-fold axes is the one
-    along which the C_2 branch starts (seed 001's secondary branches)."""
+    along which the C_2 branch starts (the secondary branches of Coleman & Swigon 2002)."""
     v = np.asarray(modes, dtype=float)
     w = np.ones(v.shape[1]) if mass is None else np.asarray(mass, dtype=float)
     image = reversal_image(points, c, v)

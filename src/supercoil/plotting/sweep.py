@@ -72,8 +72,7 @@ def hat_curves_figure(dataset, folder: str | os.PathLike):
                 continue
             result = load(tasks / str(dataset["task"].values[index]) / "result.h5")
             color = style.BRANCH_COLORS[n % len(style.BRANCH_COLORS)]
-            branches = result.branches
-            branches = branches.values() if isinstance(branches, dict) else branches
+            branches = result.branches.values()
             label = _cell_label(dataset, index)
             for branch in branches:
                 if "extension" not in branch.records or len(branch) == 0:

@@ -79,10 +79,9 @@ def _bisect(f, lo: float, hi: float, xtol: float) -> float:
     ``xtol``, or to the spacing of the floats there, by bisection.
 
     About 40-50 evaluations of a cheap ``f`` here (a bracket of 5e-3 or pi/2 halved down
-    to 1e-14 or 1e-15), a few tens of microseconds; scipy's ``brentq`` found the same
-    zero to the same tolerance, but importing ``scipy.optimize`` (it brings
-    ``scipy.spatial``, ``scipy.special`` and ``scipy.fft``) took about 0.1 s of every
-    command's start (docs/benchmarks.md, "Session 10 (fixed10)").
+    to 1e-14 or 1e-15), a few tens of microseconds; scipy's ``brentq`` finds the same
+    zero to the same tolerance, but importing ``scipy.optimize`` brings
+    ``scipy.spatial``, ``scipy.special`` and ``scipy.fft`` into every command's start.
     """
     f_lo = f(lo)
     while hi - lo > xtol:

@@ -3,8 +3,8 @@
 The twisted circle is an equilibrium for every excess link ``dLk`` with energy
 ``E L / A = 2 pi^2 (1 + (C/A) dLk^2)``. It is stable below Michell's threshold
 ``dLk = (A/C) sqrt(3)`` and loses stability to mode ``m`` at
-``dLk_m = (A/C) sqrt(m^2 - 1)`` (Michell 1889; Zajac 1962; Coleman & Swigon,
-seed 001): there a pair of eigenvalues (the ``cos`` and ``sin`` of mode
+``dLk_m = (A/C) sqrt(m^2 - 1)`` (Michell 1889; Zajac 1962; Coleman & Swigon
+2000): there a pair of eigenvalues (the ``cos`` and ``sin`` of mode
 ``m``) crosses zero, so the unstable count rises by two while the determinant
 keeps its sign.
 """
@@ -74,9 +74,13 @@ class RingResult:
     length_over_diameter: float | None = None
     contact_treatment: str | None = None
     contact: dict | None = None  # keys of supercoil.contact.report.contact_summary
+    # with self-contact: the branch the state is on ("circle", "contact" or "given
+    # curve") and the quasi-static path that reached it (problems.ring_contact)
+    branch: str | None = None
+    path: dict | None = None
 
     def summary(self) -> dict:
-        """The JSON keys of ``supercoil ring`` (see DESIGN.md conventions)."""
+        """The JSON keys of ``supercoil ring`` (docs/model.md, "Nondimensional units")."""
         out = {
             "twist_ratio": self.twist_ratio,
             "excess_link": self.excess_link,
@@ -105,6 +109,8 @@ class RingResult:
             out["length_over_diameter"] = self.length_over_diameter
             out["contact_treatment"] = self.contact_treatment
             out.update(self.contact or {})
+            out["branch"] = self.branch
+            out["path"] = self.path
         return out
 
 
@@ -223,8 +229,8 @@ def michell_threshold(twist_ratio: float, n_nodes: int, mode: int = 2,
                       curvature: str = "angle", rtol: float = 1e-11) -> float:
     """Discrete excess link where the circle's unstable count rises to ``2 (m - 1)``.
 
-    Bisection on the exact negative-eigenvalue count (seed 000 bisects on the
-    sign of the determinant, which cannot see this pair crossing) down to a
+    Bisection on the exact negative-eigenvalue count (Chamekh, Mani-Aouadi & Moakher
+    2014 bisect on the sign of the determinant, which cannot see this pair crossing) down to a
     bracket of relative width 1e-3, then Brent's method on the crossing
     eigenvalue (the inertia cannot resolve eigenvalues below its round-off).
     """

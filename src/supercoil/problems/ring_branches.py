@@ -6,10 +6,11 @@ unstable count rises by two at Michell's points ``dLk_m = (A/C) sqrt(m^2 - 1)``
 special points of kind ``bifurcation``, the determinant's sign unchanged).
 The primary branches bifurcate there along the critical mode: ``alpha``
 (m = 2) and ``beta`` (m = 3), configurations with D_m symmetry (Coleman &
-Swigon, seed 001). Without contact they pass through the rod itself
-eventually (the alpha branch at C/A = 2/3 tends to the planar figure-eight,
-Wr -> 1, dLk -> 1); contact events come with issue 4's later steps, so
-callers bound the branches (``excess_link_bounds``, ``max_points``).
+Swigon 2000). Without contact they pass through the rod itself eventually
+(the alpha branch at C/A = 2/3 tends to the planar figure-eight, Wr -> 1,
+dLk -> 1), so callers bound the branches (``excess_link_bounds``,
+``max_points``); :mod:`supercoil.problems.ring_diagram` follows them on with
+self-contact.
 
 Per point, ``Branch.records`` hold ``excess_link``, ``writhe`` (the double
 sum, :func:`supercoil.topology.writhe`), ``twist`` (the excess twist
@@ -17,7 +18,7 @@ measured from the material frames, independently of the writhe),
 ``energy`` (elastic, E L / A) and ``link_error`` = |Tw + Wr - dLk|;
 ``unstable_count``, ``zero_modes`` and ``determinant_sign`` are the branch's
 own arrays (:mod:`supercoil.continuation.stability`: the rigid motions and the
-material sliding off the circle removed, as DESIGN.md asks).
+material sliding off the circle removed: docs/model.md, "Stability").
 
 Off the circle a homogeneous ring has the material sliding as an
 approximate symmetry; continuation pins it by one phase row
@@ -51,7 +52,7 @@ def ring_records(problem: ClosedRodEnergy):
 
     def records(q: np.ndarray, multipliers: np.ndarray, excess_link: float) -> dict:
         points = q.reshape(-1, 3)
-        wr = writhe(points)
+        wr = writhe(points, self_crossing="nan")  # a branch without contact may cross
         d1 = problem.material_directors(q)
         tw = twist_from_frames(points, d1, closed=True) - problem.reference_link + excess_link
         return {"excess_link": float(excess_link), "writhe": wr, "twist": tw,

@@ -1,6 +1,6 @@
 """The ``branch.json`` payload of a tweezers run (:mod:`supercoil.problems.tweezers`).
 
-Formatting only: per-point records with DESIGN.md's keys, contact lists
+Formatting only: per-point records with the keys of docs/model.md, contact lists
 recomputed from the stored states, special points, branch metadata and the
 conventions the file states.
 """
@@ -21,7 +21,7 @@ def special_summary(p: SpecialPoint) -> dict:
 
 
 def result_points(result: TweezersResult, contacts: bool = True) -> list[dict]:
-    """One entry per point of every branch (DESIGN.md keys), contact lists included;
+    """One entry per point of every branch (keys of docs/model.md), contact lists included;
     ``contacts=False``: the lists left empty, for :func:`add_contact_lists` to fill."""
     out = []
     for b in result.branches:

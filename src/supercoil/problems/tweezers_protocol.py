@@ -16,13 +16,14 @@ A step whose state moved far from the previous one (some node by more than
 special point of kind ``jump`` on branch ``path`` with the turns, the
 extension before and after and the unstable count of the state that was
 left. The path's points carry the records of
-:func:`~supercoil.problems.tweezers.tweezers_records` plus
+:func:`~supercoil.problems.tweezers.problem.tweezers_records` plus
 ``unstable_count``, ``zero_modes``, ``direction`` (+1 up, -1 down) and
 ``stable``.
 
-The path complements the branches of :func:`tweezers_branches` (which hold
-the unstable parts too): together they are seed 001's Figure 6 picture of
-hysteresis, here with our end conditions (tangents along the force).
+The path complements the branches of
+:func:`~supercoil.problems.tweezers.tweezers_branches` (which hold the
+unstable parts too): together they are the picture of hysteresis of Coleman &
+Swigon 2002, Figure 6, here with our end conditions (tangents along the force).
 """
 
 from __future__ import annotations
@@ -36,12 +37,8 @@ from supercoil import checks
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.solve import solve_contact
-from supercoil.problems.tweezers import (
-    TweezersOptions,
-    clamped_problem,
-    set_pin,
-    tweezers_records,
-)
+from supercoil.problems.segments import set_pin
+from supercoil.problems.tweezers import TweezersOptions, clamped_problem, tweezers_records
 from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.stability.analysis import analyse
 

@@ -6,7 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil._numba import njit
-from supercoil.solvers.patterns import csr_from_arrays
+from supercoil.solvers.csr import csr_from_arrays
 
 
 @njit()

@@ -263,7 +263,7 @@ def rigid_pins(points: np.ndarray) -> np.ndarray:
     that this map maps onto themselves (:func:`_equivariant_sets`). On the
     circle (node 0 on the ``x`` axis, :func:`~supercoil.geometry.curves.circle`)
     that line is the two-fold axis through nodes 0 and ``n/2``
-    (:func:`~supercoil.problems.ring_diagram.on_mesh_direction` switches the
+    (:func:`~supercoil.problems.ring_diagram.primary.on_mesh_direction` switches the
     primary branches along it). With such pins the pinned equations are
     equivariant, so a state symmetric about that axis stays exactly so along a
     branch; with others the pins turn the axis a little at each step, the

@@ -20,7 +20,7 @@ from supercoil.geometry.curves import parallel_transport, unit
 from supercoil.rod import kernels
 from supercoil.rod.assembly import StencilPattern
 from supercoil.rod.model import Rod
-from supercoil.solvers.patterns import csr_from_arrays
+from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.problem import HessianParts
 
 

@@ -48,7 +48,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from supercoil.errors import InputError
-from supercoil.solvers.kkt import KKTFactor, SingularMatrixError
+from supercoil.solvers.errors import SingularMatrixError
+from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 log = logging.getLogger(__name__)

@@ -12,7 +12,8 @@ from typing import Protocol
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.solvers.patterns import csr_add, csr_matvec, csr_restrict
+from supercoil.solvers.csr import csr_matvec, csr_restrict
+from supercoil.solvers.csr_sum import csr_add
 
 
 @dataclass(frozen=True)

@@ -16,10 +16,11 @@ constraints, after the rigid motions (fixed DOFs) are removed. We report
   (``max(found below, negative_count - zero_modes)``);
 * approximate symmetries (``near_symmetry_modes``: a closed rod's material
   sliding off the circle) are projected out of the eigenvalues and, by an
-  integral phase row, out of the count (:func:`_reduced_system`), as DESIGN.md
-  asks;
+  integral phase row, out of the count (:func:`_reduced_system`): the unstable
+  count is that of the state modulo its continuous symmetries (docs/model.md,
+  "Stability");
 * ``determinant_sign``: the sign of ``det(Z^T H_L Z)`` — Chamekh et al.'s test
-  (seed 000), which only sees the parity of ``negative_count``: when
+  (Chamekh, Mani-Aouadi & Moakher 2014), which only sees the parity of ``negative_count``: when
   eigenvalues cross zero in pairs (symmetric bifurcations) the determinant
   keeps its sign while the count changes by two.
 """
@@ -32,13 +33,26 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.linalg import eigh, null_space
+from threadpoolctl import ThreadpoolController
 
+from supercoil.solvers.csr import csr_columns
 from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.newton import _hessian
-from supercoil.solvers.patterns import csr_columns
 from supercoil.solvers.problem import ConstrainedEnergy, free_dofs
 
 DEFAULT_ZERO_TOLERANCE = 1e-6
+_CONTROLLER: ThreadpoolController | None = None
+
+
+def _one_blas_thread():
+    """A context with BLAS on one thread: LAPACK's ``eigh`` and ARPACK's dot products
+    split their sums over the threads, so eigenvectors (their sign, and the basis of a
+    double eigenvalue) and the last bits of eigenvalues would depend on the thread count.
+    The controller is made once per process (a new one re-scans the loaded libraries)."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER.limit(limits=1, user_api="blas")
 
 
 @dataclass(frozen=True)
@@ -70,8 +84,9 @@ def _reduced_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.n
     discretisation gives it a clear curvature (Rayleigh quotient -1102 at a state of
     the ring's beta_II, N = 204), the pinned count was off by one from the
     eigenvalues and from a dense null-space count at 17 of 143 hard-contact states
-    and 18 of 158 barrier states of beta and beta_II at N = 132 (docs/benchmarks.md,
-    "hard contact").
+    and 18 of 158 barrier states of beta and beta_II at N = 132
+    (``python benchmarks/bench_hard_contact_check.py --all``;
+    benchmarks/results/beta_stability.md).
     """
     free = free_dofs(problem)
     H = _hessian(problem, q, multipliers, free)
@@ -124,7 +139,7 @@ def sliding_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
     state stays symmetric; :func:`goldstone_modes` (the rigid motion fitted on
     the pins) made the reaction depend on where the pins are: measured on the
     ring's beta branch (L/D 122, N = 204) it broke D_3 slowly, and the
-    bifurcation at dLk 5.149 (seed 001's P) unfolded into a fold.
+    bifurcation at dLk 5.149 (Coleman & Swigon 2002's P) unfolded into a fold.
     """
     near = _modes(problem, q, "near_symmetry_modes")
     if near.size == 0:
@@ -143,8 +158,8 @@ def near_symmetry_gauge(problem: ConstrainedEnergy, q: np.ndarray,
                         exclude: np.ndarray | None = None) -> np.ndarray:
     """DOFs whose pinning removes the approximate symmetries from the count (sorted).
 
-    DESIGN.md removes the continuous symmetries of the state from the
-    unstable count, the material sliding of a closed rod off the circle
+    The unstable count leaves out the continuous symmetries of the state
+    (docs/model.md, "Stability"), the material sliding of a closed rod off the circle
     included, although the discretisation breaks it weakly: the pinned
     Hessian then has a near-null eigenvalue (measured at round-off level,
     1e-9 against 3e4, on the alpha branch of the ring at N = 40) whose
@@ -208,7 +223,7 @@ def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, dofs: np.ndarray,
     """M-orthonormal basis ``(len(dofs), r)`` of the symmetry modes on ``dofs``.
 
     ``near``: include the approximate symmetries (``near_symmetry_modes``, e.g.
-    a closed rod's material sliding), which DESIGN.md removes from the count.
+    a closed rod's material sliding), which the unstable count leaves out.
     """
     modes = _modes(problem, q, "symmetry_modes")
     if near:
@@ -304,6 +319,15 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
 
 def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
                   factor_order=None):
+    """See :func:`_lowest_pairs_threads`; computed with one BLAS thread (the same
+    eigenpairs, bit for bit, whatever the thread count of the process)."""
+    with _one_blas_thread():
+        return _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry, force_sparse,
+                                     factor_order)
+
+
+def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
+                          factor_order=None):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
@@ -388,11 +412,9 @@ def dense_constrained_eigenpairs(H, J, mass, symmetry=None):
         rows.append(J.toarray())
     if symmetry is not None and symmetry.shape[1]:
         rows.append((mass[:, None] * symmetry).T)
-    if rows:
-        Z = null_space(np.vstack(rows))
-    else:
-        Z = np.eye(Hd.shape[0])
-    A = Z.T @ Hd @ Z
-    B = Z.T @ (mass[:, None] * Z)
-    values, y = eigh(0.5 * (A + A.T), 0.5 * (B + B.T))
-    return values, Z @ y
+    with _one_blas_thread():
+        Z = null_space(np.vstack(rows)) if rows else np.eye(Hd.shape[0])
+        A = Z.T @ Hd @ Z
+        B = Z.T @ (mass[:, None] * Z)
+        values, y = eigh(0.5 * (A + A.T), 0.5 * (B + B.T))
+        return values, Z @ y

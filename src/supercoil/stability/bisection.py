@@ -1,4 +1,7 @@
-"""Locate where an integer stability count changes, by bisection (seed 000, sec. 6)."""
+"""Locate where an integer stability count changes, by bisection.
+
+Chamekh, Mani-Aouadi & Moakher 2014, sec. 6.
+"""
 
 from __future__ import annotations
 

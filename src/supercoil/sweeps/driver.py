@@ -8,7 +8,7 @@ kernels compiled once load everywhere) or to the scheduler at ``scheduler``
 (an existing cluster: the workers import supercoil and see the output folder).
 
 A task (:func:`run_task`) runs its study with ``supercoil run``'s code
-(:func:`supercoil.cli.run.run_study`) into ``DIR/tasks/<key>/`` and returns its
+(:func:`supercoil.cli.study_runner.run_study`) into ``DIR/tasks/<key>/`` and returns its
 status, message and summary (:func:`supercoil.sweeps.summary.summarize` of the
 result file it wrote). A failure inside the study is an outcome (status
 ``failed`` and the exception's message), not an error of the sweep. A worker that
@@ -94,7 +94,7 @@ def run_task(key: str, text: str, source: str, folder: str) -> dict:
     folder = Path(folder)
     try:
         from supercoil import load
-        from supercoil.cli.run import run_study
+        from supercoil.cli.study_runner import run_study
         from supercoil.io.study import parse_study
 
         spec = parse_study(text, source)

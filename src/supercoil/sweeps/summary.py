@@ -27,7 +27,6 @@ Booleans become 0 and 1; counts are numbers. Branch names keep their spelling
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 
 import numpy as np
 
@@ -35,8 +34,7 @@ STRAIGHT_BRANCH = "straight"  # the tweezers' first branch (supercoil.problems.t
 
 
 def _branches(result) -> list:
-    branches = result.branches
-    return list(branches.values()) if isinstance(branches, Mapping) else list(branches)
+    return list(result.branches.values())
 
 
 def _name(text: str) -> str:

@@ -158,14 +158,18 @@ def _check_closure(closure: str) -> None:
 
 
 def _prepare(
-    points: npt.ArrayLike, closure: str, axis: npt.ArrayLike
+    points: npt.ArrayLike, closure: str, axis: npt.ArrayLike, crossing_is_error: bool = True
 ) -> tuple[np.ndarray, bool, np.ndarray | None]:
-    """Validate; return (vertices, closed polygon?, unit axis or None)."""
+    """Validate; return (vertices, closed polygon?, unit axis or None). A polygon that
+    meets itself is an InputError, or with ``crossing_is_error=False`` gives vertices None
+    (the writhe is undefined there)."""
     _check_closure(closure)
     closed = closure in ("closed", "chord")
     vertices = _as_polygon(points, "points", closed)
     unit_axis = _as_axis(axis) if closure == "axis" else None
     crossing = first_self_crossing(vertices, closed)
+    if crossing is not None and not crossing_is_error:
+        return None, closed, unit_axis
     if crossing is not None:
         i, j = crossing
         raise InputError(
@@ -511,6 +515,8 @@ def writhe(
     points: npt.ArrayLike,
     closure: Closure = "closed",
     axis: npt.ArrayLike = (0.0, 0.0, 1.0),
+    *,
+    self_crossing: str = "error",
 ) -> float:
     """Writhe of a polygonal curve, exact for the polygon (Gauss integral as solid angles).
 
@@ -535,6 +541,10 @@ def writhe(
           infinity (the convention of magnetic-tweezers experiments).
     axis
         Direction ``(3,)`` of the tails for ``closure="axis"`` (normalised here).
+    self_crossing
+        What a polygon that meets itself gives, where the writhe is undefined (it
+        jumps by 2 across a crossing): ``"error"`` (an InputError) or ``"nan"``
+        (for the records of a rod allowed to pass through itself).
 
     Returns
     -------
@@ -585,7 +595,12 @@ def writhe(
         two consecutive edges folding back), where the writhe is undefined; a
         zero or non-finite ``axis``.
     """
-    vertices, closed, unit_axis = _prepare(points, closure, axis)
+    if self_crossing not in ("error", "nan"):
+        raise InputError(f"self_crossing: got {self_crossing!r}; valid: 'error' or 'nan'",
+                         name="self_crossing")
+    vertices, closed, unit_axis = _prepare(points, closure, axis, self_crossing == "error")
+    if vertices is None:
+        return math.nan
     centred = vertices - vertices.mean(axis=0)
     scale = float(np.max(np.abs(centred)))
     if scale > 0.0:

@@ -1,7 +1,7 @@
-"""Secondary and tertiary branches of the ring diagram (seed 001, Figures 2 and 3).
+"""Secondary and tertiary branches of the ring diagram (Coleman & Swigon 2002, Figures 2, 3).
 
-Seed 001 follows, beside the primary branch beta, the *secondary* branches
-beta_I ... beta_IV that bifurcate from it and a *tertiary* branch beta*_II
+Coleman & Swigon follow, beside the primary branch beta, the *secondary*
+branches beta_I ... beta_IV that bifurcate from it and a *tertiary* branch beta*_II
 that bifurcates from beta_II; configurations on the secondary branches have
 a single two-fold axis (C_2), the tertiary one none. :func:`secondary_branches`
 does this for a computed :class:`~supercoil.problems.ring_diagram.RingDiagram`:
@@ -31,13 +31,14 @@ double eigenvalue (a symmetry-breaking bifurcation), a half-branch that keeps
 the parent's symmetry at every point (:func:`fell_back`) is noted as such and
 not switched from again. At a double eigenvalue the switch goes along the
 combination of the critical modes that keeps a two-fold axis
-(:func:`switch_direction`). At a pitchfork of a state with an exact mesh axis (its
-single critical mode odd under the axis, :func:`mirror_axis`: seed 001's S on beta_II)
-only the ``+`` half-branch is computed: the ``-`` half is its mirror image, and a note
-says so. The per-point symmetry
-(:meth:`RingDiagram.points`, ``symmetry``) tells the branches apart once they
-have left the bifurcation point by more than the symmetry tolerance (0.05 D):
-closer to it a secondary point still carries its parent's label.
+(:func:`switch_direction`). At a pitchfork of a state with an exact mesh axis
+(its single critical mode odd under the axis, :func:`mirror_axis`: Coleman &
+Swigon's S on beta_II) only the ``+`` half-branch is computed: the ``-`` half is
+its mirror image, and a note says so. The per-point symmetry
+(:meth:`~supercoil.problems.ring_diagram.RingDiagram.points`, ``symmetry``)
+tells the branches apart once they have left the bifurcation point by more than
+the symmetry tolerance (0.05 D): closer to it a secondary point still carries
+its parent's label.
 
 ``supercoil run --resume`` continues the primary branches of an interrupted
 study; its secondary branches are computed again.
@@ -59,12 +60,16 @@ from supercoil.geometry.symmetry import (
     reversal_image,
     reversal_residuals,
 )
+from supercoil.problems.branch_options import CONTACT_MIN_STEP
+from supercoil.problems.contact_events import classify_contact_events, contact_count_event
 from supercoil.problems.ring_branches import PRIMARY_NAMES, ring_records
+from supercoil.problems.ring_diagram.records import contact_records
 
 AMPLITUDES = (0.05, 0.01, 0.002, 0.2, 0.5)  # first step off the bifurcation point, units of D
 MAX_DEPTH = 3  # generations: 1 primary, 2 secondary, 3 tertiary
 # a map of the centreline is a symmetry when its RMS misfit is below this fraction of D
-# (seed 001's symmetry classes; the polygon contact's ripple breaks them at about 1e-2 D)
+# (Coleman & Swigon's symmetry classes; the polygon contact's ripple breaks them at about
+# 1e-2 D)
 SYMMETRY_TOLERANCE = 0.05
 
 
@@ -107,12 +112,6 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
     :func:`~supercoil.problems.ring_diagram.ring_diagram` (every new branch is a
     contact branch). Returns a new ``RingDiagram``.
     """
-    from supercoil.problems.ring_diagram import (
-        _contact_records,
-        classify_contact_events,
-        contact_count_event,
-    )
-
     if not 1 <= depth <= MAX_DEPTH:
         raise ValueError(f"depth must be 1 (primary only), 2 (secondary) or 3 (tertiary), "
                          f"got {depth!r}")
@@ -131,7 +130,7 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
         return diagram
     D = opts.diameter
     base = _options(opts, max_points)
-    records = _contact_records(cp, ring_records(cp.base), free=False)
+    records = contact_records(cp, ring_records(cp.base), free=False)
     added = 0
     # families: name stem -> branches of that family, one generation at a time
     families = []
@@ -191,8 +190,6 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
 
 def _options(opts, max_points: int) -> ContinuationOptions:
     """The continuation options of a half-branch: the diagram's contact branches'."""
-    from supercoil.problems.ring_diagram import CONTACT_MIN_STEP
-
     D = opts.diameter
     return ContinuationOptions(
         min_step=CONTACT_MIN_STEP, max_step=opts.contact_max_step * D, max_points=max_points,
@@ -211,12 +208,6 @@ def follow_bifurcating_branch(diagram, parent: Branch, point: SpecialPoint, side
     every bifurcation point (same options, switch direction and amplitudes), with its
     contact events classified; None when no amplitude gives a first point. For
     following one chosen branch (a tertiary one, say) without all the others."""
-    from supercoil.problems.ring_diagram import (
-        _contact_records,
-        classify_contact_events,
-        contact_count_event,
-    )
-
     cp = diagram.contact_problem
     if cp is None:
         raise ValueError("the diagram has no contact problem (no contact branch was computed)")
@@ -224,7 +215,7 @@ def follow_bifurcating_branch(diagram, parent: Branch, point: SpecialPoint, side
         raise ValueError(f"side must be +1 or -1, got {side!r}")
     D = diagram.options.diameter
     label = name or f"{parent.name}/{point.kind}{point.index}{'+' if side > 0 else '-'}"
-    records = _contact_records(cp, ring_records(cp.base), free=False)
+    records = contact_records(cp, ring_records(cp.base), free=False)
     branch = _switch(cp, parent, point, _options(diagram.options, max_points), side, label,
                      records, contact_count_event(cp), None, D)
     if branch is None:
@@ -323,11 +314,3 @@ def _with(diagram, branches, contact_names, generations, seconds, notes):
                                contact_branches=frozenset(contact_names),
                                generations=dict(generations), seconds=dict(seconds),
                                notes=tuple(notes))
-
-
-def generation_of(name: str, parent: str | None, known: dict[str, int]) -> int:
-    """0 for the circle, 1 for a primary branch (with or without contact), else ``known``."""
-    if name in known:
-        return known[name]
-    return 0 if parent is None else 1
-

@@ -1,0 +1,78 @@
+"""Closed branches: whether the last step of a branch passed through an earlier point.
+
+A branch that is a closed curve (a loop of equilibria) comes back to where it
+started; continuation stops there (``ContinuationOptions.detect_closed_loops``)
+rather than going round again. The last chord must pass within
+``closed_loop_tolerance`` of its length of an earlier point of the same
+direction and unstable count, and a correction from the nearest point of the
+chord on that point's normal hyperplane must land on it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from supercoil.continuation.corrector import correct
+from supercoil.continuation.options import ContinuationOptions
+from supercoil.continuation.system import ExtendedSystem
+
+CLOSURE_TOLERANCE = 1e-6  # a closed branch passes through its earlier point to this (relative)
+
+
+def returned_to(system: ExtendedSystem, opts: ContinuationOptions, xs: Sequence[np.ndarray],
+                ts: Sequence[np.ndarray], unstable_counts: Sequence[int]) -> int | None:
+    """Index of an earlier point of the branch ``xs`` (tangents ``ts``) that its last
+    step passed through (see ``ContinuationOptions.detect_closed_loops``), or None."""
+    k = len(xs) - 1
+    if k < 4:
+        return None
+    a, b = xs[-2], xs[-1]
+    chord = b - a
+    length = system.norm(chord)
+    if length == 0.0:
+        return None
+    reach = opts.closed_loop_tolerance * length
+    # The metric weighs the parameter by w (its last weight is w^2), so a point whose
+    # parameter lies farther than reach / w from the chord's is not within reach:
+    # only the others are stacked (this runs at every point).
+    lam = np.array([x[-1] for x in xs[:k - 2]])
+    low, high = sorted((a[-1], b[-1]))
+    off = np.maximum(np.maximum(low - lam, lam - high), 0.0)
+    near = np.flatnonzero(off * np.sqrt(system.weights[-1]) <= reach)
+    if near.size == 0:
+        return None
+    earlier = np.array([xs[j] for j in near])
+    w = system.weights
+    u = np.clip(((earlier - a) * w) @ chord / length**2, 0.0, 1.0)
+    gaps = np.sqrt(np.einsum("ij,ij->i", (a + u[:, None] * chord - earlier) ** 2,
+                             np.broadcast_to(w, earlier.shape)))
+    cos_limit = math.cos(math.radians(15.0))
+    close = np.flatnonzero(gaps <= reach)
+    if close.size == 0:
+        return None
+    count = unstable_counts[-1]
+    for i in close:
+        j = int(near[i])
+        if (ts[j] @ (w * ts[-1]) >= cos_limit and unstable_counts[j] == count
+                and _closes_at(system, opts, a + u[i] * chord, xs[j], ts[j], xs[-1][-1])):
+            return j
+    return None
+
+
+def _closes_at(system: ExtendedSystem, opts: ContinuationOptions, start: np.ndarray,
+               x_j: np.ndarray, t_j: np.ndarray, parameter: float) -> bool:
+    """Whether the branch really passes through the point ``x_j`` (tangent ``t_j``): the
+    point ``start`` of the last chord nearest to it, corrected on the hyperplane through
+    it orthogonal to its tangent, must land on it (a branch that only passes near it,
+    e.g. a helix of small pitch, lands elsewhere on that hyperplane). The system is left
+    at ``parameter`` (the last point's)."""
+    corr = correct(system, start, system.weights * t_j, x_j, 0.0,
+                   opts.tolerance, opts.max_corrector_iterations)
+    system.set_parameter(parameter)
+    if not corr.ok:
+        return False
+    scale = max(1.0, system.norm(x_j))
+    return system.norm(corr.x - x_j) <= CLOSURE_TOLERANCE * scale

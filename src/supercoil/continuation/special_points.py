@@ -1,0 +1,99 @@
+"""The special points of a branch between two of its points: search and record.
+
+Between consecutive points the segment is searched for folds (a sign change
+of ``dlambda/ds``), bifurcations (each change of the unstable count that is
+not the fold's own) and user events (sign changes of named scalars); each is
+located (:mod:`supercoil.continuation.events`) and recorded as a
+:class:`~supercoil.continuation.branch.SpecialPoint` with its stability and
+critical modes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from supercoil.continuation.branch import SpecialPoint
+from supercoil.continuation.events import (
+    Located,
+    Segment,
+    UserEvent,
+    locate_count_change,
+    locate_fold,
+    locate_user_event,
+)
+from supercoil.continuation.options import ContinuationOptions
+from supercoil.continuation.stability import point_stability
+from supercoil.continuation.system import ExtendedSystem
+
+
+def locate_events(system: ExtendedSystem, opts: ContinuationOptions,
+                  events: Sequence[UserEvent], x_a: np.ndarray, x_b: np.ndarray,
+                  t_a: np.ndarray, t_b: np.ndarray, count_a: int, count_b: int,
+                  user_a: Sequence[Mapping[str, float]], user_b: Sequence[Mapping[str, float]]
+                  ) -> tuple[Segment, list[Located]]:
+    """The segment from ``x_a`` to ``x_b`` (tangents ``t_a``, ``t_b``, unstable counts
+    ``count_a``, ``count_b``, the user events' values ``user_a``, ``user_b``) and the
+    events located on it, in the order of their place on it."""
+    segment = Segment(system, x_a, x_b, opts.tolerance, opts.max_corrector_iterations,
+                      opts.zero_tolerance)
+    xtol = opts.event_tolerance / segment.length
+    found = []
+    fold = (opts.detect_folds and t_a[-1] * t_b[-1] < 0)
+    fold_u = None
+    if fold:
+        found.append(locate_fold(segment, xtol))
+        fold_u = found[-1].u if found[-1].located else None
+    jump = count_b - count_a
+    if opts.detect_bifurcations and jump != 0 and not (fold and abs(jump) == 1):
+        # each change of the count on the segment, one after the other; a change by
+        # one where the fold is, is the fold's own (its eigenvalue crosses there)
+        start = 0.0
+        for _ in range(abs(jump) + 2):
+            located = locate_count_change(segment, xtol, opts.switch_below, start)
+            if located is None:
+                break
+            at_fold = (fold_u is not None and located.located
+                       and abs(located.count_after - located.count_before) == 1
+                       and abs(located.u - fold_u) <= max(opts.switch_below, 100 * xtol))
+            if not at_fold:
+                found.append(located)
+            if located.resume is None or located.resume >= 1.0:
+                break
+            start = located.resume
+    for event, before, after in zip(events, user_a, user_b):
+        for label in before:
+            if label in after and before[label] * after[label] < 0:
+                found.append(locate_user_event(segment, event, label, xtol, (before, after)))
+    return segment, sorted(found, key=lambda e: e.u)
+
+
+def special_point(system: ExtendedSystem, opts: ContinuationOptions, ev: Located,
+                  segment: Segment, branch: str, index: int, arclength: float,
+                  t_after: np.ndarray, count_before: int, count_after: int,
+                  records: Callable[[np.ndarray], dict]) -> SpecialPoint:
+    """The :class:`~supercoil.continuation.branch.SpecialPoint` of the event ``ev``
+    located on ``segment``, which starts at point ``index`` of ``branch`` (arclength
+    ``arclength``, unstable count ``count_before``) and ends at a point of tangent
+    ``t_after`` and count ``count_after``; ``records(x)`` are the caller's records."""
+    x = ev.x
+    t = ev.tangent if ev.tangent is not None else t_after
+    stab = point_stability(system, x, opts.zero_tolerance, opts.n_modes)
+    values = modes = np.zeros(0)
+    if ev.kind in ("bifurcation", "fold"):
+        n_critical = max(1, abs(ev.count_after - ev.count_before))
+        values, modes = stab.critical_modes(n_critical)
+    else:
+        modes = np.zeros((0, system.problem.n_dofs))
+    return SpecialPoint(
+        kind=ev.kind, label=ev.label, branch=branch, index=index,
+        parameter=float(x[-1]), arclength=arclength + ev.u * segment.length,
+        q=system.q(x), multipliers=system.multipliers(x), tangent=system.full_tangent(t),
+        unstable_count=stab.unstable_count,
+        count_before=ev.count_before if ev.kind == "bifurcation" else count_before,
+        count_after=ev.count_after if ev.kind == "bifurcation" else count_after,
+        critical_eigenvalues=values, critical_modes=modes, located=ev.located,
+        tolerance=(opts.event_tolerance if ev.accuracy is None
+                   else max(ev.accuracy, opts.event_tolerance)),
+        records=records(x))

@@ -1,0 +1,300 @@
+"""The tracer: follows one branch point by point, and keeps what each point carries.
+
+From a corrected point and its tangent, :class:`Tracer` takes steps
+(:func:`~supercoil.continuation.step.take_step`), growing them after fast
+corrections and shrinking them after failures, until a parameter bound, the
+arclength or point budget, a caller's stop, a closed loop
+(:mod:`supercoil.continuation.closure`) or a step below the minimum. At every
+accepted point the problem's ``accept(q)`` is called, then the stability
+(:mod:`supercoil.continuation.stability`), the caller's records and user
+events are evaluated, and the interval to the previous point is searched for
+special points (:mod:`supercoil.continuation.special_points`). The phase rows
+may move (:mod:`supercoil.continuation.phase`). :meth:`Tracer.branch` is the
+branch so far as a :class:`~supercoil.continuation.branch.Branch`.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from supercoil.continuation.bordered import BorderedFactor
+from supercoil.continuation.branch import Branch, SpecialPoint
+from supercoil.continuation.closure import returned_to
+from supercoil.continuation.events import UserEvent, user_values
+from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
+from supercoil.continuation.phase import regauged, rephased_tangent
+from supercoil.continuation.special_points import locate_events, special_point
+from supercoil.continuation.stability import point_stability
+from supercoil.continuation.step import take_step
+from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.errors import InertiaError, SingularMatrixError
+
+log = logging.getLogger(__name__)
+
+RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
+PointCallback = Callable[[Branch], None]
+PARTIAL_MESSAGE = "in progress: the branch so far (its computation has not ended)"
+
+
+class Tracer:
+    """Follows one branch from a corrected point and tangent; collects points and events."""
+
+    def __init__(self, system: ExtendedSystem, options: ContinuationOptions, name: str,
+                 parent: str | None, origin: SpecialPoint | None,
+                 records: RecordFunction | None, events: Sequence[UserEvent],
+                 on_point: PointCallback | None = None):
+        self.system = system
+        self.on_point = on_point
+        self.stop: Callable[[np.ndarray], str | None] | None = None  # see pseudo_arclength.continuation()
+        # see pseudo_arclength.continuation(); by default the problem's own admissible(q), if it has one
+        self.admissible: Callable[[np.ndarray], bool] | None = getattr(
+            system.problem, "admissible", None)
+        self.opts = options
+        self.name, self.parent, self.origin = name, parent, origin
+        self.records_fn = records
+        self.events = tuple(events)
+        self.xs: list[np.ndarray] = []
+        self.ts: list[np.ndarray] = []
+        self.stabs = []
+        self.s: list[float] = []
+        self.recs: list[dict] = []
+        self.user: list[list[dict]] = []
+        self.specials: list[SpecialPoint] = []
+        # (tangent, step) of the point before the first one, for the quadratic
+        # predictor of a resumed branch (set by resume_branch)
+        self.before: tuple[np.ndarray, float] | None = None
+        # (x, full Hessian) of the last point added, assembled after its accept: the
+        # rephase tangent there needs no new one (phase rows are linear)
+        self._accepted_hessian: tuple[np.ndarray, object] | None = None
+        # converted per point and per record for branch() (the recorded values are only
+        # ever appended)
+        self._rows: list[tuple] = []
+        self._columns: dict[str, list] = {}
+
+    def _previous_tangent(self) -> tuple[np.ndarray, float] | None:
+        """The tangent at the point before the last and the arclength between the two."""
+        if len(self.xs) >= 2:
+            return self.ts[-2], self.s[-1] - self.s[-2]
+        return self.before if len(self.xs) == 1 else None
+
+    # -- per point ------------------------------------------------------------------------
+    def _records(self, x):
+        if self.records_fn is None:
+            return {}
+        self.system.set_parameter(x[-1])
+        return dict(self.records_fn(self.system.q(x), self.system.multipliers(x), float(x[-1])))
+
+    def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True,
+                  full_hessian=None) -> None:
+        """Keep ``x``: stability, records and user values first (an exception leaves the
+        branch as it was), then the point, then the events since the previous one.
+
+        ``full_hessian``: the Hessian on all DOFs at ``x`` if known (a converged
+        :class:`~supercoil.continuation.corrector.Correction`'s), for the stability
+        and the rephase tangent. It was assembled before ``accept``, which carries
+        the rod's reference frames to ``x``: that changes the Hessian by round-off
+        only (measured on the ring's alpha branch at N = 200: at most 3e-16 of its
+        largest entry, as much as assembling it twice at ``x`` with other states
+        evaluated in between does).
+        """
+        system = self.system
+        system.set_parameter(x[-1])
+        system.problem.accept(system.q(x))
+        self._accepted_hessian = None
+        full = system.full_hessian(x) if full_hessian is None else full_hessian
+        stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
+                                    full)
+        records = self._records(x)
+        user = [user_values(ev, system, x) for ev in self.events]
+        self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))
+        self.xs.append(x)
+        self.ts.append(t)
+        self.stabs.append(stability)
+        self.recs.append(records)
+        self.user.append(user)
+        self._accepted_hessian = (x, full)
+        if len(self.xs) >= 2 and search_events:
+            self._search_events()
+        if self.on_point is not None:
+            self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
+
+    # -- events between the last two points -------------------------------------------------
+    def _search_events(self) -> None:
+        k = len(self.xs) - 2
+        before, after = self.stabs[k].unstable_count, self.stabs[k + 1].unstable_count
+        segment, found = locate_events(self.system, self.opts, self.events, self.xs[k],
+                                       self.xs[k + 1], self.ts[k], self.ts[k + 1], before,
+                                       after, self.user[k], self.user[k + 1])
+        for ev in found:
+            self.specials.append(special_point(self.system, self.opts, ev, segment, self.name,
+                                               k, self.s[k], self.ts[k + 1], before, after,
+                                               self._records))
+            self.system.set_parameter(self.xs[k + 1][-1])
+
+    # -- phase rows -------------------------------------------------------------------------
+    def _regauge(self) -> bool:
+        """Move the phase rows to those of the last point and correct it in the new gauge
+        (:func:`~supercoil.continuation.phase.regauged`); False if the gauge is unchanged.
+        A point that moved is added to the branch (at the same parameter value), else
+        the last point is replaced."""
+        moved = regauged(self.system, self.opts, self.xs[-1], self.ts[-1])
+        if moved is None:
+            return False
+        x, t = moved
+        if self.system.norm(x - self.xs[-1]) > self.opts.min_step:
+            # the same equilibrium up to the gauge's slide: no events between the two
+            # (their counts and values come from different gauges)
+            self.add_point(x, t, search_events=False)
+        else:
+            self.xs[-1], self.ts[-1] = x, t
+        if self.opts.rephase:
+            self._rephase()
+        return True
+
+    def _rephase(self, factor: BorderedFactor | None = None) -> None:
+        """Re-anchor the integral phase condition at the last point and recompute its
+        tangent (``ContinuationOptions.rephase``;
+        :func:`~supercoil.continuation.phase.rephased_tangent`). ``factor``: the step's
+        corrector factor (``ContinuationOptions.factor_refinement``)."""
+        x = self.xs[-1]
+        known = self._accepted_hessian
+        full = known[1] if known and known[0] is x else None
+        t = rephased_tangent(self.system, self.opts, x, self.ts[-1], full, factor)
+        if t is not None:
+            self.ts[-1] = t
+
+    # -- the stepping loop ------------------------------------------------------------------
+    def run(self, step: float) -> tuple[ContinuationStatus, str]:
+        """Step from the last point until a bound, a stop or a failure; ``(status, message)``."""
+        try:
+            return self._run(step)
+        except (SingularMatrixError, InertiaError) as exc:
+            return self._stability_failed(exc)
+
+    def _stability_failed(self, exc: Exception) -> tuple[ContinuationStatus, str]:
+        return ContinuationStatus.STEP_TOO_SMALL, (
+            f"stability at point {len(self.xs)} failed: {exc}")
+
+    def _run(self, step: float) -> tuple[ContinuationStatus, str]:
+        system, opts = self.system, self.opts
+        low, high = opts.parameter_bounds
+        ds = step
+        regauged_here = False
+        while len(self.xs) < opts.max_points:
+            if self.s[-1] >= opts.max_arclength:
+                return ContinuationStatus.MAX_ARCLENGTH, (
+                    f"arclength {self.s[-1]:.4g} reached max_arclength after {len(self.xs)} points")
+            x_k = self.xs[-1]
+            taken = take_step(system, opts, x_k, self.ts[-1],
+                              self.xs[-2] if len(self.xs) >= 2 else None,
+                              self._previous_tangent(), ds, self.admissible, self.stop)
+            if taken.refusal:
+                return ContinuationStatus.STOPPED, (
+                    f"stopped after {len(self.xs)} points at {system.parameter} = "
+                    f"{x_k[-1]:.10g}: {taken.refusal}")
+            if taken.leaves_bound:
+                return ContinuationStatus.PARAMETER_BOUND, (
+                    f"{system.parameter} = {taken.bound:.10g} is a bound and the branch leaves "
+                    f"the interval there ({len(self.xs)} points)")
+            if taken.failure is not None:
+                log.debug("step %.3g rejected: %s", ds, taken.failure)
+                if opts.regauge and system.r and not regauged_here:
+                    try:
+                        moved = self._regauge()
+                    except (SingularMatrixError, InertiaError) as exc:
+                        return ContinuationStatus.STEP_TOO_SMALL, (
+                            f"stability at the point corrected in a moved gauge failed: {exc}")
+                    if moved:
+                        regauged_here = True  # retry the same step once with the moved gauge
+                        log.debug("gauge moved at point %d", len(self.xs) - 1)
+                        continue
+                if ds <= opts.min_step:
+                    return ContinuationStatus.STEP_TOO_SMALL, (
+                        f"stopped after {len(self.xs)} points at {system.parameter} = "
+                        f"{x_k[-1]:.10g}: {taken.failure} at the minimum step "
+                        f"{opts.min_step:.1e}")
+                ds = max(ds * opts.shrink, opts.min_step)
+                continue
+            regauged_here = False
+            x_new, bound, corr = taken.x, taken.bound, taken.correction
+            try:
+                self.add_point(x_new, taken.t, full_hessian=taken.full_hessian)
+                if opts.rephase and system.r:
+                    self._rephase(corr.factor if opts.factor_refinement and bound is None
+                                  else None)
+            except (SingularMatrixError, InertiaError) as exc:
+                return self._stability_failed(exc)
+            if bound is None and x_new[-1] in (low, high):
+                bound = x_new[-1]  # the step ended exactly on the bound
+            if bound is not None:
+                return ContinuationStatus.PARAMETER_BOUND, (
+                    f"reached {system.parameter} = {bound:.10g} after {len(self.xs)} points")
+            if opts.detect_closed_loops:
+                try:
+                    j = returned_to(system, opts, self.xs, self.ts,
+                                    [s.unstable_count for s in self.stabs])
+                except (SingularMatrixError, InertiaError) as exc:
+                    return self._stability_failed(exc)
+                if j is not None:
+                    return ContinuationStatus.CLOSED_LOOP, (
+                        f"the branch closed on itself: after {len(self.xs)} points it came "
+                        f"back to point {j} ({system.parameter} = {self.xs[j][-1]:.6g}; "
+                        f"arclength {self.s[-1] - self.s[j]:.4g} per lap)")
+            if corr.iterations <= opts.fast_iterations:
+                ds = min(ds * opts.growth, opts.max_step)
+        return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"
+
+    # -- result -------------------------------------------------------------------------------
+    def branch(self, status: ContinuationStatus, message: str) -> Branch:
+        """The branch so far (also the partial branch handed to ``on_point`` at every
+        point): each point's full-DOF rows and each record's values are converted once
+        and kept (:meth:`_point_rows`, :attr:`_columns`), so that a partial branch costs
+        the arrays' stacking, not a conversion of every point."""
+        system = self.system
+        n_dofs, m = system.problem.n_dofs, system.m
+        k = len(self.xs)
+        records = {}
+        if k and self.recs[0]:
+            for name in self.recs[0]:
+                column = self._columns.setdefault(name, [])
+                column.extend(np.asarray(r[name]) for r in self.recs[len(column):k])
+            records = {name: np.array(self._columns[name][:k]) for name in self.recs[0]}
+        if k:
+            system.set_parameter(self.xs[k - 1][-1])
+        rows = self._point_rows(k)
+        stabs = self.stabs[:k]
+        return Branch(
+            name=self.name, parent=self.parent, origin=self.origin,
+            parameter=system.parameter,
+            parameter_values=np.array([x[-1] for x in self.xs[:k]]),
+            states=np.array([row[3] for row in rows]).reshape(k, n_dofs),
+            multipliers=np.array([row[4] for row in rows]).reshape(k, m),
+            unstable_count=np.array([s.unstable_count for s in stabs], dtype=np.int64),
+            zero_modes=np.array([s.zero_modes for s in stabs], dtype=np.int64),
+            determinant_sign=np.array([s.determinant_sign for s in stabs], dtype=np.int64),
+            nearest_eigenvalue=np.array([row[6] for row in rows]),
+            tangents=np.array([row[5] for row in rows]).reshape(k, n_dofs + m + 1),
+            arclength=np.array(self.s[:k]),
+            special_points=tuple(self.specials), status=status, message=message,
+            records=records, phase_modes=system.phase_modes,
+            phase_state=system.q_phase_full)
+
+    def _point_rows(self, count: int) -> list[tuple]:
+        """Per point of the first ``count``, ``(x, t, stability, q, multipliers, full
+        tangent, nearest eigenvalue)``, converted when the point's ``x``, ``t`` or
+        stability object is new (a regauged point's ``x`` and a rephased point's tangent
+        are replaced)."""
+        system, rows = self.system, self._rows
+        for i, (x, t, stab) in enumerate(zip(self.xs[:count], self.ts, self.stabs)):
+            if i < len(rows) and rows[i][0] is x and rows[i][1] is t and rows[i][2] is stab:
+                continue
+            row = (x, t, stab, system.q(x), system.multipliers(x), system.full_tangent(t),
+                   stab.nearest_eigenvalue)
+            if i < len(rows):
+                rows[i] = row
+            else:
+                rows.append(row)
+        return rows[:count]

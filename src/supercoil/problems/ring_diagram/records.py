@@ -1,0 +1,70 @@
+"""Per-point records of the ring diagram's branches.
+
+Per point the branches' ``records`` hold ``excess_link``, ``writhe`` (double
+sum), ``twist`` (material frames), ``energy`` (elastic only), ``link_error``
+= ``|Tw + Wr - dLk|`` (:func:`~supercoil.problems.ring_branches.ring_records`),
+``n_contact_points``, ``n_contact_intervals`` and ``min_gap_over_diameter``,
+and on contact branches ``sliding_residual`` (:func:`kkt_residual`); the
+contact lists with positions are recomputed from the stored states by
+:meth:`~supercoil.problems.ring_diagram.RingDiagram.points`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from supercoil.contact.problem import ContactProblem
+from supercoil.contact.report import COUNT_KEYS, contact_summary
+from supercoil.continuation import Branch
+from supercoil.solvers.problem import free_dofs
+
+
+def contact_records(problem: ContactProblem, base_records, free: bool):
+    """Per-point records: the ring's plus the contact counts and the closest approach."""
+
+    def records(q, multipliers, excess_link):
+        out = dict(base_records(q, multipliers, excess_link))
+        if free:
+            d_min = problem.min_distance(q)
+            out.update(n_contact_points=0, n_contact_intervals=0,
+                       min_gap_over_diameter=float(d_min / problem.diameter))
+        else:
+            summary = contact_summary(problem, q, multipliers, COUNT_KEYS)
+            gap = summary["min_gap_over_diameter"]
+            out.update(n_contact_points=summary["n_contact_points"],
+                       n_contact_intervals=summary["n_contact_intervals"],
+                       min_gap_over_diameter=float("inf") if gap is None else gap,
+                       sliding_residual=kkt_residual(problem, q, multipliers))
+        return out
+
+    return records
+
+
+def kkt_residual(problem, q: np.ndarray, multipliers: np.ndarray) -> float:
+    """``max |grad E + J^T mu|, |c|`` on the free DOFs, without any continuation gauge.
+
+    On a contact branch followed with the material sliding pinned this is the
+    sliding force that the pin holds (:mod:`~supercoil.problems.ring_diagram.contact_branches`,
+    "Material sliding").
+    """
+    free = free_dofs(problem)
+    g = problem.gradient(q)
+    if problem.n_constraints:
+        g = g + problem.constraint_jacobian(q).T @ multipliers
+        c = np.abs(problem.constraints(q))
+    else:
+        c = np.zeros(0)
+    return float(max(np.max(np.abs(g[free]), initial=0.0), np.max(c, initial=0.0)))
+
+
+def with_records(branch: Branch, problem, records) -> Branch:
+    """The branch with its records recomputed by ``records`` (the problem follows it)."""
+    rows = []
+    for q, mu, lam in zip(branch.states, branch.multipliers, branch.parameter_values):
+        problem.excess_link = float(lam)
+        problem.accept(q)
+        rows.append(records(q, mu, float(lam)))
+    merged = {k: np.array([r[k] for r in rows]) for k in rows[0]} if rows else {}
+    return dataclasses.replace(branch, records=merged)

@@ -1,0 +1,181 @@
+"""The tweezers' driver, :func:`tweezers_branches`: the straight rod (load control), the
+contact-free branch, then the branch with self-contact."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
+from supercoil.continuation import Branch, ContinuationOptions
+from supercoil.problems.contact_events import onset_event, stop_after_onset, truncate_after
+from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.segments import either, follow
+from supercoil.problems.tweezers.buckled import (
+    SWITCH_AMPLITUDE,
+    clamped_buckle_run,
+    onset_passed,
+    resume_stored,
+    switch_off_straight,
+)
+from supercoil.problems.tweezers.contact import contact_branch
+from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop
+from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
+from supercoil.problems.tweezers.result import TweezersResult
+from supercoil.problems.tweezers.straight import straight_branch
+
+
+def tweezers_branches(options: TweezersOptions,
+                      progress: Callable[[str], None] | None = None, *,
+                      on_point: Callable[[Branch], None] | None = None,
+                      on_branch: Callable[[Branch, bool], None] | None = None,
+                      resume: Mapping[str, tuple[Branch, bool]] | None = None,
+                      ) -> TweezersResult:
+    """Compute the branches (:mod:`supercoil.problems.tweezers`); numerical failures end
+    up in statuses.
+
+    ``on_point(branch_so_far)`` is called after every accepted point (of the
+    runs that make a branch, merged), ``on_branch(branch, contact)`` once per
+    branch when it is final (the contact-free branch cut after its contact
+    onset): e.g. to save them as they come (``supercoil run``). ``resume`` maps
+    branch names to ``(branch, complete)`` of an interrupted run with the same
+    options: complete branches are taken as they are, an incomplete one with at
+    least two points is continued from its last point with the azimuth pin its
+    points were computed with (the record ``azimuth_pin``) by
+    :func:`~supercoil.continuation.resume.resume_branch`, then in segments as usual.
+    """
+    opts = options
+    final = on_branch or (lambda branch, contact: None)
+    stored = dict(resume or {})
+    say = progress or (lambda message: None)
+    seconds: dict[str, float] = {}
+    notes: list[str] = []
+    rod, q0 = clamped_problem(opts)
+    D = opts.diameter
+    contact_options = (ContactOptions(diameter=D, curve=opts.contact_curve,
+                                      formulation=opts.contact_formulation)
+                       if D is not None else None)
+    probe = ContactProblem(rod, contact_options) if D is not None else None
+    cp = ContactProblem(rod, contact_options) if D is not None else None
+    if D is not None and rod.rod.edge_length > D:
+        notes.append(f"segments ({rod.rod.edge_length:.3g} L) are longer than the tube "
+                     f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "
+                     f"{int(np.ceil(rod.rod.length / D)) + 2}")
+    free_records = tweezers_records(rod, rod, False, probe)
+    events = (onset_event(probe),) if probe is not None else ()
+    free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
+                                    parameter_bounds=opts.turns,
+                                    max_points=min(opts.segment_points, opts.max_points),
+                                    event_tolerance=opts.event_tolerance, chord_steps=True)
+    # The contact-free runs end at the first point past a located contact onset (the
+    # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
+    # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
+    free_point, past_onset = (stop_after_onset(on_point) if probe is not None
+                              else (on_point, None))
+    pinned = pin_stop(rod)
+    free_stop = either(past_onset, pinned)
+    branches: list[Branch] = []
+    start = time.perf_counter()
+    if opts.load_control:
+        say(f"straight rod in turns at F L^2/A = {opts.tension:g}")
+        old, complete = stored.get("straight", (None, False))
+        straight = (old if complete else
+                    straight_branch(opts, rod, q0, free_records, on_point=on_point))
+        seconds["straight"] = time.perf_counter() - start
+        final(straight, False)
+        branches.append(straight)
+        bifurcations = straight.points_of_kind("bifurcation")
+        if not bifurcations:
+            exact = critical_turns(opts.twist_ratio, opts.tension)
+            if straight.status.complete:
+                notes.append(f"the straight rod does not buckle below {opts.turns[1]:g} turns "
+                             f"(exact threshold {exact:.6g})")
+            else:  # no conclusion beyond the last point computed
+                notes.append(f"incomplete: straight stopped at "
+                             f"{straight.parameter_values[-1]:.6g} turns ({straight.message}), "
+                             f"before {opts.turns[1]:g}; no buckling found up to there (exact "
+                             f"threshold {exact:.6g})")
+            return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
+                                  tuple(notes))
+        point = bifurcations[0]
+        free_name = "buckled"
+        start = time.perf_counter()
+        free_complete = stored.get(free_name, (None, False))[1]
+        first = resume_stored(stored, rod, rod, free_name, free_opts, free_records, events,
+                              on_point, free_stop)
+        if first is not None:
+            say(f"{free_name}: continued from point {len(stored[free_name][0]) - 1}")
+        if first is None and not free_complete:
+            first = switch_off_straight(rod, straight, point, free_opts, free_name,
+                                        free_records, events, free_point, free_stop, say)
+        if not free_complete and not len(first):
+            notes.append(f"failed: {free_name}: no point found off the straight rod at "
+                         f"{point.parameter:.6g} turns ({first.message})")
+            branches.append(first)
+            return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
+                                  tuple(notes), {"straight": ((0, ()),)})
+    else:
+        free_name = "clamped"
+        say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")
+        free_complete = stored.get(free_name, (None, False))[1]
+        first = resume_stored(stored, rod, rod, free_name, free_opts, free_records, events,
+                              on_point, free_stop)
+    if not opts.load_control and first is None and not free_complete:
+        first, why = clamped_buckle_run(rod, q0, free_opts, free_name, free_records, events,
+                                        free_point, free_stop)
+        if first is None:
+            notes.append(f"failed: the clamped buckle at z/L = {opts.end_distance:g} did not "
+                         f"converge ({why})")
+            return TweezersResult(opts, (), frozenset(), rod, cp, seconds, tuple(notes))
+    old, free_complete = stored.get(free_name, (None, False))
+    if free_complete:
+        free, free_pins = old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
+    else:
+        free, free_pins = follow(rod, rod, first, free_opts, free_name, free_records, events,
+                                 stop=onset_passed if probe is not None else None,
+                                 max_points=opts.max_points,
+                                 segment_points=opts.segment_points, on_point=free_point,
+                                 quality=PIN_QUALITY, refuse=free_stop)
+    onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
+    seconds[free_name] = time.perf_counter() - start
+    pins = {"straight": ((0, ()),), free_name: free_pins}
+    if probe is None or not onsets:
+        if not free.status.complete:
+            notes.append(f"incomplete: {free_name} stopped at "
+                         f"{free.parameter_values[-1]:.6g} turns: {free.message}")
+        elif probe is not None:
+            notes.append(f"{free_name}: no contact found ({free.message})")
+        final(free, False)
+        branches.append(free)
+        return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
+                              tuple(notes), pins)
+    onset = onsets[0]
+    if not free_complete:
+        free = truncate_after(free, onset, f"stopped at the first contact "
+                              f"({onset.parameter:.6g} turns); the contact-free run: "
+                              f"{free.message}")
+    final(free, False)
+    branches.append(free)
+    contact_name = f"{free_name}_contact"
+    say(f"{contact_name}: from {onset.parameter:.6g} turns, with self-contact (barrier)")
+    start = time.perf_counter()
+    contact, contact_pins = contact_branch(opts, rod, cp, free, onset, contact_name, stored,
+                                           on_point, pinned, say)
+    contact = dataclasses.replace(contact, parent=free_name, origin=onset)
+    seconds[contact_name] = time.perf_counter() - start
+    final(contact, True)
+    branches.append(contact)
+    if not contact.ok:
+        notes.append(f"failed: {contact_name}: {contact.message}")
+    elif contact.parameter_values[-1] < opts.turns[1] - 1e-9:
+        notes.append(f"incomplete: {contact_name} ended at {contact.parameter_values[-1]:.6g} "
+                     f"turns, before {opts.turns[1]:g}: {contact.message}")
+    pins[contact_name] = contact_pins
+    return TweezersResult(opts, tuple(branches), frozenset({contact_name}), rod, cp, seconds,
+                          tuple(notes), pins, frozenset({free_name}))
+

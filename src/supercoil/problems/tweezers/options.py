@@ -1,0 +1,120 @@
+"""The options of the tweezers' branches (:class:`TweezersOptions`) and their checks."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from supercoil import checks
+from supercoil.contact.options import validate_contact_choice
+from supercoil.problems.branch_options import PREDICTORS, branch_tolerances, check_steps
+
+
+@dataclass(frozen=True)
+class TweezersOptions:
+    """What :func:`~supercoil.problems.tweezers.tweezers_branches` computes; validated on
+    construction.
+
+    ``twist_ratio`` C/A; ``length_over_diameter`` L/D (> pi), or None for a
+    rod without self-contact (the contact-free branch is then followed to the
+    last turn); exactly one of ``tension`` (F L^2/A >= 0, load control) and
+    ``end_distance`` (z/L in (0, 1), displacement control); ``turns`` the
+    interval ``(start, stop)`` of turns (``stop > start >= 0``; the straight
+    branch starts at ``start``); ``n_nodes`` N. ``free_max_step``: largest
+    arclength step without contact (units of L); ``contact_max_step``: with
+    contact (units of D); ``max_points`` bounds each branch;
+    ``segment_points`` the most points per continuation run: the azimuth pin is checked
+    at every point (:func:`~supercoil.problems.tweezers.pins.pin_stop`) and a run ends
+    where it must be picked again, so runs need no other bound (2000, the default
+    ``max_points``).
+    ``contact_predictor``: the predictor of the contact branch
+    (``ContinuationOptions.predictor``). ``"quadratic"`` adds the curvature
+    of the branch from the last two tangents: the barrier's stiffness makes
+    the corrector's first residual large (5-80) even for short steps, and
+    with the tangent predictor the steps stayed at a tenth of
+    ``contact_max_step`` (290 points on the contact branch from 0 to 5 turns at
+    N = 100, L/D = 33, F L^2/A = 75; 91 with ``"quadratic"``;
+    ``benchmarks/bench_tweezers_steps.py --problems 75,33 --set
+    '{"predictor": "tangent"}'``).
+    Tolerances as in :class:`~supercoil.problems.ring_diagram.DiagramOptions`.
+    ``contact_curve``: ``"spline"`` (default) or ``"polygon"``
+    (``ContactOptions.curve``); ``contact_formulation``: ``"integral"``
+    (default) or ``"pairs"`` (``ContactOptions.formulation``). The default,
+    the double integral over the B-spline, counts a contact once wherever it
+    lies relative to the nodes: the pair sum on the polygon made a sawtooth
+    of fold pairs along the plectoneme (35 folds from 0 to 5 turns at N =
+    100 against 3; docs/contact.md, "Contact energy: pair sum or double
+    integral").
+    """
+
+    twist_ratio: float
+    length_over_diameter: float | None
+    tension: float | None = None
+    end_distance: float | None = None
+    turns: tuple[float, float] = (0.0, 5.0)
+    n_nodes: int = 100
+    free_max_step: float = 0.1
+    contact_max_step: float = 0.5
+    max_points: int = 2000
+    segment_points: int = 2000
+    contact_predictor: str = "quadratic"
+    event_tolerance: float = 1e-8
+    contact_event_tolerance: float = 1e-6
+    contact_tolerance: float = 1e-8
+    contact_curve: str = "spline"
+    contact_formulation: str = "integral"
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "twist_ratio", checks.number("twist_ratio", self.twist_ratio, 0.0,
+                                                checks.MAX_MAGNITUDE, low_open=True,
+                                                meaning="C/A"))
+        set_(self, "length_over_diameter", checks.optional_number(
+            "length_over_diameter", self.length_over_diameter, math.pi, checks.MAX_MAGNITUDE,
+            low_open=True, meaning="L/D; a thicker tube cannot bend"))
+        if (self.tension is None) == (self.end_distance is None):
+            raise checks.refuse("tension", "and end_distance: give exactly one of tension "
+                                "(F L^2/A, load control) and end_distance (z/L, displacement "
+                                "control)")
+        set_(self, "tension", checks.optional_number(
+            "tension", self.tension, 0.0, checks.MAX_MAGNITUDE, meaning="F L^2/A"))
+        set_(self, "end_distance", checks.optional_number(
+            "end_distance", self.end_distance, 0.0, 1.0, low_open=True, high_open=True,
+            meaning="z/L of an inextensible rod of length L"))
+        set_(self, "turns", check_turns(self.turns))
+        set_(self, "n_nodes", checks.integer("n_nodes", self.n_nodes, checks.MIN_CLAMPED_NODES,
+                                             checks.MAX_NODES,
+                                             meaning="nodes of the clamped rod"))
+        check_steps(self)
+        for name in ("max_points", "segment_points"):
+            checks.integer(name, getattr(self, name), 2, checks.MAX_POINTS,
+                           meaning="points of a branch")
+        checks.choice("contact_predictor", self.contact_predictor, PREDICTORS)
+        validate_contact_choice(self.contact_curve, self.contact_formulation)
+
+    @property
+    def load_control(self) -> bool:
+        return self.tension is not None
+
+    @property
+    def diameter(self) -> float | None:
+        return None if self.length_over_diameter is None else 1.0 / self.length_over_diameter
+
+    @property
+    def tolerances(self) -> dict:
+        return branch_tolerances(self)
+
+
+def check_turns(turns) -> tuple[float, float]:
+    """``(start, stop)`` turns with ``0 <= start < stop <= 1000``, or an InputError."""
+    valid = (f"(start, stop) turns with 0 <= start < stop <= "
+             f"{checks.MAX_TURNS:g}")
+    try:
+        start, stop = turns
+        start = checks.number("turns", start, 0.0, checks.MAX_TURNS)
+        stop = checks.number("turns", stop, 0.0, checks.MAX_TURNS)
+    except (TypeError, ValueError):
+        raise checks.refuse("turns", f"must be {valid}, got {turns!r}") from None
+    if not start < stop:
+        raise checks.refuse("turns", f"must be {valid}, got {turns!r}")
+    return start, stop

@@ -1,0 +1,74 @@
+"""The computed tweezers' branches (:class:`TweezersResult`) and their azimuth pins."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from supercoil.contact.problem import ContactProblem
+from supercoil.continuation import Branch, SpecialPoint
+from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.problems.tweezers.pins import hold_azimuth
+from supercoil.rod.open import ClampedRodEnergy
+
+
+@dataclass(frozen=True)
+class TweezersResult:
+    """Computed branches (in order), the problems to re-evaluate their states, notes."""
+
+    options: TweezersOptions
+    branches: tuple[Branch, ...]
+    contact_branches: frozenset[str]
+    rod_problem: ClampedRodEnergy
+    contact_problem: ContactProblem | None
+    seconds: dict[str, float] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+    # per branch: (first point index, pinned DOFs) at each choice of the azimuth pin
+    pins: dict = field(default_factory=dict)
+    # contact-free branches cut at their first contact: complete whatever the run that
+    # went on beyond the contact (penetrating) ended with
+    cut_at_contact: frozenset[str] = frozenset()
+
+    def branch_ok(self, branch: Branch) -> bool:
+        """The branch is complete: it reached its bound (or closed a loop), or it is a
+        contact-free branch handed over at its first contact to the contact branch. A
+        branch stopped by the point limit, a step failure or an interrupt is not."""
+        return branch.status.complete or branch.name in self.cut_at_contact
+
+    def pin_branch(self, name: str, index: int = 0):
+        """Set the azimuth pin with which point ``index`` of branch ``name`` was computed.
+
+        Returns the problem to check that branch against (the contact wrapper
+        for contact branches). The pinned coordinate keeps the value it had
+        at the first point of its run.
+        """
+        rod = self.rod_problem
+        dofs: tuple[int, ...] = ()
+        for start, chosen in self.pins.get(name, ((0, ()),)):
+            if start <= index:
+                dofs = chosen
+        problem = self.contact_problem if name in self.contact_branches else rod
+        hold_azimuth(rod, dofs, problem)
+        return problem
+
+    @property
+    def ok(self) -> bool:
+        return (all(self.branch_ok(b) for b in self.branches)
+                and not any(n.startswith(("failed:", "incomplete:")) for n in self.notes))
+
+    def branch(self, name: str) -> Branch:
+        for b in self.branches:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+    def special_points(self) -> list[SpecialPoint]:
+        return [p for b in self.branches for p in b.special_points]
+
+    @property
+    def greenhill_turns(self) -> float | None:
+        """Exact critical turns of the straight rod (load control),
+        :mod:`supercoil.problems.greenhill`."""
+        if not self.options.load_control:
+            return None
+        return critical_turns(self.options.twist_ratio, self.options.tension)

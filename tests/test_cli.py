@@ -18,6 +18,7 @@ import math
 import re
 import subprocess
 import sys
+import typing
 
 import numpy as np
 import pytest
@@ -125,6 +126,19 @@ def _commands(command=None, path=()):
         yield path, command
 
 
+def _numeric_parameters(callback) -> set[str]:
+    """Names of the callback's int and float parameters (optional ones too), read from its
+    annotations (the same whatever typer's internals)."""
+    out = set()
+    for name, hint in typing.get_type_hints(callback, include_extras=True).items():
+        if typing.get_origin(hint) is typing.Annotated:
+            hint = typing.get_args(hint)[0]
+        kinds = typing.get_args(hint) or (hint,)
+        if any(k in (int, float) for k in kinds):
+            out.add(name)
+    return out
+
+
 def _options(command) -> set[str]:
     return {name for p in command.params if p.param_type_name == "option" for name in p.opts}
 
@@ -161,8 +175,9 @@ def test_every_command_spells_its_options_one_way(path, command):
         assert {"--out", "--overwrite"} <= options, path
     else:
         assert "--out" not in options and options & {"--json"}, path
+    numeric = _numeric_parameters(command.callback)
     for p in command.params:
-        if p.param_type_name == "option" and p.type.name in ("int", "float", "parse_ratio"):
+        if p.param_type_name == "option" and p.name in numeric:
             assert RANGE.search(p.help or ""), (path, p.opts, p.help)
 
 

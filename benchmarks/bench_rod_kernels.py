@@ -27,7 +27,7 @@ vector and coefficient) at the first state of each N; ``--compare FILE``
 prints, per quantity, the largest difference to the stored results over the
 largest stored entry. ``--check-kernels`` compares the local kernels
 (bending in the three curvature forms, reference twist; value, gradient,
-Hessian) with ``supercoil.rod.kernels.reference_kernels`` (JAX autodiff) at
+Hessian) with ``supercoil.rod.reference_kernels.reference_kernels`` (JAX autodiff) at
 the same states. Exit status 1 if a difference exceeds ``--rtol`` (2e-12).
 The script runs on any version of the package with the same public API
 (``--check-kernels`` needs ``reference_kernels``), so "before" figures can be
@@ -153,6 +153,7 @@ def kernel_differences(n_nodes: int, stencil_count: int = 1000) -> dict[str, flo
     (the reference compiles once per count).
     """
     from supercoil.rod import kernels
+    from supercoil.rod.reference_kernels import reference_kernels
 
     problem, q = bumped_ring(n_nodes)
     x = states(problem, q, 1, seed=n_nodes)[0]
@@ -162,7 +163,7 @@ def kernel_differences(n_nodes: int, stencil_count: int = 1000) -> dict[str, flo
     frames = problem._frames()[:count]
     out = {}
     for form in kernels.CURVATURE_FORMS:
-        reference = kernels.reference_kernels(form)
+        reference = reference_kernels(form)
         for part, kernel in zip(("value", "gradient", "hessian"), kernels.bending_kernels(form)):
             a, b = kernel(stencils, weights), reference[f"bending_{part}"](stencils, weights)
             out[f"bending {form} {part}"] = float(np.max(np.abs(a - b)) / np.max(np.abs(b)))

@@ -38,7 +38,8 @@ from supercoil.topology import (
     writhe,
     writhe_reference,
 )
-from supercoil.topology.writhe import _atan2, _solid_angle_triangles
+from supercoil.topology.writhe import _atan2
+from supercoil.topology.writhe_reference import solid_angle_triangles
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -101,7 +102,7 @@ def discrete_fuller(points: np.ndarray, pole: np.ndarray, closed: bool) -> float
     following = np.roll(tangents, -1, axis=0) if closed else tangents[1:]
     previous = tangents if closed else tangents[:-1]
     poles = np.broadcast_to(pole, previous.shape)
-    return float(np.sum(_solid_angle_triangles(poles, previous, following))) / (2.0 * np.pi)
+    return float(np.sum(solid_angle_triangles(poles, previous, following))) / (2.0 * np.pi)
 
 
 def gauss_integrand_quadrature(r1, t1, r2, t2, w1, w2) -> float:
@@ -350,13 +351,13 @@ def test_serial_writhe_rows_equal_the_parallel_ones_bit_for_bit(n: int, closed: 
     # writhe() sums small polygons on one thread (_SERIAL_BELOW); the rows must not change
     from supercoil.topology.writhe import (
         _components,
-        _extended,
         _self_half_angle_rows,
         _self_half_angle_rows_serial,
+        extended_vertices,
     )
 
     points = random_walk(np.random.default_rng(n), n)
-    nx, ny, nz = _components(_extended(points, closed))
+    nx, ny, nz = _components(extended_vertices(points, closed))
     assert np.array_equal(_self_half_angle_rows_serial(nx, ny, nz, closed),
                           _self_half_angle_rows(nx, ny, nz, closed))
 
@@ -464,7 +465,7 @@ def test_helix_with_tails_fuller_formula_and_convergence() -> None:
     for m in per_turn:
         polygon_writhe = writhe(helix(radius, rise, turns, m), "axis")
         tangents = edge_tangents(helix(radius, rise, 1, m), closed=False)
-        omega = _solid_angle_triangles(Z, tangents[0], tangents[1])
+        omega = solid_angle_triangles(Z, tangents[0], tangents[1])
         assert polygon_writhe == pytest.approx((m * turns - 1) * omega / (2 * np.pi), abs=1e-12)
         # more turns add exactly one turn's worth, m Ω_m / 2π → (1 − cos θ) at O(m⁻²)
         per_turn_writhe = writhe(helix(radius, rise, turns + 1, m), "axis") - polygon_writhe

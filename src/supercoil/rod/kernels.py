@@ -54,7 +54,7 @@ vertices (``d/dx_{i-1} = -d/de``, ``d/dx_i = d/de - d/df``, ``d/dx_{i+1} = d/df`
   chain rule through ``q = e/|e|`` uses ``dq/de = (I - q q^T)/|e|`` and
   ``sum_k g_k d^2 q_k/de^2 = -(q g^T + g q^T + (q.g)(I - 3 q q^T))/|e|^2``.
 
-:func:`reference_kernels` differentiates the formulas as first written above
+:func:`supercoil.rod.reference_kernels.reference_kernels` differentiates the formulas above
 (``kb`` and the transport of the directors) with JAX autodiff: an independent
 route, used as the oracle for the hand-derived kernels (and imported only
 then: the runtime path does not need JAX).
@@ -62,18 +62,14 @@ then: the runtime path does not need JAX).
 
 from __future__ import annotations
 
-import functools
 import math
-import os
-from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
 from supercoil._numba import njit
 
 CURVATURE_FORMS = ("angle", "tan", "sin")
-_FORM_CODE = {"tan": 0, "sin": 1, "angle": 2}
+FORM_CODE = {"tan": 0, "sin": 1, "angle": 2}
 _TAN, _SIN = 0, 1
 
 # Below this value of s = tan^2(phi/2) the angle form uses the Taylor series of
@@ -400,9 +396,9 @@ def bending_terms(stencils: np.ndarray, weights: np.ndarray, form: str, order: i
     local Hessians is *added* to ``hessians`` when given (C-contiguous float64),
     so that several energies accumulate into one array.
     """
-    if form not in _FORM_CODE:
+    if form not in FORM_CODE:
         raise ValueError(f"curvature form must be one of {CURVATURE_FORMS}, got {form!r}")
-    return _run(_bending_loop, stencils, weights, (), (_FORM_CODE[form],), order, hessians,
+    return _run(_bending_loop, stencils, weights, (), (FORM_CODE[form],), order, hessians,
                 scale)
 
 
@@ -423,7 +419,7 @@ def bending_kernels(form: str):
     ``(n_vertices,)`` (``A / (l_{i-1} + l_i)``) and returns shapes
     ``(n_vertices,)``, ``(n_vertices, 9)``, ``(n_vertices, 9, 9)``.
     """
-    if form not in _FORM_CODE:
+    if form not in FORM_CODE:
         raise ValueError(f"curvature form must be one of {CURVATURE_FORMS}, got {form!r}")
 
     def value(stencils: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -467,7 +463,7 @@ def gradient_terms(q: np.ndarray, dofs: np.ndarray, bend_weights: np.ndarray, fo
     ``np.bincount(dofs.ravel(), weights=local.ravel())``), in one compiled call (the
     gather, two kernels and two scatters cost 25 us at N = 100 as separate steps).
     """
-    if form not in _FORM_CODE:
+    if form not in FORM_CODE:
         raise ValueError(f"curvature form must be one of {CURVATURE_FORMS}, got {form!r}")
     dofs = np.ascontiguousarray(dofs, dtype=np.int64)
     n = dofs.shape[0]
@@ -480,7 +476,7 @@ def gradient_terms(q: np.ndarray, dofs: np.ndarray, bend_weights: np.ndarray, fo
     twist = np.zeros(n_dofs)
     values = np.empty(n)
     _gradient_kernel(np.ascontiguousarray(q, dtype=np.float64), dofs, bend_weights,
-                     _FORM_CODE[form], frames, bend, twist, values)
+                     FORM_CODE[form], frames, bend, twist, values)
     return bend, values, twist
 
 
@@ -528,85 +524,3 @@ def twist_gradient(stencils: np.ndarray, frames: np.ndarray) -> np.ndarray:
 def twist_hessian(stencils: np.ndarray, frames: np.ndarray) -> np.ndarray:
     """Local Hessians ``(n, 9, 9)`` of the reference twists."""
     return twist_terms(stencils, frames, 2)[2]
-
-
-# --------------------------------------------------------------------------
-# JAX reference (the oracle of the tests; imported only when asked for)
-# --------------------------------------------------------------------------
-
-
-@functools.cache
-def reference_kernels(form: str) -> dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]]:
-    """JAX autodiff of the kernels' formulas as first written (``kb``, transported directors).
-
-    Keys ``bending_value``, ``bending_gradient``, ``bending_hessian`` (arguments
-    ``stencils, weights``) and ``twist_value``, ``twist_gradient``,
-    ``twist_hessian`` (``stencils, frames``), shapes as :func:`bending_kernels`.
-    Enables float64 in JAX. Compiles once per number of stencils.
-    """
-    if form not in _FORM_CODE:
-        raise ValueError(f"curvature form must be one of {CURVATURE_FORMS}, got {form!r}")
-    import jax
-    import jax.numpy as jnp
-
-    jax.config.update("jax_enable_x64", True)
-    # Compiled kernels are cached on disk so that only the first run pays for XLA.
-    cache = Path(os.environ.get("SUPERCOIL_CACHE_DIR", Path.home() / ".cache" / "supercoil"))
-    try:
-        (cache / "jax").mkdir(parents=True, exist_ok=True)
-        jax.config.update("jax_compilation_cache_dir", str(cache / "jax"))
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-        jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
-    except OSError:  # read-only home: compile in memory only
-        pass
-    series_below = 1e-8  # tan^2(phi/2) below which phi^2 uses its Taylor series
-
-    def curvature_squared(xm, x0, xp):
-        e = x0 - xm
-        f = xp - x0
-        kb = 2.0 * jnp.cross(e, f) / (jnp.linalg.norm(e) * jnp.linalg.norm(f) + jnp.dot(e, f))
-        tan2 = 0.25 * jnp.dot(kb, kb)  # tan^2(phi/2)
-        if form == "tan":
-            return 4.0 * tan2
-        if form == "sin":
-            return 4.0 * tan2 / (1.0 + tan2)  # 4 sin^2(phi/2)
-        # phi^2 = 4 atan(t)^2 = 4 t^2 (atan(t)/t)^2 with t^2 = tan2; "double where"
-        # keeps the derivatives of the unused branch finite.
-        small = tan2 < series_below
-        safe = jnp.where(small, 1.0, tan2)
-        root = jnp.sqrt(safe)
-        ratio2 = jnp.where(
-            small, 1.0 - 2.0 * tan2 / 3.0 + 23.0 * tan2**2 / 45.0, (jnp.arctan(root) / root) ** 2
-        )
-        return 4.0 * tan2 * ratio2
-
-    def transport(v, a, b):
-        n = jnp.cross(a, b)
-        c = jnp.dot(a, b)
-        return c * v + jnp.cross(n, v) + n * jnp.dot(n, v) / (1.0 + c)
-
-    def reference_twist(xm, x0, xp, frames):
-        um_old, tm_old, u0_old, t0_old = frames[0], frames[1], frames[2], frames[3]
-        tm = (x0 - xm) / jnp.linalg.norm(x0 - xm)
-        t0 = (xp - x0) / jnp.linalg.norm(xp - x0)
-        um = transport(um_old, tm_old, tm)
-        u0 = transport(u0_old, t0_old, t0)
-        carried = transport(um, tm, t0)
-        return jnp.arctan2(jnp.dot(jnp.cross(carried, u0), t0), jnp.dot(carried, u0))
-
-    def bending(v9, weight):
-        return weight * curvature_squared(v9[0:3], v9[3:6], v9[6:9])
-
-    def twist(v9, frames):
-        return reference_twist(v9[0:3], v9[3:6], v9[6:9], frames)
-
-    def batched(function):
-        compiled = jax.jit(jax.vmap(function))
-        return lambda stencils, data: np.asarray(compiled(np.asarray(stencils), np.asarray(data)))
-
-    kernels = {}
-    for name, function in (("bending", bending), ("twist", twist)):
-        kernels[f"{name}_value"] = batched(function)
-        kernels[f"{name}_gradient"] = batched(jax.grad(function))
-        kernels[f"{name}_hessian"] = batched(jax.hessian(function))
-    return kernels

@@ -14,7 +14,8 @@ three terms computed independently here.
 
 from supercoil.topology.linking import linking_number
 from supercoil.topology.twist import parallel_transport, twist_from_frames
-from supercoil.topology.writhe import writhe, writhe_reference
+from supercoil.topology.writhe import writhe
+from supercoil.topology.writhe_reference import writhe_reference
 
 __all__ = [
     "linking_number",

@@ -24,7 +24,7 @@ import numpy.typing as npt
 from supercoil._numba import njit
 from supercoil.errors import InputError
 from supercoil.topology.crossings import first_crossing
-from supercoil.topology.writhe import _as_polygon, _components, _extended, _row_half_angles
+from supercoil.topology.writhe import _as_polygon, _components, _row_half_angles, extended_vertices
 
 __all__ = ["linking_number"]
 
@@ -92,6 +92,6 @@ def linking_number(curve1: npt.ArrayLike, curve2: npt.ArrayLike) -> float:
     scale = float(max(np.max(np.abs(first - centre)), np.max(np.abs(second - centre))))
     first = (first - centre) / scale
     second = (second - centre) / scale
-    ax, ay, az = _components(_extended(first, closed=True))
-    bx, by, bz = _components(_extended(second, closed=True))
+    ax, ay, az = _components(extended_vertices(first, closed=True))
+    bx, by, bz = _components(extended_vertices(second, closed=True))
     return math.fsum(_linking_half_angle_rows(ax, ay, az, bx, by, bz)) / (2.0 * math.pi)

@@ -13,6 +13,7 @@ Units are nondimensional: bending stiffness A = 1 and rod length L = 1.
 
 from supercoil._version import __version__
 from supercoil.api.energy import Energy, continuation, switch_branch
+from supercoil.api.figures import plot
 from supercoil.api.files import save
 from supercoil.api.model import (
     AugmentedLagrangian,
@@ -76,6 +77,7 @@ __all__ = [
     "knot_type",
     "linking_number",
     "load",
+    "plot",
     "ring_diagram",
     "save",
     "stability",

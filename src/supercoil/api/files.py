@@ -47,6 +47,18 @@ def _payload(diagram: Diagram) -> dict:
                     units="nondimensional")
 
 
+def _attributes(twist_ratio: float, n_nodes: int, closed: bool,
+                length_over_diameter: float | None, **loads) -> dict:
+    """The scalar attributes the readers of a result file use (``n_nodes``, ``closed``,
+    the tube's diameter, the load), as the command line stores them."""
+    out = {"twist_ratio": twist_ratio, "n_nodes": n_nodes, "closed": closed}
+    out.update({k: v for k, v in loads.items() if v is not None})
+    if length_over_diameter is not None:
+        out.update(length_over_diameter=length_over_diameter,
+                   diameter=1.0 / length_over_diameter)
+    return out
+
+
 def _equilibrium_branch(eq: Equilibrium) -> Branch:
     q = np.asarray(eq.points, float).reshape(1, -1)
     records = {k: np.array([eq.record[k]], dtype=float)
@@ -90,6 +102,11 @@ def save(result: Diagram | Equilibrium, path: str | Path, *, overwrite: bool = F
         summary = _payload(result)
         status = "complete" if result.ok else "incomplete"
         kind = result.kind
+        options = result.settings
+        attributes = _attributes(options.twist_ratio, options.n_nodes, kind != "tweezers",
+                                 options.length_over_diameter,
+                                 tension=getattr(options, "tension", None),
+                                 end_distance=getattr(options, "end_distance", None))
     elif isinstance(result, Equilibrium):
         ring = result.problem
         settings = {"twist_ratio": ring.rod.twist_ratio, "nodes": ring.rod.nodes,
@@ -101,10 +118,13 @@ def save(result: Diagram | Equilibrium, path: str | Path, *, overwrite: bool = F
         summary = _plain(dict(result.record))
         status = "complete" if result.converged else "incomplete"
         kind = "ring"
+        attributes = _attributes(ring.rod.twist_ratio, ring.rod.nodes, True,
+                                 settings["length_over_diameter"])
     else:
         raise InputError(f"save: expected a supercoil.Diagram or Equilibrium, got "
                          f"{type(result).__name__}")
-    with ResultWriter.create(path, problem=kind, settings=settings, overwrite=overwrite) as w:
+    with ResultWriter.create(path, problem=kind, settings=settings, attributes=attributes,
+                             overwrite=overwrite) as w:
         for branch in branches:
             w.write_branch(branch, complete=branch.ok, contact=branch.name in contact)
         w.set_summary(summary)

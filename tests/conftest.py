@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import settings
 from threadpoolctl import threadpool_limits
+from typer.testing import CliRunner
 
 # One BLAS thread for the whole test run, as the CLI uses
 # (supercoil.cli.main._single_threaded_blas): results then do not depend on the
@@ -64,3 +65,9 @@ def with_rank_one_terms(rng, H: np.ndarray, J: np.ndarray, rank_one: int):
     vecs = rng.standard_normal((rank_one, n))
     coefs = rng.uniform(0.5, 3.0, rank_one) * rng.choice([-1, 1], rank_one)
     return HessianParts(sp.csr_matrix(H), vecs, coefs), sp.csr_matrix(J)
+
+
+@pytest.fixture
+def runner() -> CliRunner:
+    """Invokes the ``supercoil`` app in-process (typer's test runner)."""
+    return CliRunner()

@@ -39,12 +39,6 @@ from supercoil.cli import diagram_output
 from supercoil.cli.main import COMMANDS, app
 from supercoil.io.results import envelope, write_json
 
-
-@pytest.fixture
-def runner() -> CliRunner:
-    return CliRunner()
-
-
 # ---------------------------------------------------------------- help, version
 
 

@@ -23,15 +23,8 @@ from cli_helpers import (
     tight_trefoil,
     write_curve,
 )
-from typer.testing import CliRunner
 
 from supercoil import __version__
-
-
-@pytest.fixture
-def runner() -> CliRunner:
-    return CliRunner()
-
 
 # ------------------------------------------------------------------- bad input
 

@@ -31,16 +31,9 @@ from cli_helpers import (
     tight_trefoil,
     write_curve,
 )
-from typer.testing import CliRunner
 
 from supercoil import __version__
 from supercoil.io.results import CONVENTIONS
-
-
-@pytest.fixture
-def runner() -> CliRunner:
-    return CliRunner()
-
 
 # ------------------------------------------------------------------------ ring
 

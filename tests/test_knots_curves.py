@@ -19,7 +19,6 @@ import json
 import numpy as np
 import pytest
 from numpy.polynomial.legendre import leggauss
-from typer.testing import CliRunner
 
 from supercoil.cli.main import app
 from supercoil.geometry.curves import circle
@@ -123,11 +122,6 @@ def write_curve(path, points) -> str:
                                         for x, y, z in points]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return str(path)
-
-
-@pytest.fixture
-def runner() -> CliRunner:
-    return CliRunner()
 
 
 def test_knot_command_json_matches_the_api(runner, tmp_path):

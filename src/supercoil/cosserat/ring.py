@@ -34,6 +34,7 @@ from supercoil.stability.analysis import (
     negative_count,
 )
 from supercoil.stability.bisection import locate_count_change
+from supercoil.stability.record import stability_record
 
 DEFAULT_STIFFNESS = 1e4  # EA L^2 / A and GA L^2 / A when not given
 
@@ -93,14 +94,10 @@ class CosseratRingResult:
             "energy_circle_exact": kirchhoff_circle_energy(self.twist_ratio, self.excess_link),
             "max_stretch_strain": self.max_stretch_strain,
             "max_shear_strain": self.max_shear_strain,
-            "unstable_count": self.unstable_count,
-            "zero_modes": self.zero_modes,
-            "negative_eigenvalue_count": self.negative_count,
-            "determinant_sign": self.determinant_sign,
-            "lowest_eigenvalues": [float(v) for v in self.lowest_eigenvalues],
-            "stable": self.unstable_count == 0 and self.zero_modes == 0,
+            **stability_record(self.unstable_count, self.zero_modes, self.negative_count,
+                               self.determinant_sign, self.lowest_eigenvalues,
+                               self.stability_certified),
             "converged": self.converged,
-            "stability_certified": self.stability_certified,
             "status": self.status,
             "message": self.message,
             "residual": self.residual,

@@ -28,6 +28,7 @@ from supercoil.stability.analysis import (
     negative_count,
 )
 from supercoil.stability.bisection import locate_count_change
+from supercoil.stability.record import stability_record
 from supercoil.topology import twist_from_frames, writhe
 
 
@@ -90,14 +91,10 @@ class RingResult:
             "writhe_error": self.writhe_error,
             "energy": self.energy,
             "energy_circle_exact": circle_energy(self.twist_ratio, self.excess_link),
-            "unstable_count": self.unstable_count,
-            "zero_modes": self.zero_modes,
-            "negative_eigenvalue_count": self.negative_count,
-            "determinant_sign": self.determinant_sign,
-            "lowest_eigenvalues": [float(v) for v in self.lowest_eigenvalues],
-            "stable": self.unstable_count == 0 and self.zero_modes == 0,
+            **stability_record(self.unstable_count, self.zero_modes, self.negative_count,
+                               self.determinant_sign, self.lowest_eigenvalues,
+                               self.stability_certified),
             "converged": self.converged,
-            "stability_certified": self.stability_certified,
             "status": self.status,
             "message": self.message,
             "residual": self.residual,

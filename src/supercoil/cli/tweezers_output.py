@@ -20,14 +20,9 @@ def tweezers_attributes(options, preset) -> dict:
     if options.length_over_diameter is not None:
         out["diameter"] = 1.0 / options.length_over_diameter
     if preset is not None:
-        out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                   diameter_nm=preset.effective_diameter_nm,
-                   temperature_K=float(preset.temperature_K), relaxed_link=preset.relaxed_link,
-                   force_pN=preset.force_to_pN(options.tension),
-                   force_scale_pN=preset.force_scale_pN,
-                   torque_scale_pN_nm=preset.torque_scale_pN_nm)
-        if preset.salt_mM is not None:
-            out["salt_mM"] = float(preset.salt_mM)
+        from supercoil.units.tweezers import dna_attributes
+
+        out.update(dna_attributes(preset, preset.force_to_pN(options.tension)))
     return out
 
 

@@ -102,15 +102,38 @@ def dna_tweezers_inputs(preset: DNAPreset, force_pN: float, *, turns=None,
         raise InputError(f"dna: expected a supercoil.DNAPreset, got {preset!r}", name="dna")
     out = tweezers_parameters(preset, force_pN)
     out["turns"] = span_in_turns(preset, turns, superhelical_density, default_turns)
+    out["n_nodes"] = nodes_or_n0(n_nodes, out["length_over_diameter"])
+    return out
+
+
+def nodes_or_n0(n_nodes: int | None, length_over_diameter: float) -> int:
+    """``n_nodes`` checked (a clamped rod's), or n0 of ``length_over_diameter`` when None
+    (:func:`resolving_nodes`); an InputError naming ``n_nodes`` when n0 is too many."""
     if n_nodes is None:
-        n_nodes = resolving_nodes(out["length_over_diameter"])
+        n_nodes = resolving_nodes(length_over_diameter)
         if n_nodes > checks.MAX_NODES:
             raise checks.refuse("n_nodes", f"(the default n0 = {n_nodes}: segments no longer "
-                                f"than D at L/D = {out['length_over_diameter']:.6g}) exceeds "
-                                f"the largest number of nodes, {checks.MAX_NODES}; give the "
+                                f"than D at L/D = {length_over_diameter:.6g}) exceeds the "
+                                f"largest number of nodes, {checks.MAX_NODES}; give the "
                                 "nodes, fewer base pairs or a larger diameter")
-    out["n_nodes"] = checks.integer("n_nodes", n_nodes, checks.MIN_CLAMPED_NODES,
-                                    checks.MAX_NODES, meaning="nodes of the clamped rod")
+    return checks.integer("n_nodes", n_nodes, checks.MIN_CLAMPED_NODES, checks.MAX_NODES,
+                          meaning="nodes of the clamped rod")
+
+
+def dna_attributes(preset: DNAPreset, force_pN: float | None = None) -> dict:
+    """The scalar attributes of a result file in DNA units (what the figures read:
+    :mod:`supercoil.plotting.dna`): ``base_pairs``, ``length_nm``, ``diameter_nm``,
+    ``relaxed_link``, ``temperature_K``, ``salt_mM`` (when D comes from it), the scales
+    ``force_scale_pN`` and ``torque_scale_pN_nm`` and, given, ``force_pN``."""
+    out = {"base_pairs": preset.base_pairs, "length_nm": preset.length_nm,
+           "diameter_nm": preset.effective_diameter_nm, "relaxed_link": preset.relaxed_link,
+           "temperature_K": float(preset.temperature_K),
+           "force_scale_pN": preset.force_scale_pN,
+           "torque_scale_pN_nm": preset.torque_scale_pN_nm}
+    if preset.salt_mM is not None:
+        out["salt_mM"] = float(preset.salt_mM)
+    if force_pN is not None:
+        out["force_pN"] = float(force_pN)
     return out
 
 
@@ -146,7 +169,9 @@ def tweezers_payload_in_dna_units(payload: dict, preset: DNAPreset, force_pN: fl
 
 __all__ = [
     "SPAN_MEANING",
+    "dna_attributes",
     "dna_tweezers_inputs",
+    "nodes_or_n0",
     "resolving_nodes",
     "span_in_turns",
     "turns_of_span",

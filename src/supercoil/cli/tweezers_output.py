@@ -116,7 +116,7 @@ def write_tweezers(result, out: Path, writer, path=None, preset=None) -> dict:
               f"{payload['force_pN']:.4g} pN, D = {preset.effective_diameter_nm:.3g} nm; last "
               f"state: extension {last['extension_nm']:.4g} nm, torque "
               f"{last['torque_pN_nm']:.4g} pN nm")
-        warn(f"note: {payload['athermal']}")
+        warn(f"note: {payload['conventions']['athermal']}")
     print(f"wrote result.h5, branch.json and figures to {out.resolve()}", flush=True)
     for note in payload["notes"]:
         warn(f"note: {note}")

@@ -24,7 +24,6 @@ import math
 from supercoil import checks
 from supercoil.errors import InputError
 from supercoil.units.dna import (
-    ATHERMAL_CAVEAT,
     DNAPreset,
     tweezers_parameters,
     tweezers_point_in_dna_units,
@@ -146,7 +145,9 @@ def tweezers_payload_in_dna_units(payload: dict, preset: DNAPreset, force_pN: fl
     ``length_nm``, ``diameter_nm``, ``salt_mM`` (None when D was given),
     ``temperature_K``, ``force_pN``, ``relaxed_link``, the scales ``force_scale_pN``
     (A/L^2) and ``torque_scale_pN_nm`` (A/L), ``superhelical_density_range`` (the
-    ``turns_range`` over Lk0), ``greenhill_superhelical_density`` and ``athermal``.
+    ``turns_range`` over Lk0) and ``greenhill_superhelical_density``. The athermal
+    caveat is the envelope's (``conventions.athermal``, from
+    :meth:`~supercoil.units.dna.DNAPreset.conventions`), stated there once.
     """
     out = dict(payload)
     for key in ("points", "special_points", "path"):
@@ -157,7 +158,7 @@ def tweezers_payload_in_dna_units(payload: dict, preset: DNAPreset, force_pN: fl
                salt_mM=None if preset.salt_mM is None else float(preset.salt_mM),
                temperature_K=float(preset.temperature_K), force_pN=float(force_pN),
                relaxed_link=preset.relaxed_link, force_scale_pN=preset.force_scale_pN,
-               torque_scale_pN_nm=preset.torque_scale_pN_nm, athermal=ATHERMAL_CAVEAT)
+               torque_scale_pN_nm=preset.torque_scale_pN_nm)
     if isinstance(payload.get("turns_range"), (list, tuple)):
         out["superhelical_density_range"] = [preset.superhelical_density_of(t)
                                               for t in payload["turns_range"]]

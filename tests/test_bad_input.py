@@ -196,6 +196,7 @@ OPTIONS = {
                     "--tension", "--end-distance", "--nodes", "--protocol", "--step",
                     "--force-range", "--force-step", "--max-points", "--contact-curve",
                     "--contact-formulation", "--overwrite", "--dna", "--bp", "--force-pN",
+                    "--sigma",
                     "--salt-mM", "--diameter-nm", "--temperature-K", "--resume", "--quiet"],
     ("run",): ["--out", "--resume", "--quiet", "--overwrite", "--json", "--set"],
     ("export",): ["--out", "--branch", "--point", "--format", "--sides", "--bp", "--overwrite"],

@@ -42,9 +42,24 @@ def _payload(diagram: Diagram) -> dict:
     else:
         payload = computed.payload()
     settings = diagram.settings
-    return envelope(payload, n_nodes=settings.n_nodes, tolerances=settings.tolerances,
-                    contact_treatment=getattr(settings, "contact", "barrier"),
-                    units="nondimensional")
+    dna = _dna(diagram)
+    if dna is not None:
+        from supercoil.units.tweezers import tweezers_payload_in_dna_units
+
+        payload = tweezers_payload_in_dna_units(payload, dna, diagram.problem.force_pN)
+    out = envelope(payload, n_nodes=settings.n_nodes, tolerances=settings.tolerances,
+                   contact_treatment=getattr(settings, "contact", "barrier"),
+                   units="nondimensional" if dna is None else dna.name)
+    if dna is not None:
+        out["conventions"].update(dna.conventions())
+        out["provenance"]["units_preset"] = dna.record()
+    return out
+
+
+def _dna(result):
+    """The DNA preset of a result in DNA units (a tweezers problem made by
+    ``Tweezers.from_dna``), else None."""
+    return getattr(getattr(result, "problem", None), "dna", None)
 
 
 def _attributes(twist_ratio: float, n_nodes: int, closed: bool,
@@ -107,6 +122,10 @@ def save(result: Diagram | Equilibrium, path: str | Path, *, overwrite: bool = F
                                  options.length_over_diameter,
                                  tension=getattr(options, "tension", None),
                                  end_distance=getattr(options, "end_distance", None))
+        if _dna(result) is not None:
+            from supercoil.units.tweezers import dna_attributes
+
+            attributes.update(dna_attributes(_dna(result), result.problem.force_pN))
     elif isinstance(result, Equilibrium):
         ring = result.problem
         settings = {"twist_ratio": ring.rod.twist_ratio, "nodes": ring.rod.nodes,
@@ -123,8 +142,9 @@ def save(result: Diagram | Equilibrium, path: str | Path, *, overwrite: bool = F
     else:
         raise InputError(f"save: expected a supercoil.Diagram or Equilibrium, got "
                          f"{type(result).__name__}")
+    units = "nondimensional" if _dna(result) is None else _dna(result).name
     with ResultWriter.create(path, problem=kind, settings=settings, attributes=attributes,
-                             overwrite=overwrite) as w:
+                             units=units, overwrite=overwrite) as w:
         for branch in branches:
             w.write_branch(branch, complete=branch.ok, contact=branch.name in contact)
         w.set_summary(summary)

@@ -22,6 +22,7 @@ import numpy as np
 from supercoil import checks
 from supercoil.errors import InputError
 from supercoil.rod.kernels import CURVATURE_FORMS
+from supercoil.units.dna import DNAPreset
 
 
 @dataclass(frozen=True)
@@ -189,13 +190,50 @@ class Tweezers:
     Exactly one of ``tension`` (F L^2 / A >= 0, load control) and ``end_distance``
     (z / L in (0, 1), displacement control). ``contact``: the tube's self-contact
     (None: the rod may pass through itself, so the branch stops meaning anything
-    at its first self-crossing).
+    at its first self-crossing). ``dna``: the molecule of a problem in DNA units
+    (:meth:`from_dna`), whose results then carry nm, pN nm and σ beside the
+    nondimensional numbers.
     """
 
     rod: Rod
     tension: float | None = None
     end_distance: float | None = None
     contact: Contact | None = None
+    dna: DNAPreset | None = None
+
+    @classmethod
+    def from_dna(cls, dna: DNAPreset, force_pN: float, *, nodes: int | None = None,
+                 contact: type[Contact] | None = None) -> Tweezers:
+        """A DNA molecule pulled by ``force_pN`` (pN) and turned (magnetic tweezers).
+
+        ``dna``: a :class:`~supercoil.units.dna.DNAPreset` (base pairs, salt or diameter,
+        temperature; its superhelical density is not used: give the turns or σ to
+        :func:`~supercoil.api.verbs.tweezers`). C/A, F L^2/A and L/D follow from it;
+        ``nodes`` defaults to n0 = ceil(L/D) + 2, the fewest whose segments are no longer
+        than D (:func:`~supercoil.units.tweezers.resolving_nodes`); ``contact``: the
+        treatment's class, :class:`Barrier` (default) or :class:`Penalty`.
+
+        >>> problem = Tweezers.from_dna(DNAPreset(base_pairs=3000, salt_mM=150), 1.0)
+        >>> problem.rod.nodes, round(problem.tension, 1)
+        (240, 5062.8)
+        """
+        from supercoil.units.dna import tweezers_parameters
+        from supercoil.units.tweezers import nodes_or_n0
+
+        if not isinstance(dna, DNAPreset):
+            raise InputError(f"dna: expected a supercoil.DNAPreset, got {dna!r}", name="dna")
+        numbers = tweezers_parameters(dna, force_pN)
+        lod = numbers["length_over_diameter"]
+        contact = Barrier if contact is None else contact
+        if not (isinstance(contact, type) and issubclass(contact, Contact)):
+            raise InputError(f"contact: expected Barrier or Penalty (the class), got "
+                             f"{contact!r}", name="contact")
+        try:
+            nodes = nodes_or_n0(nodes, lod)
+        except InputError as exc:
+            raise InputError(exc.renamed({"n_nodes": "nodes"}), name="nodes") from None
+        return cls(Rod(numbers["twist_ratio"], nodes), tension=numbers["tension"],
+                   contact=contact(lod), dna=dna)
 
     def __post_init__(self) -> None:
         if not isinstance(self.rod, Rod):
@@ -218,6 +256,27 @@ class Tweezers:
         if self.contact is not None and self.contact.treatment not in ("barrier", "penalty"):
             raise InputError(f"contact: {type(self.contact).__name__} cannot be continued along "
                              "a branch; use Barrier or Penalty")
+        if self.dna is not None:
+            self._check_dna()
+
+    def _check_dna(self) -> None:
+        """A problem in DNA units has the molecule's C/A and L/D and is under a load."""
+        if not isinstance(self.dna, DNAPreset):
+            raise InputError(f"dna: expected None or a supercoil.DNAPreset, got {self.dna!r}",
+                             name="dna")
+        lod = None if self.contact is None else self.contact.length_over_diameter
+        if (self.tension is None or not math.isclose(self.rod.twist_ratio, self.dna.twist_ratio,
+                                                     rel_tol=1e-12)
+                or lod is None or not math.isclose(lod, self.dna.length_over_diameter,
+                                                   rel_tol=1e-12)):
+            raise InputError("dna: a problem in DNA units is pulled by a force and has the "
+                             "molecule's C/A and L/D; build it with "
+                             "Tweezers.from_dna(dna, force_pN)", name="dna")
+
+    @property
+    def force_pN(self) -> float | None:
+        """The pulling force in pN of a problem in DNA units (None otherwise)."""
+        return None if self.dna is None else self.dna.force_to_pN(self.tension)
 
 
 __all__ = [

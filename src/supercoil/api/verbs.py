@@ -213,21 +213,34 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
                    message=message, notes=tuple(computed.notes), computed=computed)
 
 
-def tweezers(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
+def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
+             superhelical_density: tuple[float, float] | None = None,
              progress: Callable[[str], None] | None = None, **options) -> Diagram:
-    """The branches of a rod in magnetic tweezers turned through ``turns = (start, stop)``.
+    """The branches of a rod in magnetic tweezers turned through ``turns = (start, stop)``
+    (default (0, 5)).
 
     The straight rod is followed from ``start`` turns to its buckling (Greenhill's
     condition for a clamped rod), the buckled branch off it, and with contact the
-    plectoneme's branch (its hat curve: extension against turns). Further
-    ``options`` are those of :class:`supercoil.problems.tweezers.TweezersOptions`
-    (``max_points``, ``contact_max_step``, ...).
+    plectoneme's branch (its hat curve: extension against turns). A problem in DNA
+    units (:meth:`~supercoil.api.model.Tweezers.from_dna`) may be turned through
+    ``superhelical_density = (start, stop)`` instead (σ = turns · 10.5 / N_bp; not
+    both). Further ``options`` are those of
+    :class:`supercoil.problems.tweezers.TweezersOptions` (``max_points``,
+    ``contact_max_step``, ...).
     """
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
     if not isinstance(problem, Tweezers):
         raise InputError(f"tweezers: expected a supercoil.Tweezers, got "
                          f"{type(problem).__name__}")
+    if problem.dna is not None:
+        from supercoil.units.tweezers import span_in_turns
+
+        turns = span_in_turns(problem.dna, turns, superhelical_density, (0.0, 5.0))
+    elif superhelical_density is not None:
+        raise InputError("superhelical_density needs a problem in DNA units "
+                         "(Tweezers.from_dna); give turns", name="superhelical_density")
+    turns = (0.0, 5.0) if turns is None else turns
     rod = problem.rod
     lod = None if problem.contact is None else problem.contact.length_over_diameter
     settings = _settings(TweezersOptions, {

@@ -92,12 +92,9 @@ def _attributes(spec) -> dict:
         out["diameter"] = 1.0 / rod["length_over_diameter"]
     preset = spec.dna_preset()
     if preset is not None:
-        out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                   diameter_nm=preset.effective_diameter_nm,
-                   temperature_K=float(preset.temperature_K),
-                   relaxed_link=preset.relaxed_link)
-        if preset.salt_mM is not None:
-            out["salt_mM"] = float(preset.salt_mM)
+        from supercoil.units.tweezers import dna_attributes
+
+        out.update(dna_attributes(preset, problem.get("force_pN")))
     return out
 
 
@@ -259,14 +256,10 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
     payload = result_payload(result)
     preset = spec.dna_preset()
     if preset is not None:
-        from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
+        from supercoil.units.tweezers import tweezers_payload_in_dna_units
 
-        for key in ("points", "special_points"):
-            payload[key] = [tweezers_point_in_dna_units(p, preset) for p in payload[key]]
-        payload.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                       diameter_nm=preset.effective_diameter_nm,
-                       force_pN=spec.settings["problem"]["force_pN"],
-                       relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
+        payload = tweezers_payload_in_dna_units(payload, preset,
+                                                spec.settings["problem"]["force_pN"])
     summary = _envelope(spec, payload, options.tolerances)
     summary["conventions"].update(TWEEZERS_CONVENTIONS)
     return _outcome(result.ok, payload, summary, notes)

@@ -24,7 +24,12 @@ from supercoil.cli._common import (
     warn,
 )
 from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
-from supercoil.units.dna import DEFAULT_SALT_MM, REFERENCE_TEMPERATURE_K, SALT_RANGE_MM
+from supercoil.units.dna import (
+    DEFAULT_SALT_MM,
+    HELICAL_REPEAT_BP,
+    REFERENCE_TEMPERATURE_K,
+    SALT_RANGE_MM,
+)
 
 PROTOCOLS = ("up", "up-down", "force-ramp")
 OUTPUT_FILES = ("result.h5", "branch.json", "hat_curve.png", "torque.png", "writhe.png",
@@ -40,32 +45,34 @@ TWEEZERS_OPTIONS = {"twist_ratio": "--twist-ratio",
                     "step": "--step", "force_range": "--force-range",
                     "force_step": "--force-step", "base_pairs": "--bp",
                     "force_pN": "--force-pN", "salt_mM": "--salt-mM",
-                    "diameter_nm": "--diameter-nm", "temperature_K": "--temperature-K"}
+                    "diameter_nm": "--diameter-nm", "temperature_K": "--temperature-K",
+                    "superhelical_density": "--sigma"}
 Quiet = quiet_option()
 Overwrite = overwrite_option("Write into an existing non-empty --out DIR, replacing this "
                              "command's own files (other files are left alone).")
 
 
-def parse_turns(text: str) -> tuple[float, float]:
-    """``"START:STOP"`` -> ``(start, stop)``; a one-line error unless two numbers (their
-    range is checked by :class:`~supercoil.problems.tweezers.TweezersOptions`)."""
+def parse_span(option: str, text: str, example: str) -> tuple[float, float]:
+    """``"START:STOP"`` -> ``(start, stop)``; a one-line error naming ``option`` unless two
+    numbers (their range is checked by the options the command builds)."""
     words = text.split(":")
     try:
         if len(words) != 2:
             raise ValueError
         return float(words[0]), float(words[1])
     except ValueError:
-        fail(f"--turns {text!r}: give START:STOP in turns, like 0:5")
+        fail(f"{option} {text!r}: give START:STOP {example}")
 
 
 def tweezers(
-    turns: Annotated[str, typer.Option(
-        "--turns", metavar="START:STOP", help="Turns of the end, from START to STOP "
-        f"(0 <= START < STOP <= {checks.MAX_TURNS:g}), e.g. 0:5.", show_default=False)],
     out: Annotated[Path, typer.Option(
         "--out", metavar="DIR", help="Folder for result.h5, branch.json and the figures; "
         "an existing non-empty DIR is refused unless --overwrite or --resume.",
         show_default=False, callback=checked_path)],
+    turns: Annotated[str | None, typer.Option(
+        "--turns", metavar="START:STOP", help="Turns of the end, from START to STOP "
+        f"(0 <= START < STOP <= {checks.MAX_TURNS:g}), e.g. 0:5; with --dna, this or "
+        "--sigma.", show_default=False)] = None,
     twist_ratio: Annotated[float | None, typer.Option(
         "--twist-ratio", metavar="C/A", parser=parse_ratio, help="Twist stiffness over "
         f"bending stiffness, 0 < C/A <= {MAGNITUDE}; not with --dna.",
@@ -80,10 +87,12 @@ def tweezers(
     end_distance: Annotated[float | None, typer.Option(
         "--end-distance", metavar="Z/L", help="End-to-end distance z/L in (0, 1) held fixed "
         "(displacement control).", show_default=False)] = None,
-    nodes: Annotated[int, typer.Option(
+    nodes: Annotated[int | None, typer.Option(
         "--nodes", metavar="N", help=f"Nodes of the discrete rod, {checks.MIN_CLAMPED_NODES} "
-        f"to {checks.MAX_NODES}; contact lines need segments shorter than D "
-        "(N >= L/D + 2).")] = 100,
+        f"to {checks.MAX_NODES}; contact lines need segments L/(N - 2) no longer than D "
+        "(N >= L/D + 2). Default 100; with --dna n0 = ceil(L/D) + 2, the fewest nodes "
+        "whose segments are no longer than the tube diameter D (the ply resolved).",
+        show_default=False)] = None,
     protocol: Annotated[str, typer.Option(
         "--protocol", metavar="P", help="up: the branches from START to STOP; up-down: "
         "also the quasi-static path of an experiment turning up to STOP and back (stable "
@@ -128,6 +137,11 @@ def tweezers(
     force_pN: Annotated[float | None, typer.Option(
         "--force-pN", metavar="F", help="With --dna: pulling force in pN (>= 0).",
         show_default=False)] = None,
+    sigma: Annotated[str | None, typer.Option(
+        "--sigma", metavar="START:STOP", help="With --dna, instead of --turns: the "
+        "superhelical density from START to STOP, sigma = turns * "
+        f"{HELICAL_REPEAT_BP:g} / bp (0 <= START < STOP <= 1), e.g. 0:0.06.",
+        show_default=False)] = None,
     salt_mM: Annotated[float | None, typer.Option(
         "--salt-mM", metavar="MM", help=f"With --dna: monovalent salt in mM, from "
         f"{SALT_RANGE_MM[0]:g} to {SALT_RANGE_MM[1]:g}, giving the effective diameter "
@@ -155,22 +169,26 @@ def tweezers(
     configurations.png (tubes) and, for force-ramp, force_extension.png into
     --out.
     """
-    preset = None
+    preset, span = None, None
     if dna:
-        preset, twist_ratio, tension, length_over_diameter = _dna_inputs(
-            twist_ratio, tension, length_over_diameter, end_distance, bp, force_pN, salt_mM,
-            diameter_nm, temperature_K)
+        preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \
+            _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp,
+                        force_pN, salt_mM, diameter_nm, temperature_K, turns, sigma, nodes)
     else:
         for option, value in (("--bp", bp), ("--force-pN", force_pN), ("--salt-mM", salt_mM),
                               ("--diameter-nm", diameter_nm),
-                              ("--temperature-K", temperature_K)):
+                              ("--temperature-K", temperature_K), ("--sigma", sigma)):
             if value is not None:
                 fail(f"{option} needs --dna (DNA units); without it give --twist-ratio, "
-                     "--tension or --end-distance and --length-over-diameter")
+                     "--tension or --end-distance, --length-over-diameter and --turns")
         if twist_ratio is None:
             fail("--twist-ratio C/A is missing; give it (e.g. --twist-ratio 1.3333), or use "
                  "--dna --bp N --force-pN F")
-    start, stop = parse_turns(turns)
+        if turns is None:
+            fail("--turns START:STOP is missing; give the end's rotation in turns, like "
+                 "--turns 0:5")
+        start, stop = parse_span("--turns", turns, "in turns, like 0:5")
+        nodes = 100 if nodes is None else nodes
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
              "--end-distance Z/L (displacement control, 0 < z/L < 1)")
@@ -205,6 +223,7 @@ def tweezers(
                 "max_points": max_points, "contact_curve": contact_curve,
                 "contact_formulation": contact_formulation, "protocol": protocol,
                 "step": step, "force_range": ramp, "force_step": force_step,
+                "superhelical_density": None if span is None else list(span),
                 "dna": None if preset is None else preset.record()}
     stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="tweezers",
                             settings=settings)
@@ -213,7 +232,10 @@ def tweezers(
     control = (f"F L^2/A = {tension:g}" if tension is not None else f"z/L = {end_distance:g}")
     print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
           f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
-          f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
+          f"N = {nodes}, turns {start:g} to {stop:g}"
+          + ("" if preset is None else f" (sigma {start / preset.relaxed_link:.4g} to "
+             f"{stop / preset.relaxed_link:.4g}; DNA {preset.base_pairs} bp, "
+             f"{force_pN:g} pN, D = {preset.effective_diameter_nm:.3g} nm)"), flush=True)
     from supercoil.cli.saving import (
         interrupted,
         open_writer,
@@ -280,26 +302,38 @@ def _force_range(text, tension, preset) -> tuple[float, float]:
 
 
 def _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp, force_pN,
-                salt_mM, diameter_nm, temperature_K):
-    """``(preset, C/A, F L^2/A, L/D)`` of the --dna options; one-line errors otherwise."""
-    from supercoil.units.dna import DNAPreset, tweezers_parameters
+                salt_mM, diameter_nm, temperature_K, turns, sigma, nodes):
+    """``(preset, sigma span or None, (C/A, F L^2/A, L/D, (start, stop) turns, nodes))`` of
+    the --dna options (:func:`~supercoil.units.tweezers.dna_tweezers_inputs`); one-line
+    errors otherwise."""
+    from supercoil.units.dna import DNAPreset
+    from supercoil.units.tweezers import dna_tweezers_inputs
 
+    given = "--bp N --force-pN F (--turns START:STOP | --sigma START:STOP) [--salt-mM S | " \
+        "--diameter-nm D] [--temperature-K T]"
     if end_distance is not None:
         fail("--end-distance cannot be combined with --dna: DNA runs are under a force "
-             "(load control, --force-pN F); give --bp N --force-pN F [--salt-mM S | "
-             "--diameter-nm D] [--temperature-K T]")
+             f"(load control, --force-pN F); give {given}")
     for option, value in (("--twist-ratio", twist_ratio), ("--tension", tension),
                           ("--length-over-diameter", length_over_diameter)):
         if value is not None:
             fail(f"{option} cannot be combined with --dna (the DNA preset sets it); give "
-                 "--bp N --force-pN F [--salt-mM S | --diameter-nm D] [--temperature-K T]")
+                 f"{given}")
     if bp is None or force_pN is None:
         fail("--dna needs --bp N (base pairs) and --force-pN F (pulling force in pN)")
+    if (turns is None) == (sigma is None):
+        fail(f"{'both' if turns else 'neither of'} --turns and --sigma given: with --dna give "
+             "exactly one, the end's rotation in turns (--turns 0:10) or as superhelical "
+             f"density (--sigma 0:0.06, sigma = turns * {HELICAL_REPEAT_BP:g} / bp)")
+    turns = None if turns is None else parse_span("--turns", turns, "in turns, like 0:5")
+    span = None if sigma is None else parse_span(
+        "--sigma", sigma, "as superhelical densities, like 0:0.06")
     kwargs = {"base_pairs": bp, "salt_mM": salt_mM, "diameter_nm": diameter_nm}
     if temperature_K is not None:
         kwargs["temperature_K"] = temperature_K
     with refused(TWEEZERS_OPTIONS):
         preset = DNAPreset(**kwargs)
-        numbers = tweezers_parameters(preset, force_pN)
-    return (preset, numbers["twist_ratio"], numbers["tension"],
-            numbers["length_over_diameter"])
+        numbers = dna_tweezers_inputs(preset, force_pN, turns=turns,
+                                      superhelical_density=span, n_nodes=nodes)
+    return preset, span, tuple(numbers[k] for k in (
+        "twist_ratio", "tension", "length_over_diameter", "turns", "n_nodes"))

@@ -20,9 +20,9 @@ def tweezers_attributes(options, preset) -> dict:
     if options.length_over_diameter is not None:
         out["diameter"] = 1.0 / options.length_over_diameter
     if preset is not None:
-        out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                   diameter_nm=preset.effective_diameter_nm,
-                   temperature_K=float(preset.temperature_K), relaxed_link=preset.relaxed_link)
+        from supercoil.units.tweezers import dna_attributes
+
+        out.update(dna_attributes(preset, preset.force_to_pN(options.tension)))
     return out
 
 
@@ -59,18 +59,13 @@ def write_tweezers(result, out: Path, writer, path=None, preset=None) -> dict:
                                   "turns": np.array([p["turns"] for p in path.points],
                                                     float)})
     add_contact_lists(result, payload["points"])
-    configurations = pick_configurations(payload, states)
     data = dict(payload)
     if preset is not None:
-        from supercoil.units.dna import ATHERMAL_CAVEAT, tweezers_point_in_dna_units
+        from supercoil.units.tweezers import tweezers_payload_in_dna_units
 
-        for key in ("points", "special_points", "path"):
-            if key in data:
-                data[key] = [tweezers_point_in_dna_units(p, preset) for p in data[key]]
-        data.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
-                    diameter_nm=preset.effective_diameter_nm,
-                    force_pN=preset.force_to_pN(result.options.tension),
-                    relaxed_link=preset.relaxed_link, athermal=ATHERMAL_CAVEAT)
+        data = tweezers_payload_in_dna_units(data, preset,
+                                             preset.force_to_pN(result.options.tension))
+    configurations = pick_configurations(data, states)
     data = envelope(data, n_nodes=result.options.n_nodes, tolerances=result.options.tolerances,
                     units="nondimensional" if preset is None else preset.name,
                     contact_treatment="barrier" if result.contact_problem else "none")
@@ -91,7 +86,7 @@ def write_tweezers(result, out: Path, writer, path=None, preset=None) -> dict:
     writer.close()
     write_json(data, out / "branch.json")
     try:
-        write_figures(payload, configurations, out)
+        write_figures(data, configurations, out)
     except KeyboardInterrupt:
         figures_interrupted(out)
         raise typer.Exit(EXIT_NOT_CONVERGED) from None
@@ -121,7 +116,7 @@ def write_tweezers(result, out: Path, writer, path=None, preset=None) -> dict:
               f"{payload['force_pN']:.4g} pN, D = {preset.effective_diameter_nm:.3g} nm; last "
               f"state: extension {last['extension_nm']:.4g} nm, torque "
               f"{last['torque_pN_nm']:.4g} pN nm")
-        warn(f"note: {payload['athermal']}")
+        warn(f"note: {payload['conventions']['athermal']}")
     print(f"wrote result.h5, branch.json and figures to {out.resolve()}", flush=True)
     for note in payload["notes"]:
         warn(f"note: {note}")

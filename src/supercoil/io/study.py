@@ -21,8 +21,12 @@ A study has six tables (``[study]`` and ``[continuation]`` optional)::
 (barrier or penalty). ``ring``: ``excess_link`` ("dna":
 ``superhelical_density``), ``contact`` (a treatment; needs L/D).
 ``tweezers``: ``tension`` (F L^2/A, load control) or ``end_distance`` (z/L,
-displacement control) ("dna": ``force_pN``), ``turns`` = [start, stop];
-without ``[rod] length_over_diameter`` the rod has no self-contact.
+displacement control) ("dna": ``force_pN``), ``turns`` = [start, stop] (default
+[0, 5]; "dna": or ``superhelical_density`` = [start, stop], σ = turns · 10.5 / N_bp,
+not both); without ``[rod] length_over_diameter`` the rod has no self-contact. Under
+"dna" a tweezers study's ``[rod] nodes`` defaults to n0 = ceil(L/D) + 2, the fewest
+whose segments are no longer than D (:func:`~supercoil.units.tweezers.resolving_nodes`);
+otherwise to 100.
 
 Every key is checked: an unknown or misspelled key, a key of another problem
 kind or a wrong type here; a value out of range by the options and problems
@@ -56,6 +60,7 @@ from supercoil import checks
 from supercoil.errors import InputError
 
 PROBLEM_KINDS = ("ring_diagram", "ring", "tweezers")
+DEFAULT_TURNS = (0.0, 5.0)  # a tweezers study's turns when neither they nor sigma are given
 UNITS_PRESETS = ("nondimensional", "dna")
 
 
@@ -143,7 +148,8 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
                             convert=float),
         "length_over_diameter": _Key("L/D, a number", _real, presets=("nondimensional",),
                                      convert=float),
-        "nodes": _Key("an integer", _is_int, 100),
+        # tweezers: 100, or n0 under "dna" (filled in by _complete_tweezers)
+        "nodes": _Key("an integer", _is_int, {"ring_diagram": 100, "ring": 100}),
     },
     "problem": {
         "kind": _Key(f"one of {', '.join(PROBLEM_KINDS)}", _choice(PROBLEM_KINDS)),
@@ -157,8 +163,12 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
                                          convert=float),
         "excess_link": _Key("a number of turns", _real, kinds=("ring",),
                             presets=("nondimensional",), convert=float),
-        "superhelical_density": _Key("a superhelical density (e.g. -0.06)", _real,
-                                     kinds=("ring",), presets=("dna",), convert=float),
+        "superhelical_density": _Key("a superhelical density (ring: a number, e.g. -0.06; "
+                                     "tweezers: a list [start, stop], e.g. [0, 0.06])",
+                                     lambda v: _real(v) or _numbers(v),
+                                     kinds=("ring", "tweezers"), presets=("dna",),
+                                     convert=lambda v: float(v) if _real(v)
+                                     else [float(x) for x in v]),
         "contact": _Key("a contact treatment", lambda v: isinstance(v, str), None,
                         kinds=("ring_diagram", "ring")),
         "tension": _Key("a force F L^2/A (load control)", _real, kinds=("tweezers",),
@@ -167,7 +177,8 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
                              presets=("nondimensional",), convert=float),
         "force_pN": _Key("a pulling force in pN (a number)", _real,
                          kinds=("tweezers",), presets=("dna",), convert=float),
-        "turns": _Key(_TURNS, _numbers, [0.0, 5.0], kinds=("tweezers",),
+        # [0, 5] unless given ("dna": or superhelical_density given), by _complete_tweezers
+        "turns": _Key(_TURNS, _numbers, kinds=("tweezers",),
                       convert=lambda v: [float(x) for x in v]),
     },
     "continuation": {
@@ -264,7 +275,9 @@ class Study:
         """The :class:`~supercoil.units.dna.DNAPreset` of a "dna" study, else None."""
         if self.units != "dna":
             return None
-        return _dna_preset(self.settings["units"], self.settings["problem"])
+        from supercoil.io.study_dna import dna_preset
+
+        return dna_preset(self.settings["units"], self.settings["problem"])
 
     def tweezers_options(self):
         """:class:`~supercoil.problems.tweezers.TweezersOptions` of a tweezers study."""
@@ -294,18 +307,6 @@ class Study:
             n_nodes=s["rod"]["nodes"], modes=tuple(s["problem"]["modes"]),
             max_excess_link=s["problem"]["max_excess_link"], contact=s["problem"]["contact"],
             **s["continuation"])
-
-
-def _dna_preset(units: Mapping, problem: Mapping):
-    from supercoil.units.dna import DNAPreset
-
-    kwargs = {"base_pairs": units["base_pairs"],
-              "superhelical_density": problem.get("superhelical_density", 0.0),
-              "salt_mM": units.get("salt_mM") if units.get("diameter_nm") is None else None,
-              "diameter_nm": units.get("diameter_nm"),
-              "temperature_K": units["temperature_K"],
-              "twist_persistence_nm": units["twist_persistence_nm"]}
-    return DNAPreset(**kwargs)
 
 
 def _parse_override(text: str) -> tuple[str, str, Any]:
@@ -412,37 +413,12 @@ def _validate(raw: dict, source: str) -> dict:
 
 def _complete(s: dict, kind: str, preset: str, source: str) -> None:
     """Cross-key checks and derived values (DNA preset, contact treatment)."""
-    rod, problem, units = s["rod"], s["problem"], s["units"]
+    rod, problem = s["rod"], s["problem"]
     if preset == "dna":
-        if "base_pairs" not in units:
-            raise StudyError(f"{source}: [units] base_pairs is missing; the DNA preset needs "
-                             "the plasmid's length in base pairs, e.g. base_pairs = 1000")
-        if "salt_mM" in units and "diameter_nm" in units:
-            raise StudyError(f"{source}: [units] salt_mM and diameter_nm both set the tube "
-                             "diameter; give one of them")
-        if kind == "ring" and "superhelical_density" not in problem:
-            raise StudyError(f"{source}: [problem] superhelical_density is missing; a DNA ring "
-                             "needs it, e.g. superhelical_density = -0.06")
-        with _refused(source):
-            dna = _dna_preset(units, problem)
-        lod = dna.length_over_diameter
-        if "diameter_nm" not in units:
-            units["salt_mM"] = float(dna.salt_mM)  # the default salt when none was given
-        units["effective_diameter_nm"] = dna.effective_diameter_nm
-        rod["twist_ratio"] = dna.twist_ratio
-        rod["length_over_diameter"] = lod
-        if kind == "ring_diagram":
-            problem["max_excess_link"] = problem["max_superhelical_density"] * dna.relaxed_link
-        elif kind == "ring":
-            problem["excess_link"] = dna.excess_link
-        else:
-            if "force_pN" not in problem:
-                raise StudyError(f"{source}: [problem] force_pN is missing; DNA tweezers need "
-                                 "the pulling force, e.g. force_pN = 0.5")
-            from supercoil.units.dna import tweezers_parameters
+        from supercoil.io.study_dna import complete_dna
 
-            with _refused(source):
-                problem["tension"] = tweezers_parameters(dna, problem["force_pN"])["tension"]
+        with _refused(source):
+            complete_dna(s, kind, DEFAULT_TURNS)
     else:
         if "twist_ratio" not in rod:
             raise StudyError(f"{source}: [rod] twist_ratio is missing; give C/A, e.g. "
@@ -496,6 +472,8 @@ def _refused(source: str):
 
 def _complete_tweezers(s: dict, preset: str, source: str) -> None:
     problem = s["problem"]
+    problem.setdefault("turns", list(DEFAULT_TURNS))
+    s["rod"].setdefault("nodes", 100)
     if preset != "dna" and ("tension" in problem) == ("end_distance" in problem):
         raise StudyError(f"{source}: [problem] give exactly one of tension (F L^2/A, load "
                          "control) and end_distance (z/L, displacement control)")

@@ -42,22 +42,44 @@ DIAGRAM_SIZE = (style.SINGLE[0] * 1.5, style.SINGLE[1] * 1.25)  # inches
 
 def diagram_figure(branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
                    title: str, x: str = "writhe", y: str = "excess_link",
-                   legend_title: str | None = None):
+                   legend_title: str | None = None,
+                   secondary: Mapping[str, tuple[str, float]] | None = None,
+                   caption: str | None = None):
     """``y`` against ``x``. ``branches``: ``{name, <x> (k,), <y> (k,), stable (k,)}`` and
     optionally ``color`` and ``linestyle`` (a matplotlib dash pattern);
-    ``special_points``: ``{kind, <x>, <y>}``. Stable parts heavy, unstable thin."""
+    ``special_points``: ``{kind, <x>, <y>}``. Stable parts heavy, unstable thin.
+    ``secondary``: ``{"x" or "y": (label, factor)}``, a second axis (top or right) reading
+    the values times ``factor`` (σ beside turns); ``caption``: text under the axes."""
     from matplotlib.figure import Figure
 
     with style.styled():
         fig = Figure(figsize=DIAGRAM_SIZE)
         ax = fig.subplots()
         _draw_diagram(fig, ax, branches, special_points, title=title, x=x, y=y,
-                      legend_title=legend_title)
+                      legend_title=legend_title, secondary=secondary, caption=caption)
     return fig
 
 
+def _secondary_axes(ax, secondary: Mapping[str, tuple[str, float]]) -> list:
+    """The top (``x``) or right (``y``) axes reading the values times a factor."""
+    made = []
+    for axis, (label, factor) in secondary.items():
+        functions = (lambda v, f=factor: v * f, lambda v, f=factor: v / f)
+        if axis == "x":
+            ax.tick_params(axis="x", top=False)
+            made.append(ax.secondary_xaxis("top", functions=functions))
+            made[-1].set_xlabel(label)
+        else:
+            ax.tick_params(axis="y", right=False)
+            made.append(ax.secondary_yaxis("right", functions=functions))
+            made[-1].set_ylabel(label)
+    return made
+
+
 def _draw_diagram(fig, ax, branches: Sequence[Mapping], special_points: Sequence[Mapping], *,
-                  title: str, x: str, y: str, legend_title: str | None) -> None:
+                  title: str, x: str, y: str, legend_title: str | None,
+                  secondary: Mapping[str, tuple[str, float]] | None = None,
+                  caption: str | None = None) -> None:
     """Draw :func:`diagram_figure`'s lines, labels and legend on ``ax`` of ``fig`` (an
     axes without lines, at its subplot position) and lay them out."""
     from matplotlib.lines import Line2D
@@ -86,15 +108,18 @@ def _draw_diagram(fig, ax, branches: Sequence[Mapping], special_points: Sequence
     ax.set_xlabel(_label(x))
     ax.set_ylabel(_label(y))
     ax.set_title(title)
+    extra = _secondary_axes(ax, secondary or {})
     # beside the axes: branches cross the whole diagram, so no corner is free
     legend = fig.legend(handles=handles, loc="upper left", title=legend_title)
-    _fit_beside_legend(fig, ax, legend)
+    note = None if caption is None else fig.text(0, 0, caption, ha="left", va="bottom",
+                                                 fontsize="small", color="0.25")
+    _fit_beside_legend(fig, ax, legend, note, extra)
 
 
 LAYOUT_PAD = 6.0  # points between the figure's edge, the axes' decorations and the legend
 
 
-def _fit_beside_legend(fig, ax, legend) -> None:
+def _fit_beside_legend(fig, ax, legend, caption=None, extra=()) -> None:
     """Place ``ax`` to fill ``fig`` with its tick labels, axis labels and title inside,
     and ``legend`` beside it on the right, top-aligned (what matplotlib's constrained
     layout does with ``loc="outside right upper"``, from the axes' decorations alone).
@@ -104,7 +129,8 @@ def _fit_beside_legend(fig, ax, legend) -> None:
     position (the tick locator may choose other ticks for another length) and the
     margins widened where they grew. Constrained layout solves the same margins in two
     passes of its own over the whole figure, about half of the time a figure takes to
-    save.
+    save. A ``caption`` (a figure text) goes under everything, at the left; ``extra``:
+    artists whose extent counts with the decorations (secondary axes).
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -112,11 +138,15 @@ def _fit_beside_legend(fig, ax, legend) -> None:
     width, height = fig.bbox.width, fig.bbox.height
     pad = LAYOUT_PAD * fig.dpi / 72.0
     legend_width = legend.get_window_extent(renderer).width
+    below = 0.0  # pixels under the axes' decorations taken by the caption
+    if caption is not None:
+        caption.set_position((pad / width, pad / height))
+        below = caption.get_window_extent(renderer).height + pad
     # margins (pixels) of the decorations around the axes box: left, right, bottom, top
     margins = np.zeros(4)
     for _ in range(2):
         box = ax.get_position().transformed(fig.transFigure)
-        tight = ax.get_tightbbox(renderer, bbox_extra_artists=[])
+        tight = ax.get_tightbbox(renderer, bbox_extra_artists=list(extra))
         grown = np.array([box.x0 - tight.x0, tight.x1 - box.x1, box.y0 - tight.y0,
                           tight.y1 - box.y1])
         if np.all(grown <= margins):
@@ -124,7 +154,7 @@ def _fit_beside_legend(fig, ax, legend) -> None:
         margins = np.maximum(margins, grown)
         left = margins[0] + pad
         right = width - pad - legend_width - pad - margins[1]
-        bottom = margins[2] + pad
+        bottom = margins[2] + pad + below
         top = height - pad - margins[3]
         if right - left < 0.3 * width or top - bottom < 0.3 * height:
             break  # a legend or labels too wide for the figure: keep what fits
@@ -389,16 +419,19 @@ def figure_of(result: ResultData, kind: str):
         raise ValueError(f"{result.path}: a {result.kind} result has no data for a {kind} "
                          f"figure; kinds it has: {valid}")
     param = result.parameter
-    if kind == "diagram":
-        keys = ("writhe", param)
+    if kind in ("diagram", "hat-curve"):
+        keys = ("writhe", param) if kind == "diagram" else ("turns", "extension")
         specials = _specials(result, keys)
         rows = [through_special_points(r, specials, keys) for r in _branch_rows(result, keys)]
-        return diagram_figure(rows, specials, title=result.title, x="writhe", y=param)
-    if kind == "hat-curve":
-        keys = ("turns", "extension")
-        specials = _specials(result, keys)
-        rows = [through_special_points(r, specials, keys) for r in _branch_rows(result, keys)]
-        return hat_curve_figure(rows, specials, title=result.title)
+        if result.dna is None:
+            return diagram_figure(rows, specials, title=result.title, x=keys[0], y=keys[1])
+        from supercoil.plotting.dna import caveat_text
+
+        x, y, secondary = result.dna.axes(*keys)
+        return diagram_figure([result.dna.in_dna_units(r) for r in rows],
+                              [result.dna.in_dna_units(p) for p in specials],
+                              title=result.title, x=x, y=y, secondary=secondary,
+                              caption=caveat_text() if kind == "hat-curve" else None)
     if kind == "contact-map":
         x = "writhe" if result.kind == "ring" else "turns"
         rows = []
@@ -420,6 +453,9 @@ def figure_of(result: ResultData, kind: str):
         p = b.points[index]
         label = (f"{name}, {'ΔLk' if param == 'excess_link' else 'n'} = "
                  f"{float(p[param]):.3f}, Wr = {_number_text(p.get('writhe'))}")
+        if result.dna is not None:
+            label = f"{name}, σ = {float(p[param]) / result.dna.relaxed_link:.4f}, " + \
+                label.split(", ", 2)[-1]
         configurations.append({"label": label, "points": states[index],
                                "contact_points": p.get("contact_points") or [],
                                "contact_intervals": p.get("contact_intervals") or []})

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from supercoil.errors import InputError
+from supercoil.plotting.dna import DNAScales
 
 
 class ResultError(InputError):
@@ -86,6 +87,7 @@ class ResultData:
     branches: tuple[BranchData, ...]
     special_points: tuple[Mapping, ...]
     parameters: Mapping = field(default_factory=dict)
+    dna: DNAScales | None = None  # a tweezers result in DNA units: its scales
 
     def branch(self, name: str) -> BranchData:
         for b in self.branches:
@@ -276,6 +278,9 @@ def _from_payload(path: Path, data: dict, states: StatesFor | None) -> ResultDat
              if k in data and data[k] is not None and math.isfinite(_number(data[k]))]
     if parts:
         title += ", " + ", ".join(parts)
+    dna = DNAScales.of(data) if kind == "tweezers" else None
+    if dna is not None:
+        title = dna.title(data.get("n_nodes"))
     x = "writhe" if kind == "ring" else "extension"
     specials = tuple(s for s in data.get("special_points", []) if isinstance(s, dict)
                      and parameter in s and x in s)
@@ -284,7 +289,8 @@ def _from_payload(path: Path, data: dict, states: StatesFor | None) -> ResultDat
                       closed=kind == "ring", units=str(data.get("units", "nondimensional")),
                       branches=tuple(branches), special_points=specials,
                       parameters={k: data[k] for k in ("twist_ratio", "length_over_diameter",
-                                                       "n_nodes", "force") if k in data})
+                                                       "n_nodes", "force") if k in data},
+                      dna=dna)
 
 
 def _inline_states(rows: Sequence[Mapping]) -> Callable[[], np.ndarray]:

@@ -48,6 +48,11 @@ LABELS = {
     "torque": r"torque $M\,L/A$",
     "arclength": r"arc length $s/L$",
     "force": r"force $F\,L^2/A$",
+    # DNA units (supercoil.plotting.dna)
+    "superhelical_density": r"superhelical density $\sigma$",
+    "extension_nm": r"extension $z$ (nm)",
+    "torque_pN_nm": r"torque $M$ (pN nm)",
+    "force_pN": r"force $F$ (pN)",
 }
 
 RC = {

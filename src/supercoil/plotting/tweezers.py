@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from supercoil.plotting.dna import DNAScales, caveat_text
 from supercoil.plotting.figures import (
     configurations_figure,
     diagram_figure,
@@ -26,7 +27,7 @@ FIGURES = {"hat_curve.png": "extension", "torque.png": "torque", "writhe.png": "
 SAVE_OPTIONS = {"dpi": 150, "pil_kwargs": {"compress_level": 1}}
 
 
-def _branches(payload: Mapping, y: str) -> list[dict]:
+def _branches(payload: Mapping, y: str, x: str = "turns") -> list[dict]:
     """The branches' lines of ``y`` against turns, each with its located special points
     inserted (:func:`~supercoil.plotting.figures.through_special_points`), so that a
     stable stretch is drawn heavy up to the located point: the straight rod up to its
@@ -37,15 +38,28 @@ def _branches(payload: Mapping, y: str) -> list[dict]:
         rows = [p for p in payload["points"] if p["branch"] == b["name"]]
         if not rows:
             continue
-        line = {"name": b["name"], "turns": [p["turns"] for p in rows],
+        line = {"name": b["name"], x: [p[x] for p in rows],
                 y: [p[y] for p in rows], "stable": [p["stable"] for p in rows]}
         specials = [p for p in payload["special_points"] if p.get("branch") == b["name"]]
-        out.append(through_special_points(line, specials, ("turns", y)))
+        out.append(through_special_points(line, specials, (x, y)))
     if payload.get("path"):
         rows = payload["path"]
-        out.append({"name": "experiment path", "turns": [p["turns"] for p in rows],
+        out.append({"name": "experiment path", x: [p[x] for p in rows],
                     y: [p[y] for p in rows], "stable": [True] * len(rows), "color": "0.15"})
     return out
+
+
+def _in_dna_units(payload: Mapping) -> tuple[Mapping, DNAScales | None]:
+    """``payload`` with the DNA keys in every point (:class:`DNAScales`), and its scales;
+    unchanged and None when it is not in DNA units."""
+    scales = DNAScales.of(payload)
+    if scales is None:
+        return payload, None
+    out = dict(payload)
+    for key in ("points", "special_points", "path"):
+        if out.get(key):
+            out[key] = [scales.in_dna_units(p) for p in out[key]]
+    return out, scales
 
 
 def _title(payload: Mapping) -> str:
@@ -66,7 +80,8 @@ def figure_jobs(payload: Mapping, configurations: Sequence[Mapping],
     arguments)`` for :func:`draw_job`."""
     folder = Path(folder)
     jobs = []
-    title = _title(payload)
+    payload, dna = _in_dna_units(payload)
+    title = _title(payload) if dna is None else dna.title(payload.get("n_nodes"))
     if configurations:
         jobs.append((folder / "configurations.png", "configurations", {
             "configurations": list(configurations), "diameter": payload.get("diameter"),
@@ -77,21 +92,34 @@ def figure_jobs(payload: Mapping, configurations: Sequence[Mapping],
         del figures["hat_curve.png"]
         figures["tension.png"] = "tension"
     for name, y in figures.items():
-        specials = [p for p in payload["special_points"] if y in p and "turns" in p]
+        x, y, secondary = ("turns", y, {}) if dna is None else dna.axes("turns", y)
+        specials = [p for p in payload["special_points"] if y in p and x in p]
         jobs.append((folder / name, "diagram", {
-            "branches": _branches(payload, y), "special_points": specials, "title": title,
-            "x": "turns", "y": y}))
+            "branches": _branches(payload, y, x), "special_points": specials, "title": title,
+            "x": x, "y": y, **_dna_extras(dna, secondary, y)}))
     ramp = [p for p in payload.get("path") or [] if p.get("ramp") == "tension"]
     if ramp:
-        rows = {"name": "force ramp", "tension": [p["tension"] for p in ramp],
-                "extension": [p["extension"] for p in ramp],
+        x, y, secondary = (("tension", "extension", {}) if dna is None
+                           else dna.axes("tension", "extension"))
+        rows = {"name": "force ramp", x: [p[x] for p in ramp], y: [p[y] for p in ramp],
                 "stable": [p["stable"] for p in ramp], "color": "0.15"}
-        specials = [{**j, "tension": j["tension"]} for j in payload["special_points"]
-                    if j.get("ramp") == "tension"]
+        specials = [j for j in payload["special_points"] if j.get("ramp") == "tension"
+                    and x in j and y in j]
         jobs.append((folder / "force_extension.png", "diagram", {
-            "branches": [rows], "special_points": specials, "title": title, "x": "tension",
-            "y": "extension"}))
+            "branches": [rows], "special_points": specials, "title": title, "x": x,
+            "y": y, **_dna_extras(dna, secondary, y)}))
     return jobs
+
+
+def _dna_extras(dna: DNAScales | None, secondary: dict, y: str) -> dict:
+    """The secondary axes and, on the figures of the extension and the torque, the
+    athermal caveat (:data:`~supercoil.plotting.dna.CAVEAT`)."""
+    if dna is None:
+        return {}
+    extras = {"secondary": secondary}
+    if y in ("extension_nm", "torque_pN_nm"):
+        extras["caption"] = caveat_text()
+    return extras
 
 
 def draw_job(job: tuple[Path, str, dict]) -> Path:
@@ -129,8 +157,11 @@ def pick_configurations(payload: Mapping, states: Mapping[str, np.ndarray],
     """Up to ``count`` states spread along the branches (first and last of each included)."""
     picks = []
     for name, i, p in picked_points(payload, states, count):
-        picks.append({"label": f"{name}, {p['turns']:.3g} turns, z/L = "
-                      f"{p['extension']:.3g}", "points": states[name][i].reshape(-1, 3),
+        label = f"{name}, {p['turns']:.3g} turns, z/L = {p['extension']:.3g}"
+        if "superhelical_density" in p and "extension_nm" in p:
+            label = (f"{name}, σ = {p['superhelical_density']:.3g}, z = "
+                     f"{p['extension_nm']:.4g} nm")
+        picks.append({"label": label, "points": states[name][i].reshape(-1, 3),
                       "contact_points": p.get("contact_points", []),
                       "contact_intervals": p.get("contact_intervals", [])})
     return picks

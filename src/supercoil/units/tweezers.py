@@ -1,0 +1,180 @@
+"""DNA in magnetic tweezers: the inputs in physical units, checked once, and the output keys.
+
+A tweezers run in DNA units is given by the molecule (a :class:`~supercoil.units.dna.DNAPreset`:
+base pairs, salt or diameter, temperature), the pulling force in pN, the end's rotation as
+turns or as superhelical density, and the number of nodes:
+
+* ``superhelical_density = (start, stop)`` replaces ``turns``: σ = turns / Lk0 with
+  Lk0 = N_bp / 10.5, so ``turns = σ · N_bp / 10.5``; exactly one of the two;
+* the nodes default to :func:`resolving_nodes` (n0), the fewest whose segments are no
+  longer than the tube's diameter D, which the contact of a plectoneme's two strands
+  needs (a coarser polygon cannot resolve the ply).
+
+:func:`dna_tweezers_inputs` is the one check of these inputs, shared by the command line
+(``supercoil tweezers --dna``), study files (``supercoil run``) and the library
+(:meth:`supercoil.Tweezers.from_dna`, :func:`supercoil.tweezers`); every invalid input is an
+:class:`~supercoil.errors.InputError` naming it. :func:`tweezers_payload_in_dna_units`
+adds the DNA keys to a ``branch.json`` payload (the nondimensional keys unchanged).
+"""
+
+from __future__ import annotations
+
+import math
+
+from supercoil import checks
+from supercoil.errors import InputError
+from supercoil.units.dna import (
+    DNAPreset,
+    tweezers_parameters,
+    tweezers_point_in_dna_units,
+)
+
+SPAN_MEANING = "superhelical density sigma = turns * helical repeat / base pairs"
+
+
+def resolving_nodes(length_over_diameter: float) -> int:
+    """n0: the fewest nodes of a clamped rod whose segments are no longer than D.
+
+    The clamped rod of N nodes has edges of length h = L / (N - 2) (its ends are the
+    midpoints of the first and last edges, docs/tweezers.md), which is at most
+    D = L / (L/D) when N - 2 >= L/D: ``n0 = ceil(L/D) + 2``, and at least the fewest
+    nodes of a clamped rod (:data:`supercoil.checks.MIN_CLAMPED_NODES`).
+    """
+    lod = checks.number("length_over_diameter", length_over_diameter, 0.0,
+                        checks.MAX_MAGNITUDE, low_open=True, meaning="L/D")
+    return max(checks.MIN_CLAMPED_NODES, math.ceil(lod) + 2)
+
+
+def turns_of_span(preset: DNAPreset, superhelical_density) -> tuple[float, float]:
+    """``(start, stop)`` turns of a superhelical density span ``(start, stop)``:
+    ``turns = σ · Lk0``. The span is checked: ``0 <= start < stop``, ``stop`` at most 1
+    and at most :data:`~supercoil.checks.MAX_TURNS` turns; else an InputError naming
+    ``superhelical_density``."""
+    highest = min(1.0, checks.MAX_TURNS / preset.relaxed_link)
+    valid = (f"(start, stop) with 0 <= start < stop <= {highest:.6g} ({SPAN_MEANING}, "
+             f"Lk0 = {preset.relaxed_link:.6g} turns), e.g. (0, 0.06)")
+    try:
+        start, stop = superhelical_density
+        start = checks.number("superhelical_density", start, 0.0, highest)
+        stop = checks.number("superhelical_density", stop, 0.0, highest)
+    except (TypeError, ValueError):
+        raise checks.refuse("superhelical_density",
+                            f"must be {valid}, got {superhelical_density!r}") from None
+    if not start < stop:
+        raise checks.refuse("superhelical_density",
+                            f"must be {valid}, got {superhelical_density!r}")
+    return start * preset.relaxed_link, stop * preset.relaxed_link
+
+
+def span_in_turns(preset: DNAPreset, turns=None, superhelical_density=None,
+                  default: tuple[float, float] | None = None) -> tuple[float, float]:
+    """The end's rotation ``(start, stop)`` in turns from exactly one of ``turns`` and
+    ``superhelical_density`` (:func:`turns_of_span`); with neither, ``default`` (None: an
+    InputError). The turns themselves are checked by the tweezers' options."""
+    if turns is not None and superhelical_density is not None:
+        raise InputError("superhelical_density and turns both give the end's rotation: give "
+                         f"one of them (turns, or sigma = turns * {preset.helical_repeat_bp:g}"
+                         f" / {preset.base_pairs} bp)", name="superhelical_density")
+    if superhelical_density is not None:
+        return turns_of_span(preset, superhelical_density)
+    if turns is None:
+        if default is None:
+            raise InputError("turns is missing: give the end's rotation as turns (start, "
+                             "stop) or as superhelical_density (start, stop)", name="turns")
+        turns = default
+    return tuple(turns)
+
+
+def dna_tweezers_inputs(preset: DNAPreset, force_pN: float, *, turns=None,
+                        superhelical_density=None, n_nodes: int | None = None,
+                        default_turns: tuple[float, float] | None = None) -> dict:
+    """The nondimensional inputs of a DNA tweezers run, checked.
+
+    ``force_pN``: the pulling force (pN, >= 0); ``turns`` or ``superhelical_density``:
+    the end's rotation ``(start, stop)`` (exactly one; with neither, ``default_turns``);
+    ``n_nodes``: None for :func:`resolving_nodes` of the molecule's L/D.
+
+    Returns ``twist_ratio``, ``tension`` (F L^2/A), ``length_over_diameter``, ``turns``
+    (start, stop) and ``n_nodes``; an InputError naming the input otherwise.
+    """
+    if not isinstance(preset, DNAPreset):
+        raise InputError(f"dna: expected a supercoil.DNAPreset, got {preset!r}", name="dna")
+    out = tweezers_parameters(preset, force_pN)
+    out["turns"] = span_in_turns(preset, turns, superhelical_density, default_turns)
+    out["n_nodes"] = nodes_or_n0(n_nodes, out["length_over_diameter"])
+    return out
+
+
+def nodes_or_n0(n_nodes: int | None, length_over_diameter: float) -> int:
+    """``n_nodes`` checked (a clamped rod's), or n0 of ``length_over_diameter`` when None
+    (:func:`resolving_nodes`); an InputError naming ``n_nodes`` when n0 is too many."""
+    if n_nodes is None:
+        n_nodes = resolving_nodes(length_over_diameter)
+        if n_nodes > checks.MAX_NODES:
+            raise checks.refuse("n_nodes", f"(the default n0 = {n_nodes}: segments no longer "
+                                f"than D at L/D = {length_over_diameter:.6g}) exceeds the "
+                                f"largest number of nodes, {checks.MAX_NODES}; give the "
+                                "nodes, fewer base pairs or a larger diameter")
+    return checks.integer("n_nodes", n_nodes, checks.MIN_CLAMPED_NODES, checks.MAX_NODES,
+                          meaning="nodes of the clamped rod")
+
+
+def dna_attributes(preset: DNAPreset, force_pN: float | None = None) -> dict:
+    """The scalar attributes of a result file in DNA units (what the figures read:
+    :mod:`supercoil.plotting.dna`): ``base_pairs``, ``length_nm``, ``diameter_nm``,
+    ``relaxed_link``, ``temperature_K``, ``salt_mM`` (when D comes from it), the scales
+    ``force_scale_pN`` and ``torque_scale_pN_nm`` and, given, ``force_pN``."""
+    out = {"base_pairs": preset.base_pairs, "length_nm": preset.length_nm,
+           "diameter_nm": preset.effective_diameter_nm, "relaxed_link": preset.relaxed_link,
+           "temperature_K": float(preset.temperature_K),
+           "force_scale_pN": preset.force_scale_pN,
+           "torque_scale_pN_nm": preset.torque_scale_pN_nm}
+    if preset.salt_mM is not None:
+        out["salt_mM"] = float(preset.salt_mM)
+    if force_pN is not None:
+        out["force_pN"] = float(force_pN)
+    return out
+
+
+def tweezers_payload_in_dna_units(payload: dict, preset: DNAPreset, force_pN: float) -> dict:
+    """A ``branch.json`` payload with the DNA keys added; the nondimensional keys unchanged.
+
+    Every entry of ``points``, ``special_points`` and ``path`` gains the keys of
+    :func:`~supercoil.units.dna.tweezers_point_in_dna_units` (``superhelical_density``,
+    ``extension_nm``, ``torque_pN_nm``, ...). Added at the top: ``base_pairs``,
+    ``length_nm``, ``diameter_nm``, ``salt_mM`` (None when D was given),
+    ``temperature_K``, ``force_pN``, ``relaxed_link``, the scales ``force_scale_pN``
+    (A/L^2) and ``torque_scale_pN_nm`` (A/L), ``superhelical_density_range`` (the
+    ``turns_range`` over Lk0) and ``greenhill_superhelical_density``. The athermal
+    caveat is the envelope's (``conventions.athermal``, from
+    :meth:`~supercoil.units.dna.DNAPreset.conventions`), stated there once.
+    """
+    out = dict(payload)
+    for key in ("points", "special_points", "path"):
+        if isinstance(out.get(key), list):
+            out[key] = [tweezers_point_in_dna_units(p, preset) for p in out[key]]
+    out.update(base_pairs=preset.base_pairs, length_nm=preset.length_nm,
+               diameter_nm=preset.effective_diameter_nm,
+               salt_mM=None if preset.salt_mM is None else float(preset.salt_mM),
+               temperature_K=float(preset.temperature_K), force_pN=float(force_pN),
+               relaxed_link=preset.relaxed_link, force_scale_pN=preset.force_scale_pN,
+               torque_scale_pN_nm=preset.torque_scale_pN_nm)
+    if isinstance(payload.get("turns_range"), (list, tuple)):
+        out["superhelical_density_range"] = [preset.superhelical_density_of(t)
+                                              for t in payload["turns_range"]]
+    greenhill = payload.get("greenhill_turns")
+    if isinstance(greenhill, (int, float)):
+        out["greenhill_superhelical_density"] = preset.superhelical_density_of(greenhill)
+    return out
+
+
+__all__ = [
+    "SPAN_MEANING",
+    "dna_attributes",
+    "dna_tweezers_inputs",
+    "nodes_or_n0",
+    "resolving_nodes",
+    "span_in_turns",
+    "turns_of_span",
+    "tweezers_payload_in_dna_units",
+]

@@ -22,6 +22,7 @@ they take the Kirchhoff ring's.
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Callable
 
 import numpy as np
@@ -184,8 +185,11 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
     top = max(michell_excess_link(opts.twist_ratio, m) for m in opts.modes)
     circle_top = max(opts.max_excess_link, 1.1 * top)
     say(f"circle up to dLk = {circle_top:.4g} (Cosserat rod)")
+    seconds: dict[str, float] = {}
+    start = time.perf_counter()
     circle, problem = cosserat_circle_branch(opts.twist_ratio, opts.n_nodes, circle_top,
                                              *constants[1:], curve)
+    seconds["circle"] = time.perf_counter() - start
     branches = [centreline_branch(circle)]
     bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
     free_opts = ContinuationOptions(
@@ -200,6 +204,7 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
                          f"{name} not computed")
             continue
         say(f"{name}: switched from the circle at dLk = {point.parameter:.4g}, no contact")
+        start = time.perf_counter()
         free = switch_off_circle(problem, circle, point, constants, free_opts, name, curve,
                                  notes)
         onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
@@ -209,5 +214,9 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
                                   f"{free.message}")
         else:
             notes.append(f"{name}: no contact found without contact ({free.message})")
+        seconds[name] = time.perf_counter() - start
         branches.append(centreline_branch(free))
-    return RingDiagram(opts, tuple(branches), frozenset(), {}, tuple(notes), None)
+    model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
+             "shear_stiffness": float(shear_stiffness)}
+    return RingDiagram(opts, tuple(branches), frozenset(), seconds, tuple(notes), None,
+                       model=model)

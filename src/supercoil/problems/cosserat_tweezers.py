@@ -126,6 +126,8 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     opts = options
     say = progress or (lambda message: None)
     notes: list[str] = []
+    model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
+             "shear_stiffness": float(shear_stiffness)}
     problem = clamped_cosserat_problem(opts, stretch_stiffness, shear_stiffness)
     records = cosserat_tweezers_records(problem)
     say(f"straight Cosserat rod in turns at F L^2/A = {opts.tension:g}")
@@ -143,7 +145,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
             notes.append(f"incomplete: straight stopped at {straight.parameter_values[-1]:.6g} "
                          f"turns ({straight.message})")
         return TweezersResult(opts, tuple(branches), frozenset(), problem, None, {},
-                              tuple(notes))
+                              tuple(notes), model=model)
     point = bifurcations[0]
     say(f"buckled: switched from the straight rod at {point.parameter:.6g} turns")
     # the straight rod at the point, exactly, in the current chart (a stored state is
@@ -164,4 +166,5 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
         notes.append(f"incomplete: buckled stopped at {buckled.parameter_values[-1]:.6g} "
                      f"turns: {buckled.message}")
     branches.append(centreline_branch(buckled))
-    return TweezersResult(opts, tuple(branches), frozenset(), problem, None, {}, tuple(notes))
+    return TweezersResult(opts, tuple(branches), frozenset(), problem, None, {}, tuple(notes),
+                          model=model)

@@ -122,6 +122,24 @@ ROD_TYPES = (Rod, CosseratRod)
 MODELS = {"kirchhoff": Rod, "cosserat": CosseratRod}
 
 
+def make_rod(model: str, twist_ratio: float, nodes: int, stretch_stiffness: float | None,
+             shear_stiffness: float | None, slenderness: float | None = None,
+             preset=None):
+    """The :class:`Rod` (``model = "kirchhoff"``) or :class:`CosseratRod` (``"cosserat"``)
+    of a command's or study's settings; ``slenderness`` the Cosserat section's L/D;
+    ``preset`` a DNA preset, whose stretch modulus and helix diameter set the Cosserat
+    rod's defaults. InputError on bad values."""
+    checks.choice("model", model, tuple(MODELS), meaning="rod model")
+    if model != "cosserat":
+        return Rod(twist_ratio, nodes)
+    if preset is not None:
+        slenderness = preset.section_slenderness
+        if stretch_stiffness is None:
+            stretch_stiffness = preset.stretch_stiffness
+    return CosseratRod(twist_ratio, stretch_stiffness, shear_stiffness, nodes,
+                       slenderness=DEFAULT_SLENDERNESS if slenderness is None else slenderness)
+
+
 def rod_model(rod) -> str:
     """``"kirchhoff"`` or ``"cosserat"``: the model of a rod object."""
     return "cosserat" if isinstance(rod, CosseratRod) else "kirchhoff"
@@ -310,6 +328,7 @@ __all__ = [
     "Rod",
     "Tweezers",
     "contact_from_name",
+    "make_rod",
     "rod_model",
     "section_stiffnesses",
 ]

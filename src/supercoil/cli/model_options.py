@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from supercoil.api.model import DEFAULT_POISSON_RATIO, DEFAULT_SLENDERNESS
+from supercoil.api.model import DEFAULT_POISSON_RATIO, DEFAULT_SLENDERNESS, make_rod  # noqa: F401
 from supercoil.cli._common import fail
 
 MODELS = ("kirchhoff", "cosserat")
@@ -49,24 +49,6 @@ def no_contact(model: str, command: str, contact_given: bool) -> None:
     if model == "cosserat" and contact_given:
         fail(f"contact with the Cosserat model is not available for {command}; drop the "
              "contact options, or use --model kirchhoff")
-
-
-def make_rod(model: str, twist_ratio: float, nodes: int, stretch_stiffness: float | None,
-             shear_stiffness: float | None, slenderness: float | None = None,
-             preset=None):
-    """``supercoil.Rod`` or ``supercoil.CosseratRod`` of the options (raises InputError
-    on bad values; run it inside ``refused``). ``preset``: a DNA preset, whose stretch
-    modulus and helix diameter set the defaults."""
-    from supercoil import CosseratRod, Rod
-
-    if model != "cosserat":
-        return Rod(twist_ratio, nodes)
-    if preset is not None:
-        slenderness = preset.section_slenderness
-        if stretch_stiffness is None:
-            stretch_stiffness = preset.stretch_stiffness
-    return CosseratRod(twist_ratio, stretch_stiffness, shear_stiffness, nodes,
-                       slenderness=DEFAULT_SLENDERNESS if slenderness is None else slenderness)
 
 
 def model_record(rod) -> dict:

@@ -7,7 +7,9 @@ A study has six tables (``[study]`` and ``[continuation]`` optional)::
                      base_pairs, salt_mM or diameter_nm, temperature_K,
                      twist_persistence_nm
     [rod]            twist_ratio (C/A), length_over_diameter (L/D), nodes
-                     (under "dna" C/A and L/D follow from the preset: not given)
+                     (under "dna" C/A and L/D follow from the preset: not given);
+                     model = "kirchhoff" (default) or "cosserat", with
+                     stretch_stiffness (EA L^2/A) and shear_stiffness (GA L^2/A)
     [problem]        kind = "ring_diagram", "ring" or "tweezers", and its keys (below)
     [continuation]   ring_diagram and tweezers: the step, length and tolerance options
                      of DiagramOptions / TweezersOptions (free_max_step, ...); for
@@ -56,6 +58,7 @@ from supercoil import checks
 from supercoil.errors import InputError
 
 PROBLEM_KINDS = ("ring_diagram", "ring", "tweezers")
+MODELS = ("kirchhoff", "cosserat")
 UNITS_PRESETS = ("nondimensional", "dna")
 
 
@@ -144,6 +147,9 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
         "length_over_diameter": _Key("L/D, a number", _real, presets=("nondimensional",),
                                      convert=float),
         "nodes": _Key("an integer", _is_int, 100),
+        "model": _Key('"kirchhoff" or "cosserat"', _choice(MODELS)),
+        "stretch_stiffness": _Key("EA L^2/A, a number", _real, convert=float),
+        "shear_stiffness": _Key("GA L^2/A, a number", _real, convert=float),
     },
     "problem": {
         "kind": _Key(f"one of {', '.join(PROBLEM_KINDS)}", _choice(PROBLEM_KINDS)),
@@ -283,6 +289,17 @@ class Study:
             contact_event_tolerance=c["contact_event_tolerance"],
             contact_tolerance=c["contact_tolerance"])
 
+    def rod(self):
+        """The study's :class:`supercoil.Rod` or :class:`supercoil.CosseratRod` (the
+        Cosserat rod's section of the rod's L/D, or under the DNA preset its stretch
+        modulus and the double helix's diameter)."""
+        from supercoil.api.model import make_rod
+
+        rod = self.settings["rod"]
+        return make_rod(rod.get("model", "kirchhoff"), rod["twist_ratio"], rod["nodes"],
+                        rod.get("stretch_stiffness"), rod.get("shear_stiffness"),
+                        slenderness=rod.get("length_over_diameter"), preset=self.dna_preset())
+
     def diagram_options(self):
         """:class:`~supercoil.problems.ring_diagram.DiagramOptions` of a ring_diagram study."""
         from supercoil.problems.ring_diagram import DiagramOptions
@@ -410,9 +427,43 @@ def _validate(raw: dict, source: str) -> dict:
     return settings
 
 
+def _check_model(rod: Mapping, kind: str, preset: str, source: str) -> None:
+    """The rod model's keys: stiffnesses only with the Cosserat model, which has no
+    self-contact in a ring or tweezers (``length_over_diameter``, or the DNA preset's)."""
+    cosserat = rod.get("model") == "cosserat"
+    for key in ("stretch_stiffness", "shear_stiffness"):
+        if key in rod and not cosserat:
+            raise StudyError(f"{source}: [rod] {key} needs model = \"cosserat\" (the "
+                             "Kirchhoff rod is inextensible and unshearable)")
+    if cosserat and kind != "ring_diagram" and ("length_over_diameter" in rod
+                                                or preset == "dna"):
+        raise StudyError(f"{source}: contact with the Cosserat model is not available for "
+                         f"{kind}; drop [rod] length_over_diameter (and the DNA preset), or "
+                         "use model = \"kirchhoff\"")
+
+
+def _check_cosserat_diagram(s: Mapping, source: str) -> None:
+    """The Cosserat ring diagram: the primary branches up to their first contact only."""
+    if s["rod"].get("model") != "cosserat":
+        return
+    if s["problem"].get("contact") not in (None, "barrier"):
+        raise StudyError(f"{source}: [problem] contact: contact with the Cosserat model is not "
+                         "available for ring_diagram (its primary branches stop at their first "
+                         "contact); drop it")
+    if s["continuation"].get("branch_depth", 1) != 1:
+        raise StudyError(f"{source}: [continuation] branch_depth: the Cosserat ring diagram "
+                         "computes the primary branches only (branch_depth = 1)")
+
+
 def _complete(s: dict, kind: str, preset: str, source: str) -> None:
     """Cross-key checks and derived values (DNA preset, contact treatment)."""
     rod, problem, units = s["rod"], s["problem"], s["units"]
+    _check_model(rod, kind, preset, source)
+    if kind == "ring_diagram":
+        _check_cosserat_diagram(s, source)
+    if rod.get("model") == "cosserat" and "end_distance" in problem:
+        raise StudyError(f"{source}: [problem] end_distance (displacement control) is not "
+                         "available with the Cosserat model; give tension")
     if preset == "dna":
         if "base_pairs" not in units:
             raise StudyError(f"{source}: [units] base_pairs is missing; the DNA preset needs "

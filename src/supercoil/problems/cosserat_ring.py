@@ -177,9 +177,9 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
     opts = options
     diameter = opts.diameter
     say = progress or (lambda message: None)
-    notes: list[str] = [f"the Cosserat model: primary branches stop at their first "
-                        f"self-contact (D = {diameter:.4g} L); branches with self-contact are "
-                        "not computed for this model"]
+    notes: list[str] = [(f"the Cosserat model: primary branches stop at their first "
+                         f"self-contact (D = {diameter:.4g} L); branches with self-contact are "
+                         "not computed for this model")]
     constants = (opts.twist_ratio, float(stretch_stiffness), float(shear_stiffness))
     curve = gap_curve(opts.n_nodes, diameter)
     top = max(michell_excess_link(opts.twist_ratio, m) for m in opts.modes)

@@ -27,7 +27,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from supercoil.continuation import Branch, ContinuationOptions, continuation, switch_branch
+from supercoil.continuation import ContinuationOptions, continuation, switch_branch
 from supercoil.cosserat.clamped import ClampedCosseratEnergy
 from supercoil.cosserat.rod import CosseratRod
 from supercoil.problems.cosserat_ring import centreline_branch

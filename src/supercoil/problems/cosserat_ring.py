@@ -49,6 +49,10 @@ from supercoil.problems.ring_diagram.result import RingDiagram
 SWITCH_AMPLITUDES = (2e-3, 5e-3, 1.5e-2)  # first point of a primary branch (arclength)
 SWITCH_TRIAL_POINTS = 4
 CIRCLE_MAX_STEP = 0.4  # largest step along the circle (dLk)
+# corrector tolerance: the ring's residual stagnates near 1.5e-10 in the trial
+# corrections that locate the circle's bifurcation (C/A = 0.8, N = 24, EA = GA = 1e3),
+# above the continuation's default 1e-10
+TOLERANCE = 1e-9
 
 
 def positions_of(q: np.ndarray) -> np.ndarray:
@@ -105,14 +109,23 @@ def relaxed_circle_state(problem: ClosedCosseratEnergy, excess_link: float,
 
 def cosserat_circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: float,
                            stretch_stiffness: float, shear_stiffness: float,
-                           curve: ContactCurve) -> tuple[Branch, ClosedCosseratEnergy]:
-    """The circle from ``dLk = 0`` to ``max_excess_link`` (name ``circle``)."""
-    problem = ring_problem(twist_ratio, 0.0, n_nodes, stretch_stiffness, shear_stiffness, link=0)
+                           curve: ContactCurve, link: int = 0
+                           ) -> tuple[Branch, ClosedCosseratEnergy]:
+    """The circle from ``dLk = 0`` to ``max_excess_link`` (name ``circle``), its sections'
+    ``d1`` turned ``link`` times (the rest of the excess link is carried by the intrinsic
+    twist, :mod:`supercoil.cosserat.closed`).
+
+    The discrete circle's thresholds depend on that split at O(h^2): measured at C/A = 0.8,
+    EA = GA = 1e6 A/L^2, mode 2 (Michell 2.16506), link 0 gave 2.2157 (N = 24) and
+    2.1774 (N = 48), link 2 gave 2.1796 and 2.1686: the error constant is least with
+    ``link`` near the threshold's ``dLk``."""
+    problem = ring_problem(twist_ratio, 0.0, n_nodes, stretch_stiffness, shear_stiffness,
+                           link=int(link))
     q = relaxed_circle_state(problem, 0.0, (twist_ratio, stretch_stiffness, shear_stiffness))
     # steps of 0.78 in dLk failed to locate the bifurcations (C/A = 0.8, N = 40, trial
     # corrections along the chord diverged); 0.4 located them to 1e-10
     step = min(CIRCLE_MAX_STEP, 0.1 * max_excess_link)
-    opts = ContinuationOptions(initial_step=step / 2, max_step=step,
+    opts = ContinuationOptions(initial_step=step / 2, max_step=step, tolerance=TOLERANCE,
                                parameter_bounds=(0.0, max_excess_link))
     branch = continuation(problem, q, parameter="excess_link", options=opts, name="circle",
                           records=cosserat_ring_records(problem, curve))
@@ -187,15 +200,17 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
     say(f"circle up to dLk = {circle_top:.4g} (Cosserat rod)")
     seconds: dict[str, float] = {}
     start = time.perf_counter()
+    # d1 turned by the whole turns nearest the requested thresholds' mean
+    link = int(np.rint(np.mean([michell_excess_link(opts.twist_ratio, m) for m in opts.modes])))
     circle, problem = cosserat_circle_branch(opts.twist_ratio, opts.n_nodes, circle_top,
-                                             *constants[1:], curve)
+                                             *constants[1:], curve, link)
     seconds["circle"] = time.perf_counter() - start
     branches = [centreline_branch(circle)]
     bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
     free_opts = ContinuationOptions(
         initial_step=SWITCH_AMPLITUDES[0], max_step=opts.free_max_step,
         max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
-        event_tolerance=opts.event_tolerance)
+        event_tolerance=opts.event_tolerance, tolerance=TOLERANCE)
     for mode in opts.modes:
         name = PRIMARY_NAMES.get(mode, f"mode{mode}")
         point = bifurcations.get(2 * (mode - 1))

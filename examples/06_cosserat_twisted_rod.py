@@ -25,7 +25,7 @@ def main(nodes: int = 40, tension: float = 5.0, stiffness: float = 1e4,
                          shear_stiffness=stiffness, nodes=nodes)
     run = sc.tweezers(sc.Tweezers(rod, tension=tension), (0.0, 3.0), max_points=max_points)
     straight, buckled = run.branches["straight"], run.branches["buckled"]
-    onset = [p for p in straight.points_of_kind("bifurcation") if p.count_before == 0][0]
+    onset = next(p for p in straight.points_of_kind("bifurcation") if p.count_before == 0)
     print(f"straight rod: extension {straight.records['extension'][0]:.6f} L "
           f"(1 + F/EA = {1 + tension / stiffness:.6f}); buckles at {onset.parameter:.4f} "
           f"turns")

@@ -21,7 +21,7 @@ StretchOption = Annotated[float | None, typer.Option(
     "--stretch-stiffness", metavar="EA*L^2/A",
     help="With --model cosserat: the extension stiffness EA*L^2/A (> 0). Default: a solid "
     f"circular section of the rod's L/D (--length-over-diameter, else {DEFAULT_SLENDERNESS:g}), "
-    "16 (L/D)^2; with --dna the measured stretch modulus of DNA.", show_default=False)]
+    "16 (L/D)^2.", show_default=False)]
 ShearOption = Annotated[float | None, typer.Option(
     "--shear-stiffness", metavar="GA*L^2/A",
     help="With --model cosserat: the shear stiffness GA*L^2/A (> 0). Default: a solid "

@@ -56,9 +56,9 @@ from typing import Any
 
 from supercoil import checks
 from supercoil.errors import InputError
+from supercoil.io.study_model import MODELS, model_problem
 
 PROBLEM_KINDS = ("ring_diagram", "ring", "tweezers")
-MODELS = ("kirchhoff", "cosserat")
 UNITS_PRESETS = ("nondimensional", "dna")
 
 
@@ -427,43 +427,12 @@ def _validate(raw: dict, source: str) -> dict:
     return settings
 
 
-def _check_model(rod: Mapping, kind: str, preset: str, source: str) -> None:
-    """The rod model's keys: stiffnesses only with the Cosserat model, which has no
-    self-contact in a ring or tweezers (``length_over_diameter``, or the DNA preset's)."""
-    cosserat = rod.get("model") == "cosserat"
-    for key in ("stretch_stiffness", "shear_stiffness"):
-        if key in rod and not cosserat:
-            raise StudyError(f"{source}: [rod] {key} needs model = \"cosserat\" (the "
-                             "Kirchhoff rod is inextensible and unshearable)")
-    if cosserat and kind != "ring_diagram" and ("length_over_diameter" in rod
-                                                or preset == "dna"):
-        raise StudyError(f"{source}: contact with the Cosserat model is not available for "
-                         f"{kind}; drop [rod] length_over_diameter (and the DNA preset), or "
-                         "use model = \"kirchhoff\"")
-
-
-def _check_cosserat_diagram(s: Mapping, source: str) -> None:
-    """The Cosserat ring diagram: the primary branches up to their first contact only."""
-    if s["rod"].get("model") != "cosserat":
-        return
-    if s["problem"].get("contact") not in (None, "barrier"):
-        raise StudyError(f"{source}: [problem] contact: contact with the Cosserat model is not "
-                         "available for ring_diagram (its primary branches stop at their first "
-                         "contact); drop it")
-    if s["continuation"].get("branch_depth", 1) != 1:
-        raise StudyError(f"{source}: [continuation] branch_depth: the Cosserat ring diagram "
-                         "computes the primary branches only (branch_depth = 1)")
-
-
 def _complete(s: dict, kind: str, preset: str, source: str) -> None:
     """Cross-key checks and derived values (DNA preset, contact treatment)."""
     rod, problem, units = s["rod"], s["problem"], s["units"]
-    _check_model(rod, kind, preset, source)
-    if kind == "ring_diagram":
-        _check_cosserat_diagram(s, source)
-    if rod.get("model") == "cosserat" and "end_distance" in problem:
-        raise StudyError(f"{source}: [problem] end_distance (displacement control) is not "
-                         "available with the Cosserat model; give tension")
+    problem_with_model = model_problem(s, kind, preset)
+    if problem_with_model is not None:
+        raise StudyError(f"{source}: {problem_with_model}")
     if preset == "dna":
         if "base_pairs" not in units:
             raise StudyError(f"{source}: [units] base_pairs is missing; the DNA preset needs "

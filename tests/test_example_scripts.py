@@ -25,7 +25,7 @@ def example(name: str):
 def test_every_numbered_script_is_tested():
     scripts = sorted(p.stem for p in EXAMPLES.glob("[0-9][0-9]_*.py"))
     assert scripts == ["01_ring_diagram", "02_dna_plasmid", "03_tweezers_hat_curve",
-                       "04_own_energy"]
+                       "04_own_energy", "05_cosserat_roll_up", "06_cosserat_twisted_rod"]
 
 
 def test_ring_diagram_script_finds_michells_point(tmp_path):
@@ -50,3 +50,18 @@ def test_tweezers_script_buckles_at_greenhills_threshold():
 
 def test_own_energy_script_locates_the_pitchfork_at_zero():
     assert abs(example("04_own_energy").main()) < 1e-8
+
+
+def test_cosserat_roll_up_script_closes_the_circle(tmp_path):
+    # Simo & Vu-Quoc 1986: exact for any GA and EA, the discrete rod too (to round-off)
+    figure = tmp_path / "roll_up.png"
+    gap = example("05_cosserat_roll_up").main(elements=12, stretch_stiffness=50.0,
+                                              shear_stiffness=20.0, figure=str(figure))
+    assert gap < 1e-9
+    assert figure.stat().st_size > 5_000
+
+
+def test_cosserat_twisted_rod_script_buckles_at_greenhills_threshold():
+    # Kirchhoff limit (EA = GA = 1e4 A/L^2: a shift of order 1e-3) at N = 16 (O(h^2))
+    turns = example("06_cosserat_twisted_rod").main(nodes=16, max_points=12)
+    assert turns == pytest.approx(critical_turns(0.8, 5.0), rel=1e-2)

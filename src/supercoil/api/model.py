@@ -42,6 +42,8 @@ class Rod:
     nodes: int = 100
     curvature: str = "angle"
 
+    model: ClassVar[str] = "kirchhoff"
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "twist_ratio", checks.number(
             "twist_ratio", self.twist_ratio, 0.0, checks.MAX_MAGNITUDE, low_open=True,
@@ -50,6 +52,103 @@ class Rod:
             "nodes", self.nodes, checks.MIN_NODES, checks.MAX_NODES, meaning="nodes of the rod"))
         checks.choice("curvature", self.curvature, CURVATURE_FORMS,
                       meaning="form of the discrete curvature")
+
+
+DEFAULT_SLENDERNESS = 100.0  # L/D of the section when no stiffness is given
+DEFAULT_POISSON_RATIO = 0.3
+
+
+def section_stiffnesses(slenderness: float, poisson_ratio: float) -> tuple[float, float]:
+    """``(EA L^2/A, GA L^2/A)`` of a solid circular section of diameter ``D = L /
+    slenderness`` of an isotropic material of Poisson ratio ``nu``.
+
+    With ``A = E pi D^4 / 64``: ``EA L^2/A = 16 (L/D)^2``; with Cowper's (1966) shear
+    coefficient ``k = 6 (1 + nu) / (7 + 6 nu)``, ``GA L^2/A = 48 (L/D)^2 / (7 + 6 nu)``.
+    """
+    s = checks.number("slenderness", slenderness, 1.0, checks.MAX_MAGNITUDE, low_open=True,
+                      meaning="L/D of the section")
+    nu = checks.number("poisson_ratio", poisson_ratio, -1.0, 0.5, low_open=True,
+                       meaning="Poisson ratio")
+    return 16.0 * s * s, 48.0 * s * s / (7.0 + 6.0 * nu)
+
+
+@dataclass(frozen=True)
+class CosseratRod:
+    """A special Cosserat (Simo-Reissner) rod of length 1: bending, torsion, shear and
+    extension (Simo 1985; Chamekh, Mani-Aouadi & Moakher 2009).
+
+    ``twist_ratio``: C / A. ``stretch_stiffness``: EA L^2 / A; ``shear_stiffness``:
+    GA L^2 / A (both directions of an isotropic section). Either left out is that of a
+    solid circular section of ``slenderness`` L/D (default 100) of a material of
+    ``poisson_ratio`` (default 0.3): ``EA L^2/A = 16 (L/D)^2`` and ``GA L^2/A =
+    48 (L/D)^2 / (7 + 6 nu)`` (Cowper's shear coefficient; :func:`section_stiffnesses`).
+    As both grow the rod tends to the Kirchhoff :class:`Rod`, at first order in their
+    inverses. ``nodes``: N, the nodes of two-node elements with geodesic rotation
+    interpolation and one-point shear and stretch; results converge as O(1/N^2).
+    """
+
+    twist_ratio: float
+    stretch_stiffness: float | None = None
+    shear_stiffness: float | None = None
+    nodes: int = 100
+    slenderness: float = DEFAULT_SLENDERNESS
+    poisson_ratio: float = DEFAULT_POISSON_RATIO
+
+    model: ClassVar[str] = "cosserat"
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "twist_ratio", checks.number(
+            "twist_ratio", self.twist_ratio, 0.0, checks.MAX_MAGNITUDE, low_open=True,
+            meaning="C/A"))
+        set_(self, "nodes", checks.integer(
+            "nodes", self.nodes, checks.MIN_NODES, checks.MAX_NODES, meaning="nodes of the rod"))
+        stretch, shear = section_stiffnesses(self.slenderness, self.poisson_ratio)
+        set_(self, "slenderness", float(self.slenderness))
+        set_(self, "poisson_ratio", float(self.poisson_ratio))
+        for name, default in (("stretch_stiffness", stretch), ("shear_stiffness", shear)):
+            value = getattr(self, name)
+            set_(self, name, default if value is None else checks.number(
+                name, value, 0.0, 1e12, low_open=True,
+                meaning=f"{'EA' if name.startswith('stretch') else 'GA'} L^2/A"))
+
+    @property
+    def curvature(self) -> str:
+        """The discrete curvature's form: ``"geodesic"``, the relative rotation of the two
+        nodes' frames over the element length (exact for the interpolated frame)."""
+        return "geodesic"
+
+
+ROD_TYPES = (Rod, CosseratRod)
+MODELS = {"kirchhoff": Rod, "cosserat": CosseratRod}
+
+
+def make_rod(model: str, twist_ratio: float, nodes: int, stretch_stiffness: float | None,
+             shear_stiffness: float | None, slenderness: float | None = None,
+             preset=None):
+    """The :class:`Rod` (``model = "kirchhoff"``) or :class:`CosseratRod` (``"cosserat"``)
+    of a command's or study's settings; ``slenderness`` the Cosserat section's L/D;
+    ``preset`` a DNA preset, whose stretch modulus and helix diameter set the Cosserat
+    rod's defaults. InputError on bad values."""
+    checks.choice("model", model, tuple(MODELS), meaning="rod model")
+    if model != "cosserat":
+        return Rod(twist_ratio, nodes)
+    if preset is not None:
+        slenderness = preset.section_slenderness
+        if stretch_stiffness is None:
+            stretch_stiffness = preset.stretch_stiffness
+    return CosseratRod(twist_ratio, stretch_stiffness, shear_stiffness, nodes,
+                       slenderness=DEFAULT_SLENDERNESS if slenderness is None else slenderness)
+
+
+def rod_model(rod) -> str:
+    """``"kirchhoff"`` or ``"cosserat"``: the model of a rod object."""
+    return "cosserat" if isinstance(rod, CosseratRod) else "kirchhoff"
+
+
+def _check_rod(rod) -> None:
+    if not isinstance(rod, ROD_TYPES):
+        raise InputError(f"rod: expected a supercoil.Rod or supercoil.CosseratRod, got {rod!r}")
 
 
 @dataclass(frozen=True)
@@ -163,8 +262,7 @@ class Ring:
     initial: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.rod, Rod):
-            raise InputError(f"rod: expected a supercoil.Rod, got {self.rod!r}")
+        _check_rod(self.rod)
         object.__setattr__(self, "excess_link", checks.number(
             "excess_link", self.excess_link, -checks.MAX_MAGNITUDE, checks.MAX_MAGNITUDE,
             meaning="dLk in turns"))
@@ -236,8 +334,7 @@ class Tweezers:
                    contact=contact(lod), dna=dna)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.rod, Rod):
-            raise InputError(f"rod: expected a supercoil.Rod, got {self.rod!r}")
+        _check_rod(self.rod)
         if self.rod.nodes < checks.MIN_CLAMPED_NODES:
             raise InputError(f"rod.nodes: got {self.rod.nodes}; valid: a clamped rod needs "
                              f"at least {checks.MIN_CLAMPED_NODES} nodes")
@@ -283,10 +380,14 @@ __all__ = [
     "AugmentedLagrangian",
     "Barrier",
     "Contact",
+    "CosseratRod",
     "ExactContact",
     "Penalty",
     "Ring",
     "Rod",
     "Tweezers",
     "contact_from_name",
+    "make_rod",
+    "rod_model",
+    "section_stiffnesses",
 ]

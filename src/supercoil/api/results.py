@@ -105,7 +105,9 @@ class Equilibrium:
     (``contact_points``, ``contact_intervals``, ``contacts``,
     ``n_contact_points``, ``n_contact_intervals``, ``min_gap_over_diameter``, ...),
     None without contact. ``record``: every key of the ``supercoil ring --json``
-    output. ``tolerances``: those the state was computed with (``newton_residual``,
+    output. ``frames`` (N, 3, 3): the sections' directors as columns, for a
+    :class:`~supercoil.api.model.CosseratRod` (None for a Kirchhoff rod, whose frame
+    follows from the centreline). ``tolerances``: those the state was computed with (``newton_residual``,
     ``zero_modes`` and with contact ``penetration_over_diameter``), as result files
     record them.
     """
@@ -125,9 +127,12 @@ class Equilibrium:
     contacts: Mapping | None = None
     record: Mapping = field(default_factory=dict)
     tolerances: Mapping = field(default_factory=dict)
+    frames: np.ndarray | None = None  # (N, 3, 3) section frames d1, d2, d3 (Cosserat rods)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _read_only(self.points))
+        if self.frames is not None:
+            object.__setattr__(self, "frames", _read_only(self.frames))
         object.__setattr__(self, "tensions", _read_only(self.tensions))
         object.__setattr__(self, "record", MappingProxyType(dict(self.record)))
         object.__setattr__(self, "tolerances", MappingProxyType(dict(self.tolerances)))

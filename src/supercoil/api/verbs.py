@@ -19,7 +19,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from supercoil.api.model import Barrier, Contact, Ring, Rod, Tweezers
+from supercoil.api import cosserat
+from supercoil.api.model import Barrier, Contact, CosseratRod, Ring, Rod, Tweezers
 from supercoil.api.results import (
     Diagram,
     Equilibrium,
@@ -75,6 +76,9 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
         raise InputError(f"equilibrium: expected a supercoil.Ring, got {type(problem).__name__}"
                          "; for a rod in tweezers use supercoil.tweezers (a branch in turns)")
     rod = problem.rod
+    if isinstance(rod, CosseratRod):
+        return cosserat.equilibrium(problem, RING_TOLERANCE if tolerance is None else tolerance,
+                                    n_modes)
     if problem.contact is None:
         tolerance = RING_TOLERANCE if tolerance is None else tolerance
         result = solve_ring(rod.twist_ratio, problem.excess_link, n_nodes=rod.nodes,
@@ -150,6 +154,8 @@ def stability(state: Equilibrium, *, n_modes: int = 6,
     if int(n_modes) != n_modes or not 1 <= n_modes <= 100:
         raise InputError(f"n_modes: got {n_modes!r}; valid: an integer from 1 to 100")
     tol = state.stability.zero_tolerance if zero_tolerance is None else float(zero_tolerance)
+    if isinstance(state.problem.rod, CosseratRod):
+        return cosserat.stability(state, int(n_modes), tol)
     report = _report_of(state.problem, state.points, state.tensions, int(n_modes), tol)
     return _stability(report, len(state.points))
 
@@ -197,8 +203,14 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     from supercoil.problems.ring_diagram import DiagramOptions
     from supercoil.problems.ring_diagram import ring_diagram as compute
 
+    if isinstance(rod, CosseratRod):
+        settings = _settings(DiagramOptions, {
+            "twist_ratio": rod.twist_ratio, "length_over_diameter": rod.slenderness,
+            "n_nodes": rod.nodes}, {
+            "max_excess_link": max_excess_link, "modes": tuple(modes), **options})
+        return cosserat.ring_diagram(rod, contact, settings, _run_status, progress)
     if not isinstance(rod, Rod):
-        raise InputError(f"rod: expected a supercoil.Rod, got {rod!r}")
+        raise InputError(f"rod: expected a supercoil.Rod or supercoil.CosseratRod, got {rod!r}")
     contact = Barrier(100.0) if contact is None else contact
     if not isinstance(contact, Contact):
         raise InputError(f"contact: expected a Barrier or Penalty, got {contact!r}")
@@ -247,6 +259,8 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
         "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
         "tension": problem.tension, "end_distance": problem.end_distance}, {
         "turns": tuple(turns), **options})
+    if isinstance(rod, CosseratRod):
+        return cosserat.tweezers(problem, settings, _run_status, progress)
     computed = tweezers_branches(settings, progress)
     status, message = _run_status(computed)
     return Diagram(kind="tweezers", problem=problem, settings=settings,

@@ -23,6 +23,13 @@ from supercoil.cli._common import (
     warn,
 )
 from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
+from supercoil.cli.model_options import (
+    ModelOption,
+    ShearOption,
+    StretchOption,
+    check_model,
+    make_rod,
+)
 from supercoil.problems.ring_diagram import CONTINUATION_TREATMENTS, MAX_MODE
 
 # the library's names of the diagram's inputs -> the options of 'supercoil diagram ring'
@@ -34,7 +41,9 @@ DIAGRAM_OPTIONS = {"twist_ratio": "--twist-ratio",
                    "contact_formulation": "--contact-formulation",
                    "contact_max_points": "--contact-max-points",
                    "secondary_max_points": "--secondary-max-points",
-                   "secondary_max_branches": "--secondary-max-branches"}
+                   "secondary_max_branches": "--secondary-max-branches",
+                   "stretch_stiffness": "--stretch-stiffness",
+                   "shear_stiffness": "--shear-stiffness", "slenderness": "--length-over-diameter"}
 
 
 def _count(name: str, help: str):
@@ -95,6 +104,9 @@ def diagram_ring(
         "docs/contact.md).")] = "spline",
     contact_formulation: Annotated[str, typer.Option(
         "--contact-formulation", metavar="FORM", help=FORMULATION_HELP)] = "integral",
+    model: ModelOption = "kirchhoff",
+    stretch_stiffness: StretchOption = None,
+    shear_stiffness: ShearOption = None,
     overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted diagram in --out DIR from its result.h5 "
@@ -111,7 +123,20 @@ def diagram_ring(
     read it with supercoil.load), diagram.json, link_writhe.png (dLk against Wr,
     stable parts heavy), contact_map.png (s/L of the contacts against Wr) and
     configurations.png (tubes of diameter D) into --out.
+
+    With --model cosserat the rod shears and stretches (--stretch-stiffness,
+    --shear-stiffness; by default those of a solid section of diameter D): the
+    circle and the primary branches up to their first contact; the branches with
+    self-contact are not computed for this model.
     """
+    check_model(model, stretch_stiffness, shear_stiffness)
+    if model == "cosserat":
+        for option, given in (("--contact", contact != "barrier"),
+                              ("--branch-depth", branch_depth != 1), ("--resume", resume)):
+            if given:
+                fail(f"{option} is not available with --model cosserat (the Cosserat ring "
+                     "diagram computes the circle and the primary branches up to their first "
+                     "contact); drop it, or use --model kirchhoff")
     words = modes.replace(",", " ").split()
     if not words or not all(w.isdigit() for w in words):
         fail(f"--modes {modes!r}: give distinct Michell modes from 2 to {MAX_MODE} separated "
@@ -128,6 +153,8 @@ def diagram_ring(
                                  contact_max_points=contact_max_points,
                                  secondary_max_points=secondary_max_points,
                                  secondary_max_branches=secondary_max_branches)
+        rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness,
+                       slenderness=length_over_diameter)
     stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="ring_diagram",
                             settings=diagram_settings(options, "diagram ring"),
                             what="the diagram's files")
@@ -136,7 +163,8 @@ def diagram_ring(
     print(f"supercoil diagram ring: C/A = {twist_ratio:g}, L/D = {length_over_diameter:g}, "
           f"N = {nodes}, modes {', '.join(words)}, dLk <= {max_excess_link:g}", flush=True)
     payload = run_diagram(options, out, quiet, resume=stored,
-                          resume_hint="continue with the same command and --resume")
+                          resume_hint="continue with the same command and --resume",
+                          rod=rod if model == "cosserat" else None)
     if payload is None:
         raise typer.Exit(EXIT_NOT_CONVERGED)
     message = incomplete_message(payload, out)

@@ -35,10 +35,13 @@ def diagram_attributes(options) -> dict:
 
 
 def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
-                command: str = "diagram ring", resume_hint: str = "") -> dict | None:
+                command: str = "diagram ring", resume_hint: str = "",
+                rod=None) -> dict | None:
     """Compute ``options``' ring diagram into ``out`` (``result.h5``, ``diagram.json``, the
     figures); the payload, or None after an interrupt. ``resume``: the stored
-    :class:`~supercoil.io.store.Result` to continue."""
+    :class:`~supercoil.io.store.Result` to continue. ``rod``: a
+    :class:`~supercoil.CosseratRod` for the Cosserat model's diagram
+    (:mod:`supercoil.problems.cosserat_ring`), None for the Kirchhoff rod's."""
     from supercoil.cli.saving import open_writer, run_saving, stored_for_resume
     from supercoil.problems.ring_diagram import ring_diagram
 
@@ -49,6 +52,11 @@ def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
                                      "n_nodes": options.n_nodes})
 
     def compute(message, on_point, on_branch):
+        if rod is not None:
+            from supercoil.problems.cosserat_ring import cosserat_ring_diagram
+
+            return cosserat_ring_diagram(options, rod.stretch_stiffness, rod.shear_stiffness,
+                                         message)
         stored = None if resume is None else stored_for_resume(resume, message)
         return ring_diagram(options, progress=message, on_point=on_point,
                             on_branch=on_branch, resume=stored)

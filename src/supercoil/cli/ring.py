@@ -27,6 +27,14 @@ from supercoil.cli._common import (
     write_json_or_fail,
 )
 from supercoil.cli._options import MAGNITUDE, JsonOption, exponent, overwrite_option, quiet_option
+from supercoil.cli.model_options import (
+    ModelOption,
+    ShearOption,
+    StretchOption,
+    check_model,
+    make_rod,
+    no_contact,
+)
 from supercoil.contact.options import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
 from supercoil.units.dna import (
     BENDING_PERSISTENCE_NM,
@@ -42,7 +50,8 @@ from supercoil.units.dna import (
 # the library's names of the ring's inputs -> the options of 'supercoil ring'
 RING_OPTIONS = {"twist_ratio": "--twist-ratio", "excess_link": "--excess-link",
                 "nodes": "--nodes", "length_over_diameter": "--length-over-diameter",
-                "treatment": "--contact"}
+                "treatment": "--contact", "stretch_stiffness": "--stretch-stiffness",
+                "shear_stiffness": "--shear-stiffness"}
 DNA_OPTIONS = {"base_pairs": "--bp", "superhelical_density": "--sigma",
                "salt_mM": "--salt-mM", "diameter_nm": "--diameter-nm",
                "temperature_K": "--temperature-K",
@@ -152,6 +161,9 @@ def ring(
     diameter_nm: DiameterNm = None,
     temperature_K: Temperature = None,
     twist_persistence_nm: TwistPersistence = None,
+    model: ModelOption = "kirchhoff",
+    stretch_stiffness: StretchOption = None,
+    shear_stiffness: ShearOption = None,
     json_path: JsonOption = None,
     out: Annotated[Path | None, typer.Option(
         "--out", metavar="DIR", help="Also write the result into folder DIR: result.h5 (the "
@@ -178,6 +190,9 @@ def ring(
     model is athermal: energies and writhes are those of the elastic minimum,
     not thermal averages.
     """
+    check_model(model, stretch_stiffness, shear_stiffness)
+    no_contact(model, "ring", dna or length_over_diameter is not None or contact is not None
+               or initial is not None)
     preset = None
     if dna:
         preset = _dna_preset(twist_ratio, excess_link, length_over_diameter, bp, sigma,
@@ -209,16 +224,19 @@ def ring(
             initial_points = read_curve(initial)
         names["initial"] = names["initial_points"] = f"--initial {initial}"
 
-    from supercoil import Ring, Rod, equilibrium
+    from supercoil import Ring, equilibrium
     from supercoil.api.model import contact_from_name
 
     with refused(names):
-        problem = Ring(Rod(twist_ratio, nodes), excess_link,
+        rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness)
+        problem = Ring(rod, excess_link,
                        contact=None if length_over_diameter is None else
                        contact_from_name(treatment, length_over_diameter),
                        initial=initial_points)
         state = equilibrium(problem)
-    summary = dict(state.record)
+    # an inextensible, unshearable rod: no stretch and no shear
+    summary = {"model": "kirchhoff", "max_stretch_strain": 0.0, "max_shear_strain": 0.0,
+               **state.record}
     if preset is not None:
         from supercoil.units.dna import ring_summary_in_dna_units
 

@@ -182,7 +182,14 @@ def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict
                      f"{s['rod']['length_over_diameter']:.6g}, N = {s['rod']['nodes']}, modes "
                      f"{', '.join(map(str, s['problem']['modes']))}, dLk <= "
                      f"{s['problem']['max_excess_link']:.6g}")
-    diagram = ring_diagram(options, **kwargs)
+    rod = spec.rod()
+    if rod.model == "cosserat":
+        from supercoil.problems.cosserat_ring import cosserat_ring_diagram
+
+        diagram = cosserat_ring_diagram(options, rod.stretch_stiffness, rod.shear_stiffness,
+                                        progress.message)
+    else:
+        diagram = ring_diagram(options, **kwargs)
     stored_names = set(writer.branch_names())
     for branch in diagram.branches:
         writer.write_branch(branch, complete=True, contact=branch.name in diagram.contact_branches)
@@ -243,11 +250,18 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
     progress.message(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
                      f"{options.length_over_diameter or 'no contact'}, N = {options.n_nodes}, "
                      f"turns {options.turns[0]:g} to {options.turns[1]:g}")
-    result = tweezers_branches(
-        options, progress=progress.message, on_point=_point_saver(writer, progress, saved),
-        on_branch=lambda branch, contact: writer.write_branch(branch, complete=True,
-                                                              contact=contact),
-        resume=stored)
+    rod = spec.rod()
+    if rod.model == "cosserat":
+        from supercoil.problems.cosserat_tweezers import cosserat_tweezers
+
+        result = cosserat_tweezers(options, rod.stretch_stiffness, rod.shear_stiffness,
+                                   progress.message)
+    else:
+        result = tweezers_branches(
+            options, progress=progress.message, on_point=_point_saver(writer, progress, saved),
+            on_branch=lambda branch, contact: writer.write_branch(branch, complete=True,
+                                                                  contact=contact),
+            resume=stored)
     stored_names = set(writer.branch_names())
     for branch in result.branches:
         writer.write_branch(branch, complete=True, contact=branch.name in result.contact_branches)
@@ -268,7 +282,7 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
 def _run_ring(spec, writer, progress) -> dict:
     """A single ring solve (``supercoil ring``) through :func:`supercoil.equilibrium`,
     stored as a one-point branch ``ring``."""
-    from supercoil import Ring, Rod, equilibrium
+    from supercoil import Ring, equilibrium
     from supercoil.api.model import contact_from_name
     from supercoil.cli.ring_output import ring_branch, ring_payload
 
@@ -279,9 +293,10 @@ def _run_ring(spec, writer, progress) -> dict:
     contact = None
     if "length_over_diameter" in rod:
         contact = contact_from_name(problem["contact"], rod["length_over_diameter"])
-    state = equilibrium(Ring(Rod(rod["twist_ratio"], rod["nodes"]), problem["excess_link"],
-                             contact=contact))
-    summary = dict(state.record)
+    state = equilibrium(Ring(spec.rod(), problem["excess_link"], contact=contact))
+    # an inextensible, unshearable rod: no stretch and no shear
+    summary = {"model": "kirchhoff", "max_stretch_strain": 0.0, "max_shear_strain": 0.0,
+               **state.record}
     preset = spec.dna_preset()
     if preset is not None:
         from supercoil.units.dna import ring_summary_in_dna_units

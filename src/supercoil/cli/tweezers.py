@@ -24,6 +24,15 @@ from supercoil.cli._common import (
     warn,
 )
 from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
+from supercoil.cli.model_options import (
+    ModelOption,
+    ShearOption,
+    StretchOption,
+    check_model,
+    make_rod,
+    model_record,
+    no_contact,
+)
 from supercoil.units.dna import (
     DEFAULT_SALT_MM,
     HELICAL_REPEAT_BP,
@@ -46,7 +55,9 @@ TWEEZERS_OPTIONS = {"twist_ratio": "--twist-ratio",
                     "force_step": "--force-step", "base_pairs": "--bp",
                     "force_pN": "--force-pN", "salt_mM": "--salt-mM",
                     "diameter_nm": "--diameter-nm", "temperature_K": "--temperature-K",
-                    "superhelical_density": "--sigma"}
+                    "superhelical_density": "--sigma",
+                    "stretch_stiffness": "--stretch-stiffness",
+                    "shear_stiffness": "--shear-stiffness"}
 Quiet = quiet_option()
 Overwrite = overwrite_option("Write into an existing non-empty --out DIR, replacing this "
                              "command's own files (other files are left alone).")
@@ -152,6 +163,9 @@ def tweezers(
     temperature_K: Annotated[float | None, typer.Option(
         "--temperature-K", metavar="T", help="With --dna: temperature in K (> 0) of the "
         f"kT unit (default {REFERENCE_TEMPERATURE_K:g} K).", show_default=False)] = None,
+    model: ModelOption = "kirchhoff",
+    stretch_stiffness: StretchOption = None,
+    shear_stiffness: ShearOption = None,
     quiet: Quiet = False,
 ) -> None:
     """A rod clamped at both ends on the pulling axis, turned at one end.
@@ -168,7 +182,19 @@ def tweezers(
     displacement control tension.png), torque.png, writhe.png,
     configurations.png (tubes) and, for force-ramp, force_extension.png into
     --out.
+
+    With --model cosserat the rod shears and stretches (--stretch-stiffness,
+    --shear-stiffness): load control without contact; the extension includes
+    the stretch.
     """
+    check_model(model, stretch_stiffness, shear_stiffness)
+    no_contact(model, "tweezers", length_over_diameter is not None or dna)
+    if model == "cosserat":
+        for option, given in (("--end-distance", end_distance is not None),
+                              ("--protocol", protocol != "up"), ("--resume", resume)):
+            if given:
+                fail(f"{option} is not available with --model cosserat (load control, "
+                     "--protocol up); drop it, or use --model kirchhoff")
     preset, span = None, None
     if dna:
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \
@@ -217,6 +243,7 @@ def tweezers(
                                   contact_formulation=contact_formulation)
         if protocol != "up":
             check_path(options, protocol, step, force_range=ramp, force_step=force_step)
+        rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness)
     settings = {"command": "tweezers", "twist_ratio": twist_ratio,
                 "length_over_diameter": length_over_diameter, "tension": tension,
                 "end_distance": end_distance, "turns": [start, stop], "nodes": nodes,
@@ -224,7 +251,8 @@ def tweezers(
                 "contact_formulation": contact_formulation, "protocol": protocol,
                 "step": step, "force_range": ramp, "force_step": force_step,
                 "superhelical_density": None if span is None else list(span),
-                "dna": None if preset is None else preset.record()}
+                "dna": None if preset is None else preset.record(),
+                **model_record(rod)}
     stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="tweezers",
                             settings=settings)
     if nothing_to_resume(stored):
@@ -253,6 +281,11 @@ def tweezers(
     hint = "continue with the same command and --resume"
 
     def compute(message, on_point, on_branch):
+        if model == "cosserat":
+            from supercoil.problems.cosserat_tweezers import cosserat_tweezers
+
+            return cosserat_tweezers(options, rod.stretch_stiffness, rod.shear_stiffness,
+                                     message)
         previous = None if stored is None else stored_for_resume(stored, message)
         return tweezers_branches(options, progress=message, on_point=on_point,
                                  on_branch=on_branch, resume=previous)

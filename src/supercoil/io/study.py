@@ -7,7 +7,9 @@ A study has six tables (``[study]`` and ``[continuation]`` optional)::
                      base_pairs, salt_mM or diameter_nm, temperature_K,
                      twist_persistence_nm
     [rod]            twist_ratio (C/A), length_over_diameter (L/D), nodes
-                     (under "dna" C/A and L/D follow from the preset: not given)
+                     (under "dna" C/A and L/D follow from the preset: not given);
+                     model = "kirchhoff" (default) or "cosserat", with
+                     stretch_stiffness (EA L^2/A) and shear_stiffness (GA L^2/A)
     [problem]        kind = "ring_diagram", "ring" or "tweezers", and its keys (below)
     [continuation]   ring_diagram and tweezers: the step, length and tolerance options
                      of DiagramOptions / TweezersOptions (free_max_step, ...); for
@@ -58,6 +60,7 @@ from typing import Any
 
 from supercoil import checks
 from supercoil.errors import InputError
+from supercoil.io.study_model import MODELS, model_problem
 
 PROBLEM_KINDS = ("ring_diagram", "ring", "tweezers")
 DEFAULT_TURNS = (0.0, 5.0)  # a tweezers study's turns when neither they nor sigma are given
@@ -150,6 +153,9 @@ _SCHEMA: dict[str, dict[str, _Key]] = {
                                      convert=float),
         # tweezers: 100, or n0 under "dna" (filled in by _complete_tweezers)
         "nodes": _Key("an integer", _is_int, {"ring_diagram": 100, "ring": 100}),
+        "model": _Key('"kirchhoff" or "cosserat"', _choice(MODELS)),
+        "stretch_stiffness": _Key("EA L^2/A, a number", _real, convert=float),
+        "shear_stiffness": _Key("GA L^2/A, a number", _real, convert=float),
     },
     "problem": {
         "kind": _Key(f"one of {', '.join(PROBLEM_KINDS)}", _choice(PROBLEM_KINDS)),
@@ -296,6 +302,17 @@ class Study:
             contact_event_tolerance=c["contact_event_tolerance"],
             contact_tolerance=c["contact_tolerance"])
 
+    def rod(self):
+        """The study's :class:`supercoil.Rod` or :class:`supercoil.CosseratRod` (the
+        Cosserat rod's section of the rod's L/D, or under the DNA preset its stretch
+        modulus and the double helix's diameter)."""
+        from supercoil.api.model import make_rod
+
+        rod = self.settings["rod"]
+        return make_rod(rod.get("model", "kirchhoff"), rod["twist_ratio"], rod["nodes"],
+                        rod.get("stretch_stiffness"), rod.get("shear_stiffness"),
+                        slenderness=rod.get("length_over_diameter"), preset=self.dna_preset())
+
     def diagram_options(self):
         """:class:`~supercoil.problems.ring_diagram.DiagramOptions` of a ring_diagram study."""
         from supercoil.problems.ring_diagram import DiagramOptions
@@ -414,6 +431,9 @@ def _validate(raw: dict, source: str) -> dict:
 def _complete(s: dict, kind: str, preset: str, source: str) -> None:
     """Cross-key checks and derived values (DNA preset, contact treatment)."""
     rod, problem = s["rod"], s["problem"]
+    problem_with_model = model_problem(s, kind, preset)
+    if problem_with_model is not None:
+        raise StudyError(f"{source}: {problem_with_model}")
     if preset == "dna":
         from supercoil.io.study_dna import complete_dna
 

@@ -12,6 +12,7 @@ import numpy as np
 from supercoil.contact.report import contact_summary
 from supercoil.continuation import SpecialPoint
 from supercoil.continuation.branch import jsonable
+from supercoil.problems.model_keys import model_keys
 from supercoil.problems.tweezers import TweezersResult
 
 
@@ -89,6 +90,7 @@ def result_payload(result: TweezersResult, contacts: bool = True) -> dict:
         "description": "rod clamped at both ends on the pulling axis, turned at one end: the "
         "straight rod, its buckling, the buckled branch without contact up to first contact, "
         "then with self-contact (plectoneme)",
+        **model_keys(result.model, result.branches),
         "control": "load" if opts.load_control else "displacement",
         "twist_ratio": opts.twist_ratio,
         "length_over_diameter": opts.length_over_diameter,

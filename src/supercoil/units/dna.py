@@ -76,6 +76,16 @@ twist fluctuations), i.e. P_t = 410 / 4.11 = 100 nm; Moroz & Nelson 1997
 (PNAS 94:14418) fit 120 nm and Moroz & Nelson 1998 (Macromolecules 31:6333)
 109 nm to Strick et al.'s extension data."""
 
+STRETCH_MODULUS_PN = 1100.0
+"""Stretch modulus S = EA of B-DNA, pN, the Cosserat rod's extension stiffness:
+measured about 1000-1100 pN in 150 mM salt (Smith, Cui & Bustamante 1996, Science
+271:795; Wang, Yin, Landick, Gelles & Block 1997, Biophys. J. 72:1335, about 1200)."""
+
+HELIX_DIAMETER_NM = 2.0
+"""Geometric diameter of the double helix, nm: the section whose slenderness L/D
+sets the Cosserat rod's shear stiffness (a solid circular section, Cowper's shear
+coefficient; the shear modulus of DNA is not measured directly)."""
+
 DEFAULT_SALT_MM = 150.0
 MAX_FORCE_PN = 1e4  # the largest pulling force (pN) of the tweezers
 """Monovalent salt concentration used when neither salt nor diameter is
@@ -190,6 +200,7 @@ class DNAPreset:
     twist_persistence_nm: float = TWIST_PERSISTENCE_NM
     rise_nm_per_bp: float = RISE_NM_PER_BP
     helical_repeat_bp: float = HELICAL_REPEAT_BP
+    stretch_modulus_pN: float = STRETCH_MODULUS_PN
 
     name = PRESET_NAME
 
@@ -201,7 +212,7 @@ class DNAPreset:
                       meaning="sigma = dLk / Lk0; -1 unwinds the double helix completely")
         _positive("temperature_K", self.temperature_K)
         for field in ("bending_persistence_nm", "twist_persistence_nm", "rise_nm_per_bp",
-                      "helical_repeat_bp"):
+                      "helical_repeat_bp", "stretch_modulus_pN"):
             _positive(field, getattr(self, field))
         if self.salt_mM is not None and self.diameter_nm is not None:
             raise checks.refuse("salt_mM", "and diameter_nm both set the tube diameter: give "
@@ -249,6 +260,17 @@ class DNAPreset:
     def twist_stiffness_pN_nm2(self) -> float:
         """C = P_t · kT_ref (pN·nm²), fixed at the reference temperature."""
         return self.twist_persistence_nm * KT_REFERENCE_PN_NM
+
+    @property
+    def stretch_stiffness(self) -> float:
+        """The Cosserat rod's ``EA L^2 / A`` from the stretch modulus (nondimensional)."""
+        return self.stretch_modulus_pN * self.length_nm**2 / self.bending_stiffness_pN_nm2
+
+    @property
+    def section_slenderness(self) -> float:
+        """``L / d`` with ``d`` the double helix's diameter (:data:`HELIX_DIAMETER_NM`):
+        the Cosserat rod's section, which sets its shear stiffness."""
+        return self.length_nm / HELIX_DIAMETER_NM
 
     @property
     def effective_diameter_nm(self) -> float:
@@ -367,6 +389,7 @@ class DNAPreset:
             "rise_nm_per_bp": float(self.rise_nm_per_bp),
             "helical_repeat_bp": float(self.helical_repeat_bp),
             "bending_stiffness_pN_nm2": self.bending_stiffness_pN_nm2,
+            "stretch_modulus_pN": float(self.stretch_modulus_pN),
             "twist_stiffness_pN_nm2": self.twist_stiffness_pN_nm2,
             "length_nm": self.length_nm,
             "diameter_nm": self.effective_diameter_nm,

@@ -21,6 +21,7 @@ from supercoil.contact.report import PLACE_KEYS, contact_summary
 from supercoil.continuation import Branch, SpecialPoint
 from supercoil.continuation.branch import jsonable
 from supercoil.geometry.symmetry import curve_symmetry
+from supercoil.problems.model_keys import KIRCHHOFF, model_keys
 from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_diagram.options import DiagramOptions
 from supercoil.problems.ring_diagram.secondary import SYMMETRY_TOLERANCE
@@ -39,6 +40,7 @@ class RingDiagram:
     generations: dict[str, int] = field(default_factory=dict)  # secondary (2), tertiary (3)
     # contact branches: (first point index, the six rigid pins) at each choice of pins
     pins: dict[str, tuple[tuple[int, tuple[int, ...]], ...]] = field(default_factory=dict)
+    model: dict = field(default_factory=lambda: dict(KIRCHHOFF))  # the rod model's keys
 
     def pin_branch(self, name: str, index: int, segment: bool = False,
                    problem: ContactProblem | None = None) -> None:
@@ -135,6 +137,7 @@ class RingDiagram:
             "description": "bifurcation diagram of a twisted ring with self-contact: the "
             "circle, its bifurcations, the primary branches without contact up to first "
             "contact, then with self-contact",
+            **model_keys(self.model, self.branches),
             "twist_ratio": opts.twist_ratio,
             "length_over_diameter": opts.length_over_diameter,
             "diameter": opts.diameter,

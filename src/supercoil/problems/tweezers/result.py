@@ -28,6 +28,7 @@ class TweezersResult:
     # contact-free branches cut at their first contact: complete whatever the run that
     # went on beyond the contact (penetrating) ended with
     cut_at_contact: frozenset[str] = frozenset()
+    model: dict = field(default_factory=lambda: {"model": "kirchhoff"})  # the rod model's keys
 
     def branch_ok(self, branch: Branch) -> bool:
         """The branch is complete: it reached its bound (or closed a loop), or it is a

@@ -1,0 +1,138 @@
+"""The verbs of :mod:`supercoil.api.verbs` for a :class:`~supercoil.api.model.CosseratRod`.
+
+:func:`supercoil.equilibrium`, :func:`supercoil.stability`, :func:`supercoil.ring_diagram`
+and :func:`supercoil.tweezers` hand a problem whose rod is a ``CosseratRod`` to the
+functions here; they return the same result types. Self-contact is not available
+with this model: a problem with ``contact`` is refused, naming the verb.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from supercoil.api.model import CosseratRod, Ring, Tweezers
+from supercoil.api.results import Diagram, Equilibrium, EquilibriumStatus, Stability
+from supercoil.errors import InputError
+
+
+def refuse_contact(contact, verb: str) -> None:
+    """InputError when ``contact`` is given: contact is not available for this model."""
+    if contact is not None:
+        raise InputError(f"contact with the Cosserat model is not available for {verb}; "
+                         f"drop contact, or use supercoil.Rod (the Kirchhoff model)")
+
+
+def _status(converged: bool, stab: Stability) -> EquilibriumStatus:
+    if not converged:
+        return EquilibriumStatus.NOT_CONVERGED
+    if stab.unstable_count > 0:
+        return EquilibriumStatus.UNSTABLE
+    if stab.zero_modes > 0:
+        return EquilibriumStatus.MARGINAL
+    return EquilibriumStatus.STABLE
+
+
+def equilibrium(problem: Ring, tolerance: float, n_modes: int) -> Equilibrium:
+    """The relaxed twisted circle of a Cosserat ring (an equilibrium at every dLk; above
+    the Michell threshold of the model it is returned ``UNSTABLE``)."""
+    from supercoil.cosserat.ring import solve_cosserat_ring
+
+    refuse_contact(problem.contact, "equilibrium (supercoil ring)")
+    rod = problem.rod
+    result = solve_cosserat_ring(rod.twist_ratio, problem.excess_link, n_nodes=rod.nodes,
+                                 stretch_stiffness=rod.stretch_stiffness,
+                                 shear_stiffness=rod.shear_stiffness, tolerance=tolerance,
+                                 n_modes=n_modes)
+    zero_tolerance = _zero_tolerance()
+    stab = Stability(unstable_count=result.unstable_count, zero_modes=result.zero_modes,
+                     negative_count=result.negative_count,
+                     determinant_sign=result.determinant_sign,
+                     eigenvalues=result.lowest_eigenvalues,
+                     modes=np.zeros((0, rod.nodes, 3)), zero_tolerance=zero_tolerance,
+                     certified=result.stability_certified)
+    record = {**result.summary(), "slenderness": rod.slenderness,
+              "poisson_ratio": rod.poisson_ratio, "curvature_form": rod.curvature}
+    return Equilibrium(problem=problem, status=_status(result.converged, stab),
+                       message=result.message, points=result.positions,
+                       tensions=np.zeros(0), energy=float(result.energy),
+                       twist=float(result.twist), writhe=float(result.writhe),
+                       link_error=float(result.link_error), residual=float(result.residual),
+                       iterations=int(result.iterations), stability=stab, record=record,
+                       tolerances={"newton_residual": tolerance, "zero_modes": zero_tolerance},
+                       frames=result.rotations)
+
+
+def _zero_tolerance() -> float:
+    from supercoil.stability.analysis import DEFAULT_ZERO_TOLERANCE
+
+    return float(DEFAULT_ZERO_TOLERANCE)
+
+
+def stability(state: Equilibrium, n_modes: int, zero_tolerance: float) -> Stability:
+    """The stability of a Cosserat ring's state, from its centreline and frames; the
+    modes are the node displacements (k, N, 3) of the eigenvectors."""
+    from supercoil.cosserat.closed import ClosedCosseratEnergy
+    from supercoil.cosserat.rod import CosseratRod as Discrete
+    from supercoil.stability.analysis import analyse
+
+    rod = state.problem.rod
+    if state.frames is None:
+        raise InputError("state: a Cosserat ring's state needs its frames (state.frames)",
+                         name="state")
+    discrete = Discrete(rod.nodes, twist_stiffness=rod.twist_ratio,
+                        shear_stiffness=rod.shear_stiffness,
+                        stretch_stiffness=rod.stretch_stiffness, closed=True)
+    problem = ClosedCosseratEnergy(discrete, state.problem.excess_link,
+                                   np.asarray(state.points, float),
+                                   np.asarray(state.frames, float))
+    report = analyse(problem, problem.initial_state(), np.zeros(0), n_modes=n_modes,
+                     zero_tolerance=zero_tolerance)
+    modes = np.asarray(report.lowest_modes).reshape(-1, rod.nodes, 6)[:, :, :3]
+    return Stability(unstable_count=int(report.unstable_count),
+                     zero_modes=int(report.zero_modes),
+                     negative_count=int(report.negative_count),
+                     determinant_sign=int(report.determinant_sign),
+                     eigenvalues=np.asarray(report.lowest_eigenvalues, float), modes=modes,
+                     zero_tolerance=float(report.zero_tolerance),
+                     certified=bool(report.certified), message=report.message)
+
+
+def ring_diagram(rod: CosseratRod, contact, settings, status_of,
+                 progress: Callable[[str], None] | None) -> Diagram:
+    """The Cosserat ring's diagram (:mod:`supercoil.problems.cosserat_ring`): the circle,
+    its bifurcations and the primary branches up to their first self-contact, that of
+    the rod's own section (diameter L / ``rod.slenderness``)."""
+    from supercoil.problems.cosserat_ring import cosserat_ring_diagram
+
+    refuse_contact(contact, "ring_diagram (supercoil diagram ring)")
+    if settings.branch_depth != 1:
+        raise InputError("branch_depth: the Cosserat ring diagram computes the primary "
+                         "branches only (branch_depth 1)", name="branch_depth")
+    computed = cosserat_ring_diagram(settings, rod.stretch_stiffness, rod.shear_stiffness,
+                                     progress)
+    status, message = status_of(computed)
+    return Diagram(kind="ring_diagram", problem=Ring(rod, 0.0), settings=settings,
+                   branches={b.name: b for b in computed.branches}, status=status,
+                   message=message, notes=tuple(computed.notes), computed=computed)
+
+
+def tweezers(problem: Tweezers, settings, status_of,
+             progress: Callable[[str], None] | None) -> Diagram:
+    """The Cosserat rod in tweezers (:mod:`supercoil.problems.cosserat_tweezers`), load
+    control."""
+    from supercoil.problems.cosserat_tweezers import cosserat_tweezers
+
+    refuse_contact(problem.contact, "tweezers")
+    if problem.tension is None:
+        raise InputError("end_distance: displacement control with the Cosserat model is not "
+                         "available for tweezers; give tension (load control)",
+                         name="end_distance")
+    rod = problem.rod
+    computed = cosserat_tweezers(settings, rod.stretch_stiffness, rod.shear_stiffness,
+                                 progress)
+    status, message = status_of(computed)
+    return Diagram(kind="tweezers", problem=problem, settings=settings,
+                   branches={b.name: b for b in computed.branches}, status=status,
+                   message=message, notes=tuple(computed.notes), computed=computed)

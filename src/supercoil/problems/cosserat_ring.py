@@ -1,0 +1,237 @@
+"""The Cosserat ring's diagram: the circle, its Michell bifurcations and the primary branches.
+
+The same continuation as the Kirchhoff ring's (:mod:`supercoil.problems.ring_branches`)
+on the closed Cosserat rod at fixed excess link
+(:class:`~supercoil.cosserat.ClosedCosseratEnergy`): the circle is followed in ``dLk``
+from 0, its bifurcations located where the unstable count rises by two, and for each
+requested mode the primary branch is switched off it along the critical mode and
+followed without contact. A phantom ring that passes through itself changes its
+linking number, which the Cosserat ring refuses (:class:`~supercoil.cosserat.LinkingError`),
+so each primary branch watches the closest approach of non-neighbouring centreline
+points against the section's diameter ``D = L / slenderness`` (the event
+``contact_onset``, as on the Kirchhoff diagram) and stops at the first point past it.
+Branches with self-contact are not computed for this model.
+
+Per point the records are the Kirchhoff ring's (``excess_link``, ``writhe``, ``twist``,
+``energy``, ``link_error``, ``min_gap_over_diameter``, contact counts) plus
+``max_stretch_strain`` and ``max_shear_strain``. The returned diagram's branch states
+are the centrelines (``(k, 3 N)``), so the diagram's outputs and viewer take them as
+they take the Kirchhoff ring's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from supercoil.contact.curve import ContactCurve
+from supercoil.contact.options import ContactOptions
+from supercoil.continuation import (
+    Branch,
+    ContinuationOptions,
+    SpecialPoint,
+    UserEvent,
+    continuation,
+    switch_branch,
+)
+from supercoil.cosserat.circle import circle_state
+from supercoil.cosserat.closed import ClosedCosseratEnergy
+from supercoil.cosserat.ring import michell_excess_link, relax_circle, ring_problem
+from supercoil.cosserat.rod import DOFS_PER_NODE
+from supercoil.problems.contact_events import stop_after_onset, truncate_after
+from supercoil.problems.ring_branches import PRIMARY_NAMES
+from supercoil.problems.ring_diagram.options import DiagramOptions
+from supercoil.problems.ring_diagram.result import RingDiagram
+
+SWITCH_AMPLITUDES = (2e-3, 5e-3, 1.5e-2)  # first point of a primary branch (arclength)
+SWITCH_TRIAL_POINTS = 4
+CIRCLE_MAX_STEP = 0.4  # largest step along the circle (dLk)
+# corrector tolerance: the ring's residual stagnates near 1.5e-10 in the trial
+# corrections that locate the circle's bifurcation (C/A = 0.8, N = 24, EA = GA = 1e3),
+# above the continuation's default 1e-10
+TOLERANCE = 1e-9
+
+
+def positions_of(q: np.ndarray) -> np.ndarray:
+    """The centreline ``(n, 3)`` of a Cosserat state ``q`` (positions are chart-free)."""
+    return np.asarray(q, dtype=float).reshape(-1, DOFS_PER_NODE)[:, :3]
+
+
+def gap_curve(n_nodes: int, diameter: float) -> ContactCurve:
+    """The closed polygon's self-distance for a tube of ``diameter`` (units of L)."""
+    a = np.arange(n_nodes)
+    segments = np.stack([a, (a + 1) % n_nodes], axis=1)
+    options = ContactOptions(diameter=diameter, curve="polygon", formulation="pairs")
+    return ContactCurve(segments, True, 1.0 / n_nodes, 1.0, options)
+
+
+def cosserat_ring_records(problem: ClosedCosseratEnergy, curve: ContactCurve):
+    """Per-point records of a Cosserat ring branch (module doc)."""
+
+    def records(q, multipliers, excess_link):
+        tw, wr = problem.twist(q), problem.writhe(q)
+        x, R = problem.configuration(q)
+        d_min = curve.min_distance(x.ravel())
+        return {"excess_link": float(excess_link), "writhe": wr, "twist": tw,
+                "energy": problem.rod.energy(x, R), "link_error": abs(tw + wr - excess_link),
+                "max_stretch_strain": problem.max_stretch_strain(q),
+                "max_shear_strain": problem.max_shear_strain(q),
+                "n_contact_points": 0, "n_contact_intervals": 0,
+                "min_gap_over_diameter": float(d_min / curve.diameter)}
+
+    return records
+
+
+def onset_event(curve: ContactCurve) -> UserEvent:
+    """``d_min / D - 1`` of the centreline: the ``contact_onset`` event."""
+
+    def gap(q, multipliers, excess_link):
+        d_min = curve.min_distance(positions_of(q).ravel())
+        return {"min_gap": float(min(d_min / curve.diameter - 1.0, 1e3))}
+
+    return UserEvent("contact_onset", gap)
+
+
+def relaxed_circle_state(problem: ClosedCosseratEnergy, excess_link: float,
+                         constants: tuple[float, float, float]) -> np.ndarray:
+    """The discrete twisted circle at ``excess_link``, the chart re-based there."""
+    ratio, stretch, shear = constants
+    problem.excess_link = float(excess_link)
+    exact = circle_state(ratio, excess_link, stretch, shear)
+    x, R, _ = relax_circle(problem.rod, problem.link, exact.tilt, exact.stretch)
+    q = problem.state(x, R)
+    problem.accept(q)
+    return q
+
+
+def cosserat_circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: float,
+                           stretch_stiffness: float, shear_stiffness: float,
+                           curve: ContactCurve, link: int = 0
+                           ) -> tuple[Branch, ClosedCosseratEnergy]:
+    """The circle from ``dLk = 0`` to ``max_excess_link`` (name ``circle``), its sections'
+    ``d1`` turned ``link`` times (the rest of the excess link is carried by the intrinsic
+    twist, :mod:`supercoil.cosserat.closed`).
+
+    The discrete circle's thresholds depend on that split at O(h^2): measured at C/A = 0.8,
+    EA = GA = 1e6 A/L^2, mode 2 (Michell 2.16506), link 0 gave 2.2157 (N = 24) and
+    2.1774 (N = 48), link 2 gave 2.1796 and 2.1686: the error constant is least with
+    ``link`` near the threshold's ``dLk``."""
+    problem = ring_problem(twist_ratio, 0.0, n_nodes, stretch_stiffness, shear_stiffness,
+                           link=int(link))
+    q = relaxed_circle_state(problem, 0.0, (twist_ratio, stretch_stiffness, shear_stiffness))
+    # steps of 0.78 in dLk failed to locate the bifurcations (C/A = 0.8, N = 40, trial
+    # corrections along the chord diverged); 0.4 located them to 1e-10
+    step = min(CIRCLE_MAX_STEP, 0.1 * max_excess_link)
+    opts = ContinuationOptions(initial_step=step / 2, max_step=step, tolerance=TOLERANCE,
+                               parameter_bounds=(0.0, max_excess_link))
+    branch = continuation(problem, q, parameter="excess_link", options=opts, name="circle",
+                          records=cosserat_ring_records(problem, curve))
+    return branch, problem
+
+
+def switch_off_circle(problem: ClosedCosseratEnergy, circle: Branch, point: SpecialPoint,
+                      constants, options: ContinuationOptions, name: str,
+                      curve: ContactCurve, notes: list[str]) -> Branch:
+    """The primary branch from the circle's bifurcation ``point``, checked to leave the
+    circle (a short trial run must show the writhe growing; else the other side and
+    larger amplitudes are tried). The point's state is re-based on the exact discrete
+    circle at its ``dLk`` first: a state stored along the circle describes it exactly
+    only in the chart it was accepted in (:mod:`supercoil.cosserat.problem`)."""
+    records = cosserat_ring_records(problem, curve)
+    attempts = [(a, side) for a in SWITCH_AMPLITUDES for side in (1, -1)]
+    for number, (amplitude, side) in enumerate(attempts):
+        start = dataclasses.replace(
+            point, q=relaxed_circle_state(problem, point.parameter, constants))
+        trial_opts = dataclasses.replace(options, max_points=SWITCH_TRIAL_POINTS,
+                                         initial_step=amplitude)
+        trial = switch_branch(problem, circle, start, trial_opts, side=side,
+                              amplitude=amplitude, name=name, records=records)
+        wr = np.abs(trial.records.get("writhe", np.zeros(0)))
+        leaves = wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0]
+        if leaves or number == len(attempts) - 1:
+            if number:
+                notes.append(f"{name}: switched with amplitude {amplitude:g}, side {side:+d} "
+                             f"({number} earlier attempt(s) fell back onto the circle)")
+            if not leaves:
+                notes.append(f"failed: {name}: every switching attempt fell back onto the "
+                             "circle")
+            start = dataclasses.replace(
+                point, q=relaxed_circle_state(problem, point.parameter, constants))
+            opts = dataclasses.replace(options, initial_step=amplitude)
+            watched, stop = stop_after_onset()
+            return switch_branch(problem, circle, start, opts, side=side, amplitude=amplitude,
+                                 name=name, records=records, events=(onset_event(curve),),
+                                 on_point=watched, stop=stop)
+    raise AssertionError("unreachable")
+
+
+def centreline_branch(branch: Branch) -> Branch:
+    """The branch with its states as centrelines ``(k, 3 n)`` and tangents restricted to
+    the positions and the parameter, as the diagram's outputs read them."""
+    k = len(branch)
+    states = np.asarray(branch.states, float).reshape(k, -1, DOFS_PER_NODE)[:, :, :3]
+    n_dofs = branch.states.shape[1] if k else 0
+    tangents = np.asarray(branch.tangents, float)
+    if k:
+        position = tangents[:, :n_dofs].reshape(k, -1, DOFS_PER_NODE)[:, :, :3].reshape(k, -1)
+        tangents = np.concatenate([position, tangents[:, n_dofs:]], axis=1)
+    return dataclasses.replace(branch, states=states.reshape(k, -1), tangents=tangents)
+
+
+def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
+                          shear_stiffness: float,
+                          progress: Callable[[str], None] | None = None) -> RingDiagram:
+    """The circle, its bifurcations of ``options.modes`` and the primary branches to their
+    first self-contact at the tube diameter ``options.diameter``, for the Cosserat ring of
+    ``stretch_stiffness`` EA L^2/A and ``shear_stiffness`` GA L^2/A (module doc)."""
+    opts = options
+    diameter = opts.diameter
+    say = progress or (lambda message: None)
+    notes: list[str] = [(f"the Cosserat model: primary branches stop at their first "
+                         f"self-contact (D = {diameter:.4g} L); branches with self-contact are "
+                         "not computed for this model")]
+    constants = (opts.twist_ratio, float(stretch_stiffness), float(shear_stiffness))
+    curve = gap_curve(opts.n_nodes, diameter)
+    top = max(michell_excess_link(opts.twist_ratio, m) for m in opts.modes)
+    circle_top = max(opts.max_excess_link, 1.1 * top)
+    say(f"circle up to dLk = {circle_top:.4g} (Cosserat rod)")
+    seconds: dict[str, float] = {}
+    start = time.perf_counter()
+    # d1 turned by the whole turns nearest the requested thresholds' mean
+    link = int(np.rint(np.mean([michell_excess_link(opts.twist_ratio, m) for m in opts.modes])))
+    circle, problem = cosserat_circle_branch(opts.twist_ratio, opts.n_nodes, circle_top,
+                                             *constants[1:], curve, link)
+    seconds["circle"] = time.perf_counter() - start
+    branches = [centreline_branch(circle)]
+    bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
+    free_opts = ContinuationOptions(
+        initial_step=SWITCH_AMPLITUDES[0], max_step=opts.free_max_step,
+        max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
+        event_tolerance=opts.event_tolerance, tolerance=TOLERANCE)
+    for mode in opts.modes:
+        name = PRIMARY_NAMES.get(mode, f"mode{mode}")
+        point = bifurcations.get(2 * (mode - 1))
+        if point is None or point.count_before != 2 * (mode - 2):
+            notes.append(f"the circle branch has no bifurcation point of mode {mode}: "
+                         f"{name} not computed")
+            continue
+        say(f"{name}: switched from the circle at dLk = {point.parameter:.4g}, no contact")
+        start = time.perf_counter()
+        free = switch_off_circle(problem, circle, point, constants, free_opts, name, curve,
+                                 notes)
+        onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
+        if onsets:
+            free = truncate_after(free, onsets[0], f"stopped at the first contact (dLk = "
+                                  f"{onsets[0].parameter:.6g}); the contact-free run: "
+                                  f"{free.message}")
+        else:
+            notes.append(f"{name}: no contact found without contact ({free.message})")
+        seconds[name] = time.perf_counter() - start
+        branches.append(centreline_branch(free))
+    model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
+             "shear_stiffness": float(shear_stiffness)}
+    return RingDiagram(opts, tuple(branches), frozenset(), seconds, tuple(notes), None,
+                       model=model)

@@ -1,0 +1,170 @@
+"""A Cosserat rod in magnetic tweezers: the straight rod in turns, its buckling, the
+buckled branch.
+
+Load control only: the rod is clamped at both ends on the axis
+(:class:`~supercoil.cosserat.ClampedCosseratEnergy`), the turned end slides along it
+under the dead load ``tension``. The straight rod, uniformly twisted and stretched
+by ``tension / EA``, is followed in ``turns`` by the same continuation as the
+Kirchhoff rod's; it buckles where a pair of eigenvalues crosses zero (Greenhill's
+condition in the Kirchhoff limit), and the buckled branch is switched off that point
+along a critical mode and followed to the end of the turns' range. Without
+self-contact the rod may pass through itself there (``closure_failed``).
+
+Per point the records are the Kirchhoff tweezers' (``turns``, ``extension``, ``torque``,
+``twist``, ``writhe``, ``closure_error``, ``closure_failed``, ``energy``,
+``load_potential``, ``tension``) plus ``max_stretch_strain`` and ``max_shear_strain``;
+``extension`` is the end's height over L, stretch included. ``twist`` is that of
+the ribbon of ``d1`` projected normal to the centreline, closed by the clamps'
+frames along tails on the axis, so that ``twist + writhe = turns`` (Fuller's closure)
+holds with shear too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from supercoil.continuation import ContinuationOptions, continuation, switch_branch
+from supercoil.cosserat.clamped import ClampedCosseratEnergy
+from supercoil.cosserat.rod import CosseratRod
+from supercoil.problems.cosserat_ring import centreline_branch
+from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.problems.tweezers.result import TweezersResult
+from supercoil.topology import twist_from_frames, writhe
+
+TAIL_WRAP = 0.5  # |Tw + Wr - turns| above this: the closure failed
+STRAIGHT_MAX_STEP = 0.25  # turns
+SWITCH_AMPLITUDE = 2e-3
+
+
+def clamped_cosserat_problem(options: TweezersOptions, stretch_stiffness: float,
+                             shear_stiffness: float) -> ClampedCosseratEnergy:
+    """The clamped Cosserat rod at ``turns = start`` under the options' tension, at its
+    straight state (``problem.straight_state()``)."""
+    rod = CosseratRod(options.n_nodes - 1, twist_stiffness=options.twist_ratio,
+                      shear_stiffness=shear_stiffness, stretch_stiffness=stretch_stiffness)
+    return ClampedCosseratEnergy(rod, options.turns[0], options.tension)
+
+
+def axial_twist(problem: ClampedCosseratEnergy, q: np.ndarray) -> float:
+    """Twist in turns of the ribbon ``d1`` (per element, the midpoint director projected
+    normal to the chord) closed by tails on the axis framed by the clamps (module doc)."""
+    x, R = problem.configuration(q)
+    state = problem.rod.elements(x, R)
+    t = state.chord / np.linalg.norm(state.chord, axis=1, keepdims=True)
+    d1 = state.Rm[:, :, 0]
+    d1 = d1 - np.sum(d1 * t, axis=1, keepdims=True) * t
+    h = problem.rod.element_length
+    points = np.vstack([x[:1] - [0.0, 0.0, h], x, x[-1:] + [0.0, 0.0, h]])
+    frames = np.vstack([R[0][:, 0], d1, R[-1][:, 0]])
+    return twist_from_frames(points, frames / np.linalg.norm(frames, axis=1, keepdims=True),
+                             closed=False)
+
+
+def end_torque(problem: ClampedCosseratEnergy, q: np.ndarray) -> float:
+    """Axial moment ``M L / A`` carried by the last element, ``e_z . R_m C_K (K - K_0)``."""
+    x, R = problem.configuration(q)
+    state = problem.rod.elements(x, R)
+    stress = problem.rod.bending_moduli * (state.curvature[-1]
+                                           - [0.0, 0.0, problem.rod.intrinsic_twist])
+    return float((state.Rm[-1] @ stress)[2] * problem.rod.length / problem.rod.bending_stiffness)
+
+
+def azimuth_pinned_direction(problem: ClampedCosseratEnergy, modes: np.ndarray
+                             ) -> np.ndarray | None:
+    """Pin the rotation about the axis and return the buckling direction that respects it.
+
+    Turning the centreline about the axis together with every section about its own
+    ``d3`` (isotropy) leaves the clamps' frames and the energy unchanged: an exact
+    symmetry of the clamped isotropic rod, the reason the straight rod's buckling
+    eigenvalue is double. Off the straight rod it is a zero mode; it is removed by
+    fixing the ``y`` of the node that the critical modes move most, and the switch
+    goes along the combination of the two modes that keeps that ``y`` (None for a
+    simple eigenvalue: nothing pinned)."""
+    modes = np.asarray(modes, dtype=float)
+    if modes.ndim != 2 or modes.shape[0] < 2:
+        return None
+    xy = modes[:2].reshape(2, -1, 6)[:, :, :2]
+    node = int(np.argmax(np.linalg.norm(xy, axis=(0, 2))))
+    a, b = xy[1, node, 1], -xy[0, node, 1]
+    if np.hypot(a, b) == 0.0:
+        a, b = 1.0, 0.0
+    problem.fixed = np.union1d(problem.fixed, [6 * node + 1])
+    return a * modes[0] + b * modes[1]
+
+
+def cosserat_tweezers_records(problem: ClampedCosseratEnergy):
+    """Per-point records (module doc) for ``continuation(records=)``."""
+
+    def records(q, multipliers, turns):
+        x, R = problem.configuration(q)
+        wr = writhe(x, closure="axis", self_crossing="nan")
+        tw = axial_twist(problem, q)
+        error = abs(tw + wr - turns)
+        return {"turns": float(turns), "extension": problem.extension(q),
+                "torque": end_torque(problem, q), "twist": tw, "writhe": wr,
+                "closure_error": error, "closure_failed": bool(not error <= TAIL_WRAP),
+                "energy": problem.rod.energy(x, R),
+                "load_potential": -problem.tension * float(x[-1, 2]),
+                "tension": problem.tension,
+                "max_stretch_strain": problem.max_stretch_strain(q),
+                "max_shear_strain": problem.max_shear_strain(q),
+                "n_contact_points": 0, "n_contact_intervals": 0,
+                "min_gap_over_diameter": math.inf}
+
+    return records
+
+
+def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
+                      shear_stiffness: float,
+                      progress: Callable[[str], None] | None = None) -> TweezersResult:
+    """The straight Cosserat rod in turns, its buckling and the buckled branch (module
+    doc); numerical failures end up in statuses and notes."""
+    opts = options
+    say = progress or (lambda message: None)
+    notes: list[str] = []
+    model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
+             "shear_stiffness": float(shear_stiffness)}
+    problem = clamped_cosserat_problem(opts, stretch_stiffness, shear_stiffness)
+    records = cosserat_tweezers_records(problem)
+    say(f"straight Cosserat rod in turns at F L^2/A = {opts.tension:g}")
+    cont = ContinuationOptions(initial_step=0.05, max_step=STRAIGHT_MAX_STEP,
+                               parameter_bounds=opts.turns, max_points=opts.max_points,
+                               event_tolerance=opts.event_tolerance)
+    straight = continuation(problem, problem.straight_state(), parameter="turns",
+                            options=cont, name="straight", records=records)
+    branches = [centreline_branch(straight)]
+    bifurcations = [p for p in straight.points_of_kind("bifurcation") if p.count_before == 0]
+    if not bifurcations:
+        if straight.status.complete:
+            notes.append(f"the straight rod does not buckle below {opts.turns[1]:g} turns")
+        else:
+            notes.append(f"incomplete: straight stopped at {straight.parameter_values[-1]:.6g} "
+                         f"turns ({straight.message})")
+        return TweezersResult(opts, tuple(branches), frozenset(), problem, None, {},
+                              tuple(notes), model=model)
+    point = bifurcations[0]
+    say(f"buckled: switched from the straight rod at {point.parameter:.6g} turns")
+    # the straight rod at the point, exactly, in the current chart (a stored state is
+    # exact only in the chart it was accepted in: supercoil.cosserat.problem)
+    problem.turns = point.parameter
+    start = dataclasses.replace(point, q=problem.straight_state())
+    problem.accept(start.q)
+    direction = azimuth_pinned_direction(problem, point.critical_modes)
+    free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
+                                    parameter_bounds=opts.turns, max_points=opts.max_points,
+                                    event_tolerance=opts.event_tolerance)
+    buckled = switch_branch(problem, straight, start, free_opts, name="buckled",
+                            amplitude=SWITCH_AMPLITUDE, records=records, direction=direction)
+    if not len(buckled):
+        notes.append(f"failed: buckled: no point found off the straight rod at "
+                     f"{point.parameter:.6g} turns ({buckled.message})")
+    elif not buckled.status.complete:
+        notes.append(f"incomplete: buckled stopped at {buckled.parameter_values[-1]:.6g} "
+                     f"turns: {buckled.message}")
+    branches.append(centreline_branch(buckled))
+    return TweezersResult(opts, tuple(branches), frozenset(), problem, None, {}, tuple(notes),
+                          model=model)

@@ -17,7 +17,7 @@ import numpy as np
 
 from supercoil import checks
 from supercoil.errors import InputError
-from supercoil.problems.knot_tighten import tighten
+from supercoil.problems.knot_tighten import Tightening, tighten
 from supercoil.topology.knots import KNOT_CURVES, knot_curve, torus_knot
 
 _TORUS = re.compile(r"^\s*T?\(?\s*(-?\d+)\s*,\s*(-?\d+)\s*\)?\s*$")
@@ -79,3 +79,20 @@ def knot_start(knot, n_nodes: int, length_over_diameter: float,
                                f"{length_over_diameter:g}")
     return result.points, (f"the built {name} was tightened to L/D = "
                            f"{length_over_diameter:g} in {len(result.history)} steps")
+
+
+def tight_knot(knot, n_nodes: int = 60, *, twist_ratio: float = 1e-3,
+               min_relative_step: float = 1e-4) -> Tightening:
+    """The tight limit of ``knot`` (:func:`parse_knot`) at ``n_nodes``: the tube thickened
+    until it cannot thicken by more than ``min_relative_step`` (its ``length_over_diameter``
+    is then the ropelength, from above). ``twist_ratio``: C/A of the rod, small by
+    default so that the excess link (the start's writhe) hardly constrains the writhe
+    (an ideal knot has no twist)."""
+    checks.integer("n_nodes", n_nodes, checks.MIN_NODES, checks.MAX_NODES,
+                   meaning="nodes of the ring")
+    checks.number("twist_ratio", twist_ratio, 0.0, checks.MAX_MAGNITUDE, low_open=True,
+                  meaning="C/A")
+    checks.number("min_relative_step", min_relative_step, 0.0, 0.1, low_open=True,
+                  meaning="the relative thickening below which the tube is tight")
+    fine = knot_points(knot, max(FINE_NODES, 4 * n_nodes))
+    return tighten(fine, n_nodes, twist_ratio=twist_ratio, min_relative_step=min_relative_step)

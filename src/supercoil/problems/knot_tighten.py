@@ -76,6 +76,34 @@ class Tightening:
     def writhe(self) -> float:
         return float(writhe(self.points))
 
+    def record(self) -> dict:
+        """The JSON keys of ``supercoil tighten``: L/D (the ropelength at the tight
+        limit), writhe, the smallest radius of curvature over D, the contact keys
+        (:func:`~supercoil.contact.report.contact_summary`: the pairs the barrier
+        pushes apart, those within its cushion) and the knot type."""
+        from supercoil.contact.report import contact_summary
+        from supercoil.topology.knots import identify
+
+        knot = identify(self.points)
+        summary = contact_summary(self.problem, self.points.ravel())
+        return {
+            "length_over_diameter": self.length_over_diameter,
+            "tight": self.status == "tight",
+            "writhe": self.writhe,
+            "knot_type": knot.name,
+            "chirality": knot.chirality,
+            "min_radius_of_curvature_over_diameter":
+                min_radius_of_curvature(self.points) * self.length_over_diameter,
+            **summary,
+            "min_gap_over_diameter": self.min_gap_over_diameter,
+            "barrier_activation_over_diameter": TIGHTEN_ACTIVATION,
+            "excess_link": self.excess_link,
+            "steps": len(self.history),
+            "status": self.status,
+            "message": self.message,
+            "n_nodes": len(self.points),
+        }
+
 
 def min_radius_of_curvature(points: np.ndarray) -> float:
     """Smallest discrete radius of curvature ``h / (2 tan(phi / 2))`` over the vertices

@@ -64,7 +64,7 @@ def test_knotted_ring_keeps_its_type_and_link():
 def test_built_knot_is_tightened_only_when_it_overlaps():
     free, note = knot_start("3_1", 60, 40.0)
     assert "free of overlap" in note and identify(free).name == "3_1"
-    mirrored, _ = knot_start("5_2*", 60, 120.0)
+    mirrored, _ = knot_start("5_2*", 60, 200.0)
     assert identify(mirrored).name == "5_2" and identify(mirrored).chirality == -1
 
 

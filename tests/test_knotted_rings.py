@@ -78,16 +78,26 @@ def test_knot_names():
         sc.Ring(sc.Rod(1.0, 60), 0.0, knot="3_1")
 
 
-def test_ring_cli_torus_knot_json(runner):
+def test_ring_cli_torus_knot_json_and_export(runner, tmp_path):
+    out = tmp_path / "ring"
     result = runner.invoke(app, ["ring", "--twist-ratio", "1", "--excess-link", "3",
                                  "--nodes", "60", "--length-over-diameter", "25",
-                                 "--torus-knot", "2,3", "--json", "-"],
+                                 "--torus-knot", "2,3", "--json", "-", "--out", str(out)],
                            catch_exceptions=False)
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     assert data["knot_type"] == "3_1" and data["chirality"] == 1
     assert data["initial_curve"] == "knot T(2,3)"
     assert data["link_error"] < 1e-9
+    # the coordinates are in the result file: exported, they are the same trefoil
+    xyz = tmp_path / "ring.xyz"
+    exported = runner.invoke(app, ["export", str(out), "--out", str(xyz)],
+                             catch_exceptions=False)
+    assert exported.exit_code == 0, exported.output
+    points = np.loadtxt(xyz, skiprows=2, usecols=(1, 2, 3))
+    assert points.shape == (60, 3)
+    assert identify(points).name == "3_1"
+    assert float(sc.writhe(points)) == pytest.approx(data["writhe"], abs=1e-6)
 
 
 @pytest.mark.parametrize("args", [

@@ -129,3 +129,23 @@ def test_tighten_json_has_the_coordinates(runner, tmp_path):
     assert identify(points).name == data["knot_type"] == "3_1"
     assert IDEAL_TREFOIL_ROPELENGTH < data["length_over_diameter"] < 18.0
     assert data["writhe"] == pytest.approx(float(sc.writhe(points)), abs=1e-12)
+
+
+def test_knotted_branch_in_excess_link_keeps_link_and_knot_type():
+    from supercoil.problems.knot_branch import knotted_branch
+
+    followed = knotted_branch("3_1", 1.4, 40.0, (3.0, 4.5), n_nodes=60, max_points=25)
+    branch = followed.branch
+    assert branch.status.name == "PARAMETER_BOUND"
+    assert branch.parameter_values[-1] == pytest.approx(4.5)
+    records = branch.records
+    assert len(branch) >= 5
+    # Lk = Tw + Wr at every point: twist from the material frames, writhe from the double sum
+    assert np.max(records["link_error"]) < 1e-9
+    # the knot type of every state, computed anew, is the start's
+    assert followed.knot.name == "3_1"
+    assert set(records["knot_determinant"].tolist()) == {3}
+    assert set(records["knot_alexander_degree"].tolist()) == {2}
+    for q in branch.states[:: max(1, len(branch) // 4)]:
+        assert identify(q.reshape(-1, 3)) == followed.knot
+    assert np.all(records["min_gap_over_diameter"] > 0)

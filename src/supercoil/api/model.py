@@ -253,13 +253,18 @@ class Ring:
     ``dLk = (A/C) sqrt(3)``). With ``contact`` the ring is a tube that cannot.
     ``initial`` (m, 3): start from this closed curve (any knot type, any length:
     it is scaled to L = 1 and resampled at the rod's nodes) instead of the circle;
-    it needs ``contact``.
+    it needs ``contact``. ``knot``: start from a smooth embedding of this knot instead
+    (``"3_1"``, ``"4_1"``, ``"5_1"``, ``"5_2"``, ``"7_1"``, ``"8_19"``, a trailing ``*``
+    for the mirror image, or a torus knot ``(p, q)`` / ``"T(p,q)"``), tightened until it
+    is free of overlap at the contact's L/D; it needs ``contact`` and excludes
+    ``initial``. Either way the knot type is kept at every step.
     """
 
     rod: Rod
     excess_link: float = 0.0
     contact: Contact | None = None
     initial: np.ndarray | None = None
+    knot: str | tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         _check_rod(self.rod)
@@ -273,9 +278,18 @@ class Ring:
                                     "contact=supercoil.Barrier(length_over_diameter=100); "
                                     "without it the ring relaxes to the circle")
             object.__setattr__(self, "initial", _initial_curve(self.initial))
+        if self.knot is not None:
+            from supercoil.problems.knot_ring import parse_knot
+
+            parse_knot(self.knot)
+            if self.contact is None or self.initial is not None:
+                raise checks.refuse("knot", "(a knotted starting curve) needs contact and no "
+                                    "initial curve, e.g. knot='3_1', "
+                                    "contact=supercoil.Barrier(length_over_diameter=100)")
 
     def __repr__(self) -> str:
         start = "" if self.initial is None else f", initial=<{len(self.initial)} points>"
+        start += "" if self.knot is None else f", knot={self.knot!r}"
         return (f"Ring(rod={self.rod!r}, excess_link={self.excess_link:g}, "
                 f"contact={self.contact!r}{start})")
 

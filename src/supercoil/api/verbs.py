@@ -64,7 +64,7 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
     every excess link; above Michell's threshold ``(A/C) sqrt(m^2 - 1)`` it is
     returned with status ``UNSTABLE`` and its unstable count. With contact: the
     circle if it is stable, otherwise the circle pushed along its lowest unstable
-    mode (or ``problem.initial``) relaxed by Newton minimisation under continuous
+    mode (or ``problem.initial``, or the curve of ``problem.knot``) relaxed by Newton minimisation under continuous
     collision detection to an equilibrium with self-contact. ``tolerance``: Newton's
     residual (default 1e-10 without contact, 1e-9 with); ``n_modes``: eigenpairs
     kept beyond the negative ones.
@@ -85,11 +85,17 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
                             curvature=rod.curvature, n_modes=n_modes, tolerance=tolerance)
     else:
         tolerance = CONTACT_RING_TOLERANCE if tolerance is None else tolerance
+        initial = problem.initial
+        if problem.knot is not None:
+            from supercoil.problems.knot_ring import knot_start
+
+            initial, _note = knot_start(problem.knot, rod.nodes,
+                                        problem.contact.length_over_diameter, rod.twist_ratio)
         result = solve_supercoiled_ring(
             rod.twist_ratio, problem.excess_link, problem.contact.length_over_diameter,
             n_nodes=rod.nodes, treatment=problem.contact.treatment, curvature=rod.curvature,
             tolerance=tolerance, n_modes=n_modes, max_iterations=max_iterations,
-            initial_points=problem.initial)
+            initial_points=initial)
     tolerances = {"newton_residual": tolerance, "zero_modes": result.zero_tolerance}
     if problem.contact is not None:
         from supercoil.contact.options import ContactOptions

@@ -28,6 +28,7 @@ from supercoil.cli import (
     plot,
     ring,
     sweep,
+    tighten,
     tweezers,
     view,
     writhe,
@@ -47,7 +48,7 @@ UNITS_NOTE = (
 )
 # the order a new user meets the commands in, which --help lists them in
 COMMANDS = ("demo", "ring", "diagram", "tweezers", "run", "sweep", "plot", "view", "export",
-            "writhe", "knot")
+            "writhe", "knot", "tighten")
 COMPILE_TIME = "1 to 2 minutes"  # the first run's compilation on a fresh install
 
 
@@ -112,6 +113,7 @@ app.command("view")(view.view)
 app.command("export")(export.export_command)
 app.command("writhe")(writhe.writhe)
 app.command("knot")(knot.knot)
+app.command("tighten")(tighten.tighten)
 
 
 def _single_threaded_blas() -> None:

@@ -146,6 +146,18 @@ def ring(
         "apart). The excess link counts as for the circle (twist = dLk - writhe), so a knot "
         "of writhe about W carries little twist only near --excess-link W (a trefoil: about "
         "+3 or -3).", show_default=False, callback=checked_path)] = None,
+    knot: Annotated[str | None, typer.Option(
+        "--knot", metavar="NAME",
+        help="Start from a smooth embedding of this knot instead of the circle: 3_1, 4_1, "
+        "5_1, 5_2, 7_1 or 8_19 (a trailing '*' for the mirror image), scaled to length "
+        "L = 1 and tightened (continuation in L/D downward) until it is free of overlap at "
+        "--length-over-diameter, which it needs. The knot type is kept at every step and "
+        "reported (knot_type, chirality).", show_default=False)] = None,
+    torus_knot: Annotated[str | None, typer.Option(
+        "--torus-knot", metavar="P,Q",
+        help="As --knot, the torus knot T(P,Q) (coprime P, Q; a negative one for the mirror "
+        "image): 2,3 is the right-handed trefoil, 2,5 the knot 5_1.",
+        show_default=False)] = None,
     dna: Annotated[bool, typer.Option(
         "--dna",
         help="DNA units instead of --twist-ratio/--excess-link/--length-over-diameter: the "
@@ -182,7 +194,8 @@ def ring(
     equilibrium; with it, the ring leaves the circle for a stable supercoiled
     state with self-contact (contacts, contact points and intervals, closest
     approach); a state that is not stable exits with status 1. With --initial
-    the ring is relaxed from a given closed curve (a knot, say) instead.
+    the ring is relaxed from a given closed curve instead, with --knot or
+    --torus-knot from a knot; the knot type is kept and reported.
 
     With --dna the ring is a DNA plasmid: --bp N base pairs at superhelical
     density --sigma S, in monovalent salt --salt-mM (tube diameter D); the
@@ -202,7 +215,12 @@ def ring(
     else:
         _check_plain(twist_ratio, excess_link, bp, sigma, salt_mM, diameter_nm, temperature_K,
                      twist_persistence_nm)
-    for option, value in (("--contact", contact), ("--initial", initial)):
+    given = [o for o, v in (("--initial", initial), ("--knot", knot),
+                            ("--torus-knot", torus_knot)) if v is not None]
+    if len(given) > 1:
+        fail(f"{' and '.join(given)} both give the starting curve; give one of them")
+    for option, value in (("--contact", contact), ("--initial", initial), ("--knot", knot),
+                          ("--torus-knot", torus_knot)):
         if value is not None and length_over_diameter is None:
             fail(f"{option} needs --length-over-diameter L/D (self-contact of a tube of "
                  "diameter D = L/(L/D)); give it, e.g. --length-over-diameter 100")
@@ -224,6 +242,10 @@ def ring(
             initial_points = read_curve(initial)
         names["initial"] = names["initial_points"] = f"--initial {initial}"
 
+    knot_given = knot if torus_knot is None else f"T({torus_knot})"
+    if knot_given is not None:
+        names["knot"] = f"--knot {knot}" if torus_knot is None else f"--torus-knot {torus_knot}"
+
     from supercoil import Ring, equilibrium
     from supercoil.api.model import contact_from_name
 
@@ -232,11 +254,13 @@ def ring(
         problem = Ring(rod, excess_link,
                        contact=None if length_over_diameter is None else
                        contact_from_name(treatment, length_over_diameter),
-                       initial=initial_points)
+                       initial=initial_points, knot=knot_given)
         state = equilibrium(problem)
     # an inextensible, unshearable rod: no stretch and no shear
     summary = {"model": "kirchhoff", "max_stretch_strain": 0.0, "max_shear_strain": 0.0,
                **state.record}
+    start_curve = (str(initial) if initial is not None
+                   else None if knot_given is None else f"knot {knot_given}")
     if preset is not None:
         from supercoil.units.dna import ring_summary_in_dna_units
 
@@ -245,7 +269,7 @@ def ring(
         from supercoil.cli.ring_output import ring_document, write_ring_folder
 
         data = ring_document(state, summary, preset,
-                             initial=None if initial is None else str(initial))
+                             initial=start_curve)
         if json_path is not None:
             write_json_or_fail(data, json_path)
         if out is not None:
@@ -257,7 +281,7 @@ def ring(
 
         from supercoil.cli._format import ring_table
 
-        Console().print(ring_table(summary, initial=None if initial is None else str(initial)))
+        Console().print(ring_table(summary, initial=start_curve))
     warning = warning_in(summary.get("message"))
     if warning is not None:
         warn(warning)

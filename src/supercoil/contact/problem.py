@@ -16,9 +16,11 @@ polygon's segments, or the B-spline pieces of those segments) and the gap
   pairs that penetrate during the search meet the penalty, which vanishes at
   a solution (no inactive pair penetrates there).
 
-Two guards stay on the polygon whatever the curve: the linking number
+Three guards stay on the polygon whatever the curve: the linking number
 (:meth:`ContactProblem.admissible` compares the writhe the energy carries
-through the reference twist with the polygon's double sum) and the collision
+through the reference twist with the polygon's double sum), the knot type
+(:class:`~supercoil.topology.knots.KnotGuard`: that of the first accepted
+state, or of the curve given to :meth:`ContactProblem.keep_knot_type`) and the collision
 detection of :meth:`ContactProblem.step_bound` (:mod:`supercoil.contact.step`),
 which keeps any segment from passing through another.
 
@@ -46,6 +48,7 @@ from supercoil.contact.options import ContactOptions
 from supercoil.contact.step import LinkGuard, step_bound
 from supercoil.solvers.csr_sum import block_csr, csr_add_blocks
 from supercoil.solvers.problem import HessianParts
+from supercoil.topology.knots.guard import KnotGuard
 
 
 def _blocks_matrix(dofs: np.ndarray, local: np.ndarray, n: int) -> sp.csr_matrix:
@@ -88,7 +91,9 @@ class ContactProblem:
         self._slide_pin: tuple[int, np.ndarray, np.ndarray] | None = None
         # see stability_view()
         self.stability_mode = False
+        self.refusal: str | None = None  # see admissible()
         self.link_guard = LinkGuard()  # see admissible()
+        self.knot_guard = KnotGuard()  # see admissible()
         self._integral_memo = None  # see _integral()
         self.summary_memo: dict = {}  # contact_summary's (supercoil.contact.report)
 
@@ -422,6 +427,13 @@ class ContactProblem:
 
     def accept(self, q: np.ndarray) -> None:
         self.base.accept(q)
+        if self.closed:
+            self.knot_guard.accept(q)
+
+    def keep_knot_type(self, points: np.ndarray):
+        """Make the knot type of ``points`` ``(n, 3)`` the one every state must keep
+        (else the first accepted state's); returns it (a ``KnotType``)."""
+        return self.knot_guard.keep(points)
 
     def parameter_derivative(self, q: np.ndarray, multipliers: np.ndarray,
                              parameter: str) -> np.ndarray | None:
@@ -438,11 +450,21 @@ class ContactProblem:
 
     # ---------------------------------------------------- step guard (CCD)
     def admissible(self, q: np.ndarray) -> bool:
-        """Whether the closed rod kept its linking number at ``q`` (Newton's per-step
-        guard, :class:`supercoil.contact.step.LinkGuard`); open rods: always True."""
+        """Whether the closed rod kept its linking number and its knot type at ``q``
+        (Newton's and the continuation's per-step guard,
+        :class:`supercoil.contact.step.LinkGuard`,
+        :class:`supercoil.topology.knots.KnotGuard`); open rods: always True.
+        ``refusal`` says why the last refused state was refused."""
         if not self.closed:
             return True
-        return self.link_guard.admissible(self.curve, self.base.writhe_local, q)
+        if not self.link_guard.admissible(self.curve, self.base.writhe_local, q):
+            self.refusal = "the linking number would change (a strand through another)"
+            return False
+        if not self.knot_guard.admissible(
+                q, clearance=lambda state: self.curve.min_distance(state, polygon=True)):
+            self.refusal = self.knot_guard.refusal
+            return False
+        return True
 
     def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:
         """Largest node displacement of ``dq`` over the trust radius (one edge length)."""

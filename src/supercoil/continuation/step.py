@@ -128,7 +128,9 @@ def take_step(system: ExtendedSystem, opts: ContinuationOptions, x_k: np.ndarray
         step.failure = f"tangent: {exc}"
         return step
     if admissible is not None and not admissible(system.q(x_new)):
-        step.failure = "the corrected state is inadmissible (e.g. its linking number changed)"
+        reason = getattr(problem, "refusal", None)
+        step.failure = ("the corrected state is inadmissible: "
+                        + (reason or "e.g. its linking number or knot type changed"))
         return step
     cos_turn = math.cos(math.radians(opts.max_turn_degrees))
     if t_new @ (system.weights * t_k) < cos_turn:

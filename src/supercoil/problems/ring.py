@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from supercoil import checks
+from supercoil.errors import InputError
 from supercoil.geometry.curves import circle
 from supercoil.rod.closed import ClosedRodEnergy
 from supercoil.rod.model import Rod
@@ -30,6 +31,7 @@ from supercoil.stability.analysis import (
 from supercoil.stability.bisection import locate_count_change
 from supercoil.stability.record import stability_record
 from supercoil.topology import twist_from_frames, writhe
+from supercoil.topology.knots import identify
 
 
 def circle_energy(twist_ratio: float, excess_link: float) -> float:
@@ -79,6 +81,10 @@ class RingResult:
     # curve") and the quasi-static path that reached it (problems.ring_contact)
     branch: str | None = None
     path: dict | None = None
+    # the knot type of the state (supercoil.topology.knots.identify): the table's name
+    # ("0_1", "3_1", ...; None if not found) and its chirality (+1, -1, 0)
+    knot_type: str | None = None
+    chirality: int = 0
 
     def summary(self) -> dict:
         """The JSON keys of ``supercoil ring`` (docs/model.md, "Nondimensional units")."""
@@ -89,6 +95,8 @@ class RingResult:
             "writhe": self.writhe,
             "link_error": self.link_error,
             "writhe_error": self.writhe_error,
+            "knot_type": self.knot_type,
+            "chirality": self.chirality,
             "energy": self.energy,
             "energy_circle_exact": circle_energy(self.twist_ratio, self.excess_link),
             **stability_record(self.unstable_count, self.zero_modes, self.negative_count,
@@ -177,6 +185,7 @@ def ring_result(problem, q: np.ndarray, multipliers: np.ndarray, stab, *, conver
         message += (f"; warning: modes up to m = {highest_mode} have crossed but {n_nodes} nodes "
                     f"resolve only m <= {n_nodes // 8}: use --nodes >= {8 * highest_mode}")
     wr = writhe(points)
+    knot = _knot_of(points)
     d1 = problem.material_directors(q)
     frame_twist = twist_from_frames(points, d1, closed=True)
     tw = frame_twist - problem.reference_link + excess_link
@@ -190,8 +199,19 @@ def ring_result(problem, q: np.ndarray, multipliers: np.ndarray, stab, *, conver
         lowest_eigenvalues=stab.lowest_eigenvalues, converged=converged,
         status=status, message=message, residual=residual,
         iterations=iterations, zero_tolerance=zero_tolerance, curvature=rod.curvature,
-        stability_certified=stab.certified, **extra,
+        stability_certified=stab.certified,
+        knot_type=None if knot is None else knot.name,
+        chirality=0 if knot is None else knot.chirality, **extra,
     )
+
+
+def _knot_of(points: np.ndarray):
+    """The :class:`~supercoil.topology.knots.KnotType` of a ring state, None if its
+    strands meet."""
+    try:
+        return identify(points)
+    except InputError:
+        return None
 
 
 class _CircleInertia:

@@ -28,9 +28,9 @@ on the free unknowns (fixed DOFs removed). Two globalisations:
 A problem may offer ``step_bound(q, dq)``: the largest admissible fraction of
 the step (self-contact uses continuous collision detection); every step,
 full steps included, is shortened to it; and ``admissible(q)``: a state it
-refuses (e.g. a closed rod whose linking number changed) makes the step be
-retried shorter. In ``minimize`` mode a problem may
-also offer ``step_size_ratio(q, dq)`` (step length over its trust radius): a
+refuses (e.g. a closed rod whose linking number or knot type changed) makes
+the step be retried shorter; its optional ``refusal`` (a string) says why. In
+``minimize`` mode a problem may also offer ``step_size_ratio(q, dq)`` (step length over its trust radius): a
 longer step is replaced by the shifted step ``(H + delta M) dq = -g`` with
 ``delta`` raised until it fits (Levenberg–Marquardt-style damping).
 
@@ -387,8 +387,10 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
             while alpha >= opts.min_step and not problem.admissible(q + alpha * dq):
                 alpha *= 0.5
             if alpha < opts.min_step:
+                reason = getattr(problem, "refusal", None)
                 return done(Status.LINE_SEARCH_FAILED,
-                            f"iteration {it}: every step length gave an inadmissible state", it)
+                            f"iteration {it}: every step length gave an inadmissible state"
+                            + (f" ({reason})" if reason else ""), it)
         q = q + alpha * dq
         lam = lam + alpha * (lam_new - lam)
         problem.accept(q)

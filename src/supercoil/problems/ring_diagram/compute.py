@@ -64,6 +64,8 @@ def ring_diagram(options: DiagramOptions,
     # the onset is measured on the contact's own curve (and samples, for the integral)
     probe = ContactProblem(problem, dataclasses.replace(contact_opts, treatment="barrier"))
     cp = ContactProblem(problem, contact_opts)
+    for guarded in (probe, cp):  # every branch keeps the circle's knot type, the unknot
+        guarded.keep_knot_type(circle.states[0])
     notes += _mesh_notes(opts, problem.rod, D)
     circle = with_records(circle, problem, contact_records(probe, ring_records(problem),
                                                            free=True))

@@ -10,11 +10,13 @@
   invariants of a diagram.
 - :func:`knot_curve`, :func:`torus_knot`: smooth embeddings as equally spaced
   polygons of perimeter 1.
+- :class:`KnotGuard`: whether a closed rod kept its knot type, the per-step guard.
 """
 
 from supercoil.topology.knots.alexander import alexander_polynomial, knot_determinant
 from supercoil.topology.knots.builders import KNOT_CURVES, knot_curve, torus_knot
 from supercoil.topology.knots.diagram import Diagram
+from supercoil.topology.knots.guard import KnotGuard
 from supercoil.topology.knots.jones import jones_polynomial
 from supercoil.topology.knots.knot_type import (
     KnotType,
@@ -30,6 +32,7 @@ __all__ = [
     "KNOTS",
     "KNOT_CURVES",
     "Diagram",
+    "KnotGuard",
     "KnotType",
     "TableKnot",
     "alexander_polynomial",

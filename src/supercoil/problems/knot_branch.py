@@ -1,0 +1,99 @@
+"""A knotted ring followed in its excess link with self-contact.
+
+A knotted ring has no trivial branch: :func:`knotted_branch` relaxes the knot
+(:func:`~supercoil.problems.knot_ring.knot_start`, then
+:func:`~supercoil.problems.ring_contact.solve_supercoiled_ring`) at the first
+excess link and follows that equilibrium in ``dLk`` by pseudo-arclength
+continuation with self-contact, as the ring diagram's contact branches are
+followed (:mod:`supercoil.problems.ring_diagram.contact_branches`: the
+material sliding pinned, the rigid pins re-picked between runs, steps a
+fraction of D). Every corrected state is vetted by
+:meth:`~supercoil.contact.problem.ContactProblem.admissible` (linking number
+and knot type) and a step that would change either is refused and retried
+shorter. Per point the records add ``knot_determinant`` and
+``knot_alexander_degree`` (of the state's own knot type, computed anew: they
+stay the start's exactly when the guard did its work) to the ring's
+(``excess_link``, ``writhe`` from the double sum, ``twist`` from the material
+frames, ``link_error``, ``energy``) and the contact counts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
+from supercoil.continuation import Branch, ContinuationOptions, continuation
+from supercoil.problems.branch_options import CONTACT_MIN_STEP
+from supercoil.problems.contact_events import classify_contact_events, contact_count_event
+from supercoil.problems.knot_ring import knot_start, parse_knot
+from supercoil.problems.ring_branches import ring_records
+from supercoil.problems.ring_contact import solve_supercoiled_ring
+from supercoil.problems.ring_diagram.records import contact_records
+from supercoil.problems.segments import follow, grip_stop, set_pin
+from supercoil.rod.closed import ClosedRodEnergy
+from supercoil.rod.model import Rod
+from supercoil.topology.knots import identify
+
+SEGMENT_POINTS = 40  # points per run, the rigid pins re-picked between runs
+MAX_STEP = 0.5  # of D, in the arclength metric (see contact_branches)
+
+
+@dataclasses.dataclass(frozen=True)
+class KnottedBranch:
+    """The branch (``Branch``), the knot it keeps (a ``KnotType``), and its problem."""
+
+    branch: Branch
+    knot: object
+    problem: ContactProblem
+    start_message: str
+
+
+def _knot_records(base_records):
+    def records(q, multipliers, excess_link):
+        out = dict(base_records(q, multipliers, excess_link))
+        knot = identify(np.asarray(q, float).reshape(-1, 3))
+        out.update(knot_determinant=knot.determinant,
+                   knot_alexander_degree=len(knot.alexander) - 1)
+        return out
+    return records
+
+
+def knotted_branch(knot, twist_ratio: float, length_over_diameter: float,
+                   excess_link: tuple[float, float], n_nodes: int = 100,
+                   max_points: int = 100, tolerance: float = 1e-8) -> KnottedBranch:
+    """The knotted ring's branch from ``excess_link[0]`` towards ``excess_link[1]``
+    (module doc)."""
+    parse_knot(knot)
+    start, stop = (float(v) for v in excess_link)
+    points, _note = knot_start(knot, n_nodes, length_over_diameter, twist_ratio)
+    relaxed = solve_supercoiled_ring(twist_ratio, start, length_over_diameter, n_nodes,
+                                     treatment="barrier", tolerance=tolerance,
+                                     initial_points=points)
+    rod = Rod(n_nodes=n_nodes, twist_stiffness=twist_ratio)
+    base = ClosedRodEnergy(rod, relaxed.points, start)
+    D = rod.length / length_over_diameter
+    cp = ContactProblem(base, ContactOptions(diameter=D, treatment="barrier"))
+    reference = cp.keep_knot_type(relaxed.points)
+    q0 = relaxed.points.ravel()
+    cp.accept(q0)
+    options = ContinuationOptions(
+        initial_step=0.05 * D, min_step=CONTACT_MIN_STEP, max_step=MAX_STEP * D,
+        max_points=max_points, parameter_bounds=(min(start, stop), max(start, stop)),
+        direction=1 if stop >= start else -1, parameter_weight=D, tolerance=tolerance,
+        near_symmetry_gauge=True, regauge=True, factor_refinement=True)
+    records = _knot_records(contact_records(cp, ring_records(base), free=False))
+    events = (contact_count_event(cp),)
+    set_pin(cp, base, q0)
+    first = continuation(cp, q0, parameter="excess_link",
+                         options=dataclasses.replace(options, max_points=min(
+                             SEGMENT_POINTS, max_points)),
+                         name="knot", records=records, events=events,
+                         stop=grip_stop(base.pin_grip, q0))
+    branch, _pins = follow(cp, base, first, options, "knot", records, events,
+                           max_points=max_points, segment_points=SEGMENT_POINTS,
+                           grip=base.pin_grip)
+    branch = classify_contact_events(branch, cp)
+    return KnottedBranch(branch, reference, cp, relaxed.message)

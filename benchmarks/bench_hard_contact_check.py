@@ -21,7 +21,7 @@ on the same cubic B-spline (it takes the ``pairs`` formulation: one constraint
 active set starts as the piece pairs within 1 % of D of the barrier state whose
 closest points are local minima of the curve distance (the barrier's contacts,
 shadows dropped), kept linearly independent
-(:func:`~supercoil.contact.solve._independent_pairs`), and the active-set loop of
+(:func:`~supercoil.contact.solve.independent_pairs`), and the active-set loop of
 :func:`~supercoil.contact.solve.solve_contact` runs from there (Newton in
 stationary mode: an unstable state must not be minimised away; see
 :func:`hard_contact` for the retries, and for the polygon's exact contact, tried
@@ -156,12 +156,12 @@ def initial_active_set(hard, q: np.ndarray, reach: float = 0.01) -> np.ndarray:
     """Piece pairs within ``(1 + reach) D`` at ``q`` (default: the barrier's reach, so that
     a state the barrier does not touch starts without contact) whose closest points are
     local minima of the curve distance, closest first, with independent gap gradients."""
-    from supercoil.contact.solve import _independent_pairs
+    from supercoil.contact.solve import independent_pairs
     from supercoil.contact.spline_distance import local_minimum_pairs
 
     st = hard.pair_state(q, hard.diameter * (1.0 + reach))
     keep = local_minimum_pairs(q.reshape(-1, 3), hard.curve.pieces, st.pairs, st.s, st.t)
-    active, _ = _independent_pairs(hard, q, st.pairs[keep], -st.distance[keep])
+    active, _ = independent_pairs(hard, q, st.pairs[keep], -st.distance[keep])
     return active
 
 

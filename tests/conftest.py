@@ -71,3 +71,13 @@ def with_rank_one_terms(rng, H: np.ndarray, J: np.ndarray, rank_one: int):
 def runner() -> CliRunner:
     """Invokes the ``supercoil`` app in-process (typer's test runner)."""
     return CliRunner()
+
+
+def same_bits(mine, ref) -> bool:
+    """Whether two CSR matrices are the same to the bit: shape, index dtypes, indptr,
+    indices and the bits of every value."""
+    return (mine.shape == ref.shape and mine.indices.dtype == ref.indices.dtype
+            and mine.indptr.dtype == ref.indptr.dtype
+            and np.array_equal(mine.indptr, ref.indptr)
+            and np.array_equal(mine.indices, ref.indices)
+            and np.array_equal(mine.data.view(np.int64), ref.data.view(np.int64)))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,6 +12,69 @@ from test_continuation_toys import Unconstrained
 from supercoil.contact.broadphase import candidate_pairs
 from supercoil.contact.distance import segment_distance
 from supercoil.solvers.problem import HessianParts
+
+
+def assert_derivatives_match_differences(problem, q: np.ndarray, columns) -> None:
+    """Oracle of a problem's gradient and Hessian at ``q``: central differences (step
+    1e-7) of its energy and of its gradient along each DOF of ``columns``."""
+    g = problem.gradient(q)
+    H = problem.hessian(q).dense()
+    eps = 1e-7
+    for k in columns:
+        e = np.zeros_like(q)
+        e[k] = eps
+        fd = (problem.energy(q + e) - problem.energy(q - e)) / (2 * eps)
+        assert abs(fd - g[k]) <= 1e-5 * max(1.0, abs(g[k]))
+        fd_h = (problem.gradient(q + e) - problem.gradient(q - e)) / (2 * eps)
+        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-4, atol=1e-4)
+
+
+def integral_pair_hessians_loop(x, stencil, weights, pairs, diameter, stiffness, activation, scale):
+    """Oracle of the integral formulation's pair Hessians (barrier,
+    :func:`supercoil.contact.integral.integral_terms`): a Python loop over the sample
+    pairs in the kernel's order, the same terms in the same order (so equal to the bit):
+    entry ``(3 l1 + r, 3 l2 + s)`` gains ``(c[l1] c[l2]) h3[r, s]``."""
+    from supercoil.contact.integral import barrier
+
+    q, w = weights.shape[1], weights.shape[2]
+    points = np.zeros((len(stencil), q, 3))  # summed as the kernel sums them
+    for i in range(len(stencil)):
+        for a in range(q):
+            for k in range(3):
+                total = 0.0
+                for m in range(w):
+                    total += weights[i, a, m] * x[stencil[i, m], k]
+                points[i, a, k] = total
+    out = np.zeros((len(pairs), 6 * w, 6 * w))
+    for p, (i, j) in enumerate(pairs):
+        for a in range(q):
+            for b in range(q):
+                d0, d1, d2 = (float(points[i, a, k] - points[j, b, k]) for k in range(3))
+                d = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                if d >= diameter + activation:
+                    continue
+                value, first, second = (v[0] for v in barrier(np.array([d - diameter]),
+                                                               stiffness, activation))
+                if value == np.inf:
+                    continue
+                first *= scale
+                second *= scale
+                tang = first / d
+                nv = (d0 / d, d1 / d, d2 / d)
+                h3 = [[(second - tang) * nv[r] * nv[s] for s in range(3)] for r in range(3)]
+                for r in range(3):
+                    h3[r][r] += tang
+                c = [float(weights[i, a, m]) for m in range(w)] + \
+                    [-float(weights[j, b, m]) for m in range(w)]
+                for l1 in range(2 * w):
+                    if c[l1] == 0.0:
+                        continue
+                    for l2 in range(2 * w):
+                        cc = c[l1] * c[l2]
+                        for r in range(3):
+                            for s in range(3):
+                                out[p, 3 * l1 + r, 3 * l2 + s] += cc * h3[r][s]
+    return out
 
 
 def assert_fresh_pair_state(problem, state: np.ndarray, cutoff: float, fast) -> None:

@@ -7,6 +7,7 @@ csr_add(A, block_csr(...)) bit for bit and scipy's A + B to round-off."""
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from conftest import same_bits
 
 from supercoil.solvers.csr_sum import block_csr, csr_add, csr_add_blocks
 
@@ -50,14 +51,6 @@ def test_block_csr_of_no_blocks_is_the_zero_matrix():
         block_csr(np.array([[0, 50]]), np.zeros((1, 2, 2)), 50)
 
 
-def _same_bits(mine, ref):
-    return (mine.shape == ref.shape and mine.indices.dtype == ref.indices.dtype
-            and mine.indptr.dtype == ref.indptr.dtype
-            and np.array_equal(mine.indptr, ref.indptr)
-            and np.array_equal(mine.indices, ref.indices)
-            and np.array_equal(mine.data.view(np.int64), ref.data.view(np.int64)))
-
-
 @pytest.mark.parametrize("seed", range(6))
 def test_csr_add_blocks_is_csr_add_of_block_csr_bit_for_bit(seed):
     rng = np.random.default_rng(900 + seed)
@@ -75,7 +68,7 @@ def test_csr_add_blocks_is_csr_add_of_block_csr_bit_for_bit(seed):
         blocks[0, 3, 4] = -0.0
     mine = csr_add_blocks(A, dofs, blocks)
     former = csr_add(A, block_csr(dofs, blocks, n))
-    assert mine.has_canonical_format and _same_bits(mine, former)
+    assert mine.has_canonical_format and same_bits(mine, former)
     reference = (A + _scipy(dofs, blocks, n)).tocsr()
     assert np.array_equal(mine.indptr, reference.indptr)
     assert np.array_equal(mine.indices, reference.indices)

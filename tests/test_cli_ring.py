@@ -162,6 +162,12 @@ CONTACT_KEYS = (
 )
 
 
+def contact_ring(excess_link: str, nodes: str, *options) -> tuple:
+    """The arguments of ``supercoil ring`` at C/A = 1 and L/D = 40 with ``options``."""
+    return ("ring", "--twist-ratio", "1", "--excess-link", excess_link,
+            "--length-over-diameter", "40", "--nodes", nodes, *options)
+
+
 def test_contact_help_states_the_library_defaults():
     """The help's treatments and tolerances are the library's (no copies of them)."""
     from supercoil.cli import ring as ring_command
@@ -213,22 +219,7 @@ def test_ring_with_contact_json(runner, tmp_path, treatment):
     """Above Michell's sqrt(8) (C/A = 1, dLk = 3) the ring leaves the circle and
     supercoils: writhe > 1, at least one contact, the oracles of assert_contact_state."""
     target = tmp_path / "ring.json"
-    result = invoke(
-        runner,
-        "ring",
-        "--twist-ratio",
-        "1",
-        "--excess-link",
-        "3",
-        "--length-over-diameter",
-        "40",
-        "--nodes",
-        "48",
-        "--contact",
-        treatment,
-        "--json",
-        target,
-    )
+    result = invoke(runner, *contact_ring("3", "48", "--contact", treatment, "--json", target))
     data = json.loads(target.read_text())
     assert result.exit_code == 0, (result.stderr, data["message"])
     assert_contact_state(data, treatment, 3.0)
@@ -244,20 +235,7 @@ def test_ring_with_contact_not_converged_exits_1_and_saves(runner, tmp_path, mon
     monkeypatch.setattr(ring_contact, "solve_supercoiled_ring",
                         _unconverged(ring_contact.solve_supercoiled_ring))
     target = tmp_path / "ring.json"
-    result = invoke(
-        runner,
-        "ring",
-        "--twist-ratio",
-        "1",
-        "--excess-link",
-        "1",
-        "--length-over-diameter",
-        "40",
-        "--nodes",
-        "24",
-        "--json",
-        target,
-    )
+    result = invoke(runner, *contact_ring("1", "24", "--json", target))
     assert result.exit_code == 1
     assert "not converged" in result.stderr and str(target) in result.stderr
     data = json.loads(target.read_text())
@@ -274,17 +252,7 @@ def test_ring_contact_errors_of_the_numerics_are_not_bad_input(capsys, monkeypat
     from supercoil.problems import ring_contact
     from supercoil.solvers.newton import NewtonOptions
 
-    args = (
-        "ring",
-        "--twist-ratio",
-        "1",
-        "--excess-link",
-        "3",
-        "--length-over-diameter",
-        "40",
-        "--nodes",
-        "24",
-    )
+    args = contact_ring("3", "24")
     monkeypatch.delenv("SUPERCOIL_DEBUG", raising=False)
 
     def inside_a_solver(*_args, **_kwargs):
@@ -307,20 +275,7 @@ def test_ring_contact_errors_of_the_numerics_are_not_bad_input(capsys, monkeypat
 def test_ring_contact_table_below_michell(runner):
     """Below Michell's sqrt(3) the circle is stable and stays: the human table shows the
     contact rows with no contact, a closest approach above D and the exact circle energy."""
-    result = invoke(
-        runner,
-        "ring",
-        "--twist-ratio",
-        "1",
-        "--excess-link",
-        "1",
-        "--length-over-diameter",
-        "40",
-        "--nodes",
-        "40",
-        "--contact",
-        "exact",
-    )
+    result = invoke(runner, *contact_ring("1", "40", "--contact", "exact"))
     assert result.exit_code == 0, result.stderr
     rows = {}
     for line in result.stdout.splitlines():
@@ -350,24 +305,8 @@ def test_ring_initial_trefoil_keeps_its_knot(runner, tmp_path, monkeypatch):
     write_curve(tmp_path / "trefoil.txt", 7.5 * tight_trefoil(), "trefoil")
     curve = "trefoil.txt"
     target = tmp_path / "trefoil.json"
-    result = invoke(
-        runner,
-        "ring",
-        "--twist-ratio",
-        "1",
-        "--excess-link",
-        "0",
-        "--length-over-diameter",
-        "40",
-        "--nodes",
-        "48",
-        "--contact",
-        "exact",
-        "--initial",
-        curve,
-        "--json",
-        target,
-    )
+    result = invoke(runner, *contact_ring("0", "48", "--contact", "exact", "--initial", curve,
+                                          "--json", target))
     data = json.loads(target.read_text())
     assert result.exit_code == 0, (result.stderr, data["message"])
     assert_contact_state(data, "exact", 0.0)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from contact_toys import CrossedRods, assert_fresh_pair_state
+from contact_toys import CrossedRods, assert_derivatives_match_differences, assert_fresh_pair_state
 
 from supercoil.contact import potentials
 from supercoil.contact.options import ContactOptions
@@ -132,16 +132,7 @@ def test_contact_energy_derivatives_match_finite_differences():
     # push B into A so that pairs penetrate
     q[3 * toy.n + 2 :: 3] -= 0.25 - 0.045
     assert problem.contact_energy(q) > 0
-    g = problem.gradient(q)
-    H = problem.hessian(q).dense()
-    eps = 1e-7
-    for k in range(3 * toy.n, 6 * toy.n, 5):
-        e = np.zeros_like(q)
-        e[k] = eps
-        fd = (problem.energy(q + e) - problem.energy(q - e)) / (2 * eps)
-        assert abs(fd - g[k]) <= 1e-5 * max(1.0, abs(g[k]))
-        fd_h = (problem.gradient(q + e) - problem.gradient(q - e)) / (2 * eps)
-        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-4, atol=1e-4)
+    assert_derivatives_match_differences(problem, q, range(3 * toy.n, 6 * toy.n, 5))
 
 
 def test_active_contact_removes_the_free_direction_from_stability():

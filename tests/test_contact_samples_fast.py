@@ -7,10 +7,12 @@ loops; each is checked here against the plain numpy expression it replaced.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
+from contact_toys import integral_pair_hessians_loop
 
-from supercoil.contact.sample_ccd import first_time_of_approach_samples
+from supercoil.contact.sample_ccd import first_time_of_approach_samples, sample_pair_time
 from supercoil.contact.sample_weights import polygon_weights, spline_weights
 from supercoil.contact.samples import chord_deviation, closest_samples, sample_points
 from supercoil.contact.spline_pieces import bspline_pieces
@@ -124,56 +126,6 @@ def test_sample_collision_time_matches_the_vectorised_quadratic(seed):
     assert first_time_of_approach_samples(x, dx, stencil, weights, pairs[:0], 1.0) == 1.0
 
 
-def _former_hessian_loop(x, stencil, weights, pairs, diameter, stiffness, activation, scale):
-    """The pair Hessians of _integral_kernel (barrier) by its former loop nest, in plain
-    Python: the same terms in the same order."""
-    from supercoil.contact.integral import _psi
-
-    psi = _psi.py_func
-    q, w = weights.shape[1], weights.shape[2]
-    hess = np.zeros((len(pairs), 6 * w, 6 * w))
-    for p, (i, j) in enumerate(pairs):
-        pi = [[_stencil_sum(weights[i, a], x[stencil[i]], k) for k in range(3)] for a in range(q)]
-        pj = [[_stencil_sum(weights[j, b], x[stencil[j]], k) for k in range(3)] for b in range(q)]
-        for a in range(q):
-            for b in range(q):
-                dv = [pi[a][k] - pj[b][k] for k in range(3)]
-                d = np.sqrt(dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2])
-                if d >= diameter + activation:
-                    continue
-                value, first, second = psi(0, d - diameter, stiffness, activation)
-                if value == np.inf:
-                    continue
-                first *= scale
-                nv = [dv[0] / d, dv[1] / d, dv[2] / d]
-                c = np.concatenate([weights[i, a], -weights[j, b]])
-                second *= scale
-                tang = first / d
-                h3 = np.empty((3, 3))
-                for r in range(3):
-                    for s in range(3):
-                        h3[r, s] = (second - tang) * nv[r] * nv[s]
-                    h3[r, r] += tang
-                for l1 in range(2 * w):
-                    if c[l1] == 0.0:
-                        continue
-                    for l2 in range(2 * w):
-                        cc = c[l1] * c[l2]
-                        if cc == 0.0:
-                            continue
-                        for r in range(3):
-                            for s in range(3):
-                                hess[p, 3 * l1 + r, 3 * l2 + s] += cc * h3[r, s]
-    return hess
-
-
-def _stencil_sum(weights_a, nodes, k):
-    total = 0.0
-    for l in range(len(weights_a)):
-        total += weights_a[l] * nodes[l, k]
-    return total
-
-
 @pytest.mark.parametrize("curve", ["polygon", "spline"])
 def test_integral_hessian_equals_the_former_loop_bit_for_bit(curve):
     from supercoil.contact.integral import integral_terms
@@ -196,17 +148,34 @@ def test_integral_hessian_equals_the_former_loop_bit_for_bit(curve):
     terms = integral_terms(x, stencil, weights, pairs, diameter, "barrier", 3.0, activation,
                            0.1, order=2)
     scale = (0.1 / samples) ** 2 / (2.0 * diameter * activation)
-    former = _former_hessian_loop(x, stencil, weights, pairs, diameter, 3.0, activation, scale)
+    former = integral_pair_hessians_loop(x, stencil, weights, pairs, diameter, 3.0, activation, scale)
     assert np.abs(former).max() > 0
     assert np.array_equal(terms[2], former)
 
 
+@numba.njit
+def _first_time_every_pair(p0, v, pairs, threshold):
+    """The first time of approach by the loop over every sample pair (no culling)."""
+    q = p0.shape[1]
+    t2 = threshold * threshold
+    best = 1.0
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        for a in range(q):
+            for b in range(q):
+                tau = sample_pair_time(p0, v, i, a, j, b, t2)
+                if tau < 0.0:
+                    return 0.0
+                best = min(best, tau)
+    return best
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_culled_sample_collision_time_equals_the_full_loop(seed):
-    """_first_time_kernel_culled (sample pairs that provably stay apart skipped) against
-    _first_time_kernel (every sample pair): the same time, bit for bit, for steps from
+    """first_time_of_approach_samples (sample pairs that provably stay apart skipped)
+    against the loop over every sample pair: the same time, bit for bit, for steps from
     far below to far above the gaps, thresholds below and above the closest samples."""
-    from supercoil.contact.sample_ccd import _first_time_kernel, _first_time_kernel_culled
 
     x, segments, pieces = _coil(60, 10 + seed)
     rng = np.random.default_rng(seed)
@@ -221,8 +190,7 @@ def test_culled_sample_collision_time_equals_the_full_loop(seed):
             dx = size * rng.standard_normal(x.shape)
             v = sample_points(dx, stencil, weights)
             threshold = factor * closest
-            full = _first_time_kernel(p0, v, pairs, threshold)
-            assert _first_time_kernel_culled(p0, v, pairs, threshold) == full
+            full = _first_time_every_pair(p0, v, pairs, threshold)
             assert first_time_of_approach_samples(x, dx, stencil, weights, pairs,
                                                   threshold) == full
             times.append(full)

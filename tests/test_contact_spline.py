@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from contact_toys import assert_derivatives_match_differences
 
 from supercoil.contact.distance import segment_distance_derivatives
 from supercoil.contact.distance_kernels import DistanceKind
@@ -294,16 +295,7 @@ def test_spline_contact_energy_derivatives_match_finite_differences():
     q[3 * toy.n + 2 :: 3] -= 0.25 - 0.045  # B into A: pairs penetrate
     q[3 * toy.n + 2 :: 3] += 0.02 * np.linspace(-1, 1, toy.n) ** 2  # and B curved
     assert problem.contact_energy(q) > 0
-    g = problem.gradient(q)
-    H = problem.hessian(q).dense()
-    eps = 1e-7
-    for k in range(0, 6 * toy.n, 5):
-        e = np.zeros_like(q)
-        e[k] = eps
-        fd = (problem.energy(q + e) - problem.energy(q - e)) / (2 * eps)
-        assert abs(fd - g[k]) <= 1e-5 * max(1.0, abs(g[k]))
-        fd_h = (problem.gradient(q + e) - problem.gradient(q - e)) / (2 * eps)
-        np.testing.assert_allclose(H[:, k], fd_h, rtol=1e-4, atol=1e-4)
+    assert_derivatives_match_differences(problem, q, range(0, 6 * toy.n, 5))
 
 
 def test_spline_barrier_step_guard_keeps_the_spline_gap():

@@ -23,7 +23,7 @@ from scipy.linalg import eigh, null_space
 
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.contact.solve import _independent_pairs, solve_contact
+from supercoil.contact.solve import independent_pairs, solve_contact
 from supercoil.contact.spline_distance import local_minimum_pairs
 from supercoil.problems.ring_branches import ring_records, twisted_circle_problem
 from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
@@ -72,7 +72,7 @@ def hard_contact(branch, i):
                                                curve="spline", formulation="pairs"))
     st = hard.pair_state(q, 1.01 * OPTIONS.diameter)
     minima = local_minimum_pairs(q.reshape(-1, 3), hard.curve.pieces, st.pairs, st.s, st.t)
-    hard.active, _ = _independent_pairs(hard, q, st.pairs[minima], -st.distance[minima])
+    hard.active, _ = independent_pairs(hard, q, st.pairs[minima], -st.distance[minima])
     res = solve_contact(hard, q, NewtonOptions(mode="stationary", tolerance=1e-10,
                                                max_iterations=100))
     return base, hard, res

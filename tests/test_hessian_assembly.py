@@ -15,14 +15,13 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from contact_toys import stadium_ring
+from conftest import same_bits
+from contact_toys import integral_pair_hessians_loop, stadium_ring
 
-from supercoil.contact.integral import _psi, integral_terms
+from supercoil.contact.integral import integral_terms
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.sample_weights import polygon_weights, spline_weights
@@ -30,14 +29,6 @@ from supercoil.contact.spline_pieces import bspline_pieces
 from supercoil.solvers.csr import csr_restrict
 from supercoil.solvers.csr_sum import block_csr, csr_add, csr_add_blocks
 from supercoil.solvers.newton import lagrangian_hessian
-
-
-def _same_bits(mine, ref) -> bool:
-    return (mine.shape == ref.shape and mine.indices.dtype == ref.indices.dtype
-            and mine.indptr.dtype == ref.indptr.dtype
-            and np.array_equal(mine.indptr, ref.indptr)
-            and np.array_equal(mine.indices, ref.indices)
-            and np.array_equal(mine.data.view(np.int64), ref.data.view(np.int64)))
 
 
 @pytest.mark.parametrize("seed", range(8))
@@ -60,7 +51,7 @@ def test_csr_restrict_equals_scipy_bit_for_bit(seed):
     for keep in keeps:
         ref = A[keep][:, keep].tocsr()
         mine = csr_restrict(A, keep)
-        assert _same_bits(mine, ref)
+        assert same_bits(mine, ref)
         assert np.array_equal(np.signbit(mine.data), np.signbit(ref.data))
         # the canonical flag, where set, is what scipy's own check finds
         fresh = sp.csr_matrix((mine.data, mine.indices, mine.indptr), shape=mine.shape)
@@ -106,13 +97,13 @@ def test_csr_add_blocks_then_is_two_csr_adds_bit_for_bit(seed):
                                          shape=(n, n)))
     ref = csr_add(first, C)
     mine = csr_add_blocks(A, dofs, blocks, C)
-    assert mine.has_canonical_format and _same_bits(mine, ref)
-    assert _same_bits(csr_add_blocks(A, dofs, blocks), first)
+    assert mine.has_canonical_format and same_bits(mine, ref)
+    assert same_bits(csr_add_blocks(A, dofs, blocks), first)
     empty = np.zeros((0, w), dtype=np.int64)
-    assert _same_bits(csr_add_blocks(A, empty, np.zeros((0, w, w)), C),
+    assert same_bits(csr_add_blocks(A, empty, np.zeros((0, w, w)), C),
                       csr_add(csr_add(A, sp.csr_matrix((n, n))), C))
     # no blocks given as an empty 1-D list (the former path; the kernel types 2-D DOFs)
-    assert _same_bits(csr_add_blocks(A, np.zeros(0, dtype=np.int64), np.zeros(0), C),
+    assert same_bits(csr_add_blocks(A, np.zeros(0, dtype=np.int64), np.zeros(0), C),
                       csr_add(csr_add(A, sp.csr_matrix((n, n))), C))
     # a non-canonical third operand goes through csr_add's own path
     unsorted = C.copy()
@@ -140,9 +131,9 @@ def test_contact_lagrangian_hessian_is_the_hessian_plus_the_curvature(choice):
         mu = rng.standard_normal(problem.n_constraints)
         mu[::7] = 0.0
         ref = problem.hessian(q).plus_sparse(problem.constraint_hessian(q, mu))
-        assert len(problem._state(q).pairs)
+        assert len(problem.pair_state(q, 1.1 * D).pairs)  # pairs within the barrier's reach
         for mine in (problem.lagrangian_hessian(q, mu), lagrangian_hessian(problem, q, mu)):
-            assert _same_bits(mine.sparse, ref.sparse)
+            assert same_bits(mine.sparse, ref.sparse)
             assert np.array_equal(mine.vectors, ref.vectors)
             assert np.array_equal(mine.coefficients, ref.coefficients)
 
@@ -176,50 +167,7 @@ def test_rod_constraint_curvature_equals_the_numpy_fill_bit_for_bit():
     ref = sp.csr_matrix((H.data, H.indices, H.indptr), shape=H.shape)
     ref.sum_duplicates()
     ref.sort_indices()
-    assert _same_bits(H, ref)
-
-
-def _loop_hessians(x, stencil, weights, pairs, diameter, stiffness, activation, scale):
-    """The kernel's pair Hessians (barrier) as a Python loop over the sample pairs in
-    the kernel's order: entry ``(3 l1 + r, 3 l2 + s)`` gains ``(c[l1] c[l2]) h3[r, s]``."""
-    q, w = weights.shape[1], weights.shape[2]
-    points = np.zeros((len(stencil), q, 3))  # summed as the kernel sums them
-    for i in range(len(stencil)):
-        for a in range(q):
-            for k in range(3):
-                total = 0.0
-                for m in range(w):
-                    total += weights[i, a, m] * x[stencil[i, m], k]
-                points[i, a, k] = total
-    out = np.zeros((len(pairs), 6 * w, 6 * w))
-    for p, (i, j) in enumerate(pairs):
-        for a in range(q):
-            for b in range(q):
-                d0, d1, d2 = (float(points[i, a, k] - points[j, b, k]) for k in range(3))
-                d = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                if d >= diameter + activation:
-                    continue
-                value, first, second = _psi(0, d - diameter, stiffness, activation)
-                if value == np.inf:
-                    continue
-                first *= scale
-                second *= scale
-                tang = first / d
-                nv = (d0 / d, d1 / d, d2 / d)
-                h3 = [[(second - tang) * nv[r] * nv[s] for s in range(3)] for r in range(3)]
-                for r in range(3):
-                    h3[r][r] += tang
-                c = [float(weights[i, a, m]) for m in range(w)] + \
-                    [-float(weights[j, b, m]) for m in range(w)]
-                for l1 in range(2 * w):
-                    if c[l1] == 0.0:
-                        continue
-                    for l2 in range(2 * w):
-                        cc = c[l1] * c[l2]
-                        for r in range(3):
-                            for s in range(3):
-                                out[p, 3 * l1 + r, 3 * l2 + s] += cc * h3[r][s]
-    return out
+    assert same_bits(H, ref)
 
 
 @pytest.mark.parametrize("spline", [False, True])
@@ -242,6 +190,6 @@ def test_integral_pair_hessians_equal_a_python_loop_bit_for_bit(spline):
     scale = (h / q) ** 2 / (2.0 * D * activation)
     _e, _g, hess, _f, _p, _dofs = integral_terms(x, stencil, weights, pairs, D, "barrier",
                                                  stiffness, activation, h, order=2)
-    ref = _loop_hessians(x, stencil, weights, pairs, D, stiffness, activation, scale)
+    ref = integral_pair_hessians_loop(x, stencil, weights, pairs, D, stiffness, activation, scale)
     assert np.abs(ref).max() > 0
     assert np.array_equal(hess.view(np.int64), ref.view(np.int64))

@@ -167,13 +167,13 @@ def test_secondary_branches_are_dashed_in_the_diagram_and_in_supercoil_plot(diag
     (Coleman & Swigon 2002, Figure 2) both when written and when redrawn from the file."""
     from supercoil.cli.diagram_output import write_diagram
     from supercoil.cli.saving import open_writer
-    from supercoil.plotting.figures import _branch_rows
+    from supercoil.plotting.figures import branch_rows
     from supercoil.plotting.result_data import load_result
     from supercoil.plotting.style import GENERATION_STYLES
 
     writer = open_writer(tmp_path, resume=False, problem="ring_diagram", settings={})
     write_diagram(diagram, tmp_path, OPTIONS.contact, writer)
-    rows = {r["name"]: r for r in _branch_rows(load_result(tmp_path / "diagram.json"),
+    rows = {r["name"]: r for r in branch_rows(load_result(tmp_path / "diagram.json"),
                                                 ("writhe", "excess_link"))}
     assert rows["beta"]["linestyle"] == "-" and rows["circle"]["linestyle"] == "-"
     for b in _secondary(diagram):

@@ -200,7 +200,7 @@ def test_dna_errors(edit, words):
         assert w in message, message
 
 
-TWEEZERS_STUDY = """
+TWEEZERS = """
 [rod]
 twist_ratio = 1.3333
 length_over_diameter = 20
@@ -208,7 +208,7 @@ nodes = 40
 [problem]
 kind = "tweezers"
 tension = 20.0
-turns = [0.0, 1.6]
+turns = [0, 1.6]
 """
 DNA_RING_STUDY = """
 [units]
@@ -223,9 +223,9 @@ superhelical_density = -0.06
 
 
 @pytest.mark.parametrize("study, edit, option, value", [
-    (TWEEZERS_STUDY, ("turns = [0.0, 1.6]", "turns = [0, 1e300]"), "--turns", "0:1e300"),
-    (TWEEZERS_STUDY, ("tension = 20.0", "tension = -1.0"), "--tension", "-1"),
-    (TWEEZERS_STUDY, ("nodes = 40", "nodes = 11"), "--nodes", "11"),
+    (TWEEZERS, ("turns = [0, 1.6]", "turns = [0, 1e300]"), "--turns", "0:1e300"),
+    (TWEEZERS, ("tension = 20.0", "tension = -1.0"), "--tension", "-1"),
+    (TWEEZERS, ("nodes = 40", "nodes = 11"), "--nodes", "11"),
     (DNA_RING_STUDY, ("superhelical_density = -0.06", "superhelical_density = -6"), "--sigma",
      "-6"),
     (DNA_RING_STUDY, ("base_pairs = 600", "base_pairs = 20"), "--bp", "20"),
@@ -586,18 +586,6 @@ def test_resume_branch_events_and_full_branch(predictor):
                 "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")},
             records={}), opts)
-
-
-TWEEZERS = """
-[rod]
-twist_ratio = 1.3333
-length_over_diameter = 20
-nodes = 40
-[problem]
-kind = "tweezers"
-tension = 20.0
-turns = [0, 1.6]
-"""
 
 
 def test_tweezers_study():

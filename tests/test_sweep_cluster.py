@@ -25,6 +25,8 @@ import pytest
 pytest.importorskip("distributed")
 xr = pytest.importorskip("xarray")
 
+from test_sweep import sweep_text
+
 from supercoil import load
 from supercoil.cli.study_runner import run_study
 from supercoil.io.study import parse_study
@@ -35,20 +37,7 @@ from supercoil.sweeps.summary import summarize
 ROOT = Path(__file__).resolve().parents[1]
 TIMEOUT = 300
 
-RINGS = """
-[rod]
-twist_ratio = 0.6667
-nodes = 24
-[problem]
-kind = "ring"
-excess_link = 2.5
-[outputs]
-figures = false
-json = false
-[sweep]
-"problem.excess_link" = [1.0, 2.0, 3.0]
-"rod.twist_ratio" = [0.6667, 1.0]
-"""
+RINGS = sweep_text('"problem.excess_link" = [1.0, 2.0, 3.0]\n"rod.twist_ratio" = [0.6667, 1.0]\n')
 
 # open rods without contact, each a few seconds: long enough to kill a worker mid-task
 TWEEZERS = """

@@ -38,7 +38,7 @@ from supercoil.topology import (
     writhe,
     writhe_reference,
 )
-from supercoil.topology.writhe import _atan2
+from supercoil.topology.solid_angles import branch_free_atan2
 from supercoil.topology.writhe_reference import solid_angle_triangles
 
 Z = np.array([0.0, 0.0, 1.0])
@@ -182,10 +182,10 @@ def test_vectorised_atan2_matches_libm() -> None:
         (1.0, 1.0),
         (3.0, -3.0),
     ]
-    values = [_atan2(float(yi), float(xi)) for yi, xi in zip(y, x)]
+    values = [branch_free_atan2(float(yi), float(xi)) for yi, xi in zip(y, x)]
     assert np.max(np.abs(np.array(values) - np.arctan2(y, x))) < 2e-15
     for yi, xi in special:
-        assert _atan2(yi, xi) == pytest.approx(math.atan2(yi, xi), abs=1e-15)
+        assert branch_free_atan2(yi, xi) == pytest.approx(math.atan2(yi, xi), abs=1e-15)
 
 
 # ---------------------------------------------------------------- exact values and sign
@@ -349,17 +349,13 @@ def test_numba_kernel_matches_numpy_reference_on_a_long_curve() -> None:
 @pytest.mark.parametrize("closed", [True, False])
 def test_serial_writhe_rows_equal_the_parallel_ones_bit_for_bit(n: int, closed: bool) -> None:
     # writhe() sums small polygons on one thread (_SERIAL_BELOW); the rows must not change
-    from supercoil.topology.writhe import (
-        _components,
-        _self_half_angle_rows,
-        _self_half_angle_rows_serial,
-        extended_vertices,
-    )
+    from supercoil.topology.polygon import coordinate_columns, extended_vertices
+    from supercoil.topology.solid_angles import self_half_angle_rows, self_half_angle_rows_serial
 
     points = random_walk(np.random.default_rng(n), n)
-    nx, ny, nz = _components(extended_vertices(points, closed))
-    assert np.array_equal(_self_half_angle_rows_serial(nx, ny, nz, closed),
-                          _self_half_angle_rows(nx, ny, nz, closed))
+    nx, ny, nz = coordinate_columns(extended_vertices(points, closed))
+    assert np.array_equal(self_half_angle_rows_serial(nx, ny, nz, closed),
+                          self_half_angle_rows(nx, ny, nz, closed))
 
 
 def nearly_crossing_quadrilateral(eps: float) -> np.ndarray:

@@ -7,10 +7,11 @@ load them. :func:`announce_compilation` lets a command say so before it starts.
 
 Numba's cache checks only the file of the function it caches: a kernel that calls a
 compiled function of another module keeps that callee's code as it was when the kernel
-was cached (a documented numba limitation). Two do
+was cached (a documented numba limitation). Three do
 (``contact.ccd._segment_advance_kernel`` calls ``contact.distance_kernels.closest_pair``;
 ``continuation.bordered_matrix._sorted_entries`` calls
-``solvers.kkt_matrix.permuted_kkt_entries``):
+``solvers.kkt_matrix.permuted_kkt_entries``; ``topology.linking._linking_half_angle_rows``
+calls ``topology.solid_angles.row_half_angles``):
 after editing such a callee, delete the caller module's cached ``*.nbi`` / ``*.nbc``
 files in its ``__pycache__`` (a fresh checkout has none).
 """

@@ -1,13 +1,16 @@
 """Options shared by the commands, spelled one way everywhere: ``--json PATH``,
-``-q/--quiet``, ``--overwrite``, and the numbers the help texts quote."""
+``-q/--quiet``, ``--overwrite``, the ``RESULT`` argument of the commands that read a
+result, and the numbers the help texts quote."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from supercoil import checks
+from supercoil.cli._common import checked_path
 
 
 def exponent(value: float) -> str:
@@ -43,3 +46,12 @@ def quiet_option(help: str = PROGRESS_HELP):
 def overwrite_option(help: str):
     """The ``--overwrite`` flag: reuse an existing output (never ``--force``)."""
     return Annotated[bool, typer.Option("--overwrite", help=help)]
+
+
+ResultArgument = Annotated[
+    Path,
+    typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
+                   "that computes (demo, diagram ring, tweezers, run, ring --out), its "
+                   "result.h5, or its diagram.json or branch.json.", show_default=False,
+                   callback=checked_path),
+]

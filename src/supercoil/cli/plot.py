@@ -13,7 +13,7 @@ from typing import Annotated
 import typer
 
 from supercoil.cli._common import checked_path, fail
-from supercoil.cli._options import overwrite_option, quiet_option
+from supercoil.cli._options import ResultArgument, overwrite_option, quiet_option
 
 KINDS = ("diagram", "contact-map", "hat-curve", "configurations")  # figures.KINDS
 FORMATS = ("png", "svg")
@@ -22,13 +22,7 @@ Overwrite = overwrite_option("Replace existing figure files of the same names.")
 
 
 def plot(
-    result: Annotated[
-        Path,
-        typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
-                       "that computes (demo, diagram ring, tweezers, run, ring --out), its "
-                       "result.h5, or its diagram.json or branch.json.", show_default=False,
-                       callback=checked_path),
-    ],
+    result: ResultArgument,
     out: Annotated[
         Path,
         typer.Option("--out", metavar="DIR", help="Folder for the figures (created if "

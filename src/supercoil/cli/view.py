@@ -12,20 +12,14 @@ from typing import Annotated
 import typer
 
 from supercoil.cli._common import checked_path, fail
-from supercoil.cli._options import overwrite_option, quiet_option
+from supercoil.cli._options import ResultArgument, overwrite_option, quiet_option
 
 Quiet = quiet_option("Print nothing on standard output; errors still go to standard error.")
 Overwrite = overwrite_option("Replace an existing --out file.")
 
 
 def view(
-    result: Annotated[
-        Path,
-        typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
-                       "that computes (demo, diagram ring, tweezers, run, ring --out), its "
-                       "result.h5, or its diagram.json or branch.json.", show_default=False,
-                       callback=checked_path),
-    ],
+    result: ResultArgument,
     out: Annotated[
         Path | None,
         typer.Option("--out", metavar="FILE.html", help="The page to write. Default: "

@@ -17,7 +17,7 @@ from supercoil.contact.samples import sample_points
 
 
 @njit(inline="always")
-def _sample_pair_time(p0, v, i, a, j, b, t2):
+def sample_pair_time(p0, v, i, a, j, b, t2):
     """Smaller root ``tau`` of ``|r0 + tau v|^2 = t2`` for sample point ``a`` of ``i``
     and ``b`` of ``j`` (positions ``p0``, displacements ``v``): -1.0 when they are
     already within (``c <= 0``), inf when they do not approach that close."""
@@ -41,26 +41,6 @@ def _sample_pair_time(p0, v, i, a, j, b, t2):
     return 2.0 * c / (-bb + math.sqrt(disc))
 
 
-@njit()
-def _first_time_kernel(p0, v, pairs, threshold):
-    """Smallest root over the sample pairs of ``pairs`` (see
-    :func:`first_time_of_approach_samples`); 0.0 as soon as one pair is within
-    ``threshold``, 1.0 when none comes that close."""
-    q = p0.shape[1]
-    t2 = threshold * threshold
-    best = 1.0
-    for p in range(pairs.shape[0]):
-        i = pairs[p, 0]
-        j = pairs[p, 1]
-        for a in range(q):
-            for b in range(q):
-                tau = _sample_pair_time(p0, v, i, a, j, b, t2)
-                if tau < 0.0:
-                    return 0.0
-                best = min(best, tau)
-    return best
-
-
 def first_time_of_approach_samples(x0: np.ndarray, dx: np.ndarray, stencil: np.ndarray,
                                    weights: np.ndarray, pairs: np.ndarray,
                                    threshold: float, points0: np.ndarray | None = None) -> float:
@@ -80,17 +60,20 @@ def first_time_of_approach_samples(x0: np.ndarray, dx: np.ndarray, stencil: np.n
         return 1.0
     p0 = sample_points(x0, stencil, weights) if points0 is None else points0
     v = sample_points(dx, stencil, weights)
-    return float(_first_time_kernel_culled(p0, v, pairs, float(threshold)))
+    return float(_first_time_kernel(p0, v, pairs, float(threshold)))
 
 
-# Relative margin of the culling bound of _first_time_kernel_culled (see there).
+# Relative margin of the culling bound of _first_time_kernel (see there).
 _CULL_MARGIN = 1e-6
 
 
 @njit()
-def _first_time_kernel_culled(p0, v, pairs, threshold):
-    """:func:`_first_time_kernel` skipping the sample pairs that provably stay farther
-    than ``threshold`` during the step; the same value.
+def _first_time_kernel(p0, v, pairs, threshold):
+    """Smallest root of :func:`sample_pair_time` over the sample pairs of ``pairs`` (see
+    :func:`first_time_of_approach_samples`): 0.0 as soon as one pair is within
+    ``threshold``, 1.0 when none comes that close; the sample pairs that provably stay
+    farther than ``threshold`` during the step are skipped (the same value as the loop
+    over every pair: ``tests/test_contact_samples_fast.py``).
 
     Segment ``i``'s sample points lie in the ball of centre ``c_i`` (their mean) and
     radius ``rho_i`` and move at most ``V_i = max_a |v_a|``; two of them, one of
@@ -145,7 +128,7 @@ def _first_time_kernel_culled(p0, v, pairs, threshold):
             if math.sqrt(h0 * h0 + h1 * h1 + h2 * h2) - radius[j] - va - speed[j] > far:
                 continue
             for b in range(q):
-                tau = _sample_pair_time(p0, v, i, a, j, b, t2)
+                tau = sample_pair_time(p0, v, i, a, j, b, t2)
                 if tau < 0.0:
                     return 0.0
                 best = min(best, tau)

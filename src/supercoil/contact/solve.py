@@ -236,7 +236,7 @@ def _exact(problem: ContactProblem, q0, opts):
     if not start.converged:
         return dataclasses.replace(start, message="warm start failed: " + start.message)
     st, force = warm.pair_forces(start.q)
-    active, forces = _independent_pairs(problem, start.q, st.pairs, force)
+    active, forces = independent_pairs(problem, start.q, st.pairs, force)
     lam = np.concatenate([start.multipliers[: problem.n_equalities], -forces])
     # a polish from next to the solution
     out = _active_set_loop(problem, start.q, active, lam, stationary, start.newton_iterations,
@@ -302,7 +302,7 @@ def _active_set_loop(problem: ContactProblem, q, active, lam, opts, total, outer
                     new_keys.add(key)
             if add:
                 grown = np.concatenate([active, np.array(add, dtype=np.int64)])
-                kept, _ = _independent_pairs(problem, q, grown,
+                kept, _ = independent_pairs(problem, q, grown,
                                              np.concatenate([-lam[m0:], np.zeros(len(add))]))
                 if len(kept) > len(active):
                     old_lam = {tuple(p): v for p, v in zip(active.tolist(), lam[m0:])}
@@ -328,7 +328,7 @@ def _active_set_loop(problem: ContactProblem, q, active, lam, opts, total, outer
                                newton_iterations=total)
 
 
-def _independent_pairs(problem: ContactProblem, q, pairs, force, rtol: float = 1e-3):
+def independent_pairs(problem: ContactProblem, q, pairs, force, rtol: float = 1e-3):
     """A maximal set of ``pairs`` with linearly independent constraint gradients.
 
     Along a line contact every segment touches two or three segments of the

@@ -52,7 +52,7 @@ from __future__ import annotations
 import copy
 import difflib
 import tomllib
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -60,192 +60,22 @@ from typing import Any
 
 from supercoil import checks
 from supercoil.errors import InputError
-from supercoil.io.study_model import MODELS, model_problem
+from supercoil.io.study_model import model_problem
+from supercoil.io.study_schema import (
+    KEY_NAMES,
+    PRESENTATION,
+    PROBLEM_KINDS,
+    REQUIRED_TABLES,
+    SCHEMA,
+    UNITS_PRESETS,
+    type_name,
+)
 
-PROBLEM_KINDS = ("ring_diagram", "ring", "tweezers")
 DEFAULT_TURNS = (0.0, 5.0)  # a tweezers study's turns when neither they nor sigma are given
-UNITS_PRESETS = ("nondimensional", "dna")
 
 
 class StudyError(InputError):
     """A study file that cannot be run; one line naming the file, the key and the problem."""
-
-
-# -- value checks: (type test, what is valid) ----------------------------------------------
-def _is_number(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
-
-
-def _is_int(v) -> bool:
-    return isinstance(v, int) and not isinstance(v, bool)
-
-
-def _type_name(v) -> str:
-    if isinstance(v, bool):
-        return "a boolean"
-    if isinstance(v, int):
-        return "an integer"
-    if isinstance(v, float):
-        return "a number"
-    if isinstance(v, str):
-        return "a string"
-    if isinstance(v, list):
-        return "a list"
-    if isinstance(v, dict):
-        return "a table"
-    return type(v).__name__
-
-
-@dataclass(frozen=True)
-class _Key:
-    valid: str  # what is valid, in words
-    check: Callable[[Any], bool]
-    default: Any = None  # or {kind: default} where the kinds differ
-    kinds: tuple[str, ...] = PROBLEM_KINDS  # problem kinds the key belongs to
-    presets: tuple[str, ...] = UNITS_PRESETS  # units presets the key belongs to
-    convert: Callable[[Any], Any] = lambda v: v
-
-
-def _real(v) -> bool:
-    return _is_number(v)
-
-
-def _choice(options: tuple[str, ...]):
-    return lambda v: isinstance(v, str) and v in options
-
-
-def _integers(v) -> bool:
-    return isinstance(v, list) and all(_is_int(m) for m in v)
-
-
-def _numbers(v) -> bool:
-    return isinstance(v, list) and all(_is_number(x) for x in v)
-
-
-_NUMBER, _INTEGER = "a number", "an integer"
-_TURNS = "a list [start, stop] of numbers of turns"
-
-# Types only: the ranges are checked by the options and problems the study constructs
-# (DiagramOptions, TweezersOptions, the ring's solver, DNAPreset), which name the input;
-# their messages are given here with the study's table and key.
-_SCHEMA: dict[str, dict[str, _Key]] = {
-    "study": {
-        "name": _Key("a string", lambda v: isinstance(v, str), ""),
-        "description": _Key("a string", lambda v: isinstance(v, str), ""),
-    },
-    "units": {
-        "preset": _Key(f"one of {', '.join(UNITS_PRESETS)}", _choice(UNITS_PRESETS),
-                       "nondimensional"),
-        "base_pairs": _Key("a whole number of base pairs", _is_int, presets=("dna",)),
-        "salt_mM": _Key("a monovalent salt concentration in mM (a number)", _real,
-                        presets=("dna",), convert=float),
-        "diameter_nm": _Key("a tube diameter in nm (a number)", _real,
-                            presets=("dna",), convert=float),
-        "temperature_K": _Key("a temperature in kelvin (a number)", _real,
-                              298.0, presets=("dna",), convert=float),
-        "twist_persistence_nm": _Key("a twist persistence length in nm (a number)",
-                                     _real, 95.0, presets=("dna",), convert=float),
-    },
-    "rod": {
-        "twist_ratio": _Key("C/A, a number", _real, presets=("nondimensional",),
-                            convert=float),
-        "length_over_diameter": _Key("L/D, a number", _real, presets=("nondimensional",),
-                                     convert=float),
-        # tweezers: 100, or n0 under "dna" (filled in by _complete_tweezers)
-        "nodes": _Key("an integer", _is_int, {"ring_diagram": 100, "ring": 100}),
-        "model": _Key('"kirchhoff" or "cosserat"', _choice(MODELS)),
-        "stretch_stiffness": _Key("EA L^2/A, a number", _real, convert=float),
-        "shear_stiffness": _Key("GA L^2/A, a number", _real, convert=float),
-    },
-    "problem": {
-        "kind": _Key(f"one of {', '.join(PROBLEM_KINDS)}", _choice(PROBLEM_KINDS)),
-        "modes": _Key("a list of Michell modes (integers), like [2, 3]", _integers,
-                      [2, 3], kinds=("ring_diagram",), convert=lambda v: sorted(v)),
-        "max_excess_link": _Key("a number of turns", _real, 6.0, kinds=("ring_diagram",),
-                                presets=("nondimensional",), convert=float),
-        "max_superhelical_density": _Key("a positive superhelical density up to 1 (e.g. "
-                                         "0.06)", lambda v: _real(v) and 0 < v <= 1, 0.06,
-                                         kinds=("ring_diagram",), presets=("dna",),
-                                         convert=float),
-        "excess_link": _Key("a number of turns", _real, kinds=("ring",),
-                            presets=("nondimensional",), convert=float),
-        "superhelical_density": _Key("a superhelical density (ring: a number, e.g. -0.06; "
-                                     "tweezers: a list [start, stop], e.g. [0, 0.06])",
-                                     lambda v: _real(v) or _numbers(v),
-                                     kinds=("ring", "tweezers"), presets=("dna",),
-                                     convert=lambda v: float(v) if _real(v)
-                                     else [float(x) for x in v]),
-        "contact": _Key("a contact treatment", lambda v: isinstance(v, str), None,
-                        kinds=("ring_diagram", "ring")),
-        "tension": _Key("a force F L^2/A (load control)", _real, kinds=("tweezers",),
-                        presets=("nondimensional",), convert=float),
-        "end_distance": _Key("z/L (displacement control)", _real, kinds=("tweezers",),
-                             presets=("nondimensional",), convert=float),
-        "force_pN": _Key("a pulling force in pN (a number)", _real,
-                         kinds=("tweezers",), presets=("dna",), convert=float),
-        # [0, 5] unless given ("dna": or superhelical_density given), by _complete_tweezers
-        "turns": _Key(_TURNS, _numbers, kinds=("tweezers",),
-                      convert=lambda v: [float(x) for x in v]),
-    },
-    "continuation": {
-        "free_max_step": _Key("a number (an arclength step, units of L)", _real,
-                              {"ring_diagram": 0.1, "tweezers": 0.1},
-                              kinds=("ring_diagram", "tweezers"), convert=float),
-        "free_max_points": _Key(_INTEGER, _is_int, 80, kinds=("ring_diagram",)),
-        "contact_max_step": _Key("a number (an arclength step, units of D)", _real, 0.5,
-                                 kinds=("ring_diagram", "tweezers"), convert=float),
-        "contact_max_points": _Key(_INTEGER, _is_int, 150, kinds=("ring_diagram",)),
-        "max_points": _Key("an integer (points per branch)", _is_int, 400,
-                           kinds=("tweezers",)),
-        "segment_points": _Key("an integer (the most points per continuation run; the "
-                               "azimuth pin is checked at every point)", _is_int, 2000,
-                               kinds=("tweezers",)),
-        "event_tolerance": _Key("a number (an arclength tolerance)", _real, 1e-8,
-                                kinds=("ring_diagram", "tweezers"), convert=float),
-        "contact_event_tolerance": _Key("a number (an arclength tolerance)", _real, 1e-6,
-                                        kinds=("ring_diagram", "tweezers"), convert=float),
-        "contact_tolerance": _Key("a number (a residual tolerance)", _real, 1e-8,
-                                  kinds=("ring_diagram", "tweezers"), convert=float),
-        "contact_gauge": _Key("true or false", lambda v: isinstance(v, bool), True,
-                              kinds=("ring_diagram",)),
-        "gauge": _Key('"node" or "integral"', _choice(("node", "integral")), "integral",
-                      kinds=("ring_diagram",)),
-        "branch_depth": _Key("1 (primary branches), 2 (and secondary) or 3 (and tertiary)",
-                             _is_int, 1, kinds=("ring_diagram",)),
-        "secondary_max_points": _Key("an integer (points per secondary half-branch)",
-                                     _is_int, 40, kinds=("ring_diagram",)),
-        "secondary_max_branches": _Key("an integer (secondary and tertiary half-branches "
-                                       "in all)", _is_int, 12, kinds=("ring_diagram",)),
-        "contact_formulation": _Key('"integral" or "pairs"', _choice(("integral", "pairs")),
-                                    "integral", kinds=("ring_diagram",)),
-        "contact_curve": _Key('"spline", "polygon" or "quintic"',
-                              _choice(("spline", "polygon", "quintic")), "spline",
-                              kinds=("ring_diagram",)),
-        "contact_predictor": _Key('"quadratic", "tangent" or "secant"',
-                                  _choice(("quadratic", "tangent", "secant")), "quadratic",
-                                  kinds=("ring_diagram",)),
-    },
-    "outputs": {
-        "figures": _Key("true or false", lambda v: isinstance(v, bool), True),
-        "json": _Key("true or false", lambda v: isinstance(v, bool), True),
-    },
-}
-# the names the options and problems give the study's keys -> "[table] key"
-_KEY_NAMES = {
-    "twist_ratio": "[rod] twist_ratio", "length_over_diameter": "[rod] length_over_diameter",
-    "n_nodes": "[rod] nodes", "treatment": "[problem] contact",
-    "superhelical_density": "[problem] superhelical_density",
-    "force_pN": "[problem] force_pN",
-    **{key: f"[problem] {key}" for key in ("modes", "max_excess_link", "contact",
-                                           "excess_link", "tension", "end_distance",
-                                           "turns")},
-    **{key: f"[units] {key}" for key in ("base_pairs", "salt_mM", "diameter_nm",
-                                         "temperature_K", "twist_persistence_nm")},
-    **{key: f"[continuation] {key}" for key in _SCHEMA["continuation"]},
-}
-REQUIRED_TABLES = ("rod", "problem")
-# the settings that do not change the computed numbers (ignored by --resume's comparison)
-PRESENTATION = ("study", "outputs")
 
 
 def _closest(word: str, valid: Iterable[str]) -> str:
@@ -341,16 +171,21 @@ def _parse_override(text: str) -> tuple[str, str, Any]:
 def load_study(path: str | Path, overrides: Iterable[str] = ()) -> Study:
     """Read and validate the study file at ``path``; ``overrides`` are
     ``TABLE.KEY=VALUE`` strings (TOML values) applied before validation."""
+    return parse_study(read_study_text(path), str(path), overrides)
+
+
+def read_study_text(path: str | Path) -> str:
+    """The text of the study file at ``path``; a :class:`StudyError` naming the path
+    when there is no such file, it is a folder, or it cannot be read as UTF-8."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise StudyError(f"{path}: no such study file") from None
     except IsADirectoryError:
         raise StudyError(f"{path}: is a folder; give a study file (.toml)") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise StudyError(f"{path}: cannot read the study file ({exc})") from None
-    return parse_study(text, str(path), overrides)
 
 
 def parse_study(text: str, source: str = "<study>", overrides: Iterable[str] = ()) -> Study:
@@ -362,21 +197,21 @@ def parse_study(text: str, source: str = "<study>", overrides: Iterable[str] = (
     raw = copy.deepcopy(raw)
     for item in overrides:
         table, key, value = _parse_override(item)
-        if table not in _SCHEMA:
-            raise StudyError(f"--set {item!r}: unknown table [{table}]{_closest(table, _SCHEMA)};"
-                             f" valid tables: {', '.join(_SCHEMA)}")
+        if table not in SCHEMA:
+            raise StudyError(f"--set {item!r}: unknown table [{table}]{_closest(table, SCHEMA)};"
+                             f" valid tables: {', '.join(SCHEMA)}")
         raw.setdefault(table, {})[key] = value
     return Study(source, text, _validate(raw, source))
 
 
 def _validate(raw: dict, source: str) -> dict:
     for table, body in raw.items():
-        if table not in _SCHEMA:
-            raise StudyError(f"{source}: unknown table [{table}]{_closest(table, _SCHEMA)}; "
-                             f"valid tables: {', '.join(f'[{t}]' for t in _SCHEMA)}")
+        if table not in SCHEMA:
+            raise StudyError(f"{source}: unknown table [{table}]{_closest(table, SCHEMA)}; "
+                             f"valid tables: {', '.join(f'[{t}]' for t in SCHEMA)}")
         if not isinstance(body, dict):
             raise StudyError(f"{source}: {table} must be a table ([{table}]), got "
-                             f"{_type_name(body)}")
+                             f"{type_name(body)}")
     for table in REQUIRED_TABLES:
         if table not in raw:
             raise StudyError(f"{source}: missing table [{table}]; a study needs "
@@ -385,17 +220,17 @@ def _validate(raw: dict, source: str) -> dict:
     if kind is None:
         raise StudyError(f"{source}: [problem] kind is missing; give one of "
                          f"{', '.join(PROBLEM_KINDS)}")
-    if not _SCHEMA["problem"]["kind"].check(kind):
+    if not SCHEMA["problem"]["kind"].check(kind):
         hint = _closest(kind, PROBLEM_KINDS) if isinstance(kind, str) else ""
         raise StudyError(f"{source}: [problem] kind = {kind!r} is not a problem kind{hint}; "
                          f"valid: {', '.join(PROBLEM_KINDS)}")
     preset = raw.get("units", {}).get("preset", "nondimensional")
-    if not _SCHEMA["units"]["preset"].check(preset):
+    if not SCHEMA["units"]["preset"].check(preset):
         hint = _closest(preset, UNITS_PRESETS) if isinstance(preset, str) else ""
         raise StudyError(f"{source}: [units] preset = {preset!r}{hint}; valid: "
                          f"{', '.join(UNITS_PRESETS)}")
     settings: dict[str, dict] = {}
-    for table, schema in _SCHEMA.items():
+    for table, schema in SCHEMA.items():
         body = raw.get(table, {})
         valid = [k for k, spec in schema.items() if kind in spec.kinds and preset in spec.presets]
         out = {}
@@ -415,7 +250,7 @@ def _validate(raw: dict, source: str) -> dict:
                                  f"{preset!r} ({other}); valid keys: {', '.join(valid)}")
             if not spec.check(value):
                 raise StudyError(f"{source}: [{table}] {key} must be {spec.valid}, got "
-                                 f"{value!r} ({_type_name(value)})")
+                                 f"{value!r} ({type_name(value)})")
             out[key] = spec.convert(value)
         for key in valid:
             default = schema[key].default
@@ -487,7 +322,7 @@ def _refused(source: str):
     try:
         yield
     except InputError as exc:
-        raise StudyError(f"{source}: {exc.renamed(_KEY_NAMES)}") from None
+        raise StudyError(f"{source}: {exc.renamed(KEY_NAMES)}") from None
 
 
 def _complete_tweezers(s: dict, preset: str, source: str) -> None:

@@ -346,7 +346,10 @@ def supported_kinds(result: ResultData) -> tuple[str, ...]:
     return tuple(k for k in KINDS if k in kinds)
 
 
-def _branch_rows(result: ResultData, keys: Sequence[str]) -> list[dict]:
+def branch_rows(result: ResultData, keys: Sequence[str]) -> list[dict]:
+    """The branches of a stored result as the rows a figure draws: ``name``, ``stable``
+    (per point), ``color`` (by the branch's place), ``linestyle`` (by its generation:
+    secondary branches dashed) and the values of each of ``keys``."""
     rows = []
     for index, b in enumerate(result.branches):
         row = {"name": b.name, "stable": stable_mask(b.points),
@@ -422,7 +425,7 @@ def figure_of(result: ResultData, kind: str):
     if kind in ("diagram", "hat-curve"):
         keys = ("writhe", param) if kind == "diagram" else ("turns", "extension")
         specials = _specials(result, keys)
-        rows = [through_special_points(r, specials, keys) for r in _branch_rows(result, keys)]
+        rows = [through_special_points(r, specials, keys) for r in branch_rows(result, keys)]
         if result.dna is None:
             return diagram_figure(rows, specials, title=result.title, x=keys[0], y=keys[1])
         from supercoil.plotting.dna import caveat_text

@@ -1,5 +1,5 @@
 """The JAX reference of the rod kernels: automatic differentiation of the formulas of
-:mod:`supercoil.rod.kernels` as first written, the oracle of the hand-derived kernels in
+:mod:`supercoil.rod.stencil_loops` as first written, the oracle of the hand-derived kernels in
 the tests (``tests/test_rod.py``) and ``benchmarks/bench_rod_kernels.py``. JAX is imported
 only when a reference is asked for (it is a test dependency)."""
 

@@ -133,16 +133,9 @@ def _kind_of(value) -> str | None:
 def load_sweep_study(path: str | Path) -> SweepStudy:
     """Read the sweep study at ``path``, check its ``[sweep]`` table and validate the
     study of every point of its grid (nothing runs)."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such study file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder; give a study file (.toml)") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot read the study file ({exc})") from None
-    return parse_sweep_study(text, str(path))
+    from supercoil.io.study import read_study_text
+
+    return parse_sweep_study(read_study_text(path), str(path))
 
 
 def parse_sweep_study(text: str, source: str = "<study>") -> SweepStudy:

@@ -7,7 +7,7 @@ where ``Ω_ij`` is the Gauss integral of edge ``i`` of ``C1`` with edge ``j`` of
 ``C2``: the signed solid angle of the spherical quadrilateral of the four
 vertex differences (Banchoff 1976; Klenin & Langowski 2000), evaluated with the
 Van Oosterom & Strackee (1983) ``atan2`` form exactly as for the writhe (see
-:mod:`supercoil.topology.writhe`). With this sign convention ``Lk = +1`` when
+:mod:`supercoil.topology.solid_angles`). With this sign convention ``Lk = +1`` when
 ``C2`` passes through a disc bounded by ``C1`` along the disc's right-hand
 normal (Ampère's law), and ``Lk(C, C') = Tw + Wr`` for a push-off ``C'`` of ``C``
 along a ribbon (Călugăreanu 1959, White 1969).
@@ -24,7 +24,8 @@ import numpy.typing as npt
 from supercoil._numba import njit
 from supercoil.errors import InputError
 from supercoil.topology.crossings import first_crossing
-from supercoil.topology.writhe import _as_polygon, _components, _row_half_angles, extended_vertices
+from supercoil.topology.polygon import as_polygon, coordinate_columns, extended_vertices
+from supercoil.topology.solid_angles import row_half_angles
 
 __all__ = ["linking_number"]
 
@@ -46,7 +47,7 @@ def _linking_half_angle_rows(
         to_start = np.empty(n2 + 1)
         to_end = np.empty(n2 + 1)
         half_angle = np.empty(n2 + 1)
-        rows[i] = _row_half_angles(ax, ay, az, i, bx, by, bz, 0, n2, to_start, to_end, half_angle)
+        rows[i] = row_half_angles(ax, ay, az, i, bx, by, bz, 0, n2, to_start, to_end, half_angle)
     return rows
 
 
@@ -75,8 +76,8 @@ def linking_number(curve1: npt.ArrayLike, curve2: npt.ArrayLike) -> float:
         of one within ``1e-15`` of their extent of an edge of the other), where
         the linking number is undefined (a jump by ±1).
     """
-    first = _as_polygon(curve1, "curve1", closed=True)
-    second = _as_polygon(curve2, "curve2", closed=True)
+    first = as_polygon(curve1, "curve1", closed=True)
+    second = as_polygon(curve2, "curve2", closed=True)
     if first.shape == second.shape and np.array_equal(first, second):
         raise InputError("curve2 is curve1 (the same vertices): the linking number of a "
                          "curve with itself is undefined (its self-linking needs a framing, "
@@ -92,6 +93,6 @@ def linking_number(curve1: npt.ArrayLike, curve2: npt.ArrayLike) -> float:
     scale = float(max(np.max(np.abs(first - centre)), np.max(np.abs(second - centre))))
     first = (first - centre) / scale
     second = (second - centre) / scale
-    ax, ay, az = _components(extended_vertices(first, closed=True))
-    bx, by, bz = _components(extended_vertices(second, closed=True))
+    ax, ay, az = coordinate_columns(extended_vertices(first, closed=True))
+    bx, by, bz = coordinate_columns(extended_vertices(second, closed=True))
     return math.fsum(_linking_half_angle_rows(ax, ay, az, bx, by, bz)) / (2.0 * math.pi)

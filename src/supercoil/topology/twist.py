@@ -35,7 +35,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from supercoil.topology.writhe import _as_polygon
+from supercoil.topology.polygon import as_polygon
 
 __all__ = ["parallel_transport", "twist_from_frames"]
 
@@ -142,7 +142,7 @@ def twist_from_frames(points: npt.ArrayLike, d1: npt.ArrayLike, closed: bool = T
         ``d1`` not unit or not normal to its edge, or two consecutive edges that
         are antiparallel (a cusp, where transport is undefined).
     """
-    vertices = _as_polygon(points, "points", closed=closed)
+    vertices = as_polygon(points, "points", closed=closed)
     frame = np.asarray(d1, dtype=np.float64)
     n_edges = vertices.shape[0] if closed else vertices.shape[0] - 1
     if frame.shape != (n_edges, 3):

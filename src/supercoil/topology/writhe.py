@@ -12,31 +12,8 @@ spherical quadrilateral with vertices
     v1 = C − A,   v2 = C − B,   v3 = D − B,   v4 = D − A   (projected on S²),
 
 and the Gauss integral of the pair equals its signed area ``Ω`` (a solid angle,
-``|Ω| < 2π``). We split the quadrilateral along ``v1–v3`` into two triangles and
-use the Van Oosterom & Strackee (1983) formula for a signed triangle,
-
-    tan(Ω_abc / 2) = a·(b × c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|),
-
-which stays accurate for nearly planar configurations. The arcsin form of
-Klenin & Langowski (2000) takes ``arcsin`` of dot products of unit normals that are
-then close to ±1, where ``arcsin`` amplifies rounding to about ``√ε ≈ 1e-8``. Both triangles share the
-numerator ``a·(b × c) = (e_i × e_j)·(A − C)`` (``e_i = B − A``, ``e_j = D − C``),
-so with denominators ``D1``, ``D2`` the two half angles add as the argument of a
-product of complex numbers:
-
-    Ω_ij = 2 arg((D1 + iN)(D2 + iN)) = 2 atan2(N (D1 + D2), D1 D2 − N²),
-
-a single ``atan2`` whose principal value is the right branch because
-``|Ω_ij| < 2π``. In floating point that branch is not safe near ``|Ω_ij| = 2π``
-(two edges nearly crossing): there ``D1 + D2 → 0`` and a rounding error in its
-sign would return ``Ω ∓ 4π``, an error of ±2 in the writhe. Both half angles
-``atan2(N, D_k)`` have the sign of ``N``, so ``Ω_ij`` has it too; the kernel
-takes ``atan2(|N (D1 + D2)|, D1 D2 − N²) ∈ [0, π]`` and gives it the sign of
-``N``, which is correct on both sides of ``|Ω| = 2π`` and costs one select.
-Edges that share a vertex are coplanar and contribute exactly 0
-and are skipped. The fast kernel evaluates that ``atan2`` with a branch-free
-rational approximation (Cephes) so that the pair loop vectorises; the numpy
-reference adds the two triangles' ``arctan2`` separately.
+``|Ω| < 2π``), evaluated as two Van Oosterom & Strackee (1983) triangles combined into
+one ``atan2`` (:mod:`supercoil.topology.solid_angles` derives it and sums the pairs).
 The pair integral is symmetric, so
 
     Wr = (1/4π) Σ_{i≠j} Ω_ij = (1/2π) Σ_{i<j} Ω_ij.
@@ -59,320 +36,27 @@ References
 from __future__ import annotations
 
 import math
-from typing import Literal
 
-import numba
 import numpy as np
 import numpy.typing as npt
 
 from supercoil._numba import njit
 from supercoil.errors import InputError
-from supercoil.topology.crossings import first_self_crossing
+from supercoil.topology.polygon import (
+    Closure,
+    coordinate_columns,
+    extended_vertices,
+    prepare_polygon,
+)
+from supercoil.topology.solid_angles import self_half_angle_rows, self_half_angle_rows_serial
 
-Closure = Literal["closed", "chord", "none", "axis"]
-
-_CLOSURES: tuple[str, ...] = ("closed", "chord", "none", "axis")
-
-__all__ = ["Closure", "writhe"]
+__all__ = ["writhe"]
 
 # Polygons of at most this many edges are summed on one thread. Waking numba's
 # OpenMP workers costs more than the work there: measured at N = 100 on the
 # shared 2-core machine, with other work between calls (as in a continuation's
 # records), 12 ms per writhe on two threads against 0.4 ms on one.
 _SERIAL_BELOW = 1000
-
-
-
-
-# --------------------------------------------------------------------------
-# validation
-# --------------------------------------------------------------------------
-
-
-def _as_polygon(points: npt.ArrayLike, name: str, closed: bool) -> np.ndarray:
-    """Return ``points`` as a C-contiguous float64 ``(n_vertices, 3)`` array, or raise.
-
-    Checks the shape, finiteness, the number of vertices (3 for a closed
-    polygon, 2 for an open one) and that no edge (including the closing edge
-    of a closed polygon) has zero length.
-    """
-    try:
-        array = np.asarray(points, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(
-            f"{name}: cannot be read as a float array ({error}); "
-            "expected an (n_vertices, 3) array of coordinates", name=name
-        ) from None
-    if array.ndim != 2 or array.shape[1] != 3:
-        raise InputError(
-            f"{name} has shape {array.shape}; expected an (n_vertices, 3) array of coordinates",
-            name=name)
-    minimum = 3 if closed else 2
-    if array.shape[0] < minimum:
-        count = "1 vertex" if array.shape[0] == 1 else f"{array.shape[0]} vertices"
-        kind = "a closed" if closed else "an open"
-        raise InputError(f"{name} has {count}; {kind} polygon needs at least {minimum} vertices",
-                         name=name)
-    if not np.all(np.isfinite(array)):
-        bad = int(np.argwhere(~np.isfinite(array))[0, 0])
-        raise InputError(f"{name} has a non-finite coordinate at vertex {bad}; all must be finite",
-                         name=name)
-    following = np.roll(array, -1, axis=0) if closed else array[1:]
-    lengths = np.linalg.norm(following - array[: following.shape[0]], axis=1)
-    zero = np.flatnonzero(lengths == 0.0)
-    if zero.size:
-        k = int(zero[0])
-        k_next = (k + 1) % array.shape[0]
-        hint = (
-            " (do not repeat the first vertex at the end of a closed polygon)"
-            if closed and k == array.shape[0] - 1
-            else ""
-        )
-        raise InputError(
-            f"{name} has a zero-length edge between vertices {k} and {k_next}; "
-            f"consecutive vertices must be distinct{hint}", name=name
-        )
-    return np.ascontiguousarray(array)
-
-
-def _as_axis(axis: npt.ArrayLike) -> np.ndarray:
-    """Return ``axis`` as a unit float64 vector of shape ``(3,)``, or raise."""
-    try:
-        vector = np.asarray(axis, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError(f"axis {axis!r} is not a vector; expected 3 finite numbers",
-                         name="axis") from None
-    if vector.shape != (3,) or not np.all(np.isfinite(vector)):
-        raise InputError(f"axis {axis!r} is not a finite 3-vector; expected 3 finite numbers",
-                         name="axis")
-    norm = float(np.linalg.norm(vector))
-    if norm == 0.0:
-        raise InputError("axis is the zero vector; expected a non-zero direction", name="axis")
-    return vector / norm
-
-
-def _check_closure(closure: str) -> None:
-    if closure not in _CLOSURES:
-        raise InputError(f"closure {closure!r} is unknown; expected one of {', '.join(_CLOSURES)}",
-                         name="closure")
-
-
-def prepare_polygon(
-    points: npt.ArrayLike, closure: str, axis: npt.ArrayLike, crossing_is_error: bool = True
-) -> tuple[np.ndarray, bool, np.ndarray | None]:
-    """Validate; return (vertices, closed polygon?, unit axis or None). A polygon that
-    meets itself is an InputError, or with ``crossing_is_error=False`` gives vertices None
-    (the writhe is undefined there)."""
-    _check_closure(closure)
-    closed = closure in ("closed", "chord")
-    vertices = _as_polygon(points, "points", closed)
-    unit_axis = _as_axis(axis) if closure == "axis" else None
-    crossing = first_self_crossing(vertices, closed)
-    if crossing is not None and not crossing_is_error:
-        return None, closed, unit_axis
-    if crossing is not None:
-        i, j = crossing
-        raise InputError(
-            f"points: edges {i} and {j} of the polygon meet (it intersects itself), where its "
-            "writhe is undefined (it jumps by 2 across a crossing); a polygon whose "
-            "non-neighbouring edges are apart is valid", name="points")
-    return vertices, closed, unit_axis
-
-
-def extended_vertices(vertices: np.ndarray, closed: bool) -> np.ndarray:
-    """Vertices with the first appended for a closed polygon: edge k is row k → row k+1."""
-    if closed:
-        return np.ascontiguousarray(np.vstack([vertices, vertices[:1]]))
-    return vertices
-
-
-def _components(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The x, y, z columns of ``(n, 3)`` ``vertices`` as three contiguous ``(n,)`` arrays."""
-    columns = np.ascontiguousarray(vertices.T)
-    return columns[0], columns[1], columns[2]
-
-
-# --------------------------------------------------------------------------
-# numpy reference
-# --------------------------------------------------------------------------
-
-
-# --------------------------------------------------------------------------
-# numba fast path
-# --------------------------------------------------------------------------
-
-
-# Cephes ``atan`` coefficients (S. L. Moshier): atan(t) = t + t z P(z)/Q(z), z = t²,
-# |t| ≤ tan(π/8); relative error about 1e-16.
-_P0, _P1, _P2, _P3, _P4 = (
-    -8.750608600031904122785e-1,
-    -1.615753718733365076637e1,
-    -7.500855792314704667340e1,
-    -1.228866684490136173410e2,
-    -6.485021904942025371773e1,
-)
-_Q0, _Q1, _Q2, _Q3, _Q4 = (
-    2.485846490142306297962e1,
-    1.650270098316988542046e2,
-    4.328810604912902668951e2,
-    4.853903996359136964868e2,
-    1.945506571482613964425e2,
-)
-_TAN_PI_8 = 0.41421356237309504880
-
-
-@njit(inline="always", error_model="numpy")
-def _atan2(y: float, x: float) -> float:
-    """``atan2(y, x)`` in ``[−π, π]`` without branches, so that loops calling it vectorise.
-
-    ``libm``'s ``atan2`` is an opaque call that keeps the pair loop scalar and
-    takes two thirds of its time. Here: ``t = min(|x|,|y|)/max(|x|,|y|) ∈ [0, 1]``,
-    reduced to ``|t'| ≤ tan(π/8)`` by ``t' = (t − 1)/(t + 1)`` (adding π/4),
-    the Cephes rational approximation, then the octant is restored by selects.
-    Agrees with ``math.atan2`` to a few units in the last place; ``atan2(0, 0) = 0``;
-    the sign of a zero ``y`` is ignored (only reached for ``x < 0``, i.e. a
-    pair subtending a solid angle of exactly 2π, which non-touching edges never do).
-    """
-    ax = abs(x)
-    ay = abs(y)
-    swap = ay > ax
-    hi = ay if swap else ax
-    lo = ax if swap else ay
-    reduce = lo > _TAN_PI_8 * hi
-    numerator = lo - hi if reduce else lo
-    denominator = lo + hi if reduce else hi
-    t = numerator / denominator if denominator > 0.0 else 0.0
-    z = t * t
-    p = (((_P0 * z + _P1) * z + _P2) * z + _P3) * z + _P4
-    q = ((((z + _Q0) * z + _Q1) * z + _Q2) * z + _Q3) * z + _Q4
-    angle = t + t * z * p / q
-    angle = angle + 0.25 * math.pi if reduce else angle
-    angle = 0.5 * math.pi - angle if swap else angle
-    angle = math.pi - angle if x < 0.0 else angle
-    return -angle if y < 0.0 else angle
-
-
-@njit(error_model="numpy")
-def _row_half_angles(
-    sx: np.ndarray,
-    sy: np.ndarray,
-    sz: np.ndarray,
-    i: int,
-    cx: np.ndarray,
-    cy: np.ndarray,
-    cz: np.ndarray,
-    j_start: int,
-    j_stop: int,
-    to_start: np.ndarray,
-    to_end: np.ndarray,
-    half_angle: np.ndarray,
-) -> float:
-    """Σ_j Ω_ij / 2 of edge ``i`` of curve ``s`` with edges ``j ∈ [j_start, j_stop)`` of ``c``.
-
-    Coordinates are split by component (``sx``, ``sy``, ``sz`` of shape
-    ``(n_s,)``; ``cx``, ``cy``, ``cz`` of shape ``(n_c,)``; edge ``k`` runs from
-    entry ``k`` to ``k+1``). ``to_start``, ``to_end``, ``half_angle`` are
-    ``(n_c,)`` scratch arrays. The distances from the two ends of edge ``i`` to
-    every column vertex are computed once (each serves two pairs); the pair
-    loop then has no loop-carried state and, with :func:`_atan2`, vectorises.
-    """
-    if j_stop <= j_start:
-        return 0.0
-    ax, ay, az = sx[i], sy[i], sz[i]
-    bx, by, bz = sx[i + 1], sy[i + 1], sz[i + 1]
-    eix, eiy, eiz = bx - ax, by - ay, bz - az
-    for j in range(j_start, j_stop + 1):
-        ux, uy, uz = cx[j] - ax, cy[j] - ay, cz[j] - az
-        wx, wy, wz = cx[j] - bx, cy[j] - by, cz[j] - bz
-        to_start[j] = math.sqrt(ux * ux + uy * uy + uz * uz)
-        to_end[j] = math.sqrt(wx * wx + wy * wy + wz * wz)
-    for j in range(j_start, j_stop):
-        # v1 = C − A, v2 = C − B, v3 = D − B, v4 = D − A for the edge pair (A→B, C→D)
-        v1x, v1y, v1z = cx[j] - ax, cy[j] - ay, cz[j] - az
-        v2x, v2y, v2z = cx[j] - bx, cy[j] - by, cz[j] - bz
-        v3x, v3y, v3z = cx[j + 1] - bx, cy[j + 1] - by, cz[j + 1] - bz
-        v4x, v4y, v4z = cx[j + 1] - ax, cy[j + 1] - ay, cz[j + 1] - az
-        ejx, ejy, ejz = cx[j + 1] - cx[j], cy[j + 1] - cy[j], cz[j + 1] - cz[j]
-        l1, l2, l3, l4 = to_start[j], to_end[j], to_end[j + 1], to_start[j + 1]
-        # N = v1·(v2 × v3) = v1·(v3 × v4) = −v1·(e_i × e_j)
-        numerator = -(
-            v1x * (eiy * ejz - eiz * ejy)
-            + v1y * (eiz * ejx - eix * ejz)
-            + v1z * (eix * ejy - eiy * ejx)
-        )
-        d12 = v1x * v2x + v1y * v2y + v1z * v2z
-        d13 = v1x * v3x + v1y * v3y + v1z * v3z
-        d23 = v2x * v3x + v2y * v3y + v2z * v3z
-        d14 = v1x * v4x + v1y * v4y + v1z * v4z
-        d34 = v3x * v4x + v3y * v4y + v3z * v4z
-        den1 = l1 * l2 * l3 + d12 * l3 + d13 * l2 + d23 * l1
-        den2 = l1 * l3 * l4 + d13 * l4 + d14 * l3 + d34 * l1
-        # Ω/2 = atan2(N, D1) + atan2(N, D2) has the sign of N and |Ω/2| < π, so the
-        # combined atan2 is taken with |imaginary part| and the sign of N restored:
-        # near |Ω| = 2π (nearly crossing edges) D1 + D2 → 0 and its rounded sign
-        # would otherwise pick the wrong branch (an error of ±2 in the writhe).
-        magnitude = _atan2(abs(numerator * (den1 + den2)), den1 * den2 - numerator * numerator)
-        half_angle[j] = -magnitude if numerator < 0.0 else magnitude
-    # four partial sums: a fixed order (reproducible) that does not serialise on one adder
-    s0 = s1 = s2 = s3 = 0.0
-    j = j_start
-    while j + 3 < j_stop:
-        s0 += half_angle[j]
-        s1 += half_angle[j + 1]
-        s2 += half_angle[j + 2]
-        s3 += half_angle[j + 3]
-        j += 4
-    while j < j_stop:
-        s0 += half_angle[j]
-        j += 1
-    return (s0 + s1) + (s2 + s3)
-
-
-@njit(error_model="numpy")
-def _mirrored_rows(nx, ny, nz, closed, k, rows):
-    """Rows ``k`` and ``n_edges − 1 − k`` of :func:`_self_half_angle_rows` (written into ``rows``)."""
-    n_edges = nx.shape[0] - 1
-    to_start = np.empty(n_edges + 1)
-    to_end = np.empty(n_edges + 1)
-    half_angle = np.empty(n_edges + 1)
-    # in a closed polygon edges 0 and n_edges − 1 are adjacent
-    stop = n_edges - 1 if closed and k == 0 else n_edges
-    rows[k] = _row_half_angles(nx, ny, nz, k, nx, ny, nz, k + 2, stop, to_start, to_end, half_angle)
-    mirror = n_edges - 1 - k
-    if mirror != k:
-        rows[mirror] = _row_half_angles(
-            nx, ny, nz, mirror, nx, ny, nz, mirror + 2, n_edges, to_start, to_end, half_angle
-        )
-
-
-@njit(parallel=True, error_model="numpy")
-def _self_half_angle_rows(
-    nx: np.ndarray, ny: np.ndarray, nz: np.ndarray, closed: bool
-) -> np.ndarray:
-    """Row sums ``(n_edges,)`` of Ω_ij/2 over non-adjacent pairs ``i < j`` of one polygon.
-
-    ``nx``, ``ny``, ``nz`` are ``(n_edges + 1,)``: edge k runs from entry k to
-    k+1. Rows ``k`` and ``n_edges − 1 − k`` are handled by the same loop
-    iteration so that every iteration has about the same number of pairs
-    (numba's ``prange`` splits iterations statically).
-    """
-    n_edges = nx.shape[0] - 1
-    rows = np.zeros(n_edges)
-    for k in numba.prange((n_edges + 1) // 2):
-        _mirrored_rows(nx, ny, nz, closed, k, rows)
-    return rows
-
-
-@njit(error_model="numpy")
-def _self_half_angle_rows_serial(
-    nx: np.ndarray, ny: np.ndarray, nz: np.ndarray, closed: bool
-) -> np.ndarray:
-    """:func:`_self_half_angle_rows` on the calling thread (the same rows, bit for bit)."""
-    n_edges = nx.shape[0] - 1
-    rows = np.zeros(n_edges)
-    for k in range((n_edges + 1) // 2):
-        _mirrored_rows(nx, ny, nz, closed, k, rows)
-    return rows
 
 
 @njit()
@@ -511,8 +195,8 @@ def writhe(
     scale = float(np.max(np.abs(centred)))
     if scale > 0.0:
         centred = centred / scale
-    nx, ny, nz = _components(extended_vertices(centred, closed))
-    rows = (_self_half_angle_rows_serial if nx.size <= _SERIAL_BELOW else _self_half_angle_rows)
+    nx, ny, nz = coordinate_columns(extended_vertices(centred, closed))
+    rows = (self_half_angle_rows_serial if nx.size <= _SERIAL_BELOW else self_half_angle_rows)
     half_angles = math.fsum(rows(nx, ny, nz, closed))
     if unit_axis is not None:
         half_angles += _tail_half_angles(np.ascontiguousarray(centred), unit_axis)

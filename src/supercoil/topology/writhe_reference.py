@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from supercoil.topology.writhe import Closure, extended_vertices, prepare_polygon
+from supercoil.topology.polygon import Closure, extended_vertices, prepare_polygon
 
 
 def solid_angle_triangles(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

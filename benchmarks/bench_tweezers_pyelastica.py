@@ -29,7 +29,7 @@ import numpy as np
 
 def main() -> None:
     import elastica as ea
-    from elastica._rotations import _get_rotation_matrix
+    from scipy.spatial.transform import Rotation
 
     parser = argparse.ArgumentParser()
     parser.add_argument("--elements", type=int, default=100)
@@ -76,8 +76,9 @@ def main() -> None:
             end = np.array(director_end, dtype=float)
             local_axis = end @ -axis  # the axis in the end's material frame
             local_axis /= np.linalg.norm(local_axis)
-            self.final_director = _get_rotation_matrix(-angle, local_axis.reshape(3, 1)
-                                                       ).reshape(3, 3) @ end
+            # PyElastica's directors are rows: turning the frame by the angle about
+            # local_axis multiplies them on the left by the rotation of that vector
+            self.final_director = Rotation.from_rotvec(angle * local_axis).as_matrix() @ end
             self.omega = angle / duration * local_axis
 
         def constrain_values(self, system, time):

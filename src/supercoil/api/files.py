@@ -31,22 +31,6 @@ def _plain(value):
     return value
 
 
-def _payload(diagram: Diagram) -> dict:
-    from supercoil.io.results import envelope
-
-    computed = diagram.computed
-    if diagram.kind == "tweezers":
-        from supercoil.problems.tweezers_output import result_payload
-
-        payload = result_payload(computed)
-    else:
-        payload = computed.payload()
-    settings = diagram.settings
-    return envelope(payload, n_nodes=settings.n_nodes, tolerances=settings.tolerances,
-                    contact_treatment=getattr(settings, "contact", "barrier"),
-                    units="nondimensional")
-
-
 def _attributes(twist_ratio: float, n_nodes: int, closed: bool,
                 length_over_diameter: float | None, **loads) -> dict:
     """The scalar attributes the readers of a result file use (``n_nodes``, ``closed``,
@@ -57,6 +41,15 @@ def _attributes(twist_ratio: float, n_nodes: int, closed: bool,
         out.update(length_over_diameter=length_over_diameter,
                    diameter=1.0 / length_over_diameter)
     return out
+
+
+def options_attributes(options, *, closed: bool) -> dict:
+    """The attributes of a result computed with ``options`` (a ring diagram's or the
+    tweezers' options)."""
+    return _attributes(options.twist_ratio, options.n_nodes, closed,
+                       options.length_over_diameter,
+                       tension=getattr(options, "tension", None),
+                       end_distance=getattr(options, "end_distance", None))
 
 
 def _equilibrium_branch(eq: Equilibrium) -> Branch:
@@ -99,14 +92,11 @@ def save(result: Diagram | Equilibrium, path: str | Path, *, overwrite: bool = F
         settings = _plain(dataclasses.asdict(result.settings))
         branches = list(result.branches.values())
         contact = getattr(result.computed, "contact_branches", frozenset())
-        summary = _payload(result)
+        summary = result.summary
         status = "complete" if result.ok else "incomplete"
         kind = result.kind
         options = result.settings
-        attributes = _attributes(options.twist_ratio, options.n_nodes, kind != "tweezers",
-                                 options.length_over_diameter,
-                                 tension=getattr(options, "tension", None),
-                                 end_distance=getattr(options, "end_distance", None))
+        attributes = options_attributes(options, closed=kind != "tweezers")
     elif isinstance(result, Equilibrium):
         ring = result.problem
         settings = {"twist_ratio": ring.rod.twist_ratio, "nodes": ring.rod.nodes,

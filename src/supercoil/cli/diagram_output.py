@@ -1,8 +1,8 @@
 """Run and write ring diagrams of the CLI (``diagram ring``, ``demo``).
 
-No numerics: :func:`run_diagram` computes a ring diagram through
-:func:`~supercoil.cli.saving.run_saving` (every accepted point appended to
-``result.h5`` as it comes), and :func:`write_diagram` stores the final
+No numerics: :func:`run_diagram` computes a ring diagram with
+:func:`supercoil.ring_diagram` through :func:`~supercoil.cli.saving.run_saving`
+(every accepted point appended to ``result.h5`` as it comes), and :func:`write_diagram` stores the final
 branches and the summary, closes the result, writes ``diagram.json`` (the
 payload of :meth:`~supercoil.problems.ring_diagram.RingDiagram.payload` with
 the JSON envelope) and then draws the three figures of
@@ -37,10 +37,9 @@ def diagram_attributes(options) -> dict:
 def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
                 command: str = "diagram ring", resume_hint: str = "") -> dict | None:
     """Compute ``options``' ring diagram into ``out`` (``result.h5``, ``diagram.json``, the
-    figures); the payload, or None after an interrupt. ``resume``: the stored
-    :class:`~supercoil.io.store.Result` to continue."""
-    from supercoil.cli.saving import open_writer, run_saving, stored_for_resume
-    from supercoil.problems.ring_diagram import ring_diagram
+    figures) with :func:`supercoil.ring_diagram`; the payload, or None after an interrupt.
+    ``resume``: the stored :class:`~supercoil.io.store.Result` to continue."""
+    from supercoil.cli.saving import open_writer, run_saving
 
     writer = open_writer(out, resume=resume is not None, problem="ring_diagram",
                          settings=diagram_settings(options, command),
@@ -48,15 +47,28 @@ def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
                          provenance={"contact_treatment": options.contact,
                                      "n_nodes": options.n_nodes})
 
-    def compute(message, on_point, on_branch):
-        stored = None if resume is None else stored_for_resume(resume, message)
-        return ring_diagram(options, progress=message, on_point=on_point,
-                            on_branch=on_branch, resume=stored)
+    def compute(message, on_point):
+        return diagram_through_api(options, progress=message, on_point=on_point, out=writer,
+                                   resume=resume is not None)
 
     diagram = run_saving(compute, writer, quiet, resume_hint)
     if diagram is None:
         return None
-    return write_diagram(diagram, out, options.contact, writer)
+    return write_diagram(diagram.computed, out, options.contact, writer)
+
+
+def diagram_through_api(options, **kwargs):
+    """:func:`supercoil.ring_diagram` of ``options`` (a
+    :class:`~supercoil.problems.ring_diagram.DiagramOptions`), with ``kwargs`` (``out``,
+    ``resume``, ``on_point``, ``progress``)."""
+    import supercoil
+    from supercoil.api.model import contact_from_name
+
+    fixed = ("twist_ratio", "length_over_diameter", "n_nodes", "contact")
+    rest = {k: v for k, v in dataclasses.asdict(options).items() if k not in fixed}
+    return supercoil.ring_diagram(
+        supercoil.Rod(options.twist_ratio, options.n_nodes),
+        contact_from_name(options.contact, options.length_over_diameter), **rest, **kwargs)
 
 
 def store_diagram(diagram, writer, summary: dict) -> None:

@@ -1,7 +1,6 @@
 """``supercoil tweezers``: a clamped rod pulled and turned (magnetic tweezers).
 
-Thin: parses and checks the options, calls
-:func:`supercoil.problems.tweezers.tweezers_branches` through
+Thin: parses and checks the options, calls :func:`supercoil.tweezers` through
 :func:`~supercoil.cli.saving.run_saving` (every accepted point appended to
 ``result.h5`` as it comes), then writes ``branch.json`` and the figures into
 ``--out`` (:mod:`supercoil.cli.tweezers_output`).
@@ -187,7 +186,7 @@ def tweezers(
     elif force_range is not None or force_step is not None:
         fail("--force-range and --force-step need --protocol force-ramp")
     from supercoil.cli.saving import nothing_to_resume, prepare_folder
-    from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+    from supercoil.problems.tweezers import TweezersOptions
     from supercoil.problems.tweezers_protocol import check_path
 
     with refused(TWEEZERS_OPTIONS):
@@ -218,7 +217,6 @@ def tweezers(
         interrupted,
         open_writer,
         run_saving,
-        stored_for_resume,
         terminate_as_interrupt,
     )
     from supercoil.cli.tweezers_output import tweezers_attributes, write_tweezers
@@ -230,10 +228,19 @@ def tweezers(
                          units="nondimensional" if preset is None else preset.name)
     hint = "continue with the same command and --resume"
 
-    def compute(message, on_point, on_branch):
-        previous = None if stored is None else stored_for_resume(stored, message)
-        return tweezers_branches(options, progress=message, on_point=on_point,
-                                 on_branch=on_branch, resume=previous)
+    def compute(message, on_point):
+        import supercoil
+
+        rod = supercoil.Rod(options.twist_ratio, options.n_nodes)
+        contact = (None if options.length_over_diameter is None
+                   else supercoil.Barrier(options.length_over_diameter))
+        problem = supercoil.Tweezers(rod, tension=options.tension,
+                                     end_distance=options.end_distance, contact=contact)
+        return supercoil.tweezers(problem, options.turns, progress=message, on_point=on_point,
+                                  out=writer, resume=stored is not None,
+                                  max_points=options.max_points,
+                                  contact_curve=options.contact_curve,
+                                  contact_formulation=options.contact_formulation).computed
 
     result = run_saving(compute, writer, quiet, hint)
     if result is None:

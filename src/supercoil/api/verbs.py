@@ -339,3 +339,36 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
                       message=message, notes=tuple(computed.notes), computed=computed)
     return _finished(diagram, writer, owned, "branch.json")
 
+
+
+def tweezers_path(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
+                  protocol: str = "up-down", step: float = 0.02,
+                  force_range: tuple[float, float] | None = None,
+                  force_step: float | None = None, **options):
+    """The quasi-static path of a tweezers experiment (load control): the state an
+    experiment follows as the end is turned slowly, with the jumps at folds.
+
+    ``protocol``: ``"up"`` (from ``turns[0]`` to ``turns[1]``), ``"up-down"`` (and
+    back) or ``"force-ramp"`` (up to ``turns[1]``, then the tension ramped down to
+    ``force_range[0]``, up to ``force_range[1]`` and back, in steps of ``force_step``;
+    default 1/50 of the range); ``step``: turns per step. Further ``options`` as for
+    :func:`tweezers`. Returns a
+    :class:`~supercoil.problems.tweezers_protocol.PathResult`: per-step records
+    (``points``), ``states``, ``jumps``, ``ok`` and ``message``.
+    """
+    from supercoil.problems.tweezers import TweezersOptions
+    from supercoil.problems.tweezers_protocol import check_path, quasistatic_path
+
+    if not isinstance(problem, Tweezers):
+        raise InputError(f"tweezers_path: expected a supercoil.Tweezers, got "
+                         f"{type(problem).__name__}")
+    rod = problem.rod
+    lod = None if problem.contact is None else problem.contact.length_over_diameter
+    settings = _settings(TweezersOptions, {
+        "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
+        "tension": problem.tension, "end_distance": problem.end_distance}, {
+        "turns": tuple(turns), **options})
+    ramp = None if force_range is None else tuple(force_range)
+    check_path(settings, protocol, step, force_range=ramp, force_step=force_step)
+    return quasistatic_path(settings, protocol, step=step, force_range=ramp,
+                            force_step=force_step)

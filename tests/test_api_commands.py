@@ -172,6 +172,7 @@ def test_tweezers_protocol_path_equals_tweezers_path(tmp_path):
 
 def test_demo_computes_through_ring_diagram(tmp_path, monkeypatch):
     """The demo's call is the one in the table of docs/api.md."""
+    from supercoil.api import verbs
     from supercoil.cli import demo
 
     calls = []
@@ -180,7 +181,7 @@ def test_demo_computes_through_ring_diagram(tmp_path, monkeypatch):
         calls.append((rod, contact, kwargs))
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(sc, "ring_diagram", stop)
+    monkeypatch.setattr(verbs, "ring_diagram", stop)
     assert cli(["demo", "--out", str(tmp_path / "d"), "--quiet"]) == 1
     (rod, contact, kwargs), = calls
     assert rod == sc.Rod(2 / 3, nodes=132) and contact == sc.Barrier(122)

@@ -372,3 +372,39 @@ def tweezers_path(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
     check_path(settings, protocol, step, force_range=ramp, force_step=force_step)
     return quasistatic_path(settings, protocol, step=step, force_range=ramp,
                             force_step=force_step)
+
+
+def diagram_of(options, **kwargs) -> Diagram:
+    """:func:`ring_diagram` or :func:`tweezers` of options already made: a
+    :class:`~supercoil.problems.ring_diagram.DiagramOptions` or a
+    :class:`~supercoil.problems.tweezers.TweezersOptions` (as the command line and the
+    study files make them); ``kwargs``: the verb's ``progress``, ``on_point``, ``out``,
+    ``resume``, ``overwrite``."""
+    from supercoil.api.model import contact_from_name
+    from supercoil.problems.ring_diagram import DiagramOptions
+    from supercoil.problems.tweezers import TweezersOptions
+
+    if isinstance(options, DiagramOptions):
+        rest = {k: v for k, v in dataclasses.asdict(options).items()
+                if k not in ("twist_ratio", "length_over_diameter", "n_nodes", "contact")}
+        return ring_diagram(Rod(options.twist_ratio, options.n_nodes),
+                            contact_from_name(options.contact, options.length_over_diameter),
+                            **rest, **kwargs)
+    if isinstance(options, TweezersOptions):
+        problem, rest = tweezers_arguments(options)
+        return tweezers(problem, **rest, **kwargs)
+    raise InputError(f"options: expected DiagramOptions or TweezersOptions, got "
+                     f"{type(options).__name__}")
+
+
+def tweezers_arguments(options) -> tuple[Tweezers, dict]:
+    """``(problem, options)`` of :func:`tweezers` and :func:`tweezers_path` for a
+    :class:`~supercoil.problems.tweezers.TweezersOptions` (``turns`` among the options)."""
+    lod = options.length_over_diameter
+    problem = Tweezers(Rod(options.twist_ratio, options.n_nodes), tension=options.tension,
+                       end_distance=options.end_distance,
+                       contact=None if lod is None else Barrier(lod))
+    rest = {k: v for k, v in dataclasses.asdict(options).items()
+            if k not in ("twist_ratio", "length_over_diameter", "n_nodes", "tension",
+                         "end_distance")}
+    return problem, rest

@@ -39,6 +39,7 @@ def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
     """Compute ``options``' ring diagram into ``out`` (``result.h5``, ``diagram.json``, the
     figures) with :func:`supercoil.ring_diagram`; the payload, or None after an interrupt.
     ``resume``: the stored :class:`~supercoil.io.store.Result` to continue."""
+    from supercoil.api.verbs import diagram_of
     from supercoil.cli.saving import open_writer, run_saving
 
     writer = open_writer(out, resume=resume is not None, problem="ring_diagram",
@@ -48,27 +49,13 @@ def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
                                      "n_nodes": options.n_nodes})
 
     def compute(message, on_point):
-        return diagram_through_api(options, progress=message, on_point=on_point, out=writer,
-                                   resume=resume is not None)
+        return diagram_of(options, progress=message, on_point=on_point, out=writer,
+                          resume=resume is not None)
 
     diagram = run_saving(compute, writer, quiet, resume_hint)
     if diagram is None:
         return None
     return write_diagram(diagram.computed, out, options.contact, writer)
-
-
-def diagram_through_api(options, **kwargs):
-    """:func:`supercoil.ring_diagram` of ``options`` (a
-    :class:`~supercoil.problems.ring_diagram.DiagramOptions`), with ``kwargs`` (``out``,
-    ``resume``, ``on_point``, ``progress``)."""
-    import supercoil
-    from supercoil.api.model import contact_from_name
-
-    fixed = ("twist_ratio", "length_over_diameter", "n_nodes", "contact")
-    rest = {k: v for k, v in dataclasses.asdict(options).items() if k not in fixed}
-    return supercoil.ring_diagram(
-        supercoil.Rod(options.twist_ratio, options.n_nodes),
-        contact_from_name(options.contact, options.length_over_diameter), **rest, **kwargs)
 
 
 def store_diagram(diagram, writer, summary: dict) -> None:

@@ -4,10 +4,10 @@
 :func:`prepare_folder` checks ``--out``, ``--overwrite`` and ``--resume``
 before anything is written (one-line errors, exit 2); :func:`open_writer`
 starts or continues the folder's ``result.h5``; :func:`run_saving` runs a
-branch computation with a progress display, appending every accepted point
-to the result as it comes (:class:`~supercoil.io.store.ResultWriter`: one
-write to the operating system per point), and turns Ctrl-C and SIGTERM into
-an ``interrupted`` result that ``--resume`` continues.
+verb (:func:`supercoil.ring_diagram`, :func:`supercoil.tweezers`) that appends
+every accepted point to the result as it comes (one write to the operating
+system per point) with a progress display, and turns SIGTERM into Ctrl-C: an
+``interrupted`` result that ``--resume`` continues.
 """
 
 from __future__ import annotations

@@ -213,15 +213,7 @@ def tweezers(
     print(f"supercoil tweezers: C/A = {twist_ratio:g}, {control}, L/D = "
           f"{length_over_diameter if length_over_diameter is not None else 'no contact'}, "
           f"N = {nodes}, turns {start:g} to {stop:g}", flush=True)
-    import supercoil
-
-    problem = supercoil.Tweezers(
-        supercoil.Rod(options.twist_ratio, options.n_nodes), tension=options.tension,
-        end_distance=options.end_distance, contact=None if options.length_over_diameter is None
-        else supercoil.Barrier(options.length_over_diameter))
-    numerics = {"max_points": options.max_points, "contact_curve": options.contact_curve,
-                "contact_formulation": options.contact_formulation}
-
+    from supercoil.api.verbs import diagram_of, tweezers_arguments, tweezers_path
     from supercoil.cli.saving import (
         interrupted,
         open_writer,
@@ -238,8 +230,8 @@ def tweezers(
     hint = "continue with the same command and --resume"
 
     def compute(message, on_point):
-        return supercoil.tweezers(problem, options.turns, progress=message, on_point=on_point,
-                                  out=writer, resume=stored is not None, **numerics).computed
+        return diagram_of(options, progress=message, on_point=on_point, out=writer,
+                          resume=stored is not None).computed
 
     result = run_saving(compute, writer, quiet, hint)
     if result is None:
@@ -251,9 +243,9 @@ def tweezers(
         warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
         try:
             with terminate_as_interrupt():
-                path = supercoil.tweezers_path(problem, options.turns, protocol=protocol,
-                                               step=step, force_range=ramp,
-                                               force_step=force_step, **numerics)
+                problem, numerics = tweezers_arguments(options)
+                path = tweezers_path(problem, protocol=protocol, step=step, force_range=ramp,
+                                     force_step=force_step, **numerics)
         except KeyboardInterrupt:
             interrupted(writer, hint + " (the quasi-static path is computed again)")
             raise typer.Exit(EXIT_NOT_CONVERGED) from None

@@ -26,6 +26,7 @@ from supercoil.api.model import (
     Rod,
     Tweezers,
 )
+from supercoil.api.outputs import Exported, export, view
 from supercoil.api.results import (
     Diagram,
     Equilibrium,
@@ -33,7 +34,8 @@ from supercoil.api.results import (
     RunStatus,
     Stability,
 )
-from supercoil.api.verbs import equilibrium, ring_diagram, stability, tweezers
+from supercoil.api.studies import run, sweep
+from supercoil.api.verbs import equilibrium, ring_diagram, stability, tweezers, tweezers_path
 from supercoil.continuation import (
     Branch,
     ContinuationOptions,
@@ -42,6 +44,8 @@ from supercoil.continuation import (
     UserEvent,
 )
 from supercoil.errors import InputError
+from supercoil.io.curves import read_curve
+from supercoil.problems.knot_ring import tight_knot as tighten
 from supercoil.topology import linking_number, writhe
 from supercoil.topology import twist_from_frames as twist
 from supercoil.topology.knots import KnotType, knot_curve, torus_knot
@@ -62,6 +66,7 @@ __all__ = [
     "Equilibrium",
     "EquilibriumStatus",
     "ExactContact",
+    "Exported",
     "InputError",
     "KnotType",
     "Penalty",
@@ -75,18 +80,25 @@ __all__ = [
     "__version__",
     "continuation",
     "equilibrium",
+    "export",
     "knot_curve",
     "knot_type",
     "linking_number",
     "load",
     "plot",
+    "read_curve",
     "ring_diagram",
+    "run",
     "save",
     "stability",
+    "sweep",
     "switch_branch",
+    "tighten",
     "torus_knot",
     "tweezers",
+    "tweezers_path",
     "twist",
+    "view",
     "writhe",
 ]
 

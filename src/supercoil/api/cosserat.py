@@ -8,12 +8,10 @@ with this model: a problem with ``contact`` is refused, naming the verb.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from supercoil.api.model import CosseratRod, Ring, Tweezers
-from supercoil.api.results import Diagram, Equilibrium, EquilibriumStatus, Stability
+from supercoil.api.results import Equilibrium, EquilibriumStatus, Stability
 from supercoil.errors import InputError
 
 
@@ -99,40 +97,48 @@ def stability(state: Equilibrium, n_modes: int, zero_tolerance: float) -> Stabil
                      certified=bool(report.certified), message=report.message)
 
 
-def ring_diagram(rod: CosseratRod, contact, settings, status_of,
-                 progress: Callable[[str], None] | None) -> Diagram:
-    """The Cosserat ring's diagram (:mod:`supercoil.problems.cosserat_ring`): the circle,
-    its bifurcations and the primary branches up to their first self-contact, that of
-    the rod's own section (diameter L / ``rod.slenderness``)."""
+def _refuse_resume(resume, verb: str) -> None:
+    if resume is not None and resume is not False:
+        raise InputError(f"resume: continuing a stored {verb} is not available with the "
+                         "Cosserat model; compute it again", name="resume")
+
+
+def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
+    """The driver of the Cosserat ring's diagram (:mod:`supercoil.problems.cosserat_ring`)
+    for :func:`supercoil.ring_diagram`: the circle, its bifurcations and the primary
+    branches up to their first self-contact, that of the rod's own section (diameter
+    L / ``rod.slenderness``). Its branches are stored when they end."""
     from supercoil.problems.cosserat_ring import cosserat_ring_diagram
 
     refuse_contact(contact, "ring_diagram (supercoil diagram ring)")
+    _refuse_resume(resume, "ring diagram")
     if settings.branch_depth != 1:
         raise InputError("branch_depth: the Cosserat ring diagram computes the primary "
                          "branches only (branch_depth 1)", name="branch_depth")
-    computed = cosserat_ring_diagram(settings, rod.stretch_stiffness, rod.shear_stiffness,
+
+    def compute(settings, progress, *, on_point=None, on_branch=None, resume=None):
+        return cosserat_ring_diagram(settings, rod.stretch_stiffness, rod.shear_stiffness,
                                      progress)
-    status, message = status_of(computed)
-    return Diagram(kind="ring_diagram", problem=Ring(rod, 0.0), settings=settings,
-                   branches={b.name: b for b in computed.branches}, status=status,
-                   message=message, notes=tuple(computed.notes), computed=computed)
+
+    return compute
 
 
-def tweezers(problem: Tweezers, settings, status_of,
-             progress: Callable[[str], None] | None) -> Diagram:
-    """The Cosserat rod in tweezers (:mod:`supercoil.problems.cosserat_tweezers`), load
-    control."""
+def tweezers_driver(problem: Tweezers, resume):
+    """The driver of the Cosserat rod in tweezers
+    (:mod:`supercoil.problems.cosserat_tweezers`, load control) for
+    :func:`supercoil.tweezers`. Its branches are stored when they end."""
     from supercoil.problems.cosserat_tweezers import cosserat_tweezers
 
     refuse_contact(problem.contact, "tweezers")
+    _refuse_resume(resume, "tweezers run")
     if problem.tension is None:
         raise InputError("end_distance: displacement control with the Cosserat model is not "
                          "available for tweezers; give tension (load control)",
                          name="end_distance")
     rod = problem.rod
-    computed = cosserat_tweezers(settings, rod.stretch_stiffness, rod.shear_stiffness,
+
+    def compute(settings, progress, *, on_point=None, on_branch=None, resume=None):
+        return cosserat_tweezers(settings, rod.stretch_stiffness, rod.shear_stiffness,
                                  progress)
-    status, message = status_of(computed)
-    return Diagram(kind="tweezers", problem=problem, settings=settings,
-                   branches={b.name: b for b in computed.branches}, status=status,
-                   message=message, notes=tuple(computed.notes), computed=computed)
+
+    return compute

@@ -15,18 +15,25 @@ from supercoil.errors import InputError
 
 def plot(result, kind: str | None = None, out: str | Path = ".",
          formats: Sequence[str] = ("png",)) -> list[Path]:
-    """Draw the figures of the stored ``result`` (a ``result.h5``, an output folder or a
-    ``diagram.json`` / ``branch.json``) into the folder ``out``; returns the files.
+    """Draw the figures of ``result`` (a ``result.h5``, an output folder, a
+    ``diagram.json`` / ``branch.json``, :func:`supercoil.load`'s result, or a Diagram or
+    Equilibrium just computed) into the folder ``out``; returns the files.
 
     ``kind``: one figure (``diagram``, ``contact-map``, ``configurations``,
     ``hat-curve``, ...); by default every kind the result has data for. ``formats``:
     ``png`` and/or ``svg``.
     """
-    from supercoil.plotting import style
-    from supercoil.plotting.figures import plot_result, supported_kinds
+    from supercoil.api.outputs import stored
     from supercoil.plotting.result_data import load_result
 
-    data = load_result(Path(result))
+    with stored(result) as source:
+        return _draw(load_result(source), kind, out, formats)
+
+
+def _draw(data, kind: str | None, out, formats: Sequence[str]) -> list[Path]:
+    from supercoil.plotting import style
+    from supercoil.plotting.figures import plot_result, supported_kinds
+
     kinds = supported_kinds(data)
     if kind is not None and kind not in kinds:
         raise InputError(f"kind: {kind!r} is not drawn for this result; valid: "

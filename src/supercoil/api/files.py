@@ -31,31 +31,6 @@ def _plain(value):
     return value
 
 
-def _payload(diagram: Diagram) -> dict:
-    from supercoil.io.results import envelope
-
-    computed = diagram.computed
-    if diagram.kind == "tweezers":
-        from supercoil.problems.tweezers_output import result_payload
-
-        payload = result_payload(computed)
-    else:
-        payload = computed.payload()
-    settings = diagram.settings
-    dna = _dna(diagram)
-    if dna is not None:
-        from supercoil.units.tweezers import tweezers_payload_in_dna_units
-
-        payload = tweezers_payload_in_dna_units(payload, dna, diagram.problem.force_pN)
-    out = envelope(payload, n_nodes=settings.n_nodes, tolerances=settings.tolerances,
-                   contact_treatment=getattr(settings, "contact", "barrier"),
-                   units="nondimensional" if dna is None else dna.name)
-    if dna is not None:
-        out["conventions"].update(dna.conventions())
-        out["provenance"]["units_preset"] = dna.record()
-    return out
-
-
 def _dna(result):
     """The DNA preset of a result in DNA units (a tweezers problem made by
     ``Tweezers.from_dna``), else None."""
@@ -72,6 +47,15 @@ def _attributes(twist_ratio: float, n_nodes: int, closed: bool,
         out.update(length_over_diameter=length_over_diameter,
                    diameter=1.0 / length_over_diameter)
     return out
+
+
+def options_attributes(options, *, closed: bool) -> dict:
+    """The attributes of a result computed with ``options`` (a ring diagram's or the
+    tweezers' options)."""
+    return _attributes(options.twist_ratio, options.n_nodes, closed,
+                       options.length_over_diameter,
+                       tension=getattr(options, "tension", None),
+                       end_distance=getattr(options, "end_distance", None))
 
 
 def _equilibrium_branch(eq: Equilibrium) -> Branch:
@@ -114,14 +98,11 @@ def save(result: Diagram | Equilibrium, path: str | Path, *, overwrite: bool = F
         settings = _plain(dataclasses.asdict(result.settings))
         branches = list(result.branches.values())
         contact = getattr(result.computed, "contact_branches", frozenset())
-        summary = _payload(result)
+        summary = result.summary
         status = "complete" if result.ok else "incomplete"
         kind = result.kind
         options = result.settings
-        attributes = _attributes(options.twist_ratio, options.n_nodes, kind != "tweezers",
-                                 options.length_over_diameter,
-                                 tension=getattr(options, "tension", None),
-                                 end_distance=getattr(options, "end_distance", None))
+        attributes = options_attributes(options, closed=kind != "tweezers")
         if _dna(result) is not None:
             from supercoil.units.tweezers import dna_attributes
 

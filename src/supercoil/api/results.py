@@ -15,6 +15,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from types import MappingProxyType
 
 import numpy as np
@@ -178,7 +179,7 @@ class Diagram:
     branches were computed with; ``branches``: a read-only mapping of names to
     :class:`~supercoil.continuation.Branch` (in the order computed);
     ``status``/``message``: complete, or which branch stopped and why; ``notes``:
-    what the run observed (thresholds, hand-overs). ``payload`` is the JSON
+    what the run observed (thresholds, hand-overs). :attr:`summary` is the JSON
     document the command line writes (``diagram.json`` or ``branch.json``).
     """
 
@@ -204,6 +205,36 @@ class Diagram:
 
     def __len__(self) -> int:
         return len(self.branches)
+
+    @cached_property
+    def summary(self) -> dict:
+        """The JSON summary of the run with its envelope, as ``diagram.json`` (a ring
+        diagram) or ``branch.json`` (tweezers) holds it: one record per point, the
+        special points, the branches with their status, the notes (``docs/results.md``).
+        Computed once."""
+        from supercoil.io.results import envelope
+
+        computed, settings = self.computed, self.settings
+        if self.kind == "tweezers":
+            from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
+
+            payload = result_payload(computed)
+            dna = getattr(self.problem, "dna", None)
+            if dna is not None:
+                from supercoil.units.tweezers import tweezers_payload_in_dna_units
+
+                payload = tweezers_payload_in_dna_units(payload, dna, self.problem.force_pN)
+            data = envelope(payload, n_nodes=settings.n_nodes, tolerances=settings.tolerances,
+                            contact_treatment="barrier" if computed.contact_problem
+                            else "none",
+                            units="nondimensional" if dna is None else dna.name)
+            data["conventions"].update(TWEEZERS_CONVENTIONS)
+            if dna is not None:
+                data["conventions"].update(dna.conventions())
+                data["provenance"]["units_preset"] = dna.record()
+            return data
+        return envelope(computed.payload(), n_nodes=settings.n_nodes,
+                        tolerances=settings.tolerances, contact_treatment=settings.contact)
 
     def __repr__(self) -> str:
         names = ", ".join(f"{name} ({len(b)})" for name, b in self.branches.items())

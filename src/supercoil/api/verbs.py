@@ -28,6 +28,7 @@ from supercoil.api.results import (
     RunStatus,
     Stability,
 )
+from supercoil.continuation.branch import Branch
 from supercoil.errors import InputError
 
 RING_TOLERANCE = 1e-10  # Newton's residual for a ring without contact
@@ -192,9 +193,64 @@ def _settings(cls, fixed: dict, options: dict):
         raise InputError(str(exc)) from None
 
 
+def _computed(kind: str, settings, compute, progress, on_point, out, resume, overwrite,
+              attributes: dict, provenance: dict):
+    """Run ``compute(settings, progress, on_point=, on_branch=, resume=)`` (a problem's
+    driver) with the recording of ``out`` and the branches of ``resume``; returns
+    ``(computed, writer, owned)``."""
+    from supercoil.api import recording
+    from supercoil.io.store import ResultWriter
+
+    if isinstance(resume, bool) or resume is None:
+        again = bool(resume)
+        source = None
+    else:
+        again, source = False, resume
+    given = isinstance(out, ResultWriter)
+    if again and out is None:
+        raise InputError("resume=True continues the result in out; give out (its folder), or "
+                         "give the stored result to continue as resume")
+    if overwrite and (again or source is not None) and not given:
+        raise InputError("resume and overwrite exclude each other: resume continues the "
+                         "stored result, overwrite replaces it")
+    stored = None
+    if source is not None:
+        stored = recording.stored_branches(source, kind, settings)
+    elif again and not given:
+        stored = recording.stored_branches(out, kind, settings)
+    writer = out if given else None
+    if out is not None and not given:
+        writer = recording.open_folder(out, kind=kind, options=settings,
+                                       attributes=attributes, provenance=provenance,
+                                       overwrite=overwrite, resume=again)
+    if again and given:
+        stored = writer.stored_branches()
+    say = progress or (lambda message: None)
+    if stored is not None:
+        recording.announce(stored, say)
+    with recording.recording(writer, on_point, lambda name: name.endswith("_contact")) as (
+            point, final):
+        computed = compute(settings, say, on_point=point, on_branch=final, resume=stored)
+        if writer is not None:
+            recording.store_branches(writer, computed.branches, computed.contact_branches)
+    return computed, writer, writer is not None and not given
+
+
+def _finished(diagram: Diagram, writer, owned: bool, json_name: str) -> Diagram:
+    """Close an owned result with the diagram's summary and write its JSON beside it."""
+    if owned:
+        from supercoil.api.recording import finish
+        from supercoil.io.results import write_json
+
+        finish(writer, diagram)
+        write_json(diagram.summary, writer.path.parent / json_name)
+    return diagram
+
+
 def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: float = 6.0,
                  modes: tuple[int, ...] = (2, 3), progress: Callable[[str], None] | None = None,
-                 **options) -> Diagram:
+                 on_point: Callable[[Branch], None] | None = None, out=None,
+                 resume=None, overwrite: bool = False, **options) -> Diagram:
     """The bifurcation diagram of a ring in its excess link, with self-contact.
 
     The circle is followed in ``dLk`` through Michell's bifurcations; the primary
@@ -204,36 +260,64 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     ``max_excess_link`` (Coleman & Swigon 2000, Figures 1-4). Further ``options``
     are those of :class:`supercoil.problems.ring_diagram.DiagramOptions`
     (``branch_depth``, ``contact_max_points``, ``contact_max_step``, ...).
-    ``progress(message)`` is called as branches start.
+
+    ``on_point(branch)`` is called after every accepted point with the branch so
+    far (its last point the new one), ``progress(message)`` as branches start.
+    ``out``: an output folder (created if missing): every accepted point is
+    appended to ``out/result.h5`` before ``on_point`` sees it, so a run stopped
+    by Ctrl-C, a signal or a crash keeps every point reported; at the end the
+    file gets the final branches, the summary and the status, and ``diagram.json``
+    (the summary, :attr:`Diagram.summary`) is written beside it. An existing
+    ``result.h5`` is refused unless ``overwrite``. ``out`` may also be an open
+    :class:`supercoil.io.store.ResultWriter`: the points and final branches are
+    stored in it, and the caller adds the summary and status and closes it. On
+    Ctrl-C the result is closed with status ``interrupted`` (``failed`` on an
+    error) and the exception raised again. ``resume``: ``True`` continues the
+    result in ``out``; a result (:func:`supercoil.load`'s, or its file or
+    folder) is continued from: its finished branches are kept, the others
+    continued from their last point. The stored options must be these.
     """
-    from supercoil.problems.ring_diagram import DiagramOptions
-    from supercoil.problems.ring_diagram import ring_diagram as compute
+    from supercoil.api.files import options_attributes
+    from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
+
+    compute = ring_diagram
 
     if isinstance(rod, CosseratRod):
         settings = _settings(DiagramOptions, {
             "twist_ratio": rod.twist_ratio, "length_over_diameter": rod.slenderness,
             "n_nodes": rod.nodes}, {
             "max_excess_link": max_excess_link, "modes": tuple(modes), **options})
-        return cosserat.ring_diagram(rod, contact, settings, _run_status, progress)
-    if not isinstance(rod, Rod):
-        raise InputError(f"rod: expected a supercoil.Rod or supercoil.CosseratRod, got {rod!r}")
-    contact = Barrier(100.0) if contact is None else contact
-    if not isinstance(contact, Contact):
-        raise InputError(f"contact: expected a Barrier or Penalty, got {contact!r}")
-    settings = _settings(DiagramOptions, {
-        "twist_ratio": rod.twist_ratio, "length_over_diameter": contact.length_over_diameter,
-        "n_nodes": rod.nodes, "contact": contact.treatment}, {
-        "max_excess_link": max_excess_link, "modes": tuple(modes), **options})
-    computed = compute(settings, progress)
+        compute = cosserat.ring_diagram_driver(rod, contact, settings, resume)
+        problem = Ring(rod, 0.0)
+    else:
+        if not isinstance(rod, Rod):
+            raise InputError(f"rod: expected a supercoil.Rod or supercoil.CosseratRod, got "
+                             f"{rod!r}")
+        contact = Barrier(100.0) if contact is None else contact
+        if not isinstance(contact, Contact):
+            raise InputError(f"contact: expected a Barrier or Penalty, got {contact!r}")
+        settings = _settings(DiagramOptions, {
+            "twist_ratio": rod.twist_ratio,
+            "length_over_diameter": contact.length_over_diameter,
+            "n_nodes": rod.nodes, "contact": contact.treatment}, {
+            "max_excess_link": max_excess_link, "modes": tuple(modes), **options})
+        problem = Ring(rod, 0.0, contact)
+    computed, writer, owned = _computed(
+        "ring_diagram", settings, compute, progress, on_point, out, resume, overwrite,
+        options_attributes(settings, closed=True),
+        {"contact_treatment": settings.contact, "n_nodes": settings.n_nodes})
     status, message = _run_status(computed)
-    return Diagram(kind="ring_diagram", problem=Ring(rod, 0.0, contact), settings=settings,
-                   branches={b.name: b for b in computed.branches}, status=status,
-                   message=message, notes=tuple(computed.notes), computed=computed)
+    diagram = Diagram(kind="ring_diagram", problem=problem, settings=settings,
+                      branches={b.name: b for b in computed.branches}, status=status,
+                      message=message, notes=tuple(computed.notes), computed=computed)
+    return _finished(diagram, writer, owned, "diagram.json")
 
 
 def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
              superhelical_density: tuple[float, float] | None = None,
-             progress: Callable[[str], None] | None = None, **options) -> Diagram:
+             progress: Callable[[str], None] | None = None,
+             on_point: Callable[[Branch], None] | None = None, out=None, resume=None,
+             overwrite: bool = False, **options) -> Diagram:
     """The branches of a rod in magnetic tweezers turned through ``turns = (start, stop)``
     (default (0, 5)).
 
@@ -245,7 +329,24 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
     both). Further ``options`` are those of
     :class:`supercoil.problems.tweezers.TweezersOptions` (``max_points``,
     ``contact_max_step``, ...).
+
+    ``on_point(branch)`` is called after every accepted point with the branch so
+    far (its last point the new one), ``progress(message)`` as branches start.
+    ``out``: an output folder (created if missing): every accepted point is
+    appended to ``out/result.h5`` before ``on_point`` sees it, so a run stopped
+    by Ctrl-C, a signal or a crash keeps every point reported; at the end the
+    file gets the final branches, the summary and the status, and ``branch.json``
+    (the summary, :attr:`Diagram.summary`) is written beside it. An existing
+    ``result.h5`` is refused unless ``overwrite``. ``out`` may also be an open
+    :class:`supercoil.io.store.ResultWriter`: the points and final branches are
+    stored in it, and the caller adds the summary and status and closes it. On
+    Ctrl-C the result is closed with status ``interrupted`` (``failed`` on an
+    error) and the exception raised again. ``resume``: ``True`` continues the
+    result in ``out``; a result (:func:`supercoil.load`'s, or its file or
+    folder) is continued from: its finished branches are kept, the others
+    continued from their last point. The stored options must be these.
     """
+    from supercoil.api.files import options_attributes
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
     if not isinstance(problem, Tweezers):
@@ -265,10 +366,96 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
         "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
         "tension": problem.tension, "end_distance": problem.end_distance}, {
         "turns": tuple(turns), **options})
+    attributes = options_attributes(settings, closed=False)
+    if problem.dna is not None:
+        from supercoil.units.tweezers import dna_attributes
+
+        attributes.update(dna_attributes(problem.dna, problem.force_pN))
+    compute = tweezers_branches
     if isinstance(rod, CosseratRod):
-        return cosserat.tweezers(problem, settings, _run_status, progress)
-    computed = tweezers_branches(settings, progress)
+        compute = cosserat.tweezers_driver(problem, resume)
+    computed, writer, owned = _computed(
+        "tweezers", settings, compute, progress, on_point, out, resume, overwrite,
+        attributes,
+        {"contact_treatment": "barrier" if lod else "none", "n_nodes": settings.n_nodes})
     status, message = _run_status(computed)
-    return Diagram(kind="tweezers", problem=problem, settings=settings,
-                   branches={b.name: b for b in computed.branches}, status=status,
-                   message=message, notes=tuple(computed.notes), computed=computed)
+    diagram = Diagram(kind="tweezers", problem=problem, settings=settings,
+                      branches={b.name: b for b in computed.branches}, status=status,
+                      message=message, notes=tuple(computed.notes), computed=computed)
+    return _finished(diagram, writer, owned, "branch.json")
+
+
+
+def tweezers_path(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
+                  protocol: str = "up-down", step: float = 0.02,
+                  force_range: tuple[float, float] | None = None,
+                  force_step: float | None = None, **options):
+    """The quasi-static path of a tweezers experiment (load control): the state an
+    experiment follows as the end is turned slowly, with the jumps at folds.
+
+    ``protocol``: ``"up"`` (from ``turns[0]`` to ``turns[1]``), ``"up-down"`` (and
+    back) or ``"force-ramp"`` (up to ``turns[1]``, then the tension ramped down to
+    ``force_range[0]``, up to ``force_range[1]`` and back, in steps of ``force_step``;
+    default 1/50 of the range); ``step``: turns per step. Further ``options`` as for
+    :func:`tweezers`. Returns a
+    :class:`~supercoil.problems.tweezers_protocol.PathResult`: per-step records
+    (``points``), ``states``, ``jumps``, ``ok`` and ``message``.
+    """
+    from supercoil.problems.tweezers import TweezersOptions
+    from supercoil.problems.tweezers_protocol import check_path, quasistatic_path
+
+    if not isinstance(problem, Tweezers):
+        raise InputError(f"tweezers_path: expected a supercoil.Tweezers, got "
+                         f"{type(problem).__name__}")
+    rod = problem.rod
+    lod = None if problem.contact is None else problem.contact.length_over_diameter
+    settings = _settings(TweezersOptions, {
+        "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
+        "tension": problem.tension, "end_distance": problem.end_distance}, {
+        "turns": tuple(turns), **options})
+    ramp = None if force_range is None else tuple(force_range)
+    check_path(settings, protocol, step, force_range=ramp, force_step=force_step)
+    return quasistatic_path(settings, protocol, step=step, force_range=ramp,
+                            force_step=force_step)
+
+
+def diagram_of(options, rod=None, **kwargs) -> Diagram:
+    """:func:`ring_diagram` or :func:`tweezers` of options already made: a
+    :class:`~supercoil.problems.ring_diagram.DiagramOptions` or a
+    :class:`~supercoil.problems.tweezers.TweezersOptions` (as the command line and the
+    study files make them); ``kwargs``: the verb's ``progress``, ``on_point``, ``out``,
+    ``resume``, ``overwrite``. ``rod``: a :class:`~supercoil.api.model.CosseratRod` to
+    compute with instead of the Kirchhoff rod the options describe."""
+    from supercoil.api.model import contact_from_name
+    from supercoil.problems.ring_diagram import DiagramOptions
+    from supercoil.problems.tweezers import TweezersOptions
+
+    if isinstance(options, DiagramOptions):
+        rest = {k: v for k, v in dataclasses.asdict(options).items()
+                if k not in ("twist_ratio", "length_over_diameter", "n_nodes", "contact")}
+        if rod is not None:
+            rest.pop("contact", None)
+            return ring_diagram(rod, None, **rest, **kwargs)
+        return ring_diagram(Rod(options.twist_ratio, options.n_nodes),
+                            contact_from_name(options.contact, options.length_over_diameter),
+                            **rest, **kwargs)
+    if isinstance(options, TweezersOptions):
+        problem, rest = tweezers_arguments(options)
+        if rod is not None:
+            problem = dataclasses.replace(problem, rod=rod, contact=None)
+        return tweezers(problem, **rest, **kwargs)
+    raise InputError(f"options: expected DiagramOptions or TweezersOptions, got "
+                     f"{type(options).__name__}")
+
+
+def tweezers_arguments(options) -> tuple[Tweezers, dict]:
+    """``(problem, options)`` of :func:`tweezers` and :func:`tweezers_path` for a
+    :class:`~supercoil.problems.tweezers.TweezersOptions` (``turns`` among the options)."""
+    lod = options.length_over_diameter
+    problem = Tweezers(Rod(options.twist_ratio, options.n_nodes), tension=options.tension,
+                       end_distance=options.end_distance,
+                       contact=None if lod is None else Barrier(lod))
+    rest = {k: v for k, v in dataclasses.asdict(options).items()
+            if k not in ("twist_ratio", "length_over_diameter", "n_nodes", "tension",
+                         "end_distance")}
+    return problem, rest

@@ -1,9 +1,9 @@
 """``supercoil demo``: the bifurcation diagram of a DNA-like ring with self-contact.
 
 Coleman & Swigon's DNA example (Coleman & Swigon 2000; its diagram in Coleman &
-Swigon 2002, Figures 1-4): C/A = 2/3, L/D = 122. Calls
-:func:`supercoil.problems.ring_diagram.ring_diagram` with the settings below and
-writes its files with :mod:`supercoil.cli.diagram_output`. No numerics here.
+Swigon 2002, Figures 1-4): C/A = 2/3, L/D = 122. Computes
+:func:`supercoil.ring_diagram` with the settings below and writes its files with
+:mod:`supercoil.cli.diagram_output`. No numerics here.
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """``supercoil diagram ring``: the ring's bifurcation diagram with self-contact.
 
 Thin: parses the options into :class:`~supercoil.problems.ring_diagram.DiagramOptions`
-(which validates them), checks the output folder, and computes and writes the
-diagram with :mod:`supercoil.cli.diagram_output`.
+(which validates them), checks the output folder, and computes the diagram with
+:func:`supercoil.ring_diagram` and writes it with :mod:`supercoil.cli.diagram_output`.
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """Run and write ring diagrams of the CLI (``diagram ring``, ``demo``).
 
-No numerics: :func:`run_diagram` computes a ring diagram through
-:func:`~supercoil.cli.saving.run_saving` (every accepted point appended to
-``result.h5`` as it comes), and :func:`write_diagram` stores the final
+No numerics: :func:`run_diagram` computes a ring diagram with
+:func:`supercoil.ring_diagram` through :func:`~supercoil.cli.saving.run_saving`
+(every accepted point appended to ``result.h5`` as it comes), and :func:`write_diagram` stores the final
 branches and the summary, closes the result, writes ``diagram.json`` (the
 payload of :meth:`~supercoil.problems.ring_diagram.RingDiagram.payload` with
 the JSON envelope) and then draws the three figures of
@@ -38,12 +38,12 @@ def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
                 command: str = "diagram ring", resume_hint: str = "",
                 rod=None) -> dict | None:
     """Compute ``options``' ring diagram into ``out`` (``result.h5``, ``diagram.json``, the
-    figures); the payload, or None after an interrupt. ``resume``: the stored
-    :class:`~supercoil.io.store.Result` to continue. ``rod``: a
-    :class:`~supercoil.CosseratRod` for the Cosserat model's diagram
-    (:mod:`supercoil.problems.cosserat_ring`), None for the Kirchhoff rod's."""
-    from supercoil.cli.saving import open_writer, run_saving, stored_for_resume
-    from supercoil.problems.ring_diagram import ring_diagram
+    figures) with :func:`supercoil.ring_diagram`; the payload, or None after an interrupt.
+    ``resume``: the stored :class:`~supercoil.io.store.Result` to continue. ``rod``: a
+    :class:`~supercoil.CosseratRod` for the Cosserat model's diagram, None for the
+    Kirchhoff rod's."""
+    from supercoil.api.verbs import diagram_of
+    from supercoil.cli.saving import open_writer, run_saving
 
     writer = open_writer(out, resume=resume is not None, problem="ring_diagram",
                          settings=diagram_settings(options, command),
@@ -51,20 +51,14 @@ def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
                          provenance={"contact_treatment": options.contact,
                                      "n_nodes": options.n_nodes})
 
-    def compute(message, on_point, on_branch):
-        if rod is not None:
-            from supercoil.problems.cosserat_ring import cosserat_ring_diagram
-
-            return cosserat_ring_diagram(options, rod.stretch_stiffness, rod.shear_stiffness,
-                                         message)
-        stored = None if resume is None else stored_for_resume(resume, message)
-        return ring_diagram(options, progress=message, on_point=on_point,
-                            on_branch=on_branch, resume=stored)
+    def compute(message, on_point):
+        return diagram_of(options, rod=rod, progress=message, on_point=on_point, out=writer,
+                          resume=resume is not None)
 
     diagram = run_saving(compute, writer, quiet, resume_hint)
     if diagram is None:
         return None
-    return write_diagram(diagram, out, options.contact, writer)
+    return write_diagram(diagram.computed, out, options.contact, writer)
 
 
 def store_diagram(diagram, writer, summary: dict) -> None:

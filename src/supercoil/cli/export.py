@@ -1,5 +1,6 @@
 """``supercoil export RESULT``: one state of a result file to VTK, XYZ, PDB or OBJ.
 
+Thin: checks the options and the output path, then writes with :func:`supercoil.export`.
 Lengths are written in the result's units: nm for a DNA study, units of the
 rod length L otherwise (then ``pdb`` needs ``--bp`` to know the base pairs).
 """
@@ -54,8 +55,7 @@ def export_command(
 
     VTK polydata with the tube radius (ParaView), XYZ, PDB-style coarse-grained DNA
     (one bead per base pair) or an OBJ tube mesh, in the result's units (nm for DNA)."""
-    from supercoil.io.exports import SUFFIXES, export_state
-    from supercoil.io.store import ResultFileError, load
+    from supercoil.io.exports import SUFFIXES
     if fmt is None:
         by_suffix = {v: k for k, v in SUFFIXES.items()}
         fmt = by_suffix.get(out.suffix.lower())
@@ -79,54 +79,12 @@ def export_command(
     if path_kind("--out", out.parent) != "folder":
         fail(f"--out {out}: folder {out.parent} does not exist; give a path in an existing "
              "folder")
-    # a summary (diagram.json, branch.json) names the result file beside it
-    path = result.parent if result.suffix == ".json" and result.is_file() else result
-    try:
-        data = load(path)
-    except ResultFileError as exc:
-        fail(str(exc))
-    path = data.path
-    names = data.branch_names
-    if not names:
-        fail(f"{path}: has no branch yet (the run stopped before its first point)")
-    name = branch if branch is not None else names[-1]
-    if name not in names:
-        from difflib import get_close_matches
+    import supercoil
 
-        close = get_close_matches(name, names, n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
-        fail(f"--branch {name!r}: {path} has no such branch{hint}; branches: {', '.join(names)}")
-    k = len(data.branch(name))
-    if not -k <= point < k:
-        fail(f"--point {point}: branch {name!r} has {k} points; give 0 to {k - 1} (or -1 for "
-             "the last)")
-    index = point % k
-    points = data.centreline(name, index)
-    radius = data.diameter / 2 if data.diameter is not None else None
-    length_nm = data.attributes.get("length_nm")
-    unit = "L"
-    if length_nm is not None:
-        scale, unit = float(length_nm), "nm"
-    elif bp is not None:
-        scale, unit = bp * RISE_NM_PER_BP, "nm"
-    else:
-        scale = 1.0
-    if fmt == "pdb" and unit != "nm":
-        fail(f"--format pdb: {path} is nondimensional; give --bp N to read the rod as N base "
-             "pairs of DNA, or export xyz/vtk/obj")
-    if fmt == "obj" and radius is None:
-        fail(f"--format obj: {path} has no tube diameter (a study without self-contact); "
-             "export vtk or xyz")
-    b = data.branch(name)
-    title = (f"supercoil {data.problem}: branch {name}, point {index}, {b.parameter} = "
-             f"{float(b.parameter_values[index]):.10g}, lengths in {unit}")
-    try:
-        export_state(out, fmt, points * scale, closed=data.closed,
-                     radius=None if radius is None else radius * scale,
-                     rise=RISE_NM_PER_BP, title=title, sides=sides)
-    except ValueError as exc:
-        fail(f"--format {fmt}: {exc}")
-    except OSError as exc:
-        fail(f"--out {out}: cannot write ({exc.strerror or exc})")
+    with refused({"branch": "--branch", "point": "--point", "format": "--format",
+                  "base_pairs": "--bp", "path": "--out", "sides": "--sides"}):
+        done = supercoil.export(result, out, format=fmt, branch=branch, point=point,
+                                sides=sides, base_pairs=bp, overwrite=overwrite)
     if not quiet:
-        print(f"wrote {out} ({fmt}, branch {name}, point {index}, lengths in {unit})")
+        print(f"wrote {out} ({done.format}, branch {done.branch}, point {done.point}, lengths "
+              f"in {done.unit})")

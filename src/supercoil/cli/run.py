@@ -19,7 +19,6 @@ input (the study file, the folder, a result file that does not match).
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated
 
@@ -113,45 +112,14 @@ def _prepare_folder(out: Path, spec, resume: bool, overwrite: bool):
     """The folder checks of :func:`supercoil.cli.saving.prepare_folder` (one-line errors,
     nothing written before they pass); with ``resume`` the stored result (a
     :class:`~supercoil.io.store.Result`) computed from the same study, else None."""
+    from supercoil.api.studies import study_mismatch
     from supercoil.cli.saving import prepare_folder
 
     stored = prepare_folder(out, overwrite=overwrite, resume=resume, what="its results")
     if stored is not None:
-        mismatch = settings_mismatch(stored, spec)
+        mismatch = study_mismatch(stored, spec)
         if mismatch:
             fail(f"--resume: {out / RESULT_FILE} was computed with another study ({mismatch}); "
                  "resume with the same study, or start anew with --overwrite or another "
                  "--out")
     return stored
-
-
-def settings_mismatch(stored, spec) -> str | None:
-    """The first computed setting that differs between a result file and a study, or None."""
-    if stored.problem != spec.kind:
-        return f"problem {stored.problem!r}, the study's {spec.kind!r}"
-    have = {k: v for k, v in stored.settings.items() if k not in ("study", "outputs")}
-    want = _plain(spec.computed_settings())
-    for table in sorted(set(have) | set(want)):
-        a, b = have.get(table, {}), want.get(table, {})
-        for key in sorted(set(a) | set(b)):
-            x, y = a.get(key), b.get(key)
-            if not _same(x, y):
-                return f"[{table}] {key} = {x!r} in the file, {y!r} in the study"
-    return None
-
-
-def _plain(value):
-    import json
-
-    from supercoil.io.results import to_jsonable
-
-    return json.loads(json.dumps(to_jsonable(value)))
-
-
-def _same(x, y) -> bool:
-    if isinstance(x, float) or isinstance(y, float):
-        try:
-            return math.isclose(float(x), float(y), rel_tol=1e-12, abs_tol=0.0)
-        except (TypeError, ValueError):
-            return False
-    return x == y

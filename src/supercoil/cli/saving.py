@@ -4,20 +4,20 @@
 :func:`prepare_folder` checks ``--out``, ``--overwrite`` and ``--resume``
 before anything is written (one-line errors, exit 2); :func:`open_writer`
 starts or continues the folder's ``result.h5``; :func:`run_saving` runs a
-branch computation with a progress display, appending every accepted point
-to the result as it comes (:class:`~supercoil.io.store.ResultWriter`: one
-write to the operating system per point), and turns Ctrl-C and SIGTERM into
-an ``interrupted`` result that ``--resume`` continues.
+verb (:func:`supercoil.ring_diagram`, :func:`supercoil.tweezers`) that appends
+every accepted point to the result as it comes (one write to the operating
+system per point) with a progress display, and turns SIGTERM into Ctrl-C: an
+``interrupted`` result that ``--resume`` continues.
 """
 
 from __future__ import annotations
 
 import contextlib
-import math
 import signal
 import threading
 from pathlib import Path
 
+from supercoil.api.recording import kept, plain, settings_mismatch
 from supercoil.cli._common import MAX_NAME_BYTES, fail, path_kind, warn
 
 RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
@@ -38,36 +38,6 @@ def terminate_as_interrupt():
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
-
-
-def plain(value):
-    """``value`` as JSON would give it back (tuples as lists, numpy numbers as numbers)."""
-    import json
-
-    from supercoil.io.results import to_jsonable
-
-    return json.loads(json.dumps(to_jsonable(value)))
-
-
-def settings_mismatch(have, want, where: str = "") -> str | None:
-    """The first difference between stored settings ``have`` and ``want`` (plain data;
-    floats equal to 1e-12 relative), or None."""
-    if isinstance(have, dict) and isinstance(want, dict):
-        for key in sorted(set(have) | set(want)):
-            found = settings_mismatch(have.get(key), want.get(key), f"{where}.{key}"
-                                      if where else str(key))
-            if found:
-                return found
-        return None
-    if isinstance(have, float) or isinstance(want, float):
-        try:
-            if math.isclose(float(have), float(want), rel_tol=1e-12, abs_tol=0.0):
-                return None
-        except (TypeError, ValueError):
-            pass
-    elif have == want:
-        return None
-    return f"{where} = {have!r} in the file, {want!r} now"
 
 
 def prepare_folder(out: Path, *, overwrite: bool, resume: bool, problem: str | None = None,
@@ -154,8 +124,9 @@ def _close_as(writer, status: str, message: str) -> None:
 
 
 def run_saving(compute, writer, quiet: bool = False, resume_hint: str = ""):
-    """Run ``compute(message, on_point, on_branch)`` with a progress display, storing every
-    accepted point in ``writer`` as it comes and every final branch when it is final.
+    """Run ``compute(message, on_point)`` -- a verb (:func:`supercoil.ring_diagram`,
+    :func:`supercoil.tweezers`) storing every accepted point in ``writer`` as it comes,
+    called with ``out=writer`` -- with a progress display; SIGTERM is turned into Ctrl-C.
 
     Returns what ``compute`` returns (the writer still open), or None after Ctrl-C or
     SIGTERM: the result then has status ``interrupted`` and is closed, and a warning says
@@ -164,48 +135,32 @@ def run_saving(compute, writer, quiet: bool = False, resume_hint: str = ""):
     """
     from supercoil.cli.progress import Progress
 
-    saved = {"points": 0}
     with Progress(quiet) as progress, terminate_as_interrupt():
         def on_point(branch) -> None:
-            writer.append(branch, contact=branch.name.endswith("_contact"))
-            saved["points"] += 1
             k = len(branch)
             step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
             progress.point(branch.name, branch.parameter, float(branch.parameter_values[-1]),
                            step, k)
 
-        def on_branch(branch, contact) -> None:
-            writer.write_branch(branch, complete=True, contact=contact)
-
         try:
-            return compute(progress.message, on_point, on_branch)
+            return compute(progress.message, on_point)
         except KeyboardInterrupt:
             interrupted(writer, resume_hint)
             return None
         except BaseException as exc:
-            _close_as(writer, "failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+            if writer.status == "running":
+                _close_as(writer, "failed",
+                          f"{type(exc).__name__}: {' '.join(str(exc).split())}")
             raise
 
 
 def interrupted(writer, resume_hint: str = "") -> None:
-    """Close ``writer`` as ``interrupted`` and say what was kept."""
-    stored = {name: len(b) for name, (b, _) in writer.stored_branches().items()}
-    kept = ", ".join(f"{name} ({k} points)" for name, k in stored.items()) or "no branch"
-    message = f"interrupted; kept {kept}"
-    _close_as(writer, "interrupted", message)
-    warn(f"interrupted: kept {kept} in {writer.path.resolve()}"
+    """Close ``writer`` as ``interrupted`` (unless the verb did) and say what was kept."""
+    what = kept(writer)
+    if writer.status == "running":
+        _close_as(writer, "interrupted", f"interrupted; kept {what}")
+    warn(f"interrupted: kept {what} in {writer.path.resolve()}"
          + (f"; {resume_hint}" if resume_hint else ""))
-
-
-def stored_for_resume(stored, progress_message=None) -> dict:
-    """name -> (branch, complete) of a stored result (``--resume``), announced."""
-    out = {name: (b, name in stored.complete_branches) for name, b in stored.branches.items()}
-    if progress_message is not None:
-        kept = [n for n, (b, done) in out.items() if done]
-        partial = [f"{n} ({len(b)} points)" for n, (b, done) in out.items() if not done and len(b)]
-        progress_message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
-                         f"{', '.join(partial) or 'no branch'}")
-    return out
 
 
 def figures_interrupted(out: Path) -> None:

@@ -1,9 +1,10 @@
 """Running a study (:class:`~supercoil.io.study.Study`) into a folder: what ``supercoil
 run`` and each task of ``supercoil sweep`` do.
 
-:func:`run_study` writes ``result.h5`` point by point as the problem reports points
-(:class:`~supercoil.io.store.ResultWriter`), then the JSON summary and the figures
-the study asks for. A ``ring`` study is solved through :func:`supercoil.equilibrium`.
+:func:`run_study` writes ``result.h5`` point by point: a ring diagram and a tweezers
+study are computed by :func:`supercoil.ring_diagram` and :func:`supercoil.tweezers`,
+which store every point as it comes; a ``ring`` study is solved through
+:func:`supercoil.equilibrium`. Then the JSON summary and the figures the study asks for.
 """
 
 from __future__ import annotations
@@ -49,13 +50,15 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
     except KeyboardInterrupt:
         message = (f"interrupted by the user; {saved['points']} continuation points saved "
                    "so far")
-        writer.set_status("interrupted", message)
-        writer.close()
+        if writer.status == "running":  # the verbs close their result themselves
+            writer.set_status("interrupted", message)
+            writer.close()
         return {"status": "interrupted", "message": message, "files": [RESULT_FILE],
                 "notes": []}
     except BaseException as exc:
-        writer.set_status("failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
-        writer.close()
+        if writer.status == "running":
+            writer.set_status("failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+            writer.close()
         raise
     summary = outcome["summary"]
     writer.set_summary(summary)
@@ -127,10 +130,9 @@ def _envelope(spec, payload: dict, tolerances: dict) -> dict:
     return data
 
 
-def _point_saver(writer, progress, saved: dict, contact_names=()):
+def _point_counter(progress, saved: dict):
+    """``on_point`` of the verbs (which store each point): counted and shown."""
     def on_point(branch) -> None:
-        writer.append(branch, contact=branch.name in contact_names
-                      or branch.name.endswith("_contact"))
         saved["points"] += 1
         k = len(branch)
         step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
@@ -138,17 +140,6 @@ def _point_saver(writer, progress, saved: dict, contact_names=()):
                        k)
 
     return on_point
-
-
-def _stored_for_resume(writer, progress) -> dict:
-    """The stored branches (name -> (branch, complete)), announced on ``progress``."""
-    stored = writer.stored_branches()
-    kept = [n for n, (b, complete) in stored.items() if complete]
-    partial = [f"{n} ({len(b)} points)" for n, (b, complete) in stored.items()
-               if not complete and len(b)]
-    progress.message(f"resume: kept {', '.join(kept) or 'no branch'}; continuing "
-                     f"{', '.join(partial) or 'no branch'}")
-    return stored
 
 
 def _outcome(ok: bool, payload: dict, summary: dict, notes: list) -> dict:
@@ -165,36 +156,19 @@ def _outcome(ok: bool, payload: dict, summary: dict, notes: list) -> dict:
 
 
 def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict:
-    from supercoil.problems.ring_diagram import ring_diagram
+    from supercoil.api.verbs import diagram_of
 
     options = spec.diagram_options()
     notes = []
-
-    def on_branch(branch, contact: bool) -> None:
-        writer.write_branch(branch, complete=True, contact=contact)
-
-    kwargs = {"progress": progress.message, "on_point": _point_saver(writer, progress, saved),
-              "on_branch": on_branch}
-    if resume:
-        kwargs["resume"] = _stored_for_resume(writer, progress)
     s = spec.settings
     progress.message(f"ring diagram: C/A = {s['rod']['twist_ratio']:.6g}, L/D = "
                      f"{s['rod']['length_over_diameter']:.6g}, N = {s['rod']['nodes']}, modes "
                      f"{', '.join(map(str, s['problem']['modes']))}, dLk <= "
                      f"{s['problem']['max_excess_link']:.6g}")
     rod = spec.rod()
-    if rod.model == "cosserat":
-        from supercoil.problems.cosserat_ring import cosserat_ring_diagram
-
-        diagram = cosserat_ring_diagram(options, rod.stretch_stiffness, rod.shear_stiffness,
-                                        progress.message)
-    else:
-        diagram = ring_diagram(options, **kwargs)
-    stored_names = set(writer.branch_names())
-    for branch in diagram.branches:
-        writer.write_branch(branch, complete=True, contact=branch.name in diagram.contact_branches)
-    for name in stored_names - {b.name for b in diagram.branches}:
-        writer.remove_branch(name)
+    diagram = diagram_of(options, rod=rod if rod.model == "cosserat" else None,
+                         progress=progress.message, on_point=_point_counter(progress, saved),
+                         out=writer, resume=resume).computed
     payload = diagram.payload()
     preset = spec.dna_preset()
     if preset is not None:
@@ -239,34 +213,20 @@ def diagram_in_dna_units(payload: dict, preset, max_sigma: float) -> dict:
 
 
 def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
-    from supercoil.problems.tweezers import tweezers_branches
+    from supercoil.api.verbs import diagram_of
     from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
 
     options = spec.tweezers_options()
     notes = []
-    stored = _stored_for_resume(writer, progress) if resume else None
     control = (f"F L^2/A = {options.tension:.6g}" if options.load_control
                else f"z/L = {options.end_distance:.6g}")
     progress.message(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
                      f"{options.length_over_diameter or 'no contact'}, N = {options.n_nodes}, "
                      f"turns {options.turns[0]:g} to {options.turns[1]:g}")
     rod = spec.rod()
-    if rod.model == "cosserat":
-        from supercoil.problems.cosserat_tweezers import cosserat_tweezers
-
-        result = cosserat_tweezers(options, rod.stretch_stiffness, rod.shear_stiffness,
-                                   progress.message)
-    else:
-        result = tweezers_branches(
-            options, progress=progress.message, on_point=_point_saver(writer, progress, saved),
-            on_branch=lambda branch, contact: writer.write_branch(branch, complete=True,
-                                                                  contact=contact),
-            resume=stored)
-    stored_names = set(writer.branch_names())
-    for branch in result.branches:
-        writer.write_branch(branch, complete=True, contact=branch.name in result.contact_branches)
-    for name in stored_names - {b.name for b in result.branches}:
-        writer.remove_branch(name)
+    result = diagram_of(options, rod=rod if rod.model == "cosserat" else None,
+                        progress=progress.message, on_point=_point_counter(progress, saved),
+                        out=writer, resume=resume).computed
     payload = result_payload(result)
     preset = spec.dna_preset()
     if preset is not None:

@@ -1,7 +1,6 @@
 """``supercoil tweezers``: a clamped rod pulled and turned (magnetic tweezers).
 
-Thin: parses and checks the options, calls
-:func:`supercoil.problems.tweezers.tweezers_branches` through
+Thin: parses and checks the options, calls :func:`supercoil.tweezers` through
 :func:`~supercoil.cli.saving.run_saving` (every accepted point appended to
 ``result.h5`` as it comes), then writes ``branch.json`` and the figures into
 ``--out`` (:mod:`supercoil.cli.tweezers_output`).
@@ -231,7 +230,7 @@ def tweezers(
     elif force_range is not None or force_step is not None:
         fail("--force-range and --force-step need --protocol force-ramp")
     from supercoil.cli.saving import nothing_to_resume, prepare_folder
-    from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+    from supercoil.problems.tweezers import TweezersOptions
     from supercoil.problems.tweezers_protocol import check_path
 
     with refused(TWEEZERS_OPTIONS):
@@ -264,11 +263,11 @@ def tweezers(
           + ("" if preset is None else f" (sigma {start / preset.relaxed_link:.4g} to "
              f"{stop / preset.relaxed_link:.4g}; DNA {preset.base_pairs} bp, "
              f"{force_pN:g} pN, D = {preset.effective_diameter_nm:.3g} nm)"), flush=True)
+    from supercoil.api.verbs import diagram_of, tweezers_arguments, tweezers_path
     from supercoil.cli.saving import (
         interrupted,
         open_writer,
         run_saving,
-        stored_for_resume,
         terminate_as_interrupt,
     )
     from supercoil.cli.tweezers_output import tweezers_attributes, write_tweezers
@@ -280,30 +279,23 @@ def tweezers(
                          units="nondimensional" if preset is None else preset.name)
     hint = "continue with the same command and --resume"
 
-    def compute(message, on_point, on_branch):
-        if model == "cosserat":
-            from supercoil.problems.cosserat_tweezers import cosserat_tweezers
-
-            return cosserat_tweezers(options, rod.stretch_stiffness, rod.shear_stiffness,
-                                     message)
-        previous = None if stored is None else stored_for_resume(stored, message)
-        return tweezers_branches(options, progress=message, on_point=on_point,
-                                 on_branch=on_branch, resume=previous)
+    def compute(message, on_point):
+        return diagram_of(options, rod=rod if model == "cosserat" else None, progress=message,
+                          on_point=on_point, out=writer, resume=stored is not None).computed
 
     result = run_saving(compute, writer, quiet, hint)
     if result is None:
         raise typer.Exit(EXIT_NOT_CONVERGED)
     path = None
     if protocol != "up":
-        from supercoil.problems.tweezers_protocol import quasistatic_path
-
         what = ("and back" if protocol == "up-down" else
                 f"then the force from {tension:g} to {ramp[0]:g}, {ramp[1]:g} and back")
         warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
         try:
             with terminate_as_interrupt():
-                path = quasistatic_path(options, protocol, step=step, force_range=ramp,
-                                        force_step=force_step)
+                problem, numerics = tweezers_arguments(options)
+                path = tweezers_path(problem, protocol=protocol, step=step, force_range=ramp,
+                                     force_step=force_step, **numerics)
         except KeyboardInterrupt:
             interrupted(writer, hint + " (the quasi-static path is computed again)")
             raise typer.Exit(EXIT_NOT_CONVERGED) from None

@@ -76,6 +76,11 @@ class Tightening:
     def writhe(self) -> float:
         return float(writhe(self.points))
 
+    def __repr__(self) -> str:
+        return (f"Tightening({self.status}: L/D = {self.length_over_diameter:.6g}, "
+                f"{len(self.points)} nodes, {len(self.history)} steps, "
+                f"min gap {self.min_gap_over_diameter:.3g} D)")
+
     def record(self) -> dict:
         """The JSON keys of ``supercoil tighten``: L/D (the ropelength at the tight
         limit), writhe, the smallest radius of curvature over D, the contact keys

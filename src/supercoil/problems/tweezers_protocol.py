@@ -56,6 +56,10 @@ class PathResult:
     ok: bool
     message: str
 
+    def __repr__(self) -> str:
+        return (f"PathResult({'ok' if self.ok else 'stopped'}: {len(self.points)} steps, "
+                f"{len(self.jumps)} jumps; {self.message})")
+
 
 def _minimise(problem, rod, q, contact: bool):
     set_pin(problem, rod, q)

@@ -391,15 +391,17 @@ def test_overwrite_replaces_the_run_files_only(tmp_path, capsys):
 
 
 def run_diagram(tmp_path, name, progress=None, resume=False, text=RING_DIAGRAM):
-    from supercoil.cli.study_runner import run_study
+    from supercoil.api.study_run import run_study
 
     out = tmp_path / name
     out.mkdir(exist_ok=True)
-    return out, run_study(parse_study(text), out, resume=resume, progress=progress)
+    callbacks = {} if progress is None else {"progress": progress.message,
+                                             "on_point": progress.point}
+    return out, run_study(parse_study(text), out, resume=resume, **callbacks)
 
 
 class InterruptAt:
-    """A progress sink that raises KeyboardInterrupt at its ``n``-th message or point."""
+    """Progress callbacks that raise KeyboardInterrupt at the ``n``-th message or point."""
 
     def __init__(self, n: int):
         self.n, self.seen = n, 0

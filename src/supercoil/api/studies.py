@@ -9,11 +9,14 @@
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
 from supercoil.errors import InputError
+
+log = logging.getLogger(__name__)
 
 
 def _study_text(study) -> tuple[str, str]:
@@ -118,7 +121,10 @@ def run(study, out: str | Path | None = None, *, overrides: Iterable[str] = (),
     except OSError as exc:
         raise InputError(f"out: cannot create {folder} ({exc.strerror or exc})",
                          name="out") from None
-    run_study(spec, folder, resume=resume, progress=progress, on_point=on_point)
+    outcome = run_study(spec, folder, resume=resume, progress=progress, on_point=on_point)
+    if outcome["status"] == "interrupted" and not outcome.get("resumable", True):
+        log.warning("interrupted while drawing the figures: the data are complete in %s; draw "
+                    "the figures with supercoil.plot", result_path.resolve())
     return load(result_path)
 
 

@@ -88,8 +88,8 @@ def run_study(spec, out: Path, *, resume: bool = False,
         try:
             files += _figures(result_path, out, outcome["notes"])
         except KeyboardInterrupt:
-            log.warning("interrupted while drawing the figures: the data are complete in %s",
-                        result_path.resolve())
+            log.info("interrupted while drawing the figures: the data are complete in %s",
+                     result_path.resolve())
             return {**outcome, "status": "interrupted", "files": files, "resumable": False,
                     "message": "interrupted while drawing the figures (the data are complete)"}
     return {**outcome, "files": files}

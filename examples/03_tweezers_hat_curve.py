@@ -12,7 +12,7 @@ athermal: the extension before buckling is the full contour length.
 from __future__ import annotations
 
 import supercoil as sc
-from supercoil.units.dna import tweezers_parameters
+from supercoil.units.tweezers import tweezers_parameters
 
 
 def main(base_pairs: int = 600, force_pN: float = 0.5, nodes: int = 80,

@@ -219,7 +219,8 @@ def _stop(*_args, **_kwargs):
 def fuzz_world(files, tmp_path_factory):
     """A working folder, the input files by name, and the computations replaced by _stop
     (the property is about validation; each case would otherwise start a computation)."""
-    from supercoil.cli import diagram_output, saving, study_runner
+    from supercoil.api import study_run
+    from supercoil.cli import diagram_output, saving
     from supercoil.plotting import figures, viewer
     from supercoil.problems import ring, ring_contact
 
@@ -241,7 +242,7 @@ def fuzz_world(files, tmp_path_factory):
         patch.setattr(ring_contact, "Rod", _stop)
         patch.setattr(saving, "prepare_folder", prepared_then_stop)
         patch.setattr(diagram_output, "run_diagram", _stop)
-        patch.setattr(study_runner, "run_study", _stop)
+        patch.setattr(study_run, "run_study", _stop)
         patch.setattr(figures, "plot_result", _stop)
         patch.setattr(viewer, "write_viewer", _stop)
         from supercoil.cli import demo

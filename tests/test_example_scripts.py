@@ -10,7 +10,7 @@ import pytest
 
 import supercoil as sc
 from supercoil.problems.greenhill import critical_turns
-from supercoil.units.dna import tweezers_parameters
+from supercoil.units.tweezers import tweezers_parameters
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

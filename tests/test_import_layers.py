@@ -11,6 +11,7 @@ import, module-level ones for the cycles, which are what Python runs on import):
 * plotting and I/O import no solver, stability analysis or continuation algorithm: of
   the continuation only its records (the ``Branch`` and ``SpecialPoint`` of
   ``continuation.branch``, the status of ``continuation.options``);
+* the command line sits on top: no module outside ``supercoil.cli`` imports it;
 * the graph of the package's module-level imports has no cycle.
 """
 
@@ -100,6 +101,17 @@ def test_the_package_has_no_import_cycle():
     for name in graph:
         if name not in state:
             visit(name, [])
+
+
+def test_nothing_below_the_command_line_imports_it():
+    modules = _modules(None)
+    below = {name: path for name, path in modules.items()
+             if name != "supercoil.cli" and not name.startswith("supercoil.cli.")}
+    assert len(below) > 150 and len(below) < len(modules)
+    found = {name: sorted(i for i in _imports(path)
+                          if i == "supercoil.cli" or i.startswith("supercoil.cli."))
+             for name, path in below.items()}
+    assert {name: names for name, names in found.items() if names} == {}
 
 
 # what plotting and I/O may take from the numerical layers: the continuation's records

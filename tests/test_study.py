@@ -365,6 +365,52 @@ def test_ring_study_stores_one_state(tmp_path, capsys):
     np.testing.assert_allclose(radii, 1 / (48 * math.sin(math.pi / 24)), rtol=1e-8)
 
 
+def test_a_run_in_python_speaks_through_its_callbacks_only(tmp_path, capsys):
+    """The library's run prints nothing and handles no signal: its lines go to
+    ``progress``, and ``on_point`` sees every point the result file stores of the
+    continued branches."""
+    import signal
+
+    from supercoil.api.study_run import run_study
+
+    messages, points = [], []
+
+    def on_point(branch):
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+        points.append((branch.name, len(branch)))
+
+    outcome = run_study(parse_study(RING_DIAGRAM), tmp_path, progress=messages.append,
+                        on_point=on_point)
+    assert capsys.readouterr() == ("", "")
+    assert messages[0].startswith("ring diagram: C/A = 0.6667")
+    result = supercoil.load(tmp_path)
+    assert outcome["status"] == result.status
+    # every continued branch point by point (the circle, known in closed form, is not)
+    assert {b for b, _ in points} == set(result.branch_names) - {"circle"}
+    for name in result.branch_names[1:]:
+        counts = [k for b, k in points if b == name]
+        assert counts == list(range(1, len(result.branch(name)) + 1)), name
+
+
+def test_an_interrupt_while_drawing_keeps_the_data_and_says_so(tmp_path, capsys,
+                                                                 monkeypatch):
+    from supercoil.plotting import figures
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(figures, "plot_result", interrupted)
+    study = write_study(tmp_path, RING + "[outputs]\nfigures = true\n")
+    out = tmp_path / "o"
+    assert cli(["run", str(study), "--out", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "interrupted while drawing the figures" in err and "supercoil plot" in err
+    assert "--resume" not in err
+    result = supercoil.load(out)
+    assert result.status == "complete"
+    assert json.loads((out / "ring.json").read_text()) == result.summary
+
+
 def test_json_to_standard_output(tmp_path, capsys):
     study = write_study(tmp_path, RING)
     out = tmp_path / "o"
@@ -391,15 +437,17 @@ def test_overwrite_replaces_the_run_files_only(tmp_path, capsys):
 
 
 def run_diagram(tmp_path, name, progress=None, resume=False, text=RING_DIAGRAM):
-    from supercoil.cli.study_runner import run_study
+    from supercoil.api.study_run import run_study
 
     out = tmp_path / name
     out.mkdir(exist_ok=True)
-    return out, run_study(parse_study(text), out, resume=resume, progress=progress)
+    callbacks = {} if progress is None else {"progress": progress.message,
+                                             "on_point": progress.point}
+    return out, run_study(parse_study(text), out, resume=resume, **callbacks)
 
 
 class InterruptAt:
-    """A progress sink that raises KeyboardInterrupt at its ``n``-th message or point."""
+    """Progress callbacks that raise KeyboardInterrupt at the ``n``-th message or point."""
 
     def __init__(self, n: int):
         self.n, self.seen = n, 0

@@ -206,7 +206,7 @@ json = false
 def tweezers_sweep(tmp_path_factory):
     """A one-task tweezers sweep run in this process: (folder, sweep, dataset, result)."""
     from supercoil import load
-    from supercoil.cli.study_runner import run_study
+    from supercoil.api.study_run import run_study
     from supercoil.sweeps.summary import summarize
 
     folder = tmp_path_factory.mktemp("tweezers")

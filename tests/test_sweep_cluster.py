@@ -28,7 +28,7 @@ xr = pytest.importorskip("xarray")
 from test_sweep import sweep_text
 
 from supercoil import load
-from supercoil.cli.study_runner import run_study
+from supercoil.api.study_run import run_study
 from supercoil.io.study import parse_study
 from supercoil.sweeps.dataset import load_sweep
 from supercoil.sweeps.grid import load_sweep_study

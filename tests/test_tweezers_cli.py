@@ -154,7 +154,8 @@ def test_up_down_needs_tension(tmp_path, capsys):
 
 
 def test_dna_units(tmp_path, capsys):
-    from supercoil.units.dna import DNAPreset, tweezers_parameters
+    from supercoil.units.dna import DNAPreset
+    from supercoil.units.tweezers import tweezers_parameters
 
     out = tmp_path / "dna"
     status = run(["tweezers", "--dna", "--bp", "300", "--force-pN", "0.3", "--turns", "0:1.2",

@@ -329,8 +329,7 @@ class Tweezers:
         >>> problem.rod.nodes, round(problem.tension, 1)
         (240, 5062.8)
         """
-        from supercoil.units.dna import tweezers_parameters
-        from supercoil.units.tweezers import nodes_or_n0
+        from supercoil.units.tweezers import nodes_or_n0, tweezers_parameters
 
         if not isinstance(dna, DNAPreset):
             raise InputError(f"dna: expected a supercoil.DNAPreset, got {dna!r}", name="dna")

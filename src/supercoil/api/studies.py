@@ -9,11 +9,14 @@
 
 from __future__ import annotations
 
+import logging
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
 from supercoil.errors import InputError
+
+log = logging.getLogger(__name__)
 
 
 def _study_text(study) -> tuple[str, str]:
@@ -73,7 +76,8 @@ def _default_folder(study) -> Path:
 
 
 def run(study, out: str | Path | None = None, *, overrides: Iterable[str] = (),
-        resume: bool = False, overwrite: bool = False, progress=None):
+        resume: bool = False, overwrite: bool = False,
+        progress: Callable[[str], None] | None = None, on_point: Callable | None = None):
     """Run ``study`` -- a study file (TOML; ``examples/*.toml``) or its tables as a dict
     (``{"rod": {...}, "problem": {...}, ...}``) -- into the folder ``out`` (default: the
     file's name without ``.toml``) and return the stored result (:func:`supercoil.load`'s).
@@ -82,13 +86,13 @@ def run(study, out: str | Path | None = None, *, overrides: Iterable[str] = (),
     and the figures (``[outputs] figures``). ``overrides``: ``"TABLE.KEY=VALUE"``
     strings (TOML values) applied first. An existing non-empty ``out`` is refused unless
     ``overwrite`` (its result, summary and figures replaced) or ``resume`` (an
-    interrupted run of the same study continued). ``progress``: an object with
-    ``message(text)`` and ``point(branch, parameter, value, step, count)``. The
-    result's ``status`` says how the run ended (``complete``, ``incomplete``,
+    interrupted run of the same study continued). ``progress(message)`` receives the
+    lines worth showing; ``on_point(branch)`` is called after every stored point, as by
+    :func:`supercoil.ring_diagram`. The result's ``status`` says how the run ended (``complete``, ``incomplete``,
     ``interrupted``); Ctrl-C during the run stores ``interrupted``.
     """
     from supercoil.api.recording import RESULT_FILE
-    from supercoil.cli.study_runner import run_study
+    from supercoil.api.study_run import run_study
     from supercoil.io.store import load
     from supercoil.io.study import parse_study
 
@@ -117,7 +121,10 @@ def run(study, out: str | Path | None = None, *, overrides: Iterable[str] = (),
     except OSError as exc:
         raise InputError(f"out: cannot create {folder} ({exc.strerror or exc})",
                          name="out") from None
-    run_study(spec, folder, resume=resume, progress=progress)
+    outcome = run_study(spec, folder, resume=resume, progress=progress, on_point=on_point)
+    if outcome["status"] == "interrupted" and not outcome.get("resumable", True):
+        log.warning("interrupted while drawing the figures: the data are complete in %s; draw "
+                    "the figures with supercoil.plot", result_path.resolve())
     return load(result_path)
 
 

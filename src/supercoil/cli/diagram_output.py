@@ -16,8 +16,9 @@ from pathlib import Path
 
 import typer
 
+from supercoil.api.recording import RESULT_FILE
 from supercoil.cli._common import EXIT_NOT_CONVERGED, warn
-from supercoil.cli.saving import RESULT_FILE, figures_interrupted
+from supercoil.cli.saving import figures_interrupted
 
 DIAGRAM_FILES = (RESULT_FILE, "diagram.json", "link_writhe.png", "contact_map.png",
                  "configurations.png")

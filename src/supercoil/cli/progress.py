@@ -72,3 +72,9 @@ class Progress:
         if first or n_points % self.every == 0:
             elapsed = time.perf_counter() - self._start
             print(f"  {branch}: {numbers} ({elapsed:.0f} s)", file=self.stream, flush=True)
+
+    def on_point(self, branch) -> None:
+        """The ``on_point`` of the verbs: :meth:`point` of the branch's last point."""
+        k = len(branch)
+        step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
+        self.point(branch.name, branch.parameter, float(branch.parameter_values[-1]), step, k)

@@ -1,5 +1,6 @@
 """``supercoil run STUDY.toml``: run a study file, saving as it goes (the running itself
-is :func:`supercoil.cli.study_runner.run_study`).
+is :func:`supercoil.api.study_run.run_study`; this command adds the progress display,
+SIGTERM handled as Ctrl-C, the messages and the exit status).
 
 Writes into ``--out DIR`` (default: the study file's name without ``.toml``,
 in the current folder):
@@ -24,9 +25,9 @@ from typing import Annotated
 
 import typer
 
+from supercoil.api.recording import RESULT_FILE
 from supercoil.cli._common import EXIT_NOT_CONVERGED, checked_path, fail, warn
 from supercoil.cli._options import overwrite_option, quiet_option
-from supercoil.cli.saving import RESULT_FILE
 
 Quiet = quiet_option("No progress output, and no list of the files written.")
 Overwrite = overwrite_option("Write into an existing non-empty DIR, replacing its result.h5, "
@@ -59,9 +60,10 @@ def run_command(
 
     The result file (result.h5, read with supercoil.load) is saved as the run goes;
     Ctrl-C stops it and keeps every point computed so far, --resume continues it."""
+    from supercoil.api.study_run import run_study
     from supercoil.cli._common import check_json_target, write_json_or_fail
     from supercoil.cli.progress import Progress
-    from supercoil.cli.study_runner import run_study
+    from supercoil.cli.saving import figures_interrupted, terminate_as_interrupt
     from supercoil.io.study import StudyError, load_study
 
     quiet = quiet or json_path == "-"
@@ -88,10 +90,13 @@ def run_command(
     from supercoil.io.store import ResultFileError
 
     try:
-        with Progress(quiet=quiet) as progress:
-            outcome = run_study(spec, out, resume=resume, progress=progress)
+        with Progress(quiet=quiet) as progress, terminate_as_interrupt():
+            outcome = run_study(spec, out, resume=resume, progress=progress.message,
+                                on_point=progress.on_point)
     except ResultFileError as exc:  # the result file is locked by another run
         fail(str(exc))
+    if outcome["status"] == "interrupted" and not outcome.get("resumable", True):
+        figures_interrupted(out)
     if json_path is not None and outcome.get("summary") is not None:
         write_json_or_fail(outcome["summary"], json_path)
     for note in outcome.get("notes", ()):

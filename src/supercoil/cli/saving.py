@@ -17,10 +17,8 @@ import signal
 import threading
 from pathlib import Path
 
-from supercoil.api.recording import kept, plain, settings_mismatch
+from supercoil.api.recording import RESULT_FILE, kept, plain, settings_mismatch
 from supercoil.cli._common import MAX_NAME_BYTES, fail, path_kind, warn
-
-RESULT_FILE = "result.h5"  # supercoil.io.store.RESULT_NAME (not imported: h5py is slow)
 
 
 @contextlib.contextmanager
@@ -136,14 +134,8 @@ def run_saving(compute, writer, quiet: bool = False, resume_hint: str = ""):
     from supercoil.cli.progress import Progress
 
     with Progress(quiet) as progress, terminate_as_interrupt():
-        def on_point(branch) -> None:
-            k = len(branch)
-            step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
-            progress.point(branch.name, branch.parameter, float(branch.parameter_values[-1]),
-                           step, k)
-
         try:
-            return compute(progress.message, on_point)
+            return compute(progress.message, progress.on_point)
         except KeyboardInterrupt:
             interrupted(writer, resume_hint)
             return None

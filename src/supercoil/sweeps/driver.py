@@ -8,7 +8,7 @@ kernels compiled once load everywhere) or to the scheduler at ``scheduler``
 (an existing cluster: the workers import supercoil and see the output folder).
 
 A task (:func:`run_task`) runs its study with ``supercoil run``'s code
-(:func:`supercoil.cli.study_runner.run_study`) into ``DIR/tasks/<key>/`` and returns its
+(:func:`supercoil.api.study_run.run_study`) into ``DIR/tasks/<key>/`` and returns its
 status, message and summary (:func:`supercoil.sweeps.summary.summarize` of the
 result file it wrote). A failure inside the study is an outcome (status
 ``failed`` and the exception's message), not an error of the sweep. A worker that
@@ -36,6 +36,7 @@ import time
 from datetime import UTC, datetime
 from pathlib import Path
 
+from supercoil.api.recording import RESULT_FILE
 from supercoil.errors import InputError
 from supercoil.sweeps.dataset import DATASET_NAME, TASKS_FOLDER, build_dataset, write_dataset
 from supercoil.sweeps.grid import task_key
@@ -43,7 +44,6 @@ from supercoil.sweeps.summary import summarize
 
 log = logging.getLogger(__name__)
 
-RESULT_FILE = "result.h5"
 FINISHED = ("complete", "incomplete")
 ONE_THREAD = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
               "NUMBA_NUM_THREADS": "1"}
@@ -94,7 +94,7 @@ def run_task(key: str, text: str, source: str, folder: str) -> dict:
     folder = Path(folder)
     try:
         from supercoil import load
-        from supercoil.cli.study_runner import run_study
+        from supercoil.api.study_run import run_study
         from supercoil.io.study import parse_study
 
         spec = parse_study(text, source)

@@ -87,7 +87,6 @@ sets the Cosserat rod's shear stiffness (a solid circular section, Cowper's shea
 coefficient; the shear modulus of DNA is not measured directly)."""
 
 DEFAULT_SALT_MM = 150.0
-MAX_FORCE_PN = 1e4  # the largest pulling force (pN) of the tweezers
 """Monovalent salt concentration used when neither salt nor diameter is
 given (about physiological ionic strength)."""
 
@@ -458,57 +457,4 @@ def ring_summary_in_dna_units(summary: dict, preset: DNAPreset) -> dict:
              preset.force_per_length_to_pN_per_nm(c["force_per_length"])}
             for c in summary["contact_intervals"]
         ]
-    return out
-
-
-# --- open rods (magnetic tweezers) -------------------------------------------------
-
-
-def tweezers_parameters(preset: DNAPreset, force_pN: float) -> dict[str, float]:
-    """Nondimensional numbers of a tweezers run: C/A, ``tension`` = F L²/A and L/D.
-
-    ``force_pN`` is the pulling force (pN, >= 0). The molecule's length and
-    stiffnesses come from ``preset`` (its superhelical density is not used:
-    the turns are the tweezers' own input, σ = turns / Lk0).
-    """
-    force = checks.number("force_pN", force_pN, 0.0, MAX_FORCE_PN, meaning="a pulling force")
-    return {"twist_ratio": preset.twist_ratio, "tension": preset.force_from_pN(force),
-            "length_over_diameter": preset.length_over_diameter}
-
-
-def tweezers_point_in_dna_units(point: dict, preset: DNAPreset) -> dict:
-    """A tweezers point (or special point) with DNA-unit keys added, unsuffixed ones kept.
-
-    Adds ``superhelical_density`` (turns / Lk0), ``extension_nm``, ``torque_pN_nm``,
-    ``energy_kT``, ``load_potential_kT``, ``force_pN`` (the axial force, from
-    ``tension``), ``min_gap_nm`` and, in contact entries, ``force_pN`` /
-    ``force_per_length_pN_per_nm``; for jumps, ``extension_after_nm`` and
-    ``torque_after_pN_nm``. Keys absent from ``point`` are skipped.
-    """
-    out = dict(point)
-
-    def add(key, new, convert):
-        value = point.get(key)
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            out[new] = convert(float(value))
-
-    add("turns", "superhelical_density", preset.superhelical_density_of)
-    add("extension", "extension_nm", preset.length_to_nm)
-    add("extension_after", "extension_after_nm", preset.length_to_nm)
-    add("torque", "torque_pN_nm", preset.torque_to_pN_nm)
-    add("torque_after", "torque_after_pN_nm", preset.torque_to_pN_nm)
-    add("energy", "energy_kT", preset.energy_to_kT)
-    add("load_potential", "load_potential_kT", preset.energy_to_kT)
-    add("tension", "force_pN", preset.force_to_pN)
-    gap = point.get("min_gap_over_diameter")
-    if isinstance(gap, (int, float)) and math.isfinite(gap):
-        out["min_gap_nm"] = gap * preset.effective_diameter_nm
-    if isinstance(point.get("contact_points"), list):
-        out["contact_points"] = [{**c, "force_pN": preset.force_to_pN(c["force"])}
-                                 for c in point["contact_points"]]
-    if isinstance(point.get("contact_intervals"), list):
-        out["contact_intervals"] = [
-            {**c, "force_per_length_pN_per_nm":
-             preset.force_per_length_to_pN_per_nm(c["force_per_length"])}
-            for c in point["contact_intervals"]]
     return out

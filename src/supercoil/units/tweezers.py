@@ -13,8 +13,10 @@ turns or as superhelical density, and the number of nodes:
 :func:`dna_tweezers_inputs` is the one check of these inputs, shared by the command line
 (``supercoil tweezers --dna``), study files (``supercoil run``) and the library
 (:meth:`supercoil.Tweezers.from_dna`, :func:`supercoil.tweezers`); every invalid input is an
-:class:`~supercoil.errors.InputError` naming it. :func:`tweezers_payload_in_dna_units`
-adds the DNA keys to a ``branch.json`` payload (the nondimensional keys unchanged).
+:class:`~supercoil.errors.InputError` naming it. :func:`tweezers_parameters` gives the
+nondimensional numbers of a molecule pulled by a force; :func:`tweezers_point_in_dna_units`
+and :func:`tweezers_payload_in_dna_units` add the DNA keys to a point and to a
+``branch.json`` payload (the nondimensional keys unchanged).
 """
 
 from __future__ import annotations
@@ -23,13 +25,61 @@ import math
 
 from supercoil import checks
 from supercoil.errors import InputError
-from supercoil.units.dna import (
-    DNAPreset,
-    tweezers_parameters,
-    tweezers_point_in_dna_units,
-)
+from supercoil.units.dna import DNAPreset
 
 SPAN_MEANING = "superhelical density sigma = turns * helical repeat / base pairs"
+MAX_FORCE_PN = 1e4
+"""The largest pulling force (pN) of the tweezers."""
+
+
+def tweezers_parameters(preset: DNAPreset, force_pN: float) -> dict[str, float]:
+    """Nondimensional numbers of a tweezers run: C/A, ``tension`` = F L²/A and L/D.
+
+    ``force_pN`` is the pulling force (pN, >= 0). The molecule's length and
+    stiffnesses come from ``preset`` (its superhelical density is not used:
+    the turns are the tweezers' own input, σ = turns / Lk0).
+    """
+    force = checks.number("force_pN", force_pN, 0.0, MAX_FORCE_PN, meaning="a pulling force")
+    return {"twist_ratio": preset.twist_ratio, "tension": preset.force_from_pN(force),
+            "length_over_diameter": preset.length_over_diameter}
+
+
+def tweezers_point_in_dna_units(point: dict, preset: DNAPreset) -> dict:
+    """A tweezers point (or special point) with DNA-unit keys added, unsuffixed ones kept.
+
+    Adds ``superhelical_density`` (turns / Lk0), ``extension_nm``, ``torque_pN_nm``,
+    ``energy_kT``, ``load_potential_kT``, ``force_pN`` (the axial force, from
+    ``tension``), ``min_gap_nm`` and, in contact entries, ``force_pN`` /
+    ``force_per_length_pN_per_nm``; for jumps, ``extension_after_nm`` and
+    ``torque_after_pN_nm``. Keys absent from ``point`` are skipped.
+    """
+    out = dict(point)
+
+    def add(key, new, convert):
+        value = point.get(key)
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            out[new] = convert(float(value))
+
+    add("turns", "superhelical_density", preset.superhelical_density_of)
+    add("extension", "extension_nm", preset.length_to_nm)
+    add("extension_after", "extension_after_nm", preset.length_to_nm)
+    add("torque", "torque_pN_nm", preset.torque_to_pN_nm)
+    add("torque_after", "torque_after_pN_nm", preset.torque_to_pN_nm)
+    add("energy", "energy_kT", preset.energy_to_kT)
+    add("load_potential", "load_potential_kT", preset.energy_to_kT)
+    add("tension", "force_pN", preset.force_to_pN)
+    gap = point.get("min_gap_over_diameter")
+    if isinstance(gap, (int, float)) and math.isfinite(gap):
+        out["min_gap_nm"] = gap * preset.effective_diameter_nm
+    if isinstance(point.get("contact_points"), list):
+        out["contact_points"] = [{**c, "force_pN": preset.force_to_pN(c["force"])}
+                                 for c in point["contact_points"]]
+    if isinstance(point.get("contact_intervals"), list):
+        out["contact_intervals"] = [
+            {**c, "force_per_length_pN_per_nm":
+             preset.force_per_length_to_pN_per_nm(c["force_per_length"])}
+            for c in point["contact_intervals"]]
+    return out
 
 
 def resolving_nodes(length_over_diameter: float) -> int:
@@ -140,7 +190,7 @@ def tweezers_payload_in_dna_units(payload: dict, preset: DNAPreset, force_pN: fl
     """A ``branch.json`` payload with the DNA keys added; the nondimensional keys unchanged.
 
     Every entry of ``points``, ``special_points`` and ``path`` gains the keys of
-    :func:`~supercoil.units.dna.tweezers_point_in_dna_units` (``superhelical_density``,
+    :func:`tweezers_point_in_dna_units` (``superhelical_density``,
     ``extension_nm``, ``torque_pN_nm``, ...). Added at the top: ``base_pairs``,
     ``length_nm``, ``diameter_nm``, ``salt_mM`` (None when D was given),
     ``temperature_K``, ``force_pN``, ``relaxed_link``, the scales ``force_scale_pN``
@@ -169,6 +219,7 @@ def tweezers_payload_in_dna_units(payload: dict, preset: DNAPreset, force_pN: fl
 
 
 __all__ = [
+    "MAX_FORCE_PN",
     "SPAN_MEANING",
     "dna_attributes",
     "dna_tweezers_inputs",
@@ -176,5 +227,7 @@ __all__ = [
     "resolving_nodes",
     "span_in_turns",
     "turns_of_span",
+    "tweezers_parameters",
     "tweezers_payload_in_dna_units",
+    "tweezers_point_in_dna_units",
 ]

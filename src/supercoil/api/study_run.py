@@ -1,35 +1,48 @@
-"""Running a study (:class:`~supercoil.io.study.Study`) into a folder: what ``supercoil
-run`` and each task of ``supercoil sweep`` do.
+"""Running a study (:class:`~supercoil.io.study.Study`) into a folder: what
+:func:`supercoil.run`, ``supercoil run`` and each task of ``supercoil sweep`` do.
 
 :func:`run_study` writes ``result.h5`` point by point: a ring diagram and a tweezers
 study are computed by :func:`supercoil.ring_diagram` and :func:`supercoil.tweezers`,
 which store every point as it comes; a ``ring`` study is solved through
 :func:`supercoil.equilibrium`. Then the JSON summary and the figures the study asks for.
+It reports through the callbacks it is given and through :mod:`logging`, and never
+prints or exits: the command line adds its progress display and its handling of
+signals around it.
 """
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Callable
 from pathlib import Path
 
-from supercoil.cli.saving import RESULT_FILE
+from supercoil.api.recording import RESULT_FILE
+
+log = logging.getLogger(__name__)
 
 SUMMARY_FILES = {"ring_diagram": "diagram.json", "ring": "ring.json",
                  "tweezers": "branch.json"}
 FIGURE_FORMATS = ("png",)
 
 
-def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
-    """Run ``spec`` (a :class:`~supercoil.io.study.Study`) into folder ``out``.
+def run_study(spec, out: Path, *, resume: bool = False,
+              progress: Callable[[str], None] | None = None,
+              on_point: Callable | None = None) -> dict:
+    """Run ``spec`` (a :class:`~supercoil.io.study.Study`) into the existing folder ``out``;
+    with ``resume``, continue the interrupted result there.
 
-    Returns ``{"status", "message", "files", "notes"}``; the result file's status is
-    ``complete``, ``incomplete``, ``interrupted`` (Ctrl-C: KeyboardInterrupt caught,
-    the file closed) or ``failed`` (an exception: recorded, then re-raised).
+    ``progress(message)`` receives the lines worth showing (a branch starts, a note);
+    ``on_point(branch)`` is called after every accepted point, once it is stored, with
+    its branch so far. Returns ``{"status", "message", "files", "notes"}`` (and the
+    ``summary`` once computed); the result file's status is ``complete``,
+    ``incomplete``, ``interrupted`` (KeyboardInterrupt, from Ctrl-C or a callback:
+    caught, the file closed) or ``failed`` (an exception: recorded, then re-raised).
+    ``resumable`` is False when the interrupt came while the figures were drawn (the
+    data are complete).
     """
-    from supercoil.cli.progress import Progress
-    from supercoil.cli.saving import terminate_as_interrupt
     from supercoil.io.store import ResultWriter
 
-    progress = progress or Progress(quiet=True)
+    progress = progress or _silent
     result_path = out / RESULT_FILE
     if resume:
         writer = ResultWriter.reopen(result_path)
@@ -39,14 +52,14 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
                                      attributes=_attributes(spec), study_text=spec.text,
                                      overwrite=True)
     saved = {"points": 0}
+    counted = _point_counter(on_point, saved)
     try:
-        with terminate_as_interrupt():
-            if spec.kind == "ring_diagram":
-                outcome = _run_ring_diagram(spec, writer, progress, saved, resume)
-            elif spec.kind == "tweezers":
-                outcome = _run_tweezers(spec, writer, progress, resume, saved)
-            else:
-                outcome = _run_ring(spec, writer, progress)
+        if spec.kind == "ring_diagram":
+            outcome = _run_ring_diagram(spec, writer, progress, counted, resume)
+        elif spec.kind == "tweezers":
+            outcome = _run_tweezers(spec, writer, progress, counted, resume)
+        else:
+            outcome = _run_ring(spec, writer, progress)
     except KeyboardInterrupt:
         message = (f"interrupted by the user; {saved['points']} continuation points saved "
                    "so far")
@@ -75,9 +88,8 @@ def run_study(spec, out: Path, *, resume: bool = False, progress=None) -> dict:
         try:
             files += _figures(result_path, out, outcome["notes"])
         except KeyboardInterrupt:
-            from supercoil.cli.saving import figures_interrupted
-
-            figures_interrupted(out)
+            log.info("interrupted while drawing the figures: the data are complete in %s",
+                     result_path.resolve())
             return {**outcome, "status": "interrupted", "files": files, "resumable": False,
                     "message": "interrupted while drawing the figures (the data are complete)"}
     return {**outcome, "files": files}
@@ -130,16 +142,18 @@ def _envelope(spec, payload: dict, tolerances: dict) -> dict:
     return data
 
 
-def _point_counter(progress, saved: dict):
-    """``on_point`` of the verbs (which store each point): counted and shown."""
-    def on_point(branch) -> None:
-        saved["points"] += 1
-        k = len(branch)
-        step = float(branch.arclength[-1] - branch.arclength[-2]) if k >= 2 else None
-        progress.point(branch.name, branch.parameter, float(branch.parameter_values[-1]), step,
-                       k)
+def _silent(message: str) -> None:
+    """The ``progress`` of a run given none."""
 
-    return on_point
+
+def _point_counter(on_point, saved: dict):
+    """``on_point`` of the verbs (which store each point): counted, then passed on."""
+    def counted(branch) -> None:
+        saved["points"] += 1
+        if on_point is not None:
+            on_point(branch)
+
+    return counted
 
 
 def _outcome(ok: bool, payload: dict, summary: dict, notes: list) -> dict:
@@ -155,19 +169,19 @@ def _outcome(ok: bool, payload: dict, summary: dict, notes: list) -> dict:
             "notes": notes + list(payload["notes"])}
 
 
-def _run_ring_diagram(spec, writer, progress, saved: dict, resume: bool) -> dict:
+def _run_ring_diagram(spec, writer, progress, on_point, resume: bool) -> dict:
     from supercoil.api.verbs import diagram_of
 
     options = spec.diagram_options()
     notes = []
     s = spec.settings
-    progress.message(f"ring diagram: C/A = {s['rod']['twist_ratio']:.6g}, L/D = "
+    progress(f"ring diagram: C/A = {s['rod']['twist_ratio']:.6g}, L/D = "
                      f"{s['rod']['length_over_diameter']:.6g}, N = {s['rod']['nodes']}, modes "
                      f"{', '.join(map(str, s['problem']['modes']))}, dLk <= "
                      f"{s['problem']['max_excess_link']:.6g}")
     rod = spec.rod()
     diagram = diagram_of(options, rod=rod if rod.model == "cosserat" else None,
-                         progress=progress.message, on_point=_point_counter(progress, saved),
+                         progress=progress, on_point=on_point,
                          out=writer, resume=resume).computed
     payload = diagram.payload()
     preset = spec.dna_preset()
@@ -212,7 +226,7 @@ def diagram_in_dna_units(payload: dict, preset, max_sigma: float) -> dict:
     return out
 
 
-def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
+def _run_tweezers(spec, writer, progress, on_point, resume: bool) -> dict:
     from supercoil.api.verbs import diagram_of
     from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
 
@@ -220,12 +234,12 @@ def _run_tweezers(spec, writer, progress, resume: bool, saved: dict) -> dict:
     notes = []
     control = (f"F L^2/A = {options.tension:.6g}" if options.load_control
                else f"z/L = {options.end_distance:.6g}")
-    progress.message(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
+    progress(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
                      f"{options.length_over_diameter or 'no contact'}, N = {options.n_nodes}, "
                      f"turns {options.turns[0]:g} to {options.turns[1]:g}")
     rod = spec.rod()
     result = diagram_of(options, rod=rod if rod.model == "cosserat" else None,
-                        progress=progress.message, on_point=_point_counter(progress, saved),
+                        progress=progress, on_point=on_point,
                         out=writer, resume=resume).computed
     payload = result_payload(result)
     preset = spec.dna_preset()
@@ -244,11 +258,11 @@ def _run_ring(spec, writer, progress) -> dict:
     stored as a one-point branch ``ring``."""
     from supercoil import Ring, equilibrium
     from supercoil.api.model import contact_from_name
-    from supercoil.cli.ring_output import ring_branch, ring_payload
+    from supercoil.api.ring_result import ring_branch, ring_payload
 
     s = spec.settings
     rod, problem = s["rod"], s["problem"]
-    progress.message(f"ring: C/A = {rod['twist_ratio']:.6g}, dLk = "
+    progress(f"ring: C/A = {rod['twist_ratio']:.6g}, dLk = "
                      f"{problem['excess_link']:.6g}, N = {rod['nodes']}")
     contact = None
     if "length_over_diameter" in rod:

@@ -35,7 +35,7 @@ the unstable mode breaks it. Sliding the material along the ring is a symmetry
 of the continuous ring only: an axis that slid off the mesh's symmetric
 positions (a node or an edge midpoint) meets the discretisation's sliding ripple,
 on which minimisation crawls (measured where a contact forms under the barrier).
-Newton's saddle escape leaves the symmetry motions alone for that reason
+Newton's saddle escape leaves the material sliding alone for that reason
 (:mod:`supercoil.solvers.newton`).
 
 Critical modes of the circle: the circle's O(2) symmetry makes them pairs

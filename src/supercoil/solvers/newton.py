@@ -216,20 +216,27 @@ def _shifted_step(problem, q, free, H, J, mass, rhs, radius, opts):
     return factor, sol, delta, negatives
 
 
-def _symmetry_basis(problem, q, free, mass) -> np.ndarray:
-    """M-orthonormal basis ``(len(free), r)`` of the problem's ``symmetry_modes`` and
-    ``near_symmetry_modes`` at ``q`` on the free DOFs (``r = 0`` if it has none)."""
-    rows = [np.asarray(getter(q), dtype=float).reshape(-1, problem.n_dofs)
-            for getter in (getattr(problem, "symmetry_modes", None),
-                           getattr(problem, "near_symmetry_modes", None))
-            if getter is not None]
-    modes = np.vstack(rows)[:, free] if rows else np.zeros((0, len(free)))
+def _symmetry_basis(problem, q, free, mass, factor, m: int) -> np.ndarray:
+    """M-orthonormal basis ``(len(free), r)`` of the problem's ``near_symmetry_modes``
+    (a closed rod's material sliding) as directions of ``ker J`` (``r = 0`` if it has
+    none). A mode ``s`` on the free DOFs is generally not tangent to the constraints;
+    one solve with the shifted factor, ``(H + delta M)^-1 M s`` on ``ker J``, keeps
+    its nearly null part (the one inverse iteration would amplify) and is tangent."""
+    getter = getattr(problem, "near_symmetry_modes", None)
+    if getter is None:
+        return np.zeros((len(free), 0))
+    modes = np.asarray(getter(q), dtype=float).reshape(-1, problem.n_dofs)[:, free]
     if modes.size == 0:
         return np.zeros((len(free), 0))
+    n = len(free)
+    tangent = np.array([factor.solve(np.concatenate([mass * s, np.zeros(m)]))[:n]
+                        for s in modes])
     root = np.sqrt(mass)
-    qmat, rfac = np.linalg.qr(root[:, None] * modes.T)
-    keep = np.abs(np.diag(rfac)) > 1e-10 * np.max(np.abs(np.diag(rfac)))
-    return qmat[:, keep] / root[:, None]
+    qmat, rfac = np.linalg.qr(root[:, None] * tangent.T)
+    diag = np.abs(np.diag(rfac))
+    if not np.all(np.isfinite(diag)) or diag.max() == 0.0:
+        return np.zeros((n, 0))
+    return qmat[:, diag > 1e-10 * diag.max()] / root[:, None]
 
 
 def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, radius):
@@ -246,17 +253,16 @@ def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, rad
     trust radius (at most 1) when the problem defines one, else as long as the
     Newton step.
 
-    The problem's symmetry motions (``symmetry_modes`` and ``near_symmetry_modes``
-    on the free DOFs: rigid motions whose pins grip weakly, a closed rod's
+    The problem's approximate symmetries (:func:`_symmetry_basis`: a closed rod's
     material sliding) are projected out of ``v``: along them the curvature is
     nearly null and its sign is noise, the energy gains nothing, and a long
-    straight step along a rotation or a sliding leaves the constraints at second
-    order, so the line search cut every step to nothing (measured: a ring's
-    winding under the contact barrier stalled for hundreds of iterations). A
-    sliding step also carries a closed rod off its symmetric position on the
-    mesh, where the discretisation's sliding ripple acts.
+    straight step along a sliding leaves the constraints at second order, so
+    the line search cut every step to nothing (measured: a ring's winding under
+    the contact barrier stalled for hundreds of iterations). A sliding step also
+    carries a closed rod off its symmetric position on the mesh, where the
+    discretisation's sliding ripple acts.
     """
-    basis = _symmetry_basis(problem, q, free, mass)
+    basis = _symmetry_basis(problem, q, free, mass, factor, m)
     v = np.random.default_rng(0).standard_normal(n)
     for _ in range(12):
         v = v - basis @ (basis.T @ (mass * v))

@@ -284,6 +284,7 @@ def test_ring_contact_table_below_michell(runner):
             rows[cells[0]] = cells[1]
     assert "Supercoiled ring" in result.stdout
     assert rows["started from"] == "the circle"
+    assert rows["branch (quasi-static path)"] == "circle, no jump"  # below the threshold
     assert rows["L/D, contact treatment"] == "40, exact"
     assert float(rows["closest approach / D"]) > 1
     assert rows["contacts"] == "0 point(s), 0 interval(s)"

@@ -248,7 +248,7 @@ def test_sweep_figures_draw_the_stored_numbers(tweezers_sweep, tmp_path):
     from supercoil.plotting.sweep import hat_curves_figure, map_figure, plot_sweep, sweep_kinds
 
     folder, _, dataset, result = tweezers_sweep
-    assert sweep_kinds(dataset) == ("hat-curves", "map")
+    assert sweep_kinds(dataset) == ("hat-curves", "curve-map", "map", "buckling-torque")
     fig = hat_curves_figure(dataset, folder)
     thin = [line for line in fig.axes[0].lines if line.get_linewidth() < 2]
     branches = [b for b in _branches(result).values() if len(b)]

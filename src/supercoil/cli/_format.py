@@ -65,6 +65,7 @@ def ring_table(summary: dict, initial: str | None = None) -> Table:
         gap = summary["min_gap_over_diameter"]
         rows += [
             ("started from", "the circle" if initial is None else initial),
+            ("branch (quasi-static path)", _path_text(summary.get("path"))),
             ("L/D, contact treatment",
              f"{_number(summary['length_over_diameter'], 6)}, {summary['contact_treatment']}"),
             ("closest approach / D", "none within reach" if gap is None else _number(gap, 8)),
@@ -89,6 +90,21 @@ def ring_table(summary: dict, initial: str | None = None) -> Table:
     for name, value in rows:
         table.add_row(name, value)
     return table
+
+
+def _path_text(path: dict | None) -> str:
+    """The branch a ring's answer is on and how the winding from dLk = 0 reached it."""
+    if not path:
+        return "not recorded"
+    text = str(path.get("branch"))
+    if path.get("snap_at") is not None:
+        text += f", left the circle at dLk {path['snap_at']:.6g}"
+    jumps = path.get("jumps") or []
+    text += (f", jumped at dLk {', '.join(f'{j:.6g}' for j in jumps)}" if jumps
+             else ", no jump")
+    if path.get("restarts"):
+        text += f", {path['restarts']} saddle(s) left along the unstable mode"
+    return text
 
 
 def _dna_rows(summary: dict) -> list[tuple[str, str]]:

@@ -48,10 +48,16 @@ def overwrite_option(help: str):
     return Annotated[bool, typer.Option("--overwrite", help=help)]
 
 
-ResultArgument = Annotated[
-    Path,
-    typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
-                   "that computes (demo, diagram ring, tweezers, run, ring --out), its "
-                   "result.h5, or its diagram.json or branch.json.", show_default=False,
-                   callback=checked_path),
-]
+def result_argument(more: str = ""):
+    """The RESULT argument of the commands that read a stored result; ``more``: what
+    else the command reads."""
+    return Annotated[
+        Path,
+        typer.Argument(metavar="RESULT", help="A result: the --out folder of any command "
+                       "that computes (demo, diagram ring, tweezers, run, ring --out), its "
+                       "result.h5, or its diagram.json or branch.json." + more,
+                       show_default=False, callback=checked_path),
+    ]
+
+
+ResultArgument = result_argument()

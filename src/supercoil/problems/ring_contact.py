@@ -18,10 +18,25 @@ protocols do):
   after a smooth step the step doubles again. A writhe change that stays larger
   at the smallest step is a jump (the branch folded; the writhe, not the node
   displacements, measures it: the material slides along the ring almost freely).
-  A state that is not stable (a saddle) is pushed along its unstable mode and
-  minimised again (``MAX_RESTARTS`` times at most);
+  A smallest step whose minimisation does not settle within ``STEP_ITERATIONS``
+  is retried with the full iteration budget; if it still fails, the path stops
+  there and the result says so (not converged). A state that is not stable (a
+  saddle) is pushed along its unstable mode and minimised again
+  (``MAX_RESTARTS`` times at most). Before each step the six rigid pins are
+  picked again where their grip fell below ``PIN_QUALITY``
+  (:meth:`~supercoil.rod.closed.ClosedRodEnergy.pin_quality`), as the contact
+  branches of the ring diagram do;
 * the state at the requested ``dLk`` is the answer (branch ``contact``). If it is
   still a saddle, its status says ``unstable``, never ``converged``.
+
+The path keeps the two-fold axis through node 0 that the push off the circle
+gives it (to round-off), unless a state on it is unstable and the restart along
+the unstable mode breaks it. Sliding the material along the ring is a symmetry
+of the continuous ring only: an axis that slid off the mesh's symmetric
+positions (a node or an edge midpoint) meets the discretisation's sliding ripple,
+on which minimisation crawls (measured where a contact forms under the barrier).
+Newton's saddle escape leaves the material sliding alone for that reason
+(:mod:`supercoil.solvers.newton`).
 
 Critical modes of the circle: the circle's O(2) symmetry makes them pairs
 (``cos m theta``, ``sin m theta``), and an eigensolver returns any basis of the
@@ -69,6 +84,7 @@ from supercoil.problems.ring import (
     ring_result,
     twisted_circle_problem,
 )
+from supercoil.problems.segments import set_pin
 from supercoil.rod.closed import ClosedRodEnergy
 from supercoil.rod.model import Rod
 from supercoil.solvers.newton import NewtonOptions, newton
@@ -82,6 +98,7 @@ WINDING_STEP = 0.1  # largest step of dLk along the path
 MAX_HALVINGS = 5  # a step is halved at most this many times before a move is a jump
 WRITHE_STEP = 0.15  # a step changing the writhe by more is halved
 STEP_ITERATIONS = 300  # Newton iterations of a step (a step that needs more is halved)
+PIN_QUALITY = 0.5  # the rigid pins are re-picked below this (ClosedRodEnergy.pin_quality)
 _SIGN_SEED = 20_000_101  # the fixed vector that signs a saddle's unstable mode
 
 log = logging.getLogger(__name__)
@@ -299,6 +316,10 @@ class _Winding:
         stepping = dataclasses.replace(self.newton, max_iterations=min(
             self.newton.max_iterations, STEP_ITERATIONS))
         while res.converged and level < self.excess_link:
+            if base.pin_quality(res.q) < PIN_QUALITY:
+                # the pins chosen on the circle lose their grip as the ring coils: a
+                # rigid rotation is then nearly free and minimisation stalls on it
+                set_pin(problem, base, res.q)
             stop = min(self.excess_link, level + size)
             problem.excess_link = stop
             # the reference frames at the last accepted state, restored after a refused
@@ -316,18 +337,20 @@ class _Winding:
                 _restore_frames(base, frames)
                 continue
             if not trial.converged:
-                # the smallest step failed within STEP_ITERATIONS (measured where a
-                # contact forms under the barrier): the whole remaining way is taken
-                # in one minimisation with the full iteration budget
-                stop = self.excess_link
+                # the smallest step did not settle within STEP_ITERATIONS: the same
+                # step with the full iteration budget (a jump, if it lands far)
                 problem.excess_link = stop
                 _restore_frames(base, frames)
                 trial, trial_stab, restarts = self._relax(problem, res.q)
-                self.notes.append(f"from dLk = {level:.6g} the path was taken in one "
-                                  f"minimisation (a step of {size:.2g} failed)")
-                log.debug("dLk %.6g -> %.6g in one: %s, %d Newton iterations", level, stop,
-                          trial.status, trial.newton_iterations)
-                smooth = False
+                log.debug("dLk %.6g -> %.6g with the full budget: %s, %d Newton iterations",
+                          level, stop, trial.status, trial.newton_iterations)
+                if not trial.converged:
+                    self.notes.append(f"the step from dLk = {level:.6g} to {stop:.6g} did not "
+                                      f"converge")
+                    res, stab = trial, trial_stab
+                    break
+                change = abs(base.writhe_local(trial.q) - base.writhe_local(res.q))
+                smooth = change <= WRITHE_STEP and restarts == 0
             if trial.converged and not smooth and not jumped:
                 self.jumps.append(float(stop))  # one jump, however many steps it spans
             jumped = trial.converged and not smooth

@@ -216,6 +216,29 @@ def _shifted_step(problem, q, free, H, J, mass, rhs, radius, opts):
     return factor, sol, delta, negatives
 
 
+def _symmetry_basis(problem, q, free, mass, factor, m: int) -> np.ndarray:
+    """M-orthonormal basis ``(len(free), r)`` of the problem's ``near_symmetry_modes``
+    (a closed rod's material sliding) as directions of ``ker J`` (``r = 0`` if it has
+    none). A mode ``s`` on the free DOFs is generally not tangent to the constraints;
+    one solve with the shifted factor, ``(H + delta M)^-1 M s`` on ``ker J``, keeps
+    its nearly null part (the one inverse iteration would amplify) and is tangent."""
+    getter = getattr(problem, "near_symmetry_modes", None)
+    if getter is None:
+        return np.zeros((len(free), 0))
+    modes = np.asarray(getter(q), dtype=float).reshape(-1, problem.n_dofs)[:, free]
+    if modes.size == 0:
+        return np.zeros((len(free), 0))
+    n = len(free)
+    tangent = np.array([factor.solve(np.concatenate([mass * s, np.zeros(m)]))[:n]
+                        for s in modes])
+    root = np.sqrt(mass)
+    qmat, rfac = np.linalg.qr(root[:, None] * tangent.T)
+    diag = np.abs(np.diag(rfac))
+    if not np.all(np.isfinite(diag)) or diag.max() == 0.0:
+        return np.zeros((n, 0))
+    return qmat[:, diag > 1e-10 * diag.max()] / root[:, None]
+
+
 def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, radius):
     """Add a step along the most negative curvature direction (saddle escape).
 
@@ -229,11 +252,26 @@ def _add_negative_curvature(problem, q, free, H, factor, sol, g, mass, n, m, rad
     of ``v`` pointing downhill is added (Moré & Sorensen 1979): as long as the
     trust radius (at most 1) when the problem defines one, else as long as the
     Newton step.
+
+    The problem's approximate symmetries (:func:`_symmetry_basis`: a closed rod's
+    material sliding) are projected out of ``v``: along them the curvature is
+    nearly null and its sign is noise, the energy gains nothing, and a long
+    straight step along a sliding leaves the constraints at second order, so
+    the line search cut every step to nothing (measured: a ring's winding under
+    the contact barrier stalled for hundreds of iterations). A sliding step also
+    carries a closed rod off its symmetric position on the mesh, where the
+    discretisation's sliding ripple acts.
     """
+    basis = _symmetry_basis(problem, q, free, mass, factor, m)
     v = np.random.default_rng(0).standard_normal(n)
     for _ in range(12):
+        v = v - basis @ (basis.T @ (mass * v))
         z = factor.solve(np.concatenate([mass * v, np.zeros(m)]))[:n]
-        v = z / np.sqrt(z @ (mass * z))
+        z = z - basis @ (basis.T @ (mass * z))
+        norm = float(np.sqrt(z @ (mass * z)))
+        if not np.isfinite(norm) or norm == 0.0:
+            return sol
+        v = z / norm
     curvature = float(v @ H.matvec(v))
     if curvature >= 0:
         return sol

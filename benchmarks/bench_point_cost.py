@@ -86,6 +86,7 @@ class PhaseClock:
         self.stack: list[list] = []  # [phase, start, time of wrapped calls inside]
         self.bands = collections.Counter()  # (size, kl, ku) of every band LU
         self.storage: dict[tuple, np.ndarray] = {}  # one band storage per shape
+        self.counts = collections.Counter()  # calls of the counted kernels
 
     def wrap(self, owner, name: str, phase: str) -> None:
         function = getattr(owner, name)
@@ -105,6 +106,17 @@ class PhaseClock:
                 clock.calls[phase] += 1
                 if clock.stack:
                     clock.stack[-1][2] += elapsed
+
+        setattr(owner, name, wrapper)
+
+    def count(self, owner, name: str, label: str) -> None:
+        """Count the calls of ``owner.name`` under ``label`` (no clock)."""
+        function = getattr(owner, name)
+        counts = self.counts
+
+        def wrapper(*args, **kwargs):
+            counts[label] += 1
+            return function(*args, **kwargs)
 
         setattr(owner, name, wrapper)
 
@@ -128,14 +140,17 @@ class PhaseClock:
 
 
 def instrument() -> PhaseClock:
-    import supercoil.contact.curve as curve
     import supercoil.contact.problem as contact
+    from supercoil.contact import curve
     from supercoil.continuation import (
         band_bordered,
         special_points,
+        stability,
         step,
+        system,
         tracer,
     )
+    from supercoil.solvers import band, kkt
 
     clock = PhaseClock()
     clock.wrap(tracer, "take_step", "predictor and step")
@@ -150,6 +165,15 @@ def instrument() -> PhaseClock:
     clock.wrap(curve.ContactCurve, "pair_state", "contact detection")
     clock.wrap(contact.ContactProblem, "min_distance", "contact detection")
     clock.capture_band(band_bordered)
+    # what a point needs, counted: the KKT band LUs of the inertia count and of the
+    # eigenproblem's shift-invert (solvers.band's own), the exact inertia counts, the
+    # eigenproblems, the Hessian assemblies and the residuals
+    clock.count(band, "factor_band_storage", "KKT band LUs (count, shift-invert)")
+    clock.count(kkt, "symmetric_inertia", "inertia counts (block elimination)")
+    clock.count(stability, "_lowest_pairs", "eigenproblems (shift-invert Lanczos)")
+    clock.count(system.ExtendedSystem, "full_hessian", "Hessian assemblies")
+    clock.count(system.ExtendedSystem, "hessian", "Hessian assemblies")
+    clock.count(system.ExtendedSystem, "residual", "residuals")
     return clock
 
 
@@ -193,7 +217,7 @@ def measure(workload: str, quick: bool) -> dict:
             "cpu_seconds": total, "per_point": total / points, "band_lu": lu,
             "band": {"size": key[0], "kl": key[1], "ku": key[2]},
             "factorisations": sum(clock.bands.values()), "ratio": total / points / lu,
-            "phases": spent, "phase_calls": dict(clock.calls),
+            "phases": spent, "phase_calls": dict(clock.calls), "counts": dict(clock.counts),
             "special_points": special_summary(result)}
 
 
@@ -214,6 +238,8 @@ def report(m: dict) -> None:
         print(f"| {phase} | {seconds:.2f} | {100 * seconds / m['cpu_seconds']:.0f} % | "
               f"{1e3 * seconds / m['points']:.1f} | "
               f"{seconds / m['points'] / m['band_lu']:.0f} |")
+    print("per point: " + ", ".join(f"{label} {count / m['points']:.1f}"
+                                    for label, count in m["counts"].items()))
     kinds = collections.Counter(p[0] for p in m["special_points"])
     print("special points: " + ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
 

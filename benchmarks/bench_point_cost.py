@@ -29,7 +29,8 @@ counts), records, contact detection (broad and narrow phase, wherever it is
 called) and what is left. A phase's time is exclusive: a call of another phase
 inside it (contact detection inside the corrector, records at a special point)
 counts there. ``--quick`` runs the same branches at a CI size (N = 60 to 3
-turns, N = 100 to dLk = 3) in seconds. ``--json FILE`` writes the figures.
+turns, N = 100 to dLk = 3) in seconds; ``--nodes N`` sets N (how the ratio scales).
+``--json FILE`` writes the figures.
 
 The second form times single calls at a contact state of the tweezers problem
 for each N: a residual and a Hessian at a new state, one corrector iteration
@@ -56,20 +57,22 @@ PHASES = ("predictor and step", "corrector", "tangent", "step bound", "stability
           "contact detection", "other")
 
 
-def tweezers(quick: bool):
+def tweezers(quick: bool, n_nodes: int | None = None):
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
     options = dict(PROBLEM, n_nodes=60, turns=(0, 3)) if quick else dict(PROBLEM, n_nodes=100)
+    if n_nodes:
+        options["n_nodes"] = n_nodes
     return tweezers_branches(TweezersOptions(**options))
 
 
-def ring(quick: bool):
+def ring(quick: bool, n_nodes: int | None = None):
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
     if quick:
-        return ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=100, modes=(2,),
+        return ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=n_nodes or 100, modes=(2,),
                                            max_excess_link=3.0, contact_max_points=100))
-    return ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=200, modes=(2,),
+    return ring_diagram(DiagramOptions(2 / 3, 122.0, n_nodes=n_nodes or 200, modes=(2,),
                                        max_excess_link=6.0, contact_max_points=400))
 
 
@@ -199,12 +202,12 @@ def special_summary(result) -> list:
              int(p.count_after)] for p in result.special_points()]
 
 
-def measure(workload: str, quick: bool) -> dict:
+def measure(workload: str, quick: bool, n_nodes: int | None = None) -> dict:
     run = WORKLOADS[workload]
-    run(quick)  # warm-up: kernels compiled or loaded, modules imported
+    run(True)  # warm-up at the small size: kernels compiled or loaded, modules imported
     clock = instrument()
     start = time.process_time()
-    result = run(quick)
+    result = run(quick, n_nodes)
     total = time.process_time() - start
     points = sum(len(b) for b in result.branches)
     key = clock.bands.most_common(1)[0][0]
@@ -212,7 +215,7 @@ def measure(workload: str, quick: bool) -> dict:
     in_phases = sum(clock.spent.values())
     spent = {phase: clock.spent.get(phase, 0.0) for phase in PHASES[:-1]}
     spent["other"] = total - in_phases
-    return {"workload": workload, "quick": quick, "points": points,
+    return {"workload": workload, "quick": quick, "nodes": n_nodes, "points": points,
             "branches": {b.name: len(b) for b in result.branches},
             "cpu_seconds": total, "per_point": total / points, "band_lu": lu,
             "band": {"size": key[0], "kl": key[1], "ku": key[2]},
@@ -223,7 +226,8 @@ def measure(workload: str, quick: bool) -> dict:
 
 def report(m: dict) -> None:
     size = m["band"]
-    print(f"\n{m['workload']}{' (quick)' if m['quick'] else ''}: {m['points']} points ("
+    nodes = f", N = {m['nodes']}" if m["nodes"] else ""
+    print(f"\n{m['workload']}{' (quick)' if m['quick'] else ''}{nodes}: {m['points']} points ("
           + ", ".join(f"{k} {v}" for k, v in m["branches"].items())
           + f"), {m['cpu_seconds']:.2f} s CPU")
     print(f"| per point | one band LU (n = {size['size']}, kl = {size['kl']}, ku = {size['ku']}) "
@@ -288,6 +292,8 @@ def main(argv=None) -> int:
                         help="tweezers, ring (default: both)")
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--json", metavar="FILE")
+    parser.add_argument("--nodes", type=int, metavar="N",
+                        help="N for the branches (default 100 for the tweezers, 200 for the ring)")
     parser.add_argument("--per-call", type=int, nargs="*", metavar="N")
     args = parser.parse_args(argv)
     if args.per_call:
@@ -301,7 +307,7 @@ def main(argv=None) -> int:
         parser.error(f"unknown workload {sorted(unknown)}: valid are {list(WORKLOADS)}")
     measured = []
     for workload in args.workloads or list(WORKLOADS):
-        measured.append(measure(workload, args.quick))
+        measured.append(measure(workload, args.quick, args.nodes))
         report(measured[-1])
     if args.json:
         with open(args.json, "w") as f:

@@ -24,8 +24,13 @@ from supercoil.continuation import (
     switch_branch,
 )
 from supercoil.continuation.resume import resume_branch
-from supercoil.problems.segments import set_pin
-from supercoil.problems.tweezers.pins import hold_azimuth, pin_node, rotated_mode
+from supercoil.problems.segments import either, set_pin
+from supercoil.problems.tweezers.pins import (
+    hold_azimuth,
+    pin_node,
+    rotated_mode,
+    sliding_stop,
+)
 from supercoil.rod.open import ClampedRodEnergy
 from supercoil.solvers.newton import NewtonOptions, newton
 
@@ -54,7 +59,8 @@ def resume_stored(stored: Mapping[str, tuple[Branch, bool]], rod: ClampedRodEner
         set_pin(problem, rod, q)
     return resume_branch(problem, old, dataclasses.replace(
         segment_opts, max_points=len(old) + segment_opts.max_points - 1),
-        records=records, events=events, on_point=on_point, stop=stop)
+        records=records, events=events, on_point=on_point,
+        stop=either(stop, sliding_stop(rod, q)))
 
 
 def switch_off_straight(rod: ClampedRodEnergy, straight: Branch, point: SpecialPoint,

@@ -47,6 +47,9 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     incomplete stored one continued) with its contact events classified. ``pinned``:
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`)."""
     D = opts.diameter
+    # in contact the sliding of the plectoneme is not an approximate symmetry of the
+    # discrete problem (docs/continuation.md, "Sliding of a localised structure")
+    rod.sliding_symmetry = False
     k = contact_start(free, onset, cp)
     q = free.states[k]
     cp.turns = float(free.parameter_values[k])
@@ -72,7 +75,8 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
         say(f"{name}: continued from point {len(old) - 1}")
     else:
         first = continuation(cp, q, parameter="turns", options=contact_opts, name=name,
-                             records=records, events=events, on_point=on_point, stop=pinned)
+                             records=records, events=events, on_point=on_point,
+                             stop=pinned)
     contact, pins = follow(cp, rod, first, contact_opts, name, records, events,
                            max_points=opts.max_points, segment_points=opts.segment_points,
                            on_point=on_point, quality=PIN_QUALITY, refuse=pinned)

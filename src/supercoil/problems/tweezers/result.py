@@ -48,6 +48,7 @@ class TweezersResult:
             if start <= index:
                 dofs = chosen
         problem = self.contact_problem if name in self.contact_branches else rod
+        rod.sliding_symmetry = name not in self.contact_branches
         hold_azimuth(rod, dofs, problem)
         return problem
 

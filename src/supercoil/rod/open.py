@@ -93,8 +93,9 @@ class ClampedRodEnergy(RodEnergy):
         u_last = self._directors[-1]
         self._end_mismatch = float(np.arctan2(-u_last[1], u_last[0]))  # (u x e_x).e_z, u.e_x
         self._turn_offset = 0  # whole turns restored after a rebuild of the frames (accept)
-        # whether near_symmetry_modes offers the sliding of a localised structure
-        self.sliding_symmetry = True
+        # the tail ratio below which near_symmetry_modes offers the sliding of a
+        # localised structure (None: never)
+        self.sliding_tail: float | None = SLIDING_TAIL
 
     twist_parameter = "turns"
 
@@ -225,19 +226,19 @@ class ClampedRodEnergy(RodEnergy):
         ``g_i = (x_{i+1} - x_{i-1}) / 2 - h e_z`` (zero on straight tails and at the
         clamps). Its energy is that of the structure's interaction with the clamps,
         which decays like ``exp(-lambda s)`` along the tails, plus the discretisation's
-        ripple, which a finer mesh changes: below ``SLIDING_TAIL`` (the largest
+        ripple, which a finer mesh changes: below ``sliding_tail`` (the largest
         ``|g_i|`` over the outer ``SLIDING_ENDS`` of the nodes at either end, over the
         largest overall) both are below what the computed eigenvalue resolves
         (measured at L/D = 100, F L^2/A = 1200, N = 160 along the localised loop:
         tail ratio 8e-5 with the sliding eigenvalue 4e-3, 1e-5 with 6e-5, against a
         next eigenvalue of 1.3e4), and the mode is returned; above it the sliding
         costs energy that the mesh resolves (the structure reaches the clamps) and
-        it is not a symmetry at all. Never with ``sliding_symmetry`` False (a rod in
-        self-contact: the contact's discretisation makes the sliding stiff, see
-        docs/continuation.md).
+        it is not a symmetry at all. ``sliding_tail`` is ``SLIDING_TAIL`` by default;
+        None: never (docs/continuation.md, "Sliding of a localised structure", for the
+        rod in self-contact).
         """
         g, tail = self.sliding(q)
-        if not self.sliding_symmetry or tail > SLIDING_TAIL:
+        if self.sliding_tail is None or tail > self.sliding_tail:
             return np.zeros((0, np.size(q)))
         return g[None, :]
 

@@ -30,6 +30,10 @@ from supercoil.problems.tweezers.result import TweezersResult
 from supercoil.problems.tweezers.straight import straight_branch
 from supercoil.problems.tweezers.verify import verify_bifurcations
 
+# a note when the sliding's phase row holds a force above this (a hundred times the
+# residuals' round-off floor on the contact-free branches, 1e-8 at F L^2/A = 1200)
+SLIDING_NOTE = 1e-6
+
 
 def tweezers_branches(options: TweezersOptions,
                       progress: Callable[[str], None] | None = None, *,
@@ -146,6 +150,13 @@ def tweezers_branches(options: TweezersOptions,
                                  quality=PIN_QUALITY, refuse=free_stop,
                                  restart=lambda q: sliding_stop(rod, q))
     free = verify_bifurcations(free)
+    sliding = free.records.get("sliding_residual", np.zeros(0))
+    if len(free) and np.max(sliding) > SLIDING_NOTE:
+        k = int(np.argmax(sliding))
+        notes.append(f"{free_name}: the sliding of the localised loop is held by a phase row "
+                     f"(docs/continuation.md); the force it holds, max |KKT residual| "
+                     f"without it, is at most {float(sliding[k]):.2e} (at "
+                     f"{float(free.parameter_values[k]):.4g} turns)")
     onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}

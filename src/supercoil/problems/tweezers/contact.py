@@ -47,9 +47,10 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     incomplete stored one continued) with its contact events classified. ``pinned``:
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`)."""
     D = opts.diameter
-    # in contact the sliding of the plectoneme is not an approximate symmetry of the
-    # discrete problem (docs/continuation.md, "Sliding of a localised structure")
-    rod.sliding_symmetry = False
+    # in contact the discrete contact makes the sliding of the plectoneme stiff, of
+    # either sign: not an approximate symmetry of the discrete problem, no phase row
+    # (docs/continuation.md, "Long open rods: the sliding of a localised structure")
+    rod.sliding_tail = None
     k = contact_start(free, onset, cp)
     q = free.states[k]
     cp.turns = float(free.parameter_values[k])
@@ -70,7 +71,7 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     if complete:
         return old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
     first = resume_stored(stored, rod, cp, name, contact_opts, records, events, on_point,
-                          pinned)
+                          pinned, sliding=False)
     if first is not None:
         say(f"{name}: continued from point {len(old) - 1}")
     else:

@@ -18,11 +18,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from supercoil.rod.open import SLIDING_TAIL, ClampedRodEnergy
+from supercoil.rod.open import ClampedRodEnergy
 
 PIN_QUALITY = 0.5  # re-pick the azimuth pin below this (ClampedRodEnergy.pin_quality)
-# a run ends where the sliding's tail ratio (ClampedRodEnergy.sliding) crosses
-# SLIDING_TAIL by this factor, so that the next run starts on the far side of the
+# a run ends where the sliding's tail ratio (ClampedRodEnergy.sliding) crosses the
+# rod's sliding_tail by this factor, so that the next run starts on the far side of the
 # threshold, with (or without) the sliding's phase row: without the margin a run ended
 # where the ratio barely crossed, and the next started from the point before, on the
 # near side, and was refused at once
@@ -108,12 +108,13 @@ def sliding_stop(rod: ClampedRodEnergy, q_start: np.ndarray
     had = rod.near_symmetry_modes(q_start).shape[0] > 0
 
     def refuse(q: np.ndarray) -> str | None:
-        if not rod.sliding_symmetry:
+        threshold = rod.sliding_tail
+        if threshold is None:
             return None
         tail = rod.sliding(q)[1]
-        if not had and tail <= SLIDING_TAIL / SLIDING_HYSTERESIS:
+        if not had and tail <= threshold / SLIDING_HYSTERESIS:
             return "the sliding of the localised structure became an approximate symmetry"
-        if had and tail > SLIDING_TAIL * SLIDING_HYSTERESIS:
+        if had and tail > threshold * SLIDING_HYSTERESIS:
             return "the sliding of the structure stopped being an approximate symmetry"
         return None
 

@@ -9,7 +9,7 @@ from supercoil.continuation import Branch, SpecialPoint
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import hold_azimuth
-from supercoil.rod.open import ClampedRodEnergy
+from supercoil.rod.open import SLIDING_TAIL, ClampedRodEnergy
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,7 @@ class TweezersResult:
             if start <= index:
                 dofs = chosen
         problem = self.contact_problem if name in self.contact_branches else rod
-        rod.sliding_symmetry = name not in self.contact_branches
+        rod.sliding_tail = None if name in self.contact_branches else SLIDING_TAIL
         hold_azimuth(rod, dofs, problem)
         return problem
 

@@ -70,21 +70,57 @@ def test_sliding_is_no_symmetry_where_the_structure_reaches_the_clamps():
     assert rod.near_symmetry_modes(narrow.ravel()).shape == (0, 180)
 
 
-def test_long_loop_reaches_contact_with_one_unstable_mode():
-    """C/A = 1, L/D = 100, F L^2/A = 1200 (lambda = 35): the localised loop's branch
-    reaches its first contact; the sliding of the loop, nearly null, is out of the count,
-    which is one all along (the subcritical branch off the straight rod's double
-    eigenvalue keeps one of the pair, the rotation about the axis removed), with no
-    bifurcation on it; its states are equilibria of the problem without the sliding's
-    phase row (KKT residual below 1e-6)."""
-    result = tweezers_branches(TweezersOptions(
-        twist_ratio=1.0, length_over_diameter=100, tension=1200, n_nodes=102,
-        turns=(0.0, 17.0), max_points=120))
-    buckled = result.branch("buckled")
-    assert [p.kind for p in buckled.special_points] == ["contact_onset"]
-    assert np.all(buckled.unstable_count == 1)
-    assert np.max(buckled.records["sliding_residual"]) < 1e-6
-    assert result.branch_ok(buckled)
+class FreeBranchDone(Exception):
+    """Raised by ``on_branch`` once the contact-free branch is final (the contact branch
+    is not needed here)."""
+
+
+def contact_free_branch(n_nodes: int):
+    """The contact-free branch of the long loop (C/A = 1, L/D = 100, F L^2/A = 1200:
+    lambda = 35, T R^2/A = 0.03, the ply of the plectoneme that follows) at ``n_nodes``."""
+    found = []
+
+    def keep(branch, contact):
+        if branch.name == "buckled":
+            found.append(branch)
+            raise FreeBranchDone
+
+    with pytest.raises(FreeBranchDone):
+        tweezers_branches(TweezersOptions(twist_ratio=1.0, length_over_diameter=100,
+                                          tension=1200, n_nodes=n_nodes, turns=(0.0, 17.0),
+                                          max_points=400), on_branch=keep)
+    return found[0]
+
+
+@pytest.fixture(scope="module")
+def long_loops():
+    return {n: contact_free_branch(n) for n in (102, 153)}
+
+
+def test_long_loop_reaches_contact_with_one_unstable_mode(long_loops):
+    """The localised loop's branch reaches its first contact at N and 1.5 N; the
+    sliding of the loop, nearly null, is out of the count, which is one all along (the
+    subcritical branch off the straight rod's double eigenvalue keeps one of the pair,
+    the rotation about the axis removed), with no bifurcation; its states are
+    equilibria of the problem without the sliding's phase row (KKT residual below
+    1e-6). Without the row the corrector diverged at N = 160, and the count took 0, 1
+    and 2 with eight located "bifurcations"."""
+    for branch in long_loops.values():
+        assert [p.kind for p in branch.special_points] == ["contact_onset"]
+        assert np.all(branch.unstable_count == 1)
+        assert np.max(branch.records["sliding_residual"]) < 1e-6
+
+
+def test_long_loop_counts_agree_at_n_and_one_and_a_half_n(long_loops):
+    """The same counts at the same turns on both meshes (each point of the finer branch
+    against the coarse branch's nearest in turns), and the first contact at the same
+    turns to the discretisation's error (measured 2.601 and 2.611)."""
+    coarse, fine = long_loops[102], long_loops[153]
+    nearest = np.abs(coarse.parameter_values[None, :]
+                     - fine.parameter_values[:, None]).argmin(axis=1)
+    assert np.array_equal(fine.unstable_count, coarse.unstable_count[nearest])
+    onsets = [b.points_of_kind("contact_onset")[0].parameter for b in (coarse, fine)]
+    assert onsets[0] == pytest.approx(onsets[1], rel=0.01)
 
 
 def branch_with_counts(small_run, counts, bifurcations, folds=()):
@@ -191,3 +227,21 @@ def test_plectoneme_torque_plateau_and_slope_are_the_hard_core_plys():
     slope = np.polyfit(turns[plateau], extension[plateau], 1)[0]
     assert slope == pytest.approx(slope_r * R, rel=0.02)
     assert math.degrees(theta) == pytest.approx(23.53, abs=0.01)  # the ply at 0.05
+
+
+@pytest.mark.parametrize("ld,lam", [(20, 10), (40, 10)])
+def test_every_branch_reaches_its_bound_on_a_small_grid(ld, lam):
+    """From 0 turns through buckling and the first contact to 1.5 times the exact
+    buckling turns (:func:`~supercoil.problems.greenhill.critical_turns`), C/A = 1.5,
+    N = 2 n0 (n0 = L/D + 2, segments of D); lambda = 18 at L/D = 40 is the ply test's (to
+    4.4 turns, 1.14 times the buckling turns).
+    Every branch complete, the last on the bound."""
+    from supercoil.problems.greenhill import critical_turns
+
+    stop = 1.5 * critical_turns(1.5, lam**2)
+    result = tweezers_branches(TweezersOptions(
+        twist_ratio=1.5, length_over_diameter=ld, tension=lam**2, n_nodes=2 * (ld + 2),
+        turns=(0.0, stop)))
+    assert result.ok, result.notes
+    assert [b.name for b in result.branches] == ["straight", "buckled", "buckled_contact"]
+    assert result.branches[-1].parameter_values[-1] == pytest.approx(stop, abs=1e-9)

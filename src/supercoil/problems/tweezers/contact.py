@@ -35,6 +35,10 @@ from supercoil.rod.open import ClampedRodEnergy
 # came with 461 corrector iterations instead of 501 (benchmarks/bench_tweezers_steps.py
 # --problems 75,33, then with --set '{"max_corrector_distance": null}').
 CONTACT_CORRECTOR_DISTANCE = 1.0
+# the tail ratio (ClampedRodEnergy.sliding) below which the sliding of the plectoneme is
+# left out of the count on the contact branch: the continuum's symmetry, whose discrete
+# eigenvalue is the contact's ripple, of either sign
+SLIDING_TAIL_CONTACT = 0.1
 
 
 def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
@@ -48,9 +52,9 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`)."""
     D = opts.diameter
     # in contact the discrete contact makes the sliding of the plectoneme stiff, of
-    # either sign: not an approximate symmetry of the discrete problem, no phase row
+    # either sign: no phase row, but out of the count while the tails are straight
     # (docs/continuation.md, "Long open rods: the sliding of a localised structure")
-    rod.sliding_tail = None
+    rod.sliding_tail = SLIDING_TAIL_CONTACT
     k = contact_start(free, onset, cp)
     q = free.states[k]
     cp.turns = float(free.parameter_values[k])
@@ -64,7 +68,7 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
         parameter_weight=D, tolerance=opts.contact_tolerance,
         event_tolerance=opts.contact_event_tolerance,
         predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
-        chord_steps=True)
+        chord_steps=True, near_symmetry_gauge=False)
     records = tweezers_records(cp, rod, True)
     events = (contact_count_event(cp),)
     old, complete = stored.get(name, (None, False))

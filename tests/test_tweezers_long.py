@@ -245,3 +245,18 @@ def test_every_branch_reaches_its_bound_on_a_small_grid(ld, lam):
     assert result.ok, result.notes
     assert [b.name for b in result.branches] == ["straight", "buckled", "buckled_contact"]
     assert result.branches[-1].parameter_values[-1] == pytest.approx(stop, abs=1e-9)
+
+
+def test_a_branch_back_at_the_first_turn_without_contact_is_incomplete():
+    """C/A = 1.5, L/D = 200, lambda = 10, N = n0: the subcritical branch folds back to
+    0 turns before its loop touches itself; the plectoneme is not reached, and the
+    result says so (not ok: the command exits 1)."""
+    result = tweezers_branches(TweezersOptions(
+        twist_ratio=1.5, length_over_diameter=200, tension=100.0, n_nodes=202,
+        turns=(0.0, 3.34)))
+    buckled = result.branch("buckled")
+    assert buckled.parameter_values[-1] == 0.0
+    assert not buckled.points_of_kind("contact_onset")
+    assert not result.ok
+    assert any(n.startswith("incomplete: buckled ended at 0 turns without contact")
+               for n in result.notes)

@@ -164,6 +164,11 @@ def tweezers_branches(options: TweezersOptions,
         if not free.status.complete:
             notes.append(f"incomplete: {free_name} stopped at "
                          f"{free.parameter_values[-1]:.6g} turns: {free.message}")
+        elif probe is not None and free.parameter_values[-1] < opts.turns[1] - 1e-9:
+            # back at the first turn (the subcritical branch folded back to it) without
+            # contact: the plectoneme was not reached
+            notes.append(f"incomplete: {free_name} ended at {free.parameter_values[-1]:.6g} "
+                         f"turns without contact, before {opts.turns[1]:g} ({free.message})")
         elif probe is not None:
             notes.append(f"{free_name}: no contact found ({free.message})")
         final(free, False)

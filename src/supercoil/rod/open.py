@@ -42,6 +42,21 @@ def straight_rod(n_nodes: int, length: float = 1.0) -> np.ndarray:
 # (ClampedRodEnergy.near_symmetry_modes)
 SLIDING_ENDS = 0.05
 SLIDING_TAIL = 1e-4
+SLIDING_NODES = 160  # ... at up to this many nodes; beyond, sliding_threshold
+
+
+def sliding_threshold(n_nodes: int) -> float:
+    """The tail ratio below which the sliding of a localised structure is an approximate
+    symmetry of a clamped rod of ``n_nodes`` (:meth:`ClampedRodEnergy.near_symmetry_modes`):
+    ``SLIDING_TAIL``, times ``(n_nodes / SLIDING_NODES)^2`` on finer meshes. Newton moves
+    along the sliding by the residual's round-off floor over the sliding's stiffness;
+    the floor grows like ``N^3`` (``eps |H| |q|``, ``|H| ~ A / h^3``), the stiffness
+    (mass-weighted eigenvalue times the lumped mass ``h``) like ``tail^2 h``, so the
+    tail ratio at which the two meet grows like ``N^2``. Measured at L/D = 200,
+    lambda = 20, N = 404: the corrector diverged at a tail ratio of 2.9e-4 (sliding
+    eigenvalue 1e-2, floor 1e-6), above the threshold of N = 160 and below this one's
+    (6.4e-4)."""
+    return SLIDING_TAIL * max(1.0, (n_nodes / SLIDING_NODES) ** 2)
 
 
 class ClampedRodEnergy(RodEnergy):
@@ -95,7 +110,7 @@ class ClampedRodEnergy(RodEnergy):
         self._turn_offset = 0  # whole turns restored after a rebuild of the frames (accept)
         # the tail ratio below which near_symmetry_modes offers the sliding of a
         # localised structure (None: never)
-        self.sliding_tail: float | None = SLIDING_TAIL
+        self.sliding_tail: float | None = sliding_threshold(n)
 
     twist_parameter = "turns"
 
@@ -233,7 +248,7 @@ class ClampedRodEnergy(RodEnergy):
         tail ratio 8e-5 with the sliding eigenvalue 4e-3, 1e-5 with 6e-5, against a
         next eigenvalue of 1.3e4), and the mode is returned; above it the sliding
         costs energy that the mesh resolves (the structure reaches the clamps) and
-        it is not a symmetry at all. ``sliding_tail`` is ``SLIDING_TAIL`` by default;
+        it is not a symmetry at all. ``sliding_tail`` is :func:`sliding_threshold` by default;
         None: never (docs/continuation.md, "Sliding of a localised structure", for the
         rod in self-contact).
         """

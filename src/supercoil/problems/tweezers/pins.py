@@ -25,8 +25,11 @@ PIN_QUALITY = 0.5  # re-pick the azimuth pin below this (ClampedRodEnergy.pin_qu
 # rod's sliding_tail by this factor, so that the next run starts on the far side of the
 # threshold, with (or without) the sliding's phase row: without the margin a run ended
 # where the ratio barely crossed, and the next started from the point before, on the
-# near side, and was refused at once
-SLIDING_HYSTERESIS = 4.0
+# near side, and was refused at once. The ratio changes by about 10 % a step; a factor
+# of 4 kept a run without the row going where the ratio levelled off between the
+# threshold and a quarter of it (L/D = 200, lambda = 20, N = 404: at 2.9e-4), until
+# the corrector diverged
+SLIDING_HYSTERESIS = 1.5
 
 
 def rotated_mode(mode: np.ndarray) -> tuple[np.ndarray, int]:
@@ -96,7 +99,7 @@ def sliding_stop(rod: ClampedRodEnergy, q_start: np.ndarray
     """A ``continuation`` ``stop`` for a run started at ``q_start``: it refuses a state
     where the sliding of a localised structure (``rod.near_symmetry_modes``) is an
     approximate symmetry and was not at the start, or the reverse, each with the margin
-    ``SLIDING_HYSTERESIS`` on the threshold.
+    ``SLIDING_HYSTERESIS`` on the threshold (``rod.sliding_tail``).
 
     A run carries the phase row of that sliding from its start or not at all
     (``ContinuationOptions.near_symmetry_gauge``); the run ends at the point before

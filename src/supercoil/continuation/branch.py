@@ -15,7 +15,7 @@ from supercoil.continuation.options import ContinuationStatus
 
 SCHEMA_VERSION = 1
 
-SPECIAL_KINDS = ("fold", "bifurcation", "endpoint")
+SPECIAL_KINDS = ("fold", "bifurcation", "count_change", "endpoint")
 
 
 def _frozen(a) -> np.ndarray:

@@ -31,6 +31,10 @@ from supercoil.continuation.stability import point_stability
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.problem import ConstrainedEnergy
 
+# the kinds of a change of the unstable count: a bifurcation, or a count_change that its
+# verification did not confirm (docs/model.md, "Special points and branches")
+COUNT_KINDS = ("bifurcation", "count_change")
+
 
 @dataclass(frozen=True)
 class ConsistencyReport:
@@ -125,11 +129,12 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
             if (p.parameter - lam[i]) * (p.parameter - lam[i + 1]) < -slack:
                 problems.append(f"{where}: the fold lies between its neighbours' parameter "
                                 "values (it must be an extremum)")
-        elif p.kind == "bifurcation":
-            # the bifurcation points of one segment, in order, chain its neighbours'
-            # counts; a fold in the segment changes the count by one where it lies
+        elif p.kind in COUNT_KINDS:
+            # the count changes of one segment (bifurcations and unverified ones), in
+            # order, chain its neighbours' counts; a fold in the segment changes the
+            # count by one where it lies
             chain = sorted((b for b in branch.special_points
-                            if b.kind == "bifurcation" and b.index == i),
+                            if b.kind in COUNT_KINDS and b.index == i),
                            key=lambda b: b.arclength)
             folds = [f.arclength for f in branch.special_points
                      if f.kind == "fold" and f.index == i]
@@ -139,6 +144,8 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
                      else chain[chain.index(p) + 1].count_before)
             slack_before = sum(f <= p.arclength for f in folds) if chain[0] is p else 0
             slack_after = sum(f >= p.arclength for f in folds) if chain[-1] is p else 0
+            if p.kind == "count_change" and min(p.count_before, p.count_after) < 0:
+                continue  # not located: no counts to chain
             if p.count_before == p.count_after:
                 problems.append(f"{where}: the unstable count does not change across it")
             if (abs(p.count_before - before) > slack_before

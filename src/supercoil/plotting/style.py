@@ -28,6 +28,7 @@ SPECIAL_MARKERS = {
     "contact_interval_onset": ("P", "#B7950B"),
     "jump": ("X", "#7F8C8D"),
     "endpoint": ("x", "#000000"),
+    "count_change": ("o", "#AAB7B8"),
 }
 OTHER_MARKER = ("*", "#000000")
 

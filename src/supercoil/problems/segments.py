@@ -119,6 +119,7 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
            quality: float = 0.5, grip: Callable[[np.ndarray], float] | None = None,
            grip_fraction: float = 0.25,
            refuse: Callable[[np.ndarray], str | None] | None = None,
+           restart: Callable[[np.ndarray], Callable[[np.ndarray], str | None]] | None = None,
            ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
     """Continue ``first`` (a computed run) in runs of ``segment_points``, re-pinning between.
 
@@ -144,6 +145,11 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
     e.g. to end a run as soon as what ``stop(run)`` waits for has happened instead of
     at the end of the run (a refusal it makes ends the branch when ``stop(run)`` is
     then true; otherwise the pins are re-picked as after the grip's).
+
+    ``restart(q)``: a ``stop`` made for each run from its first state ``q``, asked
+    after ``refuse`` (e.g. the end of a run where the state's approximate symmetries
+    change, so that the next run starts with the phase rows they need); the run
+    then ends ``STOPPED`` and the next one starts at its last point.
     """
     parts = [first]
     pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
@@ -179,7 +185,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         held = None if grip is None else grip_stop(grip, q, grip_fraction)
         run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
                            options=opts, name=name, records=records, events=events,
-                           on_point=report, stop=either(held, refuse))
+                           on_point=report,
+                           stop=either(held, refuse, None if restart is None else restart(q)))
         parts.append(run)
         total += len(run) - 1
     merged = merge_branches(parts, name)

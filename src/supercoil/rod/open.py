@@ -37,6 +37,28 @@ def straight_rod(n_nodes: int, length: float = 1.0) -> np.ndarray:
     return np.stack([np.zeros(n_nodes), np.zeros(n_nodes), z], axis=1)
 
 
+# the sliding of a localised structure is an approximate symmetry when the rod's outer
+# SLIDING_ENDS of nodes at either end move by at most SLIDING_TAIL of its largest move
+# (ClampedRodEnergy.near_symmetry_modes)
+SLIDING_ENDS = 0.05
+SLIDING_TAIL = 1e-4
+SLIDING_NODES = 160  # ... at up to this many nodes; beyond, sliding_threshold
+
+
+def sliding_threshold(n_nodes: int) -> float:
+    """The tail ratio below which the sliding of a localised structure is an approximate
+    symmetry of a clamped rod of ``n_nodes`` (:meth:`ClampedRodEnergy.near_symmetry_modes`):
+    ``SLIDING_TAIL``, times ``(n_nodes / SLIDING_NODES)^2`` on finer meshes. Newton moves
+    along the sliding by the residual's round-off floor over the sliding's stiffness;
+    the floor grows like ``N^3`` (``eps |H| |q|``, ``|H| ~ A / h^3``), the stiffness
+    (mass-weighted eigenvalue times the lumped mass ``h``) like ``tail^2 h``, so the
+    tail ratio at which the two meet grows like ``N^2``. Measured at L/D = 200,
+    lambda = 20, N = 404: the corrector diverged at a tail ratio of 2.9e-4 (sliding
+    eigenvalue 1e-2, floor 1e-6), above the threshold of N = 160 and below this one's
+    (6.4e-4)."""
+    return SLIDING_TAIL * max(1.0, (n_nodes / SLIDING_NODES) ** 2)
+
+
 class ClampedRodEnergy(RodEnergy):
     """Constrained energy problem of a rod clamped at both ends on the ``z`` axis."""
 
@@ -86,6 +108,9 @@ class ClampedRodEnergy(RodEnergy):
         u_last = self._directors[-1]
         self._end_mismatch = float(np.arctan2(-u_last[1], u_last[0]))  # (u x e_x).e_z, u.e_x
         self._turn_offset = 0  # whole turns restored after a rebuild of the frames (accept)
+        # the tail ratio below which near_symmetry_modes offers the sliding of a
+        # localised structure (None: never)
+        self.sliding_tail: float | None = sliding_threshold(n)
 
     twist_parameter = "turns"
 
@@ -205,6 +230,50 @@ class ClampedRodEnergy(RodEnergy):
     def writhe_local(self, q: np.ndarray) -> float:
         """Writhe with axial tails from the reference twist (no double sum): ``turns - Tw``."""
         return self.turns - self.twist(q)
+
+    def near_symmetry_modes(self, q: np.ndarray) -> np.ndarray:
+        """Sliding a localised structure along the rod, ``(1, n_dofs)``, where it is an
+        approximate symmetry; ``(0, n_dofs)`` elsewhere.
+
+        ``x(s) -> x(s - a) + a e_z`` moves a loop or a plectoneme along a rod whose
+        tails are straight along the axis, the material passing from one tail into
+        the structure and out of it into the other; at the nodes its generator is
+        ``g_i = (x_{i+1} - x_{i-1}) / 2 - h e_z`` (zero on straight tails and at the
+        clamps). Its energy is that of the structure's interaction with the clamps,
+        which decays like ``exp(-lambda s)`` along the tails, plus the discretisation's
+        ripple, which a finer mesh changes: below ``sliding_tail`` (the largest
+        ``|g_i|`` over the outer ``SLIDING_ENDS`` of the nodes at either end, over the
+        largest overall) both are below what the computed eigenvalue resolves
+        (measured at L/D = 100, F L^2/A = 1200, N = 160 along the localised loop:
+        tail ratio 8e-5 with the sliding eigenvalue 4e-3, 1e-5 with 6e-5, against a
+        next eigenvalue of 1.3e4), and the mode is returned; above it the sliding
+        costs energy that the mesh resolves (the structure reaches the clamps) and
+        it is not a symmetry at all. ``sliding_tail`` is :func:`sliding_threshold` by default;
+        None: never (docs/continuation.md, "Sliding of a localised structure", for the
+        rod in self-contact).
+        """
+        g, tail = self.sliding(q)
+        if self.sliding_tail is None or tail > self.sliding_tail:
+            return np.zeros((0, np.size(q)))
+        return g[None, :]
+
+    def sliding(self, q: np.ndarray) -> tuple[np.ndarray, float]:
+        """The sliding generator ``g`` (``(n_dofs,)``, :meth:`near_symmetry_modes`) and
+        its tail ratio: the largest ``|g_i|`` over the outer ``SLIDING_ENDS`` of the
+        nodes at either end over the largest overall (``inf`` for a straight rod, which
+        has no structure to slide)."""
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        n = x.shape[0]
+        g = np.zeros_like(x)
+        g[1:-1] = 0.5 * (x[2:] - x[:-2])
+        g[1:-1, 2] -= self.rod.edge_length
+        g[[0, 1, n - 2, n - 1]] = 0.0
+        size = np.linalg.norm(g, axis=1)
+        largest = float(size.max())
+        if largest <= 1e-6 * self.rod.edge_length:
+            return g.ravel(), float("inf")
+        ends = max(3, int(np.ceil(SLIDING_ENDS * n)))
+        return g.ravel(), float(max(size[:ends].max(), size[-ends:].max())) / largest
 
     def symmetry_modes(self, q: np.ndarray) -> np.ndarray:
         """Rotation of the centreline about the axis (empty when the rod is straight)."""

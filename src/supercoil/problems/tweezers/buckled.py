@@ -24,8 +24,13 @@ from supercoil.continuation import (
     switch_branch,
 )
 from supercoil.continuation.resume import resume_branch
-from supercoil.problems.segments import set_pin
-from supercoil.problems.tweezers.pins import hold_azimuth, pin_node, rotated_mode
+from supercoil.problems.segments import either, set_pin
+from supercoil.problems.tweezers.pins import (
+    hold_azimuth,
+    pin_node,
+    rotated_mode,
+    sliding_stop,
+)
 from supercoil.rod.open import ClampedRodEnergy
 from supercoil.solvers.newton import NewtonOptions, newton
 
@@ -37,10 +42,12 @@ SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1e-3)
 
 def resume_stored(stored: Mapping[str, tuple[Branch, bool]], rod: ClampedRodEnergy,
                   problem, name: str, segment_opts: ContinuationOptions, records,
-                  events, on_point=None, stop=None) -> Branch | None:
+                  events, on_point=None, stop=None, sliding: bool = True) -> Branch | None:
     """The stored branch ``name`` continued for one segment, or None (none stored, or
     complete, or of fewer than two points); with the azimuth pin its points were
-    computed with (the record ``azimuth_pin``), the same gauge."""
+    computed with (the record ``azimuth_pin``), the same gauge. ``sliding``: the run
+    also ends where the sliding's phase row must come or go
+    (:func:`~supercoil.problems.tweezers.pins.sliding_stop`)."""
     old, complete = stored.get(name, (None, False))
     if old is None or complete or len(old) < 2:
         return None
@@ -54,7 +61,8 @@ def resume_stored(stored: Mapping[str, tuple[Branch, bool]], rod: ClampedRodEner
         set_pin(problem, rod, q)
     return resume_branch(problem, old, dataclasses.replace(
         segment_opts, max_points=len(old) + segment_opts.max_points - 1),
-        records=records, events=events, on_point=on_point, stop=stop)
+        records=records, events=events, on_point=on_point,
+        stop=either(stop, sliding_stop(rod, q) if sliding else None))
 
 
 def switch_off_straight(rod: ClampedRodEnergy, straight: Branch, point: SpecialPoint,

@@ -24,10 +24,15 @@ from supercoil.problems.tweezers.buckled import (
 )
 from supercoil.problems.tweezers.contact import contact_branch
 from supercoil.problems.tweezers.options import TweezersOptions
-from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop
+from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
 from supercoil.problems.tweezers.result import TweezersResult
 from supercoil.problems.tweezers.straight import straight_branch
+from supercoil.problems.tweezers.verify import verify_bifurcations
+
+# a note when the sliding's phase row holds a force above this (a hundred times the
+# residuals' round-off floor on the contact-free branches, 1e-8 at F L^2/A = 1200)
+SLIDING_NOTE = 1e-6
 
 
 def tweezers_branches(options: TweezersOptions,
@@ -71,7 +76,8 @@ def tweezers_branches(options: TweezersOptions,
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns,
                                     max_points=min(opts.segment_points, opts.max_points),
-                                    event_tolerance=opts.event_tolerance, chord_steps=True)
+                                    event_tolerance=opts.event_tolerance, chord_steps=True,
+                                    gauge="integral", rephase=True)
     # The contact-free runs end at the first point past a located contact onset (the
     # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
     # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
@@ -112,7 +118,8 @@ def tweezers_branches(options: TweezersOptions,
             say(f"{free_name}: continued from point {len(stored[free_name][0]) - 1}")
         if first is None and not free_complete:
             first = switch_off_straight(rod, straight, point, free_opts, free_name,
-                                        free_records, events, free_point, free_stop, say)
+                                        free_records, events, free_point,
+                                        either(free_stop, sliding_stop(rod, q0)), say)
         if not free_complete and not len(first):
             notes.append(f"failed: {free_name}: no point found off the straight rod at "
                          f"{point.parameter:.6g} turns ({first.message})")
@@ -127,7 +134,7 @@ def tweezers_branches(options: TweezersOptions,
                               on_point, free_stop)
     if not opts.load_control and first is None and not free_complete:
         first, why = clamped_buckle_run(rod, q0, free_opts, free_name, free_records, events,
-                                        free_point, free_stop)
+                                        free_point, either(free_stop, sliding_stop(rod, q0)))
         if first is None:
             notes.append(f"failed: the clamped buckle at z/L = {opts.end_distance:g} did not "
                          f"converge ({why})")
@@ -140,7 +147,16 @@ def tweezers_branches(options: TweezersOptions,
                                  stop=onset_passed if probe is not None else None,
                                  max_points=opts.max_points,
                                  segment_points=opts.segment_points, on_point=free_point,
-                                 quality=PIN_QUALITY, refuse=free_stop)
+                                 quality=PIN_QUALITY, refuse=free_stop,
+                                 restart=lambda q: sliding_stop(rod, q))
+    free = verify_bifurcations(free)
+    sliding = free.records.get("sliding_residual", np.zeros(0))
+    if len(free) and np.max(sliding) > SLIDING_NOTE:
+        k = int(np.argmax(sliding))
+        notes.append(f"{free_name}: the sliding of the localised loop is held by a phase row "
+                     f"(docs/continuation.md); the force it holds, max |KKT residual| "
+                     f"without it, is at most {float(sliding[k]):.2e} (at "
+                     f"{float(free.parameter_values[k]):.4g} turns)")
     onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
@@ -148,6 +164,11 @@ def tweezers_branches(options: TweezersOptions,
         if not free.status.complete:
             notes.append(f"incomplete: {free_name} stopped at "
                          f"{free.parameter_values[-1]:.6g} turns: {free.message}")
+        elif probe is not None and free.parameter_values[-1] < opts.turns[1] - 1e-9:
+            # back at the first turn (the subcritical branch folded back to it) without
+            # contact: the plectoneme was not reached
+            notes.append(f"incomplete: {free_name} ended at {free.parameter_values[-1]:.6g} "
+                         f"turns without contact, before {opts.turns[1]:g} ({free.message})")
         elif probe is not None:
             notes.append(f"{free_name}: no contact found ({free.message})")
         final(free, False)
@@ -166,7 +187,7 @@ def tweezers_branches(options: TweezersOptions,
     start = time.perf_counter()
     contact, contact_pins = contact_branch(opts, rod, cp, free, onset, contact_name, stored,
                                            on_point, pinned, say)
-    contact = dataclasses.replace(contact, parent=free_name, origin=onset)
+    contact = verify_bifurcations(dataclasses.replace(contact, parent=free_name, origin=onset))
     seconds[contact_name] = time.perf_counter() - start
     final(contact, True)
     branches.append(contact)

@@ -35,6 +35,10 @@ from supercoil.rod.open import ClampedRodEnergy
 # came with 461 corrector iterations instead of 501 (benchmarks/bench_tweezers_steps.py
 # --problems 75,33, then with --set '{"max_corrector_distance": null}').
 CONTACT_CORRECTOR_DISTANCE = 1.0
+# the tail ratio (ClampedRodEnergy.sliding) below which the sliding of the plectoneme is
+# left out of the count on the contact branch: the continuum's symmetry, whose discrete
+# eigenvalue is the contact's ripple, of either sign
+SLIDING_TAIL_CONTACT = 0.1
 
 
 def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
@@ -47,6 +51,10 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     incomplete stored one continued) with its contact events classified. ``pinned``:
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`)."""
     D = opts.diameter
+    # in contact the discrete contact makes the sliding of the plectoneme stiff, of
+    # either sign: no phase row, but out of the count while the tails are straight
+    # (docs/continuation.md, "Long open rods: the sliding of a localised structure")
+    rod.sliding_tail = SLIDING_TAIL_CONTACT
     k = contact_start(free, onset, cp)
     q = free.states[k]
     cp.turns = float(free.parameter_values[k])
@@ -60,19 +68,20 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
         parameter_weight=D, tolerance=opts.contact_tolerance,
         event_tolerance=opts.contact_event_tolerance,
         predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
-        chord_steps=True)
+        chord_steps=True, near_symmetry_gauge=False)
     records = tweezers_records(cp, rod, True)
     events = (contact_count_event(cp),)
     old, complete = stored.get(name, (None, False))
     if complete:
         return old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
     first = resume_stored(stored, rod, cp, name, contact_opts, records, events, on_point,
-                          pinned)
+                          pinned, sliding=False)
     if first is not None:
         say(f"{name}: continued from point {len(old) - 1}")
     else:
         first = continuation(cp, q, parameter="turns", options=contact_opts, name=name,
-                             records=records, events=events, on_point=on_point, stop=pinned)
+                             records=records, events=events, on_point=on_point,
+                             stop=pinned)
     contact, pins = follow(cp, rod, first, contact_opts, name, records, events,
                            max_points=opts.max_points, segment_points=opts.segment_points,
                            on_point=on_point, quality=PIN_QUALITY, refuse=pinned)

@@ -21,6 +21,15 @@ import numpy as np
 from supercoil.rod.open import ClampedRodEnergy
 
 PIN_QUALITY = 0.5  # re-pick the azimuth pin below this (ClampedRodEnergy.pin_quality)
+# a run ends where the sliding's tail ratio (ClampedRodEnergy.sliding) crosses the
+# rod's sliding_tail by this factor, so that the next run starts on the far side of the
+# threshold, with (or without) the sliding's phase row: without the margin a run ended
+# where the ratio barely crossed, and the next started from the point before, on the
+# near side, and was refused at once. The ratio changes by about 10 % a step; a factor
+# of 4 kept a run without the row going where the ratio levelled off between the
+# threshold and a quarter of it (L/D = 200, lambda = 20, N = 404: at 2.9e-4), until
+# the corrector diverged
+SLIDING_HYSTERESIS = 1.5
 
 
 def rotated_mode(mode: np.ndarray) -> tuple[np.ndarray, int]:
@@ -80,6 +89,36 @@ def pin_stop(rod: ClampedRodEnergy) -> Callable[[np.ndarray], str | None]:
         quality = rod.pin_quality(q)
         if quality < PIN_QUALITY:
             return f"the azimuth pin's quality fell to {quality:.2g} (below {PIN_QUALITY:g})"
+        return None
+
+    return refuse
+
+
+def sliding_stop(rod: ClampedRodEnergy, q_start: np.ndarray
+                 ) -> Callable[[np.ndarray], str | None]:
+    """A ``continuation`` ``stop`` for a run started at ``q_start``: it refuses a state
+    where the sliding of a localised structure (``rod.near_symmetry_modes``) is an
+    approximate symmetry and was not at the start, or the reverse, each with the margin
+    ``SLIDING_HYSTERESIS`` on the threshold (``rod.sliding_tail``).
+
+    A run carries the phase row of that sliding from its start or not at all
+    (``ContinuationOptions.near_symmetry_gauge``); the run ends at the point before
+    the change and the next one starts there with the rows the state needs
+    (:func:`~supercoil.problems.segments.follow`). Without the row, Newton moves
+    along the nearly null sliding by the residual's round-off over its eigenvalue
+    (measured at L/D = 100, F L^2/A = 1200, N = 160: steps of 0.3 L from residuals
+    of 2e-8, the eigenvalue 6e-8 unweighted), and the corrector diverged."""
+    had = rod.near_symmetry_modes(q_start).shape[0] > 0
+
+    def refuse(q: np.ndarray) -> str | None:
+        threshold = rod.sliding_tail
+        if threshold is None:
+            return None
+        tail = rod.sliding(q)[1]
+        if not had and tail <= threshold / SLIDING_HYSTERESIS:
+            return "the sliding of the localised structure became an approximate symmetry"
+        if had and tail > threshold * SLIDING_HYSTERESIS:
+            return "the sliding of the structure stopped being an approximate symmetry"
         return None
 
     return refuse

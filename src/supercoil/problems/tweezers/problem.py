@@ -11,7 +11,9 @@ without self-contact, passed through itself: ``closure_failed``), ``energy``
 (elastic only), ``load_potential`` (``-F z``, zero under displacement
 control), ``tension`` (the axial force: the dead load, or the reaction at the
 end under displacement control), ``azimuth_pin``, ``n_contact_points``,
-``n_contact_intervals`` and ``min_gap_over_diameter``.
+``n_contact_intervals``, ``min_gap_over_diameter`` and ``sliding_residual`` (the KKT
+residual without the continuation's phase rows: the force the sliding's phase row
+holds, docs/continuation.md, "Long open rods").
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import math
 import numpy as np
 
 from supercoil.contact.report import COUNT_KEYS, contact_summary
+from supercoil.problems.ring_diagram.records import kkt_residual
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
@@ -85,7 +88,8 @@ def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
                "energy": rod.elastic_energy(q), "load_potential": rod.load_potential(q),
                "tension": axial_force(rod, multipliers),
                # the azimuth pin the point was computed with (a resumed run keeps it)
-               "azimuth_pin": int(rod.gauge_dofs[0]) if rod.gauge_dofs.size == 1 else -1}
+               "azimuth_pin": int(rod.gauge_dofs[0]) if rod.gauge_dofs.size == 1 else -1,
+               "sliding_residual": kkt_residual(problem, q, multipliers)}
         if contact:
             summary = contact_summary(problem, q, multipliers, COUNT_KEYS)
             gap = summary["min_gap_over_diameter"]

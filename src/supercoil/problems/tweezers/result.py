@@ -7,9 +7,10 @@ from dataclasses import dataclass, field
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, SpecialPoint
 from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.tweezers.contact import SLIDING_TAIL_CONTACT
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import hold_azimuth
-from supercoil.rod.open import ClampedRodEnergy
+from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,8 @@ class TweezersResult:
             if start <= index:
                 dofs = chosen
         problem = self.contact_problem if name in self.contact_branches else rod
+        rod.sliding_tail = (SLIDING_TAIL_CONTACT if name in self.contact_branches
+                            else sliding_threshold(rod.rod.n_nodes))
         hold_azimuth(rod, dofs, problem)
         return problem
 

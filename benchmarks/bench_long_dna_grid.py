@@ -1,0 +1,98 @@
+"""Benchmark: the tweezers' branches of long rods over a grid of lengths and forces.
+
+For each ``L/D`` and ``lambda = L sqrt(F/A)`` (``F L^2/A = lambda^2``) at ``C/A``, the
+branches from 0 turns through buckling, the first contact and the plectoneme's growth
+up to ``--factor`` (default 1.5) times the straight rod's exact buckling turns, at
+``N = n0`` and ``2 n0`` nodes (``n0 = ceil(L/D) + 2``, the smallest N whose segments are
+no longer than D). One row per run: whether the last branch reached the last turn, the
+turns reached, the points and seconds per run, the unstable counts met on the
+plectoneme (contact) branch, the verified bifurcations and the unverified count changes
+located off the straight rod, and the notes (why a run stopped).
+
+The runs are long (minutes each at L/D = 500): run it niced in the background; each row
+is appended to the table as soon as it is computed, so a partial run leaves the rows
+that completed.
+
+Run: ``python benchmarks/bench_long_dna_grid.py [--ld 100,200,500] [--lambdas
+10,20,40,80,150] [--twist-ratio 1.5] [--multiples 1,2] [--factor 1.5] [--max-points
+4000] [--out benchmarks/results/long_dna_grid.md]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+
+HEADER = ("| L/D | lambda | F L^2/A | N | target turns | reached | last turns | points | "
+          "seconds | counts on the contact branch | bifurcations | count changes | notes |")
+
+
+def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
+        max_points: int) -> str:
+    """One table row (module doc)."""
+    tension = lam**2
+    target = factor * critical_turns(twist_ratio, tension)
+    options = TweezersOptions(twist_ratio=twist_ratio, length_over_diameter=ld,
+                              tension=tension, n_nodes=nodes, turns=(0.0, target),
+                              max_points=max_points)
+    start = time.perf_counter()
+    result = tweezers_branches(options)
+    seconds = time.perf_counter() - start
+    last = [b for b in result.branches if len(b)][-1]
+    reached = float(last.parameter_values[-1])
+    points = "+".join(str(len(b)) for b in result.branches)
+    contact = [b for b in result.branches if b.name in result.contact_branches]
+    counts = "-"
+    if contact:
+        values, times = np.unique(contact[0].unstable_count, return_counts=True)
+        counts = ", ".join(f"{v}: {t}" for v, t in zip(values, times, strict=True))
+    off_straight = [p for b in result.branches if b.name != "straight"
+                    for p in b.special_points]
+    bifurcations = sum(p.kind == "bifurcation" for p in off_straight)
+    changes = sum(p.kind == "count_change" for p in off_straight)
+    ok = result.ok and reached >= target - 1e-9
+    notes = "; ".join(result.notes).replace("|", "/") or "-"
+    return (f"| {ld:g} | {lam:g} | {tension:g} | {nodes} | {target:.4g} | "
+            f"{'yes' if ok else 'no'} | {reached:.4g} | {points} | {seconds:.0f} | {counts} | "
+            f"{bifurcations} | {changes} | {notes} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ld", default="100,200,500")
+    parser.add_argument("--lambdas", default="10,20,40,80,150")
+    parser.add_argument("--twist-ratio", type=float, default=1.5)
+    parser.add_argument("--multiples", default="1,2", help="N as multiples of n0")
+    parser.add_argument("--factor", type=float, default=1.5)
+    parser.add_argument("--max-points", type=int, default=4000)
+    parser.add_argument("--out", default="benchmarks/results/long_dna_grid.md")
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with out.open("w") as f:
+        f.write(f"# Long rods in the tweezers: C/A = {args.twist_ratio:g}, up to "
+                f"{args.factor:g} x the buckling turns\n\n"
+                f"`python benchmarks/bench_long_dna_grid.py --ld {args.ld} --lambdas "
+                f"{args.lambdas} --twist-ratio {args.twist_ratio:g} --multiples "
+                f"{args.multiples} --factor {args.factor:g} --max-points "
+                f"{args.max_points}`\n\n{HEADER}\n|{'---|' * HEADER.count(' | ')}---|\n")
+    for ld in (float(v) for v in args.ld.split(",")):
+        n0 = math.ceil(ld) + 2
+        for lam in (float(v) for v in args.lambdas.split(",")):
+            for multiple in (int(v) for v in args.multiples.split(",")):
+                row = run(ld, lam, args.twist_ratio, multiple * n0, args.factor,
+                          args.max_points)
+                print(row, flush=True)
+                with out.open("a") as f:
+                    f.write(row + "\n")
+
+
+if __name__ == "__main__":
+    main()

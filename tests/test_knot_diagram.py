@@ -27,8 +27,8 @@ from supercoil.cli.main import run as cli
 from supercoil.problems.knot_diagram_points import lowest_energy, sections_touching_two
 from supercoil.topology.knots import identify
 
-CASE = dict(knot="3_1", twist_ratio=1.4, length_over_diameter=40.0, excess_link=(3.0, 4.3),
-            nodes=48, max_points=30)
+CASE = {"knot": "3_1", "twist_ratio": 1.4, "length_over_diameter": 40.0,
+        "excess_link": (3.0, 4.3), "nodes": 48, "max_points": 30}
 ARGS = ["diagram", "knot", "--knot", "3_1", "--twist-ratio", "1.4",
         "--length-over-diameter", "40", "--excess-link", "3:4.3", "--nodes", "48",
         "--max-points", "30", "-q"]

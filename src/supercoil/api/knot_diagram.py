@@ -29,7 +29,7 @@ class KnotDiagramResult:
 
 def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
                  excess_link: tuple[float, float], *, nodes: int = 60,
-                 max_points: int = 150, start: float | None = None,
+                 max_points: int = 150, start: float | None = None, deflation: int = 3,
                  out=None, overwrite: bool = False,
                  progress: Callable[[str], None] | None = None,
                  on_point: Callable | None = None) -> KnotDiagramResult:
@@ -40,8 +40,10 @@ def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
     relaxed with the barrier contact of tube diameter ``1/length_over_diameter`` at
     ``start`` (default: the middle of ``excess_link = (dLk_min, dLk_max)``) and
     followed both ways to the ends of the range, ``max_points`` points each way;
-    the knot type is kept at every step (docs/knots.md, "A knotted ring's
-    diagram"). ``out``: a folder (created if missing) for ``result.h5`` (the two
+    the knot type is kept at every step. At ``deflation`` computed points spread
+    over the range further equilibria are sought by deflation (Farrell, Birkisson
+    & Funke 2015) and each new one followed both ways (docs/knots.md, "A knotted
+    ring's diagram"). ``out``: a folder (created if missing) for ``result.h5`` (the two
     branches with their states, readable by :func:`supercoil.load`) and
     ``diagram.json`` (the summary); an existing result there is refused unless
     ``overwrite``. Invalid input raises :class:`supercoil.errors.InputError` before
@@ -53,7 +55,7 @@ def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
 
     options = KnotDiagramOptions(knot, twist_ratio, length_over_diameter,
                                  tuple(excess_link) if isinstance(excess_link, (list, tuple))
-                                 else excess_link, nodes, max_points, start)
+                                 else excess_link, nodes, max_points, start, deflation)
     folder = None if out is None else Path(out)
     if folder is not None:
         if folder.exists() and not folder.is_dir():

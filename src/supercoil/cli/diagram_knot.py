@@ -22,7 +22,7 @@ from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
 KNOT_OPTIONS = {"knot": "--knot", "twist_ratio": "--twist-ratio",
                 "length_over_diameter": "--length-over-diameter",
                 "excess_link": "--excess-link", "n_nodes": "--nodes",
-                "max_points": "--max-points", "start": "--start"}
+                "max_points": "--max-points", "start": "--start", "deflation": "--deflation"}
 Overwrite = overwrite_option("Write into an existing non-empty --out DIR, replacing the "
                              "diagram's own files (other files are left alone).")
 Quiet = quiet_option()
@@ -68,6 +68,10 @@ def diagram_knot(
     start: Annotated[float | None, typer.Option(
         "--start", metavar="X", help="The dLk at which the knot is relaxed, within A:B "
         "(default: the middle).", show_default=False)] = None,
+    deflation: Annotated[int, typer.Option(
+        "--deflation", metavar="K", help="Computed points, spread over A:B, at which further "
+        "equilibria are sought by deflation (Farrell, Birkisson & Funke 2015), each new one "
+        "followed both ways; 0 to 50.")] = 3,
     overwrite: Overwrite = False,
     quiet: Quiet = False,
 ) -> None:
@@ -80,6 +84,8 @@ def diagram_knot(
     along them; the lowest-energy state found at each dLk marked. Writes result.h5
     (read it with supercoil.load), diagram.json, link_writhe.png (dLk against Wr,
     stable parts heavy), energy.png (energy against dLk) and configurations.png.
+    At --deflation K computed points further equilibria are sought by deflation
+    and followed both ways (branches deflated_1_up, deflated_1_down, ...).
     """
     from supercoil.cli.saving import prepare_folder
     from supercoil.problems.knot_diagram import KnotDiagramOptions
@@ -87,7 +93,7 @@ def diagram_knot(
     span = _span(excess_link)
     with refused(KNOT_OPTIONS):
         KnotDiagramOptions(knot, twist_ratio, length_over_diameter, span, nodes, max_points,
-                           start)
+                           start, deflation)
     prepare_folder(out, overwrite=overwrite, resume=False, what="the diagram's files")
     import supercoil as sc
 
@@ -100,7 +106,8 @@ def diagram_knot(
           flush=True)
     with refused(KNOT_OPTIONS):
         result = sc.knot_diagram(knot, twist_ratio, length_over_diameter, span, nodes=nodes,
-                                 max_points=max_points, start=start, out=out,
+                                 max_points=max_points, start=start, deflation=deflation,
+                                 out=out,
                                  overwrite=True, progress=progress)
     draw_figures(result, out)
     summary = result.summary

@@ -48,6 +48,12 @@ from supercoil.topology.knots import identify
 
 TABLE_STEP = 0.1  # dLk between the rows of by_excess_link (at most MAX_ROWS rows)
 MAX_ROWS = 1001
+MAX_DEFLATION = 50
+# a state found by deflation is new when its energy or its writhe differs from every
+# computed branch's state at its dLk by more than these (relative, turns): copies of one
+# state slid along the mesh (equilibria with the sliding held) differ by the mesh's ripple,
+# measured up to 3e-4 turns of writhe on the trefoil at N = 48
+NEW_ENERGY, NEW_WRITHE = 1e-3, 1e-2
 BRANCH_NAMES = ("knot_up", "knot_down")
 
 
@@ -62,6 +68,7 @@ class KnotDiagramOptions:
     n_nodes: int = 60
     max_points: int = 150  # per half (knot_up, knot_down)
     start: float | None = None  # dLk of the relaxed knot; None: the middle of the range
+    deflation: int = 3  # dLk values at which further states are sought by deflation
     tolerance: float = 1e-8
 
     def __post_init__(self):
@@ -86,6 +93,8 @@ class KnotDiagramOptions:
                        meaning="points of each half-branch")
         if self.start is not None:
             checks.number("start", self.start, low, high, meaning="dLk of the relaxed knot")
+        checks.integer("deflation", self.deflation, 0, MAX_DEFLATION,
+                       meaning="dLk values searched by deflation")
         checks.number("tolerance", self.tolerance, 0.0, 1e-2, low_open=True)
 
     @property
@@ -112,6 +121,8 @@ class KnotDiagram:
     problem: object  # the ContactProblem (for the contact lists of stored states)
     seconds: dict
     start_message: str
+    origins: dict = dataclasses.field(default_factory=dict)  # deflated branches' origin
+    notes: tuple = ()
 
     @property
     def ok(self) -> bool:
@@ -172,9 +183,11 @@ class KnotDiagram:
             "excess_link": list(opts.excess_link),
             "start_excess_link": opts.start_excess_link,
             "start_message": self.start_message,
+            "deflation": opts.deflation,
             "branches": [{
-                "name": b.name, "parent": None, "origin": None, "contact": True,
-                "generation": 1, "parameter": b.parameter, "n_points": len(b),
+                "name": b.name, "parent": None, "origin": self.origins.get(b.name),
+                "contact": True, "generation": 1 if b.name in BRANCH_NAMES else 2,
+                "parameter": b.parameter, "n_points": len(b),
                 "status": b.status.name, "ok": b.status.complete, "message": b.message,
                 "seconds": round(self.seconds.get(b.name, float("nan")), 3),
                 "file": "result.h5"} for b in self.branches],
@@ -182,7 +195,7 @@ class KnotDiagram:
                                for p in b.special_points],
             "points": self.points(),
             "by_excess_link": table,
-            "notes": [],
+            "notes": list(self.notes),
             "ok": self.ok,
         }
 
@@ -214,4 +227,97 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None,
         seconds[name] = time.perf_counter() - began
         branches.append(branch)
     rod.fixed, rod.gauge_dofs, cp.fixed = pins
-    return KnotDiagram(opts, tuple(branches), knot, cp, seconds, message)
+    origins, notes = {}, []
+    if opts.deflation and branches:
+        found = _deflated_branches(opts, cp, branches, progress, on_point, seconds)
+        for branch, origin in found:
+            branches.append(branch)
+            origins[branch.name] = origin
+        notes.append(f"deflation and relaxation at {opts.deflation} dLk value(s): "
+                     f"{len(found)} further half-branch(es) from new states")
+    rod.fixed, rod.gauge_dofs, cp.fixed = pins
+    return KnotDiagram(opts, tuple(branches), knot, cp, seconds, message, origins,
+                       tuple(notes))
+
+
+def states_at(cp, branches, value: float, tolerance: float) -> list[tuple[float, float]]:
+    """``(energy, writhe)`` of the states of ``branches`` at ``dLk = value``: on every
+    segment that ``value`` falls on, the endpoint nearer in ``dLk`` corrected by Newton
+    at ``value`` (:func:`~supercoil.problems.knot_deflation.deflated_newton`, nothing
+    deflated); the segment's linear interpolation if Newton fails."""
+    from supercoil.problems.knot_deflation import deflated_newton
+    from supercoil.problems.ring_branches import ring_records
+
+    records = ring_records(cp.base)
+    cp.excess_link = float(value)
+    out = []
+    for b in branches:
+        lam = np.asarray(b.parameter_values, float)
+        energy = np.asarray(b.records["energy"], float)
+        writhe = np.asarray(b.records["writhe"], float)
+        for j in range(len(lam) - 1):
+            lo, hi = sorted((lam[j], lam[j + 1]))
+            if not lo <= value <= hi:
+                continue
+            near = j if abs(lam[j] - value) <= abs(lam[j + 1] - value) else j + 1
+            corrected = deflated_newton(cp, b.states[near], [], tolerance)
+            if corrected is not None:
+                rec = records(corrected.q, np.zeros(0), value)
+                out.append((float(rec["energy"]), float(rec["writhe"])))
+            else:
+                t = 0.0 if hi == lo else (value - lam[j]) / (lam[j + 1] - lam[j])
+                out.append(((1 - t) * energy[j] + t * energy[j + 1],
+                            (1 - t) * writhe[j] + t * writhe[j + 1]))
+    return out
+
+
+def is_new_state(known: list[tuple[float, float]], energy: float, writhe: float) -> bool:
+    """Whether a state of ``energy`` and ``writhe`` differs from every ``(energy, writhe)``
+    of ``known`` (one dLk) by more than :data:`NEW_ENERGY` (relative) or
+    :data:`NEW_WRITHE` (turns)."""
+    return not any(abs(e - energy) <= NEW_ENERGY * max(1.0, abs(e))
+                   and abs(w - writhe) <= NEW_WRITHE for e, w in known)
+
+
+def _deflated_branches(opts, cp, branches, progress, on_point, seconds):
+    """New states at ``opts.deflation`` computed points spread over the range, by deflation
+    of the point's state and by relaxing the built knot there anew (module doc), each
+    new one followed both ways (``deflated_K_up``/``_down``, ``relaxed_K_up``/``_down``)."""
+    from supercoil.problems.knot_deflation import deflate_at
+    from supercoil.problems.ring_branches import ring_records
+
+    low, high = opts.excess_link
+    records = ring_records(cp.base)
+    pool = [(b, i) for b in branches for i in range(len(b))]
+    out, known, count = [], list(branches), {"deflation": 0, "relaxation": 0}
+    for target in np.linspace(low, high, opts.deflation + 2)[1:-1]:
+        b, i = min(pool, key=lambda bi: abs(bi[0].parameter_values[bi[1]] - target))
+        value = float(b.parameter_values[i])
+        if progress is not None:
+            progress(f"deflation at dLk = {value:.4g} (from {b.name})")
+        began = time.perf_counter()
+        candidates = [(cp, d.q, "deflation") for d in deflate_at(
+            cp, value, [b.states[i]], tolerance=opts.tolerance)]
+        cp_new, q_new, _knot, _message = relaxed_knot(
+            opts.knot, opts.twist_ratio, opts.length_over_diameter, value, opts.n_nodes,
+            opts.tolerance)
+        candidates.append((cp_new, q_new, "relaxation"))
+        at_value = states_at(cp, known, value, opts.tolerance)
+        for problem, q, method in candidates:
+            rec = records(q, np.zeros(0), value)
+            if not is_new_state(at_value, rec["energy"], rec["writhe"]):
+                continue
+            at_value.append((rec["energy"], rec["writhe"]))
+            count[method] += 1
+            stem = f"{'deflated' if method == 'deflation' else 'relaxed'}_{count[method]}"
+            for name, stop in ((f"{stem}_up", high), (f"{stem}_down", low)):
+                if abs(stop - value) < 1e-12:
+                    continue
+                branch = follow_knot(problem, q.copy(), value, stop, opts.max_points,
+                                     opts.tolerance, name, on_point=on_point)
+                out.append((branch, {"method": method, "excess_link": value,
+                                     "from_branch": b.name, "from_index": i,
+                                     "energy": rec["energy"], "writhe": rec["writhe"]}))
+                known.append(branch)
+                seconds[name] = time.perf_counter() - began
+    return out

@@ -76,7 +76,7 @@ def aligned(q: np.ndarray, reference: np.ndarray) -> np.ndarray:
     return best.ravel()
 
 
-def _log_m_gradient(q: np.ndarray, known: list[np.ndarray]) -> tuple[float, np.ndarray]:
+def deflation_factor(q: np.ndarray, known: list[np.ndarray]) -> tuple[float, np.ndarray]:
     """``M(q)`` and ``grad log M(q)`` (module doc)."""
     m, g = 1.0, np.zeros_like(q)
     for k in known:
@@ -142,7 +142,7 @@ def deflated_newton(cp: ContactProblem, start: np.ndarray, known: list[np.ndarra
             delta = np.linalg.solve(kkt, -r)
         except np.linalg.LinAlgError:
             return None
-        m, grad_log_m = _log_m_gradient(q[free], known_free)
+        m, grad_log_m = deflation_factor(q[free], known_free)
         denominator = 1.0 - grad_log_m @ delta[:nf]
         step = delta / denominator if abs(denominator) > 1e-12 else delta
         dq = np.zeros_like(q)
@@ -153,7 +153,7 @@ def deflated_newton(cp: ContactProblem, start: np.ndarray, known: list[np.ndarra
             trial, lam_t = q + fraction * dq, lam + fraction * step[nf:]
             if cp.admissible(trial):
                 r_t = residual(trial, lam_t)
-                m_t, _ = _log_m_gradient(trial[free], known_free)
+                m_t, _ = deflation_factor(trial[free], known_free)
                 if np.all(np.isfinite(r_t)) and (m_t * np.linalg.norm(r_t) < merit
                                                  or iteration < FREE_STEPS):
                     break

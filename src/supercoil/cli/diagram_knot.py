@@ -48,12 +48,13 @@ def diagram_knot(
         f"bending stiffness, 0 < C/A <= {MAGNITUDE} (1.4 in Coleman & Swigon's Figure 5).",
         show_default=False)],
     length_over_diameter: Annotated[float, typer.Option(
-        "--length-over-diameter", metavar="L/D", help="Rod length over tube diameter, at "
-        "least the knot's ropelength (about 16.4 for 3_1; 170 in Coleman & Swigon's "
-        "Figure 5).", show_default=False)],
+        "--length-over-diameter", metavar="L/D", help="Rod length over tube diameter, "
+        f"pi < L/D <= {MAGNITUDE}, and at least the knot's ropelength (about 16.4 for 3_1; "
+        "170 in Coleman & Swigon's Figure 5).", show_default=False)],
     excess_link: Annotated[str, typer.Option(
-        "--excess-link", metavar="A:B", help="The range of the excess link dLk, in turns; "
-        "the knot is relaxed at its middle (or --start) and followed both ways.",
+        "--excess-link", metavar="A:B", help="The range of the excess link dLk in turns, "
+        f"-{MAGNITUDE} <= A < B <= {MAGNITUDE}; the knot is relaxed at its middle (or "
+        "--start) and followed both ways.",
         show_default=False)],
     out: Annotated[Path, typer.Option(
         "--out", metavar="DIR", help="Folder for result.h5, diagram.json and the figures; an "
@@ -66,7 +67,7 @@ def diagram_knot(
         "--max-points", metavar="K", help="Most points of each half (up and down), 2 to "
         f"{checks.MAX_POINTS}.")] = 150,
     start: Annotated[float | None, typer.Option(
-        "--start", metavar="X", help="The dLk at which the knot is relaxed, within A:B "
+        "--start", metavar="X", help="The dLk at which the knot is relaxed, A <= X <= B "
         "(default: the middle).", show_default=False)] = None,
     deflation: Annotated[int, typer.Option(
         "--deflation", metavar="K", help="Computed points, spread over A:B, at which further "

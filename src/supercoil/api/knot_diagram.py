@@ -42,7 +42,7 @@ def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
     followed both ways to the ends of the range, ``max_points`` points each way;
     the knot type is kept at every step. At ``deflation`` computed points spread
     over the range further equilibria are sought by deflation (Farrell, Birkisson
-    & Funke 2015) and each new one followed both ways (docs/knots.md, "A knotted
+    & Funke 2015) and by relaxing the knot anew, and each new one is followed both ways (docs/knots.md, "A knotted
     ring's diagram"). ``out``: a folder (created if missing) for ``result.h5`` (the two
     branches with their states, readable by :func:`supercoil.load`) and
     ``diagram.json`` (the summary); an existing result there is refused unless

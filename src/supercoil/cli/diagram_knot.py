@@ -71,8 +71,8 @@ def diagram_knot(
         "(default: the middle).", show_default=False)] = None,
     deflation: Annotated[int, typer.Option(
         "--deflation", metavar="K", help="Computed points, spread over A:B, at which further "
-        "equilibria are sought by deflation (Farrell, Birkisson & Funke 2015), each new one "
-        "followed both ways; 0 to 50.")] = 3,
+        "equilibria are sought by deflation (Farrell, Birkisson & Funke 2015) and by "
+        "relaxing the knot anew, each new one followed both ways; 0 to 50.")] = 3,
     overwrite: Overwrite = False,
     quiet: Quiet = False,
 ) -> None:
@@ -85,8 +85,9 @@ def diagram_knot(
     along them; the lowest-energy state found at each dLk marked. Writes result.h5
     (read it with supercoil.load), diagram.json, link_writhe.png (dLk against Wr,
     stable parts heavy), energy.png (energy against dLk) and configurations.png.
-    At --deflation K computed points further equilibria are sought by deflation
-    and followed both ways (branches deflated_1_up, deflated_1_down, ...).
+    At --deflation K computed points further equilibria are sought, by deflation
+    and by relaxing the knot anew, and each new one is followed both ways
+    (branches deflated_1_up, deflated_1_down, relaxed_1_up, ...).
     """
     from supercoil.cli.saving import prepare_folder
     from supercoil.problems.knot_diagram import KnotDiagramOptions

@@ -20,6 +20,13 @@ Per point the keys of the ring diagram
 (:mod:`~supercoil.problems.knot_diagram_points`); the payload adds
 ``by_excess_link``, the states found on a grid of ``dLk`` (how many, how many
 stable, the lowest).
+
+Further branches: at ``deflation`` computed points spread over the range, new
+states are sought by deflation of the point's state
+(:mod:`~supercoil.problems.knot_deflation`) and by relaxing the built knot
+anew at that ``dLk``; a state whose energy or writhe differs from every
+computed state there (:func:`states_at`, :func:`is_new_state`) is followed
+both ways (``deflated_K_up``/``_down``, ``relaxed_K_up``/``_down``).
 """
 
 from __future__ import annotations

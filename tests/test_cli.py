@@ -101,8 +101,8 @@ def test_version(runner):
 
 # the commands that write result files or folders (writhe and knot write only the --json
 # document, which like standard output is replaced if it exists)
-WRITES_FILES = {("demo",), ("ring",), ("diagram", "ring"), ("tweezers",), ("run",),
-                ("sweep",), ("plot",), ("view",), ("export",)}
+WRITES_FILES = {("demo",), ("ring",), ("diagram", "ring"), ("diagram", "knot"), ("tweezers",),
+                ("run",), ("sweep",), ("plot",), ("view",), ("export",)}
 # words of a project's development history, which the help must not carry
 HISTORY = re.compile(r"\bsessions?\b|\bissues? #?\d|\bseed 0\d\d\b|DESIGN\.md|\.\./shared|"
                      r"benchmarks\.md|\btoday\b|\byet\b|\bmeasured\b|\b20\d\d-\d\d-\d\d\b",

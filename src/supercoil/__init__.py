@@ -15,6 +15,7 @@ from supercoil._version import __version__
 from supercoil.api.energy import Energy, continuation, switch_branch
 from supercoil.api.figures import plot
 from supercoil.api.files import save
+from supercoil.api.knot_diagram import knot_diagram
 from supercoil.api.model import (
     AugmentedLagrangian,
     Barrier,
@@ -82,6 +83,7 @@ __all__ = [
     "equilibrium",
     "export",
     "knot_curve",
+    "knot_diagram",
     "knot_type",
     "linking_number",
     "load",

@@ -174,9 +174,13 @@ def diagram_ring(
 
 
 def register(app: typer.Typer, help_without_command) -> None:
-    """Add the group ``diagram`` with its command ``ring`` to the ``supercoil`` command."""
+    """Add the group ``diagram`` with its commands ``ring`` and ``knot`` to the ``supercoil``
+    command."""
+    from supercoil.cli.diagram_knot import diagram_knot
+
     group = typer.Typer(
         help="Bifurcation diagrams with self-contact (branches, stability, contact events).")
     group.callback(invoke_without_command=True)(help_without_command)
     group.command("ring")(diagram_ring)
+    group.command("knot")(diagram_knot)
     app.add_typer(group, name="diagram")

@@ -66,18 +66,41 @@ def knotted_branch(knot, twist_ratio: float, length_over_diameter: float,
                    max_points: int = 100, tolerance: float = 1e-8) -> KnottedBranch:
     """The knotted ring's branch from ``excess_link[0]`` towards ``excess_link[1]``
     (module doc)."""
-    parse_knot(knot)
     start, stop = (float(v) for v in excess_link)
+    cp, q0, reference, message = relaxed_knot(knot, twist_ratio, length_over_diameter,
+                                              start, n_nodes, tolerance)
+    branch = follow_knot(cp, q0, start, stop, max_points, tolerance, "knot")
+    return KnottedBranch(branch, reference, cp, message)
+
+
+def relaxed_knot(knot, twist_ratio: float, length_over_diameter: float, excess_link: float,
+                 n_nodes: int, tolerance: float = 1e-8):
+    """``(problem, q, knot type, message)``: the knot relaxed with self-contact (barrier)
+    at ``excess_link``, and the contact problem that keeps its knot type."""
+    parse_knot(knot)
     points, _note = knot_start(knot, n_nodes, length_over_diameter, twist_ratio)
-    relaxed = solve_supercoiled_ring(twist_ratio, start, length_over_diameter, n_nodes,
+    relaxed = solve_supercoiled_ring(twist_ratio, excess_link, length_over_diameter, n_nodes,
                                      treatment="barrier", tolerance=tolerance,
                                      initial_points=points)
     rod = Rod(n_nodes=n_nodes, twist_stiffness=twist_ratio)
-    base = ClosedRodEnergy(rod, relaxed.points, start)
+    base = ClosedRodEnergy(rod, relaxed.points, excess_link)
     D = rod.length / length_over_diameter
     cp = ContactProblem(base, ContactOptions(diameter=D, treatment="barrier"))
     reference = cp.keep_knot_type(relaxed.points)
     q0 = relaxed.points.ravel()
+    cp.accept(q0)
+    return cp, q0, reference, relaxed.message
+
+
+def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
+                max_points: int, tolerance: float = 1e-8, name: str = "knot",
+                on_point=None) -> Branch:
+    """The branch of ``cp`` (a knotted ring's contact problem) from its equilibrium ``q0``
+    at ``dLk = start`` towards ``stop``, in runs with the rigid pins re-picked (module
+    doc); its contact events classified. ``on_point(branch)`` after every point."""
+    base = cp.base
+    D = cp.diameter
+    cp.excess_link = start
     cp.accept(q0)
     options = ContinuationOptions(
         initial_step=0.05 * D, min_step=CONTACT_MIN_STEP, max_step=MAX_STEP * D,
@@ -90,10 +113,9 @@ def knotted_branch(knot, twist_ratio: float, length_over_diameter: float,
     first = continuation(cp, q0, parameter="excess_link",
                          options=dataclasses.replace(options, max_points=min(
                              SEGMENT_POINTS, max_points)),
-                         name="knot", records=records, events=events,
+                         name=name, records=records, events=events, on_point=on_point,
                          stop=grip_stop(base.pin_grip, q0))
-    branch, _pins = follow(cp, base, first, options, "knot", records, events,
+    branch, _pins = follow(cp, base, first, options, name, records, events,
                            max_points=max_points, segment_points=SEGMENT_POINTS,
-                           grip=base.pin_grip)
-    branch = classify_contact_events(branch, cp)
-    return KnottedBranch(branch, reference, cp, relaxed.message)
+                           grip=base.pin_grip, on_point=on_point)
+    return classify_contact_events(branch, cp)

@@ -149,39 +149,62 @@ def cosserat_circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: fl
     return branch, problem
 
 
+def leaves_circle(branch: Branch) -> bool:
+    """Whether the first :data:`SWITCH_TRIAL_POINTS` points of a switched branch show its
+    writhe growing (else it fell back onto the circle)."""
+    wr = np.abs(branch.records.get("writhe", np.zeros(0)))[:SWITCH_TRIAL_POINTS]
+    return bool(wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0])
+
+
+def _switch_attempt(problem: ClosedCosseratEnergy, circle: Branch, start: SpecialPoint,
+                    options: ContinuationOptions, side_amplitude: tuple[int, float], name: str,
+                    records, curve: ContactCurve, judge: bool) -> Branch:
+    """One switching run to the first contact; with ``judge``, stopped at its
+    :data:`SWITCH_TRIAL_POINTS`-th point unless it leaves the circle there."""
+    side, amplitude = side_amplitude
+    fell_back = []
+    watched, at_onset = stop_after_onset()
+
+    def on_point(branch: Branch) -> None:
+        if judge and len(branch) == SWITCH_TRIAL_POINTS and not leaves_circle(branch):
+            fell_back.append(True)
+        watched(branch)
+
+    def stop(q: np.ndarray) -> str | None:
+        return "fell back onto the circle" if fell_back else at_onset(q)
+
+    return switch_branch(problem, circle, start, options, side=side, amplitude=amplitude,
+                         name=name, records=records, events=(onset_event(curve),),
+                         on_point=on_point, stop=stop)
+
+
 def switch_off_circle(problem: ClosedCosseratEnergy, circle: Branch, point: SpecialPoint,
                       constants, options: ContinuationOptions, name: str,
                       curve: ContactCurve, notes: list[str]) -> Branch:
     """The primary branch from the circle's bifurcation ``point``, checked to leave the
-    circle (a short trial run must show the writhe growing; else the other side and
-    larger amplitudes are tried). The point's state is re-based on the exact discrete
-    circle at its ``dLk`` first: a state stored along the circle describes it exactly
-    only in the chart it was accepted in (:mod:`supercoil.cosserat.problem`)."""
+    circle (its first :data:`SWITCH_TRIAL_POINTS` points must show the writhe growing;
+    a run that does not is stopped there and the other side and larger amplitudes are
+    tried). The point's state is re-based on the exact discrete circle at its ``dLk``
+    first: a state stored along the circle describes it exactly only in the chart it
+    was accepted in (:mod:`supercoil.cosserat.problem`)."""
     records = cosserat_ring_records(problem, curve)
     attempts = [(a, side) for a in SWITCH_AMPLITUDES for side in (1, -1)]
     for number, (amplitude, side) in enumerate(attempts):
+        last = number == len(attempts) - 1
         start = dataclasses.replace(
             point, q=relaxed_circle_state(problem, point.parameter, constants))
-        trial_opts = dataclasses.replace(options, max_points=SWITCH_TRIAL_POINTS,
-                                         initial_step=amplitude)
-        trial = switch_branch(problem, circle, start, trial_opts, side=side,
-                              amplitude=amplitude, name=name, records=records)
-        wr = np.abs(trial.records.get("writhe", np.zeros(0)))
-        leaves = wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0]
-        if leaves or number == len(attempts) - 1:
+        opts = dataclasses.replace(options, initial_step=amplitude)
+        branch = _switch_attempt(problem, circle, start, opts, (side, amplitude), name,
+                                 records, curve, judge=not last)
+        leaves = leaves_circle(branch)
+        if leaves or last:
             if number:
                 notes.append(f"{name}: switched with amplitude {amplitude:g}, side {side:+d} "
                              f"({number} earlier attempt(s) fell back onto the circle)")
             if not leaves:
                 notes.append(f"failed: {name}: every switching attempt fell back onto the "
                              "circle")
-            start = dataclasses.replace(
-                point, q=relaxed_circle_state(problem, point.parameter, constants))
-            opts = dataclasses.replace(options, initial_step=amplitude)
-            watched, stop = stop_after_onset()
-            return switch_branch(problem, circle, start, opts, side=side, amplitude=amplitude,
-                                 name=name, records=records, events=(onset_event(curve),),
-                                 on_point=watched, stop=stop)
+            return branch
     raise AssertionError("unreachable")
 
 

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from supercoil._numba import njit
+
 SERIES_BELOW = 0.05
 
 
@@ -72,57 +74,95 @@ def coefficient_b_prime(theta):
                    below=0.5)
 
 
+@njit()
+def _exp_kernel(phi: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula on ``(n, 3)`` rotation vectors (the coefficients as
+    :func:`sinc` and :func:`coefficient_a`, their series below ``SERIES_BELOW``)."""
+    n = phi.shape[0]
+    out = np.empty((n, 3, 3))
+    for k in range(n):
+        x, y, z = phi[k, 0], phi[k, 1], phi[k, 2]
+        t2 = x * x + y * y + z * z
+        theta = np.sqrt(t2)
+        if theta < SERIES_BELOW:
+            s = ((-1 / 5040 * t2 + 1 / 120) * t2 - 1 / 6) * t2 + 1.0
+            a = ((-1 / 40320 * t2 + 1 / 720) * t2 - 1 / 24) * t2 + 0.5
+        else:
+            s = np.sin(theta) / theta
+            a = (1 - np.cos(theta)) / theta**2
+        # I + s hat(phi) + a hat(phi)^2, hat(phi)^2 = phi phi^T - theta^2 I
+        out[k, 0, 0] = 1.0 + a * (x * x - t2)
+        out[k, 1, 1] = 1.0 + a * (y * y - t2)
+        out[k, 2, 2] = 1.0 + a * (z * z - t2)
+        out[k, 0, 1] = -s * z + a * x * y
+        out[k, 1, 0] = s * z + a * x * y
+        out[k, 0, 2] = s * y + a * x * z
+        out[k, 2, 0] = -s * y + a * x * z
+        out[k, 1, 2] = -s * x + a * y * z
+        out[k, 2, 1] = s * x + a * y * z
+    return out
+
+
 def exp_so3(phi: np.ndarray) -> np.ndarray:
     """Rodrigues' formula ``exp(hat(phi)) = I + sinc(theta) hat + a(theta) hat^2``."""
     phi = np.asarray(phi, dtype=float)
-    theta = np.linalg.norm(phi, axis=-1)
-    P = hat(phi)
-    P2 = P @ P
-    return (np.eye(3) + sinc(theta)[..., None, None] * P
-            + coefficient_a(theta)[..., None, None] * P2)
+    flat = np.ascontiguousarray(phi.reshape(-1, 3))
+    return _exp_kernel(flat).reshape(phi.shape[:-1] + (3, 3))
+
+
+@njit()
+def _log_kernel(R: np.ndarray) -> np.ndarray:
+    """:func:`log_so3` on ``(n, 3, 3)`` rotations."""
+    n = R.shape[0]
+    out = np.empty((n, 3))
+    q = np.empty(4)
+    for k in range(n):
+        r = R[k]
+        tr = r[0, 0] + r[1, 1] + r[2, 2]
+        case = 0
+        best = tr
+        for i in range(3):
+            if r[i, i] > best:
+                best = r[i, i]
+                case = i + 1
+        if case == 0:
+            s = np.sqrt(1.0 + tr) * 2
+            q[0] = 0.25 * s
+            q[1] = (r[2, 1] - r[1, 2]) / s
+            q[2] = (r[0, 2] - r[2, 0]) / s
+            q[3] = (r[1, 0] - r[0, 1]) / s
+        else:
+            i = case - 1
+            j, m = (i + 1) % 3, (i + 2) % 3
+            s = np.sqrt(1.0 + 2 * r[i, i] - tr) * 2
+            q[0] = (r[m, j] - r[j, m]) / s
+            q[1 + i] = 0.25 * s
+            q[1 + j] = (r[j, i] + r[i, j]) / s
+            q[1 + m] = (r[m, i] + r[i, m]) / s
+        if q[0] < 0:
+            for c in range(4):
+                q[c] = -q[c]
+        w = q[0]
+        v = np.sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+        if v > 1e-12:
+            factor = 2 * np.arctan2(v, w) / v
+        else:
+            factor = 2.0 / max(w, 1e-300)
+        for c in range(3):
+            out[k, c] = factor * q[1 + c]
+    return out
 
 
 def log_so3(R: np.ndarray) -> np.ndarray:
     """Rotation vector of ``R`` with angle in ``[0, pi]``, ``(..., 3, 3) -> (..., 3)``.
 
     Through the unit quaternion (Shepperd's choice of the largest pivot, accurate at
-    every angle), then ``phi = 2 atan2(|v|, w) v / |v|`` with ``w >= 0``.
+    every angle: the trace or the largest diagonal entry, the first of equals), then
+    ``phi = 2 atan2(|v|, w) v / |v|`` with ``w >= 0``.
     """
     R = np.asarray(R, dtype=float)
-    shape = R.shape[:-2]
-    R = R.reshape(-1, 3, 3)
-    tr = np.trace(R, axis1=1, axis2=2)
-    diag = np.stack([R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]], axis=1)
-    pivots = np.concatenate([tr[:, None], diag], axis=1)
-    k = np.argmax(pivots, axis=1)
-    quat = np.empty((R.shape[0], 4))  # (w, x, y, z)
-    r21, r12 = R[:, 2, 1], R[:, 1, 2]
-    r02, r20 = R[:, 0, 2], R[:, 2, 0]
-    r10, r01 = R[:, 1, 0], R[:, 0, 1]
-    for case in range(4):
-        sel = k == case
-        if not np.any(sel):
-            continue
-        if case == 0:
-            s = np.sqrt(1.0 + tr[sel]) * 2
-            quat[sel] = np.stack([0.25 * s, (r21 - r12)[sel] / s, (r02 - r20)[sel] / s,
-                                  (r10 - r01)[sel] / s], axis=1)
-        else:
-            i = case - 1
-            j, m = (i + 1) % 3, (i + 2) % 3
-            s = np.sqrt(1.0 + 2 * diag[sel, i] - tr[sel]) * 2
-            q = np.empty((int(sel.sum()), 4))
-            q[:, 0] = (R[sel, m, j] - R[sel, j, m]) / s
-            q[:, 1 + i] = 0.25 * s
-            q[:, 1 + j] = (R[sel, j, i] + R[sel, i, j]) / s
-            q[:, 1 + m] = (R[sel, m, i] + R[sel, i, m]) / s
-            quat[sel] = q
-    quat *= np.where(quat[:, :1] < 0, -1.0, 1.0)
-    w, v = quat[:, 0], quat[:, 1:]
-    s = np.linalg.norm(v, axis=1)
-    angle = 2 * np.arctan2(s, w)
-    factor = np.where(s > 1e-12, angle / np.where(s > 1e-12, s, 1.0), 2.0 / np.maximum(w, 1e-300))
-    return (factor[:, None] * v).reshape(shape + (3,))
+    flat = np.ascontiguousarray(R.reshape(-1, 3, 3))
+    return _log_kernel(flat).reshape(R.shape[:-2] + (3,))
 
 
 def dexp(phi: np.ndarray) -> np.ndarray:

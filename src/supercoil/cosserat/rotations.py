@@ -32,44 +32,86 @@ def hat(v: np.ndarray) -> np.ndarray:
     return out
 
 
-def _series(theta: np.ndarray, exact, coefficients, below: float = SERIES_BELOW) -> np.ndarray:
-    """``exact(theta)`` where ``theta >= below``, else ``sum_k c_k theta^(2k)``."""
+# the closed forms of the coefficients, by kind (see _series)
+SINC, A, B, A_PRIME, B_PRIME, F, F_PRIME, T, T_PRIME = range(9)
+
+
+@njit()
+def _closed_form(kind: int, t: float) -> float:
+    if kind == SINC:
+        return np.sin(t) / t
+    if kind == A:
+        return (1 - np.cos(t)) / t**2
+    if kind == B:
+        return (t - np.sin(t)) / t**3
+    if kind == A_PRIME:
+        return (t * np.sin(t) - 2 * (1 - np.cos(t))) / t**4
+    if kind == B_PRIME:
+        return (3 * np.sin(t) - t * np.cos(t) - 2 * t) / t**5
+    if kind == F:
+        return (1 - (t / 2) / np.sin(t / 2)) / t**2
+    if kind == F_PRIME:
+        x = t / 2
+        sigma = x / np.sin(x)
+        dsigma = (0.5 * np.sin(x) - 0.5 * x * np.cos(x)) / np.sin(x) ** 2
+        return -dsigma / t**3 - 2 * (1 - sigma) / t**4
+    if kind == T:
+        return np.tan(t / 4) / t
+    return (t / (4 * np.cos(t / 4) ** 2) - np.tan(t / 4)) / t**3  # T_PRIME
+
+
+@njit()
+def _series_kernel(theta: np.ndarray, kind: int, coefficients: np.ndarray,
+                   below: float) -> np.ndarray:
+    out = np.empty(theta.size)
+    for k in range(theta.size):
+        t = theta[k]
+        if t < below:
+            t2 = t * t
+            poly = 0.0
+            for c in coefficients[::-1]:
+                poly = poly * t2 + c
+            out[k] = poly
+        else:
+            out[k] = _closed_form(kind, t)
+    return out
+
+
+def _series(theta: np.ndarray, kind: int, coefficients, below: float = SERIES_BELOW
+            ) -> np.ndarray:
+    """The closed form of ``kind`` where ``theta >= below``, else
+    ``sum_k c_k theta^(2k)``."""
     theta = np.asarray(theta, dtype=float)
-    small = theta < below
-    safe = np.where(small, 1.0, theta)
-    out = exact(safe)
-    t2 = theta * theta
-    poly = np.zeros_like(theta)
-    for c in reversed(coefficients):
-        poly = poly * t2 + c
-    return np.where(small, poly, out)
+    flat = np.ascontiguousarray(theta.reshape(-1))
+    return _series_kernel(flat, kind, np.asarray(coefficients, dtype=float),
+                          float(below)).reshape(theta.shape)
 
 
 def sinc(theta):
     """``sin(theta) / theta``."""
-    return _series(theta, lambda t: np.sin(t) / t, [1.0, -1 / 6, 1 / 120, -1 / 5040])
+    return _series(theta, SINC, [1.0, -1 / 6, 1 / 120, -1 / 5040])
 
 
 def coefficient_a(theta):
     """``a = (1 - cos theta) / theta^2``."""
-    return _series(theta, lambda t: (1 - np.cos(t)) / t**2, [0.5, -1 / 24, 1 / 720, -1 / 40320])
+    return _series(theta, A, [0.5, -1 / 24, 1 / 720, -1 / 40320])
 
 
 def coefficient_b(theta):
     """``b = (theta - sin theta) / theta^3``."""
-    return _series(theta, lambda t: (t - np.sin(t)) / t**3,
+    return _series(theta, B,
                    [1 / 6, -1 / 120, 1 / 5040, -1 / 362880])
 
 
 def coefficient_a_prime(theta):
     """``a'(theta) / theta``."""
-    return _series(theta, lambda t: (t * np.sin(t) - 2 * (1 - np.cos(t))) / t**4,
+    return _series(theta, A_PRIME,
                    [-1 / 12, 1 / 180, -1 / 6720, 1 / 453600, -1 / 47900160], below=0.5)
 
 
 def coefficient_b_prime(theta):
     """``b'(theta) / theta``."""
-    return _series(theta, lambda t: (3 * np.sin(t) - t * np.cos(t) - 2 * t) / t**5,
+    return _series(theta, B_PRIME,
                    [-1 / 60, 1 / 1260, -1 / 60480, 1 / 4989600, -1 / 622702080],
                    below=0.5)
 
@@ -203,30 +245,24 @@ def coefficient_f(theta):
     difference of two nodal spins (in the midpoint frame) to the variation of
     their relative rotation vector ``psi`` (see :mod:`supercoil.cosserat.element`).
     """
-    return _series(theta, lambda t: (1 - (t / 2) / np.sin(t / 2)) / t**2,
+    return _series(theta, F,
                    [-1 / 24, -7 / 5760, -31 / 967680, -127 / 154828800,
                     -73 / 3503554560])
 
 
 def coefficient_f_prime(theta):
     """``f'(theta) / theta``."""
-    def exact(t):
-        x = t / 2
-        sigma = x / np.sin(x)
-        dsigma = (0.5 * np.sin(x) - 0.5 * x * np.cos(x)) / np.sin(x) ** 2
-        return -dsigma / t**3 - 2 * (1 - sigma) / t**4
-
-    return _series(theta, exact, [-7 / 2880, -31 / 241920, -127 / 25804800, -73 / 437944320],
+    return _series(theta, F_PRIME, [-7 / 2880, -31 / 241920, -127 / 25804800, -73 / 437944320],
                    below=0.25)
 
 
 def coefficient_t(theta):
     """``t = tan(theta/4) / theta``: the midpoint spin is ``Sigma - (t/2) psi x Delta``."""
-    return _series(theta, lambda t: np.tan(t / 4) / t,
+    return _series(theta, T,
                    [1 / 4, 1 / 192, 1 / 7680, 17 / 5160960, 62 / 743178240])
 
 
 def coefficient_t_prime(theta):
     """``t'(theta) / theta``."""
-    return _series(theta, lambda t: (t / (4 * np.cos(t / 4) ** 2) - np.tan(t / 4)) / t**3,
+    return _series(theta, T_PRIME,
                    [1 / 96, 1 / 1920, 17 / 860160, 31 / 46448640], below=0.25)

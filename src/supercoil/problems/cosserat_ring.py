@@ -264,6 +264,12 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
         free = switch_off_circle(problem, circle, point, constants, free_opts, name, curve,
                                  notes)
         onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
+        if onsets and not onsets[0].located:
+            before = free.parameter_values[onsets[0].index]
+            notes.append(f"{name}: the contact onset lies between dLk = {before:.6g} and "
+                         f"{onsets[0].parameter:.6g}, where its location failed (a trial "
+                         "correction across the step did not converge); it is reported "
+                         "at the step's end")
         if onsets:
             free = truncate_after(free, onsets[0], f"stopped at the first contact (dLk = "
                                   f"{onsets[0].parameter:.6g}); the contact-free run: "

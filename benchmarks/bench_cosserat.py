@@ -7,11 +7,16 @@ Run from the repository root:
 Both diagrams are computed in one run, at C/A = 2/3 and L/D = 122 (Coleman &
 Swigon 2000's DNA example): the circle and the primary branches of ``--modes``
 without contact up to their first contact (for the Kirchhoff rod the contact
-branches are cut to two points and not counted). It prints the wall time of those
-branches for each model and their ratio (target: the Cosserat diagram at N = 200 in
-at most three times the Kirchhoff one's), after one warm-up run of each at N = 24
-(numba caches). Then the time of one Newton step of the Cosserat ring (gradient, the
-symmetrised Hessian, its factorisation) at N, 2N and 4N: it should grow linearly.
+branches are cut to two points and not counted). It prints the processor time of
+those branches for each model (a loaded host distorts it less than wall time) and
+their ratio (target: the Cosserat diagram at N = 200 in at most three times the
+Kirchhoff one's), after one warm-up run of each at N = 24 (numba caches). Then the
+time of one Newton step of the Cosserat ring (gradient, the symmetrised Hessian, its
+factorisation) at N, 2N and 4N: it should grow linearly.
+
+BLAS threads count in the processor time; on a shared host run it with
+``OPENBLAS_NUM_THREADS=1`` (measured: a (1200, 8) QR in the stability's symmetry
+basis took 20 ms with OpenBLAS's threads on a loaded two-core host, 0.1 ms without).
 """
 
 from __future__ import annotations
@@ -22,8 +27,25 @@ import time
 import numpy as np
 
 
+class Segments:
+    """Processor seconds between the progress messages of a diagram: each message starts a
+    segment, which counts when the message announces the circle or a branch without
+    contact (the Kirchhoff diagram's contact branches are not compared)."""
+
+    def __init__(self):
+        self.marks: list[tuple[float, str]] = []
+
+    def __call__(self, message: str) -> None:
+        self.marks.append((time.process_time(), message))
+
+    def contact_free(self, end: float) -> float:
+        times = [t for t, _ in self.marks] + [end]
+        return sum(times[i + 1] - times[i] for i, (_, message) in enumerate(self.marks)
+                   if message.startswith("circle") or message.endswith("no contact"))
+
+
 def diagrams(nodes: int, modes: tuple[int, ...], stiffness: float) -> dict[str, float]:
-    """Seconds of the contact-free branches of each model's diagram."""
+    """Processor seconds of the contact-free branches of each model's diagram."""
     from supercoil.problems.cosserat_ring import cosserat_ring_diagram
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
@@ -31,13 +53,15 @@ def diagrams(nodes: int, modes: tuple[int, ...], stiffness: float) -> dict[str, 
                              contact_max_points=2)
     names = ["circle", *("alpha" if m == 2 else "beta" if m == 3 else f"mode{m}"
                          for m in modes)]
-    kirchhoff = ring_diagram(options)
-    start = time.perf_counter()
-    cosserat = cosserat_ring_diagram(options, stiffness, stiffness)
-    elapsed = time.perf_counter() - start
-    out = {"kirchhoff": sum(kirchhoff.seconds.get(n, 0.0) for n in names),
-           "cosserat": elapsed}
-    for label, diagram in (("kirchhoff", kirchhoff), ("cosserat", cosserat)):
+    out = {}
+    results = {}
+    for label, compute in (("kirchhoff", lambda say: ring_diagram(options, say)),
+                           ("cosserat", lambda say: cosserat_ring_diagram(
+                               options, stiffness, stiffness, say))):
+        segments = Segments()
+        results[label] = compute(segments)
+        out[label] = segments.contact_free(time.process_time())
+    for label, diagram in results.items():
         for name in names:
             try:
                 branch = diagram.branch(name)
@@ -45,7 +69,7 @@ def diagrams(nodes: int, modes: tuple[int, ...], stiffness: float) -> dict[str, 
                 continue
             print(f"  {label:9s} {name:6s} {len(branch):4d} points, dLk "
                   f"{branch.parameter_values[0]:.4f} -> {branch.parameter_values[-1]:.4f}, "
-                  f"{diagram.seconds.get(name, float('nan')):.2f} s")
+                  f"{diagram.seconds.get(name, float('nan')):.2f} s (wall)")
     return out
 
 
@@ -82,7 +106,7 @@ def main(argv=None) -> int:
     print(f"N = {args.nodes}, modes {args.modes}, EA = GA = {args.stiffness:g} A/L^2")
     seconds = diagrams(args.nodes, modes, args.stiffness)
     ratio = seconds["cosserat"] / seconds["kirchhoff"]
-    print(f"contact-free branches: Kirchhoff {seconds['kirchhoff']:.2f} s, Cosserat "
+    print(f"contact-free branches (CPU): Kirchhoff {seconds['kirchhoff']:.2f} s, Cosserat "
           f"{seconds['cosserat']:.2f} s, ratio {ratio:.2f} (target <= 3)")
     steps = {n: newton_step(n) for n in (args.nodes, 2 * args.nodes, 4 * args.nodes)}
     print("one Newton step of the Cosserat ring: " + ", ".join(

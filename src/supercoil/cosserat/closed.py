@@ -172,11 +172,9 @@ class ClosedCosseratEnergy(CosseratEnergy):
         twist, ``d tau0 / d dLk = -2 pi / L``); None for another parameter."""
         if parameter != "excess_link":
             return None
-        x, R = self.configuration(q)
-        local = self.rod.elements(x, R).intrinsic_twist_derivative() * (-2 * np.pi
-                                                                          / self.rod.length)
-        g = np.bincount(self.rod.element_dofs().ravel(), weights=local.ravel(),
-                        minlength=self.n_dofs).reshape(-1, DOFS_PER_NODE)
+        local = self.elements_at(q)[2].intrinsic_twist_derivative() * (-2 * np.pi
+                                                                         / self.rod.length)
+        g = self._nodal(local)
         g[:, 3:] = np.einsum("nji,nj->ni", dexp(self._chart(q)), g[:, 3:])
         return g.ravel()
 

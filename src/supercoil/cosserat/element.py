@@ -142,7 +142,8 @@ class ElementState:
 
         The second variation is a sum of bilinear terms ``(A v).(X (B v))`` in the
         12 nodal variations ``v = (dx_a, w_a, dx_b, w_b)``; each is assembled as
-        ``A^T X B`` and the sum symmetrised (the quadratic form fixes only that).
+        ``A^T X B`` (those with one ``A`` summed first) and the sum symmetrised (the
+        quadratic form fixes only that).
         """
         h, Rm, psi, g, n, mu = self.h, self.Rm, self.psi, self.g, self.n, self.mu
         ne = len(psi)
@@ -174,12 +175,10 @@ class ElementState:
                                       - 2 * _outer(mu, psi)))
         dtpsi = t[:, None, None] * np.eye(3) + tp[:, None, None] * _outer(psi, psi)
 
-        def term(A, X, B):
-            return _transpose(A) @ X @ B
-
-        H = (term(Pu, -nh, Pw) + term(Pu, CG, PG) + term(PS, h * dN, PG)
-             + term(PS, -hat(MS), Pw)
-             + term(PD, DSmu + S @ CK / h - 0.5 * h * hat(N) @ dtpsi, Pp)
-             + term(PD, 0.5 * h * t[:, None, None] * hp @ dN, PG)
-             + term(PD, -hat(MD), Pw))
+        # the terms grouped by their left factor: A^T (X B + Y C + ...)
+        H = (_transpose(Pu) @ (-nh @ Pw + CG @ PG)
+             + _transpose(PS) @ (h * dN @ PG - hat(MS) @ Pw)
+             + _transpose(PD) @ ((DSmu + S @ CK / h - 0.5 * h * hat(N) @ dtpsi) @ Pp
+                                 + 0.5 * h * t[:, None, None] * hp @ dN @ PG
+                                 - hat(MD) @ Pw))
         return 0.5 * (H + _transpose(H))

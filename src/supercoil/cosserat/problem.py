@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.cosserat.rod import DOFS_PER_NODE, CosseratRod, node_rotation_blocks
+from supercoil.cosserat.rod import DOFS_PER_NODE, CosseratRod
 from supercoil.cosserat.rotations import dexp, dexp_transpose_derivative, exp_so3, hat
 from supercoil.errors import InputError
 from supercoil.solvers.csr_sum import block_csr
@@ -66,6 +66,7 @@ class CosseratEnergy:
             raise InputError(f"fixed DOFs must lie in [0, {self.n_dofs}), got {fixed.min()}, "
                              f"{fixed.max()}")
         self.fixed = fixed
+        self._memo = None
         self.forces = (np.zeros((rod.n_nodes, 3)) if forces is None
                        else np.array(forces, dtype=float).reshape(rod.n_nodes, 3))
         h = rod.element_length
@@ -107,45 +108,68 @@ class CosseratEnergy:
         nodes = np.asarray(q, dtype=float).reshape(-1, DOFS_PER_NODE)
         return nodes[:, 3:] - self.centres
 
+    def elements_at(self, q: np.ndarray):
+        """``(positions, rotations, ElementState)`` of the state ``q``. The last ones are
+        kept, keyed by ``q``, the chart and the rod: a corrector asks for the gradient,
+        the Hessian and the parameter derivative at one iterate."""
+        q = np.asarray(q, dtype=float)
+        memo = self._memo
+        if memo is not None and memo[0] is self.rod and np.array_equal(memo[1], q) \
+                and np.array_equal(memo[2], self.centres) \
+                and np.array_equal(memo[3], self.reference_rotations):
+            return memo[4]
+        x, R = self.configuration(q)
+        found = (x, R, self.rod.elements(x, R))
+        self._memo = (self.rod, q.copy(), self.centres.copy(),
+                      self.reference_rotations.copy(), found)
+        return found
+
     # -- the protocol -------------------------------------------------------------------
     def energy(self, q: np.ndarray) -> float:
-        x, R = self.configuration(q)
-        return self.rod.energy(x, R) - float(np.sum(self.forces * x))
+        x, _, state = self.elements_at(q)
+        return float(np.sum(state.energy_density())) - float(np.sum(self.forces * x))
 
-    def _spatial_gradient(self, x, R) -> np.ndarray:
-        g = self.rod.gradient(x, R).reshape(-1, DOFS_PER_NODE)
-        g[:, :3] -= self.forces
-        return g
+    def _nodal(self, local: np.ndarray) -> np.ndarray:
+        """Element vectors ``(n_elements, 12)`` summed on the nodes, ``(n_nodes, 6)``."""
+        return np.bincount(self.rod.element_dofs().ravel(), weights=local.ravel(),
+                           minlength=self.n_dofs).reshape(-1, DOFS_PER_NODE)
 
     def gradient(self, q: np.ndarray) -> np.ndarray:
-        x, R = self.configuration(q)
-        g = self._spatial_gradient(x, R)
+        g = self._nodal(self.elements_at(q)[2].local_gradient())
+        g[:, :3] -= self.forces
         T = dexp(self._chart(q))
         g[:, 3:] = np.einsum("nji,nj->ni", T, g[:, 3:])
         return g.ravel()
 
     def hessian(self, q: np.ndarray) -> HessianParts:
-        """Exact Hessian in the chart (module doc), symmetric and banded."""
-        x, R = self.configuration(q)
+        """Exact Hessian in the chart (module doc), symmetric and banded.
+
+        One element pass serves the tangent and the moments; the rotation blocks of
+        ``J`` act on the elements' spin rows and columns only, and each node's block
+        ``d(T^T m)/dphi`` is added to an element that holds the node before the one
+        sparse assembly."""
         rod = self.rod
-        state = rod.elements(x, R)
+        state = self.elements_at(q)[2]
         phi = self._chart(q)
-        T = dexp(phi)
         local = state.local_hessian()
-        J = np.zeros((rod.n_nodes, 6, 6))
-        J[:, :3, :3] = np.eye(3)
-        J[:, 3:, 3:] = T
-        Je = np.zeros((rod.n_elements, 12, 12))
-        nodes = rod.element_nodes()
-        Je[:, :6, :6], Je[:, 6:, 6:] = J[nodes[:, 0]], J[nodes[:, 1]]
-        local = np.swapaxes(Je, 1, 2) @ local @ Je
-        H = block_csr(rod.element_dofs(), 0.5 * (local + np.swapaxes(local, 1, 2)), self.n_dofs)
         if np.any(phi):
-            m = self._spatial_gradient(x, R)[:, 3:]
-            blocks = dexp_transpose_derivative(phi, m) \
-                - 0.5 * np.swapaxes(T, 1, 2) @ hat(m) @ T
-            H = (H + node_rotation_blocks(0.5 * (blocks + np.swapaxes(blocks, 1, 2)))).tocsr()
-        return HessianParts(H)
+            T = dexp(phi)
+            nodes = rod.element_nodes()
+            Te = np.zeros((rod.n_elements, 6, 6))
+            Te[:, :3, :3], Te[:, 3:, 3:] = T[nodes[:, 0]], T[nodes[:, 1]]
+            spins = np.r_[3:6, 9:12]
+            local[:, spins, :] = np.swapaxes(Te, 1, 2) @ local[:, spins, :]
+            local[:, :, spins] = local[:, :, spins] @ Te
+            moments = self._nodal(state.local_gradient())[:, 3:]
+            blocks = dexp_transpose_derivative(phi, moments) \
+                - 0.5 * np.swapaxes(T, 1, 2) @ hat(moments) @ T
+            blocks = 0.5 * (blocks + np.swapaxes(blocks, 1, 2))
+            # node i is node a of element i (b of the last element for an open rod's end)
+            local[:, 3:6, 3:6] += blocks[:rod.n_elements]
+            if not rod.closed:
+                local[-1, 9:12, 9:12] += blocks[-1]
+            local = 0.5 * (local + np.swapaxes(local, 1, 2))
+        return HessianParts(block_csr(rod.element_dofs(), local, self.n_dofs))
 
     def constraints(self, q: np.ndarray) -> np.ndarray:
         return np.zeros(0)

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from supercoil._numba import njit
+
 SERIES_BELOW = 0.05
 
 
@@ -30,99 +32,179 @@ def hat(v: np.ndarray) -> np.ndarray:
     return out
 
 
-def _series(theta: np.ndarray, exact, coefficients, below: float = SERIES_BELOW) -> np.ndarray:
-    """``exact(theta)`` where ``theta >= below``, else ``sum_k c_k theta^(2k)``."""
+# the closed forms of the coefficients, by kind (see _series)
+SINC, A, B, A_PRIME, B_PRIME, F, F_PRIME, T, T_PRIME = range(9)
+
+
+@njit()
+def _closed_form(kind: int, t: float) -> float:
+    if kind == SINC:
+        return np.sin(t) / t
+    if kind == A:
+        return (1 - np.cos(t)) / t**2
+    if kind == B:
+        return (t - np.sin(t)) / t**3
+    if kind == A_PRIME:
+        return (t * np.sin(t) - 2 * (1 - np.cos(t))) / t**4
+    if kind == B_PRIME:
+        return (3 * np.sin(t) - t * np.cos(t) - 2 * t) / t**5
+    if kind == F:
+        return (1 - (t / 2) / np.sin(t / 2)) / t**2
+    if kind == F_PRIME:
+        x = t / 2
+        sigma = x / np.sin(x)
+        dsigma = (0.5 * np.sin(x) - 0.5 * x * np.cos(x)) / np.sin(x) ** 2
+        return -dsigma / t**3 - 2 * (1 - sigma) / t**4
+    if kind == T:
+        return np.tan(t / 4) / t
+    return (t / (4 * np.cos(t / 4) ** 2) - np.tan(t / 4)) / t**3  # T_PRIME
+
+
+@njit()
+def _series_kernel(theta: np.ndarray, kind: int, coefficients: np.ndarray,
+                   below: float) -> np.ndarray:
+    out = np.empty(theta.size)
+    for k in range(theta.size):
+        t = theta[k]
+        if t < below:
+            t2 = t * t
+            poly = 0.0
+            for c in coefficients[::-1]:
+                poly = poly * t2 + c
+            out[k] = poly
+        else:
+            out[k] = _closed_form(kind, t)
+    return out
+
+
+def _series(theta: np.ndarray, kind: int, coefficients, below: float = SERIES_BELOW
+            ) -> np.ndarray:
+    """The closed form of ``kind`` where ``theta >= below``, else
+    ``sum_k c_k theta^(2k)``."""
     theta = np.asarray(theta, dtype=float)
-    small = theta < below
-    safe = np.where(small, 1.0, theta)
-    out = exact(safe)
-    t2 = theta * theta
-    poly = np.zeros_like(theta)
-    for c in reversed(coefficients):
-        poly = poly * t2 + c
-    return np.where(small, poly, out)
+    flat = np.ascontiguousarray(theta.reshape(-1))
+    return _series_kernel(flat, kind, np.asarray(coefficients, dtype=float),
+                          float(below)).reshape(theta.shape)
 
 
 def sinc(theta):
     """``sin(theta) / theta``."""
-    return _series(theta, lambda t: np.sin(t) / t, [1.0, -1 / 6, 1 / 120, -1 / 5040])
+    return _series(theta, SINC, [1.0, -1 / 6, 1 / 120, -1 / 5040])
 
 
 def coefficient_a(theta):
     """``a = (1 - cos theta) / theta^2``."""
-    return _series(theta, lambda t: (1 - np.cos(t)) / t**2, [0.5, -1 / 24, 1 / 720, -1 / 40320])
+    return _series(theta, A, [0.5, -1 / 24, 1 / 720, -1 / 40320])
 
 
 def coefficient_b(theta):
     """``b = (theta - sin theta) / theta^3``."""
-    return _series(theta, lambda t: (t - np.sin(t)) / t**3,
+    return _series(theta, B,
                    [1 / 6, -1 / 120, 1 / 5040, -1 / 362880])
 
 
 def coefficient_a_prime(theta):
     """``a'(theta) / theta``."""
-    return _series(theta, lambda t: (t * np.sin(t) - 2 * (1 - np.cos(t))) / t**4,
+    return _series(theta, A_PRIME,
                    [-1 / 12, 1 / 180, -1 / 6720, 1 / 453600, -1 / 47900160], below=0.5)
 
 
 def coefficient_b_prime(theta):
     """``b'(theta) / theta``."""
-    return _series(theta, lambda t: (3 * np.sin(t) - t * np.cos(t) - 2 * t) / t**5,
+    return _series(theta, B_PRIME,
                    [-1 / 60, 1 / 1260, -1 / 60480, 1 / 4989600, -1 / 622702080],
                    below=0.5)
+
+
+@njit()
+def _exp_kernel(phi: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula on ``(n, 3)`` rotation vectors (the coefficients as
+    :func:`sinc` and :func:`coefficient_a`, their series below ``SERIES_BELOW``)."""
+    n = phi.shape[0]
+    out = np.empty((n, 3, 3))
+    for k in range(n):
+        x, y, z = phi[k, 0], phi[k, 1], phi[k, 2]
+        t2 = x * x + y * y + z * z
+        theta = np.sqrt(t2)
+        if theta < SERIES_BELOW:
+            s = ((-1 / 5040 * t2 + 1 / 120) * t2 - 1 / 6) * t2 + 1.0
+            a = ((-1 / 40320 * t2 + 1 / 720) * t2 - 1 / 24) * t2 + 0.5
+        else:
+            s = np.sin(theta) / theta
+            a = (1 - np.cos(theta)) / theta**2
+        # I + s hat(phi) + a hat(phi)^2, hat(phi)^2 = phi phi^T - theta^2 I
+        out[k, 0, 0] = 1.0 + a * (x * x - t2)
+        out[k, 1, 1] = 1.0 + a * (y * y - t2)
+        out[k, 2, 2] = 1.0 + a * (z * z - t2)
+        out[k, 0, 1] = -s * z + a * x * y
+        out[k, 1, 0] = s * z + a * x * y
+        out[k, 0, 2] = s * y + a * x * z
+        out[k, 2, 0] = -s * y + a * x * z
+        out[k, 1, 2] = -s * x + a * y * z
+        out[k, 2, 1] = s * x + a * y * z
+    return out
 
 
 def exp_so3(phi: np.ndarray) -> np.ndarray:
     """Rodrigues' formula ``exp(hat(phi)) = I + sinc(theta) hat + a(theta) hat^2``."""
     phi = np.asarray(phi, dtype=float)
-    theta = np.linalg.norm(phi, axis=-1)
-    P = hat(phi)
-    P2 = P @ P
-    return (np.eye(3) + sinc(theta)[..., None, None] * P
-            + coefficient_a(theta)[..., None, None] * P2)
+    flat = np.ascontiguousarray(phi.reshape(-1, 3))
+    return _exp_kernel(flat).reshape(phi.shape[:-1] + (3, 3))
+
+
+@njit()
+def _log_kernel(R: np.ndarray) -> np.ndarray:
+    """:func:`log_so3` on ``(n, 3, 3)`` rotations."""
+    n = R.shape[0]
+    out = np.empty((n, 3))
+    q = np.empty(4)
+    for k in range(n):
+        r = R[k]
+        tr = r[0, 0] + r[1, 1] + r[2, 2]
+        case = 0
+        best = tr
+        for i in range(3):
+            if r[i, i] > best:
+                best = r[i, i]
+                case = i + 1
+        if case == 0:
+            s = np.sqrt(1.0 + tr) * 2
+            q[0] = 0.25 * s
+            q[1] = (r[2, 1] - r[1, 2]) / s
+            q[2] = (r[0, 2] - r[2, 0]) / s
+            q[3] = (r[1, 0] - r[0, 1]) / s
+        else:
+            i = case - 1
+            j, m = (i + 1) % 3, (i + 2) % 3
+            s = np.sqrt(1.0 + 2 * r[i, i] - tr) * 2
+            q[0] = (r[m, j] - r[j, m]) / s
+            q[1 + i] = 0.25 * s
+            q[1 + j] = (r[j, i] + r[i, j]) / s
+            q[1 + m] = (r[m, i] + r[i, m]) / s
+        if q[0] < 0:
+            for c in range(4):
+                q[c] = -q[c]
+        w = q[0]
+        v = np.sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+        if v > 1e-12:
+            factor = 2 * np.arctan2(v, w) / v
+        else:
+            factor = 2.0 / max(w, 1e-300)
+        for c in range(3):
+            out[k, c] = factor * q[1 + c]
+    return out
 
 
 def log_so3(R: np.ndarray) -> np.ndarray:
     """Rotation vector of ``R`` with angle in ``[0, pi]``, ``(..., 3, 3) -> (..., 3)``.
 
     Through the unit quaternion (Shepperd's choice of the largest pivot, accurate at
-    every angle), then ``phi = 2 atan2(|v|, w) v / |v|`` with ``w >= 0``.
+    every angle: the trace or the largest diagonal entry, the first of equals), then
+    ``phi = 2 atan2(|v|, w) v / |v|`` with ``w >= 0``.
     """
     R = np.asarray(R, dtype=float)
-    shape = R.shape[:-2]
-    R = R.reshape(-1, 3, 3)
-    tr = np.trace(R, axis1=1, axis2=2)
-    diag = np.stack([R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]], axis=1)
-    pivots = np.concatenate([tr[:, None], diag], axis=1)
-    k = np.argmax(pivots, axis=1)
-    quat = np.empty((R.shape[0], 4))  # (w, x, y, z)
-    r21, r12 = R[:, 2, 1], R[:, 1, 2]
-    r02, r20 = R[:, 0, 2], R[:, 2, 0]
-    r10, r01 = R[:, 1, 0], R[:, 0, 1]
-    for case in range(4):
-        sel = k == case
-        if not np.any(sel):
-            continue
-        if case == 0:
-            s = np.sqrt(1.0 + tr[sel]) * 2
-            quat[sel] = np.stack([0.25 * s, (r21 - r12)[sel] / s, (r02 - r20)[sel] / s,
-                                  (r10 - r01)[sel] / s], axis=1)
-        else:
-            i = case - 1
-            j, m = (i + 1) % 3, (i + 2) % 3
-            s = np.sqrt(1.0 + 2 * diag[sel, i] - tr[sel]) * 2
-            q = np.empty((int(sel.sum()), 4))
-            q[:, 0] = (R[sel, m, j] - R[sel, j, m]) / s
-            q[:, 1 + i] = 0.25 * s
-            q[:, 1 + j] = (R[sel, j, i] + R[sel, i, j]) / s
-            q[:, 1 + m] = (R[sel, m, i] + R[sel, i, m]) / s
-            quat[sel] = q
-    quat *= np.where(quat[:, :1] < 0, -1.0, 1.0)
-    w, v = quat[:, 0], quat[:, 1:]
-    s = np.linalg.norm(v, axis=1)
-    angle = 2 * np.arctan2(s, w)
-    factor = np.where(s > 1e-12, angle / np.where(s > 1e-12, s, 1.0), 2.0 / np.maximum(w, 1e-300))
-    return (factor[:, None] * v).reshape(shape + (3,))
+    flat = np.ascontiguousarray(R.reshape(-1, 3, 3))
+    return _log_kernel(flat).reshape(R.shape[:-2] + (3,))
 
 
 def dexp(phi: np.ndarray) -> np.ndarray:
@@ -163,30 +245,24 @@ def coefficient_f(theta):
     difference of two nodal spins (in the midpoint frame) to the variation of
     their relative rotation vector ``psi`` (see :mod:`supercoil.cosserat.element`).
     """
-    return _series(theta, lambda t: (1 - (t / 2) / np.sin(t / 2)) / t**2,
+    return _series(theta, F,
                    [-1 / 24, -7 / 5760, -31 / 967680, -127 / 154828800,
                     -73 / 3503554560])
 
 
 def coefficient_f_prime(theta):
     """``f'(theta) / theta``."""
-    def exact(t):
-        x = t / 2
-        sigma = x / np.sin(x)
-        dsigma = (0.5 * np.sin(x) - 0.5 * x * np.cos(x)) / np.sin(x) ** 2
-        return -dsigma / t**3 - 2 * (1 - sigma) / t**4
-
-    return _series(theta, exact, [-7 / 2880, -31 / 241920, -127 / 25804800, -73 / 437944320],
+    return _series(theta, F_PRIME, [-7 / 2880, -31 / 241920, -127 / 25804800, -73 / 437944320],
                    below=0.25)
 
 
 def coefficient_t(theta):
     """``t = tan(theta/4) / theta``: the midpoint spin is ``Sigma - (t/2) psi x Delta``."""
-    return _series(theta, lambda t: np.tan(t / 4) / t,
+    return _series(theta, T,
                    [1 / 4, 1 / 192, 1 / 7680, 17 / 5160960, 62 / 743178240])
 
 
 def coefficient_t_prime(theta):
     """``t'(theta) / theta``."""
-    return _series(theta, lambda t: (t / (4 * np.cos(t / 4) ** 2) - np.tan(t / 4)) / t**3,
+    return _series(theta, T_PRIME,
                    [1 / 96, 1 / 1920, 17 / 860160, 31 / 46448640], below=0.25)

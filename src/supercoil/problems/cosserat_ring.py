@@ -53,6 +53,23 @@ CIRCLE_MAX_STEP = 0.4  # largest step along the circle (dLk)
 # corrections that locate the circle's bifurcation (C/A = 0.8, N = 24, EA = GA = 1e3),
 # above the continuation's default 1e-10
 TOLERANCE = 1e-9
+# Predictor of the primary branches. The shear and stretch strains are of second order
+# in the rotation increments (a section turned by w ds moves its d3 by w ds and by
+# |w ds|^2 / 2 along itself), so a straight step in (positions, rotation coordinates)
+# leaves the nearly unshearable, inextensible states by a strain ~ |w ds|^2 / 2, a force
+# ~ GA |w ds|^2 / 2: measured at N = 32, EA = GA = 1e5 A/L^2 on alpha, a residual of 0.65
+# at ds = 1e-3 and 65 at ds = 1e-2 along the tangent. Newton's quadratic region shrinks
+# as the soft modes' eigenvalue over GA, so the corrector took 4 to 10 iterations at
+# ds = 2e-3 and the step control, which grows the step after at most 3, kept it there
+# (80 points from dLk 2.62 to 2.32). The quadratic predictor carries that second-order
+# term (the tangent's change between points): the same branch reached its contact at
+# dLk 1.08 in 43 points at steps up to 0.08.
+PREDICTOR = "quadratic"
+# The corrector's first iteration takes out the predictor's remaining stiff residual
+# (GA |w ds|^3), a step the Kirchhoff ring's constraints do not need: the step grows
+# after at most one iteration more than the continuation's default (alpha at N = 200:
+# 32 points instead of 44 to its contact, the same contact dLk to 1e-8).
+FAST_ITERATIONS = 4
 
 
 def positions_of(q: np.ndarray) -> np.ndarray:
@@ -132,39 +149,62 @@ def cosserat_circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: fl
     return branch, problem
 
 
+def leaves_circle(branch: Branch) -> bool:
+    """Whether the first :data:`SWITCH_TRIAL_POINTS` points of a switched branch show its
+    writhe growing (else it fell back onto the circle)."""
+    wr = np.abs(branch.records.get("writhe", np.zeros(0)))[:SWITCH_TRIAL_POINTS]
+    return bool(wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0])
+
+
+def _switch_attempt(problem: ClosedCosseratEnergy, circle: Branch, start: SpecialPoint,
+                    options: ContinuationOptions, side_amplitude: tuple[int, float], name: str,
+                    records, curve: ContactCurve, judge: bool) -> Branch:
+    """One switching run to the first contact; with ``judge``, stopped at its
+    :data:`SWITCH_TRIAL_POINTS`-th point unless it leaves the circle there."""
+    side, amplitude = side_amplitude
+    fell_back = []
+    watched, at_onset = stop_after_onset()
+
+    def on_point(branch: Branch) -> None:
+        if judge and len(branch) == SWITCH_TRIAL_POINTS and not leaves_circle(branch):
+            fell_back.append(True)
+        watched(branch)
+
+    def stop(q: np.ndarray) -> str | None:
+        return "fell back onto the circle" if fell_back else at_onset(q)
+
+    return switch_branch(problem, circle, start, options, side=side, amplitude=amplitude,
+                         name=name, records=records, events=(onset_event(curve),),
+                         on_point=on_point, stop=stop)
+
+
 def switch_off_circle(problem: ClosedCosseratEnergy, circle: Branch, point: SpecialPoint,
                       constants, options: ContinuationOptions, name: str,
                       curve: ContactCurve, notes: list[str]) -> Branch:
     """The primary branch from the circle's bifurcation ``point``, checked to leave the
-    circle (a short trial run must show the writhe growing; else the other side and
-    larger amplitudes are tried). The point's state is re-based on the exact discrete
-    circle at its ``dLk`` first: a state stored along the circle describes it exactly
-    only in the chart it was accepted in (:mod:`supercoil.cosserat.problem`)."""
+    circle (its first :data:`SWITCH_TRIAL_POINTS` points must show the writhe growing;
+    a run that does not is stopped there and the other side and larger amplitudes are
+    tried). The point's state is re-based on the exact discrete circle at its ``dLk``
+    first: a state stored along the circle describes it exactly only in the chart it
+    was accepted in (:mod:`supercoil.cosserat.problem`)."""
     records = cosserat_ring_records(problem, curve)
     attempts = [(a, side) for a in SWITCH_AMPLITUDES for side in (1, -1)]
     for number, (amplitude, side) in enumerate(attempts):
+        last = number == len(attempts) - 1
         start = dataclasses.replace(
             point, q=relaxed_circle_state(problem, point.parameter, constants))
-        trial_opts = dataclasses.replace(options, max_points=SWITCH_TRIAL_POINTS,
-                                         initial_step=amplitude)
-        trial = switch_branch(problem, circle, start, trial_opts, side=side,
-                              amplitude=amplitude, name=name, records=records)
-        wr = np.abs(trial.records.get("writhe", np.zeros(0)))
-        leaves = wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0]
-        if leaves or number == len(attempts) - 1:
+        opts = dataclasses.replace(options, initial_step=amplitude)
+        branch = _switch_attempt(problem, circle, start, opts, (side, amplitude), name,
+                                 records, curve, judge=not last)
+        leaves = leaves_circle(branch)
+        if leaves or last:
             if number:
                 notes.append(f"{name}: switched with amplitude {amplitude:g}, side {side:+d} "
                              f"({number} earlier attempt(s) fell back onto the circle)")
             if not leaves:
                 notes.append(f"failed: {name}: every switching attempt fell back onto the "
                              "circle")
-            start = dataclasses.replace(
-                point, q=relaxed_circle_state(problem, point.parameter, constants))
-            opts = dataclasses.replace(options, initial_step=amplitude)
-            watched, stop = stop_after_onset()
-            return switch_branch(problem, circle, start, opts, side=side, amplitude=amplitude,
-                                 name=name, records=records, events=(onset_event(curve),),
-                                 on_point=watched, stop=stop)
+            return branch
     raise AssertionError("unreachable")
 
 
@@ -210,7 +250,8 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
     free_opts = ContinuationOptions(
         initial_step=SWITCH_AMPLITUDES[0], max_step=opts.free_max_step,
         max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
-        event_tolerance=opts.event_tolerance, tolerance=TOLERANCE)
+        event_tolerance=opts.event_tolerance, tolerance=TOLERANCE, predictor=PREDICTOR,
+        factor_refinement=True, chord_steps=True, fast_iterations=FAST_ITERATIONS)
     for mode in opts.modes:
         name = PRIMARY_NAMES.get(mode, f"mode{mode}")
         point = bifurcations.get(2 * (mode - 1))
@@ -223,6 +264,12 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
         free = switch_off_circle(problem, circle, point, constants, free_opts, name, curve,
                                  notes)
         onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
+        if onsets and not onsets[0].located:
+            before = free.parameter_values[onsets[0].index]
+            notes.append(f"{name}: the contact onset lies between dLk = {before:.6g} and "
+                         f"{onsets[0].parameter:.6g}, where its location failed (a trial "
+                         "correction across the step did not converge); it is reported "
+                         "at the step's end")
         if onsets:
             free = truncate_after(free, onsets[0], f"stopped at the first contact (dLk = "
                                   f"{onsets[0].parameter:.6g}); the contact-free run: "

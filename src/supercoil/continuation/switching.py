@@ -148,7 +148,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     secant = corr.x - x_star
     try:
         t1 = tangent(system, corr.x, system.weights * secant / system.norm(secant))
-        tracer.add_point(corr.x, t1)
+        tracer.add_point(corr.x, t1, next_step=opts.initial_step)
     except (SingularMatrixError, InertiaError) as exc:
         return tracer.branch(ContinuationStatus.START_FAILED,
                              f"the first point of the new branch is singular ({exc}); with a "

@@ -46,7 +46,7 @@ def head(branch: Branch, k: int) -> Branch:
 def join(first: Branch, rest: Branch, offset: float) -> Branch:
     """``first`` followed by ``rest``: indices of ``rest`` shifted by ``len(first)``, its
     arclength by ``offset`` (the arclength of its point 0 on the whole branch);
-    ``rest``'s status and message."""
+    ``rest``'s status, message and phase conditions (those of the last point)."""
     k = len(first)
     shifted = tuple(dataclasses.replace(p, index=p.index + k, arclength=p.arclength + offset)
                     for p in rest.special_points)
@@ -66,6 +66,7 @@ def join(first: Branch, rest: Branch, offset: float) -> Branch:
             records[name] = first.records[name]
     return dataclasses.replace(first, special_points=first.special_points + shifted,
                                records=records, status=rest.status, message=rest.message,
+                               phase_modes=rest.phase_modes, phase_state=rest.phase_state,
                                **arrays)
 
 

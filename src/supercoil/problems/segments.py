@@ -51,7 +51,8 @@ def set_pin(problem, rod: PinnedRod, q: np.ndarray) -> None:
 def merge_branches(parts: list[Branch], name: str) -> Branch:
     """One branch from consecutive runs (each starts at the last point of the previous).
     The step controller's state at a junction is the next run's at its first point
-    (the step that run tried first from it)."""
+    (the step that run tried first from it); the phase conditions are the last run's
+    (those its last point was computed with, which a resumed run continues with)."""
     first = parts[0]
     arrays = {k: [getattr(first, k)] for k in (
         "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
@@ -61,9 +62,11 @@ def merge_branches(parts: list[Branch], name: str) -> Branch:
     records = {k: [v] for k, v in first.records.items()}
     specials = list(first.special_points)
     offset, s0 = len(first), float(first.arclength[-1]) if len(first) else 0.0
+    phase = first
     for part in parts[1:]:
         if len(part) < 2:
             continue
+        phase = part
         for k, values in arrays.items():
             values.append(getattr(part, k)[1:])
         for k, values in steps.items():
@@ -82,7 +85,8 @@ def merge_branches(parts: list[Branch], name: str) -> Branch:
         first, name=name, arclength=np.concatenate(arclength),
         records={k: np.concatenate(v) for k, v in records.items()},
         special_points=tuple(dataclasses.replace(p, branch=name) for p in specials),
-        status=last.status, message=last.message, **merged)
+        status=last.status, message=last.message, phase_modes=phase.phase_modes,
+        phase_state=phase.phase_state, **merged)
 
 
 def grip_stop(grip: Callable[[np.ndarray], float], q: np.ndarray, fraction: float = 0.25

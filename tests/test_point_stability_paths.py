@@ -32,7 +32,7 @@ from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.lu import BandLU
 
 
-def _system(n: int = 60, amplitude: float = 0.03, excess_link: float = 2.5):
+def contact_ring_system(n: int = 60, amplitude: float = 0.03, excess_link: float = 2.5):
     """A bent, twisted ring with integral barrier contact and the integral phase row."""
     x = circle(n)
     t = np.linspace(0, 2 * np.pi, n, endpoint=False)
@@ -50,7 +50,7 @@ def _system(n: int = 60, amplitude: float = 0.03, excess_link: float = 2.5):
 
 @pytest.mark.parametrize("excess_link", [0.5, 2.5, 6.0])
 def test_point_stability_equals_the_fresh_count_and_eigenpairs(excess_link):
-    system, x = _system(excess_link=excess_link)
+    system, x = contact_ring_system(excess_link=excess_link)
     full = system.full_hessian(x)
     fresh = system.hessian(x)
     restricted = full.restrict(system.free)
@@ -82,7 +82,7 @@ def test_eigenpairs_equal_the_dense_constrained_eigenpairs_to_round_off(excess_l
     its residual for the modes (``H v - mu M v`` orthogonal to the constrained space)."""
     from supercoil.stability.analysis import eigen_system
 
-    system, x = _system(excess_link=excess_link)
+    system, x = contact_ring_system(excess_link=excess_link)
     values, modes = eigenpairs(system, x, 8)
     scale = np.max(np.abs(values))
     np.testing.assert_allclose(values, _dense_nearest(system, x, values.size), rtol=0,
@@ -99,7 +99,7 @@ def test_the_hessian_before_accept_serves_the_point_after_it():
     """add_point passes the converged correction's Hessian, assembled before the accept
     that carries the reference frames to the point: the accept changes it by round-off,
     and the count and eigenvalues from it equal the fresh ones."""
-    system, x = _system(excess_link=2.5)
+    system, x = contact_ring_system(excess_link=2.5)
     rng = np.random.default_rng(5)
     problem = system.problem
     n = problem.n_dofs // 3
@@ -144,7 +144,7 @@ def test_eigen_factor_ordered_from_the_count_equals_the_fresh_ordering(excess_li
     from supercoil.continuation.stability import inertia_with_factor, related_order
     from supercoil.stability.analysis import eigen_system
 
-    system, x = _system(excess_link=excess_link)
+    system, x = contact_ring_system(excess_link=excess_link)
     tol, n_modes = 1e-6, 6
     stab = point_stability(system, x, tol, n_modes)
     fresh_values, fresh_modes = eigenpairs(system, x, stab.negative_count + n_modes)
@@ -195,7 +195,7 @@ def test_eigen_system_jacobian_equals_scipy_column_slicing():
     the arrays of scipy's ``J[:, dofs]``, bit for bit (pattern, explicit zeros, order)."""
     from supercoil.stability.analysis import eigen_system
 
-    system, x = _system(excess_link=2.5)
+    system, x = contact_ring_system(excess_link=2.5)
     problem = system.problem
     q = system.q(x)
     dofs, _H, J, _mass, _sym = eigen_system(problem, q, system.multipliers(x))

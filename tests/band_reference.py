@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.solvers.inertia import _MAX_CARRIED, _MAX_CONDITION
+from supercoil.solvers.inertia import MAX_CARRIED, MAX_CONDITION
 
 
 def equilibrated_entries(A: sp.csr_matrix, order: np.ndarray
@@ -55,10 +55,10 @@ def block_inertia(blocks: np.ndarray, n: int, s: int) -> tuple[int, int, int]:
             zero += int(np.sum(values == 0))
             return neg, zero, pos
         biggest = float(np.max(np.abs(values))) if values.size else 0.0
-        small = np.abs(values) <= biggest / _MAX_CONDITION
-        if np.count_nonzero(small) > _MAX_CARRIED * s:
+        small = np.abs(values) <= biggest / MAX_CONDITION
+        if np.count_nonzero(small) > MAX_CARRIED * s:
             # keep only the smallest ones; the others are divided by (still >= round-off)
-            keep = np.argsort(np.abs(values))[: _MAX_CARRIED * s]
+            keep = np.argsort(np.abs(values))[: MAX_CARRIED * s]
             small = np.zeros_like(small)
             small[keep] = True
         nxt = min(stop + s, n)

@@ -1,4 +1,4 @@
-"""The L D L^T-first block elimination of solvers.inertia (_block_inertia_pivoted, what
+"""The L D L^T-first block elimination of solvers.inertia (block_inertia_pivoted, what
 symmetric_inertia runs) against the dense eigenvalues' signs and the eigh-only Python
 reference (band_reference.block_inertia), on band and saddle-point matrices whose pivot blocks have
 near-null directions (deferred by the L D L^T, carried by the eigh step), and on two
@@ -107,8 +107,8 @@ def test_pivoted_block_inertia_equals_the_dense_count_and_the_eigh_reference(see
         s = max(b, 16)
     n = A.shape[0]
     blocks = _blocks(A, s)
-    pivoted = tuple(int(v) for v in inertia._block_inertia_pivoted(
-        blocks, n, s, inertia._MAX_CONDITION, inertia._MAX_CARRIED, inertia._MIN_PIVOT))
+    pivoted = tuple(int(v) for v in inertia.block_inertia_pivoted(
+        blocks, n, s, inertia.MAX_CONDITION, inertia.MAX_CARRIED, inertia.MIN_PIVOT))
     dense = _dense_count(A)
     assert dense is not None  # the generators make regular matrices (else no oracle)
     assert pivoted == dense
@@ -125,8 +125,8 @@ def test_near_null_pivot_blocks_are_deferred_not_divided_by():
     A = _near_null_blocks(rng, 3, s, 1e-12)
     P = A[:s, :s]
     M = np.hstack([P, A[:s, s:2 * s]])
-    tol = inertia._MIN_PIVOT * np.max(np.abs(P))
-    e, widths, neg, pos, biggest = inertia._partial_ldl(M, s, tol)
+    tol = inertia.MIN_PIVOT * np.max(np.abs(P))
+    e, widths, neg, pos, biggest = inertia.partial_ldl(M, s, tol)
     small = int(np.sum(np.abs(np.linalg.eigvalsh(P)) < 1e-9))
     assert small >= 1 and s - e >= small
     p, largest = 0, 0.0
@@ -155,7 +155,7 @@ def _captured(name):
 
 def _numpy_blocks(rows, cols, values, n):
     """The row blocks of the permuted scaled entries as the numpy reference builds them
-    (the layout of ``_equilibrated_blocks``): ``(blocks, s)``."""
+    (the layout of ``equilibrated_blocks``): ``(blocks, s)``."""
     s = max(int(np.max(np.abs(rows - cols))) if values.size else 0, 16)
     blocks = np.zeros((-(-n // s), s, 2 * s))
     block = rows // s
@@ -181,7 +181,7 @@ def test_captured_ring_kkt_matrices(name):
     blocks, s = _numpy_blocks(rows, cols, values, n)
     position = np.empty(n, dtype=np.int64)
     position[order] = np.arange(n)
-    compiled, s_compiled = inertia._equilibrated_blocks(A.indptr, A.indices, A.data, position)
+    compiled, s_compiled = inertia.equilibrated_blocks(A.indptr, A.indices, A.data, position)
     assert s_compiled == s and compiled.tobytes() == blocks.tobytes()
     assert block_inertia(blocks, n, s) == dense
 
@@ -189,7 +189,7 @@ def test_captured_ring_kkt_matrices(name):
 @pytest.mark.parametrize("seed", range(4))
 def test_compiled_blocks_equal_the_numpy_ones_bit_for_bit(seed):
     """Random symmetric sparse matrices with rows of very different sizes and explicit
-    zeros: _equilibrated_blocks against equilibrated_entries + the numpy block build."""
+    zeros: equilibrated_blocks against equilibrated_entries + the numpy block build."""
     rng = np.random.default_rng(910 + seed)
     n = int(rng.integers(20, 150))
     A = sp.random(n, n, density=0.05, random_state=rng, format="csr")
@@ -202,5 +202,5 @@ def test_compiled_blocks_equal_the_numpy_ones_bit_for_bit(seed):
     blocks, s = _numpy_blocks(rows, cols, values, n)
     position = np.empty(n, dtype=np.int64)
     position[order] = np.arange(n)
-    compiled, s_compiled = inertia._equilibrated_blocks(A.indptr, A.indices, A.data, position)
+    compiled, s_compiled = inertia.equilibrated_blocks(A.indptr, A.indices, A.data, position)
     assert s_compiled == s and compiled.tobytes() == blocks.tobytes()

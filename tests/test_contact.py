@@ -86,17 +86,17 @@ def test_remembered_summaries_equal_fresh_ones_and_are_copies(treatment):
     """contact_summary remembers its result per (state, multipliers, stiffness): oracle,
     the uncached summary; a caller's edit does not reach the memo; another stiffness is
     another summary (the penalty's force is stiffness times penetration)."""
-    from supercoil.contact.report import _contact_summary
+    from supercoil.contact.report import computed_contact_summary
 
     toy, problem = _crossed(treatment)
     res = solve_contact(problem, toy.points.ravel(), NewtonOptions(max_iterations=200))
     first = contact_summary(problem, res.q, res.multipliers)
-    assert first == _contact_summary(problem, res.q, res.multipliers)
+    assert first == computed_contact_summary(problem, res.q, res.multipliers)
     first["contacts"].clear()
     again = contact_summary(problem, res.q.copy(), res.multipliers.copy())
-    assert again == _contact_summary(problem, res.q, res.multipliers) and again["contacts"]
+    assert again == computed_contact_summary(problem, res.q, res.multipliers) and again["contacts"]
     again["contacts"][0]["force"] = -1.0  # an edit inside an entry does not reach it either
-    assert contact_summary(problem, res.q, res.multipliers) == _contact_summary(
+    assert contact_summary(problem, res.q, res.multipliers) == computed_contact_summary(
         problem, res.q, res.multipliers)
     for keys in (COUNT_KEYS, PLACE_KEYS):  # a selection of keys: those of the summary
         part = contact_summary(problem, res.q, res.multipliers, keys)
@@ -105,7 +105,7 @@ def test_remembered_summaries_equal_fresh_ones_and_are_copies(treatment):
     assert contact_summary(problem, res.q, res.multipliers, PLACE_KEYS)["contact_points"]
     problem.stiffness *= 2.0
     stiffer = contact_summary(problem, res.q, res.multipliers)
-    assert stiffer == _contact_summary(problem, res.q, res.multipliers)
+    assert stiffer == computed_contact_summary(problem, res.q, res.multipliers)
     assert stiffer["contacts"][0]["force"] != again["contacts"][0]["force"]
 
 
@@ -354,6 +354,6 @@ def test_close_pairs_of_the_grouping_equal_the_tree(count, periodic, monkeypatch
         expected = {tuple(map(int, p)) for p in tree.query_pairs(reach, p=np.inf)}
         for threshold in (0, 10**6):
             monkeypatch.setattr(report, "TREE_ABOVE_POINTS", threshold)
-            found = report._close_pairs(points, reach, periodic)
+            found = report.close_pairs(points, reach, periodic)
             assert all(i < j for i, j in found) and len(set(found)) == len(found)
             assert set(found) == expected

@@ -533,13 +533,13 @@ def test_branch_cost_stays_small():
 
 
 def test_critical_modes_are_brought_back_to_the_gauge_pins_before_switching():
-    from supercoil.continuation.switching import _pinned
+    from supercoil.continuation.switching import pinned_mode
 
     p = DiagonalQuartic(np.ones(4), rotation_pairs=[(0, 1)])
     p.gauge_dofs = np.array([1])
     q = np.array([2.0, 0.0, 0.0, 0.0])
     mode = np.array([0.3, 0.5, -0.2, 0.1])
-    pinned = _pinned(p, q, mode)
+    pinned = pinned_mode(p, q, mode)
     # mode minus the rotation generator (0, 2, 0, 0) scaled to zero the pinned DOF
     assert np.allclose(pinned, [0.3, 0.0, -0.2, 0.1], atol=1e-15)
 

@@ -132,13 +132,13 @@ def test_bordered_factor_equals_the_reference_as_the_pattern_changes():
 def test_bordered_factor_on_ring_states_equals_the_reference():
     """A bent ring with its integral phase condition (a pinned dense row) at two
     nearby states: the same band LU and refinement matrix as the reference."""
-    from test_factor_refinement import _nearby
-    from test_point_stability_paths import _system
+    from test_factor_refinement import nearby_state
+    from test_point_stability_paths import contact_ring_system
 
-    system, x = _system(excess_link=2.5)
+    system, x = contact_ring_system(excess_link=2.5)
     rng = np.random.default_rng(8)
     row = system.weights * np.linspace(1.0, 2.0, system.size)
-    for y in (x, _nearby(system, x, 1e-4)):
+    for y in (x, nearby_state(system, x, 1e-4)):
         H, J, column = system.hessian(y), system.jacobian(y), system.parameter_derivative(y)
         assert pinned_rows.dense_rows(J).size == 1
         check_bordered(BorderedFactor(H, J, column, row), H, J, column, row, rng)

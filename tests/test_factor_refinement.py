@@ -6,12 +6,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_point_stability_paths import _system
+from test_point_stability_paths import contact_ring_system
 
 from supercoil.continuation.corrector import bordered_factor, tangent
 
 
-def _nearby(system, x, size, seed=0):
+def nearby_state(system, x, size, seed=0):
+    """A point of the extended system near ``x``: the free DOFs moved by ``size`` times
+    a fixed smooth field, the multipliers by random amounts of that size, the
+    parameter by ``size``."""
     rng = np.random.default_rng(seed)
     n = system.problem.n_dofs // 3
     t = np.linspace(0, 2 * np.pi, n, endpoint=False)
@@ -39,10 +42,10 @@ def _dense(system, y, row, H):
 def test_refined_solve_is_as_accurate_as_a_new_factor_solve(size):
     """Oracle: the dense solve. The bordered matrix of this bent ring is ill-conditioned
     (condition number ~1e12), so both are compared by their error against it."""
-    system, x = _system(excess_link=2.5)
+    system, x = contact_ring_system(excess_link=2.5)
     row = system.weights * np.linspace(1.0, 2.0, system.size)
     old = bordered_factor(system, x, row)
-    y = _nearby(system, x, size)
+    y = nearby_state(system, x, size)
     H = system.hessian(y)
     fresh = bordered_factor(system, y, row, H)
     B = _dense(system, y, row, H)
@@ -61,9 +64,9 @@ def test_refined_solve_is_as_accurate_as_a_new_factor_solve(size):
 
 
 def test_refined_solve_refuses_a_factor_too_far_away():
-    system, x = _system(excess_link=2.5)
+    system, x = contact_ring_system(excess_link=2.5)
     row = system.weights * np.linspace(1.0, 2.0, system.size)
-    far = bordered_factor(system, _nearby(system, x, 0.3, seed=1), row)
+    far = bordered_factor(system, nearby_state(system, x, 0.3, seed=1), row)
     H = system.hessian(x)
     e_last = np.eye(system.size)[-1]
     z = far.refined_solve(H, system.jacobian(x), system.parameter_derivative(x), row, e_last)
@@ -121,13 +124,13 @@ def test_the_stacked_jacobian_is_reused_only_while_its_parts_are():
     its entries are those of a fresh stack."""
     import scipy.sparse as sp
 
-    system, x = _system(excess_link=2.5)
+    system, x = contact_ring_system(excess_link=2.5)
     first = system.jacobian(x)
     assert system.jacobian(x.copy()) is first
     fresh = sp.vstack([system._free_jacobian(system.q(x)), sp.csr_matrix(system.P)],
                       format="csr")
     assert (first != fresh).nnz == 0
-    moved = _nearby(system, x, 1e-3)
+    moved = nearby_state(system, x, 1e-3)
     other = system.jacobian(moved)
     assert other is not first and (other != first).nnz > 0
     system.set_phase(2.0 * system.phase_modes, system.q_phase_full)

@@ -1,7 +1,8 @@
 """The tracer's branch (also every partial branch handed to ``on_point``) from rows
 converted once per point, against the direct conversion of every point at every call:
-every array of every partial branch equal bit for bit, through rephased tangents (the
-last point's tangent replaced after it was added) and records of several types."""
+every array of every partial branch equal bit for bit, through rephased tangents and
+records of several types; a point is handed out once complete (its tangent rephased),
+so every partial branch is a prefix of the final one."""
 
 from __future__ import annotations
 
@@ -60,7 +61,8 @@ def test_partial_branches_equal_the_per_point_conversion(monkeypatch):
     branch = switch_branch(problem, circle, point, opts, records=records,
                            on_point=partial.append)
     assert len(branch) == 8 and checked[-1] == 8 and len(partial) >= 7
-    # the rephased tangents: a partial branch's last tangent was replaced afterwards
-    assert any(not np.array_equal(p.tangents[-1], branch.tangents[len(p) - 1])
-               for p in partial)
+    # the rephased tangents: every partial branch's last tangent is the final one
+    for p in partial:
+        assert np.array_equal(p.tangents, branch.tangents[:len(p)])
+        assert np.array_equal(p.next_step, branch.next_step[:len(p)])
     assert branch.status is ContinuationStatus.MAX_POINTS

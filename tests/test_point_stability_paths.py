@@ -19,7 +19,7 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.continuation.options import ContinuationOptions
 from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.stability import (
-    _count_system,
+    count_system,
     eigenpairs,
     inertia,
     point_stability,
@@ -32,7 +32,7 @@ from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.lu import BandLU
 
 
-def _system(n: int = 60, amplitude: float = 0.03, excess_link: float = 2.5):
+def contact_ring_system(n: int = 60, amplitude: float = 0.03, excess_link: float = 2.5):
     """A bent, twisted ring with integral barrier contact and the integral phase row."""
     x = circle(n)
     t = np.linspace(0, 2 * np.pi, n, endpoint=False)
@@ -50,7 +50,7 @@ def _system(n: int = 60, amplitude: float = 0.03, excess_link: float = 2.5):
 
 @pytest.mark.parametrize("excess_link", [0.5, 2.5, 6.0])
 def test_point_stability_equals_the_fresh_count_and_eigenpairs(excess_link):
-    system, x = _system(excess_link=excess_link)
+    system, x = contact_ring_system(excess_link=excess_link)
     full = system.full_hessian(x)
     fresh = system.hessian(x)
     restricted = full.restrict(system.free)
@@ -64,7 +64,7 @@ def test_point_stability_equals_the_fresh_count_and_eigenpairs(excess_link):
     tol, n_modes = 1e-6, 6
     stab = point_stability(system, x, tol, n_modes)
     # the count on a freshly assembled Hessian, and the dense oracle
-    H, J = _count_system(system, x)
+    H, J = count_system(system, x)
     assert isinstance(KKTFactor(H, J)._lu, BandLU)  # a narrow band: LAPACK's band LU
     neg, det_sign = inertia(system, x, tol)
     assert stab.negative_count == neg
@@ -80,14 +80,14 @@ def test_eigenpairs_equal_the_dense_constrained_eigenpairs_to_round_off(excess_l
     """Band LU and standard-mode Lanczos on the scaled shift-invert operator; the
     oracle: the dense constrained eigenproblem's eigenvalues nearest the shift, and
     its residual for the modes (``H v - mu M v`` orthogonal to the constrained space)."""
-    from supercoil.stability.analysis import _eigen_system
+    from supercoil.stability.analysis import eigen_system
 
-    system, x = _system(excess_link=excess_link)
+    system, x = contact_ring_system(excess_link=excess_link)
     values, modes = eigenpairs(system, x, 8)
     scale = np.max(np.abs(values))
     np.testing.assert_allclose(values, _dense_nearest(system, x, values.size), rtol=0,
                                atol=1e-9 * scale)
-    dofs, H, J, mass, sym = _eigen_system(system.problem, system.q(x), system.multipliers(x))
+    dofs, H, J, mass, sym = eigen_system(system.problem, system.q(x), system.multipliers(x))
     Z = null_space(np.vstack([J.toarray(), (mass[:, None] * sym).T]))
     Hd = H.dense()
     for mu, mode in zip(values, modes[:, dofs], strict=True):
@@ -99,7 +99,7 @@ def test_the_hessian_before_accept_serves_the_point_after_it():
     """add_point passes the converged correction's Hessian, assembled before the accept
     that carries the reference frames to the point: the accept changes it by round-off,
     and the count and eigenvalues from it equal the fresh ones."""
-    system, x = _system(excess_link=2.5)
+    system, x = contact_ring_system(excess_link=2.5)
     rng = np.random.default_rng(5)
     problem = system.problem
     n = problem.n_dofs // 3
@@ -127,10 +127,10 @@ def test_the_hessian_before_accept_serves_the_point_after_it():
 def _dense_nearest(system, x, k):
     """The ``k`` eigenvalues nearest the shift-invert's shift (-1e-3), from the dense
     constrained eigenproblem (the oracle of the sparse paths), ascending."""
-    from supercoil.stability.analysis import _eigen_system, dense_constrained_eigenpairs
+    from supercoil.stability.analysis import dense_constrained_eigenpairs, eigen_system
 
     problem = system.problem
-    _dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x))
+    _dofs, H, J, mass, sym = eigen_system(problem, system.q(x), system.multipliers(x))
     values, _ = dense_constrained_eigenpairs(H, J, mass, sym)
     return np.sort(values[np.argsort(np.abs(values + 1e-3))[:k]])
 
@@ -141,10 +141,10 @@ def test_eigen_factor_ordered_from_the_count_equals_the_fresh_ordering(excess_li
     (related_order: the six rigid gauge pins inserted, the dense phase row left out):
     the same eigenvalues as with a fresh kkt_order and as the dense oracle, to round-off,
     the same modes, and a band no wider than the fresh ordering's."""
-    from supercoil.continuation.stability import _inertia, related_order
-    from supercoil.stability.analysis import _eigen_system
+    from supercoil.continuation.stability import inertia_with_factor, related_order
+    from supercoil.stability.analysis import eigen_system
 
-    system, x = _system(excess_link=excess_link)
+    system, x = contact_ring_system(excess_link=excess_link)
     tol, n_modes = 1e-6, 6
     stab = point_stability(system, x, tol, n_modes)
     fresh_values, fresh_modes = eigenpairs(system, x, stab.negative_count + n_modes)
@@ -155,9 +155,9 @@ def test_eigen_factor_ordered_from_the_count_equals_the_fresh_ordering(excess_li
     overlap = np.abs(np.einsum("ij,ij->i", stab.modes * system.problem.mass, fresh_modes))
     assert np.all(overlap > 1 - 1e-8)
 
-    _neg, _sign, factor, dofs = _inertia(system, x, tol, None)
+    _neg, _sign, factor, dofs = inertia_with_factor(system, x, tol, None)
     problem = system.problem
-    eigen_dofs, H, J, mass, _sym = _eigen_system(problem, system.q(x), system.multipliers(x))
+    eigen_dofs, H, J, mass, _sym = eigen_system(problem, system.q(x), system.multipliers(x))
     assert eigen_dofs.size == dofs.size + 6 and factor.m == J.shape[0] + system.r
     order = related_order(factor.order, dofs, factor.m, eigen_dofs, J.shape[0], H.sparse)
     assert np.array_equal(np.sort(order), np.arange(eigen_dofs.size + J.shape[0]))
@@ -191,14 +191,14 @@ def test_related_order_keeps_the_old_sequence_and_places_new_dofs_between_neighb
 
 
 def test_eigen_system_jacobian_equals_scipy_column_slicing():
-    """_eigen_system takes the constraint Jacobian's eigen-DOF columns by csr_columns:
+    """eigen_system takes the constraint Jacobian's eigen-DOF columns by csr_columns:
     the arrays of scipy's ``J[:, dofs]``, bit for bit (pattern, explicit zeros, order)."""
-    from supercoil.stability.analysis import _eigen_system
+    from supercoil.stability.analysis import eigen_system
 
-    system, x = _system(excess_link=2.5)
+    system, x = contact_ring_system(excess_link=2.5)
     problem = system.problem
     q = system.q(x)
-    dofs, _H, J, _mass, _sym = _eigen_system(problem, q, system.multipliers(x))
+    dofs, _H, J, _mass, _sym = eigen_system(problem, q, system.multipliers(x))
     reference = problem.constraint_jacobian(q)[:, dofs]
     assert J.shape == reference.shape and J.format == reference.format == "csr"
     for a, b in ((J.indptr, reference.indptr), (J.indices, reference.indices),

@@ -123,6 +123,25 @@ def test_diagram_killed_mid_run_keeps_its_points_and_resumes(tmp_path, reference
     assert not (out / "result.h5.journal").exists()
 
 
+def test_diagram_killed_in_a_later_run_of_its_contact_branch_resumes(tmp_path):
+    """A contact branch is computed in runs of 40 points, each starting afresh from the
+    last point of the previous (pins, phase rows, step): killed in its second run and
+    resumed, the rest of that run and the later ones are the uninterrupted run's."""
+    args = ["diagram", "ring", "--twist-ratio", "2/3", "--length-over-diameter", "122",
+            "--nodes", "24", "--modes", "2", "--max-excess-link", "4",
+            "--contact-max-points", "100"]
+    assert cli([*args, "--out", str(tmp_path / "full"), "--quiet"]) in (0, 1)
+    full = supercoil.load(tmp_path / "full")
+    assert len(full.branch("alpha_contact")) > 80  # three runs
+    out = tmp_path / "cut"
+    kill_after(start(args, out), "alpha_contact", 50, signal.SIGKILL)
+    cut = supercoil.load(out)
+    assert 50 <= len(cut.branch("alpha_contact")) < 79  # stopped in the second run
+    assert_prefix(cut, full)
+    assert cli([*args, "--out", str(out), "--resume", "--quiet"]) in (0, 1)
+    assert_same_end(supercoil.load(out), full)
+
+
 def test_tweezers_killed_mid_run_keeps_its_points_and_resumes(tmp_path, reference):
     full = reference["tweezers"]
     out = tmp_path / "cut"

@@ -13,7 +13,7 @@ from supercoil.problems.ring import (
 )
 from supercoil.solvers.newton import least_squares_multipliers
 from supercoil.solvers.problem import free_dofs
-from supercoil.stability.analysis import _eigen_system, _lowest_pairs, analyse
+from supercoil.stability.analysis import analyse, eigen_system, lowest_pairs
 
 
 @pytest.mark.parametrize("twist_ratio,excess_link", [(2 / 3, 0.0), (2 / 3, 1.5), (1.0, 3.3),
@@ -58,12 +58,12 @@ def test_lanczos_eigenvalues_equal_dense_oracle():
     """Shift-invert Lanczos on the constrained pencil == dense null-space eigenproblem."""
     p, q = twisted_circle_problem(1.0, 1.5, 200)
     lam = least_squares_multipliers(p, q, free_dofs(p))
-    dofs, H, J, mass, sym = _eigen_system(p, q, lam)
+    dofs, H, J, mass, sym = eigen_system(p, q, lam)
     from supercoil.stability.analysis import dense_constrained_eigenpairs
 
     dense, _ = dense_constrained_eigenpairs(H, J, mass, sym)
-    sparse_vals, _ = _lowest_pairs(H, J, mass, n_wanted=8, n=dofs.size, m=J.shape[0],
-                                   symmetry=sym, force_sparse=True)
+    sparse_vals, _ = lowest_pairs(H, J, mass, n_wanted=8, n=dofs.size, m=J.shape[0],
+                                  symmetry=sym, force_sparse=True)
     nearest = dense[np.argsort(np.abs(dense + 1e-3))[:8]]
     assert np.allclose(np.sort(sparse_vals), np.sort(nearest), rtol=1e-8, atol=1e-6)
     # below threshold all positive; mode-2 pair first and degenerate

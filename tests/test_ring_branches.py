@@ -17,7 +17,7 @@ from scipy.linalg import eigh, null_space
 from supercoil.continuation import consistency_check
 from supercoil.problems.ring import circle_energy, michell_excess_link, richardson
 from supercoil.problems.ring_branches import circle_branch, radial_harmonics, ring_branches
-from supercoil.solvers.newton import _hessian
+from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.stability.analysis import analyse, goldstone_modes, near_symmetry_gauge
 from supercoil.topology import writhe
 
@@ -34,7 +34,7 @@ def dense_count(problem, q, multipliers, excess_link, tolerance=1e-6):
     problem.excess_link = excess_link
     problem.accept(q)
     dofs = np.arange(problem.n_dofs)
-    H = _hessian(problem, q, multipliers, dofs).dense()
+    H = lagrangian_hessian(problem, q, multipliers).restrict(dofs).dense()
     J = problem.constraint_jacobian(q).toarray()
     M = problem.mass
     S = np.vstack([problem.symmetry_modes(q), problem.near_symmetry_modes(q)])

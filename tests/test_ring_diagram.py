@@ -301,9 +301,9 @@ def test_sparse_constrained_eigenvalues_equal_the_dense_oracle_with_contact(diag
     """On a contact state the material sliding is not an eigenvector, so removing it
     must be a constraint (as in the dense null-space oracle), not a projection."""
     from supercoil.stability.analysis import (
-        _eigen_system,
-        _lowest_pairs,
         dense_constrained_eigenpairs,
+        eigen_system,
+        lowest_pairs,
     )
 
     contact = diagram.branch("alpha_contact")
@@ -311,11 +311,11 @@ def test_sparse_constrained_eigenvalues_equal_the_dense_oracle_with_contact(diag
     cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
     cp.excess_link = float(contact.parameter_values[i])
     cp.accept(contact.states[i])
-    dofs, H, J, mass, sym = _eigen_system(cp, contact.states[i], contact.multipliers[i])
+    dofs, H, J, mass, sym = eigen_system(cp, contact.states[i], contact.multipliers[i])
     assert sym.shape[1] == 7  # six rigid motions and the material sliding
     dense, _ = dense_constrained_eigenpairs(H, J, mass, sym)
-    sparse, vectors = _lowest_pairs(H, J, mass, n_wanted=5, n=dofs.size, m=J.shape[0],
-                                    symmetry=sym, force_sparse=True)
+    sparse, vectors = lowest_pairs(H, J, mass, n_wanted=5, n=dofs.size, m=J.shape[0],
+                                   symmetry=sym, force_sparse=True)
     nearest = dense[np.argsort(np.abs(dense + 1e-3))[:5]]
     # the barrier's stiffness leaves both at about 1e-7 relative (measured); the
     # projection this replaced was 7e-3 off
@@ -401,7 +401,7 @@ def test_contact_branch_counts_do_not_depend_on_the_rigid_pins(diagram):
     N = 200 the construction pins gave a spurious count and fold pairs from dLk 3.40:
     benchmarks/bench_ring_diagram.py.)"""
     from supercoil.rod.closed import rigid_pins
-    from supercoil.stability.analysis import _eigen_system, dense_constrained_eigenpairs
+    from supercoil.stability.analysis import dense_constrained_eigenpairs, eigen_system
 
     contact = diagram.branch("alpha_contact")
     cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
@@ -411,7 +411,7 @@ def test_contact_branch_counts_do_not_depend_on_the_rigid_pins(diagram):
     for i, q in enumerate(contact.states):
         cp.excess_link = float(contact.parameter_values[i])
         cp.accept(q)
-        _dofs, H, J, mass, sym = _eigen_system(cp, q, contact.multipliers[i])
+        _dofs, H, J, mass, sym = eigen_system(cp, q, contact.multipliers[i])
         values, _ = dense_constrained_eigenpairs(H, J, mass, sym)
         assert int(np.sum(values < -1e-6)) == contact.unstable_count[i], i
     np.testing.assert_array_equal(cp.base.fixed, construction)

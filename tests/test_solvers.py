@@ -214,13 +214,13 @@ def test_rod_constraint_curvature_equals_the_coo_assembly():
 
 @pytest.mark.parametrize("excess_link", [0.0, 1.0, 3.0, 4.5])
 def test_kkt_inertia_on_the_ring_equals_dense(excess_link):
-    from supercoil.solvers.newton import _hessian, least_squares_multipliers
+    from supercoil.solvers.newton import lagrangian_hessian, least_squares_multipliers
     from supercoil.solvers.problem import free_dofs
 
     p, q = twisted_circle_problem(2 / 3, excess_link, 60)
     free = free_dofs(p)
     lam = least_squares_multipliers(p, q, free)
-    H = _hessian(p, q, lam, free)
+    H = lagrangian_hessian(p, q, lam).restrict(free)
     J = p.constraint_jacobian(q)[:, free]
     K = np.block([[H.dense(), J.toarray().T], [J.toarray(), np.zeros((60, 60))]])
     ev = np.linalg.eigvalsh(K)

@@ -141,17 +141,17 @@ def test_the_axis_invariant_combination_of_an_e_mode_keeps_that_axis():
 @pytest.mark.parametrize("n", [48, 97])
 def test_reversal_axes_equal_the_half_node_scan_reference(m, bump, height_bump, seed, n):
     """reversal_axes (integer scan, pruned by the edge length, refined within a node)
-    against _reversal_axes_reference (half-node trigonometric scan, every local minimum
+    against reversal_axes_reference (half-node trigonometric scan, every local minimum
     refined): the same axes, to the refinement's tolerance, on curves with D_m, C_2 and
     no reversing axis, sampled from random phases (axes off the nodes) and with a loose
     tolerance as the ring diagram uses (0.05 D), so that near-misses are candidates too."""
-    from supercoil.geometry.symmetry import _reversal_axes_reference
+    from symmetry_reference import reversal_axes_reference
 
     x = sampled(lambda s: 1 + 0.2 * np.cos(m * s) + bump * np.cos(2 * s),
                 lambda s: 0.15 * np.sin(m * s) + height_bump * np.cos(s), n=n, seed=seed)
     for tolerance in (TOL, 1e-3):
         fast = reversal_axes(x, tolerance)
-        reference = _reversal_axes_reference(x, tolerance)
+        reference = reversal_axes_reference(x, tolerance)
         assert len(fast) == len(reference), (fast, reference)
         for (c, r), (c_ref, r_ref) in zip(fast, reference):
             assert min(abs(c - c_ref), n - abs(c - c_ref)) < 1e-5
@@ -159,18 +159,18 @@ def test_reversal_axes_equal_the_half_node_scan_reference(m, bump, height_bump, 
 
 
 def test_the_integer_scan_by_fft_equals_the_permuted_copies():
-    """_integer_reversal_scan (covariances by FFT cross-correlation) against the residuals
+    """integer_reversal_scan (covariances by FFT cross-correlation) against the residuals
     of the reversed curve's node permutations, each fitted by Kabsch (brute force)."""
-    from supercoil.geometry.symmetry import _fit_residuals, _integer_reversal_scan
+    from supercoil.geometry.symmetry import fit_residuals, integer_reversal_scan
 
     for n, seed in ((48, 0), (97, 1), (200, 2)):
         x = sampled(lambda s: 1 + 0.2 * np.cos(3 * s) + 0.05 * np.cos(2 * s),
                     lambda s: 0.15 * np.sin(3 * s) + 0.03 * np.cos(s), n=n, seed=seed)
         index = (-(np.arange(n)[None, :] + np.arange(n)[:, None])) % n
-        brute = _fit_residuals(x, x[index])
+        brute = fit_residuals(x, x[index])
         # both cancel sums of squares down to about sqrt(eps) of the curve's size
-        np.testing.assert_allclose(_integer_reversal_scan(x), brute, rtol=0, atol=1e-6)
-        assert np.argmin(_integer_reversal_scan(x)) == np.argmin(brute)
+        np.testing.assert_allclose(integer_reversal_scan(x), brute, rtol=0, atol=1e-6)
+        assert np.argmin(integer_reversal_scan(x)) == np.argmin(brute)
 
 
 @pytest.mark.parametrize("m, bump, height_bump", [

@@ -397,15 +397,15 @@ def test_point_stability_assembles_once_and_equals_the_separate_parts(small_run,
     its restrictions equal the two separately assembled Hessians bit for bit, and the
     point's stability equals the inertia and eigenpairs computed each on its own."""
     from supercoil.continuation.stability import eigenpairs, inertia, point_stability
-    from supercoil.solvers.newton import _hessian
-    from supercoil.stability.analysis import _eigen_dofs
+    from supercoil.solvers.newton import lagrangian_hessian
+    from supercoil.stability.analysis import eigen_dofs
 
     for branch, i, problem, system, x, q, mu in _three_points(small_run, name):
         full = system.full_hessian(x)
         assert _same_hessian(full.restrict(system.free), system.hessian(x))
-        dofs = _eigen_dofs(problem)
+        dofs = eigen_dofs(problem)
         assert dofs.size > system.free.size  # the gauge pin is released there
-        assert _same_hessian(full.restrict(dofs), _hessian(problem, q, mu, dofs))
+        assert _same_hessian(full.restrict(dofs), lagrangian_hessian(problem, q, mu).restrict(dofs))
         stab = point_stability(system, x, 1e-6, 2)
         neg, sign = inertia(system, x, 1e-6)
         values, modes = eigenpairs(system, x, neg + 2)
@@ -424,12 +424,12 @@ def test_point_stability_equals_the_dense_eigenpairs(small_run, name):
     gauge pin inserted) against the freshly ordered eigenpairs and the dense
     constrained eigenproblem: the same eigenvalues to round-off, the branch's counts."""
     from supercoil.continuation.stability import eigenpairs, point_stability
-    from supercoil.stability.analysis import _eigen_system, dense_constrained_eigenpairs
+    from supercoil.stability.analysis import dense_constrained_eigenpairs, eigen_system
 
     for branch, i, problem, system, x, q, mu in _three_points(small_run, name):
         stab = point_stability(system, x, 1e-6, 2)
         values, _modes = eigenpairs(system, x, stab.negative_count + 2)
-        _dofs, H, J, mass, sym = _eigen_system(problem, q, mu)
+        _dofs, H, J, mass, sym = eigen_system(problem, q, mu)
         dense, _ = dense_constrained_eigenpairs(H, J, mass, sym)
         dense = np.sort(dense[np.argsort(np.abs(dense + 1e-3))[:values.size]])
         scale = np.max(np.abs(dense))

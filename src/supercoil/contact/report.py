@@ -49,7 +49,7 @@ GROUPING_FLOOR = 1e-2  # of the largest contact force, see the module docstring
 # once more after the run; a few kilobytes each
 SUMMARY_MEMO = 512
 # Up to this many points the close pairs of the grouping are found by testing every
-# pair (numpy), beyond by a KD tree (see _close_pairs)
+# pair (numpy), beyond by a KD tree (see close_pairs)
 TREE_ABOVE_POINTS = 128
 
 
@@ -64,14 +64,14 @@ def _components(points: np.ndarray, reach: float, periodic: bool) -> np.ndarray:
             i = parent[i]
         return i
 
-    for i, j in _close_pairs(points, reach, periodic):
+    for i, j in close_pairs(points, reach, periodic):
         ri, rj = root(i), root(j)
         if ri != rj:
             parent[ri] = rj
     return np.array([root(i) for i in range(n)])
 
 
-def _close_pairs(points: np.ndarray, reach: float, periodic: bool) -> list[tuple[int, int]]:
+def close_pairs(points: np.ndarray, reach: float, periodic: bool) -> list[tuple[int, int]]:
     """Pairs ``(i, j)``, ``i < j``, of ``points`` (n, 2) within ``reach`` in the max norm;
     ``periodic``: coordinates modulo 1 (the distance the shorter way round).
 
@@ -163,7 +163,7 @@ def contact_summary(problem: ContactProblem, q: np.ndarray,
     remembered for the last ``SUMMARY_MEMO`` arguments (a copy is returned).
     """
     if problem.treatment not in ("barrier", "penalty"):
-        found = _contact_summary(problem, q, multipliers)
+        found = computed_contact_summary(problem, q, multipliers)
         return found if keys is None else {k: found[k] for k in keys}
     key = (np.ascontiguousarray(q, dtype=np.float64).tobytes(),
            None if multipliers is None else
@@ -173,7 +173,7 @@ def contact_summary(problem: ContactProblem, q: np.ndarray,
     memo = problem.summary_memo
     found = memo.get(key)
     if found is None:
-        found = _contact_summary(problem, q, multipliers)
+        found = computed_contact_summary(problem, q, multipliers)
         if len(memo) >= SUMMARY_MEMO:
             del memo[next(iter(memo))]
         memo[key] = found
@@ -188,8 +188,10 @@ def _copied(summary: dict, keys) -> dict:
             else summary[k] for k in keys}
 
 
-def _contact_summary(problem: ContactProblem, q: np.ndarray,
-                     multipliers: np.ndarray | None) -> dict:
+def computed_contact_summary(problem: ContactProblem, q: np.ndarray,
+                             multipliers: np.ndarray | None) -> dict:
+    """The contact summary at ``(q, multipliers)`` computed afresh (what
+    :func:`contact_summary` remembers)."""
     rod = problem.base.rod
     force_scale = rod.length**2 / rod.bending_stiffness
     st, force = problem.pair_forces(q, multipliers)

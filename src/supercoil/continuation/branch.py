@@ -108,6 +108,13 @@ class Branch:
     (k,), ``records`` (name -> (k, ...) arrays from the caller's record
     function). ``phase_modes`` (r, n_dofs) and ``phase_state`` (n_dofs,) are
     the phase conditions the branch was computed with (``r = 0`` if none).
+
+    The step controller's state after each point, which a resumed run starts
+    from: ``next_step`` (k,) the arclength step the tracer tries first from the
+    point (NaN where unknown, e.g. a branch stored without it), ``gauge_moved``
+    (k,) whether the point is the last one corrected in moved phase rows after
+    a failed step (the step from it is then retried once without moving them
+    again). Arrays of another length than the branch are read as unknown.
     """
 
     name: str
@@ -129,8 +136,17 @@ class Branch:
     records: dict = field(default_factory=dict)
     phase_modes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     phase_state: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    next_step: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    gauge_moved: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     def __post_init__(self):
+        k = int(np.size(self.parameter_values))
+        if np.shape(self.next_step) != (k,):
+            object.__setattr__(self, "next_step", np.full(k, np.nan))
+        if np.shape(self.gauge_moved) != (k,):
+            object.__setattr__(self, "gauge_moved", np.zeros(k, dtype=bool))
+        object.__setattr__(self, "next_step", np.asarray(self.next_step, dtype=float))
+        object.__setattr__(self, "gauge_moved", np.asarray(self.gauge_moved, dtype=bool))
         for f in fields(self):
             value = getattr(self, f.name)
             if isinstance(value, np.ndarray):

@@ -95,7 +95,7 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                              f"the starting point did not converge: {corr.message}")
     try:
         t0 = opts.direction * tangent(system, corr.x, e_lam, corr.hessian)
-        tracer.add_point(corr.x, t0)
+        tracer.add_point(corr.x, t0, next_step=opts.initial_step)
     except (SingularMatrixError, InertiaError) as exc:
         return tracer.branch(ContinuationStatus.START_FAILED,
                              f"the starting point is singular ({exc}): start away from folds "

@@ -5,8 +5,10 @@ interrupted is continued by :func:`resume_branch` with the same extended
 system: the branch's own phase conditions (``phase_modes``, ``phase_state``:
 the gauge pins it was computed with, not new ones chosen at the last point),
 the last point re-corrected at its parameter value, the tangent oriented like
-the stored one, and the step the interrupted run would have taken next
-(:func:`_next_step`, or ``step``). The result is the whole branch, the stored
+the stored one, and the step controller's state the interrupted run stored
+with its last point (``Branch.next_step``, ``Branch.gauge_moved``; for a
+branch stored without it, :func:`_next_step`; or ``step``). From the same
+state the steps that follow, failed ones included, are the same. The result is the whole branch, the stored
 points followed by the new ones (indices and arclength continued), as the
 uninterrupted run gives it (tested: the same points to round-off).
 """
@@ -29,7 +31,8 @@ from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
 
 _POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
-                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")
+                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength",
+                 "next_step", "gauge_moved")
 
 
 def head(branch: Branch, k: int) -> Branch:
@@ -43,7 +46,7 @@ def head(branch: Branch, k: int) -> Branch:
 def join(first: Branch, rest: Branch, offset: float) -> Branch:
     """``first`` followed by ``rest``: indices of ``rest`` shifted by ``len(first)``, its
     arclength by ``offset`` (the arclength of its point 0 on the whole branch);
-    ``rest``'s status and message."""
+    ``rest``'s status, message and phase conditions (those of the last point)."""
     k = len(first)
     shifted = tuple(dataclasses.replace(p, index=p.index + k, arclength=p.arclength + offset)
                     for p in rest.special_points)
@@ -63,6 +66,7 @@ def join(first: Branch, rest: Branch, offset: float) -> Branch:
             records[name] = first.records[name]
     return dataclasses.replace(first, special_points=first.special_points + shifted,
                                records=records, status=rest.status, message=rest.message,
+                               phase_modes=rest.phase_modes, phase_state=rest.phase_state,
                                **arrays)
 
 
@@ -75,13 +79,17 @@ def _reduced(system: ExtendedSystem, full: np.ndarray) -> np.ndarray:
 
 
 def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOptions) -> float:
-    """The step the interrupted run would have taken next.
+    """The step the interrupted run would have taken next, for a branch stored without
+    it (``Branch.next_step`` NaN): an estimate.
 
     The last step's pseudo-arclength ``ds = W d . (x_k - x_{k-1})`` (``d`` the
     predictor direction at point ``k - 1``) is exact; whether the run then grew
     it depends on the corrector's iteration count, which is replayed (one
     correction from point ``k - 1``), as the tracer does: ``growth * ds`` (at
-    most ``max_step``) after a fast correction, ``ds`` otherwise.
+    most ``max_step``) after a fast correction, ``ds`` otherwise. The replay does
+    not see what the run's corrector did differently (a predictor shortened at an
+    obstacle, refinement with an old factor), nor a step that failed after point
+    ``k - 1`` was stored.
     """
     k = len(partial)
     if k < 2:
@@ -122,6 +130,8 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
                   admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
     """Continue ``partial`` (at least one point) under ``options`` (the options it was
     computed with: ``max_points`` counts the whole branch); see the module docstring.
+    ``problem`` is as the interrupted run had it before the branch's first point (its
+    stored points are accepted in turn).
 
     ``records``, ``events``, ``stop`` and ``admissible`` must be those of the
     interrupted run (:func:`~supercoil.continuation.continuation`). ``on_point``
@@ -134,16 +144,26 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     if k >= opts.max_points:
         return dataclasses.replace(partial, status=ContinuationStatus.MAX_POINTS,
                                    message=f"{k} points computed (max_points)")
+    # the stored points accepted in order, as the interrupted run accepted them: a
+    # problem's accept may carry state along the path (a rod's reference frames, by
+    # parallel transport, depend on it), and a state stored relative to it means the
+    # same configuration only at the end of the same path
+    for value, state in zip(partial.parameter_values, partial.states):
+        setattr(problem, partial.parameter, float(value))
+        problem.accept(np.array(state, dtype=float))
     lam = float(partial.parameter_values[-1])
     q = np.array(partial.states[-1], dtype=float)
-    setattr(problem, partial.parameter, lam)
-    problem.accept(q)
     modes = partial.phase_modes if partial.phase_modes.size else None
     system = ExtendedSystem(problem, partial.parameter, q, modes,
                             partial.phase_state if modes is not None else None,
                             opts.parameter_weight, opts.finite_difference_step)
-    if step is None:
-        step = _next_step(system, partial, opts)
+    gauge_moved = False
+    if step is not None:
+        step = min(max(step, opts.min_step), opts.max_step)
+    elif np.isfinite(partial.next_step[-1]):
+        step, gauge_moved = float(partial.next_step[-1]), bool(partial.gauge_moved[-1])
+    else:
+        step = min(max(_next_step(system, partial, opts), opts.min_step), opts.max_step)
         setattr(problem, partial.parameter, lam)
         problem.accept(q)
     # the first k - 1 points, with every special point found so far: one between
@@ -165,6 +185,8 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     if k >= 2:
         tracer.before = (_reduced(system, partial.tangents[-2]),
                          float(partial.arclength[-1] - partial.arclength[-2]))
+        tracer.point_before = system.pack(partial.states[-2], partial.multipliers[-2],
+                                          float(partial.parameter_values[-2]))
     x0 = system.pack(q, partial.multipliers[-1], lam)
     e_lam = np.zeros(system.size)
     e_lam[-1] = 1.0
@@ -176,12 +198,13 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     guess = _reduced(system, partial.tangents[-1])
     try:
         t0 = tangent(system, corr.x, system.weights * guess)
-        tracer.add_point(corr.x, t0)
+        tracer.add_point(corr.x, t0, next_step=step, publish=False)
+        tracer.moved[-1] = gauge_moved
+        tracer.publish()
     except (SingularMatrixError, InertiaError) as exc:
         return dataclasses.replace(partial, status=ContinuationStatus.START_FAILED,
                                    message=f"resume: the last stored point is singular ({exc})")
-    step = min(max(step, opts.min_step), opts.max_step)
-    status, message = tracer.run(step)
+    status, message = tracer.run(step, gauge_moved)
     whole = join(before, tracer.branch(status, message), offset)
     if status is ContinuationStatus.MAX_POINTS:
         message = f"{len(whole)} points computed (max_points)"

@@ -28,10 +28,10 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.kkt import KKTFactor
 from supercoil.stability.analysis import (
-    _eigen_system,
-    _lowest_pairs,
     dense_constrained_eigenpairs,
+    eigen_system,
     goldstone_modes,
+    lowest_pairs,
     near_symmetry_gauge,
 )
 
@@ -86,7 +86,7 @@ def count_gauge(system: ExtendedSystem, x: np.ndarray) -> np.ndarray:
     return np.searchsorted(system.free, dofs)
 
 
-def _count_system(system: ExtendedSystem, x: np.ndarray, hessian=None, drop=None):
+def count_system(system: ExtendedSystem, x: np.ndarray, hessian=None, drop=None):
     """``(H, J)`` of the count at ``x``: the system's, less the near-symmetry gauge
     (``hessian``: ``system.hessian(x)`` if already known; ``drop``: ``count_gauge(system,
     x)`` if already known)."""
@@ -111,17 +111,17 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     ``-zero_tolerance / 2`` (the inertia of ``H + M zero_tolerance / 2``) and
     the determinant sign is 0. ``hessian``: ``system.hessian(x)`` if already known.
     """
-    negative, sign, _factor, _dofs = _inertia(system, x, zero_tolerance, hessian)
+    negative, sign, _factor, _dofs = inertia_with_factor(system, x, zero_tolerance, hessian)
     return negative, sign
 
 
-def _inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None,
-             hessian) -> tuple[int, int, KKTFactor, np.ndarray]:
+def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None,
+                        hessian) -> tuple[int, int, KKTFactor, np.ndarray]:
     """:func:`inertia` with the factor it counted with and that factor's DOFs (indices
     into the problem's DOFs, ``(n_count,)``): its unknowns are those DOFs, then the
     rows of ``system.jacobian(x)``."""
     drop = count_gauge(system, x)
-    H, J = _count_system(system, x, hessian, drop)
+    H, J = count_system(system, x, hessian, drop)
     dofs = np.delete(system.free, drop) if drop.size else system.free
     try:
         factor = KKTFactor(H, J)
@@ -185,16 +185,16 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
                full=None, count: tuple[np.ndarray, np.ndarray, int] | None = None
                ) -> tuple[np.ndarray, np.ndarray]:
     """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``
-    (:func:`~supercoil.stability.analysis._lowest_pairs`).
+    (:func:`~supercoil.stability.analysis.lowest_pairs`).
 
     ``full``: ``system.full_hessian(x)`` if already assembled. ``count``: ``(dofs, order, rows)`` of the count's
     factor at ``x`` (its DOFs, :attr:`~supercoil.solvers.kkt.KKTFactor.order` and
-    number of rows, as :func:`_inertia` gives them): the shift-invert factor is then
+    number of rows, as :func:`inertia_with_factor` gives them): the shift-invert factor is then
     ordered by :func:`related_order` rather than by a new ``kkt_order`` (the same
     eigenpairs to round-off)."""
     problem = system.problem
     system.set_parameter(x[-1])
-    dofs, H, J, mass, sym = _eigen_system(problem, system.q(x), system.multipliers(x), full)
+    dofs, H, J, mass, sym = eigen_system(problem, system.q(x), system.multipliers(x), full)
     m = J.shape[0] if J is not None else 0
     dim = dofs.size - m - sym.shape[1]
     if dim <= 0:
@@ -205,9 +205,9 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
         order = None
         if count is not None:
             order = related_order(count[1], count[0], count[2], dofs, m, H.sparse.tocsr())
-        values, vectors = _lowest_pairs(H, J, mass, n_wanted=min(n_wanted, dim - 2), n=dofs.size,
-                                        m=m, symmetry=sym, force_sparse=True,
-                                        factor_order=order)
+        values, vectors = lowest_pairs(H, J, mass, n_wanted=min(n_wanted, dim - 2), n=dofs.size,
+                                       m=m, symmetry=sym, force_sparse=True,
+                                       factor_order=order)
     modes = np.zeros((values.size, problem.n_dofs))
     modes[:, dofs] = vectors.T
     return values, modes
@@ -222,8 +222,8 @@ def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float
     count's (``eigenpairs(count=...)``).
     """
     full = system.full_hessian(x) if full is None else full
-    neg, det_sign, factor, dofs = _inertia(system, x, zero_tolerance,
-                                           full.restrict(system.free))
+    neg, det_sign, factor, dofs = inertia_with_factor(system, x, zero_tolerance,
+                                                      full.restrict(system.free))
     values, modes = eigenpairs(system, x, neg + n_modes, full, (dofs, factor.order, factor.m))
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))

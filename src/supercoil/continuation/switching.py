@@ -39,7 +39,7 @@ from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
 
 
-def _pinned(problem: ConstrainedEnergy, q: np.ndarray, mode: np.ndarray) -> np.ndarray:
+def pinned_mode(problem: ConstrainedEnergy, q: np.ndarray, mode: np.ndarray) -> np.ndarray:
     """The mode made zero on the gauge pins by adding symmetry modes.
 
     Critical modes are computed with gauge pins released and the symmetry
@@ -110,7 +110,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
             raise ValueError(f"the special point has {special_point.critical_modes.shape[0]} "
                              f"critical modes, mode {mode} asked for")
         direction = special_point.critical_modes[mode]
-    direction = _pinned(problem, special_point.q, np.asarray(direction, dtype=float))
+    direction = pinned_mode(problem, special_point.q, np.asarray(direction, dtype=float))
     eps = opts.initial_step if amplitude is None else float(amplitude)
     label = name or f"{branch.name}/{special_point.kind}{special_point.index}"
     setattr(problem, branch.parameter, float(special_point.parameter))
@@ -148,7 +148,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     secant = corr.x - x_star
     try:
         t1 = tangent(system, corr.x, system.weights * secant / system.norm(secant))
-        tracer.add_point(corr.x, t1)
+        tracer.add_point(corr.x, t1, next_step=opts.initial_step)
     except (SingularMatrixError, InertiaError) as exc:
         return tracer.branch(ContinuationStatus.START_FAILED,
                              f"the first point of the new branch is singular ({exc}); with a "

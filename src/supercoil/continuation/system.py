@@ -31,7 +31,7 @@ from supercoil.solvers.csr import (
     csr_rmatvec,
     csr_vstack,
 )
-from supercoil.solvers.newton import _hessian, lagrangian_hessian
+from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 
@@ -174,7 +174,8 @@ class ExtendedSystem:
     def hessian(self, x: np.ndarray) -> HessianParts:
         """Hessian of the Lagrangian on the free DOFs (phase conditions are linear)."""
         self.set_parameter(x[-1])
-        return _hessian(self.problem, self.q(x), x[self.n:self.n + self.m], self.free)
+        return lagrangian_hessian(self.problem, self.q(x),
+                                  x[self.n:self.n + self.m]).restrict(self.free)
 
     def full_hessian(self, x: np.ndarray) -> HessianParts:
         """Hessian of the Lagrangian on all DOFs: :meth:`hessian` is its restriction to

@@ -63,9 +63,14 @@ class Tracer:
         self.recs: list[dict] = []
         self.user: list[list[dict]] = []
         self.specials: list[SpecialPoint] = []
+        # the step controller's state after each point (Branch.next_step, .gauge_moved)
+        self.steps: list[float] = []
+        self.moved: list[bool] = []
         # (tangent, step) of the point before the first one, for the quadratic
         # predictor of a resumed branch (set by resume_branch)
         self.before: tuple[np.ndarray, float] | None = None
+        # the point before the first one, for the secant predictor of a resumed branch
+        self.point_before: np.ndarray | None = None
         # (x, full Hessian) of the last point added, assembled after its accept: the
         # rephase tangent there needs no new one (phase rows are linear)
         self._accepted_hessian: tuple[np.ndarray, object] | None = None
@@ -88,9 +93,12 @@ class Tracer:
         return dict(self.records_fn(self.system.q(x), self.system.multipliers(x), float(x[-1])))
 
     def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True,
-                  full_hessian=None) -> None:
+                  full_hessian=None, next_step: float = float("nan"),
+                  publish: bool = True) -> None:
         """Keep ``x``: stability, records and user values first (an exception leaves the
-        branch as it was), then the point, then the events since the previous one.
+        branch as it was), then the point, then the events since the previous one;
+        then, with ``publish``, hand the branch to ``on_point`` (:meth:`publish`).
+        ``next_step``: the step the run will try first from ``x``.
 
         ``full_hessian``: the Hessian on all DOFs at ``x`` if known (a converged
         :class:`~supercoil.continuation.corrector.Correction`'s), for the stability
@@ -115,9 +123,18 @@ class Tracer:
         self.stabs.append(stability)
         self.recs.append(records)
         self.user.append(user)
+        self.steps.append(float(next_step))
+        self.moved.append(False)
         self._accepted_hessian = (x, full)
         if len(self.xs) >= 2 and search_events:
             self._search_events()
+        if publish:
+            self.publish()
+
+    def publish(self) -> None:
+        """Hand the branch so far to ``on_point``, once its last point is complete: its
+        tangent and phase rows final (after a rephase), and the step controller's
+        state from it known, so that a run resumed from it takes the same steps."""
         if self.on_point is not None:
             self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
 
@@ -135,11 +152,12 @@ class Tracer:
             self.system.set_parameter(self.xs[k + 1][-1])
 
     # -- phase rows -------------------------------------------------------------------------
-    def _regauge(self) -> bool:
+    def _regauge(self, ds: float) -> bool:
         """Move the phase rows to those of the last point and correct it in the new gauge
         (:func:`~supercoil.continuation.phase.regauged`); False if the gauge is unchanged.
         A point that moved is added to the branch (at the same parameter value), else
-        the last point is replaced."""
+        the last point is replaced; either way it is published with the step ``ds``,
+        to be retried from it once without moving the gauge again."""
         moved = regauged(self.system, self.opts, self.xs[-1], self.ts[-1])
         if moved is None:
             return False
@@ -147,11 +165,15 @@ class Tracer:
         if self.system.norm(x - self.xs[-1]) > self.opts.min_step:
             # the same equilibrium up to the gauge's slide: no events between the two
             # (their counts and values come from different gauges)
-            self.add_point(x, t, search_events=False)
+            self.add_point(x, t, search_events=False, publish=False)
         else:
             self.xs[-1], self.ts[-1] = x, t
-        if self.opts.rephase:
-            self._rephase()
+        self.steps[-1], self.moved[-1] = ds, True
+        try:
+            if self.opts.rephase:
+                self._rephase()
+        finally:
+            self.publish()
         return True
 
     def _rephase(self, factor: BorderedFactor | None = None) -> None:
@@ -167,10 +189,13 @@ class Tracer:
             self.ts[-1] = t
 
     # -- the stepping loop ------------------------------------------------------------------
-    def run(self, step: float) -> tuple[ContinuationStatus, str]:
-        """Step from the last point until a bound, a stop or a failure; ``(status, message)``."""
+    def run(self, step: float, gauge_moved: bool = False) -> tuple[ContinuationStatus, str]:
+        """Step from the last point until a bound, a stop or a failure; ``(status, message)``.
+        ``step``: the first step tried; ``gauge_moved``: the last point was corrected in
+        moved phase rows after a failed step (they are not moved again before a step
+        succeeds)."""
         try:
-            return self._run(step)
+            return self._run(step, gauge_moved)
         except (SingularMatrixError, InertiaError) as exc:
             return self._stability_failed(exc)
 
@@ -178,18 +203,17 @@ class Tracer:
         return ContinuationStatus.STEP_TOO_SMALL, (
             f"stability at point {len(self.xs)} failed: {exc}")
 
-    def _run(self, step: float) -> tuple[ContinuationStatus, str]:
+    def _run(self, step: float, regauged_here: bool) -> tuple[ContinuationStatus, str]:
         system, opts = self.system, self.opts
         low, high = opts.parameter_bounds
         ds = step
-        regauged_here = False
         while len(self.xs) < opts.max_points:
             if self.s[-1] >= opts.max_arclength:
                 return ContinuationStatus.MAX_ARCLENGTH, (
                     f"arclength {self.s[-1]:.4g} reached max_arclength after {len(self.xs)} points")
             x_k = self.xs[-1]
             taken = take_step(system, opts, x_k, self.ts[-1],
-                              self.xs[-2] if len(self.xs) >= 2 else None,
+                              self.xs[-2] if len(self.xs) >= 2 else self.point_before,
                               self._previous_tangent(), ds, self.admissible, self.stop)
             if taken.refusal:
                 return ContinuationStatus.STOPPED, (
@@ -203,7 +227,7 @@ class Tracer:
                 log.debug("step %.3g rejected: %s", ds, taken.failure)
                 if opts.regauge and system.r and not regauged_here:
                     try:
-                        moved = self._regauge()
+                        moved = self._regauge(ds)
                     except (SingularMatrixError, InertiaError) as exc:
                         return ContinuationStatus.STEP_TOO_SMALL, (
                             f"stability at the point corrected in a moved gauge failed: {exc}")
@@ -220,11 +244,17 @@ class Tracer:
                 continue
             regauged_here = False
             x_new, bound, corr = taken.x, taken.bound, taken.correction
+            if corr.iterations <= opts.fast_iterations:
+                ds = min(ds * opts.growth, opts.max_step)
             try:
-                self.add_point(x_new, taken.t, full_hessian=taken.full_hessian)
-                if opts.rephase and system.r:
-                    self._rephase(corr.factor if opts.factor_refinement and bound is None
-                                  else None)
+                self.add_point(x_new, taken.t, full_hessian=taken.full_hessian, next_step=ds,
+                               publish=False)
+                try:
+                    if opts.rephase and system.r:
+                        self._rephase(corr.factor if opts.factor_refinement and bound is None
+                                      else None)
+                finally:
+                    self.publish()
             except (SingularMatrixError, InertiaError) as exc:
                 return self._stability_failed(exc)
             if bound is None and x_new[-1] in (low, high):
@@ -243,8 +273,6 @@ class Tracer:
                         f"the branch closed on itself: after {len(self.xs)} points it came "
                         f"back to point {j} ({system.parameter} = {self.xs[j][-1]:.6g}; "
                         f"arclength {self.s[-1] - self.s[j]:.4g} per lap)")
-            if corr.iterations <= opts.fast_iterations:
-                ds = min(ds * opts.growth, opts.max_step)
         return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"
 
     # -- result -------------------------------------------------------------------------------
@@ -280,7 +308,8 @@ class Tracer:
             arclength=np.array(self.s[:k]),
             special_points=tuple(self.specials), status=status, message=message,
             records=records, phase_modes=system.phase_modes,
-            phase_state=system.q_phase_full)
+            phase_state=system.q_phase_full, next_step=np.array(self.steps[:k], dtype=float),
+            gauge_moved=np.array(self.moved[:k], dtype=bool))
 
     def _point_rows(self, count: int) -> list[tuple]:
         """Per point of the first ``count``, ``(x, t, stability, q, multipliers, full

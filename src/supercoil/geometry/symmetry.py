@@ -54,7 +54,7 @@ def shifted(points: np.ndarray, shift: np.ndarray | float) -> np.ndarray:
     return out[0] if np.ndim(shift) == 0 else out
 
 
-def _fit_residuals(x: np.ndarray, ys: np.ndarray, direct: bool = False) -> np.ndarray:
+def fit_residuals(x: np.ndarray, ys: np.ndarray, direct: bool = False) -> np.ndarray:
     """RMS residual of the best proper rotation taking each ``ys[c]`` onto ``x`` (both
     centred), ``(k,)``. By default from the singular values ``s`` of ``x^T y``:
     ``(|x|^2 + |y|^2 - 2 (s_1 + s_2 + d s_3)) / n`` with ``d`` the sign of its
@@ -77,7 +77,7 @@ def _fit_residuals(x: np.ndarray, ys: np.ndarray, direct: bool = False) -> np.nd
 def _procrustes_residuals(cov: np.ndarray, squares: np.ndarray | float, n: int) -> np.ndarray:
     """RMS residuals of the best proper rotations from the covariances ``cov`` (k, 3, 3) of
     two centred ``n``-point sets and the sums ``squares`` of their squared norms (k,):
-    ``sqrt((squares - 2 (s_1 + s_2 + d s_3)) / n)`` (:func:`_fit_residuals`)."""
+    ``sqrt((squares - 2 (s_1 + s_2 + d s_3)) / n)`` (:func:`fit_residuals`)."""
     sv = np.linalg.svd(cov, compute_uv=False)
     sign = np.sign(np.linalg.det(cov))
     sign[sign == 0] = 1.0
@@ -85,7 +85,7 @@ def _procrustes_residuals(cov: np.ndarray, squares: np.ndarray | float, n: int) 
     return np.sqrt(np.maximum(squares - 2.0 * trace, 0.0) / n)
 
 
-def _integer_reversal_scan(x: np.ndarray) -> np.ndarray:
+def integer_reversal_scan(x: np.ndarray) -> np.ndarray:
     """The residuals of ``x(c - s) = R x(s)`` at every integer ``c`` in ``[0, n)``, ``(n,)``,
     as :func:`reversal_residuals` (not ``direct``) gives them, in O(n log n): the
     covariance of the curve with its reversed copy shifted by ``c`` is a circular
@@ -111,15 +111,15 @@ def cyclic_residuals(points: np.ndarray, orders: np.ndarray) -> np.ndarray:
     round-off: bit for bit on the ring diagram's 169 states at N = 200)."""
     x = np.asarray(points, dtype=float)
     shifts = x.shape[0] / np.asarray(orders, dtype=float)
-    return _fit_residuals(x, shifted(x, shifts), direct=True)
+    return fit_residuals(x, shifted(x, shifts), direct=True)
 
 
 def reversal_residuals(points: np.ndarray, c: np.ndarray, direct: bool = False) -> np.ndarray:
     """Residuals of ``x(c - s) = R x(s)`` (a reversing two-fold axis) for each ``c``
-    (in node spacings), ``(k,)``; ``direct`` as in :func:`_fit_residuals`."""
+    (in node spacings), ``(k,)``; ``direct`` as in :func:`fit_residuals`."""
     x = np.asarray(points, dtype=float)
     reversed_ = x[(-np.arange(x.shape[0])) % x.shape[0]]  # x(-s)
-    return _fit_residuals(x, shifted(reversed_, np.asarray(c, dtype=float)), direct)
+    return fit_residuals(x, shifted(reversed_, np.asarray(c, dtype=float)), direct)
 
 
 def reversal_axes(points: np.ndarray, tolerance: float, refine: bool = True
@@ -128,14 +128,14 @@ def reversal_axes(points: np.ndarray, tolerance: float, refine: bool = True
     spacings) where ``x(c - s) = R x(s)`` holds within ``tolerance``; each axis once.
 
     The residual is scanned at the integer ``c`` (the reversed curve's nodes
-    permuted, no interpolation; :func:`_integer_reversal_scan`), and refined by
+    permuted, no interpolation; :func:`integer_reversal_scan`), and refined by
     Brent's method within one node of each local minimum of that scan whose value
     allows an axis nearby: near an axis ``c*`` the residual is a V of slope at most
     the mean edge length ``h`` (shifting the curve by ``dc`` moves each node by about
     ``h dc``), so the nearest integer (within 1/2) has a residual below
-    ``h / 2 + tolerance``; scan minima above ``h + tolerance`` are skipped.
-    :func:`_reversal_axes_reference` (a half-node trigonometric scan, every local
-    minimum refined) is the test oracle.
+    ``h / 2 + tolerance``; scan minima above ``h + tolerance`` are skipped. (The
+    tests check it against a half-node trigonometric scan with every local minimum
+    refined.)
 
     ``refine=False`` (enough to count the axes, as :func:`curve_symmetry` does): a
     scan minimum below half of both its neighbours (the V's bottom within a third of
@@ -143,7 +143,7 @@ def reversal_axes(points: np.ndarray, tolerance: float, refine: bool = True
     within ``tolerance`` is taken as it is, ``c`` an integer; the others are refined.
     """
     x = np.asarray(points, dtype=float)
-    values = _integer_reversal_scan(x)
+    values = integer_reversal_scan(x)
     left, right = np.roll(values, 1), np.roll(values, -1)
     h = float(np.mean(np.linalg.norm(np.roll(x, -1, axis=0) - x, axis=1)))
     candidates = np.flatnonzero((values <= left) & (values <= right)
@@ -151,11 +151,11 @@ def reversal_axes(points: np.ndarray, tolerance: float, refine: bool = True
     clear = None
     if not refine:
         clear = values[candidates] <= 0.5 * np.minimum(left, right)[candidates]
-    return _refined_axes(x, candidates.astype(float), 1.0, tolerance, clear)
+    return refined_axes(x, candidates.astype(float), 1.0, tolerance, clear)
 
 
-def _refined_axes(x: np.ndarray, centres: np.ndarray, reach: float, tolerance: float,
-                  as_they_are: np.ndarray | None = None) -> list[tuple[float, float]]:
+def refined_axes(x: np.ndarray, centres: np.ndarray, reach: float, tolerance: float,
+                 as_they_are: np.ndarray | None = None) -> list[tuple[float, float]]:
     """The axes found by Brent's method within ``reach`` of each of ``centres``: those
     whose residual is within ``tolerance``, each once (sorted by ``c``).
     ``as_they_are`` (bool per centre): a centre whose own residual is within
@@ -181,23 +181,6 @@ def _refined_axes(x: np.ndarray, centres: np.ndarray, reach: float, tolerance: f
             continue
         axes.append((c, value))
     return sorted(axes)
-
-
-def _reversal_axes_reference(points: np.ndarray, tolerance: float) -> list[tuple[float, float]]:
-    """:func:`reversal_axes` by a half-node trigonometric scan with every local minimum
-    that can hide a zero refined (the former implementation; slower, the tests' oracle)."""
-    x = np.asarray(points, dtype=float)
-    n = x.shape[0]
-    grid = np.arange(2 * n) * 0.5
-    values = reversal_residuals(x, grid)
-    left, right = np.roll(values, 1), np.roll(values, -1)
-    # A local minimum on the half-node grid is refined (an axis rarely falls on it)
-    # when it can hide a zero: near an axis the residual is a V, k |c - c*|, and the
-    # grid point nearest c* (within 1/4) has at most half the value of its farther
-    # neighbour (at least 1/2 away); 3/4 leaves room for the V's curvature.
-    candidates = np.flatnonzero((values <= left) & (values <= right) &
-                                (values <= 0.75 * np.maximum(left, right) + tolerance))
-    return _refined_axes(x, grid[candidates], 0.5, tolerance)
 
 
 @dataclass(frozen=True)

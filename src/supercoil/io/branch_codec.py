@@ -9,6 +9,8 @@ Names inside a branch (``docs/results.md``, "Layout")::
 
     parameter_values, states, multipliers, unstable_count, zero_modes,
     determinant_sign, nearest_eigenvalue, tangents, arclength   per point
+    next_step, gauge_moved                      per point, optional (the step
+                                                controller's state; absent: unknown)
     records/<record>                                            per point
     phase_modes, phase_state
     special_points/<iiii>/{q, multipliers, tangent, critical_eigenvalues,
@@ -26,6 +28,9 @@ from supercoil.continuation.options import ContinuationStatus
 POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")
 INT_ARRAYS = ("unstable_count", "zero_modes", "determinant_sign")
+# per point, optional: a record without them (a file written before they were kept)
+# reads as unknown (NaN, False)
+STEP_ARRAYS = {"next_step": (np.float64, np.nan), "gauge_moved": (np.bool_, False)}
 SPECIAL_SCALARS = {"kind": str, "label": str, "branch": str, "index": int, "parameter": float,
                    "arclength": float, "unstable_count": int, "count_before": int,
                    "count_after": int, "located": bool, "tolerance": float}
@@ -86,6 +91,8 @@ def flatten(branch: Branch, start: int = 0, special_start: int = 0,
     for name in POINT_ARRAYS:
         dtype = np.int64 if name in INT_ARRAYS else np.float64
         arrays[name] = np.asarray(getattr(branch, name)[start:], dtype=dtype, order="C")
+    for name, (dtype, _) in STEP_ARRAYS.items():
+        arrays[name] = np.asarray(getattr(branch, name)[start:], dtype=dtype, order="C")
     for name, values in branch.records.items():
         arrays[f"records/{key(name)}"] = _record_array(branch.name, name,
                                                        np.asarray(values)[start:])
@@ -120,7 +127,7 @@ class BranchBuilder:
 
     def __init__(self, meta: dict, groups: dict, arrays: dict):
         self.meta = dict(meta)
-        self.chunks = {name: [] for name in POINT_ARRAYS}
+        self.chunks = {name: [] for name in (*POINT_ARRAYS, *STEP_ARRAYS)}
         self.records: dict[str, list] = {}
         self.specials: list[SpecialPoint] = []
         self.origin = None
@@ -130,7 +137,7 @@ class BranchBuilder:
     def extend(self, meta: dict, groups: dict, arrays: dict) -> None:
         start, special_start = int(meta.get("start", 0)), int(meta.get("special_start", 0))
         if start == 0:  # a whole branch: anything stored before is replaced
-            self.chunks = {name: [] for name in POINT_ARRAYS}
+            self.chunks = {name: [] for name in (*POINT_ARRAYS, *STEP_ARRAYS)}
             self.records, self.specials, self.origin = {}, [], None
         elif start != self.n_points or special_start > len(self.specials):
             raise CodecError(f"branch {meta.get('name')!r}: an addition from point {start} "
@@ -146,6 +153,10 @@ class BranchBuilder:
                 raise CodecError(f"branch {meta.get('name')!r}: {name} has {len(a)} rows, "
                                  f"parameter_values {k}")
             self.chunks[name].append(a)
+        for name, (dtype, unknown) in STEP_ARRAYS.items():
+            a = arrays.get(name)
+            self.chunks[name].append(np.full(k, unknown, dtype=dtype)
+                                     if a is None or len(a) != k else a)
         records = {unkey(p[len("records/"):]): a for p, a in arrays.items()
                    if p.startswith("records/")}
         if start > 0 and set(records) != set(self.records):
@@ -191,7 +202,7 @@ class BranchBuilder:
                         phase_modes=self.phase[0], phase_state=self.phase[1],
                         **self._arrays())
         # the chunks are now one array each: later additions append to it
-        self.chunks = {n: [getattr(branch, n)] for n in POINT_ARRAYS}
+        self.chunks = {n: [getattr(branch, n)] for n in (*POINT_ARRAYS, *STEP_ARRAYS)}
         self.records = {n: [v] for n, v in branch.records.items()}
         return branch
 

@@ -49,20 +49,29 @@ def set_pin(problem, rod: PinnedRod, q: np.ndarray) -> None:
 
 
 def merge_branches(parts: list[Branch], name: str) -> Branch:
-    """One branch from consecutive runs (each starts at the last point of the previous)."""
+    """One branch from consecutive runs (each starts at the last point of the previous).
+    The step controller's state at a junction is the next run's at its first point
+    (the step that run tried first from it); the phase conditions are the last run's
+    (those its last point was computed with, which a resumed run continues with)."""
     first = parts[0]
     arrays = {k: [getattr(first, k)] for k in (
         "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
         "determinant_sign", "nearest_eigenvalue", "tangents")}
+    steps = {k: [getattr(first, k)] for k in ("next_step", "gauge_moved")}
     arclength = [first.arclength]
     records = {k: [v] for k, v in first.records.items()}
     specials = list(first.special_points)
     offset, s0 = len(first), float(first.arclength[-1]) if len(first) else 0.0
+    phase = first
     for part in parts[1:]:
         if len(part) < 2:
             continue
+        phase = part
         for k, values in arrays.items():
             values.append(getattr(part, k)[1:])
+        for k, values in steps.items():
+            values[-1] = values[-1][:-1]
+            values.append(getattr(part, k))
         arclength.append(part.arclength[1:] + s0)
         for k, values in records.items():
             values.append(part.records[k][1:])
@@ -71,12 +80,13 @@ def merge_branches(parts: list[Branch], name: str) -> Branch:
         offset += len(part) - 1
         s0 += float(part.arclength[-1])
     last = parts[-1]
-    merged = {k: np.concatenate(v) for k, v in arrays.items()}
+    merged = {k: np.concatenate(v) for k, v in (arrays | steps).items()}
     return dataclasses.replace(
         first, name=name, arclength=np.concatenate(arclength),
         records={k: np.concatenate(v) for k, v in records.items()},
         special_points=tuple(dataclasses.replace(p, branch=name) for p in specials),
-        status=last.status, message=last.message, **merged)
+        status=last.status, message=last.message, phase_modes=phase.phase_modes,
+        phase_state=phase.phase_state, **merged)
 
 
 def grip_stop(grip: Callable[[np.ndarray], float], q: np.ndarray, fraction: float = 0.25

@@ -44,7 +44,7 @@ def csr_add(A: sp.csr_matrix, B: sp.spmatrix) -> sp.csr_matrix:
         return (A + B).tocsr()
     indptr, indices, data = merge_kernel(A.indptr, A.indices, A.data, B.indptr, B.indices,
                                           B.data, A.shape[0])
-    return _canonical_csr(data, indices, indptr, A.shape, A.indices.dtype, A.indptr.dtype)
+    return canonical_csr(data, indices, indptr, A.shape, A.indices.dtype, A.indptr.dtype)
 
 
 def csr_add_blocks(A: sp.csr_matrix, dofs: np.ndarray, blocks: np.ndarray,
@@ -85,7 +85,7 @@ def csr_add_blocks(A: sp.csr_matrix, dofs: np.ndarray, blocks: np.ndarray,
     upper = int(A.indptr[n]) - int(A.indptr[0]) + blocks.size + int(c_ptr[n]) - int(c_ptr[0])
     index_dtype, indptr_dtype = A.indices.dtype, A.indptr.dtype
     if max(int(upper), n) > np.iinfo(indptr_dtype).max:
-        index_dtype = indptr_dtype = np.int64  # as scipy upcasts (see _canonical_csr)
+        index_dtype = indptr_dtype = np.int64  # as scipy upcasts (see canonical_csr)
     indptr, indices, data = _add_blocks_kernel(
         A.indptr, A.indices, A.data, dofs, blocks, c_ptr, c.indices, c.data, n,
         np.empty(0, dtype=index_dtype), np.empty(0, dtype=indptr_dtype))
@@ -161,7 +161,7 @@ def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data,
     return indptr, indices[:nnz].copy(), data[:nnz].copy()
 
 
-def _canonical_csr(data, indices, indptr, shape, index_dtype, indptr_dtype) -> sp.csr_matrix:
+def canonical_csr(data, indices, indptr, shape, index_dtype, indptr_dtype) -> sp.csr_matrix:
     """The merged arrays as a canonical csr_matrix with the operands' index dtypes, wider
     (int64, as scipy would upcast) where those cannot hold the entry count or shape."""
     widest = np.iinfo(np.dtype(indptr_dtype)).max

@@ -19,8 +19,8 @@ unstable at N >= 2000). Cost ``O(n s^2)`` while few directions are carried.
 
 The eigendecomposition is the expensive part (measured 122 us of a 150 us step
 at s = 43), so each pivot block is first reduced by a Bunch–Kaufman
-``L D L^T`` (:func:`_partial_ldl`) that divides only by pivots of magnitude
-above ``_MIN_PIVOT`` (1e-3) times the block's largest entry; a leading column
+``L D L^T`` (:func:`partial_ldl`) that divides only by pivots of magnitude
+above ``MIN_PIVOT`` (1e-3) times the block's largest entry; a leading column
 whose pivot is smaller is deferred. ``P = L diag(D, R) L^T`` is again an exact
 congruence, and the deferred rest ``R`` (a few rows: the near-null directions)
 goes through the eigh step above. Measured on the N = 200 ring's KKT matrices:
@@ -45,12 +45,12 @@ from supercoil.solvers.band import bandwidth_order
 
 # Eigen-directions of a pivot block smaller than its largest eigenvalue over
 # this are not divided by: they are carried into the next block.
-_MAX_CONDITION = 1e4
+MAX_CONDITION = 1e4
 # At most this many blocks' worth of directions are carried at once.
-_MAX_CARRIED = 4
+MAX_CARRIED = 4
 # The L D L^T first pass over a pivot block divides only by pivots (1 x 1, or the
 # smaller eigenvalue of a 2 x 2) of magnitude above this times its largest entry.
-_MIN_PIVOT = 1e-3
+MIN_PIVOT = 1e-3
 _CONTROLLER: ThreadpoolController | None = None
 
 
@@ -85,14 +85,14 @@ def _symmetric_inertia(A: sp.spmatrix, order: np.ndarray | None = None) -> tuple
         order = bandwidth_order(A)
     position = np.empty(n, dtype=np.int64)
     position[np.asarray(order, dtype=np.int64)] = np.arange(n)
-    blocks, s = _equilibrated_blocks(A.indptr, A.indices, A.data, position)
-    neg, zero, pos = _block_inertia_pivoted(blocks, n, s, _MAX_CONDITION, _MAX_CARRIED,
-                                            _MIN_PIVOT)
+    blocks, s = equilibrated_blocks(A.indptr, A.indices, A.data, position)
+    neg, zero, pos = block_inertia_pivoted(blocks, n, s, MAX_CONDITION, MAX_CARRIED,
+                                           MIN_PIVOT)
     return int(neg), int(zero), int(pos)
 
 
 @njit()
-def _equilibrated_blocks(indptr, indices, data, position):
+def equilibrated_blocks(indptr, indices, data, position):
     """The row blocks of :func:`_symmetric_inertia` from a csr matrix without
     duplicates, compiled: ``(blocks, s)``.
 
@@ -146,7 +146,7 @@ def _swap(M, m, a, b, deferred):
 
 
 @njit()
-def _partial_ldl(M, m, tol):
+def partial_ldl(M, m, tol):
     """Bunch–Kaufman ``L D L^T`` of the window ``M[:, :m]`` (rows carry their coupling
     ``M[:, m:]``), in place, that divides only by pivots of magnitude above ``tol``.
 
@@ -238,9 +238,9 @@ def _partial_ldl(M, m, tol):
 
 
 @njit()
-def _block_inertia_pivoted(blocks, n, s, max_condition, max_carried, min_pivot):
+def block_inertia_pivoted(blocks, n, s, max_condition, max_carried, min_pivot):
     """Haynsworth's elimination (module doc) with each pivot block first reduced by
-    :func:`_partial_ldl`: pivots above ``min_pivot`` times the block's largest entry
+    :func:`partial_ldl`: pivots above ``min_pivot`` times the block's largest entry
     are eliminated by ``L D L^T``, the deferred rest ``R`` diagonalised by ``eigh``
     and treated as the eigh-only elimination (module doc) treats a whole block (eigen-directions
     with ``|mu| <= biggest / max_condition`` carried, ``biggest`` the largest
@@ -262,7 +262,7 @@ def _block_inertia_pivoted(blocks, n, s, max_condition, max_carried, min_pivot):
         if t:
             M[carried:, m:] = blocks[k, :stop - start, s:s + t]
         scale = np.max(np.abs(pending)) if m else 0.0
-        e, widths, n_neg, n_pos, biggest = _partial_ldl(M, m, min_pivot * scale)
+        e, widths, n_neg, n_pos, biggest = partial_ldl(M, m, min_pivot * scale)
         neg += n_neg
         pos += n_pos
         q = m - e

@@ -37,7 +37,7 @@ from threadpoolctl import ThreadpoolController
 
 from supercoil.solvers.csr import csr_columns
 from supercoil.solvers.kkt import KKTFactor
-from supercoil.solvers.newton import _hessian
+from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.solvers.problem import ConstrainedEnergy, free_dofs
 
 DEFAULT_ZERO_TOLERANCE = 1e-6
@@ -89,7 +89,7 @@ def _reduced_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.n
     benchmarks/results/beta_stability.md).
     """
     free = free_dofs(problem)
-    H = _hessian(problem, q, multipliers, free)
+    H = lagrangian_hessian(problem, q, multipliers).restrict(free)
     J = problem.constraint_jacobian(q)[:, free] if problem.n_constraints else None
     modes = sliding_phase_modes(problem, q)
     if modes.size:
@@ -196,7 +196,7 @@ def near_symmetry_gauge(problem: ConstrainedEnergy, q: np.ndarray,
     return np.array(sorted(chosen), dtype=np.int64)
 
 
-def _eigen_dofs(problem: ConstrainedEnergy) -> np.ndarray:
+def eigen_dofs(problem: ConstrainedEnergy) -> np.ndarray:
     """DOFs of the eigenproblem: the free ones plus the gauge pins.
 
     Fixed DOFs are either boundary conditions (clamps) or ``gauge_dofs`` that
@@ -236,16 +236,19 @@ def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, dofs: np.ndarray,
     return qmat[:, keep] / root[:, None]
 
 
-def _eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
-                  lagrangian_hessian=None):
-    """``(dofs, H, J, mass, symmetry)`` of the constrained eigenproblem (see _eigen_dofs).
+def eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
+                 full_hessian=None):
+    """``(dofs, H, J, mass, symmetry)`` of the constrained eigenproblem at ``(q,
+    multipliers)``: its DOFs (:func:`eigen_dofs`), the Hessian of the Lagrangian and
+    the constraint Jacobian on them, their masses, and the M-orthonormal symmetry
+    modes projected out.
 
-    ``lagrangian_hessian``: the Hessian of the Lagrangian at ``(q, multipliers)`` on all
+    ``full_hessian``: the Hessian of the Lagrangian at ``(q, multipliers)`` on all
     DOFs (:func:`~supercoil.solvers.newton.lagrangian_hessian`) if already assembled.
     """
-    dofs = _eigen_dofs(problem)
-    H = (_hessian(problem, q, multipliers, dofs) if lagrangian_hessian is None
-         else lagrangian_hessian.restrict(dofs))
+    dofs = eigen_dofs(problem)
+    H = (lagrangian_hessian(problem, q, multipliers) if full_hessian is None
+         else full_hessian).restrict(dofs)
     # csr_columns: scipy's column slicing, the same arrays from a gather remembered per
     # pattern (checked equal along the tweezers benchmark: 135 of 135; 0.4 ms a call)
     J = None
@@ -264,10 +267,10 @@ def negative_count(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.nd
 def eigenvalue_nearest_zero(problem: ConstrainedEnergy, q: np.ndarray,
                             multipliers: np.ndarray) -> float:
     """The signed eigenvalue of ``H_L v = mu M v`` (constrained, symmetry removed) nearest 0."""
-    dofs, H, J, mass, sym = _eigen_system(problem, q, multipliers)
+    dofs, H, J, mass, sym = eigen_system(problem, q, multipliers)
     m = J.shape[0] if J is not None else 0
-    values, _ = _lowest_pairs(H, J, mass, n_wanted=4, n=dofs.size, m=m, symmetry=sym,
-                              force_sparse=True)
+    values, _ = lowest_pairs(H, J, mass, n_wanted=4, n=dofs.size, m=m, symmetry=sym,
+                             force_sparse=True)
     return float(values[np.argmin(np.abs(values))])
 
 
@@ -278,9 +281,9 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     factor = KKTFactor(H, J)
     neg = factor.reduced_negative_count
     det_sign = int(factor.determinant_sign * (-1) ** (J.shape[0] if J is not None else 0))
-    dofs, H_e, J_e, mass_e, sym = _eigen_system(problem, q, multipliers)
-    values, vectors = _lowest_pairs(H_e, J_e, mass_e, n_wanted=neg + n_modes, n=dofs.size,
-                                    m=J_e.shape[0] if J_e is not None else 0, symmetry=sym)
+    dofs, H_e, J_e, mass_e, sym = eigen_system(problem, q, multipliers)
+    values, vectors = lowest_pairs(H_e, J_e, mass_e, n_wanted=neg + n_modes, n=dofs.size,
+                                   m=J_e.shape[0] if J_e is not None else 0, symmetry=sym)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # Approximate symmetries (a closed rod's material sliding) are projected out
@@ -317,10 +320,12 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     )
 
 
-def _lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
-                  factor_order=None):
-    """See :func:`_lowest_pairs_threads`; computed with one BLAS thread (the same
-    eigenpairs, bit for bit, whatever the thread count of the process)."""
+def lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
+                 factor_order=None):
+    """The eigenpairs of ``H v = mu M v`` on ``ker J`` (the symmetry modes projected
+    out) nearest zero, ``(values, vectors)``: the method of
+    :func:`_lowest_pairs_threads`, computed with one BLAS thread (the same eigenpairs,
+    bit for bit, whatever the thread count of the process)."""
     with _one_blas_thread():
         return _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry, force_sparse,
                                      factor_order)

@@ -164,6 +164,15 @@ def replayed_pins(cp: ContactProblem, states: np.ndarray
     return pins
 
 
+def run_bounds(n_points: int) -> tuple[int, int]:
+    """The first and last point indices of the run (of :func:`_follow_contact`'s runs of
+    ``CONTACT_SEGMENT_POINTS``, each starting at the last point of the previous) that
+    computed point ``n_points - 1`` of a contact branch (its start for the first point)."""
+    step = CONTACT_SEGMENT_POINTS - 1
+    j = max(n_points - 2, 0) // step
+    return j * step, (j + 1) * step
+
+
 def _follow_contact(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
                     options: ContinuationOptions, name: str, on_point=None
                     ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
@@ -178,12 +187,15 @@ def _follow_contact(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
                                                              options.max_points))
     with pins_restored(cp):
         if old is not None and len(old):
-            # the pins the interrupted run had; a resumed run's later boundaries
-            # are counted from the point it resumed at
+            # the pins the interrupted run had, and the rest of the run it was stopped
+            # in: the runs' boundaries are the uninterrupted run's
             earlier = replayed_pins(cp, old.states)
-            first = (resume_branch(cp, old, first_opts, on_point=on_point, records=records,
-                                   events=events)
-                     if len(old) < CONTACT_SEGMENT_POINTS else old)
+            start, end = run_bounds(len(old))
+            first = old if len(old) == end + 1 else resume_branch(
+                cp, old, dataclasses.replace(options, max_points=min(end + 1,
+                                                                     options.max_points)),
+                on_point=on_point, records=records, events=events,
+                stop=grip_stop(rod.pin_grip, old.states[start]))
         else:
             set_pin(cp, rod, q_start)
             earlier = [(0, tuple(int(d) for d in rod.fixed))]

@@ -330,21 +330,8 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
     :class:`supercoil.problems.tweezers.TweezersOptions` (``max_points``,
     ``contact_max_step``, ...).
 
-    ``on_point(branch)`` is called after every accepted point with the branch so
-    far (its last point the new one), ``progress(message)`` as branches start.
-    ``out``: an output folder (created if missing): every accepted point is
-    appended to ``out/result.h5`` before ``on_point`` sees it, so a run stopped
-    by Ctrl-C, a signal or a crash keeps every point reported; at the end the
-    file gets the final branches, the summary and the status, and ``branch.json``
-    (the summary, :attr:`Diagram.summary`) is written beside it. An existing
-    ``result.h5`` is refused unless ``overwrite``. ``out`` may also be an open
-    :class:`supercoil.io.store.ResultWriter`: the points and final branches are
-    stored in it, and the caller adds the summary and status and closes it. On
-    Ctrl-C the result is closed with status ``interrupted`` (``failed`` on an
-    error) and the exception raised again. ``resume``: ``True`` continues the
-    result in ``out``; a result (:func:`supercoil.load`'s, or its file or
-    folder) is continued from: its finished branches are kept, the others
-    continued from their last point. The stored options must be these.
+    ``on_point``, ``progress``, ``out``, ``resume`` and ``overwrite`` act as for
+    :func:`ring_diagram`, with ``branch.json`` in place of ``diagram.json``.
     """
     from supercoil.api.files import options_attributes
     from supercoil.problems.tweezers import TweezersOptions, tweezers_branches

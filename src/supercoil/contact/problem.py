@@ -51,15 +51,6 @@ from supercoil.solvers.problem import HessianParts
 from supercoil.topology.knots.guard import KnotGuard
 
 
-def _blocks_matrix(dofs: np.ndarray, local: np.ndarray, n: int) -> sp.csr_matrix:
-    """The ``(n, n)`` sum of the blocks ``local`` ``(m, w, w)`` on the DOFs ``dofs``
-    ``(m, w)`` (duplicates summed)."""
-    w = dofs.shape[1]
-    rows = np.repeat(dofs, w, axis=1).ravel()
-    cols = np.tile(dofs, (1, w)).ravel()
-    return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))
-
-
 class ContactProblem:
     """A rod energy plus impenetrability; see the module docstring.
 
@@ -346,7 +337,7 @@ class ContactProblem:
             second = np.where(touching, self.stiffness, second)
         local = (second[:, None, None] * grad[:, :, None] * grad[:, None, :]
                  + first[:, None, None] * hess)
-        return _blocks_matrix(dofs, local, n)
+        return block_csr(dofs, local, n)
 
     def hessian(self, q: np.ndarray) -> HessianParts:
         """The rod's Hessian plus :meth:`contact_hessian`. The integral formulation's pair
@@ -423,7 +414,7 @@ class ContactProblem:
         if len(self.active) == 0:
             return H
         _d, _grad, hess, dofs = self._pair_derivatives(q, self.active)
-        return (H + _blocks_matrix(dofs, lam[m0:, None, None] * hess, self.n_dofs)).tocsr()
+        return (H + block_csr(dofs, lam[m0:, None, None] * hess, self.n_dofs)).tocsr()
 
     def accept(self, q: np.ndarray) -> None:
         self.base.accept(q)

@@ -185,7 +185,7 @@ def test_dataset_cells_hold_their_tasks_and_read_back(tmp_path):
         load_sweep(tmp_path / "nowhere")
 
 
-TWEEZERS = """
+TWEEZERS_STUDY = """
 [rod]
 twist_ratio = 1.3333333333333333
 length_over_diameter = 20
@@ -197,9 +197,8 @@ turns = [0.0, 1.6]
 [outputs]
 figures = false
 json = false
-[sweep]
-"problem.tension" = [20.0]
 """
+TWEEZERS = TWEEZERS_STUDY + '[sweep]\n"problem.tension" = [20.0]\n'
 
 
 @pytest.fixture(scope="module")

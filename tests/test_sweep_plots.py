@@ -13,27 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_sweep import TWEEZERS_STUDY
 
 from supercoil.io.study import parse_study
 from supercoil.sweeps.dataset import build_dataset, load_sweep, write_dataset
 from supercoil.sweeps.grid import parse_sweep_study
 
 FORCES = (10.0, 20.0)
-TWEEZERS = f"""
-[rod]
-twist_ratio = 1.3333333333333333
-length_over_diameter = 20
-nodes = 16
-[problem]
-kind = "tweezers"
-tension = 20.0
-turns = [0.0, 1.6]
-[outputs]
-figures = false
-json = false
-[sweep]
-"problem.tension" = [{FORCES[1]}, {FORCES[0]}]
-"""
+TWEEZERS = TWEEZERS_STUDY + f'[sweep]\n"problem.tension" = [{FORCES[1]}, {FORCES[0]}]\n'
 
 
 @pytest.fixture(scope="module")

@@ -49,7 +49,7 @@ UNITS_NOTE = (
 # the order a new user meets the commands in, which --help lists them in
 COMMANDS = ("demo", "ring", "diagram", "tweezers", "run", "sweep", "plot", "view", "export",
             "writhe", "knot", "tighten")
-COMPILE_TIME = "1 to 2 minutes"  # the first run's compilation on a fresh install
+COMPILE_TIME = "half a minute, longer on a busy machine"  # measured: 34 s (demo, load 1.5)
 
 
 class _InUsersOrder(TyperGroup):

@@ -3,7 +3,8 @@
 Numba compiles a kernel at its first call and keeps the machine code in its cache:
 the ``__pycache__`` folder beside the module, or ``NUMBA_CACHE_DIR`` when set. A
 first run on a fresh install compiles every kernel it calls (about half a minute for
-the demo); later runs load them. :func:`announce_compilation` lets a command say so before it starts.
+the demo); later runs load them. :func:`announce_compilation` lets a command say so
+before it starts.
 
 Numba's cache checks only the file of the function it caches: a kernel that calls a
 compiled function of another module keeps that callee's code as it was when the kernel

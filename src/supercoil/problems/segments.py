@@ -130,6 +130,7 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
            grip_fraction: float = 0.25,
            refuse: Callable[[np.ndarray], str | None] | None = None,
            restart: Callable[[np.ndarray], Callable[[np.ndarray], str | None]] | None = None,
+           on_run: Callable[[int], None] | None = None,
            ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
     """Continue ``first`` (a computed run) in runs of ``segment_points``, re-pinning between.
 
@@ -160,6 +161,10 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
     after ``refuse`` (e.g. the end of a run where the state's approximate symmetries
     change, so that the next run starts with the phase rows they need); the run
     then ends ``STOPPED`` and the next one starts at its last point.
+
+    ``on_run(index)``: called before each later run with the index of its first point
+    on the merged branch (e.g. to record where each run starts, so that an interrupted
+    run can be resumed up to its own end).
     """
     parts = [first]
     pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
@@ -193,6 +198,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         report = None if on_point is None else (
             lambda partial, done=done: on_point(merge_branches([done, partial], name)))
         held = None if grip is None else grip_stop(grip, q, grip_fraction)
+        if on_run is not None:
+            on_run(total - 1)
         run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
                            options=opts, name=name, records=records, events=events,
                            on_point=report,

@@ -297,9 +297,14 @@ def _transported_directors(points: np.ndarray) -> np.ndarray:
 
 
 def _axis_rotation_pin(points: np.ndarray) -> list[int]:
-    """The azimuthal coordinate of the node farthest from the axis (if any is off it)."""
+    """The azimuthal coordinate of the node farthest from the axis (if any is off it).
+
+    The first node within a relative ``1e-6`` of the largest distance: a state symmetric
+    about the rod's middle has two such nodes at exactly the same distance, and round-off
+    would pick either (a resumed run, whose states equal the uninterrupted run's to
+    round-off, then pinned the other and followed the branch in another gauge)."""
     radius = np.linalg.norm(points[:, :2], axis=1)
-    k = int(np.argmax(radius))
+    k = int(np.flatnonzero(radius >= (1.0 - 1e-6) * radius.max())[0])
     if radius[k] <= 1e-6 * np.ptp(points[:, 2]):
         return []
     azimuth = np.array([-points[k, 1], points[k, 0]]) / radius[k]

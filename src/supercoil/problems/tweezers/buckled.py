@@ -40,29 +40,80 @@ SWITCH_AMPLITUDE = 2e-2  # first point of the buckled branch from the bifurcatio
 SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1e-3)
 
 
+class RunRecords:
+    """Per-point records ``records`` with ``run_start``: the index on the branch of the
+    first point of the continuation run that computed the point (:func:`begin`, as
+    :func:`~supercoil.problems.segments.follow`'s ``on_run``), so that an interrupted
+    run is resumed up to its own end (:func:`resume_stored`)."""
+
+    def __init__(self, records):
+        self.records = records
+        self.start = 0
+
+    def begin(self, index: int) -> None:
+        self.start = index
+
+    def __call__(self, q: np.ndarray, multipliers: np.ndarray, parameter: float) -> dict:
+        return self.records(q, multipliers, parameter) | {"run_start": self.start}
+
+
+def stored_pins(branch: Branch) -> tuple[tuple[int, tuple[int, ...]], ...]:
+    """The azimuth pins of a stored branch as :func:`~supercoil.problems.segments.follow`
+    reports them, ``(first point index, pinned DOFs)`` per change, from its record
+    ``azimuth_pin``: a pin first recorded at point ``i`` was picked at point ``i - 1``,
+    where its run started (a pin picked again unchanged is not seen)."""
+    pin = branch.records["azimuth_pin"]
+
+    def dofs(i):
+        return (int(pin[i]),) if pin[i] >= 0 else ()
+
+    return ((0, dofs(0)),) + tuple((i - 1, dofs(i)) for i in range(1, len(pin))
+                                   if pin[i] != pin[i - 1])
+
+
+def resumed_pins(old: Branch, later: tuple[tuple[int, tuple[int, ...]], ...]
+                 ) -> tuple[tuple[int, tuple[int, ...]], ...]:
+    """The pins of a branch continued from the stored ``old``: those of its stored
+    points (:func:`stored_pins`), then those ``follow`` picked after them (``later``,
+    whose first entry is the pin the stored points ended with)."""
+    return stored_pins(old) + tuple(p for p in later if p[0] >= len(old) - 1 and p[0] > 0)
+
+
 def resume_stored(stored: Mapping[str, tuple[Branch, bool]], rod: ClampedRodEnergy,
-                  problem, name: str, segment_opts: ContinuationOptions, records,
-                  events, on_point=None, stop=None, sliding: bool = True) -> Branch | None:
-    """The stored branch ``name`` continued for one segment, or None (none stored, or
-    complete, or of fewer than two points); with the azimuth pin its points were
-    computed with (the record ``azimuth_pin``), the same gauge. ``sliding``: the run
-    also ends where the sliding's phase row must come or go
-    (:func:`~supercoil.problems.tweezers.pins.sliding_stop`)."""
+                  problem, name: str, segment_opts: ContinuationOptions,
+                  records: RunRecords, events, on_point=None, stop=None,
+                  sliding: bool = True, max_points: int | None = None,
+                  first: np.ndarray | None = None) -> Branch | None:
+    """The stored branch ``name`` continued to the end of the run it was stopped in, or
+    None (none stored, or complete, or of fewer than two points).
+
+    The run is the one the record ``run_start`` names (a branch stored without it: a
+    run from its last point), continued as the uninterrupted run went on: up to its
+    ``segment_opts.max_points`` points (``max_points`` bounds the whole branch), with
+    the azimuth pin its points were computed with (the record ``azimuth_pin``, the same
+    gauge), its phase rows (those stored with the branch), and ``stop``. ``sliding``:
+    the run also ends where the sliding's phase row must come or go relative to the
+    run's first state (:func:`~supercoil.problems.tweezers.pins.sliding_stop`), or
+    relative to ``first`` for the branch's first run (the state its stop was made from).
+    ``records.start`` is left at the run's start."""
     old, complete = stored.get(name, (None, False))
     if old is None or complete or len(old) < 2:
         return None
     q = old.states[-1]
-    problem.turns = float(old.parameter_values[-1])
-    problem.accept(q)
+    start = (int(old.records["run_start"][-1]) if "run_start" in old.records
+             else len(old) - 1)
+    total = segment_opts.max_points if max_points is None else max_points
+    end = min(start + segment_opts.max_points, total)
     pin = int(old.records["azimuth_pin"][-1]) if "azimuth_pin" in old.records else -1
     if pin >= 0:  # the pin the stored points were computed with: the same gauge
         hold_azimuth(rod, (pin,), problem)
     else:
         set_pin(problem, rod, q)
-    return resume_branch(problem, old, dataclasses.replace(
-        segment_opts, max_points=len(old) + segment_opts.max_points - 1),
-        records=records, events=events, on_point=on_point,
-        stop=either(stop, sliding_stop(rod, q) if sliding else None))
+    records.begin(start)
+    since = first if start == 0 and first is not None else old.states[start]
+    return resume_branch(problem, old, dataclasses.replace(segment_opts, max_points=end),
+                         records=records, events=events, on_point=on_point,
+                         stop=either(stop, sliding_stop(rod, since) if sliding else None))
 
 
 def switch_off_straight(rod: ClampedRodEnergy, straight: Branch, point: SpecialPoint,

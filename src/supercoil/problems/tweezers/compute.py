@@ -17,9 +17,12 @@ from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.segments import either, follow
 from supercoil.problems.tweezers.buckled import (
     SWITCH_AMPLITUDE,
+    RunRecords,
     clamped_buckle_run,
     onset_passed,
     resume_stored,
+    resumed_pins,
+    stored_pins,
     switch_off_straight,
 )
 from supercoil.problems.tweezers.contact import contact_branch
@@ -71,7 +74,8 @@ def tweezers_branches(options: TweezersOptions,
         notes.append(f"segments ({rod.rod.edge_length:.3g} L) are longer than the tube "
                      f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "
                      f"{int(np.ceil(rod.rod.length / D)) + 2}")
-    free_records = tweezers_records(rod, rod, False, probe)
+    straight_records = tweezers_records(rod, rod, False, probe)
+    free_records = RunRecords(straight_records)
     events = (onset_event(probe),) if probe is not None else ()
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns,
@@ -91,7 +95,7 @@ def tweezers_branches(options: TweezersOptions,
         say(f"straight rod in turns at F L^2/A = {opts.tension:g}")
         old, complete = stored.get("straight", (None, False))
         straight = (old if complete else
-                    straight_branch(opts, rod, q0, free_records, on_point=on_point))
+                    straight_branch(opts, rod, q0, straight_records, on_point=on_point))
         seconds["straight"] = time.perf_counter() - start
         final(straight, False)
         branches.append(straight)
@@ -113,7 +117,7 @@ def tweezers_branches(options: TweezersOptions,
         start = time.perf_counter()
         free_complete = stored.get(free_name, (None, False))[1]
         first = resume_stored(stored, rod, rod, free_name, free_opts, free_records, events,
-                              on_point, free_stop)
+                              free_point, free_stop, max_points=opts.max_points, first=q0)
         if first is not None:
             say(f"{free_name}: continued from point {len(stored[free_name][0]) - 1}")
         if first is None and not free_complete:
@@ -131,7 +135,7 @@ def tweezers_branches(options: TweezersOptions,
         say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")
         free_complete = stored.get(free_name, (None, False))[1]
         first = resume_stored(stored, rod, rod, free_name, free_opts, free_records, events,
-                              on_point, free_stop)
+                              free_point, free_stop, max_points=opts.max_points, first=q0)
     if not opts.load_control and first is None and not free_complete:
         first, why = clamped_buckle_run(rod, q0, free_opts, free_name, free_records, events,
                                         free_point, either(free_stop, sliding_stop(rod, q0)))
@@ -141,14 +145,17 @@ def tweezers_branches(options: TweezersOptions,
             return TweezersResult(opts, (), frozenset(), rod, cp, seconds, tuple(notes))
     old, free_complete = stored.get(free_name, (None, False))
     if free_complete:
-        free, free_pins = old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
+        free, free_pins = old, stored_pins(old)
     else:
         free, free_pins = follow(rod, rod, first, free_opts, free_name, free_records, events,
                                  stop=onset_passed if probe is not None else None,
                                  max_points=opts.max_points,
                                  segment_points=opts.segment_points, on_point=free_point,
                                  quality=PIN_QUALITY, refuse=free_stop,
-                                 restart=lambda q: sliding_stop(rod, q))
+                                 restart=lambda q: sliding_stop(rod, q),
+                                 on_run=free_records.begin)
+        if old is not None and len(old) >= 2:  # resumed: the pins of the stored points
+            free_pins = resumed_pins(old, free_pins)
     free = verify_bifurcations(free)
     sliding = free.records.get("sliding_residual", np.zeros(0))
     if len(free) and np.max(sliding) > SLIDING_NOTE:

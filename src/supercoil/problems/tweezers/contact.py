@@ -21,7 +21,12 @@ from supercoil.problems.contact_events import (
     contact_start,
 )
 from supercoil.problems.segments import follow, set_pin
-from supercoil.problems.tweezers.buckled import resume_stored
+from supercoil.problems.tweezers.buckled import (
+    RunRecords,
+    resume_stored,
+    resumed_pins,
+    stored_pins,
+)
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY
 from supercoil.problems.tweezers.problem import tweezers_records
@@ -69,13 +74,13 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
         event_tolerance=opts.contact_event_tolerance,
         predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
         chord_steps=True, near_symmetry_gauge=False)
-    records = tweezers_records(cp, rod, True)
+    records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     old, complete = stored.get(name, (None, False))
     if complete:
-        return old, ((0, tuple(int(d) for d in rod.gauge_dofs)),)
+        return old, stored_pins(old)
     first = resume_stored(stored, rod, cp, name, contact_opts, records, events, on_point,
-                          pinned, sliding=False)
+                          pinned, sliding=False, max_points=opts.max_points)
     if first is not None:
         say(f"{name}: continued from point {len(old) - 1}")
     else:
@@ -84,5 +89,8 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
                              stop=pinned)
     contact, pins = follow(cp, rod, first, contact_opts, name, records, events,
                            max_points=opts.max_points, segment_points=opts.segment_points,
-                           on_point=on_point, quality=PIN_QUALITY, refuse=pinned)
+                           on_point=on_point, quality=PIN_QUALITY, refuse=pinned,
+                           on_run=records.begin)
+    if old is not None and len(old) >= 2:  # resumed: the pins of the stored points
+        pins = resumed_pins(old, pins)
     return classify_contact_events(contact, cp), pins

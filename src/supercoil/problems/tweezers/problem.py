@@ -13,7 +13,9 @@ control), ``tension`` (the axial force: the dead load, or the reaction at the
 end under displacement control), ``azimuth_pin``, ``n_contact_points``,
 ``n_contact_intervals``, ``min_gap_over_diameter`` and ``sliding_residual`` (the KKT
 residual without the continuation's phase rows: the force the sliding's phase row
-holds, docs/continuation.md, "Long open rods").
+holds, docs/continuation.md, "Long open rods"); the contact-free and contact
+branches also record ``run_start``, the index of the first point of the continuation
+run that computed the point (:class:`~supercoil.problems.tweezers.buckled.RunRecords`).
 """
 
 from __future__ import annotations

@@ -8,6 +8,7 @@ alternating the worker counts; prints the smallest and median wall time per coun
 and the speed-up over the first count. Checks that every run gives the same dataset.
 
     python benchmarks/bench_sweep.py --workers 1 2 --repeat 1
+    python benchmarks/bench_sweep.py --workers 1 2 --repeat 2 --nodes 80 --stop 3
 """
 
 from __future__ import annotations
@@ -25,9 +26,15 @@ EXAMPLE = ROOT / "examples" / "sweep_hat_curves.toml"
 FORCES = [5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0]
 
 
-def study_text() -> str:
+def study_text(nodes: int | None = None, stop: float | None = None) -> str:
+    """The example's study at the eight forces; ``nodes``, ``stop`` (turns) replace the
+    example's N = 24 and 1.6 turns for longer branches."""
     text = EXAMPLE.read_text(encoding="utf-8")
     head, _ = text.split("\n[sweep]\n")
+    if nodes is not None:
+        head = head.replace("nodes = 24", f"nodes = {nodes}")
+    if stop is not None:
+        head = head.replace("turns = [0.0, 1.6]", f"turns = [0.0, {stop}]")
     return head + f"\n[sweep]\n\"problem.tension\" = {FORCES}\n"
 
 
@@ -46,6 +53,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--repeat", type=int, default=1)
+    parser.add_argument("--nodes", type=int, default=None,
+                        help="nodes of each branch (default: the example's 24)")
+    parser.add_argument("--stop", type=float, default=None,
+                        help="last turn of each branch (default: the example's 1.6)")
     args = parser.parse_args()
     from supercoil.sweeps import load_sweep
 
@@ -53,7 +64,7 @@ def main() -> int:
     reference = None
     with tempfile.TemporaryDirectory() as folder:
         study = Path(folder) / "sweep8.toml"
-        study.write_text(study_text(), encoding="utf-8")
+        study.write_text(study_text(args.nodes, args.stop), encoding="utf-8")
         # a first run loads (or compiles) the numba cache, untimed
         run(study, Path(folder) / "warm", 1)
         for r in range(args.repeat):

@@ -39,7 +39,7 @@ def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
     """One table row (module doc)."""
     tension = lam**2
     target = factor * critical_turns(twist_ratio, tension)
-    options = TweezersOptions(twist_ratio=twist_ratio, length_over_diameter=ld,
+    options = TweezersOptions(loop_sliding=True, twist_ratio=twist_ratio, length_over_diameter=ld,
                               tension=tension, n_nodes=nodes, turns=(0.0, target),
                               max_points=max_points)
     start = time.perf_counter()

@@ -88,7 +88,8 @@ def contact_free_branch(n_nodes: int):
     with pytest.raises(FreeBranchDone):
         tweezers_branches(TweezersOptions(twist_ratio=1.0, length_over_diameter=100,
                                           tension=1200, n_nodes=n_nodes, turns=(0.0, 17.0),
-                                          max_points=400), on_branch=keep)
+                                          max_points=400, loop_sliding=True),
+                          on_branch=keep)
     return found[0]
 
 

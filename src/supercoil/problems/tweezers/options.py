@@ -38,7 +38,13 @@ class TweezersOptions:
     '{"predictor": "tangent"}'``).
     Tolerances as in :class:`~supercoil.problems.ring_diagram.DiagramOptions`.
     ``contact_curve``: ``"spline"`` (default) or ``"polygon"``
-    (``ContactOptions.curve``); ``contact_formulation``: ``"integral"``
+    (``ContactOptions.curve``); ``loop_sliding``: treat the sliding of a localised
+    loop with straight tails as an approximate symmetry (a phase row on the
+    contact-free branch, out of the unstable count; docs/continuation.md, "Long open
+    rods"): it lets long rods at lambda of about 20 reach their contact where the
+    corrector otherwise diverges along the nearly free sliding, but the 3 kbp hat
+    curve at 1 pN (lambda about 71) then stops at its contact onset, so it is off by
+    default; ``contact_formulation``: ``"integral"``
     (default) or ``"pairs"`` (``ContactOptions.formulation``). The default,
     the double integral over the B-spline, counts a contact once wherever it
     lies relative to the nodes: the pair sum on the polygon made a sawtooth
@@ -63,6 +69,7 @@ class TweezersOptions:
     contact_tolerance: float = 1e-8
     contact_curve: str = "spline"
     contact_formulation: str = "integral"
+    loop_sliding: bool = False
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__

@@ -44,9 +44,12 @@ def clamped_problem(options: TweezersOptions) -> tuple[ClampedRodEnergy, np.ndar
     rod = Rod(opts.n_nodes, twist_stiffness=opts.twist_ratio, closed=False)
     if opts.load_control:
         pts = straight_rod(opts.n_nodes)
-        return ClampedRodEnergy(rod, pts, opts.turns[0], tension=opts.tension), pts.ravel()
-    pts = clamped_buckle(opts.n_nodes, opts.end_distance)
-    problem = ClampedRodEnergy(rod, pts, opts.turns[0], end_distance_control=True)
+        problem = ClampedRodEnergy(rod, pts, opts.turns[0], tension=opts.tension)
+    else:
+        pts = clamped_buckle(opts.n_nodes, opts.end_distance)
+        problem = ClampedRodEnergy(rod, pts, opts.turns[0], end_distance_control=True)
+    if not opts.loop_sliding:
+        problem.sliding_tail = None  # the sliding is never an approximate symmetry
     return problem, pts.ravel()
 
 

@@ -50,7 +50,8 @@ class TweezersResult:
             if start <= index:
                 dofs = chosen
         problem = self.contact_problem if name in self.contact_branches else rod
-        rod.sliding_tail = (SLIDING_TAIL_CONTACT if name in self.contact_branches
+        rod.sliding_tail = (None if not self.options.loop_sliding
+                            else SLIDING_TAIL_CONTACT if name in self.contact_branches
                             else sliding_threshold(rod.rod.n_nodes))
         hold_azimuth(rod, dofs, problem)
         return problem

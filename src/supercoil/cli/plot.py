@@ -102,16 +102,7 @@ def plot(
     if missing:
         fail(f"{result}: a {data.kind} result has no data for --kind {missing[0]}; kinds it "
              f"has: {', '.join(available) or 'none'}")
-    targets = [out / f"{output_stem(k)}.{f}" for k in kinds for f in fmts]
-    existing = [t for t in targets if t.exists()]
-    if existing and not overwrite:
-        fail(f"--out {out}: {existing[0].name} exists; give a new folder, or add --overwrite to "
-             "replace the figures")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
-             "writable location")
+    _prepare_out(out, [f"{output_stem(k)}.{f}" for k in kinds for f in fmts], overwrite)
     written = []
     for k in kinds:
         try:
@@ -124,6 +115,19 @@ def plot(
     if not quiet:
         print(f"wrote {', '.join(p.name for p in written)} to {out.resolve()}")
 
+
+def _prepare_out(out: Path, names: list[str], overwrite: bool) -> None:
+    """Refuse to replace the figure files ``names`` in ``out`` without ``--overwrite``,
+    then create ``out``."""
+    existing = [name for name in names if (out / name).exists()]
+    if existing and not overwrite:
+        fail(f"--out {out}: {existing[0]} exists; give a new folder, or add --overwrite to "
+             "replace the figures")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
+             "writable location")
 
 
 def _plot_sweep(folder: Path, kinds: list[str], variable: str | None, out: Path,
@@ -151,16 +155,8 @@ def _plot_sweep(folder: Path, kinds: list[str], variable: str | None, out: Path,
         if name not in numbers:
             fail(f"--variable {name!r}: not a number of this sweep; numbers: "
                  f"{', '.join(numbers[:12])}{', ...' if len(numbers) > 12 else ''}")
-    targets = [out / f"{sweep_stem(dataset, k, variable)}.{f}" for k in kinds for f in fmts]
-    existing = [t for t in targets if t.exists()]
-    if existing and not overwrite:
-        fail(f"--out {out}: {existing[0].name} exists; give a new folder, or add --overwrite to "
-             "replace the figures")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail(f"--out {out}: cannot create the folder ({exc.strerror}); give a folder in a "
-             "writable location")
+    _prepare_out(out, [f"{sweep_stem(dataset, k, variable)}.{f}" for k in kinds for f in fmts],
+                 overwrite)
     root = folder.parent if folder.is_file() else folder
     written = []
     for k in kinds:

@@ -42,7 +42,7 @@ from supercoil.cosserat.closed import ClosedCosseratEnergy
 from supercoil.cosserat.ring import michell_excess_link, relax_circle, ring_problem
 from supercoil.cosserat.rod import DOFS_PER_NODE
 from supercoil.problems.contact_events import stop_after_onset, truncate_after
-from supercoil.problems.ring_branches import PRIMARY_NAMES
+from supercoil.problems.ring_branches import mode_bifurcation
 from supercoil.problems.ring_diagram.options import DiagramOptions
 from supercoil.problems.ring_diagram.result import RingDiagram
 
@@ -246,18 +246,14 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
                                              *constants[1:], curve, link)
     seconds["circle"] = time.perf_counter() - start
     branches = [centreline_branch(circle)]
-    bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
     free_opts = ContinuationOptions(
         initial_step=SWITCH_AMPLITUDES[0], max_step=opts.free_max_step,
         max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
         event_tolerance=opts.event_tolerance, tolerance=TOLERANCE, predictor=PREDICTOR,
         factor_refinement=True, chord_steps=True, fast_iterations=FAST_ITERATIONS)
     for mode in opts.modes:
-        name = PRIMARY_NAMES.get(mode, f"mode{mode}")
-        point = bifurcations.get(2 * (mode - 1))
-        if point is None or point.count_before != 2 * (mode - 2):
-            notes.append(f"the circle branch has no bifurcation point of mode {mode}: "
-                         f"{name} not computed")
+        name, point = mode_bifurcation(circle, mode, notes)
+        if point is None:
             continue
         say(f"{name}: switched from the circle at dLk = {point.parameter:.4g}, no contact")
         start = time.perf_counter()

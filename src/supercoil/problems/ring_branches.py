@@ -149,3 +149,18 @@ def radial_harmonics(points: np.ndarray, n_harmonics: int = 12) -> np.ndarray:
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     distance = np.linalg.norm(points - points.mean(axis=0), axis=1)
     return np.abs(np.fft.rfft(distance))[: n_harmonics + 1] / len(distance)
+
+
+def mode_bifurcation(circle, mode: int, notes: list[str]):
+    """``(name, point)`` of the primary branch of ``mode`` off the ``circle`` branch: its
+    bifurcation point, where the unstable count goes from ``2 (mode - 2)`` to
+    ``2 (mode - 1)`` (Michell's m-th threshold), or None with a note when the circle
+    has none."""
+    name = PRIMARY_NAMES.get(mode, f"mode{mode}")
+    bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
+    point = bifurcations.get(2 * (mode - 1))
+    if point is None or point.count_before != 2 * (mode - 2):
+        notes.append(f"the circle branch has no bifurcation point of mode {mode}: "
+                     f"{name} not computed")
+        return name, None
+    return name, point

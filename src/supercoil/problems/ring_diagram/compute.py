@@ -14,7 +14,7 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch
 from supercoil.problems.contact_events import contact_start, truncate_after
 from supercoil.problems.ring import michell_excess_link
-from supercoil.problems.ring_branches import PRIMARY_NAMES, circle_branch, ring_records
+from supercoil.problems.ring_branches import circle_branch, mode_bifurcation, ring_records
 from supercoil.problems.ring_diagram.contact_branches import (
     Pins,
     contact_branch,
@@ -73,13 +73,9 @@ def ring_diagram(options: DiagramOptions,
     branches: list[Branch] = [circle]
     contact_names: set[str] = set()
     pins: dict[str, Pins] = {}
-    bifurcations = {p.count_after: p for p in circle.points_of_kind("bifurcation")}
     for mode in opts.modes:
-        name = PRIMARY_NAMES.get(mode, f"mode{mode}")
-        point = bifurcations.get(2 * (mode - 1))
-        if point is None or point.count_before != 2 * (mode - 2):
-            notes.append(f"the circle branch has no bifurcation point of mode {mode}: "
-                         f"{name} not computed")
+        name, point = mode_bifurcation(circle, mode, notes)
+        if point is None:
             continue
         say(f"{name}: switched from the circle at dLk = {point.parameter:.4g}, no contact")
         start = time.perf_counter()

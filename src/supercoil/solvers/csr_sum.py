@@ -96,25 +96,34 @@ _EMPTY_ROWS = sp.csr_matrix((1, 1))  # the indices and data of no entries
 
 
 @njit()
-def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data, n,
-                       index_like, indptr_like):
-    """Arrays of ``(A + block sum) + C`` (see :func:`csr_add_blocks`) with the dtypes of
-    ``index_like`` and ``indptr_like``; ``C`` of no entries adds nothing."""
+def _block_rows(dofs, n):
+    """The blocks' rows touching each DOF (the CSR of the incidence), in block order:
+    ``(start, which)``, DOF ``r``'s rows ``which[start[r]:start[r + 1]]`` as ``k * w + i``
+    (row ``i`` of block ``k``, ``w`` rows a block)."""
     p, w = dofs.shape
-    # the blocks' rows touching each DOF, in block order (as _block_csr_kernel)
     start = np.zeros(n + 1, dtype=np.int64)
     for k in range(p):
         for i in range(w):
             start[dofs[k, i] + 1] += 1
     for r in range(n):
         start[r + 1] += start[r]
-    which = np.empty(start[n], dtype=np.int64)  # k * w + i
+    which = np.empty(start[n], dtype=np.int64)
     fill = start[:n].copy()
     for k in range(p):
         for i in range(w):
             r = dofs[k, i]
             which[fill[r]] = k * w + i
             fill[r] += 1
+    return start, which
+
+
+@njit()
+def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data, n,
+                       index_like, indptr_like):
+    """Arrays of ``(A + block sum) + C`` (see :func:`csr_add_blocks`) with the dtypes of
+    ``index_like`` and ``indptr_like``; ``C`` of no entries adds nothing."""
+    p, w = dofs.shape
+    start, which = _block_rows(dofs, n)
     upper = a_ptr[n] - a_ptr[0] + p * w * w + c_ptr[n] - c_ptr[0]
     indptr = np.zeros(n + 1, dtype=indptr_like.dtype)
     indices = np.empty(upper, dtype=index_like.dtype)
@@ -242,21 +251,8 @@ def block_csr(dofs: np.ndarray, blocks: np.ndarray, n: int) -> sp.csr_matrix:
 
 @njit()
 def _block_csr_kernel(dofs, blocks, n):
-    p, w = dofs.shape
-    # the blocks' rows touching each DOF (CSR of the incidence), in block order
-    start = np.zeros(n + 1, dtype=np.int64)
-    for k in range(p):
-        for i in range(w):
-            start[dofs[k, i] + 1] += 1
-    for r in range(n):
-        start[r + 1] += start[r]
-    which = np.empty(start[n], dtype=np.int64)  # k * w + i
-    fill = start[:n].copy()
-    for k in range(p):
-        for i in range(w):
-            r = dofs[k, i]
-            which[fill[r]] = k * w + i
-            fill[r] += 1
+    w = dofs.shape[1]
+    start, which = _block_rows(dofs, n)
     slot = np.full(n, -1, dtype=np.int64)  # column -> position in the row being built
     indptr = np.zeros(n + 1, dtype=np.int64)
     indices = np.empty(start[n] * w, dtype=np.int64)

@@ -117,6 +117,27 @@ def _block_rows(dofs, n):
     return start, which
 
 
+@njit(inline="always")
+def _sum_block_row(r, start, which, dofs, blocks, slot, values, cols, count):
+    """Row ``r`` of the block sum (rows from :func:`_block_rows`): each column met for the
+    first time is marked in ``slot`` and appended to ``cols`` at ``count``, its value
+    summed into ``values[column]`` in the blocks' order; returns the new ``count``."""
+    w = dofs.shape[1]
+    for e in range(start[r], start[r + 1]):
+        k = which[e] // w
+        i = which[e] - k * w
+        for j in range(w):  # duplicates summed in the blocks' order
+            col = dofs[k, j]
+            if slot[col] < 0:
+                slot[col] = count
+                cols[count] = col
+                values[col] = blocks[k, i, j]
+                count += 1
+            else:
+                values[col] += blocks[k, i, j]
+    return count
+
+
 @njit()
 def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data, n,
                        index_like, indptr_like):
@@ -136,19 +157,7 @@ def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data,
     m_vals = np.empty(n)
     nnz = 0
     for r in range(n):
-        nb = 0
-        for e in range(start[r], start[r + 1]):
-            k = which[e] // w
-            i = which[e] - k * w
-            for j in range(w):  # duplicates summed in the blocks' order
-                col = dofs[k, j]
-                if slot[col] < 0:
-                    slot[col] = nb
-                    b_cols[nb] = col
-                    values[col] = blocks[k, i, j]
-                    nb += 1
-                else:
-                    values[col] += blocks[k, i, j]
+        nb = _sum_block_row(r, start, which, dofs, blocks, slot, values, b_cols, 0)
         for t in range(1, nb):  # insertion sort: the blocks' columns come in sorted runs
             col = b_cols[t]
             u = t - 1
@@ -261,18 +270,7 @@ def _block_csr_kernel(dofs, blocks, n):
     nnz = 0
     for r in range(n):
         first = nnz
-        for e in range(start[r], start[r + 1]):
-            k = which[e] // w
-            i = which[e] - k * w
-            for j in range(w):  # duplicates summed in the blocks' order
-                c = dofs[k, j]
-                if slot[c] < 0:
-                    slot[c] = nnz
-                    indices[nnz] = c
-                    values[c] = blocks[k, i, j]
-                    nnz += 1
-                else:
-                    values[c] += blocks[k, i, j]
+        nnz = _sum_block_row(r, start, which, dofs, blocks, slot, values, indices, nnz)
         for t in range(first, nnz):
             c = indices[t]
             data[t] = values[c]

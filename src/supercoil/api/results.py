@@ -35,6 +35,18 @@ class EquilibriumStatus(enum.Enum):
     def converged(self) -> bool:
         return self is not EquilibriumStatus.NOT_CONVERGED
 
+    @classmethod
+    def of(cls, converged: bool, stability) -> EquilibriumStatus:
+        """The status of a computation that ``converged`` (or not) to a state of
+        ``stability`` (its ``unstable_count`` and ``zero_modes``)."""
+        if not converged:
+            return cls.NOT_CONVERGED
+        if stability.unstable_count > 0:
+            return cls.UNSTABLE
+        if stability.zero_modes > 0:
+            return cls.MARGINAL
+        return cls.STABLE
+
 
 class RunStatus(enum.Enum):
     """How a run of several branches ended."""

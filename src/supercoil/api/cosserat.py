@@ -22,16 +22,6 @@ def refuse_contact(contact, verb: str) -> None:
                          f"drop contact, or use supercoil.Rod (the Kirchhoff model)")
 
 
-def _status(converged: bool, stab: Stability) -> EquilibriumStatus:
-    if not converged:
-        return EquilibriumStatus.NOT_CONVERGED
-    if stab.unstable_count > 0:
-        return EquilibriumStatus.UNSTABLE
-    if stab.zero_modes > 0:
-        return EquilibriumStatus.MARGINAL
-    return EquilibriumStatus.STABLE
-
-
 def equilibrium(problem: Ring, tolerance: float, n_modes: int) -> Equilibrium:
     """The relaxed twisted circle of a Cosserat ring (an equilibrium at every dLk; above
     the Michell threshold of the model it is returned ``UNSTABLE``)."""
@@ -52,7 +42,7 @@ def equilibrium(problem: Ring, tolerance: float, n_modes: int) -> Equilibrium:
                      certified=result.stability_certified)
     record = {**result.summary(), "slenderness": rod.slenderness,
               "poisson_ratio": rod.poisson_ratio, "curvature_form": rod.curvature}
-    return Equilibrium(problem=problem, status=_status(result.converged, stab),
+    return Equilibrium(problem=problem, status=EquilibriumStatus.of(result.converged, stab),
                        message=result.message, points=result.positions,
                        tensions=np.zeros(0), energy=float(result.energy),
                        twist=float(result.twist), writhe=float(result.writhe),

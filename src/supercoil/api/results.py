@@ -20,7 +20,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from supercoil.continuation.branch import Branch, SpecialPoint
+from supercoil.continuation.branch import Branch, SpecialPoint, special_point_counts
 
 
 class EquilibriumStatus(enum.Enum):
@@ -34,6 +34,18 @@ class EquilibriumStatus(enum.Enum):
     @property
     def converged(self) -> bool:
         return self is not EquilibriumStatus.NOT_CONVERGED
+
+    @classmethod
+    def of(cls, converged: bool, stability) -> EquilibriumStatus:
+        """The status of a computation that ``converged`` (or not) to a state of
+        ``stability`` (its ``unstable_count`` and ``zero_modes``)."""
+        if not converged:
+            return cls.NOT_CONVERGED
+        if stability.unstable_count > 0:
+            return cls.UNSTABLE
+        if stability.zero_modes > 0:
+            return cls.MARGINAL
+        return cls.STABLE
 
 
 class RunStatus(enum.Enum):
@@ -238,9 +250,6 @@ class Diagram:
 
     def __repr__(self) -> str:
         names = ", ".join(f"{name} ({len(b)})" for name, b in self.branches.items())
-        kinds: dict[str, int] = {}
-        for p in self.special_points:
-            kinds[p.kind] = kinds.get(p.kind, 0) + 1
-        special = ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())) or "none"
+        special = special_point_counts(self.special_points)
         return (f"Diagram({self.kind}, {self.status.name}: {len(self.branches)} branches\n"
                 f"  points per branch: {names}\n  special points: {special})")

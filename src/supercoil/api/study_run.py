@@ -169,9 +169,17 @@ def _outcome(ok: bool, payload: dict, summary: dict, notes: list) -> dict:
             "notes": notes + list(payload["notes"])}
 
 
-def _run_ring_diagram(spec, writer, progress, on_point, resume: bool) -> dict:
+def _computed(spec, options, writer, progress, on_point, resume: bool):
+    """The computed branches of ``options`` on the study's rod (the ring diagram's or the
+    tweezers'), saved by ``writer``."""
     from supercoil.api.verbs import diagram_of
 
+    rod = spec.rod()
+    return diagram_of(options, rod=rod if rod.model == "cosserat" else None,
+                      progress=progress, on_point=on_point, out=writer, resume=resume).computed
+
+
+def _run_ring_diagram(spec, writer, progress, on_point, resume: bool) -> dict:
     options = spec.diagram_options()
     notes = []
     s = spec.settings
@@ -179,10 +187,7 @@ def _run_ring_diagram(spec, writer, progress, on_point, resume: bool) -> dict:
                      f"{s['rod']['length_over_diameter']:.6g}, N = {s['rod']['nodes']}, modes "
                      f"{', '.join(map(str, s['problem']['modes']))}, dLk <= "
                      f"{s['problem']['max_excess_link']:.6g}")
-    rod = spec.rod()
-    diagram = diagram_of(options, rod=rod if rod.model == "cosserat" else None,
-                         progress=progress, on_point=on_point,
-                         out=writer, resume=resume).computed
+    diagram = _computed(spec, options, writer, progress, on_point, resume)
     payload = diagram.payload()
     preset = spec.dna_preset()
     if preset is not None:
@@ -227,7 +232,6 @@ def diagram_in_dna_units(payload: dict, preset, max_sigma: float) -> dict:
 
 
 def _run_tweezers(spec, writer, progress, on_point, resume: bool) -> dict:
-    from supercoil.api.verbs import diagram_of
     from supercoil.problems.tweezers_output import TWEEZERS_CONVENTIONS, result_payload
 
     options = spec.tweezers_options()
@@ -237,10 +241,7 @@ def _run_tweezers(spec, writer, progress, on_point, resume: bool) -> dict:
     progress(f"tweezers: C/A = {options.twist_ratio:.6g}, {control}, L/D = "
                      f"{options.length_over_diameter or 'no contact'}, N = {options.n_nodes}, "
                      f"turns {options.turns[0]:g} to {options.turns[1]:g}")
-    rod = spec.rod()
-    result = diagram_of(options, rod=rod if rod.model == "cosserat" else None,
-                        progress=progress, on_point=on_point,
-                        out=writer, resume=resume).computed
+    result = _computed(spec, options, writer, progress, on_point, resume)
     payload = result_payload(result)
     preset = spec.dna_preset()
     if preset is not None:

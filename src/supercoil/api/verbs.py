@@ -35,16 +35,6 @@ RING_TOLERANCE = 1e-10  # Newton's residual for a ring without contact
 CONTACT_RING_TOLERANCE = 1e-9  # and with contact (the barrier's conditioning)
 
 
-def _equilibrium_status(converged: bool, stability) -> EquilibriumStatus:
-    if not converged:
-        return EquilibriumStatus.NOT_CONVERGED
-    if stability.unstable_count > 0:
-        return EquilibriumStatus.UNSTABLE
-    if stability.zero_modes > 0:
-        return EquilibriumStatus.MARGINAL
-    return EquilibriumStatus.STABLE
-
-
 def _stability(report, n_nodes: int) -> Stability:
     modes = np.asarray(report.lowest_modes)[:, :3 * n_nodes]
     return Stability(unstable_count=int(report.unstable_count),
@@ -111,7 +101,7 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
                      eigenvalues=result.lowest_eigenvalues,
                      modes=np.zeros((0, rod.nodes, 3)), zero_tolerance=result.zero_tolerance,
                      certified=result.stability_certified)
-    return Equilibrium(problem=problem, status=_equilibrium_status(result.converged, stab),
+    return Equilibrium(problem=problem, status=EquilibriumStatus.of(result.converged, stab),
                        message=result.message, points=result.points,
                        tensions=result.multipliers, energy=float(result.energy),
                        twist=float(result.twist), writhe=float(result.writhe),
@@ -191,6 +181,19 @@ def _settings(cls, fixed: dict, options: dict):
         raise
     except (TypeError, ValueError) as exc:
         raise InputError(str(exc)) from None
+
+
+def _tweezers_settings(problem: Tweezers, turns, options: dict):
+    """The :class:`~supercoil.problems.tweezers.TweezersOptions` of ``problem`` over
+    ``turns`` with the numerical ``options``."""
+    from supercoil.problems.tweezers import TweezersOptions
+
+    rod = problem.rod
+    lod = None if problem.contact is None else problem.contact.length_over_diameter
+    return _settings(TweezersOptions, {
+        "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
+        "tension": problem.tension, "end_distance": problem.end_distance}, {
+        "turns": tuple(turns), **options})
 
 
 def _computed(kind: str, settings, compute, progress, on_point, out, resume, overwrite,
@@ -334,7 +337,7 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
     :func:`ring_diagram`, with ``branch.json`` in place of ``diagram.json``.
     """
     from supercoil.api.files import options_attributes
-    from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+    from supercoil.problems.tweezers import tweezers_branches
 
     if not isinstance(problem, Tweezers):
         raise InputError(f"tweezers: expected a supercoil.Tweezers, got "
@@ -347,24 +350,20 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
         raise InputError("superhelical_density needs a problem in DNA units "
                          "(Tweezers.from_dna); give turns", name="superhelical_density")
     turns = (0.0, 5.0) if turns is None else turns
-    rod = problem.rod
-    lod = None if problem.contact is None else problem.contact.length_over_diameter
-    settings = _settings(TweezersOptions, {
-        "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
-        "tension": problem.tension, "end_distance": problem.end_distance}, {
-        "turns": tuple(turns), **options})
+    settings = _tweezers_settings(problem, turns, options)
     attributes = options_attributes(settings, closed=False)
     if problem.dna is not None:
         from supercoil.units.tweezers import dna_attributes
 
         attributes.update(dna_attributes(problem.dna, problem.force_pN))
     compute = tweezers_branches
-    if isinstance(rod, CosseratRod):
+    if isinstance(problem.rod, CosseratRod):
         compute = cosserat.tweezers_driver(problem, resume)
     computed, writer, owned = _computed(
         "tweezers", settings, compute, progress, on_point, out, resume, overwrite,
         attributes,
-        {"contact_treatment": "barrier" if lod else "none", "n_nodes": settings.n_nodes})
+        {"contact_treatment": "barrier" if settings.length_over_diameter else "none",
+         "n_nodes": settings.n_nodes})
     status, message = _run_status(computed)
     diagram = Diagram(kind="tweezers", problem=problem, settings=settings,
                       branches={b.name: b for b in computed.branches}, status=status,
@@ -388,18 +387,12 @@ def tweezers_path(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
     :class:`~supercoil.problems.tweezers_protocol.PathResult`: per-step records
     (``points``), ``states``, ``jumps``, ``ok`` and ``message``.
     """
-    from supercoil.problems.tweezers import TweezersOptions
     from supercoil.problems.tweezers_protocol import check_path, quasistatic_path
 
     if not isinstance(problem, Tweezers):
         raise InputError(f"tweezers_path: expected a supercoil.Tweezers, got "
                          f"{type(problem).__name__}")
-    rod = problem.rod
-    lod = None if problem.contact is None else problem.contact.length_over_diameter
-    settings = _settings(TweezersOptions, {
-        "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
-        "tension": problem.tension, "end_distance": problem.end_distance}, {
-        "turns": tuple(turns), **options})
+    settings = _tweezers_settings(problem, turns, options)
     ramp = None if force_range is None else tuple(force_range)
     check_path(settings, protocol, step, force_range=ramp, force_step=force_step)
     return quasistatic_path(settings, protocol, step=step, force_range=ramp,

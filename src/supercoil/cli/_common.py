@@ -154,6 +154,18 @@ def parse_ratio(text: str) -> float:
     return values[0] / values[1]
 
 
+def parse_span(option: str, text: str, valid: str) -> tuple[float, float]:
+    """``"A:B"`` -> ``(a, b)``; a one-line error ``OPTION TEXT: give VALID`` unless two
+    numbers (their range is checked by the options the command builds)."""
+    words = text.split(":")
+    try:
+        if len(words) != 2:
+            raise ValueError
+        return float(words[0]), float(words[1])
+    except ValueError:
+        fail(f"{option} {text!r}: give {valid}")
+
+
 def parse_vector(option: str, text: str) -> tuple[float, float, float]:
     """Three finite numbers separated by commas or spaces, not all zero."""
     words = text.replace(",", " ").split()

@@ -28,6 +28,7 @@ from supercoil.cli.model_options import (
     ShearOption,
     StretchOption,
     check_model,
+    kirchhoff_only,
     make_rod,
 )
 from supercoil.problems.ring_diagram import CONTINUATION_TREATMENTS, MAX_MODE
@@ -130,13 +131,10 @@ def diagram_ring(
     self-contact are not computed for this model.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    if model == "cosserat":
-        for option, given in (("--contact", contact != "barrier"),
-                              ("--branch-depth", branch_depth != 1), ("--resume", resume)):
-            if given:
-                fail(f"{option} is not available with --model cosserat (the Cosserat ring "
-                     "diagram computes the circle and the primary branches up to their first "
-                     "contact); drop it, or use --model kirchhoff")
+    kirchhoff_only(model, (("--contact", contact != "barrier"),
+                           ("--branch-depth", branch_depth != 1), ("--resume", resume)),
+                   "the Cosserat ring diagram computes the circle and the primary branches "
+                   "up to their first contact")
     words = modes.replace(",", " ").split()
     if not words or not all(w.isdigit() for w in words):
         fail(f"--modes {modes!r}: give distinct Michell modes from 2 to {MAX_MODE} separated "

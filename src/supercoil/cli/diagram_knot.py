@@ -16,7 +16,13 @@ from typing import Annotated
 import typer
 
 from supercoil import checks
-from supercoil.cli._common import EXIT_NOT_CONVERGED, checked_path, fail, parse_ratio, refused
+from supercoil.cli._common import (
+    EXIT_NOT_CONVERGED,
+    checked_path,
+    parse_ratio,
+    parse_span,
+    refused,
+)
 from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
 
 KNOT_OPTIONS = {"knot": "--knot", "twist_ratio": "--twist-ratio",
@@ -27,16 +33,6 @@ Overwrite = overwrite_option("Write into an existing non-empty --out DIR, replac
                              "diagram's own files (other files are left alone).")
 Quiet = quiet_option()
 FIGURES = ("link_writhe.png", "energy.png", "configurations.png")
-
-
-def _span(text: str) -> tuple[float, float]:
-    words = text.split(":")
-    try:
-        if len(words) != 2:
-            raise ValueError
-        return float(words[0]), float(words[1])
-    except ValueError:
-        fail(f"--excess-link {text!r}: give dLk_min:dLk_max in turns, like 2:5")
 
 
 def diagram_knot(
@@ -92,7 +88,8 @@ def diagram_knot(
     from supercoil.cli.saving import prepare_folder
     from supercoil.problems.knot_diagram import KnotDiagramOptions
 
-    span = _span(excess_link)
+    span = parse_span("--excess-link", excess_link,
+                      "dLk_min:dLk_max in turns, like 2:5")
     with refused(KNOT_OPTIONS):
         KnotDiagramOptions(knot, twist_ratio, length_over_diameter, span, nodes, max_points,
                            start, deflation)

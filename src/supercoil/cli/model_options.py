@@ -51,6 +51,17 @@ def no_contact(model: str, command: str, contact_given: bool) -> None:
              "contact options, or use --model kirchhoff")
 
 
+def kirchhoff_only(model: str, options, scope: str) -> None:
+    """Exit 2 when one of ``options``, pairs ``(option, given)``, is given with the
+    Cosserat model, whose command computes only ``scope``."""
+    if model != "cosserat":
+        return
+    for option, given in options:
+        if given:
+            fail(f"{option} is not available with --model cosserat ({scope}); drop it, or "
+                 "use --model kirchhoff")
+
+
 def model_record(rod) -> dict:
     """The JSON keys of the rod's model: ``model`` and, for a Cosserat rod, its
     stiffnesses."""

@@ -96,12 +96,7 @@ def plot(
         available = supported_kinds(data)  # reads the branch files
     except ResultError as exc:
         fail(str(exc))
-    if not kinds:
-        kinds = list(available)
-    missing = [k for k in kinds if k not in available]
-    if missing:
-        fail(f"{result}: a {data.kind} result has no data for --kind {missing[0]}; kinds it "
-             f"has: {', '.join(available) or 'none'}")
+    kinds = _chosen_kinds(kinds, available, f"{result}: a {data.kind} result")
     _prepare_out(out, [f"{output_stem(k)}.{f}" for k in kinds for f in fmts], overwrite)
     written = []
     for k in kinds:
@@ -114,6 +109,18 @@ def plot(
                  "writable folder")
     if not quiet:
         print(f"wrote {', '.join(p.name for p in written)} to {out.resolve()}")
+
+
+def _chosen_kinds(kinds: list[str], available, source: str) -> list[str]:
+    """The figure ``kinds`` asked for (all ``available`` when none), each refused unless
+    ``source`` (e.g. ``"PATH: this sweep"``) has data for it."""
+    if not kinds:
+        kinds = list(available)
+    missing = [k for k in kinds if k not in available]
+    if missing:
+        fail(f"{source} has no data for --kind {missing[0]}; kinds it has: "
+             f"{', '.join(available) or 'none'}")
+    return kinds
 
 
 def _prepare_out(out: Path, names: list[str], overwrite: bool) -> None:
@@ -143,12 +150,7 @@ def _plot_sweep(folder: Path, kinds: list[str], variable: str | None, out: Path,
     except InputError as exc:
         fail(str(exc))
     available = sweep_kinds(dataset)
-    if not kinds:
-        kinds = list(available)
-    missing = [k for k in kinds if k not in available]
-    if missing:
-        fail(f"{folder}: this sweep has no data for --kind {missing[0]}; kinds it has: "
-             f"{', '.join(available) or 'none'}")
+    kinds = _chosen_kinds(kinds, available, f"{folder}: this sweep")
     if "map" in kinds:
         name = map_variable(dataset, variable)
         numbers = [v for v in dataset.data_vars if dataset[v].dtype.kind == "f"]

@@ -19,6 +19,7 @@ from supercoil.cli._common import (
     checked_path,
     fail,
     parse_ratio,
+    parse_span,
     refused,
     warn,
 )
@@ -28,6 +29,7 @@ from supercoil.cli.model_options import (
     ShearOption,
     StretchOption,
     check_model,
+    kirchhoff_only,
     make_rod,
     model_record,
     no_contact,
@@ -60,18 +62,6 @@ TWEEZERS_OPTIONS = {"twist_ratio": "--twist-ratio",
 Quiet = quiet_option()
 Overwrite = overwrite_option("Write into an existing non-empty --out DIR, replacing this "
                              "command's own files (other files are left alone).")
-
-
-def parse_span(option: str, text: str, example: str) -> tuple[float, float]:
-    """``"START:STOP"`` -> ``(start, stop)``; a one-line error naming ``option`` unless two
-    numbers (their range is checked by the options the command builds)."""
-    words = text.split(":")
-    try:
-        if len(words) != 2:
-            raise ValueError
-        return float(words[0]), float(words[1])
-    except ValueError:
-        fail(f"{option} {text!r}: give START:STOP {example}")
 
 
 def tweezers(
@@ -188,12 +178,9 @@ def tweezers(
     """
     check_model(model, stretch_stiffness, shear_stiffness)
     no_contact(model, "tweezers", length_over_diameter is not None or dna)
-    if model == "cosserat":
-        for option, given in (("--end-distance", end_distance is not None),
-                              ("--protocol", protocol != "up"), ("--resume", resume)):
-            if given:
-                fail(f"{option} is not available with --model cosserat (load control, "
-                     "--protocol up); drop it, or use --model kirchhoff")
+    kirchhoff_only(model, (("--end-distance", end_distance is not None),
+                           ("--protocol", protocol != "up"), ("--resume", resume)),
+                   "load control, --protocol up")
     preset, span = None, None
     if dna:
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \
@@ -212,7 +199,7 @@ def tweezers(
         if turns is None:
             fail("--turns START:STOP is missing; give the end's rotation in turns, like "
                  "--turns 0:5")
-        start, stop = parse_span("--turns", turns, "in turns, like 0:5")
+        start, stop = parse_span("--turns", turns, "START:STOP in turns, like 0:5")
         nodes = 100 if nodes is None else nodes
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
@@ -313,13 +300,7 @@ def _force_range(text, tension, preset) -> tuple[float, float]:
     """``--force-range LOW:HIGH`` in F L^2/A (pN with --dna); default ``0:2F``."""
     if text is None:
         return 0.0, 2.0 * tension if tension > 0 else 1.0
-    words = text.split(":")
-    try:
-        if len(words) != 2:
-            raise ValueError
-        low, high = float(words[0]), float(words[1])
-    except ValueError:
-        fail(f"--force-range {text!r}: give LOW:HIGH, like 0:100")
+    low, high = parse_span("--force-range", text, "LOW:HIGH, like 0:100")
     if preset is not None:
         with refused(TWEEZERS_OPTIONS):
             low, high = preset.force_from_pN(low), preset.force_from_pN(high)
@@ -350,9 +331,9 @@ def _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp, fo
         fail(f"{'both' if turns else 'neither of'} --turns and --sigma given: with --dna give "
              "exactly one, the end's rotation in turns (--turns 0:10) or as superhelical "
              f"density (--sigma 0:0.06, sigma = turns * {HELICAL_REPEAT_BP:g} / bp)")
-    turns = None if turns is None else parse_span("--turns", turns, "in turns, like 0:5")
+    turns = None if turns is None else parse_span("--turns", turns, "START:STOP in turns, like 0:5")
     span = None if sigma is None else parse_span(
-        "--sigma", sigma, "as superhelical densities, like 0:0.06")
+        "--sigma", sigma, "START:STOP as superhelical densities, like 0:0.06")
     kwargs = {"base_pairs": bp, "salt_mM": salt_mM, "diameter_nm": diameter_nm}
     if temperature_K is not None:
         kwargs["temperature_K"] = temperature_K

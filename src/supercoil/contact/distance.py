@@ -143,6 +143,15 @@ __all__ = [
 
 
 
+def within_buffers(pairs) -> tuple[np.ndarray, ...]:
+    """``(pairs, kept, d, s, t)`` of a within-cutoff pass over candidate ``pairs``: the
+    pairs as ``(m, 2)`` int64 and the empty buffers of ``m`` rows it fills in order
+    (the kept pairs, their distances and parameters)."""
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    m = len(pairs)
+    return pairs, np.empty((m, 2), dtype=np.int64), np.empty(m), np.empty(m), np.empty(m)
+
+
 def segment_pairs_within(x: np.ndarray, segments: np.ndarray, pairs: np.ndarray,
                          cutoff: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(pairs, d, s, t)`` of the segment pairs ``pairs`` ``(m, 2)`` within ``cutoff``,
@@ -155,12 +164,8 @@ def segment_pairs_within(x: np.ndarray, segments: np.ndarray, pairs: np.ndarray,
     The arrays are views of buffers of ``m`` rows.
     Raises ValueError, as :func:`segment_distance`, when an end is not finite.
     """
-    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    pairs, kept, d, s, t = within_buffers(pairs)
     m = len(pairs)
-    kept = np.empty((m, 2), dtype=np.int64)
-    d = np.empty(m)
-    s = np.empty(m)
-    t = np.empty(m)
     count = pairs_within_kernel(np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3),
                                  np.ascontiguousarray(segments, dtype=np.int64), pairs,
                                  float(cutoff), kept, d, s, t) if m else 0

@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from supercoil._numba import njit
+from supercoil.contact.distance import within_buffers
 
 
 @njit()
@@ -263,12 +264,8 @@ def closest_samples_within(points: np.ndarray, centre: np.ndarray, radius: np.nd
     ``centre``, ``radius``: the bounding spheres of
     :func:`sample_state`. The arrays are
     views of buffers of ``m`` rows."""
-    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    pairs, kept, d, s, t = within_buffers(pairs)
     m = len(pairs)
-    kept = np.empty((m, 2), dtype=np.int64)
-    d = np.empty(m)
-    s = np.empty(m)
-    t = np.empty(m)
     count = _closest_samples_within_kernel(points, centre, radius, pairs, float(cutoff), kept,
                                            d, s, t) if m else 0
     return kept[:count], d[:count], s[:count], t[:count]

@@ -161,10 +161,7 @@ class Branch:
         span = ("no points" if not len(self) else
                 f"{self.parameter} from {self.parameter_values[0]:.6g} to "
                 f"{self.parameter_values[-1]:.6g}")
-        kinds: dict[str, int] = {}
-        for p in self.special_points:
-            kinds[p.kind] = kinds.get(p.kind, 0) + 1
-        special = ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())) or "none"
+        special = special_point_counts(self.special_points)
         return (f"Branch({self.name!r}: {len(self)} points, {span}, {self.status.name}\n"
                 f"  special points: {special}; records: {', '.join(self.records) or 'none'})")
 
@@ -197,3 +194,12 @@ class Branch:
                 "parameter": self.parameter, "status": self.status.name,
                 "message": self.message, "points": points,
                 "special_points": [p.summary() for p in self.special_points]}
+
+
+def special_point_counts(points) -> str:
+    """``"2 bifurcation, 1 fold"``: how many special ``points`` of each kind, kinds in
+    alphabetical order (``"none"`` for none), as the results' short reprs say it."""
+    kinds: dict[str, int] = {}
+    for p in points:
+        kinds[p.kind] = kinds.get(p.kind, 0) + 1
+    return ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())) or "none"

@@ -34,7 +34,7 @@ from supercoil.stability.analysis import (
     negative_count,
 )
 from supercoil.stability.bisection import locate_count_change
-from supercoil.stability.record import stability_record
+from supercoil.stability.record import solved_state_record
 
 DEFAULT_STIFFNESS = 1e4  # EA L^2 / A and GA L^2 / A when not given
 
@@ -94,15 +94,7 @@ class CosseratRingResult:
             "energy_circle_exact": kirchhoff_circle_energy(self.twist_ratio, self.excess_link),
             "max_stretch_strain": self.max_stretch_strain,
             "max_shear_strain": self.max_shear_strain,
-            **stability_record(self.unstable_count, self.zero_modes, self.negative_count,
-                               self.determinant_sign, self.lowest_eigenvalues,
-                               self.stability_certified),
-            "converged": self.converged,
-            "status": self.status,
-            "message": self.message,
-            "residual": self.residual,
-            "newton_iterations": self.iterations,
-            "n_nodes": self.n_nodes,
+            **solved_state_record(self),
             "michell_threshold_exact": michell_excess_link(self.twist_ratio, 2),
         }
 

@@ -22,6 +22,7 @@ import json
 import os
 import secrets
 import time
+from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Self
@@ -184,8 +185,8 @@ class ResultWriter:
         path = Path(path)
         if path.exists() and not overwrite:
             raise FileExistsError(f"{path}: exists; give another path or allow overwriting")
-        journal = cls._lock(path)
-        try:
+
+        def contents() -> Contents:
             now = _now()
             header = {"format": FORMAT, "schema_version": SCHEMA_VERSION,
                       "problem": str(problem), "units": str(units), "status": "running",
@@ -193,26 +194,32 @@ class ResultWriter:
                       "journal_generation": "",
                       "settings": to_jsonable(settings), "provenance":
                       to_jsonable(_provenance(provenance)), "conventions": dict(CONVENTIONS)}
-            contents = Contents(header=header, study=study_text,
-                                attributes={str(k): _plain(v)
-                                            for k, v in (attributes or {}).items()})
-            writer = cls(path, contents, journal)
-            writer._snapshot()
-        except BaseException:
-            journal.close()
-            raise
-        return writer
+            return Contents(header=header, study=study_text,
+                            attributes={str(k): _plain(v)
+                                        for k, v in (attributes or {}).items()})
+
+        return cls._open(path, contents)
 
     @classmethod
     def reopen(cls, path: str | Path) -> ResultWriter:
         """Open an existing result file (and what its journal holds) to continue it
         (``--resume``); its status becomes ``running``."""
         path = Path(path)
+
+        def contents() -> Contents:
+            stored = read_contents(path)
+            stored.header["status"] = "running"
+            return stored
+
+        return cls._open(path, contents)
+
+    @classmethod
+    def _open(cls, path: Path, contents: Callable[[], Contents]) -> ResultWriter:
+        """The writer of ``path`` under its journal's lock, with ``contents()``, its first
+        snapshot written; the lock is released if any of that fails."""
         journal = cls._lock(path)
         try:
-            contents = read_contents(path)
-            contents.header["status"] = "running"
-            writer = cls(path, contents, journal)
+            writer = cls(path, contents(), journal)
             writer._snapshot()
         except BaseException:
             journal.close()

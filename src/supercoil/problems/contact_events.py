@@ -194,6 +194,20 @@ def truncate_after(branch: Branch, point: SpecialPoint, message: str) -> Branch:
                                status=ContinuationStatus.STOPPED, message=message, **arrays)
 
 
+def first_onset(branch: Branch) -> SpecialPoint | None:
+    """The first ``contact_onset`` of a contact-free ``branch`` with a point computed
+    beyond it (where the branch is cut and the contact branch starts), or None."""
+    onsets = [p for p in branch.points_of_kind("contact_onset") if p.index + 1 < len(branch)]
+    return onsets[0] if onsets else None
+
+
+def cut_at_onset(branch: Branch, onset: SpecialPoint, where: str) -> Branch:
+    """:func:`truncate_after` the first contact ``onset``, ``where`` (e.g. ``"dLk = 1.2"``)
+    in the message beside how the contact-free run went on."""
+    return truncate_after(branch, onset, f"stopped at the first contact ({where}); the "
+                          f"contact-free run: {branch.message}")
+
+
 def contact_start(free: Branch, onset: SpecialPoint, cp: ContactProblem) -> int:
     """The index of the point of the contact-free branch ``free`` a contact branch starts
     from: the last one up to ``onset`` that the contact terms do not yet act on.

@@ -41,13 +41,18 @@ from supercoil.cosserat.circle import circle_state
 from supercoil.cosserat.closed import ClosedCosseratEnergy
 from supercoil.cosserat.ring import michell_excess_link, relax_circle, ring_problem
 from supercoil.cosserat.rod import DOFS_PER_NODE
-from supercoil.problems.contact_events import stop_after_onset, truncate_after
-from supercoil.problems.ring_branches import mode_bifurcation
+from supercoil.problems.circle_switch import (
+    SWITCH_AMPLITUDES,
+    SWITCH_TRIAL_POINTS,
+    leaves_circle,
+    mode_points,
+    switch_attempts,
+    switch_notes,
+)
+from supercoil.problems.contact_events import cut_at_onset, first_onset, stop_after_onset
 from supercoil.problems.ring_diagram.options import DiagramOptions
 from supercoil.problems.ring_diagram.result import RingDiagram
 
-SWITCH_AMPLITUDES = (2e-3, 5e-3, 1.5e-2)  # first point of a primary branch (arclength)
-SWITCH_TRIAL_POINTS = 4
 CIRCLE_MAX_STEP = 0.4  # largest step along the circle (dLk)
 # corrector tolerance: the ring's residual stagnates near 1.5e-10 in the trial
 # corrections that locate the circle's bifurcation (C/A = 0.8, N = 24, EA = GA = 1e3),
@@ -149,13 +154,6 @@ def cosserat_circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: fl
     return branch, problem
 
 
-def leaves_circle(branch: Branch) -> bool:
-    """Whether the first :data:`SWITCH_TRIAL_POINTS` points of a switched branch show its
-    writhe growing (else it fell back onto the circle)."""
-    wr = np.abs(branch.records.get("writhe", np.zeros(0)))[:SWITCH_TRIAL_POINTS]
-    return bool(wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0])
-
-
 def _switch_attempt(problem: ClosedCosseratEnergy, circle: Branch, start: SpecialPoint,
                     options: ContinuationOptions, side_amplitude: tuple[int, float], name: str,
                     records, curve: ContactCurve, judge: bool) -> Branch:
@@ -188,7 +186,7 @@ def switch_off_circle(problem: ClosedCosseratEnergy, circle: Branch, point: Spec
     first: a state stored along the circle describes it exactly only in the chart it
     was accepted in (:mod:`supercoil.cosserat.problem`)."""
     records = cosserat_ring_records(problem, curve)
-    attempts = [(a, side) for a in SWITCH_AMPLITUDES for side in (1, -1)]
+    attempts = switch_attempts()
     for number, (amplitude, side) in enumerate(attempts):
         last = number == len(attempts) - 1
         start = dataclasses.replace(
@@ -198,12 +196,7 @@ def switch_off_circle(problem: ClosedCosseratEnergy, circle: Branch, point: Spec
                                  records, curve, judge=not last)
         leaves = leaves_circle(branch)
         if leaves or last:
-            if number:
-                notes.append(f"{name}: switched with amplitude {amplitude:g}, side {side:+d} "
-                             f"({number} earlier attempt(s) fell back onto the circle)")
-            if not leaves:
-                notes.append(f"failed: {name}: every switching attempt fell back onto the "
-                             "circle")
+            switch_notes(notes, name, number, amplitude, side, leaves)
             return branch
     raise AssertionError("unreachable")
 
@@ -251,25 +244,19 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
         max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
         event_tolerance=opts.event_tolerance, tolerance=TOLERANCE, predictor=PREDICTOR,
         factor_refinement=True, chord_steps=True, fast_iterations=FAST_ITERATIONS)
-    for mode in opts.modes:
-        name, point = mode_bifurcation(circle, mode, notes)
-        if point is None:
-            continue
-        say(f"{name}: switched from the circle at dLk = {point.parameter:.4g}, no contact")
+    for name, point in mode_points(circle, opts.modes, notes, say):
         start = time.perf_counter()
         free = switch_off_circle(problem, circle, point, constants, free_opts, name, curve,
                                  notes)
-        onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
-        if onsets and not onsets[0].located:
-            before = free.parameter_values[onsets[0].index]
+        onset = first_onset(free)
+        if onset is not None and not onset.located:
+            before = free.parameter_values[onset.index]
             notes.append(f"{name}: the contact onset lies between dLk = {before:.6g} and "
-                         f"{onsets[0].parameter:.6g}, where its location failed (a trial "
+                         f"{onset.parameter:.6g}, where its location failed (a trial "
                          "correction across the step did not converge); it is reported "
                          "at the step's end")
-        if onsets:
-            free = truncate_after(free, onsets[0], f"stopped at the first contact (dLk = "
-                                  f"{onsets[0].parameter:.6g}); the contact-free run: "
-                                  f"{free.message}")
+        if onset is not None:
+            free = cut_at_onset(free, onset, f"dLk = {onset.parameter:.6g}")
         else:
             notes.append(f"{name}: no contact found without contact ({free.message})")
         seconds[name] = time.perf_counter() - start

@@ -29,7 +29,7 @@ from supercoil.stability.analysis import (
     negative_count,
 )
 from supercoil.stability.bisection import locate_count_change
-from supercoil.stability.record import stability_record
+from supercoil.stability.record import solved_state_record
 from supercoil.topology import twist_from_frames, writhe
 from supercoil.topology.knots import identify
 
@@ -99,15 +99,7 @@ class RingResult:
             "chirality": self.chirality,
             "energy": self.energy,
             "energy_circle_exact": circle_energy(self.twist_ratio, self.excess_link),
-            **stability_record(self.unstable_count, self.zero_modes, self.negative_count,
-                               self.determinant_sign, self.lowest_eigenvalues,
-                               self.stability_certified),
-            "converged": self.converged,
-            "status": self.status,
-            "message": self.message,
-            "residual": self.residual,
-            "newton_iterations": self.iterations,
-            "n_nodes": self.n_nodes,
+            **solved_state_record(self),
             "michell_threshold_exact": michell_excess_link(self.twist_ratio, 2),
         }
         if self.contact_treatment is not None:

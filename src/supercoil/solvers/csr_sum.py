@@ -96,25 +96,55 @@ _EMPTY_ROWS = sp.csr_matrix((1, 1))  # the indices and data of no entries
 
 
 @njit()
-def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data, n,
-                       index_like, indptr_like):
-    """Arrays of ``(A + block sum) + C`` (see :func:`csr_add_blocks`) with the dtypes of
-    ``index_like`` and ``indptr_like``; ``C`` of no entries adds nothing."""
+def _block_rows(dofs, n):
+    """The blocks' rows touching each DOF (the CSR of the incidence), in block order:
+    ``(start, which)``, DOF ``r``'s rows ``which[start[r]:start[r + 1]]`` as ``k * w + i``
+    (row ``i`` of block ``k``, ``w`` rows a block)."""
     p, w = dofs.shape
-    # the blocks' rows touching each DOF, in block order (as _block_csr_kernel)
     start = np.zeros(n + 1, dtype=np.int64)
     for k in range(p):
         for i in range(w):
             start[dofs[k, i] + 1] += 1
     for r in range(n):
         start[r + 1] += start[r]
-    which = np.empty(start[n], dtype=np.int64)  # k * w + i
+    which = np.empty(start[n], dtype=np.int64)
     fill = start[:n].copy()
     for k in range(p):
         for i in range(w):
             r = dofs[k, i]
             which[fill[r]] = k * w + i
             fill[r] += 1
+    return start, which
+
+
+@njit(inline="always")
+def _sum_block_row(r, start, which, dofs, blocks, slot, values, cols, count):
+    """Row ``r`` of the block sum (rows from :func:`_block_rows`): each column met for the
+    first time is marked in ``slot`` and appended to ``cols`` at ``count``, its value
+    summed into ``values[column]`` in the blocks' order; returns the new ``count``."""
+    w = dofs.shape[1]
+    for e in range(start[r], start[r + 1]):
+        k = which[e] // w
+        i = which[e] - k * w
+        for j in range(w):  # duplicates summed in the blocks' order
+            col = dofs[k, j]
+            if slot[col] < 0:
+                slot[col] = count
+                cols[count] = col
+                values[col] = blocks[k, i, j]
+                count += 1
+            else:
+                values[col] += blocks[k, i, j]
+    return count
+
+
+@njit()
+def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data, n,
+                       index_like, indptr_like):
+    """Arrays of ``(A + block sum) + C`` (see :func:`csr_add_blocks`) with the dtypes of
+    ``index_like`` and ``indptr_like``; ``C`` of no entries adds nothing."""
+    p, w = dofs.shape
+    start, which = _block_rows(dofs, n)
     upper = a_ptr[n] - a_ptr[0] + p * w * w + c_ptr[n] - c_ptr[0]
     indptr = np.zeros(n + 1, dtype=indptr_like.dtype)
     indices = np.empty(upper, dtype=index_like.dtype)
@@ -127,19 +157,7 @@ def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data,
     m_vals = np.empty(n)
     nnz = 0
     for r in range(n):
-        nb = 0
-        for e in range(start[r], start[r + 1]):
-            k = which[e] // w
-            i = which[e] - k * w
-            for j in range(w):  # duplicates summed in the blocks' order
-                col = dofs[k, j]
-                if slot[col] < 0:
-                    slot[col] = nb
-                    b_cols[nb] = col
-                    values[col] = blocks[k, i, j]
-                    nb += 1
-                else:
-                    values[col] += blocks[k, i, j]
+        nb = _sum_block_row(r, start, which, dofs, blocks, slot, values, b_cols, 0)
         for t in range(1, nb):  # insertion sort: the blocks' columns come in sorted runs
             col = b_cols[t]
             u = t - 1
@@ -242,21 +260,8 @@ def block_csr(dofs: np.ndarray, blocks: np.ndarray, n: int) -> sp.csr_matrix:
 
 @njit()
 def _block_csr_kernel(dofs, blocks, n):
-    p, w = dofs.shape
-    # the blocks' rows touching each DOF (CSR of the incidence), in block order
-    start = np.zeros(n + 1, dtype=np.int64)
-    for k in range(p):
-        for i in range(w):
-            start[dofs[k, i] + 1] += 1
-    for r in range(n):
-        start[r + 1] += start[r]
-    which = np.empty(start[n], dtype=np.int64)  # k * w + i
-    fill = start[:n].copy()
-    for k in range(p):
-        for i in range(w):
-            r = dofs[k, i]
-            which[fill[r]] = k * w + i
-            fill[r] += 1
+    w = dofs.shape[1]
+    start, which = _block_rows(dofs, n)
     slot = np.full(n, -1, dtype=np.int64)  # column -> position in the row being built
     indptr = np.zeros(n + 1, dtype=np.int64)
     indices = np.empty(start[n] * w, dtype=np.int64)
@@ -265,18 +270,7 @@ def _block_csr_kernel(dofs, blocks, n):
     nnz = 0
     for r in range(n):
         first = nnz
-        for e in range(start[r], start[r + 1]):
-            k = which[e] // w
-            i = which[e] - k * w
-            for j in range(w):  # duplicates summed in the blocks' order
-                c = dofs[k, j]
-                if slot[c] < 0:
-                    slot[c] = nnz
-                    indices[nnz] = c
-                    values[c] = blocks[k, i, j]
-                    nnz += 1
-                else:
-                    values[c] += blocks[k, i, j]
+        nnz = _sum_block_row(r, start, which, dofs, blocks, slot, values, indices, nnz)
         for t in range(first, nnz):
             c = indices[t]
             data[t] = values[c]

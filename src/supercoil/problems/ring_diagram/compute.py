@@ -8,13 +8,13 @@ import math
 import time
 from collections.abc import Callable, Mapping
 
-import numpy as np
-
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch
-from supercoil.problems.contact_events import contact_start, truncate_after
+from supercoil.problems.branch_options import coarse_mesh_note
+from supercoil.problems.circle_switch import mode_points
+from supercoil.problems.contact_events import contact_start, cut_at_onset, first_onset
 from supercoil.problems.ring import michell_excess_link
-from supercoil.problems.ring_branches import circle_branch, mode_bifurcation, ring_records
+from supercoil.problems.ring_branches import circle_branch, ring_records
 from supercoil.problems.ring_diagram.contact_branches import (
     Pins,
     contact_branch,
@@ -73,27 +73,19 @@ def ring_diagram(options: DiagramOptions,
     branches: list[Branch] = [circle]
     contact_names: set[str] = set()
     pins: dict[str, Pins] = {}
-    for mode in opts.modes:
-        name, point = mode_bifurcation(circle, mode, notes)
-        if point is None:
-            continue
-        say(f"{name}: switched from the circle at dLk = {point.parameter:.4g}, no contact")
+    for name, point in mode_points(circle, opts.modes, notes, say):
         start = time.perf_counter()
         free, complete = contact_free_branch(problem, circle, point, name, opts, circle_top,
                                              probe, stored, notes, on_point)
-        onsets = [p for p in free.points_of_kind("contact_onset")
-                  if p.index + 1 < len(free)]
+        onset = first_onset(free)
         seconds[name] = time.perf_counter() - start
-        if not onsets:
+        if onset is None:
             notes.append(f"{name}: no contact found without contact ({free.message})")
             final(free, False)
             branches.append(free)
             continue
-        onset = onsets[0]
         if not complete:
-            free = truncate_after(free, onset, f"stopped at the first contact (dLk = "
-                                  f"{onset.parameter:.6g}); the contact-free run: "
-                                  f"{free.message}")
+            free = cut_at_onset(free, onset, f"dLk = {onset.parameter:.6g}")
         final(free, False)
         branches.append(free)
         contact_name = f"{name}_contact"
@@ -130,11 +122,8 @@ def ring_diagram(options: DiagramOptions,
 
 def _mesh_notes(opts: DiagramOptions, rod, D: float) -> list[str]:
     """Notes on a mesh too coarse for the tube, or without the primary branches' D_m."""
-    notes = []
-    if rod.edge_length > D:
-        notes.append(f"segments ({rod.edge_length:.3g} L) are longer than the tube "
-                     f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "
-                     f"{int(np.ceil(rod.length / D))}")
+    note = coarse_mesh_note(rod, D)
+    notes = [] if note is None else [note]
     asymmetric = [m for m in opts.modes if opts.n_nodes % m]
     if asymmetric:
         notes.append(f"N = {opts.n_nodes} is not a multiple of "

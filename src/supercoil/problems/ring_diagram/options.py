@@ -102,10 +102,7 @@ class DiagramOptions:
                                 f", got {self.contact!r} (the exact and augmented treatments "
                                 "need their active-set or multiplier loops, which the "
                                 "continuation does not run)")
-        check_steps(self)
-        for name in ("free_max_points", "contact_max_points", "secondary_max_points"):
-            checks.integer(name, getattr(self, name), 2, checks.MAX_POINTS,
-                           meaning="points of a branch")
+        check_steps(self, points=("free_max_points", "contact_max_points", "secondary_max_points"))
         checks.integer("secondary_max_branches", self.secondary_max_branches, 0,
                        MAX_SECONDARY_BRANCHES, meaning="secondary and tertiary half-branches")
         checks.choice("contact_predictor", self.contact_predictor, PREDICTORS)

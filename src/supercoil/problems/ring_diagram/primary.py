@@ -24,14 +24,17 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, switch_branch
 from supercoil.continuation.resume import resume_branch
 from supercoil.geometry.symmetry import axis_invariant_combination
+from supercoil.problems.circle_switch import (
+    SWITCH_AMPLITUDE,
+    SWITCH_TRIAL_POINTS,
+    leaves_circle,
+    switch_attempts,
+    switch_notes,
+)
 from supercoil.problems.contact_events import onset_event, stop_after_onset
 from supercoil.problems.ring_branches import ring_records
 from supercoil.problems.ring_diagram.options import DiagramOptions
 from supercoil.problems.ring_diagram.records import contact_records
-
-SWITCH_AMPLITUDE = 2e-3  # first point of a primary branch from its bifurcation (arclength)
-SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1.5e-2)  # tried in turn, see switch_off_circle
-SWITCH_TRIAL_POINTS = 4
 
 
 def contact_free_branch(problem, circle: Branch, point: SpecialPoint, name: str,
@@ -85,22 +88,16 @@ def switch_off_circle(problem, circle: Branch, point: SpecialPoint,
     """
     records = contact_records(probe, ring_records(problem), free=True)
     direction = on_mesh_direction(problem, point)
-    attempts = [(a, side) for a in SWITCH_AMPLITUDES for side in (1, -1)]
+    attempts = switch_attempts()
     for number, (amplitude, side) in enumerate(attempts):
         trial_opts = dataclasses.replace(options, max_points=SWITCH_TRIAL_POINTS,
                                          initial_step=amplitude)
         trial = switch_branch(problem, circle, point, trial_opts, side=side,
                               amplitude=amplitude, name=name, records=records,
                               direction=direction)
-        wr = np.abs(trial.records.get("writhe", np.zeros(0)))
-        leaves = wr.size >= 2 and wr[-1] > 1e-4 and wr[-1] > 2 * wr[0]
+        leaves = leaves_circle(trial)
         if leaves or number == len(attempts) - 1:
-            if number:
-                notes.append(f"{name}: switched with amplitude {amplitude:g}, side {side:+d} "
-                             f"({number} earlier attempt(s) fell back onto the circle)")
-            if not leaves:
-                notes.append(f"failed: {name}: every switching attempt fell back onto the "
-                             "circle")
+            switch_notes(notes, name, number, amplitude, side, leaves)
             opts = dataclasses.replace(options, initial_step=amplitude)
             watched, stop = stop_after_onset(on_point)
             return switch_branch(problem, circle, point, opts, side=side, amplitude=amplitude,

@@ -18,9 +18,10 @@ import numpy as np
 
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import PLACE_KEYS, contact_summary
-from supercoil.continuation import Branch, SpecialPoint
+from supercoil.continuation import Branch
 from supercoil.continuation.branch import jsonable
 from supercoil.geometry.symmetry import curve_symmetry
+from supercoil.problems.branch_set import BranchSet
 from supercoil.problems.model_keys import KIRCHHOFF, model_keys
 from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_diagram.options import DiagramOptions
@@ -28,7 +29,7 @@ from supercoil.problems.ring_diagram.secondary import SYMMETRY_TOLERANCE
 
 
 @dataclass(frozen=True)
-class RingDiagram:
+class RingDiagram(BranchSet):
     """The computed diagram: branches (circle, primary, contact), their problems' settings."""
 
     options: DiagramOptions
@@ -80,15 +81,6 @@ class RingDiagram:
         ``failed:``)."""
         return (all(self.branch_ok(b) for b in self.branches)
                 and not any(n.startswith("failed:") for n in self.notes))
-
-    def branch(self, name: str) -> Branch:
-        for b in self.branches:
-            if b.name == name:
-                return b
-        raise KeyError(name)
-
-    def special_points(self) -> list[SpecialPoint]:
-        return [p for b in self.branches for p in b.special_points]
 
     def points(self) -> list[dict]:
         """One record per branch point (module doc), contact lists included."""

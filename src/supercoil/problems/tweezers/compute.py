@@ -12,7 +12,13 @@ import numpy as np
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, ContinuationOptions
-from supercoil.problems.contact_events import onset_event, stop_after_onset, truncate_after
+from supercoil.problems.branch_options import coarse_mesh_note
+from supercoil.problems.contact_events import (
+    cut_at_onset,
+    first_onset,
+    onset_event,
+    stop_after_onset,
+)
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.segments import either, follow
 from supercoil.problems.tweezers.buckled import (
@@ -70,10 +76,9 @@ def tweezers_branches(options: TweezersOptions,
                        if D is not None else None)
     probe = ContactProblem(rod, contact_options) if D is not None else None
     cp = ContactProblem(rod, contact_options) if D is not None else None
-    if D is not None and rod.rod.edge_length > D:
-        notes.append(f"segments ({rod.rod.edge_length:.3g} L) are longer than the tube "
-                     f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "
-                     f"{int(np.ceil(rod.rod.length / D)) + 2}")
+    note = coarse_mesh_note(rod.rod, D, extra_nodes=2) if D is not None else None
+    if note is not None:
+        notes.append(note)
     straight_records = tweezers_records(rod, rod, False, probe)
     free_records = RunRecords(straight_records)
     events = (onset_event(probe),) if probe is not None else ()
@@ -164,10 +169,10 @@ def tweezers_branches(options: TweezersOptions,
                      f"(docs/continuation.md); the force it holds, max |KKT residual| "
                      f"without it, is at most {float(sliding[k]):.2e} (at "
                      f"{float(free.parameter_values[k]):.4g} turns)")
-    onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
+    onset = first_onset(free)
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
-    if probe is None or not onsets:
+    if probe is None or onset is None:
         if not free.status.complete:
             notes.append(f"incomplete: {free_name} stopped at "
                          f"{free.parameter_values[-1]:.6g} turns: {free.message}")
@@ -182,11 +187,8 @@ def tweezers_branches(options: TweezersOptions,
         branches.append(free)
         return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
                               tuple(notes), pins)
-    onset = onsets[0]
     if not free_complete:
-        free = truncate_after(free, onset, f"stopped at the first contact "
-                              f"({onset.parameter:.6g} turns); the contact-free run: "
-                              f"{free.message}")
+        free = cut_at_onset(free, onset, f"{onset.parameter:.6g} turns")
     final(free, False)
     branches.append(free)
     contact_name = f"{free_name}_contact"

@@ -92,10 +92,7 @@ class TweezersOptions:
         set_(self, "n_nodes", checks.integer("n_nodes", self.n_nodes, checks.MIN_CLAMPED_NODES,
                                              checks.MAX_NODES,
                                              meaning="nodes of the clamped rod"))
-        check_steps(self)
-        for name in ("max_points", "segment_points"):
-            checks.integer(name, getattr(self, name), 2, checks.MAX_POINTS,
-                           meaning="points of a branch")
+        check_steps(self, points=("max_points", "segment_points"))
         checks.choice("contact_predictor", self.contact_predictor, PREDICTORS)
         validate_contact_choice(self.contact_curve, self.contact_formulation)
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation import Branch, SpecialPoint
+from supercoil.continuation import Branch
+from supercoil.problems.branch_set import BranchSet
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.tweezers.contact import SLIDING_TAIL_CONTACT
 from supercoil.problems.tweezers.options import TweezersOptions
@@ -14,7 +15,7 @@ from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
 
 
 @dataclass(frozen=True)
-class TweezersResult:
+class TweezersResult(BranchSet):
     """Computed branches (in order), the problems to re-evaluate their states, notes."""
 
     options: TweezersOptions
@@ -60,15 +61,6 @@ class TweezersResult:
     def ok(self) -> bool:
         return (all(self.branch_ok(b) for b in self.branches)
                 and not any(n.startswith(("failed:", "incomplete:")) for n in self.notes))
-
-    def branch(self, name: str) -> Branch:
-        for b in self.branches:
-            if b.name == name:
-                return b
-        raise KeyError(name)
-
-    def special_points(self) -> list[SpecialPoint]:
-        return [p for b in self.branches for p in b.special_points]
 
     @property
     def greenhill_turns(self) -> float | None:

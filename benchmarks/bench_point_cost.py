@@ -4,6 +4,7 @@ Run from the repository root (``OPENBLAS_NUM_THREADS=1``):
 
     python benchmarks/bench_point_cost.py [tweezers] [ring] [--quick] [--nodes N] [--json FILE]
                                           [--contact-tolerance TOL] [--without-point-eigenpairs]
+                                          [--newton]
     python benchmarks/bench_point_cost.py --per-call 100 200 400
 
 The first form computes, in one warm process, the branches of
@@ -25,8 +26,9 @@ most often), their ratio, the bordered factorisations per point, and a profile
 by phase: predictor (and the rest of the step), corrector, tangent, step bound
 (continuous collision detection), stability (inertia count and eigenpairs of
 the accepted points), events (the user events' values at the points, the search
-and localisation of special points, with their trial corrections and
-counts), records, contact detection (broad and narrow phase, wherever it is
+of special points; their localisation, with its trial corrections and counts,
+by kind: user events, folds, count changes; and the special points' own
+stability), records, contact detection (broad and narrow phase, wherever it is
 called) and what is left. A phase's time is exclusive: a call of another phase
 inside it (contact detection inside the corrector, records at a special point)
 counts there. ``--quick`` runs the same branches at a CI size (N = 60 to 3
@@ -42,6 +44,10 @@ branches' corrector tolerance (the commands' is 1e-8);
 inertia count alone (``nearest_eigenvalue`` NaN, ``zero_modes`` 0: not a valid
 result), an upper bound of what computing eigenpairs only where the count
 changes would save. Alternate runs with and without, and read the ratios.
+``--newton`` also prints the continuation steps' Newton iterations (accepted
+and failed steps), the predictor's residual, the contraction ``e_(k+1) / e_k^2``
+of their residuals ``e_k = max |F|``, and the hits and misses of the bordered
+factors' pattern memo (its wrappers cost time: read the ratios without it).
 
 The second form times single calls at a contact state of the tweezers problem
 for each N: a residual and a Hessian at a new state, one corrector iteration
@@ -64,8 +70,9 @@ import numpy as np
 
 PROBLEM = {"twist_ratio": 1.3333, "length_over_diameter": 33, "tension": 75, "turns": (0, 5)}
 
-PHASES = ("predictor and step", "corrector", "tangent", "step bound", "stability", "events", "records",
-          "contact detection", "other")
+PHASES = ("predictor and step", "corrector", "tangent", "step bound", "stability", "events",
+          "events: user events", "events: folds", "events: count changes",
+          "events: special points", "records", "contact detection", "other")
 
 
 def tweezers(quick: bool, n_nodes: int | None = None, **extra):
@@ -196,6 +203,10 @@ def instrument() -> PhaseClock:
     clock.wrap(tracer, "user_values", "events")
     clock.wrap(tracer.Tracer, "_search_events", "events")
     clock.wrap(special_points, "locate_events", "events")
+    clock.wrap(special_points, "locate_user_event", "events: user events")
+    clock.wrap(special_points, "locate_fold", "events: folds")
+    clock.wrap(special_points, "locate_count_change", "events: count changes")
+    clock.wrap(tracer, "special_point", "events: special points")
     clock.wrap(tracer.Tracer, "_records", "records")
     clock.wrap(curve.ContactCurve, "pair_state", "contact detection")
     clock.wrap(contact.ContactProblem, "min_distance", "contact detection")
@@ -231,6 +242,75 @@ def without_point_eigenpairs() -> None:
     tracer.point_stability = count_only
 
 
+class NewtonLog:
+    """The continuation steps' corrections (``--newton``): for each, whether it converged,
+    its iterations and the residuals ``max |F|`` of its iterates (the last trial of each
+    damped step); and the bordered factors' pattern memo: hits, misses, and factors
+    outside it (a dense phase row's pins)."""
+
+    def __init__(self):
+        from supercoil.continuation import bordered, corrector, step, system
+
+        self.corrections: list[tuple[bool, int, list[float]]] = []
+        self.memo = collections.Counter()
+        residuals: list | None = None
+        log = self
+
+        residual = system.ExtendedSystem.residual
+        factor = corrector.bordered_factor
+        correct = step.correct
+        pattern = bordered.BorderedFactor._pattern
+
+        def logged_residual(self_, x):
+            F = residual(self_, x)
+            if residuals is not None:
+                residuals.append(float(np.max(np.abs(F))) if F.size else 0.0)
+            return F
+
+        def logged_factor(*args, **kwargs):
+            if residuals is not None:
+                residuals.append(None)  # a Newton step: the residual before it is an iterate's
+            return factor(*args, **kwargs)
+
+        def logged_correct(*args, **kwargs):
+            nonlocal residuals
+            residuals = []
+            try:
+                result = correct(*args, **kwargs)
+            finally:
+                trace, residuals = residuals, None
+            iterates = [trace[i - 1] for i, r in enumerate(trace) if r is None and i]
+            log.corrections.append((result.ok, result.iterations, iterates + trace[-1:]))
+            return result
+
+        def logged_pattern(*args):
+            known = {id(entry[0]) for entry in bordered._PATTERNS.values()}
+            found = pattern(*args)
+            remembered = found[0].words is not None
+            self.memo["hit" if id(found[0]) in known else
+                      "miss" if remembered else "outside the memo"] += 1
+            return found
+
+        system.ExtendedSystem.residual = logged_residual
+        corrector.bordered_factor = logged_factor
+        step.correct = logged_correct
+        bordered.BorderedFactor._pattern = staticmethod(logged_pattern)
+
+    def summary(self) -> dict:
+        accepted = [c for c in self.corrections if c[0]]
+        first = [c[2][0] for c in accepted if len(c[2]) >= 3]
+        contraction = [b / a**2 for c in accepted if len(c[2]) >= 3
+                       for a, b in zip(c[2], c[2][1:]) if a > 1e-6]
+        quantiles = (lambda v: [float(q) for q in np.quantile(v, [0.1, 0.5, 0.9])]
+                     if v else [])
+        return {"accepted": len(accepted),
+                "accepted_iterations": sum(c[1] for c in accepted),
+                "failed": len(self.corrections) - len(accepted),
+                "failed_iterations": sum(c[1] for c in self.corrections if not c[0]),
+                "predictor_residual": quantiles(first),
+                "contraction": quantiles(contraction), "memo": dict(self.memo)}
+
+
 def band_lu_seconds(layout, flat: np.ndarray, repeat: int = 200) -> float:
     """Median CPU seconds of one ``dgbtrf`` of the captured storage (a fresh copy each)."""
     from scipy.linalg import lapack
@@ -253,10 +333,12 @@ def special_summary(result) -> list:
              int(p.count_after)] for p in result.special_points()]
 
 
-def measure(workload: str, quick: bool, n_nodes: int | None = None, **extra) -> dict:
+def measure(workload: str, quick: bool, n_nodes: int | None = None, newton: bool = False,
+            **extra) -> dict:
     run = WORKLOADS[workload]
     run(True, **extra)  # warm-up at the small size: kernels compiled or loaded, modules imported
     clock = instrument()
+    newton_log = NewtonLog() if newton else None
     start = time.process_time()
     result = run(quick, n_nodes, **extra)
     total = time.process_time() - start
@@ -273,7 +355,8 @@ def measure(workload: str, quick: bool, n_nodes: int | None = None, **extra) -> 
             "factorisations": sum(clock.bands.values()), "ratio": total / points / lu,
             "phases": spent, "phase_calls": dict(clock.calls), "counts": dict(clock.counts),
             "lapack": dict(clock.lapack), "lapack_calls": dict(clock.lapack_calls),
-            "special_points": special_summary(result)}
+            "special_points": special_summary(result),
+            "newton": None if newton_log is None else newton_log.summary()}
 
 
 def report(m: dict) -> None:
@@ -302,6 +385,16 @@ def report(m: dict) -> None:
         for name in sorted(m["lapack"])) + f" a point, {1e3 * in_lapack / m['points']:.2f} ms a "
         f"point ({in_lapack / m['points'] / m['band_lu']:.1f} band LUs, "
         f"{100 * in_lapack / m['cpu_seconds']:.0f} % of the run)")
+    if m.get("newton"):
+        n = m["newton"]
+        print(f"continuation steps: {n['accepted']} accepted, {n['accepted_iterations']} "
+              f"Newton iterations ({n['accepted_iterations'] / max(n['accepted'], 1):.1f} a "
+              f"step); {n['failed']} failed, {n['failed_iterations']} iterations")
+        print("accepted steps of 3 or more iterations, 10th / 50th / 90th percentiles: "
+              "predictor's residual " + " / ".join(f"{v:.2g}" for v in n["predictor_residual"])
+              + "; e_(k+1) / e_k^2 " + " / ".join(f"{v:.2g}" for v in n["contraction"]))
+        print("bordered factors' pattern memo: " + ", ".join(
+            f"{k} {v}" for k, v in sorted(n["memo"].items())))
     kinds = collections.Counter(p[0] for p in m["special_points"])
     print("special points: " + ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
 
@@ -356,6 +449,9 @@ def main(argv=None) -> int:
     parser.add_argument("--contact-tolerance", type=float, metavar="TOL",
                         help="the contact branches' corrector tolerance (default the "
                              "commands', 1e-8)")
+    parser.add_argument("--newton", action="store_true",
+                        help="also the continuation steps' Newton iterations, contraction "
+                             "and the bordered factors' pattern memo")
     parser.add_argument("--without-point-eigenpairs", action="store_true",
                         help="the accepted points' inertia count without their eigenpairs "
                              "(not a valid result: what the eigenpairs cost)")
@@ -374,7 +470,7 @@ def main(argv=None) -> int:
         without_point_eigenpairs()
     measured = []
     for workload in args.workloads or list(WORKLOADS):
-        measured.append(measure(workload, args.quick, args.nodes, **extra))
+        measured.append(measure(workload, args.quick, args.nodes, args.newton, **extra))
         report(measured[-1])
     if args.json:
         with open(args.json, "w") as f:

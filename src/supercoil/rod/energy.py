@@ -86,6 +86,15 @@ class RodEnergy(abc.ABC):
         self._constrained = np.asarray(edges_index, dtype=np.int64)
         self.n_constraints = len(self._constrained)
 
+    def centreline(self, q: np.ndarray) -> np.ndarray:
+        """The centreline ``(3 n,)`` of ``q``: ``q`` itself (the unknowns are the nodes)."""
+        return np.asarray(q, dtype=float)
+
+    @property
+    def centreline_dofs(self) -> np.ndarray:
+        """The entries of ``q`` that :meth:`centreline` selects: all of them."""
+        return np.arange(self.n_dofs)
+
     def _edge_vectors(self, q: np.ndarray) -> np.ndarray:
         x = q.reshape(-1, 3)
         return x[self.edge_nodes[:, 1]] - x[self.edge_nodes[:, 0]]

@@ -106,11 +106,12 @@ def _refuse_resume(resume, verb: str) -> None:
 def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
     """The driver of the Cosserat ring's diagram (:mod:`supercoil.problems.cosserat_ring`)
     for :func:`supercoil.ring_diagram`: the circle, its bifurcations and the primary
-    branches up to their first self-contact, that of the rod's own section (diameter
-    L / ``rod.slenderness``). Its branches are stored when they end."""
+    branches up to their first self-contact, then with ``contact`` (the tube of
+    ``settings``) on with self-contact; without it the diagram ends at the first
+    contacts of the rod's own section (diameter L / ``rod.slenderness``). Its
+    branches are stored when they end."""
     from supercoil.problems.cosserat_ring import cosserat_ring_diagram
 
-    refuse_contact(contact, "ring_diagram (supercoil diagram ring)")
     _refuse_resume(resume, "ring diagram")
     if settings.branch_depth != 1:
         raise InputError("branch_depth: the Cosserat ring diagram computes the primary "
@@ -118,7 +119,7 @@ def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
 
     def compute(settings, progress, *, on_point=None, on_branch=None, resume=None):
         return cosserat_ring_diagram(settings, rod.stretch_stiffness, rod.shear_stiffness,
-                                     progress)
+                                     progress, contact=contact is not None)
 
     return compute
 

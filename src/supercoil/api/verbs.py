@@ -283,19 +283,21 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     compute = ring_diagram
 
     if isinstance(rod, CosseratRod):
+        _check_contact(contact)
+        tube = {} if contact is None else {
+            "length_over_diameter": contact.length_over_diameter, "contact": contact.treatment}
         settings = _settings(DiagramOptions, {
             "twist_ratio": rod.twist_ratio, "length_over_diameter": rod.slenderness,
-            "n_nodes": rod.nodes}, {
+            "n_nodes": rod.nodes, **tube}, {
             "max_excess_link": max_excess_link, "modes": tuple(modes), **options})
         compute = cosserat.ring_diagram_driver(rod, contact, settings, resume)
-        problem = Ring(rod, 0.0)
+        problem = Ring(rod, 0.0, contact)
     else:
         if not isinstance(rod, Rod):
             raise InputError(f"rod: expected a supercoil.Rod or supercoil.CosseratRod, got "
                              f"{rod!r}")
         contact = Barrier(100.0) if contact is None else contact
-        if not isinstance(contact, Contact):
-            raise InputError(f"contact: expected a Barrier or Penalty, got {contact!r}")
+        _check_contact(contact)
         settings = _settings(DiagramOptions, {
             "twist_ratio": rod.twist_ratio,
             "length_over_diameter": contact.length_over_diameter,
@@ -311,6 +313,11 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
                       branches={b.name: b for b in computed.branches}, status=status,
                       message=message, notes=tuple(computed.notes), computed=computed)
     return _finished(diagram, writer, owned, "diagram.json")
+
+
+def _check_contact(contact) -> None:
+    if contact is not None and not isinstance(contact, Contact):
+        raise InputError(f"contact: expected a Barrier or Penalty, got {contact!r}")
 
 
 def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,

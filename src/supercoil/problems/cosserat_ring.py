@@ -8,9 +8,12 @@ requested mode the primary branch is switched off it along the critical mode and
 followed without contact. A phantom ring that passes through itself changes its
 linking number, which the Cosserat ring refuses (:class:`~supercoil.cosserat.LinkingError`),
 so each primary branch watches the closest approach of non-neighbouring centreline
-points against the section's diameter ``D = L / slenderness`` (the event
-``contact_onset``, as on the Kirchhoff diagram) and stops at the first point past it.
-Branches with self-contact are not computed for this model.
+points against the tube diameter ``D`` (the event ``contact_onset``, as on the
+Kirchhoff diagram) and stops at the first point past it. With ``contact`` the branch
+goes on from there with self-contact (``alpha_contact``, parent ``alpha``,
+:mod:`supercoil.problems.cosserat_ring_contact`), and the onset is measured on the
+contact's own curve; without it ``D`` is the section's, ``L / slenderness``, and the
+diagram ends at the first contacts.
 
 Per point the records are the Kirchhoff ring's (``excess_link``, ``writhe``, ``twist``,
 ``energy``, ``link_error``, ``min_gap_over_diameter``, contact counts) plus
@@ -77,11 +80,14 @@ def positions_of(q: np.ndarray) -> np.ndarray:
     return np.asarray(q, dtype=float).reshape(-1, DOFS_PER_NODE)[:, :3]
 
 
-def gap_curve(n_nodes: int, diameter: float) -> ContactCurve:
-    """The closed polygon's self-distance for a tube of ``diameter`` (units of L)."""
+def gap_curve(n_nodes: int, diameter: float, options: ContactOptions | None = None
+              ) -> ContactCurve:
+    """The closed polygon's self-distance for a tube of ``diameter`` (units of L), or the
+    self-distance of the contact curve of ``options`` (its diameter)."""
     a = np.arange(n_nodes)
     segments = np.stack([a, (a + 1) % n_nodes], axis=1)
-    options = ContactOptions(diameter=diameter, curve="polygon", formulation="pairs")
+    if options is None:
+        options = ContactOptions(diameter=diameter, curve="polygon", formulation="pairs")
     return ContactCurve(segments, True, 1.0 / n_nodes, 1.0, options)
 
 
@@ -223,18 +229,28 @@ def centreline_branch(branch: Branch) -> Branch:
 
 def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
                           shear_stiffness: float,
-                          progress: Callable[[str], None] | None = None) -> RingDiagram:
+                          progress: Callable[[str], None] | None = None,
+                          contact: bool = False) -> RingDiagram:
     """The circle, its bifurcations of ``options.modes`` and the primary branches to their
     first self-contact at the tube diameter ``options.diameter``, for the Cosserat ring of
-    ``stretch_stiffness`` EA L^2/A and ``shear_stiffness`` GA L^2/A (module doc)."""
+    ``stretch_stiffness`` EA L^2/A and ``shear_stiffness`` GA L^2/A, and with ``contact``
+    on from there with self-contact (``options.contact``; module doc)."""
+    from supercoil.problems.cosserat_ring_contact import (
+        cosserat_contact_branch,
+        cosserat_contact_problem,
+    )
+
     opts = options
     diameter = opts.diameter
     say = progress or (lambda message: None)
-    notes: list[str] = [(f"the Cosserat model: primary branches stop at their first "
-                         f"self-contact (D = {diameter:.4g} L); branches with self-contact are "
-                         "not computed for this model")]
+    notes: list[str] = [] if contact else [
+        (f"the Cosserat model without contact: primary branches stop at their first "
+         f"self-contact (D = {diameter:.4g} L)")]
     constants = (opts.twist_ratio, float(stretch_stiffness), float(shear_stiffness))
-    curve = gap_curve(opts.n_nodes, diameter)
+    # with contact the onset is measured on the contact's own curve (as the Kirchhoff
+    # diagram's probe)
+    curve = gap_curve(opts.n_nodes, diameter, dataclasses.replace(
+        opts.contact_options(diameter), treatment="barrier") if contact else None)
     top = max(michell_excess_link(opts.twist_ratio, m) for m in opts.modes)
     circle_top = max(opts.max_excess_link, 1.1 * top)
     say(f"circle up to dLk = {circle_top:.4g} (Cosserat rod)")
@@ -246,6 +262,8 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
                                              *constants[1:], curve, link)
     seconds["circle"] = time.perf_counter() - start
     branches = [centreline_branch(circle)]
+    contact_names: set[str] = set()
+    cp = cosserat_contact_problem(problem, opts) if contact else None
     free_opts = ContinuationOptions(
         initial_step=SWITCH_AMPLITUDES[0], max_step=opts.free_max_step,
         max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
@@ -274,7 +292,24 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
             notes.append(f"{name}: no contact found without contact ({free.message})")
         seconds[name] = time.perf_counter() - start
         branches.append(centreline_branch(free))
+        if not (onsets and contact):
+            continue
+        contact_name = f"{name}_contact"
+        say(f"{contact_name}: from dLk = {onsets[0].parameter:.4g}, with self-contact "
+            f"({opts.contact})")
+        start = time.perf_counter()
+        with_contact = cosserat_contact_branch(cp, free, onsets[0], opts,
+                                               cosserat_ring_records(problem, curve),
+                                               contact_name)
+        if with_contact is None:
+            notes.append(f"{contact_name}: contact at dLk = {onsets[0].parameter:.4g} is "
+                         f"outside [0, {opts.max_excess_link:g}]: not computed")
+            continue
+        with_contact = dataclasses.replace(with_contact, parent=name, origin=onsets[0])
+        seconds[contact_name] = time.perf_counter() - start
+        branches.append(centreline_branch(with_contact))
+        contact_names.add(contact_name)
     model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
              "shear_stiffness": float(shear_stiffness)}
-    return RingDiagram(opts, tuple(branches), frozenset(), seconds, tuple(notes), None,
-                       model=model)
+    return RingDiagram(opts, tuple(branches), frozenset(contact_names), seconds, tuple(notes),
+                       None, model=model)

@@ -56,7 +56,7 @@ def test_kirchhoff_ring_json_states_its_model(runner, tmp_path):
     (["tweezers", "--twist-ratio", "0.8", "--end-distance", "0.9", "--turns", "0:3",
       "--model", "cosserat", "--out", "OUT"], "--end-distance is not available"),
     (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40", "--model",
-      "cosserat", "--contact", "penalty", "--out", "OUT"], "--contact is not available"),
+      "cosserat", "--branch-depth", "2", "--out", "OUT"], "--branch-depth is not available"),
     (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40",
       "--shear-stiffness", "5", "--out", "OUT"], "--shear-stiffness needs --model cosserat"),
 ])

@@ -427,10 +427,7 @@ def diagram_of(options, rod=None, **kwargs) -> Diagram:
     if isinstance(options, DiagramOptions):
         rest = {k: v for k, v in dataclasses.asdict(options).items()
                 if k not in ("twist_ratio", "length_over_diameter", "n_nodes", "contact")}
-        if rod is not None:
-            rest.pop("contact", None)
-            return ring_diagram(rod, None, **rest, **kwargs)
-        return ring_diagram(Rod(options.twist_ratio, options.n_nodes),
+        return ring_diagram(Rod(options.twist_ratio, options.n_nodes) if rod is None else rod,
                             contact_from_name(options.contact, options.length_over_diameter),
                             **rest, **kwargs)
     if isinstance(options, TweezersOptions):

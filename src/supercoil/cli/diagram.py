@@ -126,17 +126,16 @@ def diagram_ring(
 
     With --model cosserat the rod shears and stretches (--stretch-stiffness,
     --shear-stiffness; by default those of a solid section of diameter D): the
-    circle and the primary branches up to their first contact; the branches with
-    self-contact are not computed for this model.
+    circle and the primary branches, without and with self-contact (its contact
+    acts on the centreline); secondary branches are not computed for this model.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
     if model == "cosserat":
-        for option, given in (("--contact", contact != "barrier"),
-                              ("--branch-depth", branch_depth != 1), ("--resume", resume)):
+        for option, given in (("--branch-depth", branch_depth != 1), ("--resume", resume)):
             if given:
                 fail(f"{option} is not available with --model cosserat (the Cosserat ring "
-                     "diagram computes the circle and the primary branches up to their first "
-                     "contact); drop it, or use --model kirchhoff")
+                     "diagram computes the circle and the primary branches, without and with "
+                     "contact, in one run); drop it, or use --model kirchhoff")
     words = modes.replace(",", " ").split()
     if not words or not all(w.isdigit() for w in words):
         fail(f"--modes {modes!r}: give distinct Michell modes from 2 to {MAX_MODE} separated "

@@ -12,7 +12,7 @@ def model_problem(s: Mapping, kind: str, preset: str) -> str | None:
     """What is wrong with the study's model keys (the message after the file's name), or
     None: stiffnesses only with the Cosserat model, which has no self-contact in a ring
     or tweezers (``length_over_diameter``, or the DNA preset's), no displacement control,
-    and in a ring diagram the primary branches only."""
+    and in a ring diagram the primary branches only (with their contact)."""
     rod, problem = s["rod"], s["problem"]
     cosserat = rod.get("model") == "cosserat"
     for key in ("stretch_stiffness", "shear_stiffness"):
@@ -28,9 +28,6 @@ def model_problem(s: Mapping, kind: str, preset: str) -> str | None:
         return ("[problem] end_distance (displacement control) is not available with the "
                 "Cosserat model; give tension")
     if kind == "ring_diagram":
-        if problem.get("contact") not in (None, "barrier"):
-            return ("[problem] contact: contact with the Cosserat model is not available for "
-                    "ring_diagram (its primary branches stop at their first contact); drop it")
         if s.get("continuation", {}).get("branch_depth", 1) != 1:
             return ("[continuation] branch_depth: the Cosserat ring diagram computes the "
                     "primary branches only (branch_depth = 1)")

@@ -47,14 +47,14 @@ def stadium(n: int = N) -> np.ndarray:
 
 
 CASES = {
-    "penalty pairs polygon": dict(diameter=0.104, treatment="penalty", curve="polygon",
-                                  formulation="pairs"),
-    "penalty pairs spline": dict(diameter=0.104, treatment="penalty", curve="spline",
-                                 formulation="pairs"),
-    "barrier pairs spline": dict(diameter=0.09, treatment="barrier", curve="spline",
-                                 formulation="pairs", barrier_activation=0.3),
-    "barrier integral spline": dict(diameter=0.09, treatment="barrier", curve="spline",
-                                    formulation="integral", barrier_activation=0.3),
+    "penalty pairs polygon": {"diameter": 0.104, "treatment": "penalty", "curve": "polygon",
+                              "formulation": "pairs"},
+    "penalty pairs spline": {"diameter": 0.104, "treatment": "penalty", "curve": "spline",
+                             "formulation": "pairs"},
+    "barrier pairs spline": {"diameter": 0.09, "treatment": "barrier", "curve": "spline",
+                             "formulation": "pairs", "barrier_activation": 0.3},
+    "barrier integral spline": {"diameter": 0.09, "treatment": "barrier", "curve": "spline",
+                                "formulation": "integral", "barrier_activation": 0.3},
 }
 
 

@@ -78,8 +78,7 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
                          "; for a rod in tweezers use supercoil.tweezers (a branch in turns)")
     rod = problem.rod
     if isinstance(rod, CosseratRod):
-        return cosserat.equilibrium(problem, RING_TOLERANCE if tolerance is None else tolerance,
-                                    n_modes)
+        return cosserat.equilibrium(problem, tolerance, n_modes, max_iterations)
     if problem.contact is None:
         tolerance = RING_TOLERANCE if tolerance is None else tolerance
         result = solve_ring(rod.twist_ratio, problem.excess_link, n_nodes=rod.nodes,

@@ -3,8 +3,7 @@
 :func:`supercoil.equilibrium`, :func:`supercoil.stability`, :func:`supercoil.ring_diagram`
 and :func:`supercoil.tweezers` hand a problem whose rod is a ``CosseratRod`` to the
 functions here; they return the same result types. Self-contact acts on the rod's
-centreline (:mod:`supercoil.cosserat.centreline`); a verb whose contact is not available
-for this model refuses a problem with ``contact``, naming the verb.
+centreline (:mod:`supercoil.cosserat.centreline`).
 """
 
 from __future__ import annotations
@@ -14,13 +13,6 @@ import numpy as np
 from supercoil.api.model import CosseratRod, Ring, Tweezers
 from supercoil.api.results import Equilibrium, EquilibriumStatus, Stability
 from supercoil.errors import InputError
-
-
-def refuse_contact(contact, verb: str) -> None:
-    """InputError when ``contact`` is given: contact is not available for this model."""
-    if contact is not None:
-        raise InputError(f"contact with the Cosserat model is not available for {verb}; "
-                         f"drop contact, or use supercoil.Rod (the Kirchhoff model)")
 
 
 def _status(converged: bool, stab: Stability) -> EquilibriumStatus:
@@ -163,11 +155,11 @@ def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
 
 def tweezers_driver(problem: Tweezers, resume):
     """The driver of the Cosserat rod in tweezers
-    (:mod:`supercoil.problems.cosserat_tweezers`, load control) for
-    :func:`supercoil.tweezers`. Its branches are stored when they end."""
+    (:mod:`supercoil.problems.cosserat_tweezers`, load control, with the problem's
+    self-contact) for :func:`supercoil.tweezers`. Its branches are stored when they
+    end."""
     from supercoil.problems.cosserat_tweezers import cosserat_tweezers
 
-    refuse_contact(problem.contact, "tweezers")
     _refuse_resume(resume, "tweezers run")
     if problem.tension is None:
         raise InputError("end_distance: displacement control with the Cosserat model is not "

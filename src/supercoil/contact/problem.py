@@ -35,7 +35,8 @@ properties that read and write the rod's.
 
 The centreline. The contact terms see the rod's centreline only: the points
 ``base.centreline(q)`` ``(3 n,)``, whose entry ``k`` is the unknown
-``q[base.centreline_dofs[k]]`` (a linear selection: the Kirchhoff rod's unknowns
+``q[base.centreline_dofs[k]]``, its first node at arc length
+``base.centreline_origin`` (a linear selection: the Kirchhoff rod's unknowns
 are its nodes, the map is the identity; a Cosserat rod's also hold rotations,
 :mod:`supercoil.cosserat.centreline`). Every distance, pair state, collision
 bound and guard is asked of the centreline (and a step's centreline is
@@ -77,7 +78,7 @@ class ContactProblem:
         dofs = np.asarray(base.centreline_dofs, dtype=np.int64)
         self._dof_map = None if np.array_equal(dofs, np.arange(base.n_dofs)) else dofs
         self.curve = ContactCurve(base.edge_nodes, rod.closed, rod.edge_length, rod.length,
-                                  options)
+                                  options, base.centreline_origin)
         self.diameter = self.curve.diameter
         self.closed = self.curve.closed
         self.edge_length = self.curve.edge_length

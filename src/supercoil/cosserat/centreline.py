@@ -58,3 +58,28 @@ class CosseratCentreline:
     def edge_nodes(self) -> np.ndarray:
         """``(n_elements, 2)``: the nodes of each element, the centreline's segments."""
         return self.rod.element_nodes()
+
+    # the rod's ends are its first and last nodes
+    centreline_origin = 0.0
+
+
+class StoredCentrelines(CosseratCentreline):
+    """A Cosserat rod seen through its centreline alone: the unknowns are the centreline
+    ``(3 n,)`` (the map is the identity), for the contact of centrelines stored along a
+    branch (contact lists of the outputs). Its contact terms are those of the Cosserat
+    energy of the same ``rod`` at the same centreline."""
+
+    n_constraints = 0
+
+    def __init__(self, rod):
+        self.rod = rod
+        self.n_dofs = 3 * rod.n_nodes
+        self.fixed = np.zeros(0, dtype=np.int64)
+        self.mass = np.full(self.n_dofs, rod.edge_length)
+
+    def centreline(self, q: np.ndarray) -> np.ndarray:
+        return np.asarray(q, dtype=float)
+
+    @property
+    def centreline_dofs(self) -> np.ndarray:
+        return np.arange(self.n_dofs)

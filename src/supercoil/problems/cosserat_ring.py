@@ -32,6 +32,7 @@ import numpy as np
 
 from supercoil.contact.curve import ContactCurve
 from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import (
     Branch,
     ContinuationOptions,
@@ -40,6 +41,7 @@ from supercoil.continuation import (
     continuation,
     switch_branch,
 )
+from supercoil.cosserat.centreline import StoredCentrelines
 from supercoil.cosserat.circle import circle_state
 from supercoil.cosserat.closed import ClosedCosseratEnergy
 from supercoil.cosserat.ring import michell_excess_link, relax_circle, ring_problem
@@ -264,6 +266,8 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
     branches = [centreline_branch(circle)]
     contact_names: set[str] = set()
     cp = cosserat_contact_problem(problem, opts) if contact else None
+    # the contact of the stored centrelines, for the outputs' contact lists
+    view = None if cp is None else ContactProblem(StoredCentrelines(problem.rod), cp.options)
     free_opts = ContinuationOptions(
         initial_step=SWITCH_AMPLITUDES[0], max_step=opts.free_max_step,
         max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
@@ -312,4 +316,4 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
     model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
              "shear_stiffness": float(shear_stiffness)}
     return RingDiagram(opts, tuple(branches), frozenset(contact_names), seconds, tuple(notes),
-                       None, model=model)
+                       view, model=model)

@@ -432,7 +432,7 @@ def diagram_of(options, rod=None, **kwargs) -> Diagram:
     if isinstance(options, TweezersOptions):
         problem, rest = tweezers_arguments(options)
         if rod is not None:
-            problem = dataclasses.replace(problem, rod=rod, contact=None)
+            problem = dataclasses.replace(problem, rod=rod)
         return tweezers(problem, **rest, **kwargs)
     raise InputError(f"options: expected DiagramOptions or TweezersOptions, got "
                      f"{type(options).__name__}")

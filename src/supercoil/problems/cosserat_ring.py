@@ -220,12 +220,13 @@ def centreline_branch(branch: Branch) -> Branch:
     """The branch with its states as centrelines ``(k, 3 n)`` and tangents restricted to
     the positions and the parameter, as the diagram's outputs read them."""
     k = len(branch)
+    if not k:  # a branch without points (a failed start): nothing to restrict
+        return branch
     states = np.asarray(branch.states, float).reshape(k, -1, DOFS_PER_NODE)[:, :, :3]
-    n_dofs = branch.states.shape[1] if k else 0
+    n_dofs = branch.states.shape[1]
     tangents = np.asarray(branch.tangents, float)
-    if k:
-        position = tangents[:, :n_dofs].reshape(k, -1, DOFS_PER_NODE)[:, :, :3].reshape(k, -1)
-        tangents = np.concatenate([position, tangents[:, n_dofs:]], axis=1)
+    position = tangents[:, :n_dofs].reshape(k, -1, DOFS_PER_NODE)[:, :, :3].reshape(k, -1)
+    tangents = np.concatenate([position, tangents[:, n_dofs:]], axis=1)
     return dataclasses.replace(branch, states=states.reshape(k, -1), tangents=tangents)
 
 

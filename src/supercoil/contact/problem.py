@@ -33,16 +33,11 @@ a positive force is excluded from the tangent space. What belongs to the rod
 parameters a continuation sets (``excess_link``, ``turns``, ``tension``) are
 properties that read and write the rod's.
 
-The centreline. The contact terms see the rod's centreline only: the points
-``base.centreline(q)`` ``(3 n,)``, whose entry ``k`` is the unknown
-``q[base.centreline_dofs[k]]``, its first node at arc length
-``base.centreline_origin`` (a linear selection: the Kirchhoff rod's unknowns
-are its nodes, the map is the identity; a Cosserat rod's also hold rotations,
-:mod:`supercoil.cosserat.centreline`). Every distance, pair state, collision
-bound and guard is asked of the centreline (and a step's centreline is
-``base.centreline(dq)``), and the contact gradients, Hessians and constraint
-rows, computed in centreline coordinates, are scattered into ``q`` through the
-map, so the rod's own unknowns beside the centreline carry no contact term.
+The centreline. Contact sees the points ``base.centreline(q)`` ``(3 n,)``, entry ``k``
+the unknown ``q[base.centreline_dofs[k]]`` (the identity for the Kirchhoff rod; the
+positions among a Cosserat rod's unknowns, :mod:`supercoil.cosserat.centreline`), the
+first at arc length ``base.centreline_origin``: distances, guards and collision bounds
+are the centreline's, and the contact derivatives are scattered into ``q`` by the map.
 """
 
 from __future__ import annotations
@@ -74,8 +69,7 @@ class ContactProblem:
         self.base = base
         self.options = options
         rod = base.rod
-        # the centreline's entries in q (module doc, "The centreline"); None: the identity
-        dofs = np.asarray(base.centreline_dofs, dtype=np.int64)
+        dofs = np.asarray(base.centreline_dofs, dtype=np.int64)  # None below: the identity
         self._dof_map = None if np.array_equal(dofs, np.arange(base.n_dofs)) else dofs
         self.curve = ContactCurve(base.edge_nodes, rod.closed, rod.edge_length, rod.length,
                                   options, base.centreline_origin)
@@ -165,11 +159,11 @@ class ContactProblem:
 
     # ----------------------------------------------------------- geometry
     def centreline(self, q: np.ndarray) -> np.ndarray:
-        """The centreline ``(3 n,)`` of ``q`` (module doc, "The centreline"); linear in ``q``."""
+        """The centreline ``(3 n,)`` of ``q`` (module doc), linear in ``q``."""
         return self.base.centreline(q)
 
     def _scatter(self, dofs: np.ndarray) -> np.ndarray:
-        """Centreline coordinates (indices into :meth:`centreline`) as indices into ``q``."""
+        """Indices into :meth:`centreline` as indices into ``q``."""
         return dofs if self._dof_map is None else self._dof_map[dofs]
 
     @property
@@ -294,13 +288,11 @@ class ContactProblem:
         opts = self.options
         # the sample points of the pair state's search (remembered for this q), not
         # formed again per pair in the kernel
-        terms = integral_terms(np.asarray(x, dtype=float).reshape(-1, 3), self.curve.sample_stencil,
+        terms = integral_terms(x.reshape(-1, 3), self.curve.sample_stencil,
                                self.curve.sample_weights, st.pairs, self.diameter, self.treatment,
                                self.stiffness, opts.barrier_activation * self.diameter,
                                self.edge_length, order, points=self.curve.sample_points(x))
-        if self._dof_map is not None:  # the pair blocks' DOFs as indices into q
-            energy, grad, hess, force, param, dofs = terms
-            terms = (energy, grad, hess, force, param, self._scatter(dofs))
+        terms = (*terms[:5], self._scatter(terms[5]))  # the pair blocks' DOFs in q
         self._integral_memo = (key, order, self.stiffness, terms)
         return st, terms
 

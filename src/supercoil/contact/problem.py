@@ -34,10 +34,11 @@ parameters a continuation sets (``excess_link``, ``turns``, ``tension``) are
 properties that read and write the rod's.
 
 The centreline. Contact sees the points ``base.centreline(q)`` ``(3 n,)``, entry ``k``
-the unknown ``q[base.centreline_dofs[k]]`` (the identity for the Kirchhoff rod; the
-positions among a Cosserat rod's unknowns, :mod:`supercoil.cosserat.centreline`), the
-first at arc length ``base.centreline_origin``: distances, guards and collision bounds
-are the centreline's, and the contact derivatives are scattered into ``q`` by the map.
+the unknown ``q[base.centreline_dofs[k]]`` (the positions among a Cosserat rod's
+unknowns, :mod:`supercoil.cosserat.centreline`), the first at arc length
+``base.centreline_origin``: distances, guards and collision bounds are the
+centreline's, and the contact derivatives are scattered into ``q`` by the map. A rod
+without ``centreline_dofs`` (the Kirchhoff rod) has its nodes as its unknowns.
 """
 
 from __future__ import annotations
@@ -69,10 +70,11 @@ class ContactProblem:
         self.base = base
         self.options = options
         rod = base.rod
-        dofs = np.asarray(base.centreline_dofs, dtype=np.int64)  # None below: the identity
-        self._dof_map = None if np.array_equal(dofs, np.arange(base.n_dofs)) else dofs
+        dofs = getattr(base, "centreline_dofs", None)  # (module doc); None: the identity
+        self._dof_map = None if dofs is None or np.array_equal(dofs, np.arange(base.n_dofs)) \
+            else np.asarray(dofs, dtype=np.int64)
         self.curve = ContactCurve(base.edge_nodes, rod.closed, rod.edge_length, rod.length,
-                                  options, base.centreline_origin)
+                                  options, getattr(base, "centreline_origin", None))
         self.diameter = self.curve.diameter
         self.closed = self.curve.closed
         self.edge_length = self.curve.edge_length
@@ -160,7 +162,7 @@ class ContactProblem:
     # ----------------------------------------------------------- geometry
     def centreline(self, q: np.ndarray) -> np.ndarray:
         """The centreline ``(3 n,)`` of ``q`` (module doc), linear in ``q``."""
-        return self.base.centreline(q)
+        return np.asarray(q, dtype=float) if self._dof_map is None else self.base.centreline(q)
 
     def _scatter(self, dofs: np.ndarray) -> np.ndarray:
         """Indices into :meth:`centreline` as indices into ``q``."""

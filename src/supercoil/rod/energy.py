@@ -86,21 +86,6 @@ class RodEnergy(abc.ABC):
         self._constrained = np.asarray(edges_index, dtype=np.int64)
         self.n_constraints = len(self._constrained)
 
-    def centreline(self, q: np.ndarray) -> np.ndarray:
-        """The centreline ``(3 n,)`` of ``q``: ``q`` itself (the unknowns are the nodes)."""
-        return np.asarray(q, dtype=float)
-
-    @property
-    def centreline_dofs(self) -> np.ndarray:
-        """The entries of ``q`` that :meth:`centreline` selects: all of them."""
-        return np.arange(self.n_dofs)
-
-    @property
-    def centreline_origin(self) -> float:
-        """Arc length of the first node: 0 on a ring, ``-h/2`` on an open rod (its ends are
-        the mid-edges next to the clamps)."""
-        return 0.0 if self.rod.closed else -0.5 * self.rod.edge_length
-
     def _edge_vectors(self, q: np.ndarray) -> np.ndarray:
         x = q.reshape(-1, 3)
         return x[self.edge_nodes[:, 1]] - x[self.edge_nodes[:, 0]]

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Callable
 
 import numpy as np
@@ -152,8 +153,11 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     cont = ContinuationOptions(initial_step=0.05, max_step=STRAIGHT_MAX_STEP,
                                parameter_bounds=opts.turns, max_points=opts.max_points,
                                event_tolerance=opts.event_tolerance)
+    seconds: dict[str, float] = {}
+    start_time = time.perf_counter()
     straight = continuation(problem, problem.straight_state(), parameter="turns",
                             options=cont, name="straight", records=records)
+    seconds["straight"] = time.perf_counter() - start_time
     branches = [centreline_branch(straight)]
     bifurcations = [p for p in straight.points_of_kind("bifurcation") if p.count_before == 0]
     if not bifurcations:
@@ -162,7 +166,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
         else:
             notes.append(f"incomplete: straight stopped at {straight.parameter_values[-1]:.6g} "
                          f"turns ({straight.message})")
-        return TweezersResult(opts, tuple(branches), frozenset(), problem, view, {},
+        return TweezersResult(opts, tuple(branches), frozenset(), problem, view, seconds,
                               tuple(notes), model=model)
     point = bifurcations[0]
     say(f"buckled: switched from the straight rod at {point.parameter:.6g} turns")
@@ -175,6 +179,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns, max_points=opts.max_points,
                                     event_tolerance=opts.event_tolerance)
+    start_time = time.perf_counter()
     watched, at_onset = stop_after_onset() if cp is not None else (None, None)
     buckled = switch_branch(problem, straight, start, free_opts, name="buckled",
                             amplitude=SWITCH_AMPLITUDE, records=records, direction=direction,
@@ -193,11 +198,13 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
                      f"turns: {buckled.message}")
     elif cp is not None:
         notes.append(f"buckled: no contact found ({buckled.message})")
+    seconds["buckled"] = time.perf_counter() - start_time
     branches.append(centreline_branch(buckled))
     if not onsets:
-        return TweezersResult(opts, tuple(branches), frozenset(), problem, view, {},
+        return TweezersResult(opts, tuple(branches), frozenset(), problem, view, seconds,
                               tuple(notes), model=model)
     say(f"buckled_contact: from {onsets[0].parameter:.6g} turns, with self-contact (barrier)")
+    start_time = time.perf_counter()
     contact = cosserat_contact_branch(opts, cp, buckled, onsets[0],
                                       cosserat_tweezers_records(problem), "buckled_contact")
     contact = dataclasses.replace(contact, parent="buckled", origin=onsets[0])
@@ -207,6 +214,8 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
         notes.append(f"incomplete: buckled_contact ended at "
                      f"{contact.parameter_values[-1]:.6g} turns, before {opts.turns[1]:g}: "
                      f"{contact.message}")
+    seconds["buckled_contact"] = time.perf_counter() - start_time
     branches.append(centreline_branch(contact))
     return TweezersResult(opts, tuple(branches), frozenset({"buckled_contact"}), problem, view,
-                          {}, tuple(notes), cut_at_contact=frozenset({"buckled"}), model=model)
+                          seconds, tuple(notes), cut_at_contact=frozenset({"buckled"}),
+                          model=model)

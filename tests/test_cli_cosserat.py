@@ -46,17 +46,12 @@ def test_kirchhoff_ring_json_states_its_model(runner, tmp_path):
     (["ring", "--twist-ratio", "0.8", "--excess-link", "1", "--model", "elastica"],
      "--model 'elastica'"),
     (["ring", "--twist-ratio", "0.8", "--excess-link", "1", "--model", "cosserat",
-      "--length-over-diameter", "40"],
-     "contact with the Cosserat model is not available for ring"),
-    (["ring", "--dna", "--bp", "600", "--sigma", "-0.05", "--model", "cosserat"],
-     "contact with the Cosserat model is not available for ring"),
-    (["tweezers", "--twist-ratio", "0.8", "--tension", "5", "--turns", "0:3", "--model",
-      "cosserat", "--length-over-diameter", "40", "--out", "OUT"],
-     "contact with the Cosserat model is not available for tweezers"),
+      "--length-over-diameter", "40", "--knot", "3_1"],
+     "--knot is not available with --model cosserat"),
     (["tweezers", "--twist-ratio", "0.8", "--end-distance", "0.9", "--turns", "0:3",
       "--model", "cosserat", "--out", "OUT"], "--end-distance is not available"),
     (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40", "--model",
-      "cosserat", "--contact", "penalty", "--out", "OUT"], "--contact is not available"),
+      "cosserat", "--branch-depth", "2", "--out", "OUT"], "--branch-depth is not available"),
     (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40",
       "--shear-stiffness", "5", "--out", "OUT"], "--shear-stiffness needs --model cosserat"),
 ])
@@ -95,8 +90,9 @@ def test_study_files_take_the_model():
     assert isinstance(rod, sc.CosseratRod) and rod.stretch_stiffness == 1e4
     assert isinstance(parse_study(text.replace('model = "cosserat"\nstretch_stiffness = 1e4\n',
                                                "")).rod(), sc.Rod)
-    with pytest.raises(StudyError, match="contact with the Cosserat model"):
-        parse_study(text.replace("nodes = 20", "nodes = 20\nlength_over_diameter = 40"))
+    # the Cosserat ring takes self-contact; its section is the tube's
+    tube = parse_study(text.replace("nodes = 20", "nodes = 20\nlength_over_diameter = 40"))
+    assert tube.rod().slenderness == 40.0
     with pytest.raises(StudyError, match='needs model = "cosserat"'):
         parse_study(text.replace('model = "cosserat"', 'model = "kirchhoff"'))
     with pytest.raises(StudyError, match="model"):

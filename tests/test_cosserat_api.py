@@ -44,10 +44,10 @@ def test_invalid_cosserat_problems_are_refused():
     with pytest.raises(sc.InputError, match="poisson_ratio"):
         sc.CosseratRod(0.8, poisson_ratio=0.7)
     rod = sc.CosseratRod(0.8, nodes=20)
-    with pytest.raises(sc.InputError, match="contact with the Cosserat model is not available"):
-        sc.equilibrium(sc.Ring(rod, 1.0, contact=sc.Penalty(30.0)))
-    with pytest.raises(sc.InputError, match="contact with the Cosserat model is not available"):
-        sc.ring_diagram(rod, sc.Barrier(30.0))
+    with pytest.raises(sc.InputError, match="knot"):
+        sc.equilibrium(sc.Ring(rod, 1.0, contact=sc.Penalty(30.0), knot="3_1"))
+    with pytest.raises(sc.InputError, match="branch_depth"):
+        sc.ring_diagram(rod, sc.Barrier(30.0), branch_depth=2)
     with pytest.raises(sc.InputError, match="end_distance"):
         sc.tweezers(sc.Tweezers(rod, end_distance=0.9))
 

@@ -2,8 +2,8 @@
 
 :func:`supercoil.equilibrium`, :func:`supercoil.stability`, :func:`supercoil.ring_diagram`
 and :func:`supercoil.tweezers` hand a problem whose rod is a ``CosseratRod`` to the
-functions here; they return the same result types. Self-contact is not available
-with this model: a problem with ``contact`` is refused, naming the verb.
+functions here; they return the same result types. Self-contact acts on the rod's
+centreline (:mod:`supercoil.cosserat.centreline`).
 """
 
 from __future__ import annotations
@@ -15,24 +15,40 @@ from supercoil.api.results import Equilibrium, EquilibriumStatus, Stability
 from supercoil.errors import InputError
 
 
-def refuse_contact(contact, verb: str) -> None:
-    """InputError when ``contact`` is given: contact is not available for this model."""
-    if contact is not None:
-        raise InputError(f"contact with the Cosserat model is not available for {verb}; "
-                         f"drop contact, or use supercoil.Rod (the Kirchhoff model)")
-
-
-def equilibrium(problem: Ring, tolerance: float, n_modes: int) -> Equilibrium:
-    """The relaxed twisted circle of a Cosserat ring (an equilibrium at every dLk; above
-    the Michell threshold of the model it is returned ``UNSTABLE``)."""
+def equilibrium(problem: Ring, tolerance: float | None, n_modes: int,
+                max_iterations: int = 1000) -> Equilibrium:
+    """Without contact, the relaxed twisted circle of a Cosserat ring (an equilibrium at
+    every dLk; above the Michell threshold of the model it is returned ``UNSTABLE``);
+    with contact, the state reached by winding from the circle
+    (:mod:`supercoil.problems.cosserat_ring_winding`). ``tolerance``: Newton's residual
+    (None: 1e-10 without contact, 1e-9 with)."""
     from supercoil.cosserat.ring import solve_cosserat_ring
+    from supercoil.problems.cosserat_ring_winding import solve_cosserat_supercoiled_ring
 
-    refuse_contact(problem.contact, "equilibrium (supercoil ring)")
     rod = problem.rod
-    result = solve_cosserat_ring(rod.twist_ratio, problem.excess_link, n_nodes=rod.nodes,
-                                 stretch_stiffness=rod.stretch_stiffness,
-                                 shear_stiffness=rod.shear_stiffness, tolerance=tolerance,
-                                 n_modes=n_modes)
+    tolerances = {}
+    if problem.initial is not None or problem.knot is not None:
+        raise InputError("initial, knot: a starting curve is not available with the Cosserat "
+                         "model (its sections' frames are unknowns too); the ring is wound "
+                         "from the circle", name="initial" if problem.knot is None else "knot")
+    if problem.contact is None:
+        tolerance = 1e-10 if tolerance is None else tolerance
+        result = solve_cosserat_ring(rod.twist_ratio, problem.excess_link, n_nodes=rod.nodes,
+                                     stretch_stiffness=rod.stretch_stiffness,
+                                     shear_stiffness=rod.shear_stiffness, tolerance=tolerance,
+                                     n_modes=n_modes)
+    else:
+        from supercoil.contact.options import ContactOptions
+
+        tolerance = 1e-9 if tolerance is None else tolerance
+        contact = problem.contact
+        result = solve_cosserat_supercoiled_ring(
+            rod.twist_ratio, problem.excess_link, contact.length_over_diameter, rod.nodes,
+            rod.stretch_stiffness, rod.shear_stiffness, contact.treatment, tolerance,
+            n_modes=n_modes, max_iterations=max_iterations)
+        # the penetration the treatment accepts (its default, as the solve uses it)
+        tolerances["penetration_over_diameter"] = ContactOptions(
+            diameter=contact.diameter, treatment=contact.treatment).tolerance
     zero_tolerance = _zero_tolerance()
     stab = Stability(unstable_count=result.unstable_count, zero_modes=result.zero_modes,
                      negative_count=result.negative_count,
@@ -48,7 +64,9 @@ def equilibrium(problem: Ring, tolerance: float, n_modes: int) -> Equilibrium:
                        twist=float(result.twist), writhe=float(result.writhe),
                        link_error=float(result.link_error), residual=float(result.residual),
                        iterations=int(result.iterations), stability=stab, record=record,
-                       tolerances={"newton_residual": tolerance, "zero_modes": zero_tolerance},
+                       contacts=result.contact,
+                       tolerances={"newton_residual": tolerance, "zero_modes": zero_tolerance,
+                                   **tolerances},
                        frames=result.rotations)
 
 
@@ -75,8 +93,19 @@ def stability(state: Equilibrium, n_modes: int, zero_tolerance: float) -> Stabil
     problem = ClosedCosseratEnergy(discrete, state.problem.excess_link,
                                    np.asarray(state.points, float),
                                    np.asarray(state.frames, float))
-    report = analyse(problem, problem.initial_state(), np.zeros(0), n_modes=n_modes,
-                     zero_tolerance=zero_tolerance)
+    q = problem.initial_state()
+    contact = state.problem.contact
+    if contact is not None:
+        from supercoil.contact.options import ContactOptions
+        from supercoil.contact.problem import ContactProblem
+
+        if contact.treatment == "exact":
+            raise InputError("state: the stability of a state with exact contact needs its "
+                             "active constraints; it is reported by equilibrium()",
+                             name="state")
+        problem = ContactProblem(problem, ContactOptions(
+            diameter=contact.diameter, treatment=contact.treatment)).stability_view()
+    report = analyse(problem, q, np.zeros(0), n_modes=n_modes, zero_tolerance=zero_tolerance)
     modes = np.asarray(report.lowest_modes).reshape(-1, rod.nodes, 6)[:, :, :3]
     return Stability(unstable_count=int(report.unstable_count),
                      zero_modes=int(report.zero_modes),
@@ -96,11 +125,12 @@ def _refuse_resume(resume, verb: str) -> None:
 def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
     """The driver of the Cosserat ring's diagram (:mod:`supercoil.problems.cosserat_ring`)
     for :func:`supercoil.ring_diagram`: the circle, its bifurcations and the primary
-    branches up to their first self-contact, that of the rod's own section (diameter
-    L / ``rod.slenderness``). Its branches are stored when they end."""
+    branches up to their first self-contact, then with ``contact`` (the tube of
+    ``settings``) on with self-contact; without it the diagram ends at the first
+    contacts of the rod's own section (diameter L / ``rod.slenderness``). Its
+    branches are stored when they end."""
     from supercoil.problems.cosserat_ring import cosserat_ring_diagram
 
-    refuse_contact(contact, "ring_diagram (supercoil diagram ring)")
     _refuse_resume(resume, "ring diagram")
     if settings.branch_depth != 1:
         raise InputError("branch_depth: the Cosserat ring diagram computes the primary "
@@ -108,18 +138,18 @@ def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
 
     def compute(settings, progress, *, on_point=None, on_branch=None, resume=None):
         return cosserat_ring_diagram(settings, rod.stretch_stiffness, rod.shear_stiffness,
-                                     progress)
+                                     progress, contact=contact is not None)
 
     return compute
 
 
 def tweezers_driver(problem: Tweezers, resume):
     """The driver of the Cosserat rod in tweezers
-    (:mod:`supercoil.problems.cosserat_tweezers`, load control) for
-    :func:`supercoil.tweezers`. Its branches are stored when they end."""
+    (:mod:`supercoil.problems.cosserat_tweezers`, load control, with the problem's
+    self-contact) for :func:`supercoil.tweezers`. Its branches are stored when they
+    end."""
     from supercoil.problems.cosserat_tweezers import cosserat_tweezers
 
-    refuse_contact(problem.contact, "tweezers")
     _refuse_resume(resume, "tweezers run")
     if problem.tension is None:
         raise InputError("end_distance: displacement control with the Cosserat model is not "

@@ -68,8 +68,7 @@ def equilibrium(problem: Ring, *, tolerance: float | None = None,
                          "; for a rod in tweezers use supercoil.tweezers (a branch in turns)")
     rod = problem.rod
     if isinstance(rod, CosseratRod):
-        return cosserat.equilibrium(problem, RING_TOLERANCE if tolerance is None else tolerance,
-                                    n_modes)
+        return cosserat.equilibrium(problem, tolerance, n_modes, max_iterations)
     if problem.contact is None:
         tolerance = RING_TOLERANCE if tolerance is None else tolerance
         result = solve_ring(rod.twist_ratio, problem.excess_link, n_nodes=rod.nodes,
@@ -286,19 +285,21 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     compute = ring_diagram
 
     if isinstance(rod, CosseratRod):
+        _check_contact(contact)
+        tube = {} if contact is None else {
+            "length_over_diameter": contact.length_over_diameter, "contact": contact.treatment}
         settings = _settings(DiagramOptions, {
             "twist_ratio": rod.twist_ratio, "length_over_diameter": rod.slenderness,
-            "n_nodes": rod.nodes}, {
+            "n_nodes": rod.nodes, **tube}, {
             "max_excess_link": max_excess_link, "modes": tuple(modes), **options})
         compute = cosserat.ring_diagram_driver(rod, contact, settings, resume)
-        problem = Ring(rod, 0.0)
+        problem = Ring(rod, 0.0, contact)
     else:
         if not isinstance(rod, Rod):
             raise InputError(f"rod: expected a supercoil.Rod or supercoil.CosseratRod, got "
                              f"{rod!r}")
         contact = Barrier(100.0) if contact is None else contact
-        if not isinstance(contact, Contact):
-            raise InputError(f"contact: expected a Barrier or Penalty, got {contact!r}")
+        _check_contact(contact)
         settings = _settings(DiagramOptions, {
             "twist_ratio": rod.twist_ratio,
             "length_over_diameter": contact.length_over_diameter,
@@ -314,6 +315,11 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
                       branches={b.name: b for b in computed.branches}, status=status,
                       message=message, notes=tuple(computed.notes), computed=computed)
     return _finished(diagram, writer, owned, "diagram.json")
+
+
+def _check_contact(contact) -> None:
+    if contact is not None and not isinstance(contact, Contact):
+        raise InputError(f"contact: expected a Barrier or Penalty, got {contact!r}")
 
 
 def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
@@ -413,16 +419,13 @@ def diagram_of(options, rod=None, **kwargs) -> Diagram:
     if isinstance(options, DiagramOptions):
         rest = {k: v for k, v in dataclasses.asdict(options).items()
                 if k not in ("twist_ratio", "length_over_diameter", "n_nodes", "contact")}
-        if rod is not None:
-            rest.pop("contact", None)
-            return ring_diagram(rod, None, **rest, **kwargs)
-        return ring_diagram(Rod(options.twist_ratio, options.n_nodes),
+        return ring_diagram(Rod(options.twist_ratio, options.n_nodes) if rod is None else rod,
                             contact_from_name(options.contact, options.length_over_diameter),
                             **rest, **kwargs)
     if isinstance(options, TweezersOptions):
         problem, rest = tweezers_arguments(options)
         if rod is not None:
-            problem = dataclasses.replace(problem, rod=rod, contact=None)
+            problem = dataclasses.replace(problem, rod=rod)
         return tweezers(problem, **rest, **kwargs)
     raise InputError(f"options: expected DiagramOptions or TweezersOptions, got "
                      f"{type(options).__name__}")

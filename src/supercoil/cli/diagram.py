@@ -127,14 +127,13 @@ def diagram_ring(
 
     With --model cosserat the rod shears and stretches (--stretch-stiffness,
     --shear-stiffness; by default those of a solid section of diameter D): the
-    circle and the primary branches up to their first contact; the branches with
-    self-contact are not computed for this model.
+    circle and the primary branches, without and with self-contact (its contact
+    acts on the centreline); secondary branches are not computed for this model.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    kirchhoff_only(model, (("--contact", contact != "barrier"),
-                           ("--branch-depth", branch_depth != 1), ("--resume", resume)),
-                   "the Cosserat ring diagram computes the circle and the primary branches "
-                   "up to their first contact")
+    kirchhoff_only(model, (("--branch-depth", branch_depth != 1), ("--resume", resume)),
+                   "the Cosserat ring diagram computes the circle and the primary branches, "
+                   "without and with contact, in one run")
     words = modes.replace(",", " ").split()
     if not words or not all(w.isdigit() for w in words):
         fail(f"--modes {modes!r}: give distinct Michell modes from 2 to {MAX_MODE} separated "

@@ -44,13 +44,6 @@ def check_model(model: str, stretch_stiffness: float | None,
              "inextensible and unshearable)")
 
 
-def no_contact(model: str, command: str, contact_given: bool) -> None:
-    """Exit 2 when self-contact is asked of the Cosserat model."""
-    if model == "cosserat" and contact_given:
-        fail(f"contact with the Cosserat model is not available for {command}; drop the "
-             "contact options, or use --model kirchhoff")
-
-
 def kirchhoff_only(model: str, options, scope: str) -> None:
     """Exit 2 when one of ``options``, pairs ``(option, given)``, is given with the
     Cosserat model, whose command computes only ``scope``."""

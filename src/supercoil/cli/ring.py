@@ -33,7 +33,6 @@ from supercoil.cli.model_options import (
     StretchOption,
     check_model,
     make_rod,
-    no_contact,
 )
 from supercoil.contact.options import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
 from supercoil.units.dna import (
@@ -204,8 +203,13 @@ def ring(
     not thermal averages.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    no_contact(model, "ring", dna or length_over_diameter is not None or contact is not None
-               or initial is not None)
+    if model == "cosserat":
+        for option, value in (("--initial", initial), ("--knot", knot),
+                              ("--torus-knot", torus_knot)):
+            if value is not None:
+                fail(f"{option} is not available with --model cosserat (the sections' frames "
+                     "are unknowns too: the ring is wound from the circle); drop it, or use "
+                     "--model kirchhoff")
     preset = None
     if dna:
         preset = _dna_preset(twist_ratio, excess_link, length_over_diameter, bp, sigma,
@@ -250,7 +254,8 @@ def ring(
     from supercoil.api.model import contact_from_name
 
     with refused(names):
-        rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness)
+        rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness,
+                       slenderness=length_over_diameter, preset=preset)
         problem = Ring(rod, excess_link,
                        contact=None if length_over_diameter is None else
                        contact_from_name(treatment, length_over_diameter),

@@ -32,7 +32,6 @@ from supercoil.cli.model_options import (
     kirchhoff_only,
     make_rod,
     model_record,
-    no_contact,
 )
 from supercoil.units.dna import (
     DEFAULT_SALT_MM,
@@ -173,11 +172,10 @@ def tweezers(
     --out.
 
     With --model cosserat the rod shears and stretches (--stretch-stiffness,
-    --shear-stiffness): load control without contact; the extension includes
-    the stretch.
+    --shear-stiffness): load control, with or without contact (its contact acts
+    on the centreline); the extension includes the stretch.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    no_contact(model, "tweezers", length_over_diameter is not None or dna)
     kirchhoff_only(model, (("--end-distance", end_distance is not None),
                            ("--protocol", protocol != "up"), ("--resume", resume)),
                    "load control, --protocol up")
@@ -229,7 +227,8 @@ def tweezers(
                                   contact_formulation=contact_formulation)
         if protocol != "up":
             check_path(options, protocol, step, force_range=ramp, force_step=force_step)
-        rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness)
+        rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness,
+                       slenderness=length_over_diameter, preset=preset)
     settings = {"command": "tweezers", "twist_ratio": twist_ratio,
                 "length_over_diameter": length_over_diameter, "tension": tension,
                 "end_distance": end_distance, "turns": [start, stop], "nodes": nodes,

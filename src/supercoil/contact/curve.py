@@ -90,13 +90,15 @@ class ContactCurve:
     """The curve whose self-distance is the contact distance (see the module docstring).
 
     ``segments`` ``(n_segments, 2)``: the node indices of the rod's edges; ``closed``:
-    whether the rod is a ring; ``edge_length`` h and ``length`` L of the rod. Every
+    whether the rod is a ring; ``edge_length`` h and ``length`` L of the rod; ``origin``:
+    the arc length of the first segment's start (default 0 for a ring, ``-h/2`` for an
+    open rod, whose ends are mid-edges). Every
     query is a pure function of ``q`` (and of the fixed segments, pieces, arc lengths
     and exclusion); the recent answers are remembered.
     """
 
     def __init__(self, segments: np.ndarray, closed: bool, edge_length: float, length: float,
-                 options: ContactOptions):
+                 options: ContactOptions, origin: float | None = None):
         h = float(edge_length)
         self.options = options
         self.diameter = float(options.diameter)
@@ -105,7 +107,7 @@ class ContactCurve:
         self.length = float(length)
         self.segments = np.asarray(segments, dtype=np.int64)
         k = np.arange(len(self.segments), dtype=float)
-        offset = 0.0 if self.closed else -0.5  # open rods: ends at mid-edges
+        offset = (0.0 if self.closed else -0.5) if origin is None else origin / h
         self.s_start = (k + offset) * h
         self.s_end = (k + offset + 1.0) * h
         self.period = self.length if self.closed else None

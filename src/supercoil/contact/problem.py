@@ -32,6 +32,13 @@ a positive force is excluded from the tangent space. What belongs to the rod
 (its frames, writhe, reference link) is asked of ``problem.base``; the load
 parameters a continuation sets (``excess_link``, ``turns``, ``tension``) are
 properties that read and write the rod's.
+
+The centreline. Contact sees the points ``base.centreline(q)`` ``(3 n,)``, entry ``k``
+the unknown ``q[base.centreline_dofs[k]]`` (the positions among a Cosserat rod's
+unknowns, :mod:`supercoil.cosserat.centreline`), the first at arc length
+``base.centreline_origin``: distances, guards and collision bounds are the
+centreline's, and the contact derivatives are scattered into ``q`` by the map. A rod
+without ``centreline_dofs`` (the Kirchhoff rod) has its nodes as its unknowns.
 """
 
 from __future__ import annotations
@@ -63,8 +70,11 @@ class ContactProblem:
         self.base = base
         self.options = options
         rod = base.rod
+        dofs = getattr(base, "centreline_dofs", None)  # (module doc); None: the identity
+        self._dof_map = None if dofs is None or np.array_equal(dofs, np.arange(base.n_dofs)) \
+            else np.asarray(dofs, dtype=np.int64)
         self.curve = ContactCurve(base.edge_nodes, rod.closed, rod.edge_length, rod.length,
-                                  options)
+                                  options, getattr(base, "centreline_origin", None))
         self.diameter = self.curve.diameter
         self.closed = self.curve.closed
         self.edge_length = self.curve.edge_length
@@ -150,6 +160,14 @@ class ContactProblem:
         return self.base.near_symmetry_modes
 
     # ----------------------------------------------------------- geometry
+    def centreline(self, q: np.ndarray) -> np.ndarray:
+        """The centreline ``(3 n,)`` of ``q`` (module doc), linear in ``q``."""
+        return np.asarray(q, dtype=float) if self._dof_map is None else self.base.centreline(q)
+
+    def _scatter(self, dofs: np.ndarray) -> np.ndarray:
+        """Indices into :meth:`centreline` as indices into ``q``."""
+        return dofs if self._dof_map is None else self._dof_map[dofs]
+
     @property
     def treatment(self) -> str:
         return self.options.treatment
@@ -180,9 +198,10 @@ class ContactProblem:
         gauge only steers the augmented-Lagrangian outer iterations; every
         returned state is an equilibrium without it.
         """
-        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        x = self.centreline(q).reshape(-1, 3)
         n = len(x)
-        fixed_nodes = set((np.asarray(self.base.fixed) // 3).tolist())
+        held = np.isin(self._scatter(np.arange(3 * n)), self.base.fixed).reshape(n, 3)
+        fixed_nodes = set(np.flatnonzero(held.any(axis=1)).tolist())
         k = next(i for i in range(n // 4, n // 4 + n) if i % n not in fixed_nodes) % n
         t = x[(k + 1) % n] - x[(k - 1) % n]
         self._slide_pin = (k, t / np.linalg.norm(t), x[k].copy())
@@ -195,16 +214,16 @@ class ContactProblem:
 
     def pair_distances(self, q: np.ndarray, pairs: np.ndarray):
         """``(d, s, t)`` ``(m,)`` of pairs ``(m, 2)`` on the contact curve (exact minima)."""
-        return self.curve.pair_distances(q, pairs)
+        return self.curve.pair_distances(self.centreline(q), pairs)
 
     def pair_state(self, q: np.ndarray, cutoff: float, polygon: bool = False,
                    shadows: bool = False) -> PairState:
         """Pairs within ``cutoff`` at ``q``: :meth:`ContactCurve.pair_state`."""
-        return self.curve.pair_state(q, cutoff, polygon, shadows)
+        return self.curve.pair_state(self.centreline(q), cutoff, polygon, shadows)
 
     def min_distance(self, q: np.ndarray, polygon: bool = False) -> float:
         """Smallest distance of non-neighbour pairs: :meth:`ContactCurve.min_distance`."""
-        return self.curve.min_distance(q, polygon)
+        return self.curve.min_distance(self.centreline(q), polygon)
 
     def arclength(self, segment: np.ndarray, param: np.ndarray) -> np.ndarray:
         """Arc-length fraction ``s/L`` of the point ``param`` along ``segment``."""
@@ -217,8 +236,9 @@ class ContactProblem:
 
     def _pair_derivatives(self, q: np.ndarray, pairs: np.ndarray):
         """``(d, gradient, Hessian, dofs)`` of the pairs' distances
-        (:meth:`ContactCurve.pair_derivatives`)."""
-        return self.curve.pair_derivatives(q, pairs)
+        (:meth:`ContactCurve.pair_derivatives`), ``dofs`` indices into ``q``."""
+        d, grad, hess, dofs = self.curve.pair_derivatives(self.centreline(q), pairs)
+        return d, grad, hess, self._scatter(dofs)
 
     def _cutoff(self) -> float:
         """Distance below which a pair contributes to the energy or may become active."""
@@ -261,7 +281,8 @@ class ContactProblem:
         """:func:`~supercoil.contact.integral.integral_terms` of the pairs within reach
         at ``q``; the last call is remembered, and serves lower orders too."""
         st = self._state(q)
-        key = np.ascontiguousarray(q, dtype=np.float64).tobytes()
+        x = self.centreline(q)
+        key = np.ascontiguousarray(x, dtype=np.float64).tobytes()
         cached = self._integral_memo
         if cached is not None and cached[0] == key and cached[1] >= order \
                 and cached[2] == self.stiffness:
@@ -269,10 +290,11 @@ class ContactProblem:
         opts = self.options
         # the sample points of the pair state's search (remembered for this q), not
         # formed again per pair in the kernel
-        terms = integral_terms(np.asarray(q, dtype=float).reshape(-1, 3), self.curve.sample_stencil,
+        terms = integral_terms(x.reshape(-1, 3), self.curve.sample_stencil,
                                self.curve.sample_weights, st.pairs, self.diameter, self.treatment,
                                self.stiffness, opts.barrier_activation * self.diameter,
-                               self.edge_length, order, points=self.curve.sample_points(q))
+                               self.edge_length, order, points=self.curve.sample_points(x))
+        terms = (*terms[:5], self._scatter(terms[5]))  # the pair blocks' DOFs in q
         self._integral_memo = (key, order, self.stiffness, terms)
         return st, terms
 
@@ -385,7 +407,7 @@ class ContactProblem:
         c = self.base.constraints(q)
         if self._slide_pin is not None:
             k, t, xk = self._slide_pin
-            x = np.asarray(q, dtype=float).reshape(-1, 3)
+            x = self.centreline(q).reshape(-1, 3)
             c = np.concatenate([c, [float(t @ (x[k] - xk))]])
         if len(self.active) == 0:
             return c
@@ -396,7 +418,8 @@ class ContactProblem:
         J = self.base.constraint_jacobian(q)
         if self._slide_pin is not None:
             k, t, _ = self._slide_pin
-            row = sp.csr_matrix((t, (np.zeros(3, dtype=np.int64), 3 * k + np.arange(3))),
+            row = sp.csr_matrix((t, (np.zeros(3, dtype=np.int64),
+                                     self._scatter(3 * k + np.arange(3)))),
                                 shape=(1, self.n_dofs))
             J = sp.vstack([J, row]).tocsr()
         if len(self.active) == 0:
@@ -419,7 +442,7 @@ class ContactProblem:
     def accept(self, q: np.ndarray) -> None:
         self.base.accept(q)
         if self.closed:
-            self.knot_guard.accept(q)
+            self.knot_guard.accept(self.centreline(q))
 
     def keep_knot_type(self, points: np.ndarray):
         """Make the knot type of ``points`` ``(n, 3)`` the one every state must keep
@@ -448,24 +471,26 @@ class ContactProblem:
         ``refusal`` says why the last refused state was refused."""
         if not self.closed:
             return True
-        if not self.link_guard.admissible(self.curve, self.base.writhe_local, q):
+        x = self.centreline(q)
+        if not self.link_guard.admissible(self.curve, x, lambda: self.base.writhe_local(q)):
             self.refusal = "the linking number would change (a strand through another)"
             return False
         if not self.knot_guard.admissible(
-                q, clearance=lambda state: self.curve.min_distance(state, polygon=True)):
+                x, clearance=lambda state: self.curve.min_distance(state, polygon=True)):
             self.refusal = self.knot_guard.refusal
             return False
         return True
 
     def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:
         """Largest node displacement of ``dq`` over the trust radius (one edge length)."""
-        dx = np.asarray(dq, dtype=float).reshape(-1, 3)
+        dx = self.centreline(dq).reshape(-1, 3)
         return float(np.max(np.linalg.norm(dx, axis=1))) / self.edge_length if dx.size else 0.0
 
     def step_bound(self, q: np.ndarray, dq: np.ndarray) -> float:
         """Largest fraction of the step ``dq`` free of collisions
         (:func:`supercoil.contact.step.step_bound`)."""
-        return step_bound(self.curve, q, dq, self.treatment == "barrier")
+        return step_bound(self.curve, self.centreline(q), self.centreline(dq),
+                          self.treatment == "barrier")
 
     # ------------------------------------------------------------ forces
     def pair_forces(self, q: np.ndarray, multipliers: np.ndarray | None = None):

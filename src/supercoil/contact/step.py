@@ -119,10 +119,10 @@ class LinkGuard:
     def __init__(self):
         self._verified: tuple[np.ndarray, float] | None = None
 
-    def admissible(self, curve: ContactCurve, writhe_local, q: np.ndarray) -> bool:
-        """Whether ``q`` kept the link; ``writhe_local(q)`` is the writhe the energy
-        carries."""
-        x = np.asarray(q, dtype=float).reshape(-1, 3)
+    def admissible(self, curve: ContactCurve, points: np.ndarray, carried_writhe) -> bool:
+        """Whether the centreline ``points`` kept the link; ``carried_writhe()`` is the
+        writhe the energy carries there (asked only when the double sum runs)."""
+        x = np.asarray(points, dtype=float).reshape(-1, 3)
         if len(x) > LINK_CHECK_MAX_NODES:
             return True
         if self._verified is not None:
@@ -131,7 +131,7 @@ class LinkGuard:
             x_v, d_v = self._verified
             if x_v.shape == x.shape and 2.0 * np.max(np.linalg.norm(x - x_v, axis=1)) < d_v:
                 return True
-        ok = abs(writhe_local(q) - writhe(x)) < 0.5
+        ok = abs(carried_writhe() - writhe(x)) < 0.5
         if ok:
-            self._verified = (x.copy(), curve.min_distance(q, polygon=True))
+            self._verified = (x.copy(), curve.min_distance(x.ravel(), polygon=True))
         return ok

@@ -203,6 +203,11 @@ class ClosedCosseratEnergy(CosseratEnergy):
         """Writhe of the centreline polygon (exact double sum)."""
         return writhe(self.configuration(q)[0])
 
+    def writhe_local(self, q: np.ndarray) -> float:
+        """The writhe the ring's link carries at ``q``: ``link - Tw`` (frames only, no double
+        sum); it equals :meth:`writhe` while the link is kept."""
+        return self.link - self.frame_twist(q)
+
     def twist(self, q: np.ndarray) -> float:
         """Excess twist ``Tw - Lk_0 = Tw - link + dLk``: ``twist + writhe = dLk``."""
         return self.frame_twist(q) - self.link + self.excess_link

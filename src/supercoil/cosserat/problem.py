@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from supercoil.cosserat.centreline import CosseratCentreline
 from supercoil.cosserat.rod import DOFS_PER_NODE, CosseratRod
 from supercoil.cosserat.rotations import dexp, dexp_transpose_derivative, exp_so3, hat
 from supercoil.errors import InputError
@@ -39,13 +40,14 @@ from supercoil.solvers.csr_sum import block_csr
 from supercoil.solvers.problem import HessianParts
 
 
-class CosseratEnergy:
+class CosseratEnergy(CosseratCentreline):
     """Energy of a Cosserat rod under dead nodal forces, with some DOFs fixed.
 
     ``positions`` ``(n_nodes, 3)`` and ``rotations`` ``(n_nodes, 3, 3)``: the initial
     state, which is ``q0 = initial_state()`` (zero rotation coordinates). ``fixed``:
     indices into ``q`` held at their values (clamps). ``forces`` ``(n_nodes, 3)``:
-    dead loads, potential ``-sum f_i . x_i``.
+    dead loads, potential ``-sum f_i . x_i``. Its centreline (the nodes' positions) is
+    what self-contact sees (:mod:`supercoil.cosserat.centreline`).
     """
 
     n_constraints = 0

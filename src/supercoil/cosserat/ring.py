@@ -78,10 +78,17 @@ class CosseratRingResult:
     message: str
     residual: float
     iterations: int
+    # with self-contact (supercoil.problems.cosserat_ring_winding): the tube, the
+    # treatment, the contact summary, the winding path and the contact multipliers
+    length_over_diameter: float | None = None
+    contact_treatment: str | None = None
+    contact: dict | None = None
+    path: dict | None = None
+    multipliers: np.ndarray | None = None
 
     def summary(self) -> dict:
         """JSON-ready keys, those of the Kirchhoff ring plus the model's."""
-        return {
+        out = {
             "model": "cosserat",
             "twist_ratio": self.twist_ratio,
             "excess_link": self.excess_link,
@@ -97,6 +104,11 @@ class CosseratRingResult:
             **solved_state_record(self),
             "michell_threshold_exact": michell_excess_link(self.twist_ratio, 2),
         }
+        if self.contact_treatment is not None:
+            out.update(length_over_diameter=self.length_over_diameter,
+                       contact_treatment=self.contact_treatment, **(self.contact or {}),
+                       branch=(self.path or {}).get("branch"), path=self.path)
+        return out
 
 
 def ring_problem(twist_ratio: float, excess_link: float, n_nodes: int,

@@ -100,6 +100,11 @@ class CosseratRod:
         return self.length / self.n_elements
 
     @property
+    def edge_length(self) -> float:
+        """The rest length of the centreline's segments: :attr:`element_length`."""
+        return self.element_length
+
+    @property
     def bending_moduli(self) -> np.ndarray:
         """``C_K = diag(A, A, C)`` as ``(3,)``."""
         return np.array([self.bending_stiffness, self.bending_stiffness, self.twist_stiffness])

@@ -266,7 +266,7 @@ def _validate(raw: dict, source: str) -> dict:
 def _complete(s: dict, kind: str, preset: str, source: str) -> None:
     """Cross-key checks and derived values (DNA preset, contact treatment)."""
     rod, problem = s["rod"], s["problem"]
-    problem_with_model = model_problem(s, kind, preset)
+    problem_with_model = model_problem(s, kind)
     if problem_with_model is not None:
         raise StudyError(f"{source}: {problem_with_model}")
     if preset == "dna":

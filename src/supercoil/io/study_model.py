@@ -8,11 +8,10 @@ from collections.abc import Mapping
 MODELS = ("kirchhoff", "cosserat")
 
 
-def model_problem(s: Mapping, kind: str, preset: str) -> str | None:
+def model_problem(s: Mapping, kind: str) -> str | None:
     """What is wrong with the study's model keys (the message after the file's name), or
-    None: stiffnesses only with the Cosserat model, which has no self-contact in a ring
-    or tweezers (``length_over_diameter``, or the DNA preset's), no displacement control,
-    and in a ring diagram the primary branches only."""
+    None: stiffnesses only with the Cosserat model, which has no displacement control
+    and, in a ring diagram, computes the primary branches only (with their contact)."""
     rod, problem = s["rod"], s["problem"]
     cosserat = rod.get("model") == "cosserat"
     for key in ("stretch_stiffness", "shear_stiffness"):
@@ -21,17 +20,10 @@ def model_problem(s: Mapping, kind: str, preset: str) -> str | None:
                     "inextensible and unshearable)")
     if not cosserat:
         return None
-    if kind != "ring_diagram" and ("length_over_diameter" in rod or preset == "dna"):
-        return (f"contact with the Cosserat model is not available for {kind}; drop [rod] "
-                'length_over_diameter (and the DNA preset), or use model = "kirchhoff"')
     if "end_distance" in problem:
         return ("[problem] end_distance (displacement control) is not available with the "
                 "Cosserat model; give tension")
-    if kind == "ring_diagram":
-        if problem.get("contact") not in (None, "barrier"):
-            return ("[problem] contact: contact with the Cosserat model is not available for "
-                    "ring_diagram (its primary branches stop at their first contact); drop it")
-        if s.get("continuation", {}).get("branch_depth", 1) != 1:
-            return ("[continuation] branch_depth: the Cosserat ring diagram computes the "
-                    "primary branches only (branch_depth = 1)")
+    if kind == "ring_diagram" and s.get("continuation", {}).get("branch_depth", 1) != 1:
+        return ("[continuation] branch_depth: the Cosserat ring diagram computes the "
+                "primary branches only (branch_depth = 1)")
     return None

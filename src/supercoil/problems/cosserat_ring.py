@@ -8,9 +8,12 @@ requested mode the primary branch is switched off it along the critical mode and
 followed without contact. A phantom ring that passes through itself changes its
 linking number, which the Cosserat ring refuses (:class:`~supercoil.cosserat.LinkingError`),
 so each primary branch watches the closest approach of non-neighbouring centreline
-points against the section's diameter ``D = L / slenderness`` (the event
-``contact_onset``, as on the Kirchhoff diagram) and stops at the first point past it.
-Branches with self-contact are not computed for this model.
+points against the tube diameter ``D`` (the event ``contact_onset``, as on the
+Kirchhoff diagram) and stops at the first point past it. With ``contact`` the branch
+goes on from there with self-contact (``alpha_contact``, parent ``alpha``,
+:mod:`supercoil.problems.cosserat_ring_contact`), and the onset is measured on the
+contact's own curve; without it ``D`` is the section's, ``L / slenderness``, and the
+diagram ends at the first contacts.
 
 Per point the records are the Kirchhoff ring's (``excess_link``, ``writhe``, ``twist``,
 ``energy``, ``link_error``, ``min_gap_over_diameter``, contact counts) plus
@@ -29,6 +32,7 @@ import numpy as np
 
 from supercoil.contact.curve import ContactCurve
 from supercoil.contact.options import ContactOptions
+from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import (
     Branch,
     ContinuationOptions,
@@ -37,6 +41,7 @@ from supercoil.continuation import (
     continuation,
     switch_branch,
 )
+from supercoil.cosserat.centreline import StoredCentrelines
 from supercoil.cosserat.circle import circle_state
 from supercoil.cosserat.closed import ClosedCosseratEnergy
 from supercoil.cosserat.ring import michell_excess_link, relax_circle, ring_problem
@@ -82,11 +87,14 @@ def positions_of(q: np.ndarray) -> np.ndarray:
     return np.asarray(q, dtype=float).reshape(-1, DOFS_PER_NODE)[:, :3]
 
 
-def gap_curve(n_nodes: int, diameter: float) -> ContactCurve:
-    """The closed polygon's self-distance for a tube of ``diameter`` (units of L)."""
+def gap_curve(n_nodes: int, diameter: float, options: ContactOptions | None = None
+              ) -> ContactCurve:
+    """The closed polygon's self-distance for a tube of ``diameter`` (units of L), or the
+    self-distance of the contact curve of ``options`` (its diameter)."""
     a = np.arange(n_nodes)
     segments = np.stack([a, (a + 1) % n_nodes], axis=1)
-    options = ContactOptions(diameter=diameter, curve="polygon", formulation="pairs")
+    if options is None:
+        options = ContactOptions(diameter=diameter, curve="polygon", formulation="pairs")
     return ContactCurve(segments, True, 1.0 / n_nodes, 1.0, options)
 
 
@@ -205,29 +213,40 @@ def centreline_branch(branch: Branch) -> Branch:
     """The branch with its states as centrelines ``(k, 3 n)`` and tangents restricted to
     the positions and the parameter, as the diagram's outputs read them."""
     k = len(branch)
+    if not k:  # a branch without points (a failed start): nothing to restrict
+        return branch
     states = np.asarray(branch.states, float).reshape(k, -1, DOFS_PER_NODE)[:, :, :3]
-    n_dofs = branch.states.shape[1] if k else 0
+    n_dofs = branch.states.shape[1]
     tangents = np.asarray(branch.tangents, float)
-    if k:
-        position = tangents[:, :n_dofs].reshape(k, -1, DOFS_PER_NODE)[:, :, :3].reshape(k, -1)
-        tangents = np.concatenate([position, tangents[:, n_dofs:]], axis=1)
+    position = tangents[:, :n_dofs].reshape(k, -1, DOFS_PER_NODE)[:, :, :3].reshape(k, -1)
+    tangents = np.concatenate([position, tangents[:, n_dofs:]], axis=1)
     return dataclasses.replace(branch, states=states.reshape(k, -1), tangents=tangents)
 
 
 def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
                           shear_stiffness: float,
-                          progress: Callable[[str], None] | None = None) -> RingDiagram:
+                          progress: Callable[[str], None] | None = None,
+                          contact: bool = False) -> RingDiagram:
     """The circle, its bifurcations of ``options.modes`` and the primary branches to their
     first self-contact at the tube diameter ``options.diameter``, for the Cosserat ring of
-    ``stretch_stiffness`` EA L^2/A and ``shear_stiffness`` GA L^2/A (module doc)."""
+    ``stretch_stiffness`` EA L^2/A and ``shear_stiffness`` GA L^2/A, and with ``contact``
+    on from there with self-contact (``options.contact``; module doc)."""
+    from supercoil.problems.cosserat_ring_contact import (
+        cosserat_contact_branch,
+        cosserat_contact_problem,
+    )
+
     opts = options
     diameter = opts.diameter
     say = progress or (lambda message: None)
-    notes: list[str] = [(f"the Cosserat model: primary branches stop at their first "
-                         f"self-contact (D = {diameter:.4g} L); branches with self-contact are "
-                         "not computed for this model")]
+    notes: list[str] = [] if contact else [
+        (f"the Cosserat model without contact: primary branches stop at their first "
+         f"self-contact (D = {diameter:.4g} L)")]
     constants = (opts.twist_ratio, float(stretch_stiffness), float(shear_stiffness))
-    curve = gap_curve(opts.n_nodes, diameter)
+    # with contact the onset is measured on the contact's own curve (as the Kirchhoff
+    # diagram's probe)
+    curve = gap_curve(opts.n_nodes, diameter, dataclasses.replace(
+        opts.contact_options(diameter), treatment="barrier") if contact else None)
     top = max(michell_excess_link(opts.twist_ratio, m) for m in opts.modes)
     circle_top = max(opts.max_excess_link, 1.1 * top)
     say(f"circle up to dLk = {circle_top:.4g} (Cosserat rod)")
@@ -239,6 +258,10 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
                                              *constants[1:], curve, link)
     seconds["circle"] = time.perf_counter() - start
     branches = [centreline_branch(circle)]
+    contact_names: set[str] = set()
+    cp = cosserat_contact_problem(problem, opts) if contact else None
+    # the contact of the stored centrelines, for the outputs' contact lists
+    view = None if cp is None else ContactProblem(StoredCentrelines(problem.rod), cp.options)
     free_opts = ContinuationOptions(
         initial_step=SWITCH_AMPLITUDES[0], max_step=opts.free_max_step,
         max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
@@ -261,7 +284,24 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
             notes.append(f"{name}: no contact found without contact ({free.message})")
         seconds[name] = time.perf_counter() - start
         branches.append(centreline_branch(free))
+        if not (onsets and contact):
+            continue
+        contact_name = f"{name}_contact"
+        say(f"{contact_name}: from dLk = {onsets[0].parameter:.4g}, with self-contact "
+            f"({opts.contact})")
+        start = time.perf_counter()
+        with_contact = cosserat_contact_branch(cp, free, onsets[0], opts,
+                                               cosserat_ring_records(problem, curve),
+                                               contact_name)
+        if with_contact is None:
+            notes.append(f"{contact_name}: contact at dLk = {onsets[0].parameter:.4g} is "
+                         f"outside [0, {opts.max_excess_link:g}]: not computed")
+            continue
+        with_contact = dataclasses.replace(with_contact, parent=name, origin=onsets[0])
+        seconds[contact_name] = time.perf_counter() - start
+        branches.append(centreline_branch(with_contact))
+        contact_names.add(contact_name)
     model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
              "shear_stiffness": float(shear_stiffness)}
-    return RingDiagram(opts, tuple(branches), frozenset(), seconds, tuple(notes), None,
-                       model=model)
+    return RingDiagram(opts, tuple(branches), frozenset(contact_names), seconds, tuple(notes),
+                       view, model=model)

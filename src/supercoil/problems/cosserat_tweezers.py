@@ -8,11 +8,15 @@ by ``tension / EA``, is followed in ``turns`` by the same continuation as the
 Kirchhoff rod's; it buckles where a pair of eigenvalues crosses zero (Greenhill's
 condition in the Kirchhoff limit), and the buckled branch is switched off that point
 along a critical mode and followed to the end of the turns' range. Without
-self-contact the rod may pass through itself there (``closure_failed``).
+self-contact the rod may pass through itself there (``closure_failed``); with it
+(``options.length_over_diameter``) the buckled branch stops past its first contact
+and goes on with self-contact to the plectoneme
+(:mod:`supercoil.problems.cosserat_tweezers_contact`).
 
 Per point the records are the Kirchhoff tweezers' (``turns``, ``extension``, ``torque``,
 ``twist``, ``writhe``, ``closure_error``, ``closure_failed``, ``energy``,
-``load_potential``, ``tension``) plus ``max_stretch_strain`` and ``max_shear_strain``;
+``load_potential``, ``tension``, the contact counts and ``min_gap_over_diameter``) plus
+``max_stretch_strain`` and ``max_shear_strain``;
 ``extension`` is the end's height over L, stretch included. ``twist`` is that of
 the ribbon of ``d1`` projected normal to the centreline, closed by the clamps'
 frames along tails on the axis, so that ``twist + writhe = turns`` (Fuller's closure)
@@ -23,14 +27,23 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Callable
 
 import numpy as np
 
+from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import ContinuationOptions, continuation, switch_branch
+from supercoil.cosserat.centreline import StoredCentrelines
 from supercoil.cosserat.clamped import ClampedCosseratEnergy
 from supercoil.cosserat.rod import CosseratRod
+from supercoil.problems.contact_events import onset_event, stop_after_onset, truncate_after
 from supercoil.problems.cosserat_ring import centreline_branch
+from supercoil.problems.cosserat_tweezers_contact import (
+    cosserat_contact_branch,
+    tweezers_contact_options,
+    with_contact_records,
+)
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.result import TweezersResult
 from supercoil.topology import twist_from_frames, writhe
@@ -130,12 +143,21 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
              "shear_stiffness": float(shear_stiffness)}
     problem = clamped_cosserat_problem(opts, stretch_stiffness, shear_stiffness)
     records = cosserat_tweezers_records(problem)
+    cp = view = None
+    if opts.diameter is not None:
+        cp = ContactProblem(problem, tweezers_contact_options(opts))
+        # the contact of the stored centrelines, for the outputs' contact lists
+        view = ContactProblem(StoredCentrelines(problem.rod), cp.options)
+        records = with_contact_records(records, cp, False)
     say(f"straight Cosserat rod in turns at F L^2/A = {opts.tension:g}")
     cont = ContinuationOptions(initial_step=0.05, max_step=STRAIGHT_MAX_STEP,
                                parameter_bounds=opts.turns, max_points=opts.max_points,
                                event_tolerance=opts.event_tolerance)
+    seconds: dict[str, float] = {}
+    start_time = time.perf_counter()
     straight = continuation(problem, problem.straight_state(), parameter="turns",
                             options=cont, name="straight", records=records)
+    seconds["straight"] = time.perf_counter() - start_time
     branches = [centreline_branch(straight)]
     bifurcations = [p for p in straight.points_of_kind("bifurcation") if p.count_before == 0]
     if not bifurcations:
@@ -144,7 +166,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
         else:
             notes.append(f"incomplete: straight stopped at {straight.parameter_values[-1]:.6g} "
                          f"turns ({straight.message})")
-        return TweezersResult(opts, tuple(branches), frozenset(), problem, None, {},
+        return TweezersResult(opts, tuple(branches), frozenset(), problem, view, seconds,
                               tuple(notes), model=model)
     point = bifurcations[0]
     say(f"buckled: switched from the straight rod at {point.parameter:.6g} turns")
@@ -157,14 +179,43 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns, max_points=opts.max_points,
                                     event_tolerance=opts.event_tolerance)
+    start_time = time.perf_counter()
+    watched, at_onset = stop_after_onset() if cp is not None else (None, None)
     buckled = switch_branch(problem, straight, start, free_opts, name="buckled",
-                            amplitude=SWITCH_AMPLITUDE, records=records, direction=direction)
-    if not len(buckled):
+                            amplitude=SWITCH_AMPLITUDE, records=records, direction=direction,
+                            events=() if cp is None else (onset_event(cp),),
+                            on_point=watched, stop=at_onset)
+    onsets = [p for p in buckled.points_of_kind("contact_onset") if p.index + 1 < len(buckled)]
+    if onsets:
+        buckled = truncate_after(buckled, onsets[0], f"stopped at the first contact "
+                                 f"({onsets[0].parameter:.6g} turns); the contact-free run: "
+                                 f"{buckled.message}")
+    elif not len(buckled):
         notes.append(f"failed: buckled: no point found off the straight rod at "
                      f"{point.parameter:.6g} turns ({buckled.message})")
     elif not buckled.status.complete:
         notes.append(f"incomplete: buckled stopped at {buckled.parameter_values[-1]:.6g} "
                      f"turns: {buckled.message}")
+    elif cp is not None:
+        notes.append(f"buckled: no contact found ({buckled.message})")
+    seconds["buckled"] = time.perf_counter() - start_time
     branches.append(centreline_branch(buckled))
-    return TweezersResult(opts, tuple(branches), frozenset(), problem, None, {}, tuple(notes),
+    if not onsets:
+        return TweezersResult(opts, tuple(branches), frozenset(), problem, view, seconds,
+                              tuple(notes), model=model)
+    say(f"buckled_contact: from {onsets[0].parameter:.6g} turns, with self-contact (barrier)")
+    start_time = time.perf_counter()
+    contact = cosserat_contact_branch(opts, cp, buckled, onsets[0],
+                                      cosserat_tweezers_records(problem), "buckled_contact")
+    contact = dataclasses.replace(contact, parent="buckled", origin=onsets[0])
+    if not contact.ok:
+        notes.append(f"failed: buckled_contact: {contact.message}")
+    elif contact.parameter_values[-1] < opts.turns[1] - 1e-9:
+        notes.append(f"incomplete: buckled_contact ended at "
+                     f"{contact.parameter_values[-1]:.6g} turns, before {opts.turns[1]:g}: "
+                     f"{contact.message}")
+    seconds["buckled_contact"] = time.perf_counter() - start_time
+    branches.append(centreline_branch(contact))
+    return TweezersResult(opts, tuple(branches), frozenset({"buckled_contact"}), problem, view,
+                          seconds, tuple(notes), cut_at_contact=frozenset({"buckled"}),
                           model=model)

@@ -284,20 +284,20 @@ def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
             notes.append(f"{name}: no contact found without contact ({free.message})")
         seconds[name] = time.perf_counter() - start
         branches.append(centreline_branch(free))
-        if not (onsets and contact):
+        if onset is None or not contact:
             continue
         contact_name = f"{name}_contact"
-        say(f"{contact_name}: from dLk = {onsets[0].parameter:.4g}, with self-contact "
+        say(f"{contact_name}: from dLk = {onset.parameter:.4g}, with self-contact "
             f"({opts.contact})")
         start = time.perf_counter()
-        with_contact = cosserat_contact_branch(cp, free, onsets[0], opts,
+        with_contact = cosserat_contact_branch(cp, free, onset, opts,
                                                cosserat_ring_records(problem, curve),
                                                contact_name)
         if with_contact is None:
-            notes.append(f"{contact_name}: contact at dLk = {onsets[0].parameter:.4g} is "
+            notes.append(f"{contact_name}: contact at dLk = {onset.parameter:.4g} is "
                          f"outside [0, {opts.max_excess_link:g}]: not computed")
             continue
-        with_contact = dataclasses.replace(with_contact, parent=name, origin=onsets[0])
+        with_contact = dataclasses.replace(with_contact, parent=name, origin=onset)
         seconds[contact_name] = time.perf_counter() - start
         branches.append(centreline_branch(with_contact))
         contact_names.add(contact_name)

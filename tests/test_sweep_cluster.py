@@ -11,9 +11,11 @@ sweep that ran straight through.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -99,12 +101,29 @@ def rings(tmp_path_factory):
     study = folder / "rings.toml"
     study.write_text(RINGS, encoding="utf-8")
     out = folder / "local"
-    return study, out, _sweep(study, out, "--workers", "2")
+    with _held_port(8787):  # dask's default port, as another cluster would hold it
+        return study, out, _sweep(study, out, "--workers", "2")
+
+
+@contextlib.contextmanager
+def _held_port(port: int):
+    """Listen on ``port`` (if it is free; else someone else holds it already)."""
+    holder = socket.socket()
+    try:
+        holder.bind(("", port))
+        holder.listen()
+    except OSError:
+        pass
+    try:
+        yield
+    finally:
+        holder.close()
 
 
 def test_local_cluster_tasks_equal_the_studies_run_alone(rings, tmp_path):
     study, out, done = rings
     assert done.returncode == 0, done.stderr
+    assert "already in use" not in done.stderr  # the cluster's ports are free ones
     dataset = load_sweep(out)
     sweep = load_sweep_study(study)
     assert dataset["status"].shape == (3, 2) and set(dataset["status"].values.ravel()) == {

@@ -153,8 +153,12 @@ def _client(workers: int | None, scheduler: str | None, retries: int):
     config = {"distributed.nanny.pre-spawn-environ": environ,
               "distributed.scheduler.allowed-failures": retries}
     with dask.config.set(config):
+        # no dashboard; the scheduler's own HTTP server (health, metrics) on a free
+        # port, not on the default 8787, which a second sweep or another dask
+        # cluster on the machine may hold
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=None, silence_logs=logging.ERROR,
+                               scheduler_kwargs={"dashboard_address": ":0"})
     with cluster, Client(cluster, set_as_default=False) as client:
         yield client
 

@@ -8,9 +8,9 @@ continuation with self-contact, as the ring diagram's contact branches are
 followed (:mod:`supercoil.problems.ring_diagram.contact_branches`: the
 material sliding pinned, the rigid pins re-picked between runs, steps a
 fraction of D). Every corrected state is vetted by
-:meth:`~supercoil.contact.problem.ContactProblem.admissible` (linking number
-and knot type) and a step that would change either is refused and retried
-shorter. Per point the records add ``knot_determinant`` and
+:meth:`~supercoil.contact.problem.ContactProblem.admissible` (linking number,
+knot type, and a radius of curvature of at least D/2) and a step that would
+break one is refused and retried shorter. Per point the records add ``knot_determinant`` and
 ``knot_alexander_degree`` (of the state's own knot type, computed anew: they
 stay the start's exactly when the guard did its work) to the ring's
 (``excess_link``, ``writhe`` from the double sum, ``twist`` from the material
@@ -88,6 +88,7 @@ def relaxed_knot(knot, twist_ratio: float, length_over_diameter: float, excess_l
     base = ClosedRodEnergy(rod, relaxed.points, excess_link)
     D = rod.length / length_over_diameter
     cp = ContactProblem(base, ContactOptions(diameter=D, treatment="barrier"))
+    cp.curvature_limit = 0.5 * D  # a radius of curvature of at least D/2 at every step
     reference = cp.keep_knot_type(relaxed.points)
     q0 = relaxed.points.ravel()
     cp.accept(q0)

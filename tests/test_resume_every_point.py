@@ -164,7 +164,9 @@ def test_ring_branch_resumed_after_every_point_ends_as_the_uninterrupted_run():
     assert len(full) == 20 and full.phase_modes.shape[0] == 1
     assert full.gauge_moved.any()  # a gauge moved after a failed step
     assert {1, 2} <= set(rejections.after), rejections.after
-    assert full.next_step[-1] > 10 * full.next_step[0]  # the steps grew
+    # the steps grew, then were cut where the branch nears its figure-eight (a step
+    # through the rod itself refused)
+    assert np.max(full.next_step) > 10 * full.next_step[0]
     for k in range(1, len(full)):
         partial = interrupted_after(k, run)
         problem, _, _ = ring_alpha()  # a fresh problem, as after a restart

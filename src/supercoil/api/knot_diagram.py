@@ -4,10 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from pathlib import Path
-
-from supercoil.api.recording import RESULT_FILE
-from supercoil.errors import InputError
 
 DIAGRAM_JSON = "diagram.json"
 
@@ -30,7 +26,7 @@ class KnotDiagramResult:
 def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
                  excess_link: tuple[float, float], *, nodes: int = 60,
                  max_points: int = 150, start: float | None = None, deflation: int = 3,
-                 out=None, overwrite: bool = False,
+                 out=None, resume=None, overwrite: bool = False,
                  progress: Callable[[str], None] | None = None,
                  on_point: Callable | None = None) -> KnotDiagramResult:
     """The diagram of a knotted ring in its excess link, with self-contact (Coleman &
@@ -42,41 +38,59 @@ def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
     followed both ways to the ends of the range, ``max_points`` points each way;
     the knot type is kept at every step. At ``deflation`` computed points spread
     over the range further equilibria are sought by deflation (Farrell, Birkisson
-    & Funke 2015) and by relaxing the knot anew, and each new one is followed both ways (docs/knots.md, "A knotted
-    ring's diagram"). ``out``: a folder (created if missing) for ``result.h5`` (the two
-    branches with their states, readable by :func:`supercoil.load`) and
-    ``diagram.json`` (the summary); an existing result there is refused unless
-    ``overwrite``. Invalid input raises :class:`supercoil.errors.InputError` before
-    anything is computed or written.
+    & Funke 2015) and by relaxing the knot anew, and each new one is followed both
+    ways (docs/knots.md, "A knotted ring's diagram").
+
+    ``out``: a folder (created if missing): every accepted point is appended to
+    ``out/result.h5`` as it comes, before ``on_point(branch)`` sees it, so a run
+    stopped by Ctrl-C, a signal or a crash keeps every point reported (the result is
+    then closed as ``interrupted`` or ``failed``); at the end the file gets the final
+    branches, the summary and the status, and ``diagram.json`` (the summary) is
+    written beside it. An existing result there is refused unless ``overwrite``.
+    ``out`` may also be an open :class:`supercoil.io.store.ResultWriter`: the points
+    and final branches are stored in it, and the caller adds the summary and status
+    and closes it. ``resume``: ``True`` continues the result in ``out``; a result
+    (:func:`supercoil.load`'s, or its file or folder) is continued from: its finished
+    branches are kept, the others continued from their last point, and the stored
+    options must be these (as for :func:`supercoil.ring_diagram`). Invalid input
+    raises :class:`supercoil.errors.InputError` before anything is computed or
+    written.
     """
+    from supercoil.api.verbs import _computed
     from supercoil.io.results import envelope, write_json
-    from supercoil.io.store import save
     from supercoil.problems.knot_diagram import KnotDiagramOptions, compute_knot_diagram
 
     options = KnotDiagramOptions(knot, twist_ratio, length_over_diameter,
                                  tuple(excess_link) if isinstance(excess_link, (list, tuple))
                                  else excess_link, nodes, max_points, start, deflation)
-    folder = None if out is None else Path(out)
-    if folder is not None:
-        if folder.exists() and not folder.is_dir():
-            raise InputError(f"out {folder}: is a file, not a folder; give a folder",
-                             name="out")
-        if (folder / RESULT_FILE).exists() and not overwrite:
-            raise InputError(f"out {folder}: holds a {RESULT_FILE} already; give another "
-                             "folder or overwrite=True", name="out")
-    diagram = compute_knot_diagram(options, progress=progress, on_point=on_point)
+
+    def compute(settings, say, *, on_point, on_branch, resume):
+        return compute_knot_diagram(settings, progress=say, on_point=on_point,
+                                    on_branch=on_branch, resume=resume)
+
+    diagram, writer, owned = _computed(
+        "knot_diagram", options, compute, progress, on_point, out, resume, overwrite,
+        attributes={"twist_ratio": options.twist_ratio, "n_nodes": options.n_nodes,
+                    "closed": True, "diameter": options.diameter,
+                    "length_over_diameter": options.length_over_diameter},
+        provenance={"contact_treatment": "barrier", "n_nodes": options.n_nodes},
+        contact=lambda name: True)
     summary = envelope(diagram.payload(), n_nodes=options.n_nodes,
                        tolerances=options.tolerances, contact_treatment="barrier")
-    if folder is not None:
-        folder.mkdir(parents=True, exist_ok=True)
-        settings = {"command": "diagram knot",
-                    "options": {k: v for k, v in dataclasses.asdict(options).items()}}
-        save(folder / RESULT_FILE, diagram.branches, problem="knot_diagram",
-             settings=settings, summary=summary, overwrite=True,
-             attributes={"twist_ratio": options.twist_ratio, "n_nodes": options.n_nodes,
-                         "closed": True, "diameter": options.diameter,
-                         "length_over_diameter": options.length_over_diameter,
-                         "knot_type": diagram.knot.name},
-             status="complete" if diagram.ok else "incomplete")
-        write_json(summary, folder / DIAGRAM_JSON)
+    if writer is not None:
+        writer.set_attribute("knot_type", diagram.knot.name)
+    if owned:
+        finish(writer, diagram, summary)
+        write_json(summary, writer.path.parent / DIAGRAM_JSON)
     return KnotDiagramResult(diagram.branches, summary, diagram)
+
+
+def finish(writer, diagram, summary: dict) -> None:
+    """Store ``summary`` (``diagram.json``'s data) and the run's status in ``writer`` (which
+    holds ``diagram``'s final branches), and close it."""
+    writer.set_summary(summary)
+    stopped = [b.name for b in diagram.branches if not b.status.complete]
+    writer.set_status("complete" if diagram.ok else "incomplete",
+                      f"{len(diagram.branches)} branches computed" if diagram.ok else
+                      f"branch(es) {', '.join(stopped)} stopped early")
+    writer.close()

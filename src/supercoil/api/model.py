@@ -248,9 +248,10 @@ def _initial_curve(points) -> np.ndarray:
 class Ring:
     """A closed rod at a fixed excess link ``dLk = Lk - Lk0`` (turns).
 
-    Without ``contact`` the rod may pass through itself (the twisted circle is
-    its equilibrium at every dLk, unstable above Michell's threshold
-    ``dLk = (A/C) sqrt(3)``). With ``contact`` the ring is a tube that cannot.
+    Without ``contact`` nothing keeps the rod from reaching itself (the twisted
+    circle is its equilibrium at every dLk, unstable above Michell's threshold
+    ``dLk = (A/C) sqrt(3)``): a computation stops where a step would pass it
+    through itself. With ``contact`` the ring is a tube of diameter D.
     ``initial`` (m, 3): start from this closed curve (any knot type, any length:
     it is scaled to L = 1 and resampled at the rod's nodes) instead of the circle;
     it needs ``contact``. ``knot``: start from a smooth embedding of this knot instead

@@ -196,10 +196,12 @@ def _tweezers_settings(problem: Tweezers, turns, options: dict):
 
 
 def _computed(kind: str, settings, compute, progress, on_point, out, resume, overwrite,
-              attributes: dict, provenance: dict):
+              attributes: dict, provenance: dict,
+              contact: Callable[[str], bool] = lambda name: name.endswith("_contact")):
     """Run ``compute(settings, progress, on_point=, on_branch=, resume=)`` (a problem's
     driver) with the recording of ``out`` and the branches of ``resume``; returns
-    ``(computed, writer, owned)``."""
+    ``(computed, writer, owned)``. ``contact(name)``: whether branch ``name`` has
+    self-contact (as its points are stored)."""
     from supercoil.api import recording
     from supercoil.io.store import ResultWriter
 
@@ -230,7 +232,7 @@ def _computed(kind: str, settings, compute, progress, on_point, out, resume, ove
     say = progress or (lambda message: None)
     if stored is not None:
         recording.announce(stored, say)
-    with recording.recording(writer, on_point, lambda name: name.endswith("_contact")) as (
+    with recording.recording(writer, on_point, contact) as (
             point, final):
         computed = compute(settings, say, on_point=point, on_branch=final, resume=stored)
         if writer is not None:

@@ -2,10 +2,12 @@
 
 Thin: parses the options, checks them by building
 :class:`~supercoil.problems.knot_diagram.KnotDiagramOptions` and the output
-folder before anything is computed, then calls :func:`supercoil.knot_diagram`
-(which writes ``result.h5`` and ``diagram.json``) and draws the figures from its
-summary: ``link_writhe.png`` (dLk against Wr, as for ``diagram ring``),
-``energy.png`` (energy against dLk) and ``configurations.png``.
+folder (with ``--resume``, the stored result's options) before anything is
+computed, then calls :func:`supercoil.knot_diagram`, which appends every
+accepted point to ``result.h5`` as it comes (Ctrl-C or SIGTERM leave an
+``interrupted`` result that ``--resume`` continues), writes ``diagram.json`` and
+draws the figures from its summary: ``link_writhe.png`` (dLk against Wr, as for
+``diagram ring``), ``energy.png`` (energy against dLk) and ``configurations.png``.
 """
 
 from __future__ import annotations
@@ -70,6 +72,10 @@ def diagram_knot(
         "equilibria are sought by deflation (Farrell, Birkisson & Funke 2015) and by "
         "relaxing the knot anew, each new one followed both ways; 0 to 50.")] = 3,
     overwrite: Overwrite = False,
+    resume: Annotated[bool, typer.Option(
+        "--resume", help="Continue the interrupted diagram in --out DIR from its result.h5 "
+        "(the same options): finished branches are kept, the others continued from their "
+        "last point.")] = False,
     quiet: Quiet = False,
 ) -> None:
     """A knotted ring's diagram in its excess link, with self-contact (Coleman & Swigon
@@ -79,35 +85,57 @@ def diagram_knot(
     followed both ways by continuation (branches knot_up and knot_down), its knot
     type checked at every step; folds, bifurcations, contact events and stability
     along them; the lowest-energy state found at each dLk marked. Writes result.h5
-    (read it with supercoil.load), diagram.json, link_writhe.png (dLk against Wr,
-    stable parts heavy), energy.png (energy against dLk) and configurations.png.
+    (every branch with its states, saved point by point; read it with
+    supercoil.load), diagram.json, link_writhe.png (dLk against Wr, stable parts
+    heavy), energy.png (energy against dLk) and configurations.png.
     At --deflation K computed points further equilibria are sought, by deflation
     and by relaxing the knot anew, and each new one is followed both ways
     (branches deflated_1_up, deflated_1_down, relaxed_1_up, ...).
     """
-    from supercoil.cli.saving import prepare_folder
+    from supercoil.api.knot_diagram import DIAGRAM_JSON, finish
+    from supercoil.api.recording import stored_branches
+    from supercoil.cli.diagram_output import diagram_settings
+    from supercoil.cli.saving import nothing_to_resume, open_writer, prepare_folder, run_saving
+    from supercoil.io.results import write_json
     from supercoil.problems.knot_diagram import KnotDiagramOptions
 
     span = parse_span("--excess-link", excess_link,
                       "dLk_min:dLk_max in turns, like 2:5")
     with refused(KNOT_OPTIONS):
-        KnotDiagramOptions(knot, twist_ratio, length_over_diameter, span, nodes, max_points,
-                           start, deflation)
-    prepare_folder(out, overwrite=overwrite, resume=False, what="the diagram's files")
+        options = KnotDiagramOptions(knot, twist_ratio, length_over_diameter, span, nodes,
+                                     max_points, start, deflation)
+    stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="knot_diagram",
+                            what="the diagram's files")
+    if stored is not None:  # the stored options must be these (the verb's own check)
+        with refused(KNOT_OPTIONS):
+            stored_branches(stored, "knot_diagram", options)
+    if nothing_to_resume(stored):
+        return
     import supercoil as sc
-
-    def progress(message: str) -> None:
-        if not quiet:
-            print(f"  {message}", flush=True)
 
     print(f"supercoil diagram knot: {knot}, C/A = {twist_ratio:g}, "
           f"L/D = {length_over_diameter:g}, N = {nodes}, dLk {span[0]:g}:{span[1]:g}",
           flush=True)
-    with refused(KNOT_OPTIONS):
-        result = sc.knot_diagram(knot, twist_ratio, length_over_diameter, span, nodes=nodes,
-                                 max_points=max_points, start=start, deflation=deflation,
-                                 out=out,
-                                 overwrite=True, progress=progress)
+    writer = open_writer(out, resume=resume, problem="knot_diagram",
+                         settings=diagram_settings(options, "diagram knot"),
+                         attributes={"twist_ratio": options.twist_ratio, "n_nodes": nodes,
+                                     "closed": True, "diameter": options.diameter,
+                                     "length_over_diameter": options.length_over_diameter},
+                         provenance={"contact_treatment": "barrier", "n_nodes": nodes})
+
+    def compute(message, on_point):
+        with refused(KNOT_OPTIONS):
+            return sc.knot_diagram(knot, twist_ratio, length_over_diameter, span, nodes=nodes,
+                                   max_points=max_points, start=start, deflation=deflation,
+                                   out=writer, resume=resume, progress=message,
+                                   on_point=on_point)
+
+    result = run_saving(compute, writer, quiet,
+                        resume_hint="continue with the same command and --resume")
+    if result is None:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+    finish(writer, result.computed, result.summary)
+    write_json(result.summary, out / DIAGRAM_JSON)
     draw_figures(result, out)
     summary = result.summary
     for b in summary["branches"]:

@@ -22,7 +22,10 @@ through the reference twist with the polygon's double sum), the knot type
 (:class:`~supercoil.topology.knots.KnotGuard`: that of the first accepted
 state, or of the curve given to :meth:`ContactProblem.keep_knot_type`) and the collision
 detection of :meth:`ContactProblem.step_bound` (:mod:`supercoil.contact.step`),
-which keeps any segment from passing through another.
+which keeps any segment from passing through another. The knotted computations add
+a fourth, ``curvature_limit``: a tube of diameter D overlaps itself locally where its
+radius of curvature falls below D/2 (Carlen et al. 2005), which the neighbour
+exclusion hides from the contact, so a state bent more tightly is refused.
 
 The wrapper speaks the :class:`~supercoil.solvers.problem.ConstrainedEnergy`
 protocol, so Newton, the inertia count and the eigenvalues see the contact
@@ -53,6 +56,7 @@ from supercoil.contact.curve import ContactCurve, PairState
 from supercoil.contact.integral import integral_terms
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.step import LinkGuard, step_bound
+from supercoil.geometry.curves import min_radius_of_curvature
 from supercoil.solvers.csr_sum import block_csr, csr_add_blocks
 from supercoil.solvers.problem import HessianParts
 from supercoil.topology.knots.guard import KnotGuard
@@ -95,6 +99,9 @@ class ContactProblem:
         self.refusal: str | None = None  # see admissible()
         self.link_guard = LinkGuard()  # see admissible()
         self.knot_guard = KnotGuard()  # see admissible()
+        # the smallest radius of curvature a state may have (None: not checked; the
+        # knotted computations set D/2), see admissible()
+        self.curvature_limit: float | None = None
         self._integral_memo = None  # see _integral()
         self.summary_memo: dict = {}  # contact_summary's (supercoil.contact.report)
 
@@ -467,7 +474,9 @@ class ContactProblem:
         """Whether the closed rod kept its linking number and its knot type at ``q``
         (Newton's and the continuation's per-step guard,
         :class:`supercoil.contact.step.LinkGuard`,
-        :class:`supercoil.topology.knots.KnotGuard`); open rods: always True.
+        :class:`supercoil.topology.knots.KnotGuard`) and, with a ``curvature_limit``, a
+        discrete radius of curvature of at least that everywhere
+        (:func:`supercoil.geometry.curves.min_radius_of_curvature`); open rods: always True.
         ``refusal`` says why the last refused state was refused."""
         if not self.closed:
             return True
@@ -479,6 +488,14 @@ class ContactProblem:
                 x, clearance=lambda state: self.curve.min_distance(state, polygon=True)):
             self.refusal = self.knot_guard.refusal
             return False
+        if self.curvature_limit is not None:
+            radius, vertex = min_radius_of_curvature(np.asarray(q, dtype=float).reshape(-1, 3))
+            if radius < self.curvature_limit:
+                self.refusal = (f"the radius of curvature would fall to {radius / self.diameter:.4g}"
+                                f" D at node {vertex}, below "
+                                f"{self.curvature_limit / self.diameter:.4g} D (a tube "
+                                "overlapping itself locally)")
+                return False
         return True
 
     def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:

@@ -24,6 +24,7 @@ from supercoil.continuation.branch import Branch
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
+from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.step import quadratic_term
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.continuation.tracer import PointCallback, RecordFunction, Tracer
@@ -195,6 +196,16 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
         return dataclasses.replace(partial, status=ContinuationStatus.START_FAILED,
                                    message=f"resume: the last stored point did not converge "
                                    f"again: {corr.message}")
+    if opts.rephase and modes is not None and (k >= 2 or bool(partial.gauge_moved[-1])):
+        # the interrupted run re-anchored the phase rows at the stored point (after its
+        # step, or its moved gauge); the point corrected again lies a round-off away
+        # (measured 3e-10), and rows left at the stored one differ from those of the
+        # corrected point by as much: a failed step's regauge would take that for a
+        # moved gauge where the uninterrupted run saw none. Re-anchored here, as it was.
+        q_again = system.q(corr.x)
+        again = branch_phase_modes(problem, q_again, opts)
+        if again is not None and again.shape == system.phase_modes.shape:
+            system.set_phase(again, q_again)
     guess = _reduced(system, partial.tangents[-1])
     try:
         t0 = tangent(system, corr.x, system.weights * guess)

@@ -78,3 +78,23 @@ def resample_closed(points: np.ndarray, n_nodes: int, length: float = 1.0) -> np
     target = np.arange(n_nodes) * total / n_nodes
     out = np.stack([np.interp(target, s, closed[:, k]) for k in range(3)], axis=1)
     return (out - out.mean(axis=0)) * (length / total)
+
+
+def min_radius_of_curvature(points: np.ndarray) -> tuple[float, int]:
+    """``(radius, vertex)``: the smallest discrete radius of curvature ``h / (2 tan(phi / 2))``
+    over the vertices of the closed polygon ``points`` ``(n, 3)`` (``phi`` the turning
+    angle at the vertex, ``h`` the mean of its two edges; ``inf`` where it does not
+    turn) and where it is. A regular ``n``-gon of edge ``h`` has ``h / (2 tan(pi / n))``,
+    the radius of its inscribed circle; on a smooth curve sampled with edges ``h`` it
+    tends to the radius of curvature as ``h^2``."""
+    x = np.asarray(points, float)
+    e = np.roll(x, -1, axis=0) - x
+    prev = np.roll(e, 1, axis=0)
+    cos = np.einsum("ij,ij->i", prev, e) / (np.linalg.norm(prev, axis=1)
+                                            * np.linalg.norm(e, axis=1))
+    phi = np.arccos(np.clip(cos, -1.0, 1.0))
+    h = 0.5 * (np.linalg.norm(prev, axis=1) + np.linalg.norm(e, axis=1))
+    with np.errstate(divide="ignore"):
+        radius = h / (2.0 * np.tan(0.5 * phi))
+    k = int(np.argmin(radius))
+    return float(radius[k]), k

@@ -8,13 +8,14 @@ continuation with self-contact, as the ring diagram's contact branches are
 followed (:mod:`supercoil.problems.ring_diagram.contact_branches`: the
 material sliding pinned, the rigid pins re-picked between runs, steps a
 fraction of D). Every corrected state is vetted by
-:meth:`~supercoil.contact.problem.ContactProblem.admissible` (linking number
-and knot type) and a step that would change either is refused and retried
-shorter. Per point the records add ``knot_determinant`` and
+:meth:`~supercoil.contact.problem.ContactProblem.admissible` (linking number,
+knot type, and a radius of curvature of at least D/2) and a step that would
+break one is refused and retried shorter. Per point the records add ``knot_determinant`` and
 ``knot_alexander_degree`` (of the state's own knot type, computed anew: they
 stay the start's exactly when the guard did its work) to the ring's
 (``excess_link``, ``writhe`` from the double sum, ``twist`` from the material
-frames, ``link_error``, ``energy``) and the contact counts.
+frames, ``link_error``, ``energy``) and the contact counts, and ``run_start``
+(the first point of the run that computed the point, for resuming it).
 """
 
 from __future__ import annotations
@@ -26,13 +27,14 @@ import numpy as np
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, ContinuationOptions, continuation
+from supercoil.continuation.resume import resume_branch
 from supercoil.problems.branch_options import CONTACT_MIN_STEP
 from supercoil.problems.contact_events import classify_contact_events, contact_count_event
 from supercoil.problems.knot_ring import knot_start, parse_knot
 from supercoil.problems.ring_branches import ring_records
 from supercoil.problems.ring_contact import solve_supercoiled_ring
 from supercoil.problems.ring_diagram.records import contact_records
-from supercoil.problems.segments import follow, grip_stop, set_pin
+from supercoil.problems.segments import RunRecords, follow, grip_stop, replay_pins, set_pin
 from supercoil.rod.closed import ClosedRodEnergy
 from supercoil.rod.model import Rod
 from supercoil.topology.knots import identify
@@ -86,6 +88,7 @@ def relaxed_knot(knot, twist_ratio: float, length_over_diameter: float, excess_l
     base = ClosedRodEnergy(rod, relaxed.points, excess_link)
     D = rod.length / length_over_diameter
     cp = ContactProblem(base, ContactOptions(diameter=D, treatment="barrier"))
+    cp.curvature_limit = 0.5 * D  # a radius of curvature of at least D/2 at every step
     reference = cp.keep_knot_type(relaxed.points)
     q0 = relaxed.points.ravel()
     cp.accept(q0)
@@ -94,10 +97,14 @@ def relaxed_knot(knot, twist_ratio: float, length_over_diameter: float, excess_l
 
 def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
                 max_points: int, tolerance: float = 1e-8, name: str = "knot",
-                on_point=None) -> Branch:
+                on_point=None, old: Branch | None = None) -> Branch:
     """The branch of ``cp`` (a knotted ring's contact problem) from its equilibrium ``q0``
     at ``dLk = start`` towards ``stop``, in runs with the rigid pins re-picked (module
-    doc); its contact events classified. ``on_point(branch)`` after every point."""
+    doc); its contact events classified. ``on_point(branch)`` after every point.
+
+    ``old``: the same branch stored partially by an interrupted run (its records with
+    ``run_start``): continued from its last point with the pins and the run the
+    interrupted computation had there, so that it ends as the uninterrupted run does."""
     base = cp.base
     D = cp.diameter
     cp.excess_link = start
@@ -107,15 +114,24 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
         max_points=max_points, parameter_bounds=(min(start, stop), max(start, stop)),
         direction=1 if stop >= start else -1, parameter_weight=D, tolerance=tolerance,
         near_symmetry_gauge=True, regauge=True, factor_refinement=True)
-    records = _knot_records(contact_records(cp, ring_records(base), free=False))
+    records = RunRecords(_knot_records(contact_records(cp, ring_records(base), free=False)))
     events = (contact_count_event(cp),)
-    set_pin(cp, base, q0)
-    first = continuation(cp, q0, parameter="excess_link",
-                         options=dataclasses.replace(options, max_points=min(
-                             SEGMENT_POINTS, max_points)),
-                         name=name, records=records, events=events, on_point=on_point,
-                         stop=grip_stop(base.pin_grip, q0))
+    if old is not None and len(old) and "run_start" in old.records:
+        run = replay_pins(cp, base, old, q0, SEGMENT_POINTS, max_points)
+        records.begin(run)
+        first = resume_branch(
+            cp, old, dataclasses.replace(options, max_points=min(run + SEGMENT_POINTS,
+                                                                 max_points)),
+            records=records, events=events, on_point=on_point,
+            stop=grip_stop(base.pin_grip, q0 if run == 0 else old.states[run]))
+    else:
+        set_pin(cp, base, q0)
+        first = continuation(cp, q0, parameter="excess_link",
+                             options=dataclasses.replace(options, max_points=min(
+                                 SEGMENT_POINTS, max_points)),
+                             name=name, records=records, events=events, on_point=on_point,
+                             stop=grip_stop(base.pin_grip, q0))
     branch, _pins = follow(cp, base, first, options, name, records, events,
                            max_points=max_points, segment_points=SEGMENT_POINTS,
-                           grip=base.pin_grip, on_point=on_point)
+                           grip=base.pin_grip, on_point=on_point, on_run=records.begin)
     return classify_contact_events(branch, cp)

@@ -135,6 +135,11 @@ class KnotDiagram:
     def ok(self) -> bool:
         return all(b.status.complete for b in self.branches)
 
+    @property
+    def contact_branches(self) -> frozenset:
+        """The names of the branches with self-contact: all of them."""
+        return frozenset(b.name for b in self.branches)
+
     def points(self) -> list[dict]:
         """One record per point (module doc)."""
         cp, opts = self.problem, self.options
@@ -207,15 +212,23 @@ class KnotDiagram:
         }
 
 
-def compute_knot_diagram(options: KnotDiagramOptions, progress=None,
-                         on_point=None) -> KnotDiagram:
+def compute_knot_diagram(options: KnotDiagramOptions, progress=None, on_point=None,
+                         on_branch=None, resume=None) -> KnotDiagram:
     """The diagram of ``options`` (module doc). ``progress(message)`` as each half starts,
-    ``on_point(branch)`` after every accepted point."""
+    ``on_point(branch)`` after every accepted point, ``on_branch(branch, contact)`` when a
+    branch is final (``contact`` True: every branch has self-contact). ``resume`` maps
+    branch names to ``(branch, complete)`` of an interrupted run with the same options:
+    complete branches are taken as they are, incomplete ones continued from their last
+    point (:func:`~supercoil.problems.knot_branch.follow_knot`'s ``old``); the start is
+    relaxed again and the deflation searches are made again (their branches kept or
+    continued the same way)."""
     opts = options
     start = opts.start_excess_link
     low, high = opts.excess_link
-    if progress is not None:
-        progress(f"relaxing {opts.knot} at dLk = {start:g}")
+    say = progress or (lambda message: None)
+    follow = _follower(opts, dict(resume or {}), say, on_point,
+                       on_branch or (lambda branch, contact: None))
+    say(f"relaxing {opts.knot} at dLk = {start:g}")
     cp, q0, knot, message = relaxed_knot(opts.knot, opts.twist_ratio,
                                          opts.length_over_diameter, start, opts.n_nodes,
                                          opts.tolerance)
@@ -225,18 +238,14 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None,
     for name, stop in zip(BRANCH_NAMES, (high, low)):
         if stop == start:
             continue
-        if progress is not None:
-            progress(f"{name}: dLk {start:g} -> {stop:g}")
         rod.fixed, rod.gauge_dofs, cp.fixed = pins
         began = time.perf_counter()
-        branch = follow_knot(cp, q0.copy(), start, stop, opts.max_points, opts.tolerance,
-                             name, on_point=on_point)
+        branches.append(follow(cp, q0, start, stop, name))
         seconds[name] = time.perf_counter() - began
-        branches.append(branch)
     rod.fixed, rod.gauge_dofs, cp.fixed = pins
     origins, notes = {}, []
     if opts.deflation and branches:
-        found = _deflated_branches(opts, cp, branches, progress, on_point, seconds)
+        found = _deflated_branches(opts, cp, branches, say, follow, seconds)
         for branch, origin in found:
             branches.append(branch)
             origins[branch.name] = origin
@@ -245,6 +254,25 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None,
     rod.fixed, rod.gauge_dofs, cp.fixed = pins
     return KnotDiagram(opts, tuple(branches), knot, cp, seconds, message, origins,
                        tuple(notes))
+
+
+def _follower(opts: KnotDiagramOptions, stored: dict, say, on_point, on_branch):
+    """``follow(cp, q0, start, stop, name)``: the branch ``name`` as stored when complete,
+    else followed (an incomplete stored one continued), and handed to ``on_branch``."""
+
+    def follow(cp, q0, start: float, stop: float, name: str) -> Branch:
+        old, complete = stored.get(name, (None, False))
+        if complete:
+            say(f"{name}: kept ({len(old)} points)")
+            return old
+        say(f"{name}: dLk {start:g} -> {stop:g}" + (
+            f", continued from point {len(old) - 1}" if old is not None and len(old) else ""))
+        branch = follow_knot(cp, q0.copy(), start, stop, opts.max_points, opts.tolerance,
+                             name, on_point=on_point, old=old)
+        on_branch(branch, True)
+        return branch
+
+    return follow
 
 
 def states_at(cp, branches, value: float, tolerance: float) -> list[tuple[float, float]]:
@@ -286,10 +314,11 @@ def is_new_state(known: list[tuple[float, float]], energy: float, writhe: float)
                    and abs(w - writhe) <= NEW_WRITHE for e, w in known)
 
 
-def _deflated_branches(opts, cp, branches, progress, on_point, seconds):
+def _deflated_branches(opts, cp, branches, say, follow, seconds):
     """New states at ``opts.deflation`` computed points spread over the range, by deflation
     of the point's state and by relaxing the built knot there anew (module doc), each
-    new one followed both ways (``deflated_K_up``/``_down``, ``relaxed_K_up``/``_down``)."""
+    new one followed both ways (``deflated_K_up``/``_down``, ``relaxed_K_up``/``_down``) by
+    ``follow`` (:func:`_follower`)."""
     from supercoil.problems.knot_deflation import deflate_at
     from supercoil.problems.ring_branches import ring_records
 
@@ -300,8 +329,7 @@ def _deflated_branches(opts, cp, branches, progress, on_point, seconds):
     for target in np.linspace(low, high, opts.deflation + 2)[1:-1]:
         b, i = min(pool, key=lambda bi: abs(bi[0].parameter_values[bi[1]] - target))
         value = float(b.parameter_values[i])
-        if progress is not None:
-            progress(f"deflation at dLk = {value:.4g} (from {b.name})")
+        say(f"deflation at dLk = {value:.4g} (from {b.name})")
         began = time.perf_counter()
         candidates = [(cp, d.q, "deflation") for d in deflate_at(
             cp, value, [b.states[i]], tolerance=opts.tolerance)]
@@ -320,8 +348,7 @@ def _deflated_branches(opts, cp, branches, progress, on_point, seconds):
             for name, stop in ((f"{stem}_up", high), (f"{stem}_down", low)):
                 if abs(stop - value) < 1e-12:
                     continue
-                branch = follow_knot(problem, q.copy(), value, stop, opts.max_points,
-                                     opts.tolerance, name, on_point=on_point)
+                branch = follow(problem, q, value, stop, name)
                 out.append((branch, {"method": method, "excess_link": value,
                                      "from_branch": b.name, "from_index": i,
                                      "energy": rec["energy"], "writhe": rec["writhe"]}))

@@ -21,9 +21,17 @@ tight limit, ``L/D`` its ropelength (Pieranski 1998; Carlen, Laurie, Maddocks &
 Smutny 2005), reached from above.
 
 A tube of diameter D must not overlap itself locally either: its radius of
-curvature stays at least D/2 (Carlen et al. 2005); that condition is checked
-on the result (``min_radius_of_curvature_over_diameter``, the discrete radius
-``h / (2 tan(phi / 2))`` at a vertex turning by ``phi``), not imposed.
+curvature stays at least D/2 (Carlen et al. 2005; the discrete radius
+``h / (2 tan(phi / 2))`` at a vertex turning by ``phi``,
+:func:`~supercoil.geometry.curves.min_radius_of_curvature`). The neighbour
+exclusion of the contact hides such an overlap, so the condition is imposed
+on its own: a Newton step to a state bent more tightly is refused
+(``ContactProblem.curvature_limit``), and the tube thickens by the same
+fraction of the smaller of the free gap and of the radius of curvature's room
+above D/2. At the tight limit either may be the active one: the round circle
+(the ideal unknot, L/D = pi; for the regular ``n``-gon ``n tan(pi / n)``) has
+both, the tight trefoil at these resolutions the contacts only
+(``min_radius_of_curvature_over_diameter`` about 0.65-0.73).
 """
 
 from __future__ import annotations
@@ -37,6 +45,7 @@ import numpy as np
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.solve import solve_contact
+from supercoil.geometry.curves import min_radius_of_curvature as curvature_radius
 from supercoil.geometry.curves import resample_closed
 from supercoil.rod.closed import ClosedRodEnergy
 from supercoil.rod.model import Rod
@@ -111,18 +120,9 @@ class Tightening:
 
 
 def min_radius_of_curvature(points: np.ndarray) -> float:
-    """Smallest discrete radius of curvature ``h / (2 tan(phi / 2))`` over the vertices
-    of the closed polygon ``points`` ``(n, 3)`` (``h`` the mean of the two edges)."""
-    x = np.asarray(points, float)
-    e = np.roll(x, -1, axis=0) - x
-    prev = np.roll(e, 1, axis=0)
-    cos = np.einsum("ij,ij->i", prev, e) / (np.linalg.norm(prev, axis=1)
-                                            * np.linalg.norm(e, axis=1))
-    phi = np.arccos(np.clip(cos, -1.0, 1.0))
-    h = 0.5 * (np.linalg.norm(prev, axis=1) + np.linalg.norm(e, axis=1))
-    with np.errstate(divide="ignore"):
-        radius = h / (2.0 * np.tan(0.5 * phi))
-    return float(np.min(radius))
+    """Smallest discrete radius of curvature of the closed polygon ``points`` ``(n, 3)``
+    (:func:`supercoil.geometry.curves.min_radius_of_curvature`)."""
+    return curvature_radius(points)[0]
 
 
 def _problem(base: ClosedRodEnergy, diameter: float, reference: np.ndarray,
@@ -130,6 +130,7 @@ def _problem(base: ClosedRodEnergy, diameter: float, reference: np.ndarray,
     problem = ContactProblem(base, ContactOptions(diameter=diameter, treatment="barrier",
                                                   barrier_activation=activation))
     problem.keep_knot_type(reference)
+    problem.curvature_limit = 0.5 * diameter
     return problem
 
 
@@ -156,6 +157,7 @@ def tighten(points: np.ndarray, n_nodes: int, *, length_over_diameter: float | N
         if d > 1.5 * diameter:
             break
         diameter = 0.5 * d
+    diameter = min(diameter, min_radius_of_curvature(x))  # and a radius of curvature >= D
     if target is not None and target <= diameter:
         problem = _problem(base, target, x, TIGHTEN_ACTIVATION)
         gap = problem.min_distance(x.ravel(), polygon=True) / target - 1.0
@@ -185,15 +187,19 @@ def tighten(points: np.ndarray, n_nodes: int, *, length_over_diameter: float | N
         q, problem = res.q, trial
         history.append(1.0 / diameter)
         d = problem.min_distance(q, polygon=True)
-        log.debug("tighten step %d: L/D %.6g, gap %.3e D", step, 1 / diameter, d / diameter - 1)
+        radius = min_radius_of_curvature(q.reshape(-1, 3))
+        log.debug("tighten step %d: L/D %.6g, gap %.3e D, radius of curvature %.4g D", step,
+                  1 / diameter, d / diameter - 1, radius / diameter)
         if target is not None and diameter == target:
             status, message, reached = "reached", "reached the requested L/D", True
             break
-        following = diameter + THICKEN * (d - diameter)
+        # the free room: the gap, and the radius of curvature above D/2
+        following = diameter + THICKEN * (min(d, 2.0 * radius) - diameter)
         if following <= diameter * (1.0 + min_relative_step):
             status, reached = "tight", target is None
             message = (f"the tube cannot thicken by more than {min_relative_step:g} of D "
-                       f"(gap {d / diameter - 1:.2e} D): the tight limit")
+                       f"(gap {d / diameter - 1:.2e} D, radius of curvature "
+                       f"{radius / diameter:.4g} D): the tight limit")
             break
         diameter = following
     if problem is None:

@@ -6,9 +6,11 @@ unstable count rises by two at Michell's points ``dLk_m = (A/C) sqrt(m^2 - 1)``
 special points of kind ``bifurcation``, the determinant's sign unchanged).
 The primary branches bifurcate there along the critical mode: ``alpha``
 (m = 2) and ``beta`` (m = 3), configurations with D_m symmetry (Coleman &
-Swigon 2000). Without contact they pass through the rod itself eventually
-(the alpha branch at C/A = 2/3 tends to the planar figure-eight, Wr -> 1,
-dLk -> 1), so callers bound the branches (``excess_link_bounds``,
+Swigon 2000). Without contact they reach the rod itself eventually (the
+alpha branch at C/A = 2/3 tends to the planar figure-eight, Wr -> 1,
+dLk -> 1); a step through it is refused
+(:meth:`~supercoil.rod.closed.ClosedRodEnergy.admissible`), so the branch stops
+there with that status, and callers bound the branches (``excess_link_bounds``,
 ``max_points``); :mod:`supercoil.problems.ring_diagram` follows them on with
 self-contact.
 

@@ -270,6 +270,8 @@ class _Winding:
             points = resample_closed(initial_points, self.n_nodes, rod.length)
             base = ClosedRodEnergy(rod, points, self.excess_link)
             problem = self._contact_problem(base)
+            # a knotted (or given) curve: its radius of curvature kept at least D/2 too
+            problem.curvature_limit = 0.5 * problem.diameter
             self._check_start(problem, points.ravel(), True)
             self.notes.append("started from the given curve")
             res, stab = self._accept_relaxed(problem, points.ravel())

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from itertools import pairwise
 from typing import Protocol
 
 import numpy as np
@@ -40,12 +41,46 @@ class PinnedRod(Protocol):
     def pin_quality(self, q: np.ndarray) -> float: ...
 
 
+class RunRecords:
+    """Per-point records ``records`` with ``run_start``: the index on the branch of the
+    first point of the continuation run that computed the point (:meth:`begin`, as
+    :func:`follow`'s ``on_run``), so that an interrupted run is resumed up to its own
+    end (e.g. :func:`~supercoil.problems.tweezers.buckled.resume_stored`)."""
+
+    def __init__(self, records):
+        self.records = records
+        self.start = 0
+
+    def begin(self, index: int) -> None:
+        self.start = index
+
+    def __call__(self, q: np.ndarray, multipliers: np.ndarray, parameter: float) -> dict:
+        return self.records(q, multipliers, parameter) | {"run_start": self.start}
+
+
 def set_pin(problem, rod: PinnedRod, q: np.ndarray) -> None:
     """Re-pick the rod's symmetry pins for ``q`` (``rod.repin``), on the rod and on its
     contact wrapper (``problem``, whose ``fixed`` copies the rod's)."""
     rod.repin(q)
     if problem is not rod:
         problem.fixed = rod.fixed
+
+
+def replay_pins(problem, rod: PinnedRod, branch: Branch, q0: np.ndarray,
+                segment_points: int, max_points: int, quality: float = 0.5) -> int:
+    """Pin ``rod`` (and ``problem``) as an uninterrupted :func:`follow` had it pinned when it
+    computed the last point of ``branch`` (a stored partial branch whose records hold
+    :class:`RunRecords`' ``run_start``), and return the index of the first point of that
+    run. The first run's pins are picked at ``q0`` (its start); a later run's where it
+    starts if the run before it stopped short of its ``segment_points`` (a refusal) or
+    the pins' quality had fallen below ``quality`` there, as :func:`follow` decides."""
+    starts = sorted({0, *(int(v) for v in branch.records["run_start"])})
+    set_pin(problem, rod, q0)
+    for before, start in pairwise(starts):
+        size = min(segment_points, max_points - before)
+        if start - before + 1 < size or rod.pin_quality(branch.states[start]) < quality:
+            set_pin(problem, rod, branch.states[start])
+    return starts[-1]
 
 
 def merge_branches(parts: list[Branch], name: str) -> Branch:

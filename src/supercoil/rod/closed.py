@@ -29,6 +29,7 @@ from supercoil.geometry.curves import edges, parallel_transport, perpendicular, 
 from supercoil.rod import kernels
 from supercoil.rod.energy import RodEnergy
 from supercoil.rod.model import Rod
+from supercoil.topology.knots.passage import StrandPassageGuard
 
 
 def initial_reference_frames(points: np.ndarray) -> np.ndarray:
@@ -88,6 +89,9 @@ class ClosedRodEnergy(RodEnergy):
         self.reference_link = int(reference_link)
         self.fixed = rigid_pins(points)
         self.gauge_dofs = self.fixed  # all six pins only remove rigid motions
+        # every state keeps the link and the knot type of ``points`` (admissible)
+        self.passage_guard = StrandPassageGuard(points)
+        self.refusal: str | None = None
 
     twist_parameter = "excess_link"
 
@@ -165,6 +169,17 @@ class ClosedRodEnergy(RodEnergy):
             self.reference_link = int(np.rint(phi_new / (2 * np.pi) + writhe(points)))
         else:
             self.reference_link += int(np.rint((phi_new - phi_old) / (2 * np.pi)))
+
+    def admissible(self, q: np.ndarray) -> bool:
+        """Whether ``q`` kept the linking number and the knot type of the curve the problem
+        was set up with (Newton's and the continuation's per-step guard: a refused state's
+        step is retried shorter; :class:`~supercoil.topology.knots.StrandPassageGuard`).
+        ``refusal`` says why the last refused state was refused. With self-contact
+        :meth:`supercoil.contact.problem.ContactProblem.admissible` is the guard."""
+        if self.passage_guard.admissible(q, self.writhe_local):
+            return True
+        self.refusal = self.passage_guard.refusal
+        return False
 
     def writhe_local(self, q: np.ndarray) -> float:
         """Writhe from the reference twist: ``Lk_u - Phi / 2pi`` (no double sum)."""

@@ -21,7 +21,7 @@ import numpy as np
 
 from supercoil._numba import njit
 
-__all__ = ["RELATIVE_TOLERANCE", "first_crossing", "first_self_crossing"]
+__all__ = ["RELATIVE_TOLERANCE", "closest_approach", "first_crossing", "first_self_crossing"]
 
 RELATIVE_TOLERANCE = 1e-15  # edges closer than this times the curves' extent meet (a few ulps)
 
@@ -99,6 +99,22 @@ def _first_pair(a: np.ndarray, b: np.ndarray, same: bool, closed: bool,
     return -1, -1
 
 
+@njit()
+def _closest_approach(a: np.ndarray, closed: bool) -> float:
+    """Smallest distance between edges of the extended vertex array ``a`` that share no
+    vertex (``inf`` if there are none)."""
+    n = a.shape[0] - 1
+    best = np.inf
+    for i in range(n):
+        for j in range(i + 2, n):
+            if closed and i == 0 and j == n - 1:
+                continue
+            d2 = _distance2(a[i, 0], a[i, 1], a[i, 2], a[i + 1, 0], a[i + 1, 1], a[i + 1, 2],
+                            a[j, 0], a[j, 1], a[j, 2], a[j + 1, 0], a[j + 1, 1], a[j + 1, 2])
+            best = min(best, d2)
+    return np.sqrt(best)
+
+
 def _extent(*arrays: np.ndarray) -> float:
     points = np.vstack(arrays)
     return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
@@ -118,6 +134,18 @@ def first_self_crossing(vertices: np.ndarray, closed: bool) -> tuple[int, int] |
     tolerance = RELATIVE_TOLERANCE * _extent(nodes)
     i, j = _first_pair(nodes, nodes, True, closed, tolerance)
     return None if i < 0 else (int(i), int(j))
+
+
+def closest_approach(vertices: np.ndarray, closed: bool = True) -> float:
+    """The smallest distance between two edges of a polygon (``(n, 3)`` finite vertices,
+    edges of non-zero length) that share no vertex, ``inf`` if no two edges are so.
+
+    No motion of the vertices by at most ``d`` each brings two edges closer by more than
+    ``2 d`` (a point of an edge is a convex combination of its vertices), so a polygon
+    moved by less than half of this cannot have passed an edge through another.
+    """
+    return float(_closest_approach(_extended(np.asarray(vertices, dtype=np.float64), closed),
+                                   closed))
 
 
 def first_crossing(first: np.ndarray, second: np.ndarray) -> tuple[int, int] | None:

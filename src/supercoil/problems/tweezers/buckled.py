@@ -24,7 +24,7 @@ from supercoil.continuation import (
     switch_branch,
 )
 from supercoil.continuation.resume import resume_branch
-from supercoil.problems.segments import either, set_pin
+from supercoil.problems.segments import RunRecords, either, set_pin
 from supercoil.problems.tweezers.pins import (
     hold_azimuth,
     pin_node,
@@ -38,23 +38,6 @@ SWITCH_AMPLITUDE = 2e-2  # first point of the buckled branch from the bifurcatio
 # tried in turn when the switch finds no point (the subcritical branch turns back sharply
 # under a large tension: measured at F L^2/A = 900, N = 120, 2e-2 diverged)
 SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1e-3)
-
-
-class RunRecords:
-    """Per-point records ``records`` with ``run_start``: the index on the branch of the
-    first point of the continuation run that computed the point (:func:`begin`, as
-    :func:`~supercoil.problems.segments.follow`'s ``on_run``), so that an interrupted
-    run is resumed up to its own end (:func:`resume_stored`)."""
-
-    def __init__(self, records):
-        self.records = records
-        self.start = 0
-
-    def begin(self, index: int) -> None:
-        self.start = index
-
-    def __call__(self, q: np.ndarray, multipliers: np.ndarray, parameter: float) -> dict:
-        return self.records(q, multipliers, parameter) | {"run_start": self.start}
 
 
 def stored_pins(branch: Branch) -> tuple[tuple[int, tuple[int, ...]], ...]:

@@ -15,7 +15,7 @@ end under displacement control), ``azimuth_pin``, ``n_contact_points``,
 residual without the continuation's phase rows: the force the sliding's phase row
 holds, docs/continuation.md, "Long open rods"); the contact-free and contact
 branches also record ``run_start``, the index of the first point of the continuation
-run that computed the point (:class:`~supercoil.problems.tweezers.buckled.RunRecords`).
+run that computed the point (:class:`~supercoil.problems.segments.RunRecords`).
 """
 
 from __future__ import annotations

@@ -10,7 +10,9 @@
   invariants of a diagram.
 - :func:`knot_curve`, :func:`torus_knot`: smooth embeddings as equally spaced
   polygons of perimeter 1.
-- :class:`KnotGuard`: whether a closed rod kept its knot type, the per-step guard.
+- :class:`KnotGuard`: whether a closed rod kept its knot type, the per-step guard;
+  :class:`StrandPassageGuard`: whether a closed rod without contact kept its linking
+  number and knot type.
 """
 
 from supercoil.topology.knots.alexander import alexander_polynomial, knot_determinant
@@ -25,6 +27,7 @@ from supercoil.topology.knots.knot_type import (
     identify_diagram,
     simplified_diagram,
 )
+from supercoil.topology.knots.passage import StrandPassageGuard
 from supercoil.topology.knots.projection import project
 from supercoil.topology.knots.table import KNOTS, TableKnot
 
@@ -34,6 +37,7 @@ __all__ = [
     "Diagram",
     "KnotGuard",
     "KnotType",
+    "StrandPassageGuard",
     "TableKnot",
     "alexander_polynomial",
     "classify",

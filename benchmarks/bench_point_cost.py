@@ -173,7 +173,7 @@ def instrument() -> PhaseClock:
     # eigenproblems, the Hessian assemblies and the residuals
     clock.count(band, "factor_band_storage", "KKT band LUs (count, shift-invert)")
     clock.count(kkt, "symmetric_inertia", "inertia counts (block elimination)")
-    clock.count(stability, "_lowest_pairs", "eigenproblems (shift-invert Lanczos)")
+    clock.count(stability, "lowest_pairs", "eigenproblems (shift-invert Lanczos)")
     clock.count(system.ExtendedSystem, "full_hessian", "Hessian assemblies")
     clock.count(system.ExtendedSystem, "hessian", "Hessian assemblies")
     clock.count(system.ExtendedSystem, "residual", "residuals")

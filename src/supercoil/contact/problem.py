@@ -30,8 +30,8 @@ terms through the Hessian (energy treatments) or through the active
 constraints (exact treatment): a direction that would open a contact carrying
 a positive force is excluded from the tangent space. What belongs to the rod
 (its frames, writhe, reference link) is asked of ``problem.base``; the load
-parameters a continuation sets (``excess_link``, ``turns``, ``tension``) are
-properties that read and write the rod's.
+parameters (``excess_link``, ``turns``, ``tension``) read the rod's, and
+:meth:`ContactProblem.at` gives the contact problem over the rod at other values.
 """
 
 from __future__ import annotations
@@ -111,31 +111,32 @@ class ContactProblem:
         return getattr(self.base, "gauge_dofs", np.zeros(0, dtype=np.int64))
 
     @property
-    def excess_link(self) -> float:
-        """The closed rod's excess link, a continuation parameter."""
-        return self.base.excess_link
+    def parameters(self) -> tuple[str, ...]:
+        """The rod's load parameters (:meth:`at`)."""
+        return self.base.parameters
 
-    @excess_link.setter
-    def excess_link(self, value: float) -> None:
-        self.base.excess_link = value
+    def at(self, **values: float) -> ContactProblem:
+        """This contact problem over the rod at other parameter values
+        (``base.at(**values)``); the contact state (active set, multipliers, guards,
+        curve) is shared, and this problem is unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.at(**values)
+        return new
+
+    @property
+    def excess_link(self) -> float:
+        """The closed rod's excess link, a continuation parameter (:meth:`at`)."""
+        return self.base.excess_link
 
     @property
     def turns(self) -> float:
-        """The clamped rod's turns of the end clamp, a continuation parameter."""
+        """The clamped rod's turns of the end clamp, a continuation parameter (:meth:`at`)."""
         return self.base.turns
-
-    @turns.setter
-    def turns(self, value: float) -> None:
-        self.base.turns = value
 
     @property
     def tension(self) -> float:
-        """The clamped rod's dead load, a continuation parameter."""
+        """The clamped rod's dead load, a continuation parameter (:meth:`at`)."""
         return self.base.tension
-
-    @tension.setter
-    def tension(self, value: float) -> None:
-        self.base.tension = value
 
     @property
     def symmetry_modes(self):

@@ -16,7 +16,8 @@ Checks, from the stored data and the problem alone:
   same points accounts for a change by one).
 
 ``problem.accept(q)`` is called at every checked point (so that a problem
-with a reference state follows the branch); the problem is left at the last one.
+with a reference state follows the branch); its parameter is never set (the
+residuals are those of ``problem.at``).
 """
 
 from __future__ import annotations
@@ -93,8 +94,7 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
     for i in indices:
         repin(int(i), False)
         x = x_of(branch.states[i], branch.multipliers[i], branch.parameter_values[i])
-        system.set_parameter(x[-1])
-        problem.accept(branch.states[i])
+        system.accept(branch.states[i])
         res = residual(x)
         if not res <= residual_tolerance:
             problems.append(f"point {i}: KKT residual {res:.2e} > {residual_tolerance:.1e}")
@@ -154,6 +154,4 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
                                 f"from its neighbours' {before} -> {after}")
         elif not lam.min() - 1e-12 <= p.parameter <= lam.max() + 1e-12:
             problems.append(f"{where}: outside the branch's parameter range")
-    if k:
-        system.set_parameter(lam[-1])
     return ConsistencyReport(tuple(problems), int(indices.size))

@@ -43,7 +43,8 @@ class UserEvent:
     ``function(q, multipliers, parameter)`` returns named scalars (a mapping
     ``name -> float``); a sign change of any of them between two branch
     points is an event of kind ``kind`` (e.g. ``"contact_onset"``), labelled
-    by the name. The problem's parameter attribute is set before each call.
+    by the name. The problem passed to the continuation is never changed: a
+    function that needs it at the point derives it, ``problem.at(name=parameter)``.
     """
 
     kind: str
@@ -336,7 +337,6 @@ def _tangent_or_secant(segment: Segment, u: float) -> np.ndarray:
 
 
 def user_values(event: UserEvent, system: ExtendedSystem, x: np.ndarray) -> dict[str, float]:
-    system.set_parameter(x[-1])
     return {k: float(v) for k, v in
             event.function(system.q(x), system.multipliers(x), float(x[-1])).items()}
 

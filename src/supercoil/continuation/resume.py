@@ -108,8 +108,7 @@ def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOption
     ds = float(row @ (x_last - x_prev))
     if not ds > 0:
         return opts.initial_step
-    setattr(system.problem, partial.parameter, float(partial.parameter_values[-2]))
-    system.problem.accept(np.asarray(partial.states[-2], dtype=float))
+    system.accept(np.asarray(partial.states[-2], dtype=float))
     start = x_prev + ds * d
     if opts.predictor == "quadratic" and k >= 3:
         start = start + quadratic_term(system, _reduced(system, partial.tangents[-3]),
@@ -148,8 +147,7 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     # problem's accept may carry state along the path (a rod's reference frames, by
     # parallel transport, depend on it), and a state stored relative to it means the
     # same configuration only at the end of the same path
-    for value, state in zip(partial.parameter_values, partial.states):
-        setattr(problem, partial.parameter, float(value))
+    for state in partial.states:
         problem.accept(np.array(state, dtype=float))
     lam = float(partial.parameter_values[-1])
     q = np.array(partial.states[-1], dtype=float)
@@ -164,8 +162,7 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
         step, gauge_moved = float(partial.next_step[-1]), bool(partial.gauge_moved[-1])
     else:
         step = min(max(_next_step(system, partial, opts), opts.min_step), opts.max_step)
-        setattr(problem, partial.parameter, lam)
-        problem.accept(q)
+        system.accept(q)
     # the first k - 1 points, with every special point found so far: one between
     # points k - 2 and k - 1 was located when point k - 1 was added, and the
     # resumed run starts at point k - 1, so it would not search that interval again

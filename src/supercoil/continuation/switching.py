@@ -113,7 +113,6 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     direction = pinned_mode(problem, special_point.q, np.asarray(direction, dtype=float))
     eps = opts.initial_step if amplitude is None else float(amplitude)
     label = name or f"{branch.name}/{special_point.kind}{special_point.index}"
-    setattr(problem, branch.parameter, float(special_point.parameter))
     problem.accept(special_point.q)
     q_star = np.array(special_point.q, dtype=float)
     plain = ExtendedSystem(problem, branch.parameter, q_star,
@@ -129,7 +128,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     v = v / plain.norm(v)
     q_pred = plain.q(plain.pack(q_star, special_point.multipliers, special_point.parameter)
                      + side * eps * v)
-    modes = branch_phase_modes(problem, q_pred, opts)
+    modes = branch_phase_modes(plain.problem_at(special_point.parameter), q_pred, opts)
     system = ExtendedSystem(problem, branch.parameter, q_star, modes, q_pred,
                             opts.parameter_weight, opts.finite_difference_step)
     v = np.concatenate([v[:n + m], np.zeros(system.r), v[-1:]])

@@ -5,7 +5,7 @@ From a corrected point and its tangent, :class:`Tracer` takes steps
 corrections and shrinking them after failures, until a parameter bound, the
 arclength or point budget, a caller's stop, a closed loop
 (:mod:`supercoil.continuation.closure`) or a step below the minimum. At every
-accepted point the problem's ``accept(q)`` is called, then the stability
+accepted point the problem's ``accept(q)`` is called (:meth:`ExtendedSystem.accept`), then the stability
 (:mod:`supercoil.continuation.stability`), the caller's records and user
 events are evaluated, and the interval to the previous point is searched for
 special points (:mod:`supercoil.continuation.special_points`). The phase rows
@@ -89,7 +89,6 @@ class Tracer:
     def _records(self, x):
         if self.records_fn is None:
             return {}
-        self.system.set_parameter(x[-1])
         return dict(self.records_fn(self.system.q(x), self.system.multipliers(x), float(x[-1])))
 
     def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True,
@@ -109,8 +108,7 @@ class Tracer:
         evaluated in between does).
         """
         system = self.system
-        system.set_parameter(x[-1])
-        system.problem.accept(system.q(x))
+        system.accept(system.q(x))
         self._accepted_hessian = None
         full = system.full_hessian(x) if full_hessian is None else full_hessian
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
@@ -149,7 +147,6 @@ class Tracer:
             self.specials.append(special_point(self.system, self.opts, ev, segment, self.name,
                                                k, self.s[k], self.ts[k + 1], before, after,
                                                self._records))
-            self.system.set_parameter(self.xs[k + 1][-1])
 
     # -- phase rows -------------------------------------------------------------------------
     def _regauge(self, ds: float) -> bool:
@@ -290,8 +287,6 @@ class Tracer:
                 column = self._columns.setdefault(name, [])
                 column.extend(np.asarray(r[name]) for r in self.recs[len(column):k])
             records = {name: np.array(self._columns[name][:k]) for name in self.recs[0]}
-        if k:
-            system.set_parameter(self.xs[k - 1][-1])
         rows = self._point_rows(k)
         stabs = self.stabs[:k]
         return Branch(

@@ -36,10 +36,11 @@ from supercoil.cosserat.rod import DOFS_PER_NODE, CosseratRod
 from supercoil.cosserat.rotations import dexp, dexp_transpose_derivative, exp_so3, hat
 from supercoil.errors import InputError
 from supercoil.solvers.csr_sum import block_csr
+from supercoil.solvers.parameters import Parametrised
 from supercoil.solvers.problem import HessianParts
 
 
-class CosseratEnergy:
+class CosseratEnergy(Parametrised):
     """Energy of a Cosserat rod under dead nodal forces, with some DOFs fixed.
 
     ``positions`` ``(n_nodes, 3)`` and ``rotations`` ``(n_nodes, 3, 3)``: the initial

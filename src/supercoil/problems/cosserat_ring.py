@@ -89,13 +89,14 @@ def cosserat_ring_records(problem: ClosedCosseratEnergy, curve: ContactCurve):
     """Per-point records of a Cosserat ring branch (module doc)."""
 
     def records(q, multipliers, excess_link):
-        tw, wr = problem.twist(q), problem.writhe(q)
-        x, R = problem.configuration(q)
+        at = problem.at(excess_link=float(excess_link))
+        tw, wr = at.twist(q), at.writhe(q)
+        x, R = at.configuration(q)
         d_min = curve.min_distance(x.ravel())
         return {"excess_link": float(excess_link), "writhe": wr, "twist": tw,
-                "energy": problem.rod.energy(x, R), "link_error": abs(tw + wr - excess_link),
-                "max_stretch_strain": problem.max_stretch_strain(q),
-                "max_shear_strain": problem.max_shear_strain(q),
+                "energy": at.rod.energy(x, R), "link_error": abs(tw + wr - excess_link),
+                "max_stretch_strain": at.max_stretch_strain(q),
+                "max_shear_strain": at.max_shear_strain(q),
                 "n_contact_points": 0, "n_contact_intervals": 0,
                 "min_gap_over_diameter": float(d_min / curve.diameter)}
 
@@ -116,9 +117,9 @@ def relaxed_circle_state(problem: ClosedCosseratEnergy, excess_link: float,
                          constants: tuple[float, float, float]) -> np.ndarray:
     """The discrete twisted circle at ``excess_link``, the chart re-based there."""
     ratio, stretch, shear = constants
-    problem.excess_link = float(excess_link)
     exact = circle_state(ratio, excess_link, stretch, shear)
-    x, R, _ = relax_circle(problem.rod, problem.link, exact.tilt, exact.stretch)
+    rod = problem.at(excess_link=float(excess_link)).rod  # its intrinsic twist at dLk
+    x, R, _ = relax_circle(rod, problem.link, exact.tilt, exact.stretch)
     q = problem.state(x, R)
     problem.accept(q)
     return q

@@ -100,7 +100,6 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
     doc); its contact events classified. ``on_point(branch)`` after every point."""
     base = cp.base
     D = cp.diameter
-    cp.excess_link = start
     cp.accept(q0)
     options = ContinuationOptions(
         initial_step=0.05 * D, min_step=CONTACT_MIN_STEP, max_step=MAX_STEP * D,
@@ -110,7 +109,7 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
     records = _knot_records(contact_records(cp, ring_records(base), free=False))
     events = (contact_count_event(cp),)
     set_pin(cp, base, q0)
-    first = continuation(cp, q0, parameter="excess_link",
+    first = continuation(cp, q0, parameter="excess_link", start=start,
                          options=dataclasses.replace(options, max_points=min(
                              SEGMENT_POINTS, max_points)),
                          name=name, records=records, events=events, on_point=on_point,

@@ -56,7 +56,8 @@ def ring_records(problem: ClosedRodEnergy):
         d1 = problem.material_directors(q)
         tw = twist_from_frames(points, d1, closed=True) - problem.reference_link + excess_link
         return {"excess_link": float(excess_link), "writhe": wr, "twist": tw,
-                "energy": problem.elastic_energy(q), "link_error": abs(tw + wr - excess_link)}
+                "energy": problem.at(excess_link=float(excess_link)).elastic_energy(q),
+                "link_error": abs(tw + wr - excess_link)}
 
     return records
 

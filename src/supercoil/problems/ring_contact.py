@@ -296,13 +296,17 @@ class _Winding:
         threshold = michell_threshold(self.twist_ratio, self.n_nodes, curvature=self.curvature,
                                       rtol=1e-9)
         snap_at = min(self.excess_link, threshold * (1 + SNAP_OFFSET))
-        base.excess_link = snap_at
+        # the path's problem at each level: a new one, carrying on what the last one
+        # holds (frames, pins, contact state)
+        problem = problem.at(excess_link=snap_at)
+        base = problem.base
         circle = newton(base, q0, NewtonOptions(tolerance=self.tolerance, mode="stationary"))
         self.iterations += circle.iterations
         report = analyse(base, circle.q, circle.multipliers, n_modes=2)
         if report.unstable_count == 0:  # the threshold's round-off: a little further
             snap_at = min(self.excess_link, threshold * (1 + 10 * SNAP_OFFSET))
-            base.excess_link = snap_at
+            problem = problem.at(excess_link=snap_at)
+            base = problem.base
             report = analyse(base, circle.q, circle.multipliers, n_modes=2)
         start = circle.q + circle_perturbation(base, circle.q, report)
         base.accept(start)
@@ -321,7 +325,8 @@ class _Winding:
                 # rigid rotation is then nearly free and minimisation stalls on it
                 set_pin(problem, base, res.q)
             stop = min(self.excess_link, level + size)
-            problem.excess_link = stop
+            problem = problem.at(excess_link=stop)
+            base = problem.base
             # the reference frames at the last accepted state, restored after a refused
             # step (carrying them back by transport can slip the tracked writhe by a turn)
             frames = _frames_of(base)
@@ -333,13 +338,13 @@ class _Winding:
                       trial.newton_iterations, change, restarts, trial_stab.unstable_count)
             if not smooth and stop - level > self.step / 2**MAX_HALVINGS:
                 size = 0.5 * (stop - level)
-                problem.excess_link = level
+                problem = problem.at(excess_link=level)
+                base = problem.base
                 _restore_frames(base, frames)
                 continue
             if not trial.converged:
                 # the smallest step did not settle within STEP_ITERATIONS: the same
                 # step with the full iteration budget (a jump, if it lands far)
-                problem.excess_link = stop
                 _restore_frames(base, frames)
                 trial, trial_stab, restarts = self._relax(problem, res.q)
                 log.debug("dLk %.6g -> %.6g with the full budget: %s, %d Newton iterations",

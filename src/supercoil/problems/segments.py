@@ -182,7 +182,6 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         elif len(run) < 2:
             break
         q = run.states[-1]
-        setattr(problem, run.parameter, float(run.parameter_values[-1]))
         problem.accept(q)
         if run.status.name == "STOPPED" or rod.pin_quality(q) < quality:
             set_pin(problem, rod, q)
@@ -201,6 +200,7 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         if on_run is not None:
             on_run(total - 1)
         run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
+                           start=float(run.parameter_values[-1]),
                            options=opts, name=name, records=records, events=events,
                            on_point=report,
                            stop=either(held, refuse, None if restart is None else restart(q)))

@@ -90,6 +90,7 @@ class ClosedRodEnergy(RodEnergy):
         self.gauge_dofs = self.fixed  # all six pins only remove rigid motions
 
     twist_parameter = "excess_link"
+    parameters = ("excess_link",)
 
     def twist_offset(self) -> float:
         return self.excess_link - self.reference_link

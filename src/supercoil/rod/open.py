@@ -113,6 +113,7 @@ class ClampedRodEnergy(RodEnergy):
         self.sliding_tail: float | None = sliding_threshold(n)
 
     twist_parameter = "turns"
+    parameters = ("turns", "tension")
 
     def twist_offset(self) -> float:
         return self.turns + self._end_mismatch / (2 * np.pi) + self._turn_offset

@@ -102,10 +102,10 @@ def ring_diagram(options: DiagramOptions,
         start = time.perf_counter()
         k = contact_start(free, onset, cp)
         direction = 1 if free.tangents[k, -1] >= 0 else -1
-        cp.excess_link = float(free.parameter_values[k])
+        at = float(free.parameter_values[k])
         cp.accept(free.states[k])
-        if not 0.0 <= cp.excess_link <= opts.max_excess_link:
-            notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "
+        if not 0.0 <= at <= opts.max_excess_link:
+            notes.append(f"{contact_name}: contact at dLk = {at:.4g} is outside "
                          f"[0, {opts.max_excess_link:g}]: not computed")
             continue
         contact, pins[contact_name] = contact_branch(

@@ -36,7 +36,8 @@ def contact_records(problem: ContactProblem, base_records, free: bool):
             out.update(n_contact_points=summary["n_contact_points"],
                        n_contact_intervals=summary["n_contact_intervals"],
                        min_gap_over_diameter=float("inf") if gap is None else gap,
-                       sliding_residual=kkt_residual(problem, q, multipliers))
+                       sliding_residual=kkt_residual(problem.at(excess_link=excess_link), q,
+                                                     multipliers))
         return out
 
     return records
@@ -60,10 +61,10 @@ def kkt_residual(problem, q: np.ndarray, multipliers: np.ndarray) -> float:
 
 
 def with_records(branch: Branch, problem, records) -> Branch:
-    """The branch with its records recomputed by ``records`` (the problem follows it)."""
+    """The branch with its records recomputed by ``records`` (the problem's frames follow
+    it)."""
     rows = []
     for q, mu, lam in zip(branch.states, branch.multipliers, branch.parameter_values):
-        problem.excess_link = float(lam)
         problem.accept(q)
         rows.append(records(q, mu, float(lam)))
     merged = {k: np.array([r[k] for r in rows]) for k in rows[0]} if rows else {}

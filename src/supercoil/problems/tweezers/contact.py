@@ -63,7 +63,6 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
         rod.sliding_tail = SLIDING_TAIL_CONTACT
     k = contact_start(free, onset, cp)
     q = free.states[k]
-    cp.turns = float(free.parameter_values[k])
     cp.accept(q)
     set_pin(cp, rod, q)
     contact_opts = ContinuationOptions(
@@ -85,7 +84,8 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     if first is not None:
         say(f"{name}: continued from point {len(old) - 1}")
     else:
-        first = continuation(cp, q, parameter="turns", options=contact_opts, name=name,
+        first = continuation(cp, q, parameter="turns", start=float(free.parameter_values[k]),
+                             options=contact_opts, name=name,
                              records=records, events=events, on_point=on_point,
                              stop=pinned)
     contact, pins = follow(cp, rod, first, contact_opts, name, records, events,

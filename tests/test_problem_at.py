@@ -57,7 +57,9 @@ def _cosserat_clamped(turns=0.3, tension=2.0):
                                                 stretch_stiffness=1e3, closed=False),
                                     turns, tension)
     q = problem.straight_state()
-    return problem, q + 1e-3 * np.sin(np.arange(q.size))
+    delta = 1e-3 * np.sin(np.arange(q.size))
+    delta[problem.fixed] = 0.0  # the clamps' values
+    return problem, q + delta
 
 
 def _cosserat_ring(excess_link=1.3):
@@ -141,3 +143,78 @@ def test_continuation_never_sets_the_parameter_of_the_problem_it_is_given():
                                                       initial_step=0.1, max_step=0.25))
     assert branch.ok and branch.parameter_values[-1] == 1.0
     assert problem.turns == 0.0 and problem.tension == 5.0
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_carried_to_and_with_frames_leave_the_original_unchanged(case):
+    make, _ = CASES[case]
+    problem, q = make()
+    delta = 1e-3 * np.cos(np.arange(q.size))
+    delta[np.asarray(problem.fixed, dtype=np.int64)] = 0.0  # the clamps stay
+    moved = q + delta
+    energy, gradient = problem.energy(moved), problem.gradient(moved).copy()
+    frames = problem.frames
+    carried = problem.carried_to(moved)
+    # the oracle: a deep copy accepting the state in place
+    oracle = copy.deepcopy(problem)
+    oracle.accept(moved)
+    assert carried.frames.equals(oracle.frames) and not carried.frames.equals(frames)
+    assert carried.energy(moved) == oracle.energy(moved)
+    assert problem.frames.equals(frames)
+    assert problem.energy(moved) == energy
+    np.testing.assert_array_equal(problem.gradient(moved), gradient)
+    # the carried frames, restored on the original: the carried problem bit for bit
+    restored = problem.with_frames(carried.frames)
+    assert restored.energy(moved) == carried.energy(moved)
+    np.testing.assert_array_equal(restored.gradient(moved), carried.gradient(moved))
+    assert problem.frames.equals(frames)
+    with pytest.raises(ValueError):
+        next(iter(frames.values.values()))[...] = 0.0  # read-only
+
+
+def _ring_runs(n_nodes: int = 24):
+    from supercoil.problems.ring_branches import circle_branch, mode_bifurcation
+
+    circle, problem = circle_branch(2 / 3, n_nodes, 4.0)
+    points = {mode: mode_bifurcation(circle, mode, [])[1] for mode in (2,)}
+    options = ContinuationOptions(initial_step=2e-3, max_step=0.1, max_points=8)
+    return circle, problem, points, options
+
+
+def _same(a, b):
+    for name in ("parameter_values", "states", "multipliers", "tangents", "arclength",
+                 "unstable_count"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    for name in a.records:
+        np.testing.assert_array_equal(a.records[name], b.records[name], err_msg=name)
+    assert len(a.frames) == len(b.frames) == len(a)
+    assert all(f.equals(g) for f, g in zip(a.frames, b.frames))
+
+
+def test_a_branch_does_not_depend_on_what_was_computed_before_on_its_problem():
+    """The same primary branch switched from the circle twice, with other branches
+    computed on the same problem in between, and on a fresh problem: bit for bit."""
+    from supercoil.continuation import switch_branch
+    from supercoil.problems.ring_branches import ring_records
+
+    circle, problem, points, options = _ring_runs()
+    frames, q = problem.frames, circle.states[-1]
+    energy = problem.energy(q)
+
+    def alpha(on):
+        return switch_branch(on, circle, points[2], options, amplitude=2e-3, name="alpha",
+                             records=ring_records(on))
+
+    first = alpha(problem)
+    beta = switch_branch(problem, circle, points[2], options, side=-1, amplitude=4e-3,
+                         name="beta", records=ring_records(problem))
+    onwards = continuation(problem, first.states[-1], first.multipliers[-1], "excess_link",
+                           ContinuationOptions(max_points=4, max_step=0.1),
+                           start=float(first.parameter_values[-1]))
+    assert len(beta) > 1 and len(onwards) > 1
+    again = alpha(problem)
+    _same(first, again)
+    _same(first, alpha(_ring_runs()[1]))  # a fresh problem, nothing computed on it
+    # the problem the runs were given is unchanged
+    assert problem.frames.equals(frames) and problem.energy(q) == energy
+    assert problem.excess_link == 0.0

@@ -25,6 +25,7 @@ from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint
 from supercoil.continuation import continuation as follow
 from supercoil.continuation import switch_branch as switch
 from supercoil.errors import InputError
+from supercoil.solvers.carried import Carried
 from supercoil.solvers.parameters import Parametrised, problem_at
 from supercoil.solvers.problem import HessianParts
 
@@ -84,7 +85,7 @@ class Energy:
                                  f"{', '.join(missing)}")
 
 
-class _EnergyAt(Parametrised):
+class _EnergyAt(Parametrised, Carried):
     """An :class:`Energy` at the parameter value ``self.parameter``: the protocol of the
     numerical layers (:class:`~supercoil.solvers.problem.ConstrainedEnergy`)."""
 
@@ -173,7 +174,8 @@ def continuation(problem, q0, *, start: float, bounds: tuple[float, float] | Non
     into arrays it shares).
     ``q0`` (n_dofs,): a near-equilibrium at ``start`` (corrected first);
     ``bounds``: ``(low, high)`` of the parameter, where the run stops.
-    ``records(q, multipliers, lam) -> dict`` adds named per-point values;
+    ``records(q, multipliers, lam) -> dict`` adds named per-point values (a function
+    that also takes the keyword ``problem`` gets the problem at the point);
     ``events``: :class:`~supercoil.continuation.UserEvent` s located on the branch.
     Returns a :class:`~supercoil.continuation.Branch` whose ``status`` says how the
     run ended (numerical failures never raise).

@@ -422,6 +422,26 @@ class ContactProblem:
         if self.closed:
             self.knot_guard.accept(q)
 
+    @property
+    def frames(self):
+        """The rod's carried frames (:mod:`supercoil.solvers.carried`)."""
+        return self.base.frames
+
+    def with_frames(self, frames) -> ContactProblem:
+        """This contact problem over the rod carrying ``frames``; this one unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.with_frames(frames)
+        return new
+
+    def carried_to(self, q: np.ndarray) -> ContactProblem:
+        """This contact problem over the rod carried to ``q`` (the knot guard, shared,
+        takes ``q``'s knot type if it has none yet); this one unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.carried_to(q)
+        if self.closed:
+            self.knot_guard.accept(q)
+        return new
+
     def keep_knot_type(self, points: np.ndarray):
         """Make the knot type of ``points`` ``(n, 3)`` the one every state must keep
         (else the first accepted state's); returns it (a ``KnotType``)."""

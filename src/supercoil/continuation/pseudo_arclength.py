@@ -71,8 +71,10 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     pass through itself). Returns a :class:`Branch` whose ``status`` says how
     the run ended; numerical failures never raise. The problem's parameter is
     never set (the residuals are those of ``problem.at(**{parameter: value})``,
-    :func:`~supercoil.solvers.parameters.problem_at`); its reference frames are
-    carried to the last point (accepted).
+    :func:`~supercoil.solvers.parameters.problem_at`) and its frames never move: the
+    run carries new problems from point to point (``carried_to``), and the branch
+    keeps their frames (``Branch.frames``). ``records`` and events that need the
+    problem at the point take it as the keyword ``problem``.
     """
     opts = options or ContinuationOptions()
     if not hasattr(problem, parameter):

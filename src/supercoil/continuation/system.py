@@ -4,7 +4,8 @@ A :class:`~supercoil.solvers.problem.ConstrainedEnergy` whose energy depends on
 a scalar parameter: the system keeps the problem it was given, unchanged, and
 evaluates at ``x[-1]`` the problem ``problem.at(**{parameter: x[-1]})``
 (:func:`~supercoil.solvers.parameters.problem_at`; the last one is kept, so that
-the evaluations at one iterate share one). On the free DOFs (``problem.fixed`` removed) the unknowns are
+the evaluations at one iterate share one). At an accepted point the system follows
+the problem carried there (:meth:`ExtendedSystem.carry_to`). On the free DOFs (``problem.fixed`` removed) the unknowns are
 
     x = [q_free (n), mu (m), nu (r), lambda (1)],
 
@@ -26,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from supercoil.solvers.carried import carried
 from supercoil.solvers.csr import (
     csr_columns,
     csr_columns_map,
@@ -133,11 +135,11 @@ class ExtendedSystem:
         self._at = (self.problem, lam, at)
         return at
 
-    def accept(self, q: np.ndarray) -> None:
-        """Carry the problem's reference frames to ``q`` (``problem.accept``); the
-        problems derived before are forgotten."""
-        self.problem.accept(q)
-        self._at = None
+    def carry_to(self, q: np.ndarray) -> None:
+        """Follow the problem carried to ``q`` (``problem.carried_to``,
+        :func:`~supercoil.solvers.carried.carried`): ``problem`` is then that new problem,
+        the one given before unchanged."""
+        self.problem = carried(self.problem, q)
 
     def _free_jacobian(self, p, q: np.ndarray) -> sp.csr_matrix:
         """``constraint_jacobian(q)`` on the free DOFs; the restriction is redone only

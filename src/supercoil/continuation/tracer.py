@@ -10,7 +10,13 @@ accepted point the problem's ``accept(q)`` is called (:meth:`ExtendedSystem.acce
 events are evaluated, and the interval to the previous point is searched for
 special points (:mod:`supercoil.continuation.special_points`). The phase rows
 may move (:mod:`supercoil.continuation.phase`). :meth:`Tracer.branch` is the
-branch so far as a :class:`~supercoil.continuation.branch.Branch`.
+branch so far as a :class:`~supercoil.continuation.branch.Branch`, with the
+frames the problem carried at each point.
+
+The problem the tracer was given is never changed: at each accepted point the
+system follows a new problem carried there (``carried_to``). Record and event
+functions that need it take a keyword ``problem``: they are then called with the
+problem at the point (its parameter value and its carried frames).
 """
 
 from __future__ import annotations
@@ -23,13 +29,14 @@ import numpy as np
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.closure import returned_to
-from supercoil.continuation.events import UserEvent, user_values
+from supercoil.continuation.events import UserEvent, point_values, user_values
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
 from supercoil.continuation.special_points import locate_events, special_point
 from supercoil.continuation.stability import point_stability
 from supercoil.continuation.step import take_step
 from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.carried import frames_of
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 
 log = logging.getLogger(__name__)
@@ -37,6 +44,7 @@ log = logging.getLogger(__name__)
 RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
 PointCallback = Callable[[Branch], None]
 PARTIAL_MESSAGE = "in progress: the branch so far (its computation has not ended)"
+
 
 
 class Tracer:
@@ -49,9 +57,10 @@ class Tracer:
         self.system = system
         self.on_point = on_point
         self.stop: Callable[[np.ndarray], str | None] | None = None  # see pseudo_arclength.continuation()
-        # see pseudo_arclength.continuation(); by default the problem's own admissible(q), if it has one
-        self.admissible: Callable[[np.ndarray], bool] | None = getattr(
-            system.problem, "admissible", None)
+        # see pseudo_arclength.continuation(); by default the problem's own admissible(q),
+        # if it has one: that of the problem carried to the last point
+        self.admissible: Callable[[np.ndarray], bool] | None = (
+            self._carried_admissible if hasattr(system.problem, "admissible") else None)
         self.opts = options
         self.name, self.parent, self.origin = name, parent, origin
         self.records_fn = records
@@ -61,6 +70,7 @@ class Tracer:
         self.stabs = []
         self.s: list[float] = []
         self.recs: list[dict] = []
+        self.frames: list = []  # the problem's carried frames at each point
         self.user: list[list[dict]] = []
         self.specials: list[SpecialPoint] = []
         # the step controller's state after each point (Branch.next_step, .gauge_moved)
@@ -85,11 +95,14 @@ class Tracer:
             return self.ts[-2], self.s[-1] - self.s[-2]
         return self.before if len(self.xs) == 1 else None
 
+    def _carried_admissible(self, q: np.ndarray) -> bool:
+        return self.system.problem.admissible(q)
+
     # -- per point ------------------------------------------------------------------------
     def _records(self, x):
         if self.records_fn is None:
             return {}
-        return dict(self.records_fn(self.system.q(x), self.system.multipliers(x), float(x[-1])))
+        return dict(point_values(self.records_fn, self.system, x))
 
     def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True,
                   full_hessian=None, next_step: float = float("nan"),
@@ -108,7 +121,7 @@ class Tracer:
         evaluated in between does).
         """
         system = self.system
-        system.accept(system.q(x))
+        system.carry_to(system.q(x))
         self._accepted_hessian = None
         full = system.full_hessian(x) if full_hessian is None else full_hessian
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
@@ -120,6 +133,7 @@ class Tracer:
         self.ts.append(t)
         self.stabs.append(stability)
         self.recs.append(records)
+        self.frames.append(frames_of(system.problem))
         self.user.append(user)
         self.steps.append(float(next_step))
         self.moved.append(False)
@@ -304,7 +318,9 @@ class Tracer:
             special_points=tuple(self.specials), status=status, message=message,
             records=records, phase_modes=system.phase_modes,
             phase_state=system.q_phase_full, next_step=np.array(self.steps[:k], dtype=float),
-            gauge_moved=np.array(self.moved[:k], dtype=bool))
+            gauge_moved=np.array(self.moved[:k], dtype=bool),
+            frames=tuple(self.frames[:k]) if all(f is not None for f in self.frames[:k])
+            else ())
 
     def _point_rows(self, count: int) -> list[tuple]:
         """Per point of the first ``count``, ``(x, t, stability, q, multipliers, full

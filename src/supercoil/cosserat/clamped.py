@@ -83,6 +83,10 @@ class ClampedCosseratEnergy(CosseratEnergy):
         (re-bases the chart there)."""
         return self.state(*self.straight(self.rod, self.turns, self.tension))
 
+    def _restore_frames(self, frames) -> None:
+        super()._restore_frames(frames)
+        self.turns = self.turns  # the end clamp's rotation is this problem's
+
     @property
     def turns(self) -> float:
         return self._turns

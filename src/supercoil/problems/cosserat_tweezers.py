@@ -96,11 +96,12 @@ def azimuth_pinned_direction(problem: ClampedCosseratEnergy, modes: np.ndarray
     return a * modes[0] + b * modes[1]
 
 
-def cosserat_tweezers_records(problem: ClampedCosseratEnergy):
+def cosserat_tweezers_records(rod: ClampedCosseratEnergy):
     """Per-point records (module doc) for ``continuation(records=)``."""
 
-    def records(q, multipliers, turns):
-        at = problem.at(turns=float(turns))
+    def records(q, multipliers, turns, problem=None):
+        # the rod at the point (the continuation's, with its chart), else this one there
+        at = rod.at(turns=float(turns)) if problem is None else problem
         x, R = at.configuration(q)
         wr = writhe(x, closure="axis", self_crossing="nan")
         tw = axial_twist(at, q)
@@ -155,6 +156,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     start = dataclasses.replace(point, q=problem.state(*at.straight(at.rod, at.turns,
                                                                     at.tension)))
     problem.accept(start.q)
+    start = dataclasses.replace(start, frames=problem.frames)  # the chart of its q
     direction = azimuth_pinned_direction(problem, point.critical_modes)
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns, max_points=opts.max_points,

@@ -52,8 +52,8 @@ class KnottedBranch:
 
 
 def _knot_records(base_records):
-    def records(q, multipliers, excess_link):
-        out = dict(base_records(q, multipliers, excess_link))
+    def records(q, multipliers, excess_link, problem=None):
+        out = dict(base_records(q, multipliers, excess_link, problem=problem))
         knot = identify(np.asarray(q, float).reshape(-1, 3))
         out.update(knot_determinant=knot.determinant,
                    knot_alexander_degree=len(knot.alexander) - 1)

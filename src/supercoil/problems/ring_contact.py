@@ -329,7 +329,7 @@ class _Winding:
             base = problem.base
             # the reference frames at the last accepted state, restored after a refused
             # step (carrying them back by transport can slip the tracked writhe by a turn)
-            frames = _frames_of(base)
+            frames = base.frames
             trial, trial_stab, restarts = self._relax(problem, res.q, stepping)
             change = abs(problem.base.writhe_local(trial.q) - problem.base.writhe_local(res.q))
             smooth = trial.converged and change <= WRITHE_STEP and restarts == 0
@@ -338,14 +338,14 @@ class _Winding:
                       trial.newton_iterations, change, restarts, trial_stab.unstable_count)
             if not smooth and stop - level > self.step / 2**MAX_HALVINGS:
                 size = 0.5 * (stop - level)
-                problem = problem.at(excess_link=level)
+                problem = problem.at(excess_link=level).with_frames(frames)
                 base = problem.base
-                _restore_frames(base, frames)
                 continue
             if not trial.converged:
                 # the smallest step did not settle within STEP_ITERATIONS: the same
                 # step with the full iteration budget (a jump, if it lands far)
-                _restore_frames(base, frames)
+                problem = problem.with_frames(frames)
+                base = problem.base
                 trial, trial_stab, restarts = self._relax(problem, res.q)
                 log.debug("dLk %.6g -> %.6g with the full budget: %s, %d Newton iterations",
                           level, stop, trial.status, trial.newton_iterations)
@@ -456,14 +456,3 @@ class _Winding:
                 f"differs from the double sum by {result.writhe_error:.2e}, |Tw + Wr - dLk| = "
                 f"{result.link_error:.2e})")
         return result
-
-
-def _frames_of(base: ClosedRodEnergy):
-    """The reference frames a closed rod carries along (tangents, directors, ``Lk_u``)."""
-    return base._tangents, base._directors, base.reference_link
-
-
-def _restore_frames(base: ClosedRodEnergy, frames) -> None:
-    tangents, directors, reference_link = frames
-    base._set_frames(tangents, directors)
-    base.reference_link = reference_link

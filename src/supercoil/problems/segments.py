@@ -29,6 +29,8 @@ from supercoil.continuation import (
     UserEvent,
     continuation,
 )
+from supercoil.continuation.carry import frames_at
+from supercoil.solvers.carried import carried
 
 
 class PinnedRod(Protocol):
@@ -182,10 +184,11 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         elif len(run) < 2:
             break
         q = run.states[-1]
-        problem.accept(q)
         if run.status.name == "STOPPED" or rod.pin_quality(q) < quality:
             set_pin(problem, rod, q)
             pins.append((total - 1, tuple(int(d) for d in rod.gauge_dofs)))
+        # the next run starts with the frames this one ended with (problem unchanged)
+        carrying = carried(frames_at(problem, run, len(run) - 1), q)
         direction = 1 if run.tangents[-1, -1] >= 0 else -1
         step = float(np.clip(run.arclength[-1] - run.arclength[-2], options.min_step,
                              options.max_step))
@@ -199,7 +202,7 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         held = None if grip is None else grip_stop(grip, q, grip_fraction)
         if on_run is not None:
             on_run(total - 1)
-        run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
+        run = continuation(carrying, q, run.multipliers[-1], parameter=run.parameter,
                            start=float(run.parameter_values[-1]),
                            options=opts, name=name, records=records, events=events,
                            on_point=report,

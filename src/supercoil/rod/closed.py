@@ -91,6 +91,7 @@ class ClosedRodEnergy(RodEnergy):
 
     twist_parameter = "excess_link"
     parameters = ("excess_link",)
+    frame_attributes = RodEnergy.frame_attributes + (("reference_link", "reference_link"),)
 
     def twist_offset(self) -> float:
         return self.excess_link - self.reference_link
@@ -206,13 +207,13 @@ class ClosedRodEnergy(RodEnergy):
         :func:`supercoil.topology.twist_from_frames`, is an independent check
         of Lk = Tw + Wr.
         """
-        self.accept(q)  # directors adapted to the current tangents
-        ref = kernels.twist_value(self._stencils(q), self._frames())
+        carried = self.carried_to(q)  # directors adapted to the current tangents
+        ref = kernels.twist_value(carried._stencils(q), carried._frames())
         mean = ref.mean()
         theta = np.zeros(len(ref))
         theta[1:] = np.cumsum(mean - ref[1:])
-        t = self._tangents
-        u = self._directors
+        t = carried._tangents
+        u = carried._directors
         v = np.cross(t, u)
         return np.cos(theta)[:, None] * u + np.sin(theta)[:, None] * v
 

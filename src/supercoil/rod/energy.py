@@ -20,6 +20,7 @@ from supercoil.geometry.curves import parallel_transport, unit
 from supercoil.rod import kernels
 from supercoil.rod.assembly import StencilPattern
 from supercoil.rod.model import Rod
+from supercoil.solvers.carried import Carried, Frames
 from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.parameters import Parametrised
 from supercoil.solvers.problem import HessianParts
@@ -52,7 +53,7 @@ def _key(q: np.ndarray) -> bytes:
     return np.ascontiguousarray(q, dtype=np.float64).tobytes()
 
 
-class RodEnergy(Parametrised, abc.ABC):
+class RodEnergy(Parametrised, Carried, abc.ABC):
     """Shared machinery of the discrete rods: stencils, frames, constraints.
 
     Subclasses set ``self.rod``, the vertex stencils ``vertex_nodes``
@@ -102,6 +103,14 @@ class RodEnergy(Parametrised, abc.ABC):
         """Turns added to ``Phi / 2pi`` to give the excess twist (set by the boundary)."""
 
     # ----------------------------------------------------------------- pieces
+    # the carried state (supercoil.solvers.carried): the reference frames, and what a
+    # subclass keeps with them
+    frame_attributes = (("tangents", "_tangents"), ("directors", "_directors"))
+
+    def _restore_frames(self, frames: Frames) -> None:
+        super()._restore_frames(frames)
+        self._set_frames(frames.values["tangents"], frames.values["directors"])
+
     def _set_frames(self, tangents: np.ndarray, directors: np.ndarray) -> None:
         """New reference frames; forgets what was computed with the old ones."""
         self._tangents = tangents

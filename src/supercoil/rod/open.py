@@ -114,6 +114,8 @@ class ClampedRodEnergy(RodEnergy):
 
     twist_parameter = "turns"
     parameters = ("turns", "tension")
+    frame_attributes = RodEnergy.frame_attributes + (("end_mismatch", "_end_mismatch"),
+                                                     ("turn_offset", "_turn_offset"))
 
     def twist_offset(self) -> float:
         return self.turns + self._end_mismatch / (2 * np.pi) + self._turn_offset

@@ -12,6 +12,7 @@ import numpy as np
 
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch
+from supercoil.continuation.carry import frames_at
 from supercoil.problems.contact_events import contact_start, truncate_after
 from supercoil.problems.ring import michell_excess_link
 from supercoil.problems.ring_branches import circle_branch, mode_bifurcation, ring_records
@@ -103,13 +104,13 @@ def ring_diagram(options: DiagramOptions,
         k = contact_start(free, onset, cp)
         direction = 1 if free.tangents[k, -1] >= 0 else -1
         at = float(free.parameter_values[k])
-        cp.accept(free.states[k])
+        carrying = frames_at(cp, free, k)  # the frames of the free branch's point k
         if not 0.0 <= at <= opts.max_excess_link:
             notes.append(f"{contact_name}: contact at dLk = {at:.4g} is outside "
                          f"[0, {opts.max_excess_link:g}]: not computed")
             continue
         contact, pins[contact_name] = contact_branch(
-            cp, free, k, contact_options(opts, D, direction), contact_name, stored, on_point)
+            carrying, free, k, contact_options(opts, D, direction), contact_name, stored, on_point)
         note = sliding_note(contact, opts, contact_name)
         if note is not None:
             notes.append(note)

@@ -53,8 +53,10 @@ class RunRecords:
     def begin(self, index: int) -> None:
         self.start = index
 
-    def __call__(self, q: np.ndarray, multipliers: np.ndarray, parameter: float) -> dict:
-        return self.records(q, multipliers, parameter) | {"run_start": self.start}
+    def __call__(self, q: np.ndarray, multipliers: np.ndarray, parameter: float,
+                 problem=None) -> dict:
+        return (self.records(q, multipliers, parameter, problem=problem)
+                | {"run_start": self.start})
 
 
 def stored_pins(branch: Branch) -> tuple[tuple[int, tuple[int, ...]], ...]:

@@ -78,12 +78,14 @@ def clamped_buckle(n_nodes: int, end_distance: float) -> np.ndarray:
     return pts
 
 
-def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
+def tweezers_records(whole, rod: ClampedRodEnergy, contact: bool, probe=None):
     """Per-point records (module doc) for ``continuation(records=)``."""
 
-    def records(q: np.ndarray, multipliers: np.ndarray, turns: float) -> dict:
-        point = problem.at(turns=float(turns))  # the problem at the point's load
-        rod_at = point if rod is problem else point.base
+    def records(q: np.ndarray, multipliers: np.ndarray, turns: float, problem=None) -> dict:
+        # the problem at the point (the continuation's, with its frames), else this one
+        # at the point's load
+        point = whole.at(turns=float(turns)) if problem is None else problem
+        rod_at = point if rod is whole else point.base
         x = q.reshape(-1, 3)
         wr = writhe(x, closure="axis", self_crossing="nan")
         tw = rod_at.twist(q)

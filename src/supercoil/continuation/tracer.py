@@ -5,7 +5,8 @@ From a corrected point and its tangent, :class:`Tracer` takes steps
 corrections and shrinking them after failures, until a parameter bound, the
 arclength or point budget, a caller's stop, a closed loop
 (:mod:`supercoil.continuation.closure`) or a step below the minimum. At every
-accepted point the problem's ``accept(q)`` is called (:meth:`ExtendedSystem.accept`), then the stability
+accepted point the system follows the problem carried there
+(:meth:`ExtendedSystem.carry_to`), then the stability
 (:mod:`supercoil.continuation.stability`), the caller's records and user
 events are evaluated, and the interval to the previous point is searched for
 special points (:mod:`supercoil.continuation.special_points`). The phase rows
@@ -81,7 +82,7 @@ class Tracer:
         self.before: tuple[np.ndarray, float] | None = None
         # the point before the first one, for the secant predictor of a resumed branch
         self.point_before: np.ndarray | None = None
-        # (x, full Hessian) of the last point added, assembled after its accept: the
+        # (x, full Hessian) of the last point added, assembled after its carry: the
         # rephase tangent there needs no new one (phase rows are linear)
         self._accepted_hessian: tuple[np.ndarray, object] | None = None
         # converted per point and per record for branch() (the recorded values are only
@@ -114,8 +115,8 @@ class Tracer:
 
         ``full_hessian``: the Hessian on all DOFs at ``x`` if known (a converged
         :class:`~supercoil.continuation.corrector.Correction`'s), for the stability
-        and the rephase tangent. It was assembled before ``accept``, which carries
-        the rod's reference frames to ``x``: that changes the Hessian by round-off
+        and the rephase tangent. It was assembled before the problem was carried to
+        ``x`` (the rod's reference frames transported there): that changes the Hessian by round-off
         only (measured on the ring's alpha branch at N = 200: at most 3e-16 of its
         largest entry, as much as assembling it twice at ``x`` with other states
         evaluated in between does).

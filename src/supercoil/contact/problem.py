@@ -478,6 +478,16 @@ class ContactProblem:
             return False
         return True
 
+    def admissible_over(self, q: np.ndarray, problem=None) -> bool:
+        """:meth:`admissible` with the rod of ``problem`` (the rod a continuation carried
+        to the point, whose frames give the writhe it tracks): the guard of a run without
+        contact terms, which this problem only watches."""
+        if problem is None:
+            return self.admissible(q)
+        watched = copy.copy(self)
+        watched.base = getattr(problem, "base", problem)
+        return watched.admissible(q)
+
     def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:
         """Largest node displacement of ``dq`` over the trust radius (one edge length)."""
         dx = np.asarray(dq, dtype=float).reshape(-1, 3)

@@ -65,7 +65,8 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     KeyboardInterrupt) propagates. ``stop(q)``, if given, is asked about each corrected
     state before it is accepted: a non-empty message refuses it and ends the run at
     the point before (status ``STOPPED``), e.g. when a problem's gauge pins lose their
-    grip there and must be picked again. ``admissible(q)``, if given, replaces the
+    grip there and must be picked again. ``admissible(q)`` (with the keyword
+    ``problem``, if it takes it, the problem carried to the last point), if given, replaces the
     problem's own ``admissible`` (if any): a corrected state it refuses is not
     accepted, and the step is retried shorter (e.g. a contact-free ring that would
     pass through itself). Returns a :class:`Branch` whose ``status`` says how

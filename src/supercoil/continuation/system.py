@@ -141,7 +141,7 @@ class ExtendedSystem:
         the one given before unchanged."""
         self.problem = carried(self.problem, q)
 
-    def _free_jacobian(self, p, q: np.ndarray) -> sp.csr_matrix:
+    def _free_jacobian(self, q: np.ndarray, p=None) -> sp.csr_matrix:
         """``constraint_jacobian(q)`` on the free DOFs; the restriction is redone only
         when the problem returns another matrix object (a problem that keeps its
         Jacobian for the same ``q`` saves the column slicing, 0.1 ms at N = 100).
@@ -150,7 +150,7 @@ class ExtendedSystem:
         ``indptr`` and ``indices`` compared as bytes): a Jacobian of that pattern is
         restricted without ``csr_columns``' checks of the free DOFs and memo look-up
         (15 -> 4 us at N = 100, a new Jacobian at every residual), the same matrix."""
-        J = p.constraint_jacobian(q)
+        J = (self.problem if p is None else p).constraint_jacobian(q)
         if J is not self._jacobian_source:
             self._jacobian_source = J
             self._jacobian_free = self._free_columns(J)
@@ -172,10 +172,12 @@ class ExtendedSystem:
         return csr_from_arrays(J.data[selected], free_indices.copy(), free_indptr.copy(),
                                (J.shape[0], self.free.size))
 
-    def _kkt_residual(self, p, q: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    def _kkt_residual(self, q: np.ndarray, mu: np.ndarray, p=None) -> np.ndarray:
+        """``[grad E + J^T mu ; c]`` on the free DOFs of ``p`` (default: the problem)."""
+        p = self.problem if p is None else p
         g = p.gradient(q)[self.free]
         if self.m:
-            J = self._free_jacobian(p, q)
+            J = self._free_jacobian(q, p)
             if getattr(J, "format", None) == "csr" and J.dtype == np.float64:
                 # scipy's J.T @ mu (csc_matvec on the transpose, the same sums) without
                 # the transpose object and the operator dispatch (35 µs at N = 200)
@@ -188,7 +190,7 @@ class ExtendedSystem:
     def residual(self, x: np.ndarray) -> np.ndarray:
         q = self.q(x)
         mu = x[self.n:self.n + self.m]
-        F = self._kkt_residual(self.problem_at(x[-1]), q, mu)
+        F = self._kkt_residual(q, mu, self.problem_at(x[-1]))
         if self.r:
             nu = x[self.n + self.m:self.n + self.m + self.r]
             F[:self.n] += self.P.T @ nu
@@ -211,7 +213,7 @@ class ExtendedSystem:
         problem returns the same Jacobian object and the phase rows are unchanged
         (a corrector's residual, factor and refinement at one iterate)."""
         rows = []
-        free = self._free_jacobian(self.problem_at(x[-1]), self.q(x)) if self.m else None
+        free = self._free_jacobian(self.q(x), self.problem_at(x[-1])) if self.m else None
         if self.r and (self._phase_rows is None or self._phase_rows[0] is not self.P):
             self._phase_rows = (self.P, sp.csr_matrix(self.P))
         stacked = self.__dict__.get("_stacked")
@@ -242,9 +244,9 @@ class ExtendedSystem:
             out = np.concatenate([full[self.free], full[p.n_dofs:p.n_dofs + self.m]])
         else:
             step = self.fd_step * max(1.0, abs(lam))
-            plus = self._kkt_residual(problem_at(self.problem, **{self.parameter: lam + step}),
-                                      q, mu)
-            minus = self._kkt_residual(problem_at(self.problem, **{self.parameter: lam - step}),
-                                       q, mu)
+            plus = self._kkt_residual(q, mu,
+                                      problem_at(self.problem, **{self.parameter: lam + step}))
+            minus = self._kkt_residual(q, mu,
+                                       problem_at(self.problem, **{self.parameter: lam - step}))
             out = (plus - minus) / (2.0 * step)
         return np.concatenate([out, np.zeros(self.r)])

@@ -30,7 +30,7 @@ import numpy as np
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.closure import returned_to
-from supercoil.continuation.events import UserEvent, point_values, user_values
+from supercoil.continuation.events import UserEvent, point_values, takes_problem, user_values
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
 from supercoil.continuation.special_points import locate_events, special_point
@@ -98,6 +98,13 @@ class Tracer:
 
     def _carried_admissible(self, q: np.ndarray) -> bool:
         return self.system.problem.admissible(q)
+
+    def _vet(self, q: np.ndarray) -> bool:
+        """``admissible(q)``, with ``problem=`` the problem carried to the last point if
+        it takes that keyword."""
+        if takes_problem(self.admissible):
+            return self.admissible(q, problem=self.system.problem)
+        return self.admissible(q)
 
     # -- per point ------------------------------------------------------------------------
     def _records(self, x):
@@ -226,7 +233,8 @@ class Tracer:
             x_k = self.xs[-1]
             taken = take_step(system, opts, x_k, self.ts[-1],
                               self.xs[-2] if len(self.xs) >= 2 else self.point_before,
-                              self._previous_tangent(), ds, self.admissible, self.stop)
+                              self._previous_tangent(), ds,
+                              None if self.admissible is None else self._vet, self.stop)
             if taken.refusal:
                 return ContinuationStatus.STOPPED, (
                     f"stopped after {len(self.xs)} points at {system.parameter} = "

@@ -136,13 +136,16 @@ def test_a_users_protocol_object_is_copied_with_the_parameter_set_on_the_copy():
 
 
 def test_continuation_never_sets_the_parameter_of_the_problem_it_is_given():
-    problem, q = _clamped(turns=0.0, tension=5.0)
+    problem, bent = _clamped(turns=0.0, tension=5.0)
+    frames, energy = problem.frames, problem.energy(bent)
     q = straight_rod(30).ravel()
     branch = continuation(problem, q, parameter="turns",
                           options=ContinuationOptions(parameter_bounds=(0.0, 1.0),
                                                       initial_step=0.1, max_step=0.25))
     assert branch.ok and branch.parameter_values[-1] == 1.0
     assert problem.turns == 0.0 and problem.tension == 5.0
+    assert problem.frames.equals(frames) and problem.energy(bent) == energy
+    assert len(branch.frames) == len(branch)
 
 
 @pytest.mark.parametrize("case", sorted(CASES))

@@ -271,8 +271,8 @@ def test_rephase_anchors_the_integral_condition_at_the_previous_point():
             free = free_dofs(problem)
             mass = np.asarray(problem.mass, dtype=float)[free]
             q0, q1 = branch.states[k - 1], branch.states[k]
-            problem.excess_link = float(branch.parameter_values[k - 1])
-            modes = sliding_phase_modes(problem, q0)
+            at = problem.at(excess_link=float(branch.parameter_values[k - 1]))
+            modes = sliding_phase_modes(at, q0)
             if modes.size == 0:
                 continue
             g = modes[0, free] / np.linalg.norm(modes[0])

@@ -125,7 +125,7 @@ class DiagonalQuartic(Unconstrained):
         self.lam = lam
         self.rotation_pairs = tuple(rotation_pairs)
         self.max_move = np.inf
-        self.step_bound_calls = 0
+        self._counts = {"step_bound": 0}  # shared by the copies a continuation makes
 
     def energy(self, q):
         return float(0.5 * np.sum((self.d - self.lam) * q**2) + 0.25 * (q @ q) ** 2)
@@ -140,9 +140,13 @@ class DiagonalQuartic(Unconstrained):
 
     def step_bound(self, q, dq):
         """Collision-guard stand-in: no step moves a coordinate by more than ``max_move``."""
-        self.step_bound_calls += 1
+        self._counts["step_bound"] += 1
         largest = float(np.max(np.abs(dq)))
         return 1.0 if largest <= self.max_move else self.max_move / largest
+
+    @property
+    def step_bound_calls(self) -> int:
+        return self._counts["step_bound"]
 
     def symmetry_modes(self, q):
         """Generators of the rotations in the declared coordinate pairs, ``(r, n_dofs)``."""

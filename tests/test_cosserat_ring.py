@@ -282,4 +282,5 @@ def test_continuation_finds_michell_and_the_buckled_branch_keeps_the_link():
     onwards = ContinuationOptions(parameter_bounds=(0.5, 3.0), initial_step=0.05,
                                   max_step=0.1, max_points=30, direction=-1)
     with pytest.raises(LinkingError, match="passed through itself"):
-        continuation(problem, buckled.states[-1], parameter="excess_link", options=onwards)
+        continuation(problem, buckled.states[-1], parameter="excess_link", options=onwards,
+                     start=float(buckled.parameter_values[-1]))

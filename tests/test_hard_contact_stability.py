@@ -130,10 +130,10 @@ def test_analyse_counts_every_barrier_state_as_the_continuation_and_the_dense_or
     cp = diagram.contact_problem
     for i in range(len(beta)):
         q, mu = beta.states[i], beta.multipliers[i]
-        cp.excess_link = float(beta.parameter_values[i])
         cp.accept(q)
         cp.base.repin(q)
-        report = analyse(cp, q, mu)
+        at = cp.at(excess_link=float(beta.parameter_values[i]))
+        report = analyse(at, q, mu)
         assert report.certified, (i, report.message)
         assert report.unstable_count == beta.unstable_count[i], i
-        assert dense_unstable_count(cp, q, mu) == beta.unstable_count[i], i
+        assert dense_unstable_count(at, q, mu) == beta.unstable_count[i], i

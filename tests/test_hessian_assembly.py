@@ -156,7 +156,7 @@ def test_rod_constraint_curvature_equals_the_numpy_fill_bit_for_bit():
     H = rod.constraint_hessian(x.ravel(), mu)
     assert H.has_canonical_format and H.has_sorted_indices
     # the numpy fill of the remembered pattern that the compiled loop replaced
-    _, first, second, indices, indptr = rod._curvature_pattern
+    _, first, second, indices, indptr = rod._shared["curvature_pattern"]
     w = np.repeat(mu / rod.rod.edge_length, 3)
     data = np.concatenate([w, w, -w, -w])
     values = data[first]

@@ -33,13 +33,11 @@ def _bent_ring(n: int = 60):
 
 def _central_difference(problem, q, mu, step=1e-4, parameter="excess_link"):
     def kkt(lam):
-        setattr(problem, parameter, lam)
-        return np.concatenate([problem.gradient(q) + problem.constraint_jacobian(q).T @ mu,
-                               problem.constraints(q)])
+        at = problem.at(**{parameter: lam})
+        return np.concatenate([at.gradient(q) + at.constraint_jacobian(q).T @ mu,
+                               at.constraints(q)])
     lam = getattr(problem, parameter)
-    out = (kkt(lam + step) - kkt(lam - step)) / (2 * step)
-    setattr(problem, parameter, lam)
-    return out
+    return (kkt(lam + step) - kkt(lam - step)) / (2 * step)
 
 
 def _bent_clamped_rod(n: int = 50):

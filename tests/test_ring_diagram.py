@@ -114,9 +114,8 @@ def test_sliding_residual_is_the_unpinned_kkt_residual(diagram):
     for i in range(len(contact)):
         # the rigid pins point i was computed with (RingDiagram.pins)
         diagram.pin_branch("alpha_contact", i, False, cp)
-        system = ExtendedSystem(cp, "excess_link", contact.states[i])
-        cp.excess_link = float(contact.parameter_values[i])
         cp.accept(contact.states[i])
+        system = ExtendedSystem(cp, "excess_link", contact.states[i])
         x = system.pack(contact.states[i], contact.multipliers[i], contact.parameter_values[i])
         residual = float(np.max(np.abs(system.residual(x))))
         assert contact.records["sliding_residual"][i] == pytest.approx(residual, rel=1e-6,
@@ -309,9 +308,9 @@ def test_sparse_constrained_eigenvalues_equal_the_dense_oracle_with_contact(diag
     contact = diagram.branch("alpha_contact")
     i = len(contact) - 1
     cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))
-    cp.excess_link = float(contact.parameter_values[i])
     cp.accept(contact.states[i])
-    dofs, H, J, mass, sym = eigen_system(cp, contact.states[i], contact.multipliers[i])
+    dofs, H, J, mass, sym = eigen_system(cp.at(excess_link=float(contact.parameter_values[i])),
+                                         contact.states[i], contact.multipliers[i])
     assert sym.shape[1] == 7  # six rigid motions and the material sliding
     dense, _ = dense_constrained_eigenpairs(H, J, mass, sym)
     sparse, vectors = lowest_pairs(H, J, mass, n_wanted=5, n=dofs.size, m=J.shape[0],
@@ -409,9 +408,9 @@ def test_contact_branch_counts_do_not_depend_on_the_rigid_pins(diagram):
     first = diagram.pins["alpha_contact"][0]
     assert first == (0, tuple(int(d) for d in rigid_pins(contact.states[0].reshape(-1, 3))))
     for i, q in enumerate(contact.states):
-        cp.excess_link = float(contact.parameter_values[i])
         cp.accept(q)
-        _dofs, H, J, mass, sym = eigen_system(cp, q, contact.multipliers[i])
+        at = cp.at(excess_link=float(contact.parameter_values[i]))
+        _dofs, H, J, mass, sym = eigen_system(at, q, contact.multipliers[i])
         values, _ = dense_constrained_eigenpairs(H, J, mass, sym)
         assert int(np.sum(values < -1e-6)) == contact.unstable_count[i], i
     np.testing.assert_array_equal(cp.base.fixed, construction)

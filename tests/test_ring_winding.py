@@ -51,7 +51,7 @@ def explicit_continuation(twist_ratio, excess_link, lod, nodes, step):
     q = circle.q + circle_perturbation(base, circle.q, report)
     levels = np.linspace(start, excess_link, int(np.ceil((excess_link - start) / step)) + 1)
     for level in levels:
-        problem.excess_link = float(level)
+        problem = problem.at(excess_link=float(level))
         problem.accept(q)
         res = solve_contact(problem, q, options)
         assert res.converged and res.admissible, (level, res.message)

@@ -384,11 +384,10 @@ def _three_points(small_run, name):
     problem = small_run.pin_branch(name)
     for i in (1, len(branch) // 2, len(branch) - 1):
         q, mu, lam = branch.states[i], branch.multipliers[i], branch.parameter_values[i]
+        problem.accept(q)
         system = ExtendedSystem(problem, branch.parameter, q)
         x = system.pack(q, mu, lam)
-        system.set_parameter(lam)
-        problem.accept(q)
-        yield branch, i, problem, system, x, q, mu
+        yield branch, i, system.problem_at(lam), system, x, q, mu
 
 
 @pytest.mark.parametrize("name", ["buckled", "buckled_contact"])

@@ -25,6 +25,8 @@ from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint
 from supercoil.continuation import continuation as follow
 from supercoil.continuation import switch_branch as switch
 from supercoil.errors import InputError
+from supercoil.solvers.carried import Carried
+from supercoil.solvers.parameters import Parametrised, problem_at
 from supercoil.solvers.problem import HessianParts
 
 Array = np.ndarray
@@ -83,9 +85,11 @@ class Energy:
                                  f"{', '.join(missing)}")
 
 
-class _EnergyAt:
+class _EnergyAt(Parametrised, Carried):
     """An :class:`Energy` at the parameter value ``self.parameter``: the protocol of the
     numerical layers (:class:`~supercoil.solvers.problem.ConstrainedEnergy`)."""
+
+    parameters = ("parameter",)
 
     def __init__(self, model: Energy, value: float):
         self.model = model
@@ -147,11 +151,11 @@ def _options(options: ContinuationOptions | None, bounds) -> ContinuationOptions
 def _problem(problem, parameter: str, start: float):
     if isinstance(problem, Energy):
         return _EnergyAt(problem, start), "parameter"
-    work = copy.deepcopy(problem)
-    if not hasattr(work, parameter):
+    if not hasattr(problem, parameter):
         raise InputError(f"parameter: the problem has no attribute {parameter!r}")
-    setattr(work, parameter, float(start))
-    return work, parameter
+    # a deep copy: the continuation carries the copy's reference frames along (accept);
+    # then the parameter's value by ``at``, or, on an object without it, set on the copy
+    return problem_at(copy.deepcopy(problem), **{parameter: float(start)}), parameter
 
 
 def continuation(problem, q0, *, start: float, bounds: tuple[float, float] | None = None,
@@ -162,10 +166,16 @@ def continuation(problem, q0, *, start: float, bounds: tuple[float, float] | Non
 
     ``problem``: an :class:`Energy`, or an object with the protocol of
     :class:`~supercoil.solvers.problem.ConstrainedEnergy` whose attribute
-    ``parameter`` is the continuation parameter (it is copied, never changed).
+    ``parameter`` is the continuation parameter. It is copied, never changed: the
+    continuation evaluates ``problem.at(**{parameter: value})`` where the object has
+    ``at`` (:class:`~supercoil.solvers.parameters.Parametrised`), else a shallow copy
+    with the attribute set on the copy, so the attribute must hold the parameter's
+    whole effect (a property whose setter rebinds what depends on it, never writes
+    into arrays it shares).
     ``q0`` (n_dofs,): a near-equilibrium at ``start`` (corrected first);
     ``bounds``: ``(low, high)`` of the parameter, where the run stops.
-    ``records(q, multipliers, lam) -> dict`` adds named per-point values;
+    ``records(q, multipliers, lam) -> dict`` adds named per-point values (a function
+    that also takes the keyword ``problem`` gets the problem at the point);
     ``events``: :class:`~supercoil.continuation.UserEvent` s located on the branch.
     Returns a :class:`~supercoil.continuation.Branch` whose ``status`` says how the
     run ended (numerical failures never raise).

@@ -33,8 +33,8 @@ terms through the Hessian (energy treatments) or through the active
 constraints (exact treatment): a direction that would open a contact carrying
 a positive force is excluded from the tangent space. What belongs to the rod
 (its frames, writhe, reference link) is asked of ``problem.base``; the load
-parameters a continuation sets (``excess_link``, ``turns``, ``tension``) are
-properties that read and write the rod's.
+parameters (``excess_link``, ``turns``, ``tension``) read the rod's, and
+:meth:`ContactProblem.at` gives the contact problem over the rod at other values.
 
 The centreline. Contact sees the points ``base.centreline(q)`` ``(3 n,)``, entry ``k``
 the unknown ``q[base.centreline_dofs[k]]`` (the positions among a Cosserat rod's
@@ -128,31 +128,32 @@ class ContactProblem:
         return getattr(self.base, "gauge_dofs", np.zeros(0, dtype=np.int64))
 
     @property
-    def excess_link(self) -> float:
-        """The closed rod's excess link, a continuation parameter."""
-        return self.base.excess_link
+    def parameters(self) -> tuple[str, ...]:
+        """The rod's load parameters (:meth:`at`)."""
+        return self.base.parameters
 
-    @excess_link.setter
-    def excess_link(self, value: float) -> None:
-        self.base.excess_link = value
+    def at(self, **values: float) -> ContactProblem:
+        """This contact problem over the rod at other parameter values
+        (``base.at(**values)``); the contact state (active set, multipliers, guards,
+        curve) is shared, and this problem is unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.at(**values)
+        return new
+
+    @property
+    def excess_link(self) -> float:
+        """The closed rod's excess link, a continuation parameter (:meth:`at`)."""
+        return self.base.excess_link
 
     @property
     def turns(self) -> float:
-        """The clamped rod's turns of the end clamp, a continuation parameter."""
+        """The clamped rod's turns of the end clamp, a continuation parameter (:meth:`at`)."""
         return self.base.turns
-
-    @turns.setter
-    def turns(self, value: float) -> None:
-        self.base.turns = value
 
     @property
     def tension(self) -> float:
-        """The clamped rod's dead load, a continuation parameter."""
+        """The clamped rod's dead load, a continuation parameter (:meth:`at`)."""
         return self.base.tension
-
-    @tension.setter
-    def tension(self, value: float) -> None:
-        self.base.tension = value
 
     @property
     def symmetry_modes(self):
@@ -451,6 +452,26 @@ class ContactProblem:
         if self.closed:
             self.knot_guard.accept(self.centreline(q))
 
+    @property
+    def frames(self):
+        """The rod's carried frames (:mod:`supercoil.solvers.carried`)."""
+        return self.base.frames
+
+    def with_frames(self, frames) -> ContactProblem:
+        """This contact problem over the rod carrying ``frames``; this one unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.with_frames(frames)
+        return new
+
+    def carried_to(self, q: np.ndarray) -> ContactProblem:
+        """This contact problem over the rod carried to ``q`` (the knot guard, shared,
+        takes ``q``'s knot type if it has none yet); this one unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.carried_to(q)
+        if self.closed:
+            self.knot_guard.accept(self.centreline(q))
+        return new
+
     def keep_knot_type(self, points: np.ndarray):
         """Make the knot type of ``points`` ``(n, 3)`` the one every state must keep
         (else the first accepted state's); returns it (a ``KnotType``)."""
@@ -497,6 +518,16 @@ class ContactProblem:
                                 "overlapping itself locally)")
                 return False
         return True
+
+    def admissible_over(self, q: np.ndarray, problem=None) -> bool:
+        """:meth:`admissible` with the rod of ``problem`` (the rod a continuation carried
+        to the point, whose frames give the writhe it tracks): the guard of a run without
+        contact terms, which this problem only watches."""
+        if problem is None:
+            return self.admissible(q)
+        watched = copy.copy(self)
+        watched.base = getattr(problem, "base", problem)
+        return watched.admissible(q)
 
     def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:
         """Largest node displacement of ``dq`` over the trust radius (one edge length)."""

@@ -58,6 +58,8 @@ class SpecialPoint:
     located: bool = True
     tolerance: float = float("nan")
     records: dict = field(default_factory=dict)
+    # the frames the problem carried when the point was located (None: unknown)
+    frames: object = None
 
     def entry(self, parameter_key: str) -> dict:
         """The special point in a result file's ``special_points`` (the keys of docs/model.md): the
@@ -115,6 +117,11 @@ class Branch:
     (k,) whether the point is the last one corrected in moved phase rows after
     a failed step (the step from it is then retried once without moving them
     again). Arrays of another length than the branch are read as unknown.
+
+    ``frames`` (k,): what the problem carried at each point (its ``frames``,
+    :mod:`supercoil.solvers.carried`), so that switching, checks and resumption start
+    from a point's own frames; empty where unknown (a branch read from a file, whose
+    frames are carried again along its states).
     """
 
     name: str
@@ -138,9 +145,11 @@ class Branch:
     phase_state: np.ndarray = field(default_factory=lambda: np.zeros(0))
     next_step: np.ndarray = field(default_factory=lambda: np.zeros(0))
     gauge_moved: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    frames: tuple = ()
 
     def __post_init__(self):
         k = int(np.size(self.parameter_values))
+        object.__setattr__(self, "frames", tuple(self.frames) if len(self.frames) == k else ())
         if np.shape(self.next_step) != (k,):
             object.__setattr__(self, "next_step", np.full(k, np.nan))
         if np.shape(self.gauge_moved) != (k,):

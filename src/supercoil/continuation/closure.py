@@ -57,21 +57,19 @@ def returned_to(system: ExtendedSystem, opts: ContinuationOptions, xs: Sequence[
     for i in close:
         j = int(near[i])
         if (ts[j] @ (w * ts[-1]) >= cos_limit and unstable_counts[j] == count
-                and _closes_at(system, opts, a + u[i] * chord, xs[j], ts[j], xs[-1][-1])):
+                and _closes_at(system, opts, a + u[i] * chord, xs[j], ts[j])):
             return j
     return None
 
 
 def _closes_at(system: ExtendedSystem, opts: ContinuationOptions, start: np.ndarray,
-               x_j: np.ndarray, t_j: np.ndarray, parameter: float) -> bool:
+               x_j: np.ndarray, t_j: np.ndarray) -> bool:
     """Whether the branch really passes through the point ``x_j`` (tangent ``t_j``): the
     point ``start`` of the last chord nearest to it, corrected on the hyperplane through
     it orthogonal to its tangent, must land on it (a branch that only passes near it,
-    e.g. a helix of small pitch, lands elsewhere on that hyperplane). The system is left
-    at ``parameter`` (the last point's)."""
+    e.g. a helix of small pitch, lands elsewhere on that hyperplane)."""
     corr = correct(system, start, system.weights * t_j, x_j, 0.0,
                    opts.tolerance, opts.max_corrector_iterations)
-    system.set_parameter(parameter)
     if not corr.ok:
         return False
     scale = max(1.0, system.norm(x_j))

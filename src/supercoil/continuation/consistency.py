@@ -15,8 +15,9 @@ Checks, from the stored data and the problem alone:
   points through their ``count_before`` / ``count_after`` (a fold between the
   same points accounts for a change by one).
 
-``problem.accept(q)`` is called at every checked point (so that a problem
-with a reference state follows the branch); the problem is left at the last one.
+The problem is never changed: each point is checked with the frames the branch
+carried there (:mod:`supercoil.continuation.carry`), at its parameter value
+(``problem.at``).
 """
 
 from __future__ import annotations
@@ -27,8 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from supercoil.continuation.branch import Branch
+from supercoil.continuation.carry import branch_frames
 from supercoil.continuation.stability import point_stability
 from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.carried import with_frames
 from supercoil.solvers.problem import ConstrainedEnergy
 
 # the kinds of a change of the unstable count: a bifurcation, or a count_change that its
@@ -90,11 +93,11 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
         return float(np.max(np.abs(F[:system.n + system.m]))) if F.size else 0.0
 
     indices = np.arange(k) if points is None else np.asarray(points, dtype=np.int64)
+    frames = branch_frames(problem, branch)
     for i in indices:
         repin(int(i), False)
         x = x_of(branch.states[i], branch.multipliers[i], branch.parameter_values[i])
-        system.set_parameter(x[-1])
-        problem.accept(branch.states[i])
+        system.problem = with_frames(problem, frames[i])
         res = residual(x)
         if not res <= residual_tolerance:
             problems.append(f"point {i}: KKT residual {res:.2e} > {residual_tolerance:.1e}")
@@ -119,6 +122,7 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
             problems.append(f"{where}: arclength {p.arclength:.6g} not between its neighbours "
                             f"{branch.arclength[i]:.6g} and {branch.arclength[i + 1]:.6g}")
         repin(i, True)
+        system.problem = with_frames(problem, p.frames if p.frames is not None else frames[i])
         res = residual(x_of(p.q, p.multipliers, p.parameter))
         if not res <= residual_tolerance:
             problems.append(f"{where}: KKT residual {res:.2e}")
@@ -154,6 +158,4 @@ def consistency_check(branch: Branch, problem: ConstrainedEnergy, *,
                                 f"from its neighbours' {before} -> {after}")
         elif not lam.min() - 1e-12 <= p.parameter <= lam.max() + 1e-12:
             problems.append(f"{where}: outside the branch's parameter range")
-    if k:
-        system.set_parameter(lam[-1])
     return ConsistencyReport(tuple(problems), int(indices.size))

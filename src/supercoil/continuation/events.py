@@ -24,6 +24,7 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
@@ -43,7 +44,9 @@ class UserEvent:
     ``function(q, multipliers, parameter)`` returns named scalars (a mapping
     ``name -> float``); a sign change of any of them between two branch
     points is an event of kind ``kind`` (e.g. ``"contact_onset"``), labelled
-    by the name. The problem's parameter attribute is set before each call.
+    by the name. The problem passed to the continuation is never changed: a
+    function that needs it takes the keyword ``problem`` and is called with the
+    problem at the point (its parameter value and its carried frames).
     """
 
     kind: str
@@ -335,10 +338,25 @@ def _tangent_or_secant(segment: Segment, u: float) -> np.ndarray:
         return segment.d / segment.length
 
 
+def takes_problem(function) -> bool:
+    """Whether a record or event function takes the keyword ``problem`` (module doc)."""
+    try:
+        return "problem" in inspect.signature(function).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+def point_values(function, system: ExtendedSystem, x) -> Mapping:
+    """``function(q, multipliers, parameter)`` at ``x``, with ``problem=`` the problem at
+    the point (``system.problem`` carried there, at ``x``'s parameter) if it takes it."""
+    args = (system.q(x), system.multipliers(x), float(x[-1]))
+    if takes_problem(function):
+        return function(*args, problem=system.problem_at(x[-1]))
+    return function(*args)
+
+
 def user_values(event: UserEvent, system: ExtendedSystem, x: np.ndarray) -> dict[str, float]:
-    system.set_parameter(x[-1])
-    return {k: float(v) for k, v in
-            event.function(system.q(x), system.multipliers(x), float(x[-1])).items()}
+    return {k: float(v) for k, v in point_values(event.function, system, x).items()}
 
 
 def locate_user_event(segment: Segment, event: UserEvent, label: str, xtol: float,

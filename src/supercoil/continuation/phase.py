@@ -84,7 +84,7 @@ def regauged(system: ExtendedSystem, opts: ContinuationOptions, x: np.ndarray,
     so the state moves a little. A step from the uncorrected point could not
     converge, however short."""
     q = system.q(x)
-    modes = branch_phase_modes(system.problem, q, opts)
+    modes = branch_phase_modes(system.problem_at(x[-1]), q, opts)
     if modes is None or modes.shape != system.phase_modes.shape:
         return None
     if opts.gauge == "node" and np.array_equal(modes != 0, system.phase_modes != 0):
@@ -104,7 +104,6 @@ def regauged(system: ExtendedSystem, opts: ContinuationOptions, x: np.ndarray,
         t = tangent(system, corr.x, orientation(system, corr.x, t_old))
     except SingularMatrixError:
         system.set_phase(*old)
-        system.set_parameter(x[-1])
         return None
     return corr.x, t
 
@@ -125,7 +124,7 @@ def rephased_tangent(system: ExtendedSystem, opts: ContinuationOptions, x: np.nd
     factor only when refinement does not converge.
     """
     q = system.q(x)
-    modes = branch_phase_modes(system.problem, q, opts)
+    modes = branch_phase_modes(system.problem_at(x[-1]), q, opts)
     if modes is None or modes.shape != system.phase_modes.shape:
         return None
     system.set_phase(modes, q)
@@ -153,7 +152,7 @@ def orientation(system: ExtendedSystem, x: np.ndarray, t_old: np.ndarray) -> np.
     decreasing, and the branch turned back at a spurious fold, then snaked.
     """
     v = np.array(t_old, dtype=float)
-    modes = goldstone_modes(system.problem, system.q(x))
+    modes = goldstone_modes(system.problem_at(x[-1]), system.q(x))
     if modes.size:
         g = modes[:, system.free]
         mass = system.weights[:system.n]

@@ -38,6 +38,7 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.continuation.tracer import PointCallback, RecordFunction, Tracer
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.newton import least_squares_multipliers
+from supercoil.solvers.parameters import problem_at
 from supercoil.solvers.problem import ConstrainedEnergy
 
 
@@ -48,11 +49,13 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                  events: Sequence[UserEvent] = (),
                  on_point: PointCallback | None = None,
                  stop: Callable[[np.ndarray], str | None] | None = None,
-                 admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
-    """Follow the equilibria of ``problem`` through ``q0`` as ``problem.<parameter>`` varies.
+                 admissible: Callable[[np.ndarray], bool] | None = None,
+                 start: float | None = None) -> Branch:
+    """Follow the equilibria of ``problem`` through ``q0`` as its ``parameter`` varies.
 
-    ``q0`` (n_dofs,) is a (near-)equilibrium at the current parameter value;
-    it is first corrected at fixed parameter. ``multipliers0`` (m,) default to
+    ``q0`` (n_dofs,) is a (near-)equilibrium at the parameter value ``start``
+    (default: the problem's, ``problem.<parameter>``); it is first corrected at
+    fixed parameter. ``multipliers0`` (m,) default to
     least squares. ``records(q, multipliers, parameter)`` returns named
     per-point values kept in ``Branch.records``; ``events`` are
     :class:`UserEvent` s. ``on_point(partial_branch)``, if given, is called
@@ -62,25 +65,31 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     KeyboardInterrupt) propagates. ``stop(q)``, if given, is asked about each corrected
     state before it is accepted: a non-empty message refuses it and ends the run at
     the point before (status ``STOPPED``), e.g. when a problem's gauge pins lose their
-    grip there and must be picked again. ``admissible(q)``, if given, replaces the
+    grip there and must be picked again. ``admissible(q)`` (with the keyword
+    ``problem``, if it takes it, the problem carried to the last point), if given, replaces the
     problem's own ``admissible`` (if any): a corrected state it refuses is not
     accepted, and the step is retried shorter (e.g. a contact-free ring that would
     pass through itself). Returns a :class:`Branch` whose ``status`` says how
-    the run ended; numerical failures never raise. The problem is left at the
-    last point's parameter value and state (accepted).
+    the run ended; numerical failures never raise. The problem's parameter is
+    never set (the residuals are those of ``problem.at(**{parameter: value})``,
+    :func:`~supercoil.solvers.parameters.problem_at`) and its frames never move: the
+    run carries new problems from point to point (``carried_to``), and the branch
+    keeps their frames (``Branch.frames``). ``records`` and events that need the
+    problem at the point take it as the keyword ``problem``.
     """
     opts = options or ContinuationOptions()
     if not hasattr(problem, parameter):
         raise ValueError(f"the problem has no parameter attribute {parameter!r}")
-    lam0 = float(getattr(problem, parameter))
+    lam0 = float(getattr(problem, parameter) if start is None else start)
     low, high = opts.parameter_bounds
     if not low <= lam0 <= high:
         raise ValueError(f"the starting {parameter} = {lam0} is outside the bounds {low, high}")
     q0 = np.array(q0, dtype=float)
-    modes = branch_phase_modes(problem, q0, opts)
+    at_start = problem_at(problem, **{parameter: lam0})
+    modes = branch_phase_modes(at_start, q0, opts)
     system = ExtendedSystem(problem, parameter, q0, modes, q0, opts.parameter_weight,
                             opts.finite_difference_step)
-    mu0 = (least_squares_multipliers(problem, q0, system.free) if multipliers0 is None
+    mu0 = (least_squares_multipliers(at_start, q0, system.free) if multipliers0 is None
            else np.asarray(multipliers0, dtype=float))
     tracer = Tracer(system, opts, name, None, None, records, events, on_point)
     tracer.stop = stop

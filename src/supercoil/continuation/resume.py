@@ -21,6 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from supercoil.continuation.branch import Branch
+from supercoil.continuation.carry import branch_frames
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
@@ -28,6 +29,7 @@ from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.step import quadratic_term
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.continuation.tracer import PointCallback, RecordFunction, Tracer
+from supercoil.solvers.carried import with_frames
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
 
@@ -40,7 +42,7 @@ def head(branch: Branch, k: int) -> Branch:
     """The first ``k`` points of ``branch`` with the special points between them."""
     return dataclasses.replace(
         branch, special_points=tuple(p for p in branch.special_points if p.index + 1 < k),
-        records={n: v[:k] for n, v in branch.records.items()},
+        records={n: v[:k] for n, v in branch.records.items()}, frames=branch.frames[:k],
         **{n: getattr(branch, n)[:k] for n in _POINT_ARRAYS})
 
 
@@ -65,10 +67,12 @@ def join(first: Branch, rest: Branch, offset: float) -> Branch:
             records[name] = rest.records[name]
         elif len(rest) == 0:
             records[name] = first.records[name]
+    frames = (first.frames + rest.frames if (first.frames or not len(first)) and rest.frames
+              else ())
     return dataclasses.replace(first, special_points=first.special_points + shifted,
                                records=records, status=rest.status, message=rest.message,
                                phase_modes=rest.phase_modes, phase_state=rest.phase_state,
-                               **arrays)
+                               frames=frames, **arrays)
 
 
 def _reduced(system: ExtendedSystem, full: np.ndarray) -> np.ndarray:
@@ -79,7 +83,8 @@ def _reduced(system: ExtendedSystem, full: np.ndarray) -> np.ndarray:
                            np.zeros(system.r), full[-1:]])
 
 
-def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOptions) -> float:
+def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOptions,
+               problem: ConstrainedEnergy) -> float:
     """The step the interrupted run would have taken next, for a branch stored without
     it (``Branch.next_step`` NaN): an estimate.
 
@@ -109,8 +114,7 @@ def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOption
     ds = float(row @ (x_last - x_prev))
     if not ds > 0:
         return opts.initial_step
-    setattr(system.problem, partial.parameter, float(partial.parameter_values[-2]))
-    system.problem.accept(np.asarray(partial.states[-2], dtype=float))
+    system.problem = with_frames(problem, partial.frames[-2])  # as the run had them there
     start = x_prev + ds * d
     if opts.predictor == "quadratic" and k >= 3:
         start = start + quadratic_term(system, _reduced(system, partial.tangents[-3]),
@@ -131,8 +135,9 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
                   admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
     """Continue ``partial`` (at least one point) under ``options`` (the options it was
     computed with: ``max_points`` counts the whole branch); see the module docstring.
-    ``problem`` is as the interrupted run had it before the branch's first point (its
-    stored points are accepted in turn).
+    ``problem`` is as the interrupted run had it before the branch's first point; it is
+    never changed (the frames of the stored points are ``partial.frames``, else carried
+    along its states from it: :mod:`supercoil.continuation.carry`).
 
     ``records``, ``events``, ``stop`` and ``admissible`` must be those of the
     interrupted run (:func:`~supercoil.continuation.continuation`). ``on_point``
@@ -145,17 +150,16 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     if k >= opts.max_points:
         return dataclasses.replace(partial, status=ContinuationStatus.MAX_POINTS,
                                    message=f"{k} points computed (max_points)")
-    # the stored points accepted in order, as the interrupted run accepted them: a
-    # problem's accept may carry state along the path (a rod's reference frames, by
-    # parallel transport, depend on it), and a state stored relative to it means the
-    # same configuration only at the end of the same path
-    for value, state in zip(partial.parameter_values, partial.states):
-        setattr(problem, partial.parameter, float(value))
-        problem.accept(np.array(state, dtype=float))
+    # the frames of the stored points (a state means the same configuration only with
+    # the frames it was computed with): those the run kept, else carried along the
+    # stored points in order from the problem, as the interrupted run carried them
+    # (supercoil.continuation.carry); the problem is never changed
+    partial = dataclasses.replace(partial, frames=branch_frames(problem, partial))
     lam = float(partial.parameter_values[-1])
     q = np.array(partial.states[-1], dtype=float)
     modes = partial.phase_modes if partial.phase_modes.size else None
-    system = ExtendedSystem(problem, partial.parameter, q, modes,
+    system = ExtendedSystem(with_frames(problem, partial.frames[-1]), partial.parameter, q,
+                            modes,
                             partial.phase_state if modes is not None else None,
                             opts.parameter_weight, opts.finite_difference_step)
     gauge_moved = False
@@ -164,9 +168,9 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     elif np.isfinite(partial.next_step[-1]):
         step, gauge_moved = float(partial.next_step[-1]), bool(partial.gauge_moved[-1])
     else:
-        step = min(max(_next_step(system, partial, opts), opts.min_step), opts.max_step)
-        setattr(problem, partial.parameter, lam)
-        problem.accept(q)
+        step = min(max(_next_step(system, partial, opts, problem), opts.min_step),
+                   opts.max_step)
+        system.problem = with_frames(problem, partial.frames[-1])
     # the first k - 1 points, with every special point found so far: one between
     # points k - 2 and k - 1 was located when point k - 1 was added, and the
     # resumed run starts at point k - 1, so it would not search that interval again

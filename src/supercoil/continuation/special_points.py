@@ -26,6 +26,7 @@ from supercoil.continuation.events import (
 from supercoil.continuation.options import ContinuationOptions
 from supercoil.continuation.stability import point_stability
 from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.carried import frames_of
 
 
 def locate_events(system: ExtendedSystem, opts: ContinuationOptions,
@@ -96,4 +97,4 @@ def special_point(system: ExtendedSystem, opts: ContinuationOptions, ev: Located
         critical_eigenvalues=values, critical_modes=modes, located=ev.located,
         tolerance=(opts.event_tolerance if ev.accuracy is None
                    else max(ev.accuracy, opts.event_tolerance)),
-        records=records(x))
+        records=records(x), frames=frames_of(system.problem))

@@ -68,7 +68,7 @@ def count_gauge(system: ExtendedSystem, x: np.ndarray) -> np.ndarray:
     system's phase rows already remove them (a continuation started with
     ``near_symmetry_gauge``: one row per mode, coupled to it).
     """
-    problem = system.problem
+    problem = system.problem_at(x[-1])
     q = system.q(x)
     modes = goldstone_modes(problem, q)
     if modes.size == 0:
@@ -192,8 +192,7 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
     number of rows, as :func:`inertia_with_factor` gives them): the shift-invert factor is then
     ordered by :func:`related_order` rather than by a new ``kkt_order`` (the same
     eigenpairs to round-off)."""
-    problem = system.problem
-    system.set_parameter(x[-1])
+    problem = system.problem_at(x[-1])
     dofs, H, J, mass, sym = eigen_system(problem, system.q(x), system.multipliers(x), full)
     m = J.shape[0] if J is not None else 0
     dim = dofs.size - m - sym.shape[1]

@@ -29,12 +29,14 @@ from collections.abc import Callable
 import numpy as np
 
 from supercoil.continuation.branch import Branch, SpecialPoint
+from supercoil.continuation.carry import frames_at
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.continuation.tracer import PointCallback, RecordFunction, Tracer
+from supercoil.solvers.carried import carried, with_frames
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
 
@@ -97,8 +99,11 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     number ``mode`` (or along ``direction``, a full DOF vector in the null
     space); ``amplitude`` is the distance of the first point from the
     bifurcation (arclength metric; default ``options.initial_step``).
-    ``problem.accept(special_point.q)`` is called first so that a problem
-    with a reference state (rod frames) is brought back to that point.
+    The problem is never changed: the run starts from it carrying the frames the
+    special point was located with (``special_point.frames``; else those of the
+    branch's point before it, :func:`~supercoil.continuation.carry.frames_at`), carried
+    to the special point, so that the branch does not depend on what was computed
+    before.
     ``on_point``, ``stop`` and ``admissible`` as in
     :func:`~supercoil.continuation.continuation`.
     """
@@ -113,8 +118,10 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     direction = pinned_mode(problem, special_point.q, np.asarray(direction, dtype=float))
     eps = opts.initial_step if amplitude is None else float(amplitude)
     label = name or f"{branch.name}/{special_point.kind}{special_point.index}"
-    setattr(problem, branch.parameter, float(special_point.parameter))
-    problem.accept(special_point.q)
+    start = (with_frames(problem, special_point.frames) if special_point.frames is not None
+             else frames_at(problem, branch, special_point.index)
+             if 0 <= special_point.index < len(branch) else problem)
+    problem = carried(start, special_point.q)
     q_star = np.array(special_point.q, dtype=float)
     plain = ExtendedSystem(problem, branch.parameter, q_star,
                            parameter_weight=opts.parameter_weight)
@@ -129,7 +136,7 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     v = v / plain.norm(v)
     q_pred = plain.q(plain.pack(q_star, special_point.multipliers, special_point.parameter)
                      + side * eps * v)
-    modes = branch_phase_modes(problem, q_pred, opts)
+    modes = branch_phase_modes(plain.problem_at(special_point.parameter), q_pred, opts)
     system = ExtendedSystem(problem, branch.parameter, q_star, modes, q_pred,
                             opts.parameter_weight, opts.finite_difference_step)
     v = np.concatenate([v[:n + m], np.zeros(system.r), v[-1:]])

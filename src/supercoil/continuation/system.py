@@ -1,8 +1,11 @@
 """The extended system ``F(q, mu, lambda) = 0`` that continuation follows.
 
 A :class:`~supercoil.solvers.problem.ConstrainedEnergy` whose energy depends on
-a scalar parameter: continuation sets it with ``setattr(problem, parameter,
-value)``. On the free DOFs (``problem.fixed`` removed) the unknowns are
+a scalar parameter: the system keeps the problem it was given, unchanged, and
+evaluates at ``x[-1]`` the problem ``problem.at(**{parameter: x[-1]})``
+(:func:`~supercoil.solvers.parameters.problem_at`; the last one is kept, so that
+the evaluations at one iterate share one). At an accepted point the system follows
+the problem carried there (:meth:`ExtendedSystem.carry_to`). On the free DOFs (``problem.fixed`` removed) the unknowns are
 
     x = [q_free (n), mu (m), nu (r), lambda (1)],
 
@@ -24,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from supercoil.solvers.carried import carried
 from supercoil.solvers.csr import (
     csr_columns,
     csr_columns_map,
@@ -32,6 +36,7 @@ from supercoil.solvers.csr import (
     csr_vstack,
 )
 from supercoil.solvers.newton import lagrangian_hessian
+from supercoil.solvers.parameters import problem_at
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 
@@ -43,6 +48,11 @@ class ExtendedSystem:
                  parameter_weight: float = 1.0, finite_difference_step: float = 6e-6):
         if not hasattr(problem, parameter):
             raise ValueError(f"the problem has no parameter attribute {parameter!r}")
+        known = getattr(problem, "parameters", None)
+        if getattr(problem, "at", None) is not None and known is not None \
+                and parameter not in known:
+            raise ValueError(f"{parameter!r} is not a parameter of the problem; valid: "
+                             f"{', '.join(map(repr, known))}")
         self.problem = problem
         self.parameter = parameter
         self.free = free_dofs(problem)
@@ -69,6 +79,8 @@ class ExtendedSystem:
         self.fd_step = finite_difference_step
         self._jacobian_source = self._jacobian_free = None
         self._phase_rows: tuple[np.ndarray, sp.csr_matrix] | None = None
+        # (problem, value, the problem at that value): see problem_at
+        self._at: tuple[object, float, object] | None = None
 
     def set_phase(self, phase_modes: np.ndarray, q_phase: np.ndarray) -> None:
         """New phase rows of the same number (a moved gauge); the layout of ``x`` is kept."""
@@ -112,10 +124,24 @@ class ExtendedSystem:
         return np.concatenate([dq, t[self.n:self.n + self.m], t[-1:]])
 
     # -- residual and derivatives ----------------------------------------------------------
-    def set_parameter(self, lam: float) -> None:
-        setattr(self.problem, self.parameter, float(lam))
+    def problem_at(self, lam: float):
+        """The problem at the parameter value ``lam`` (``problem.at``); the last one is
+        kept, for the same problem object and value."""
+        lam = float(lam)
+        memo = self._at
+        if memo is not None and memo[0] is self.problem and memo[1] == lam:
+            return memo[2]
+        at = problem_at(self.problem, **{self.parameter: lam})
+        self._at = (self.problem, lam, at)
+        return at
 
-    def _free_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
+    def carry_to(self, q: np.ndarray) -> None:
+        """Follow the problem carried to ``q`` (``problem.carried_to``,
+        :func:`~supercoil.solvers.carried.carried`): ``problem`` is then that new problem,
+        the one given before unchanged."""
+        self.problem = carried(self.problem, q)
+
+    def _free_jacobian(self, q: np.ndarray, p=None) -> sp.csr_matrix:
         """``constraint_jacobian(q)`` on the free DOFs; the restriction is redone only
         when the problem returns another matrix object (a problem that keeps its
         Jacobian for the same ``q`` saves the column slicing, 0.1 ms at N = 100).
@@ -124,7 +150,7 @@ class ExtendedSystem:
         ``indptr`` and ``indices`` compared as bytes): a Jacobian of that pattern is
         restricted without ``csr_columns``' checks of the free DOFs and memo look-up
         (15 -> 4 us at N = 100, a new Jacobian at every residual), the same matrix."""
-        J = self.problem.constraint_jacobian(q)
+        J = (self.problem if p is None else p).constraint_jacobian(q)
         if J is not self._jacobian_source:
             self._jacobian_source = J
             self._jacobian_free = self._free_columns(J)
@@ -146,11 +172,12 @@ class ExtendedSystem:
         return csr_from_arrays(J.data[selected], free_indices.copy(), free_indptr.copy(),
                                (J.shape[0], self.free.size))
 
-    def _kkt_residual(self, q: np.ndarray, mu: np.ndarray) -> np.ndarray:
-        p = self.problem
+    def _kkt_residual(self, q: np.ndarray, mu: np.ndarray, p=None) -> np.ndarray:
+        """``[grad E + J^T mu ; c]`` on the free DOFs of ``p`` (default: the problem)."""
+        p = self.problem if p is None else p
         g = p.gradient(q)[self.free]
         if self.m:
-            J = self._free_jacobian(q)
+            J = self._free_jacobian(q, p)
             if getattr(J, "format", None) == "csr" and J.dtype == np.float64:
                 # scipy's J.T @ mu (csc_matvec on the transpose, the same sums) without
                 # the transpose object and the operator dispatch (35 µs at N = 200)
@@ -161,10 +188,9 @@ class ExtendedSystem:
         return g
 
     def residual(self, x: np.ndarray) -> np.ndarray:
-        self.set_parameter(x[-1])
         q = self.q(x)
         mu = x[self.n:self.n + self.m]
-        F = self._kkt_residual(q, mu)
+        F = self._kkt_residual(q, mu, self.problem_at(x[-1]))
         if self.r:
             nu = x[self.n + self.m:self.n + self.m + self.r]
             F[:self.n] += self.P.T @ nu
@@ -173,24 +199,21 @@ class ExtendedSystem:
 
     def hessian(self, x: np.ndarray) -> HessianParts:
         """Hessian of the Lagrangian on the free DOFs (phase conditions are linear)."""
-        self.set_parameter(x[-1])
-        return lagrangian_hessian(self.problem, self.q(x),
+        return lagrangian_hessian(self.problem_at(x[-1]), self.q(x),
                                   x[self.n:self.n + self.m]).restrict(self.free)
 
     def full_hessian(self, x: np.ndarray) -> HessianParts:
         """Hessian of the Lagrangian on all DOFs: :meth:`hessian` is its restriction to
         the free ones (the same entries), the stability's eigenproblem another."""
-        self.set_parameter(x[-1])
-        return lagrangian_hessian(self.problem, self.q(x), x[self.n:self.n + self.m])
+        return lagrangian_hessian(self.problem_at(x[-1]), self.q(x), x[self.n:self.n + self.m])
 
     def jacobian(self, x: np.ndarray) -> sp.csr_matrix:
         """Constraint Jacobian with the phase rows, ``(m + r, n)``. The stacked matrix
         is returned again (the same object: callers must not modify it) while the
         problem returns the same Jacobian object and the phase rows are unchanged
         (a corrector's residual, factor and refinement at one iterate)."""
-        self.set_parameter(x[-1])
         rows = []
-        free = self._free_jacobian(self.q(x)) if self.m else None
+        free = self._free_jacobian(self.q(x), self.problem_at(x[-1])) if self.m else None
         if self.r and (self._phase_rows is None or self._phase_rows[0] is not self.P):
             self._phase_rows = (self.P, sp.csr_matrix(self.P))
         stacked = self.__dict__.get("_stacked")
@@ -211,21 +234,19 @@ class ExtendedSystem:
         lam = float(x[-1])
         q = self.q(x)
         mu = x[self.n:self.n + self.m]
-        p = self.problem
+        p = self.problem_at(lam)
         derivative = getattr(p, "parameter_derivative", None)
         full = None
         if derivative is not None:
-            self.set_parameter(lam)
             full = derivative(q, mu, self.parameter)
         if full is not None:
             full = np.asarray(full, dtype=float)
             out = np.concatenate([full[self.free], full[p.n_dofs:p.n_dofs + self.m]])
         else:
             step = self.fd_step * max(1.0, abs(lam))
-            self.set_parameter(lam + step)
-            plus = self._kkt_residual(q, mu)
-            self.set_parameter(lam - step)
-            minus = self._kkt_residual(q, mu)
-            self.set_parameter(lam)
+            plus = self._kkt_residual(q, mu,
+                                      problem_at(self.problem, **{self.parameter: lam + step}))
+            minus = self._kkt_residual(q, mu,
+                                       problem_at(self.problem, **{self.parameter: lam - step}))
             out = (plus - minus) / (2.0 * step)
         return np.concatenate([out, np.zeros(self.r)])

@@ -5,12 +5,19 @@ From a corrected point and its tangent, :class:`Tracer` takes steps
 corrections and shrinking them after failures, until a parameter bound, the
 arclength or point budget, a caller's stop, a closed loop
 (:mod:`supercoil.continuation.closure`) or a step below the minimum. At every
-accepted point the problem's ``accept(q)`` is called, then the stability
+accepted point the system follows the problem carried there
+(:meth:`ExtendedSystem.carry_to`), then the stability
 (:mod:`supercoil.continuation.stability`), the caller's records and user
 events are evaluated, and the interval to the previous point is searched for
 special points (:mod:`supercoil.continuation.special_points`). The phase rows
 may move (:mod:`supercoil.continuation.phase`). :meth:`Tracer.branch` is the
-branch so far as a :class:`~supercoil.continuation.branch.Branch`.
+branch so far as a :class:`~supercoil.continuation.branch.Branch`, with the
+frames the problem carried at each point.
+
+The problem the tracer was given is never changed: at each accepted point the
+system follows a new problem carried there (``carried_to``). Record and event
+functions that need it take a keyword ``problem``: they are then called with the
+problem at the point (its parameter value and its carried frames).
 """
 
 from __future__ import annotations
@@ -23,13 +30,14 @@ import numpy as np
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.closure import returned_to
-from supercoil.continuation.events import UserEvent, user_values
+from supercoil.continuation.events import UserEvent, point_values, takes_problem, user_values
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
 from supercoil.continuation.special_points import locate_events, special_point
 from supercoil.continuation.stability import point_stability
 from supercoil.continuation.step import take_step
 from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.carried import frames_of
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 
 log = logging.getLogger(__name__)
@@ -37,6 +45,7 @@ log = logging.getLogger(__name__)
 RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
 PointCallback = Callable[[Branch], None]
 PARTIAL_MESSAGE = "in progress: the branch so far (its computation has not ended)"
+
 
 
 class Tracer:
@@ -49,9 +58,10 @@ class Tracer:
         self.system = system
         self.on_point = on_point
         self.stop: Callable[[np.ndarray], str | None] | None = None  # see pseudo_arclength.continuation()
-        # see pseudo_arclength.continuation(); by default the problem's own admissible(q), if it has one
-        self.admissible: Callable[[np.ndarray], bool] | None = getattr(
-            system.problem, "admissible", None)
+        # see pseudo_arclength.continuation(); by default the problem's own admissible(q),
+        # if it has one: that of the problem carried to the last point
+        self.admissible: Callable[[np.ndarray], bool] | None = (
+            self._carried_admissible if hasattr(system.problem, "admissible") else None)
         self.opts = options
         self.name, self.parent, self.origin = name, parent, origin
         self.records_fn = records
@@ -61,6 +71,7 @@ class Tracer:
         self.stabs = []
         self.s: list[float] = []
         self.recs: list[dict] = []
+        self.frames: list = []  # the problem's carried frames at each point
         self.user: list[list[dict]] = []
         self.specials: list[SpecialPoint] = []
         # the step controller's state after each point (Branch.next_step, .gauge_moved)
@@ -71,7 +82,7 @@ class Tracer:
         self.before: tuple[np.ndarray, float] | None = None
         # the point before the first one, for the secant predictor of a resumed branch
         self.point_before: np.ndarray | None = None
-        # (x, full Hessian) of the last point added, assembled after its accept: the
+        # (x, full Hessian) of the last point added, assembled after its carry: the
         # rephase tangent there needs no new one (phase rows are linear)
         self._accepted_hessian: tuple[np.ndarray, object] | None = None
         # converted per point and per record for branch() (the recorded values are only
@@ -85,12 +96,21 @@ class Tracer:
             return self.ts[-2], self.s[-1] - self.s[-2]
         return self.before if len(self.xs) == 1 else None
 
+    def _carried_admissible(self, q: np.ndarray) -> bool:
+        return self.system.problem.admissible(q)
+
+    def _vet(self, q: np.ndarray) -> bool:
+        """``admissible(q)``, with ``problem=`` the problem carried to the last point if
+        it takes that keyword."""
+        if takes_problem(self.admissible):
+            return self.admissible(q, problem=self.system.problem)
+        return self.admissible(q)
+
     # -- per point ------------------------------------------------------------------------
     def _records(self, x):
         if self.records_fn is None:
             return {}
-        self.system.set_parameter(x[-1])
-        return dict(self.records_fn(self.system.q(x), self.system.multipliers(x), float(x[-1])))
+        return dict(point_values(self.records_fn, self.system, x))
 
     def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True,
                   full_hessian=None, next_step: float = float("nan"),
@@ -102,15 +122,14 @@ class Tracer:
 
         ``full_hessian``: the Hessian on all DOFs at ``x`` if known (a converged
         :class:`~supercoil.continuation.corrector.Correction`'s), for the stability
-        and the rephase tangent. It was assembled before ``accept``, which carries
-        the rod's reference frames to ``x``: that changes the Hessian by round-off
+        and the rephase tangent. It was assembled before the problem was carried to
+        ``x`` (the rod's reference frames transported there): that changes the Hessian by round-off
         only (measured on the ring's alpha branch at N = 200: at most 3e-16 of its
         largest entry, as much as assembling it twice at ``x`` with other states
         evaluated in between does).
         """
         system = self.system
-        system.set_parameter(x[-1])
-        system.problem.accept(system.q(x))
+        system.carry_to(system.q(x))
         self._accepted_hessian = None
         full = system.full_hessian(x) if full_hessian is None else full_hessian
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
@@ -122,6 +141,7 @@ class Tracer:
         self.ts.append(t)
         self.stabs.append(stability)
         self.recs.append(records)
+        self.frames.append(frames_of(system.problem))
         self.user.append(user)
         self.steps.append(float(next_step))
         self.moved.append(False)
@@ -149,7 +169,6 @@ class Tracer:
             self.specials.append(special_point(self.system, self.opts, ev, segment, self.name,
                                                k, self.s[k], self.ts[k + 1], before, after,
                                                self._records))
-            self.system.set_parameter(self.xs[k + 1][-1])
 
     # -- phase rows -------------------------------------------------------------------------
     def _regauge(self, ds: float) -> bool:
@@ -214,7 +233,8 @@ class Tracer:
             x_k = self.xs[-1]
             taken = take_step(system, opts, x_k, self.ts[-1],
                               self.xs[-2] if len(self.xs) >= 2 else self.point_before,
-                              self._previous_tangent(), ds, self.admissible, self.stop)
+                              self._previous_tangent(), ds,
+                              None if self.admissible is None else self._vet, self.stop)
             if taken.refusal:
                 return ContinuationStatus.STOPPED, (
                     f"stopped after {len(self.xs)} points at {system.parameter} = "
@@ -290,8 +310,6 @@ class Tracer:
                 column = self._columns.setdefault(name, [])
                 column.extend(np.asarray(r[name]) for r in self.recs[len(column):k])
             records = {name: np.array(self._columns[name][:k]) for name in self.recs[0]}
-        if k:
-            system.set_parameter(self.xs[k - 1][-1])
         rows = self._point_rows(k)
         stabs = self.stabs[:k]
         return Branch(
@@ -309,7 +327,9 @@ class Tracer:
             special_points=tuple(self.specials), status=status, message=message,
             records=records, phase_modes=system.phase_modes,
             phase_state=system.q_phase_full, next_step=np.array(self.steps[:k], dtype=float),
-            gauge_moved=np.array(self.moved[:k], dtype=bool))
+            gauge_moved=np.array(self.moved[:k], dtype=bool),
+            frames=tuple(self.frames[:k]) if all(f is not None for f in self.frames[:k])
+            else ())
 
     def _point_rows(self, count: int) -> list[tuple]:
         """Per point of the first ``count``, ``(x, t, stability, q, multipliers, full

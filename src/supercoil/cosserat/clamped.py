@@ -37,6 +37,7 @@ class ClampedCosseratEnergy(CosseratEnergy):
     """
 
     twist_parameter = "turns"
+    parameters = ("turns", "tension")
 
     def __init__(self, rod: CosseratRod, turns: float = 0.0, tension: float = 0.0,
                  end_distance_control: bool = False, positions: np.ndarray | None = None,
@@ -82,6 +83,10 @@ class ClampedCosseratEnergy(CosseratEnergy):
         (re-bases the chart there)."""
         return self.state(*self.straight(self.rod, self.turns, self.tension))
 
+    def _restore_frames(self, frames) -> None:
+        super()._restore_frames(frames)
+        self.turns = self.turns  # the end clamp's rotation is this problem's
+
     @property
     def turns(self) -> float:
         return self._turns
@@ -91,7 +96,9 @@ class ClampedCosseratEnergy(CosseratEnergy):
         # the end node's rotation coordinate is fixed at its chart centre, so its
         # rotation is the reference one: the clamp's
         self._turns = float(value)
-        self.reference_rotations[-1] = exp_so3(2 * np.pi * self._turns * AXIS)
+        rotations = self.reference_rotations.copy()  # rebound: at() shares the old array
+        rotations[-1] = exp_so3(2 * np.pi * self._turns * AXIS)
+        self.reference_rotations = rotations
 
     @property
     def tension(self) -> float:

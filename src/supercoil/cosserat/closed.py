@@ -121,6 +121,7 @@ class ClosedCosseratEnergy(CosseratEnergy):
     """
 
     twist_parameter = "excess_link"
+    parameters = ("excess_link",)
 
     def __init__(self, rod: CosseratRod, excess_link: float, positions: np.ndarray | None = None,
                  rotations: np.ndarray | None = None, link: int | None = None):

@@ -36,11 +36,13 @@ from supercoil.cosserat.centreline import CosseratCentreline
 from supercoil.cosserat.rod import DOFS_PER_NODE, CosseratRod
 from supercoil.cosserat.rotations import dexp, dexp_transpose_derivative, exp_so3, hat
 from supercoil.errors import InputError
+from supercoil.solvers.carried import Carried
 from supercoil.solvers.csr_sum import block_csr
+from supercoil.solvers.parameters import Parametrised
 from supercoil.solvers.problem import HessianParts
 
 
-class CosseratEnergy(CosseratCentreline):
+class CosseratEnergy(CosseratCentreline, Parametrised, Carried):
     """Energy of a Cosserat rod under dead nodal forces, with some DOFs fixed.
 
     ``positions`` ``(n_nodes, 3)`` and ``rotations`` ``(n_nodes, 3, 3)``: the initial
@@ -51,6 +53,8 @@ class CosseratEnergy(CosseratCentreline):
     """
 
     n_constraints = 0
+    # the carried state (supercoil.solvers.carried): the chart
+    frame_attributes = (("reference_rotations", "reference_rotations"), ("centres", "centres"))
 
     def __init__(self, rod: CosseratRod, positions: np.ndarray, rotations: np.ndarray,
                  fixed=(), forces: np.ndarray | None = None):

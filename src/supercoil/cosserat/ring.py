@@ -228,20 +228,23 @@ class CircleInertia:
 
     def equilibrium(self, excess_link: float) -> np.ndarray:
         """The relaxed circle, from the continuous rod's (tilted, stretched) circle."""
-        problem = self.problem
-        problem.excess_link = float(excess_link)
+        return self.relaxed(excess_link)[1]
+
+    def relaxed(self, excess_link: float) -> tuple[ClosedCosseratEnergy, np.ndarray]:
+        """``(problem at excess_link, the relaxed circle's q)`` (:meth:`equilibrium`)."""
+        problem = self.problem.at(excess_link=float(excess_link))
         ratio, stretch, shear = self.constants
         exact = circle_state(ratio, excess_link, stretch, shear)
         x, R, _ = relax_circle(problem.rod, problem.link, exact.tilt, exact.stretch)
         q = problem.state(x, R)
         problem.accept(q)
-        return q
+        return problem, q
 
     def __call__(self, excess_link: float) -> int:
-        return negative_count(self.problem, self.equilibrium(excess_link), np.zeros(0))
+        return negative_count(*self.relaxed(excess_link), np.zeros(0))
 
     def eigenvalue(self, excess_link: float) -> float:
-        return eigenvalue_nearest_zero(self.problem, self.equilibrium(excess_link), np.zeros(0))
+        return eigenvalue_nearest_zero(*self.relaxed(excess_link), np.zeros(0))
 
 
 def michell_threshold(twist_ratio: float, n_nodes: int, mode: int = 2,

@@ -98,17 +98,19 @@ def gap_curve(n_nodes: int, diameter: float, options: ContactOptions | None = No
     return ContactCurve(segments, True, 1.0 / n_nodes, 1.0, options)
 
 
-def cosserat_ring_records(problem: ClosedCosseratEnergy, curve: ContactCurve):
+def cosserat_ring_records(ring: ClosedCosseratEnergy, curve: ContactCurve):
     """Per-point records of a Cosserat ring branch (module doc)."""
 
-    def records(q, multipliers, excess_link):
-        tw, wr = problem.twist(q), problem.writhe(q)
-        x, R = problem.configuration(q)
+    def records(q, multipliers, excess_link, problem=None):
+        # the ring at the point (the continuation's, with its chart), else this one there
+        at = ring.at(excess_link=float(excess_link)) if problem is None else problem
+        tw, wr = at.twist(q), at.writhe(q)
+        x, R = at.configuration(q)
         d_min = curve.min_distance(x.ravel())
         return {"excess_link": float(excess_link), "writhe": wr, "twist": tw,
-                "energy": problem.rod.energy(x, R), "link_error": abs(tw + wr - excess_link),
-                "max_stretch_strain": problem.max_stretch_strain(q),
-                "max_shear_strain": problem.max_shear_strain(q),
+                "energy": at.rod.energy(x, R), "link_error": abs(tw + wr - excess_link),
+                "max_stretch_strain": at.max_stretch_strain(q),
+                "max_shear_strain": at.max_shear_strain(q),
                 "n_contact_points": 0, "n_contact_intervals": 0,
                 "min_gap_over_diameter": float(d_min / curve.diameter)}
 
@@ -126,15 +128,17 @@ def onset_event(curve: ContactCurve) -> UserEvent:
 
 
 def relaxed_circle_state(problem: ClosedCosseratEnergy, excess_link: float,
-                         constants: tuple[float, float, float]) -> np.ndarray:
-    """The discrete twisted circle at ``excess_link``, the chart re-based there."""
+                         constants: tuple[float, float, float]
+                         ) -> tuple[ClosedCosseratEnergy, np.ndarray]:
+    """``(problem with its chart re-based there, q)``: the discrete twisted circle at
+    ``excess_link``; ``problem`` is unchanged."""
     ratio, stretch, shear = constants
-    problem.excess_link = float(excess_link)
     exact = circle_state(ratio, excess_link, stretch, shear)
-    x, R, _ = relax_circle(problem.rod, problem.link, exact.tilt, exact.stretch)
+    rod = problem.at(excess_link=float(excess_link)).rod  # its intrinsic twist at dLk
+    x, R, _ = relax_circle(rod, problem.link, exact.tilt, exact.stretch)
+    problem = problem.with_frames(problem.frames)  # a copy, whose chart state() re-bases
     q = problem.state(x, R)
-    problem.accept(q)
-    return q
+    return problem.carried_to(q), q
 
 
 def cosserat_circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: float,
@@ -151,7 +155,8 @@ def cosserat_circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: fl
     ``link`` near the threshold's ``dLk``."""
     problem = ring_problem(twist_ratio, 0.0, n_nodes, stretch_stiffness, shear_stiffness,
                            link=int(link))
-    q = relaxed_circle_state(problem, 0.0, (twist_ratio, stretch_stiffness, shear_stiffness))
+    problem, q = relaxed_circle_state(problem, 0.0,
+                                      (twist_ratio, stretch_stiffness, shear_stiffness))
     # steps of 0.78 in dLk failed to locate the bifurcations (C/A = 0.8, N = 40, trial
     # corrections along the chord diverged); 0.4 located them to 1e-10
     step = min(CIRCLE_MAX_STEP, 0.1 * max_excess_link)
@@ -197,8 +202,8 @@ def switch_off_circle(problem: ClosedCosseratEnergy, circle: Branch, point: Spec
     attempts = switch_attempts()
     for number, (amplitude, side) in enumerate(attempts):
         last = number == len(attempts) - 1
-        start = dataclasses.replace(
-            point, q=relaxed_circle_state(problem, point.parameter, constants))
+        based, q = relaxed_circle_state(problem, point.parameter, constants)
+        start = dataclasses.replace(point, q=q, frames=based.frames)
         opts = dataclasses.replace(options, initial_step=amplitude)
         branch = _switch_attempt(problem, circle, start, opts, (side, amplitude), name,
                                  records, curve, judge=not last)

@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 
 from supercoil.contact.problem import ContactProblem
+from supercoil.continuation.carry import frames_at
 from supercoil.continuation import Branch, SpecialPoint, continuation
 from supercoil.cosserat.closed import ClosedCosseratEnergy
 from supercoil.problems.contact_events import (
@@ -59,9 +60,9 @@ def cosserat_contact_branch(cp: ContactProblem, free: Branch, onset: SpecialPoin
     start = float(free.parameter_values[k])
     if not 0.0 <= start <= options.max_excess_link:
         return None
-    cp.excess_link = start
-    cp.accept(free.states[k])
-    branch = continuation(cp, free.states[k], parameter="excess_link",
+    # from the frames of the contact-free branch's point k (cp unchanged)
+    branch = continuation(frames_at(cp, free, k), free.states[k], parameter="excess_link",
+                          start=start,
                           options=contact_options(options, cp.diameter, direction), name=name,
                           records=contact_records(cp, records, free=False),
                           events=(contact_count_event(cp),))

@@ -95,14 +95,20 @@ class _Winding:
         self.jumps: list[float] = []
         self.notes: list[str] = []
         ratio, stretch, shear = constants
-        self.problem = ring_problem(ratio, 0.0, n_nodes, stretch, shear,
-                                    link=int(np.rint(excess_link)))
-        self.cp = ContactProblem(self.problem, ContactOptions(diameter=1.0 / self.lod,
-                                                              treatment=treatment))
+        ring = ring_problem(ratio, 0.0, n_nodes, stretch, shear,
+                            link=int(np.rint(excess_link)))
+        self.cp = ContactProblem(ring, ContactOptions(diameter=1.0 / self.lod,
+                                                      treatment=treatment))
+
+    @property
+    def problem(self):
+        """The ring under the contact problem, at its current parameter and chart."""
+        return self.cp.base
 
     def solve(self) -> CosseratRingResult:
+        self._rebase(self.target)
         problem, cp = self.problem, self.cp
-        q = relaxed_circle_state(problem, self.target, self.constants)
+        q = self.circle
         cp.keep_knot_type(problem.centreline(q).reshape(-1, 3))
         d0 = cp.min_distance(q)
         if not d0 > cp.diameter * (1 - cp.options.tolerance):
@@ -117,6 +123,14 @@ class _Winding:
                                       "snap_at": None, "steps": 0, "jumps": []})
         return self._wind()
 
+    def _rebase(self, excess_link: float):
+        """The discrete twisted circle at ``excess_link``: the ring and its contact
+        problem there, in the circle's chart, and the state; ``(ring, q)``."""
+        ring, q = relaxed_circle_state(self.problem, excess_link, self.constants)
+        self.cp = self.cp.at(excess_link=float(excess_link)).with_frames(ring.frames)
+        self.circle = q
+        return ring, q
+
     def _relax(self, start: np.ndarray, options: NewtonOptions | None = None
                ) -> ContactSolveResult:
         self.cp.accept(start)
@@ -129,16 +143,16 @@ class _Winding:
         return res
 
     def _wind(self) -> CosseratRingResult:
-        problem, cp = self.problem, self.cp
         ratio, stretch, shear = self.constants
         threshold = michell_threshold(ratio, self.n_nodes, 2, stretch, shear, rtol=1e-9)
         snap = self.sign * min(abs(self.target), threshold * (1 + SNAP_OFFSET))
-        q = relaxed_circle_state(problem, snap, self.constants)
+        problem, q = self._rebase(snap)
         report = analyse(problem, q, np.zeros(0), n_modes=2)
         if report.unstable_count == 0:  # the threshold's round-off: a little further
             snap = self.sign * min(abs(self.target), threshold * (1 + 10 * SNAP_OFFSET))
-            q = relaxed_circle_state(problem, snap, self.constants)
+            problem, q = self._rebase(snap)
             report = analyse(problem, q, np.zeros(0), n_modes=2)
+        cp = self.cp
         start = q + critical_push(problem, q, report, PERTURBATION_AMPLITUDE * problem.rod.length)
         self.notes.append(f"wound from the circle: it lost stability at dLk = "
                           f"{self.sign * threshold:.6g} and was pushed along its critical "
@@ -149,16 +163,17 @@ class _Winding:
         stepping = dataclasses.replace(self.newton, max_iterations=min(
             self.newton.max_iterations, STEP_ITERATIONS))
         while res.converged and abs(level) < abs(self.target):
+            problem = cp.base
             saved = problem.configuration(res.q)
             writhe = problem.writhe(res.q)
             stop = self.sign * min(abs(self.target), abs(level) + size)
-            cp.excess_link = stop
+            cp = self.cp = cp.at(excess_link=stop)
             trial = self._relax(res.q, stepping)
             smooth = trial.converged and abs(problem.writhe(trial.q) - writhe) <= WRITHE_STEP
             if not smooth and abs(stop - level) > smallest:
                 size = 0.5 * abs(stop - level)
-                cp.excess_link = level
-                res = dataclasses.replace(res, q=problem.state(*saved))
+                cp = self.cp = cp.at(excess_link=level)
+                res = dataclasses.replace(res, q=cp.base.state(*saved))
                 cp.accept(res.q)
                 continue
             if not trial.converged:

@@ -109,22 +109,24 @@ def azimuth_pinned_direction(problem: ClampedCosseratEnergy, modes: np.ndarray
     return a * modes[0] + b * modes[1]
 
 
-def cosserat_tweezers_records(problem: ClampedCosseratEnergy):
+def cosserat_tweezers_records(rod: ClampedCosseratEnergy):
     """Per-point records (module doc) for ``continuation(records=)``."""
 
-    def records(q, multipliers, turns):
-        x, R = problem.configuration(q)
+    def records(q, multipliers, turns, problem=None):
+        # the rod at the point (the continuation's, with its chart), else this one there
+        at = rod.at(turns=float(turns)) if problem is None else problem
+        x, R = at.configuration(q)
         wr = writhe(x, closure="axis", self_crossing="nan")
-        tw = axial_twist(problem, q)
+        tw = axial_twist(at, q)
         error = abs(tw + wr - turns)
-        return {"turns": float(turns), "extension": problem.extension(q),
-                "torque": end_torque(problem, q), "twist": tw, "writhe": wr,
+        return {"turns": float(turns), "extension": at.extension(q),
+                "torque": end_torque(at, q), "twist": tw, "writhe": wr,
                 "closure_error": error, "closure_failed": bool(not error <= TAIL_WRAP),
-                "energy": problem.rod.energy(x, R),
-                "load_potential": -problem.tension * float(x[-1, 2]),
-                "tension": problem.tension,
-                "max_stretch_strain": problem.max_stretch_strain(q),
-                "max_shear_strain": problem.max_shear_strain(q),
+                "energy": at.rod.energy(x, R),
+                "load_potential": -at.tension * float(x[-1, 2]),
+                "tension": at.tension,
+                "max_stretch_strain": at.max_stretch_strain(q),
+                "max_shear_strain": at.max_shear_strain(q),
                 "n_contact_points": 0, "n_contact_intervals": 0,
                 "min_gap_over_diameter": math.inf}
 
@@ -172,9 +174,11 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     say(f"buckled: switched from the straight rod at {point.parameter:.6g} turns")
     # the straight rod at the point, exactly, in the current chart (a stored state is
     # exact only in the chart it was accepted in: supercoil.cosserat.problem)
-    problem.turns = point.parameter
-    start = dataclasses.replace(point, q=problem.straight_state())
+    at = problem.at(turns=point.parameter)
+    start = dataclasses.replace(point, q=problem.state(*at.straight(at.rod, at.turns,
+                                                                    at.tension)))
     problem.accept(start.q)
+    start = dataclasses.replace(start, frames=problem.frames)  # the chart of its q
     direction = azimuth_pinned_direction(problem, point.critical_modes)
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns, max_points=opts.max_points,

@@ -18,6 +18,7 @@ import numpy as np
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, contact_summary
+from supercoil.continuation.carry import frames_at
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, continuation
 from supercoil.problems.branch_options import CONTACT_MIN_STEP
 from supercoil.problems.contact_events import (
@@ -65,8 +66,6 @@ def cosserat_contact_branch(options: TweezersOptions, cp: ContactProblem, free: 
     D = opts.diameter
     k = contact_start(free, onset, cp)
     q = free.states[k]
-    cp.turns = float(free.parameter_values[k])
-    cp.accept(q)
     contact_opts = ContinuationOptions(
         initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
         max_step=opts.contact_max_step * D, max_points=opts.max_points,
@@ -74,7 +73,10 @@ def cosserat_contact_branch(options: TweezersOptions, cp: ContactProblem, free: 
         parameter_weight=D, tolerance=opts.contact_tolerance,
         event_tolerance=opts.contact_event_tolerance, predictor=opts.contact_predictor,
         max_corrector_distance=CONTACT_CORRECTOR_DISTANCE, chord_steps=True)
-    branch = continuation(cp, q, parameter="turns", options=contact_opts, name=name,
+    # from the frames of the contact-free branch's point k (cp unchanged)
+    branch = continuation(frames_at(cp, free, k), q, parameter="turns",
+                          start=float(free.parameter_values[k]), options=contact_opts,
+                          name=name,
                           records=with_contact_records(records, cp, True),
                           events=(contact_count_event(cp),))
     return classify_contact_events(branch, cp)

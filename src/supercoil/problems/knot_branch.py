@@ -54,8 +54,8 @@ class KnottedBranch:
 
 
 def _knot_records(base_records):
-    def records(q, multipliers, excess_link):
-        out = dict(base_records(q, multipliers, excess_link))
+    def records(q, multipliers, excess_link, problem=None):
+        out = dict(base_records(q, multipliers, excess_link, problem=problem))
         knot = identify(np.asarray(q, float).reshape(-1, 3))
         out.update(knot_determinant=knot.determinant,
                    knot_alexander_degree=len(knot.alexander) - 1)
@@ -107,7 +107,6 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
     interrupted computation had there, so that it ends as the uninterrupted run does."""
     base = cp.base
     D = cp.diameter
-    cp.excess_link = start
     cp.accept(q0)
     options = ContinuationOptions(
         initial_step=0.05 * D, min_step=CONTACT_MIN_STEP, max_step=MAX_STEP * D,
@@ -126,7 +125,7 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
             stop=grip_stop(base.pin_grip, q0 if run == 0 else old.states[run]))
     else:
         set_pin(cp, base, q0)
-        first = continuation(cp, q0, parameter="excess_link",
+        first = continuation(cp, q0, parameter="excess_link", start=start,
                              options=dataclasses.replace(options, max_points=min(
                                  SEGMENT_POINTS, max_points)),
                              name=name, records=records, events=events, on_point=on_point,

@@ -188,8 +188,9 @@ def deflate_at(cp: ContactProblem, excess_link: float, states: list[np.ndarray],
                amplitude: float = 0.5, directions: int = 2,
                tolerance: float = 1e-8) -> list[Deflated]:
     """New equilibria at ``excess_link`` by deflation of ``states`` (module doc), each
-    found one deflated in turn for the following starts."""
-    cp.excess_link = float(excess_link)
+    found one deflated in turn for the following starts. ``cp`` is unchanged (its
+    problem at ``excess_link`` carries the frames from state to state)."""
+    cp = cp.at(excess_link=float(excess_link))
     found: list[Deflated] = []
     D = cp.diameter
     for base_state in states:

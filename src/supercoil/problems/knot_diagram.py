@@ -283,8 +283,8 @@ def states_at(cp, branches, value: float, tolerance: float) -> list[tuple[float,
     from supercoil.problems.knot_deflation import deflated_newton
     from supercoil.problems.ring_branches import ring_records
 
+    cp = cp.at(excess_link=float(value))
     records = ring_records(cp.base)
-    cp.excess_link = float(value)
     out = []
     for b in branches:
         lam = np.asarray(b.parameter_values, float)

@@ -218,14 +218,14 @@ class _CircleInertia:
         self.free = free_dofs(self.problem)
 
     def __call__(self, excess_link: float) -> int:
-        self.problem.excess_link = float(excess_link)
-        lam = least_squares_multipliers(self.problem, self.q, self.free)
-        return negative_count(self.problem, self.q, lam)
+        problem = self.problem.at(excess_link=float(excess_link))
+        lam = least_squares_multipliers(problem, self.q, self.free)
+        return negative_count(problem, self.q, lam)
 
     def eigenvalue(self, excess_link: float) -> float:
-        self.problem.excess_link = float(excess_link)
-        lam = least_squares_multipliers(self.problem, self.q, self.free)
-        return eigenvalue_nearest_zero(self.problem, self.q, lam)
+        problem = self.problem.at(excess_link=float(excess_link))
+        lam = least_squares_multipliers(problem, self.q, self.free)
+        return eigenvalue_nearest_zero(problem, self.q, lam)
 
 
 def circle_negative_count(twist_ratio: float, excess_link: float, n_nodes: int,

@@ -49,16 +49,20 @@ from supercoil.topology import twist_from_frames, writhe
 PRIMARY_NAMES = {2: "alpha", 3: "beta", 4: "gamma"}
 
 
-def ring_records(problem: ClosedRodEnergy):
+def ring_records(ring: ClosedRodEnergy):
     """Per-point records of a ring branch (see module doc) for ``continuation(records=)``."""
 
-    def records(q: np.ndarray, multipliers: np.ndarray, excess_link: float) -> dict:
+    def records(q: np.ndarray, multipliers: np.ndarray, excess_link: float,
+                problem=None) -> dict:
+        # the ring at the point (the continuation's, with its frames), else this one there
+        rod = (ring.at(excess_link=float(excess_link)) if problem is None
+               else getattr(problem, "base", problem))
         points = q.reshape(-1, 3)
         wr = writhe(points, self_crossing="nan")  # a branch without contact may cross
-        d1 = problem.material_directors(q)
-        tw = twist_from_frames(points, d1, closed=True) - problem.reference_link + excess_link
+        d1 = rod.material_directors(q)
+        tw = twist_from_frames(points, d1, closed=True) - rod.reference_link + excess_link
         return {"excess_link": float(excess_link), "writhe": wr, "twist": tw,
-                "energy": problem.elastic_energy(q), "link_error": abs(tw + wr - excess_link)}
+                "energy": rod.elastic_energy(q), "link_error": abs(tw + wr - excess_link)}
 
     return records
 
@@ -71,7 +75,7 @@ class RingBranches:
     n_nodes: int
     circle: Branch
     primary: dict[int, Branch] = field(default_factory=dict)  # mode m -> branch
-    problem: ClosedRodEnergy | None = None  # left at the last point computed
+    problem: ClosedRodEnergy | None = None  # the ring's problem (never changed)
 
     def bifurcation(self, mode: int) -> SpecialPoint:
         """The circle's bifurcation point of mode ``m`` (its count rises to 2 (m - 1))."""
@@ -90,7 +94,8 @@ def circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: float,
                   ) -> tuple[Branch, ClosedRodEnergy]:
     """The circle followed from ``dLk = 0`` to ``max_excess_link`` (name ``circle``).
 
-    Returns the branch and the problem (left at its last point).
+    Returns the branch and the problem (unchanged by the continuation; the branch keeps
+    the frames of its points).
     """
     problem, q = twisted_circle_problem(twist_ratio, 0.0, n_nodes, curvature)
     step = 0.1 * max_excess_link

@@ -298,13 +298,17 @@ class _Winding:
         threshold = michell_threshold(self.twist_ratio, self.n_nodes, curvature=self.curvature,
                                       rtol=1e-9)
         snap_at = min(self.excess_link, threshold * (1 + SNAP_OFFSET))
-        base.excess_link = snap_at
+        # the path's problem at each level: a new one, carrying on what the last one
+        # holds (frames, pins, contact state)
+        problem = problem.at(excess_link=snap_at)
+        base = problem.base
         circle = newton(base, q0, NewtonOptions(tolerance=self.tolerance, mode="stationary"))
         self.iterations += circle.iterations
         report = analyse(base, circle.q, circle.multipliers, n_modes=2)
         if report.unstable_count == 0:  # the threshold's round-off: a little further
             snap_at = min(self.excess_link, threshold * (1 + 10 * SNAP_OFFSET))
-            base.excess_link = snap_at
+            problem = problem.at(excess_link=snap_at)
+            base = problem.base
             report = analyse(base, circle.q, circle.multipliers, n_modes=2)
         start = circle.q + circle_perturbation(base, circle.q, report)
         base.accept(start)
@@ -323,10 +327,11 @@ class _Winding:
                 # rigid rotation is then nearly free and minimisation stalls on it
                 set_pin(problem, base, res.q)
             stop = min(self.excess_link, level + size)
-            problem.excess_link = stop
+            problem = problem.at(excess_link=stop)
+            base = problem.base
             # the reference frames at the last accepted state, restored after a refused
             # step (carrying them back by transport can slip the tracked writhe by a turn)
-            frames = _frames_of(base)
+            frames = base.frames
             trial, trial_stab, restarts = self._relax(problem, res.q, stepping)
             change = abs(problem.base.writhe_local(trial.q) - problem.base.writhe_local(res.q))
             smooth = trial.converged and change <= WRITHE_STEP and restarts == 0
@@ -335,14 +340,14 @@ class _Winding:
                       trial.newton_iterations, change, restarts, trial_stab.unstable_count)
             if not smooth and stop - level > self.step / 2**MAX_HALVINGS:
                 size = 0.5 * (stop - level)
-                problem.excess_link = level
-                _restore_frames(base, frames)
+                problem = problem.at(excess_link=level).with_frames(frames)
+                base = problem.base
                 continue
             if not trial.converged:
                 # the smallest step did not settle within STEP_ITERATIONS: the same
                 # step with the full iteration budget (a jump, if it lands far)
-                problem.excess_link = stop
-                _restore_frames(base, frames)
+                problem = problem.with_frames(frames)
+                base = problem.base
                 trial, trial_stab, restarts = self._relax(problem, res.q)
                 log.debug("dLk %.6g -> %.6g with the full budget: %s, %d Newton iterations",
                           level, stop, trial.status, trial.newton_iterations)
@@ -453,14 +458,3 @@ class _Winding:
                 f"differs from the double sum by {result.writhe_error:.2e}, |Tw + Wr - dLk| = "
                 f"{result.link_error:.2e})")
         return result
-
-
-def _frames_of(base: ClosedRodEnergy):
-    """The reference frames a closed rod carries along (tangents, directors, ``Lk_u``)."""
-    return base._tangents, base._directors, base.reference_link
-
-
-def _restore_frames(base: ClosedRodEnergy, frames) -> None:
-    tangents, directors, reference_link = frames
-    base._set_frames(tangents, directors)
-    base.reference_link = reference_link

@@ -30,6 +30,8 @@ from supercoil.continuation import (
     UserEvent,
     continuation,
 )
+from supercoil.continuation.carry import frames_at
+from supercoil.solvers.carried import carried
 
 
 class PinnedRod(Protocol):
@@ -54,8 +56,10 @@ class RunRecords:
     def begin(self, index: int) -> None:
         self.start = index
 
-    def __call__(self, q: np.ndarray, multipliers: np.ndarray, parameter: float) -> dict:
-        return self.records(q, multipliers, parameter) | {"run_start": self.start}
+    def __call__(self, q: np.ndarray, multipliers: np.ndarray, parameter: float,
+                 problem=None) -> dict:
+        return (self.records(q, multipliers, parameter, problem=problem)
+                | {"run_start": self.start})
 
 
 def set_pin(problem, rod: PinnedRod, q: np.ndarray) -> None:
@@ -217,11 +221,11 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         elif len(run) < 2:
             break
         q = run.states[-1]
-        setattr(problem, run.parameter, float(run.parameter_values[-1]))
-        problem.accept(q)
         if run.status.name == "STOPPED" or rod.pin_quality(q) < quality:
             set_pin(problem, rod, q)
             pins.append((total - 1, tuple(int(d) for d in rod.gauge_dofs)))
+        # the next run starts with the frames this one ended with (problem unchanged)
+        carrying = carried(frames_at(problem, run, len(run) - 1), q)
         direction = 1 if run.tangents[-1, -1] >= 0 else -1
         step = float(np.clip(run.arclength[-1] - run.arclength[-2], options.min_step,
                              options.max_step))
@@ -235,7 +239,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         held = None if grip is None else grip_stop(grip, q, grip_fraction)
         if on_run is not None:
             on_run(total - 1)
-        run = continuation(problem, q, run.multipliers[-1], parameter=run.parameter,
+        run = continuation(carrying, q, run.multipliers[-1], parameter=run.parameter,
+                           start=float(run.parameter_values[-1]),
                            options=opts, name=name, records=records, events=events,
                            on_point=report,
                            stop=either(held, refuse, None if restart is None else restart(q)))

@@ -150,8 +150,6 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
                                                   formulation=options.contact_formulation))
                if D is not None else rod)
     contact = D is not None
-    records = tweezers_records(problem, rod, contact,
-                               None if not contact else problem)
     reach = D if D is not None else 0.02
     jump_distance = reach if jump_distance is None else jump_distance
     points, states, jumps = [], [], []
@@ -163,8 +161,11 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
         for pieces in SUBSTEPS:
             q_new, converged = q, True
             for j in range(1, pieces + 1):
-                problem.turns = last[0] + (turns - last[0]) * j / pieces
-                rod.tension = last[1] + (tension - last[1]) * j / pieces
+                # each sub-step's problem at its load, carrying on what the last one
+                # holds (frames, pins, contact state)
+                problem = problem.at(turns=last[0] + (turns - last[0]) * j / pieces,
+                                     tension=last[1] + (tension - last[1]) * j / pieces)
+                rod = problem.base if contact else problem
                 rod.accept(q_new)
                 q_new, mu, converged, why = _minimise(problem, rod, q_new, contact)
                 if not converged:
@@ -192,6 +193,7 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
                                   f"not converge: {why}")
             break
         rod.accept(q_new)
+        records = tweezers_records(problem, rod, contact, problem if contact else None)
         rec = dict(records(q_new, mu, float(turns)))
         rec.update(unstable_count=int(report.unstable_count), zero_modes=int(report.zero_modes),
                    stable=bool(report.unstable_count == 0 and report.zero_modes == 0),

@@ -94,6 +94,8 @@ class ClosedRodEnergy(RodEnergy):
         self.refusal: str | None = None
 
     twist_parameter = "excess_link"
+    parameters = ("excess_link",)
+    frame_attributes = RodEnergy.frame_attributes + (("reference_link", "reference_link"),)
 
     def twist_offset(self) -> float:
         return self.excess_link - self.reference_link
@@ -220,13 +222,13 @@ class ClosedRodEnergy(RodEnergy):
         :func:`supercoil.topology.twist_from_frames`, is an independent check
         of Lk = Tw + Wr.
         """
-        self.accept(q)  # directors adapted to the current tangents
-        ref = kernels.twist_value(self._stencils(q), self._frames())
+        carried = self.carried_to(q)  # directors adapted to the current tangents
+        ref = kernels.twist_value(carried._stencils(q), carried._frames())
         mean = ref.mean()
         theta = np.zeros(len(ref))
         theta[1:] = np.cumsum(mean - ref[1:])
-        t = self._tangents
-        u = self._directors
+        t = carried._tangents
+        u = carried._directors
         v = np.cross(t, u)
         return np.cos(theta)[:, None] * u + np.sin(theta)[:, None] * v
 

@@ -20,7 +20,9 @@ from supercoil.geometry.curves import parallel_transport, unit
 from supercoil.rod import kernels
 from supercoil.rod.assembly import StencilPattern
 from supercoil.rod.model import Rod
+from supercoil.solvers.carried import Carried, Frames
 from supercoil.solvers.csr import csr_from_arrays
+from supercoil.solvers.parameters import Parametrised
 from supercoil.solvers.problem import HessianParts
 
 
@@ -51,12 +53,15 @@ def _key(q: np.ndarray) -> bytes:
     return np.ascontiguousarray(q, dtype=np.float64).tobytes()
 
 
-class RodEnergy(abc.ABC):
+class RodEnergy(Parametrised, Carried, abc.ABC):
     """Shared machinery of the discrete rods: stencils, frames, constraints.
 
     Subclasses set ``self.rod``, the vertex stencils ``vertex_nodes``
     ``(n_vertices, 3)``, the edges ``edge_nodes`` ``(n_edges, 2)``, the
-    previous/next edge of each vertex, and :meth:`twist_offset` (turns).
+    previous/next edge of each vertex, and :meth:`twist_offset` (turns). Its load
+    parameters (:attr:`parameters`) change through :meth:`at`, a new problem that
+    shares the rod, the patterns, the layouts and the frames (the caches are keyed by
+    the state and hold no parameter-dependent values).
     The excess twist is ``Tw = twist_offset + Phi / 2pi`` and its energy
     ``2 pi^2 C Tw^2 / L``.
     """
@@ -76,7 +81,10 @@ class RodEnergy(abc.ABC):
         self._curvature = rod.curvature
         self._bending = kernels.bending_kernels(rod.curvature)
         self._twist_coefficient = 4.0 * np.pi**2 * rod.twist_stiffness / rod.length
-        self._local_hessians: np.ndarray | None = None  # work array of hessian()
+        # what depends on neither the parameters nor the frames, made once and shared by
+        # the problems ``at`` derives from this one: hessian()'s work array, the
+        # Jacobian's and the constraint curvature's layouts (by constrained set)
+        self._shared: dict = {}
         self.mass = np.full(3 * n, rod.edge_length)
         self._set_frames(unit(self._edge_vectors(points.ravel())),
                          np.asarray(reference_directors, dtype=float))
@@ -95,6 +103,14 @@ class RodEnergy(abc.ABC):
         """Turns added to ``Phi / 2pi`` to give the excess twist (set by the boundary)."""
 
     # ----------------------------------------------------------------- pieces
+    # the carried state (supercoil.solvers.carried): the reference frames, and what a
+    # subclass keeps with them
+    frame_attributes = (("tangents", "_tangents"), ("directors", "_directors"))
+
+    def _restore_frames(self, frames: Frames) -> None:
+        super()._restore_frames(frames)
+        self._set_frames(frames.values["tangents"], frames.values["directors"])
+
     def _set_frames(self, tangents: np.ndarray, directors: np.ndarray) -> None:
         """New reference frames; forgets what was computed with the old ones."""
         self._tangents = tangents
@@ -190,9 +206,9 @@ class RodEnergy(abc.ABC):
         tw = self.twist(q)
         # One buffer per problem: fresh (n, 9, 9) arrays cost page faults that
         # doubled the time at N = 10000 (measured).
-        if self._local_hessians is None:
-            self._local_hessians = np.zeros((len(self._bend_weight), 9, 9))
-        local = self._local_hessians
+        local = self._shared.get("local_hessians")
+        if local is None:
+            local = self._shared["local_hessians"] = np.zeros((len(self._bend_weight), 9, 9))
         local.fill(0.0)
         kernels.bending_terms(self._stencils(q), self._bend_weight, self._curvature, 2, local)
         twist_local = self._twist_terms(q, 2, local, k * tw / (2 * np.pi))[1]
@@ -225,7 +241,7 @@ class RodEnergy(abc.ABC):
         """``(constrained, order, indices, indptr, edges)``: the CSR layout of the
         Jacobian for the constrained edges (see :meth:`_constraint_jacobian`) and their
         end nodes ``(m, 2)``; made once per constrained set."""
-        layout = self.__dict__.get("_jacobian_layout")
+        layout = self._shared.get("jacobian_layout")
         if layout is None or layout[0] is not self._constrained:
             m = self.n_constraints
             nodes = self.edge_nodes[self._constrained]
@@ -237,7 +253,7 @@ class RodEnergy(abc.ABC):
             indices = np.take_along_axis(cols, order, axis=1).ravel().astype(index)
             indptr = np.arange(0, 6 * m + 1, 6, dtype=index)
             layout = (self._constrained, order, indices, indptr, np.ascontiguousarray(nodes))
-            self._jacobian_layout = layout
+            self._shared["jacobian_layout"] = layout
         return layout
 
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
@@ -283,7 +299,7 @@ class RodEnergy(abc.ABC):
         matrix is marked canonical (its pattern's keys are sorted and unique), which
         spares the sums that take it scipy's check.
         """
-        pattern = self.__dict__.get("_curvature_pattern")
+        pattern = self._shared.get("curvature_pattern")
         if pattern is None or pattern[0] is not self._constrained:
             rows, cols = self._constraint_hessian_entries()
             key = rows * self.n_dofs + cols
@@ -298,7 +314,7 @@ class RodEnergy(abc.ABC):
             np.cumsum(np.bincount(slots // self.n_dofs, minlength=self.n_dofs), out=indptr[1:])
             pattern = (self._constrained, first, second, (slots % self.n_dofs).astype(np.int32),
                        indptr)
-            self._curvature_pattern = pattern
+            self._shared["curvature_pattern"] = pattern
         _, first, second, indices, indptr = pattern
         values = _curvature_values(np.ascontiguousarray(multipliers, dtype=np.float64),
                                    float(self.rod.edge_length), first, second)

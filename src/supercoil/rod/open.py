@@ -113,6 +113,9 @@ class ClampedRodEnergy(RodEnergy):
         self.sliding_tail: float | None = sliding_threshold(n)
 
     twist_parameter = "turns"
+    parameters = ("turns", "tension")
+    frame_attributes = RodEnergy.frame_attributes + (("end_mismatch", "_end_mismatch"),
+                                                     ("turn_offset", "_turn_offset"))
 
     def twist_offset(self) -> float:
         return self.turns + self._end_mismatch / (2 * np.pi) + self._turn_offset

@@ -63,6 +63,14 @@ class ConstrainedEnergy(Protocol):
     ``gauge_dofs`` (a subset of ``fixed`` that only removes continuous
     symmetries) and ``symmetry_modes(q)`` (shape ``(r, n_dofs)``) let the
     stability analysis report eigenvalues independent of the pins.
+
+    A problem is never changed by the numerical layers. Continuation needs a scalar
+    parameter attribute and derives the problem at another value with
+    ``at(**{name: value})`` (:mod:`supercoil.solvers.parameters`); a problem that
+    carries reference frames from state to state gives ``carried_to(q)``, ``frames``
+    and ``with_frames(frames)`` (:mod:`supercoil.solvers.carried`). A caller's own
+    object without them is copied (shallowly) with the attribute set, or ``accept(q)``
+    called, on the copy.
     """
 
     n_dofs: int
@@ -81,10 +89,6 @@ class ConstrainedEnergy(Protocol):
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix: ...
 
     def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix: ...
-
-    def accept(self, q: np.ndarray) -> None:
-        """Called after every accepted step (e.g. to carry reference frames along)."""
-        ...
 
 
 def free_dofs(problem: ConstrainedEnergy) -> np.ndarray:

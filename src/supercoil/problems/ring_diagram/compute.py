@@ -10,6 +10,7 @@ from collections.abc import Callable, Mapping
 
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch
+from supercoil.continuation.carry import frames_at
 from supercoil.problems.branch_options import coarse_mesh_note
 from supercoil.problems.circle_switch import mode_points
 from supercoil.problems.contact_events import contact_start, cut_at_onset, first_onset
@@ -94,14 +95,14 @@ def ring_diagram(options: DiagramOptions,
         start = time.perf_counter()
         k = contact_start(free, onset, cp)
         direction = 1 if free.tangents[k, -1] >= 0 else -1
-        cp.excess_link = float(free.parameter_values[k])
-        cp.accept(free.states[k])
-        if not 0.0 <= cp.excess_link <= opts.max_excess_link:
-            notes.append(f"{contact_name}: contact at dLk = {cp.excess_link:.4g} is outside "
+        at = float(free.parameter_values[k])
+        carrying = frames_at(cp, free, k)  # the frames of the free branch's point k
+        if not 0.0 <= at <= opts.max_excess_link:
+            notes.append(f"{contact_name}: contact at dLk = {at:.4g} is outside "
                          f"[0, {opts.max_excess_link:g}]: not computed")
             continue
         contact, pins[contact_name] = contact_branch(
-            cp, free, k, contact_options(opts, D, direction), contact_name, stored, on_point)
+            carrying, free, k, contact_options(opts, D, direction), contact_name, stored, on_point)
         note = sliding_note(contact, opts, contact_name)
         if note is not None:
             notes.append(note)

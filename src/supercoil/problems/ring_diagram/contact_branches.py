@@ -115,7 +115,8 @@ def contact_branch(cp: ContactProblem, free: Branch, k: int, options: Continuati
     if complete:
         with pins_restored(cp):
             return old, tuple(replayed_pins(cp, old.states))
-    branch, pins = _follow_contact(cp, free.states[k], old, options, name, on_point)
+    branch, pins = _follow_contact(cp, free.states[k], float(free.parameter_values[k]), old,
+                                   options, name, on_point)
     return classify_contact_events(branch, cp), pins
 
 
@@ -173,10 +174,11 @@ def run_bounds(n_points: int) -> tuple[int, int]:
     return j * step, (j + 1) * step
 
 
-def _follow_contact(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
+def _follow_contact(cp: ContactProblem, q_start: np.ndarray, start: float, old: Branch | None,
                     options: ContinuationOptions, name: str, on_point=None
                     ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
-    """A contact branch from ``q_start`` (or ``old``, an interrupted one, continued) in runs
+    """A contact branch from ``q_start`` at ``excess_link = start`` (or ``old``, an
+    interrupted one, continued) in runs
     of ``CONTACT_SEGMENT_POINTS``, the rigid pins re-picked between runs (module doc,
     "Rigid pins"), and its pins (``RingDiagram.pins``); the ring's construction pins
     are restored afterwards."""
@@ -199,7 +201,8 @@ def _follow_contact(cp: ContactProblem, q_start: np.ndarray, old: Branch | None,
         else:
             set_pin(cp, rod, q_start)
             earlier = [(0, tuple(int(d) for d in rod.fixed))]
-            first = continuation(cp, q_start, parameter="excess_link", options=first_opts,
+            first = continuation(cp, q_start, parameter="excess_link", start=start,
+                                 options=first_opts,
                                  name=name, records=records, events=events,
                                  on_point=on_point, stop=grip_stop(rod.pin_grip, q_start))
         branch, later = follow(cp, rod, first, options, name, records, events,

@@ -58,7 +58,7 @@ def contact_free_branch(problem, circle: Branch, point: SpecialPoint, name: str,
         return resume_branch(problem, old, free_opts, on_point=watched,
                              records=contact_records(probe, ring_records(problem), True),
                              events=(onset_event(probe),), stop=stop,
-                             admissible=probe.admissible), False
+                             admissible=probe.admissible_over), False
     return switch_off_circle(problem, circle, point, free_opts, name, probe, notes,
                              on_point), False
 
@@ -103,7 +103,7 @@ def switch_off_circle(problem, circle: Branch, point: SpecialPoint,
             return switch_branch(problem, circle, point, opts, side=side, amplitude=amplitude,
                                  name=name, records=records, events=(onset_event(probe),),
                                  on_point=watched, direction=direction, stop=stop,
-                                 admissible=probe.admissible)
+                                 admissible=probe.admissible_over)
     raise AssertionError("unreachable")
 
 

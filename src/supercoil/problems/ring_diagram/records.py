@@ -18,18 +18,27 @@ import numpy as np
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, contact_summary
 from supercoil.continuation import Branch
+from supercoil.continuation.carry import branch_frames
 from supercoil.solvers.problem import free_dofs
 
 
-def contact_records(problem: ContactProblem, base_records, free: bool):
-    """Per-point records: the ring's plus the contact counts and the closest approach."""
+def contact_records(contact: ContactProblem, base_records, free: bool):
+    """Per-point records: the ring's plus the contact counts and the closest approach
+    (``contact``'s, a probe on a contact-free branch)."""
 
-    def records(q, multipliers, excess_link):
-        out = dict(base_records(q, multipliers, excess_link))
+    def records(q, multipliers, excess_link, problem=None):
+        # the contact problem at the point (the continuation's), else this one there
+        # the problem at the point (the continuation's: the contact problem, or the rod on
+        # a contact-free branch), else this one there
+        if problem is None:
+            problem = contact.at(excess_link=excess_link)
+            problem = problem.base if free else problem
+        out = dict(base_records(q, multipliers, excess_link,
+                                problem=getattr(problem, "base", problem)))
         if free:
-            d_min = problem.min_distance(q)
+            d_min = contact.min_distance(q)
             out.update(n_contact_points=0, n_contact_intervals=0,
-                       min_gap_over_diameter=float(d_min / problem.diameter))
+                       min_gap_over_diameter=float(d_min / contact.diameter))
         else:
             summary = contact_summary(problem, q, multipliers, COUNT_KEYS)
             gap = summary["min_gap_over_diameter"]
@@ -60,11 +69,14 @@ def kkt_residual(problem, q: np.ndarray, multipliers: np.ndarray) -> float:
 
 
 def with_records(branch: Branch, problem, records) -> Branch:
-    """The branch with its records recomputed by ``records`` (the problem follows it)."""
+    """The branch with its records recomputed by ``records``, given the problem at each
+    point (the branch's frames, :mod:`supercoil.continuation.carry`; ``problem``
+    unchanged)."""
     rows = []
-    for q, mu, lam in zip(branch.states, branch.multipliers, branch.parameter_values):
-        problem.excess_link = float(lam)
-        problem.accept(q)
-        rows.append(records(q, mu, float(lam)))
+    frames = branch_frames(problem, branch)
+    for q, mu, lam, carried in zip(branch.states, branch.multipliers, branch.parameter_values,
+                                   frames):
+        point = problem.with_frames(carried).at(excess_link=float(lam))
+        rows.append(records(q, mu, float(lam), problem=point))
     merged = {k: np.array([r[k] for r in rows]) for k in rows[0]} if rows else {}
     return dataclasses.replace(branch, records=merged)

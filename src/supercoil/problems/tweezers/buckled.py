@@ -112,7 +112,6 @@ def switch_off_straight(rod: ClampedRodEnergy, straight: Branch, point: SpecialP
     for amplitude in SWITCH_AMPLITUDES:
         if amplitude == SWITCH_AMPLITUDES[0]:
             say(f"{name}: switched from the straight rod at {point.parameter:.6g} turns")
-        rod.turns = point.parameter
         pin_node(rod, node)
         first = switch_branch(rod, straight, point,
                               dataclasses.replace(options, initial_step=amplitude),

@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping
 
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, continuation
+from supercoil.continuation.carry import frames_at
 from supercoil.problems.branch_options import CONTACT_MIN_STEP
 from supercoil.problems.contact_events import (
     classify_contact_events,
@@ -63,8 +64,6 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
         rod.sliding_tail = SLIDING_TAIL_CONTACT
     k = contact_start(free, onset, cp)
     q = free.states[k]
-    cp.turns = float(free.parameter_values[k])
-    cp.accept(q)
     set_pin(cp, rod, q)
     contact_opts = ContinuationOptions(
         initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
@@ -85,7 +84,10 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     if first is not None:
         say(f"{name}: continued from point {len(old) - 1}")
     else:
-        first = continuation(cp, q, parameter="turns", options=contact_opts, name=name,
+        # from the frames of the contact-free branch's point k (cp unchanged)
+        first = continuation(frames_at(cp, free, k), q, parameter="turns",
+                             start=float(free.parameter_values[k]),
+                             options=contact_opts, name=name,
                              records=records, events=events, on_point=on_point,
                              stop=pinned)
     contact, pins = follow(cp, rod, first, contact_opts, name, records, events,

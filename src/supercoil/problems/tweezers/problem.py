@@ -78,25 +78,29 @@ def clamped_buckle(n_nodes: int, end_distance: float) -> np.ndarray:
     return pts
 
 
-def tweezers_records(problem, rod: ClampedRodEnergy, contact: bool, probe=None):
+def tweezers_records(whole, rod: ClampedRodEnergy, contact: bool, probe=None):
     """Per-point records (module doc) for ``continuation(records=)``."""
 
-    def records(q: np.ndarray, multipliers: np.ndarray, turns: float) -> dict:
+    def records(q: np.ndarray, multipliers: np.ndarray, turns: float, problem=None) -> dict:
+        # the problem at the point (the continuation's, with its frames), else this one
+        # at the point's load
+        point = whole.at(turns=float(turns)) if problem is None else problem
+        rod_at = point if rod is whole else point.base
         x = q.reshape(-1, 3)
         wr = writhe(x, closure="axis", self_crossing="nan")
-        tw = rod.twist(q)
+        tw = rod_at.twist(q)
         error = abs(tw + wr - turns)
-        out = {"turns": float(turns), "extension": rod.extension(q),
-               "torque": 2 * math.pi * rod.rod.twist_ratio * tw, "twist": tw, "writhe": wr,
+        out = {"turns": float(turns), "extension": rod_at.extension(q),
+               "torque": 2 * math.pi * rod_at.rod.twist_ratio * tw, "twist": tw, "writhe": wr,
                "closure_error": error,
                "closure_failed": bool(not error <= TAIL_WRAP),  # a crossing: NaN, failed
-               "energy": rod.elastic_energy(q), "load_potential": rod.load_potential(q),
-               "tension": axial_force(rod, multipliers),
+               "energy": rod_at.elastic_energy(q), "load_potential": rod_at.load_potential(q),
+               "tension": axial_force(rod_at, multipliers),
                # the azimuth pin the point was computed with (a resumed run keeps it)
-               "azimuth_pin": int(rod.gauge_dofs[0]) if rod.gauge_dofs.size == 1 else -1,
-               "sliding_residual": kkt_residual(problem, q, multipliers)}
+               "azimuth_pin": int(rod_at.gauge_dofs[0]) if rod_at.gauge_dofs.size == 1 else -1,
+               "sliding_residual": kkt_residual(point, q, multipliers)}
         if contact:
-            summary = contact_summary(problem, q, multipliers, COUNT_KEYS)
+            summary = contact_summary(point, q, multipliers, COUNT_KEYS)
             gap = summary["min_gap_over_diameter"]
             out.update(n_contact_points=summary["n_contact_points"],
                        n_contact_intervals=summary["n_contact_intervals"],

@@ -47,7 +47,6 @@ def straight_branch(options: TweezersOptions, problem: ClampedRodEnergy, q0: np.
     specials = straight_bifurcations(problem, branch, cont, records)
     if specials is not None:
         return dataclasses.replace(branch, special_points=specials)
-    problem.turns = opts.turns[0]
     problem.accept(q0)
     return continuation(problem, q0, parameter="turns", options=dataclasses.replace(
         cont, detect_bifurcations=True), name="straight", records=records, on_point=on_point)
@@ -172,29 +171,25 @@ def straight_bifurcations(problem: ClampedRodEnergy, branch: Branch,
     order = turns if sense > 0 else -turns  # increasing, for the segment of a root
     specials = []
     before = 0
-    try:
-        for cluster, at in zip(clusters, centres, strict=True):
-            after = before + len(cluster)
-            index = int(np.searchsorted(order, sense * at)) - 1
-            x = x_at(at)
-            stab = point_stability(system, x, options.zero_tolerance, options.n_modes)
-            values, modes = stab.critical_modes(len(cluster))
-            u = (at - turns[index]) / (turns[index + 1] - turns[index])
-            arclength = float(branch.arclength[index]
-                              + u * (branch.arclength[index + 1] - branch.arclength[index]))
-            tangent = np.zeros(branch.tangents.shape[1])
-            tangent[-1] = 1.0  # the branch's secant: the state does not move
-            system.set_parameter(at)
-            specials.append(SpecialPoint(
-                kind="bifurcation", label="bifurcation", branch=branch.name, index=index,
-                parameter=at, arclength=arclength, q=q.copy(), multipliers=mu.copy(),
-                tangent=tangent, unstable_count=before, count_before=before,
-                count_after=after, critical_eigenvalues=values, critical_modes=modes,
-                located=True, tolerance=options.event_tolerance,
-                records=dict(records(q, mu, at)) if records is not None else {}))
-            before = after
-    finally:
-        system.set_parameter(last)
+    for cluster, at in zip(clusters, centres, strict=True):
+        after = before + len(cluster)
+        index = int(np.searchsorted(order, sense * at)) - 1
+        x = x_at(at)
+        stab = point_stability(system, x, options.zero_tolerance, options.n_modes)
+        values, modes = stab.critical_modes(len(cluster))
+        u = (at - turns[index]) / (turns[index + 1] - turns[index])
+        arclength = float(branch.arclength[index]
+                          + u * (branch.arclength[index + 1] - branch.arclength[index]))
+        tangent = np.zeros(branch.tangents.shape[1])
+        tangent[-1] = 1.0  # the branch's secant: the state does not move
+        specials.append(SpecialPoint(
+            kind="bifurcation", label="bifurcation", branch=branch.name, index=index,
+            parameter=at, arclength=arclength, q=q.copy(), multipliers=mu.copy(),
+            tangent=tangent, unstable_count=before, count_before=before,
+            count_after=after, critical_eigenvalues=values, critical_modes=modes,
+            located=True, tolerance=options.event_tolerance,
+            records=dict(records(q, mu, at)) if records is not None else {}))
+        before = after
     return tuple(specials)
 
 
@@ -213,7 +208,7 @@ def straight_force_branch(options: TweezersOptions, turns: float,
                          f"{force_range!r}")
     opts = dataclasses.replace(options, tension=high, end_distance=None, turns=(0.0, 1.0))
     problem, q0 = clamped_problem(opts)
-    problem.turns = float(turns)
+    problem = problem.at(turns=float(turns))
     cont = ContinuationOptions(initial_step=0.05, max_step=max(1.0, 0.05 * (high - low)),
                                parameter_bounds=(low, high), max_points=options.max_points,
                                direction=-1, event_tolerance=options.event_tolerance)

@@ -23,8 +23,8 @@ from __future__ import annotations
 import dataclasses
 
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation.carry import frames_at
 from supercoil.continuation import Branch, SpecialPoint, continuation
+from supercoil.continuation.carry import frames_at
 from supercoil.cosserat.closed import ClosedCosseratEnergy
 from supercoil.problems.contact_events import (
     classify_contact_events,

@@ -18,8 +18,8 @@ import numpy as np
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, contact_summary
-from supercoil.continuation.carry import frames_at
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, continuation
+from supercoil.continuation.carry import frames_at
 from supercoil.problems.branch_options import CONTACT_MIN_STEP
 from supercoil.problems.contact_events import (
     classify_contact_events,
@@ -42,8 +42,10 @@ def with_contact_records(records, cp: ContactProblem, contact: bool):
     approach (contact branch, with the force the continuation's phase row holds), or the
     closest approach alone (contact-free branch, no contact counted)."""
 
-    def out(q: np.ndarray, multipliers: np.ndarray, turns: float) -> dict:
-        row = dict(records(q, multipliers, turns))
+    def out(q: np.ndarray, multipliers: np.ndarray, turns: float, problem=None) -> dict:
+        # the rod at the point, with its chart (the continuation's problem is the contact
+        # problem on the contact branch)
+        row = dict(records(q, multipliers, turns, problem=getattr(problem, "base", problem)))
         if contact:
             summary = contact_summary(cp, q, multipliers, COUNT_KEYS)
             gap = summary["min_gap_over_diameter"]

@@ -159,6 +159,18 @@ def test_help_fits_100_columns_and_speaks_of_the_tool(path):
 
 @pytest.mark.parametrize(("path", "command"), list(_commands()),
                          ids=lambda p: " ".join(p) if isinstance(p, tuple) else "")
+def test_help_shows_every_bracketed_word_it_is_given(path, command):
+    """A word in brackets in an option's help (a study file's table, '[sweep]') is shown
+    as written, not taken for console markup and dropped."""
+    result = CliRunner().invoke(app, [*path, "--help"], env={"COLUMNS": "100"})
+    shown = " ".join(result.stdout.replace("│", " ").split())
+    for p in command.params:
+        for word in re.findall(r"\\?(\[[a-z_.]+\])", p.help or ""):
+            assert word in shown, (path, p.opts, word)
+
+
+@pytest.mark.parametrize(("path", "command"), list(_commands()),
+                         ids=lambda p: " ".join(p) if isinstance(p, tuple) else "")
 def test_every_command_spells_its_options_one_way(path, command):
     """-q/--quiet everywhere; --out, --overwrite on every command that writes files (never
     --force); every numeric option states its range."""

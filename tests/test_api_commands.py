@@ -203,6 +203,23 @@ def test_ring_command_equals_equilibrium(tmp_path):
     assert_same_branches(sc.load(tmp_path / "cli"), sc.load(tmp_path / "api.h5"))
 
 
+def test_a_ring_with_contact_is_plotted_and_viewed_as_any_result(tmp_path):
+    """The folder of ``ring --out`` with self-contact (whose solve reports the route it
+    took, circle or contact) is drawn and viewed; its one point is of the stored
+    branch ``ring``."""
+    out = tmp_path / "cli"
+    assert cli(["ring", "--twist-ratio", "1.5", "--excess-link", "0.5", "--nodes", "24",
+                "--length-over-diameter", "20", "--out", str(out), "--quiet"]) == 0
+    points = json.loads((out / "ring.json").read_text())["points"]
+    assert [p["branch"] for p in points] == list(sc.load(out).branches) == ["ring"]
+    for given in (out, out / "result.h5", out / "ring.json"):
+        assert cli(["plot", str(given), "--kind", "diagram", "--format", "svg", "--out",
+                    str(tmp_path / "figures"), "--overwrite", "--quiet"]) == 0
+        assert cli(["view", str(given), "--out", str(tmp_path / f"{given.name}.html"),
+                    "--quiet"]) == 0
+    assert sc.plot(sc.load(out), "diagram", out=tmp_path, formats=("svg",))
+
+
 def test_run_command_equals_run(tmp_path):
     from supercoil.sweeps.grid import toml_text
 

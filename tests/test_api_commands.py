@@ -104,6 +104,19 @@ def test_diagram_ring_equals_ring_diagram(diagram_runs):
     assert by_cli.attributes == by_api.attributes
 
 
+def test_a_diagram_stopped_by_its_point_limit_names_the_branch(tmp_path):
+    """A contact branch cut by its point limit: the command's and the verb's result
+    files say which branch stopped early (the branch is ok, not complete)."""
+    short = [*DIAGRAM, "--contact-max-points", "3"]
+    assert cli([*short, "--out", str(tmp_path / "cli")]) == 1
+    options = {**DIAGRAM_OPTIONS, "contact_max_points": 3}
+    diagram = sc.ring_diagram(ROD, sc.Barrier(LOD), out=tmp_path / "api", **options)
+    stopped = [n for n, b in diagram.branches.items() if not b.status.complete]
+    assert stopped == ["alpha_contact"] and not diagram.ok
+    for result in (sc.load(tmp_path / "cli"), sc.load(tmp_path / "api")):
+        assert result.message == "branch(es) alpha_contact stopped early"
+
+
 def test_on_point_sees_the_points_stored(diagram_runs):
     """Each branch continued with contact is final as computed: its stored states are
     exactly the reported ones, in order."""

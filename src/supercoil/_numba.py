@@ -3,8 +3,8 @@
 Numba compiles a kernel at its first call and keeps the machine code in its cache:
 the ``__pycache__`` folder beside the module, or ``NUMBA_CACHE_DIR`` when set. A
 first run on a fresh install compiles every kernel it calls (about half a minute for
-the demo); later runs load them. :func:`announce_compilation` lets a command say so
-before it starts.
+the demo); later runs load them. :func:`cache_is_cold` lets a command say so before it
+starts.
 
 Numba's cache checks only the file of the function it caches: a kernel that calls a
 compiled function of another module keeps that callee's code as it was when the kernel
@@ -20,11 +20,9 @@ files in its ``__pycache__`` (a fresh checkout has none).
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
-_announce: Callable[[], None] | None = None
 
 
 def cache_is_cold() -> bool | None:
@@ -42,30 +40,14 @@ def cache_is_cold() -> bool | None:
     return next(PACKAGE.rglob("__pycache__/*.nbi"), None) is None
 
 
-def announce_compilation(say: Callable[[], None]) -> None:
-    """Call ``say()`` once, when the first kernel module is imported and the cache is
-    cold (:func:`cache_is_cold`): before the first compilation. For a command's
-    process (the ``supercoil`` command says it on standard error); the library never
-    prints."""
-    global _announce
-    _announce = say
-
-
 def njit(**options: object):
     """``numba.njit(cache=True, **options)``, or without cache if none is usable.
 
     Numba raises ``RuntimeError`` at decoration time when neither the source tree's
     ``__pycache__`` nor a user-wide cache directory is writable; the kernels then
-    compile in memory in each new process. (numba is imported here, not with this
-    module: :func:`announce_compilation` costs a command nothing.)
+    compile in memory in each new process.
     """
     import numba
-
-    global _announce
-    if _announce is not None:
-        say, _announce = _announce, None
-        if cache_is_cold():
-            say()
 
     def decorate(function):
         try:

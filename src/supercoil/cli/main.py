@@ -50,6 +50,9 @@ UNITS_NOTE = (
 # the order a new user meets the commands in, which --help lists them in
 COMMANDS = ("demo", "ring", "diagram", "tweezers", "run", "sweep", "plot", "view", "export",
             "writhe", "knot", "tighten")
+# the commands that call the compiled kernels: a first run of one says it compiles them
+COMPUTING_COMMANDS = ("demo", "ring", "diagram", "tweezers", "run", "sweep", "writhe", "knot",
+                      "tighten")
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS")
 COMPILE_TIME = "half a minute, longer on a busy machine"  # measured: 34 s (demo, load 1.5)
 
@@ -140,6 +143,13 @@ def _compiling() -> None:
           "cached for later runs)", file=sys.stderr, flush=True)
 
 
+def _computes(args: Sequence[str]) -> bool:
+    """Whether ``args`` ask for a command that runs numerical kernels (not for a help,
+    the version, or a figure, page or file drawn from a result)."""
+    return bool(args) and args[0] in COMPUTING_COMMANDS \
+        and not {"-h", "--help", "--version"} & set(args)
+
+
 def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
@@ -160,10 +170,12 @@ def run(argv: Sequence[str] | None = None) -> int:
     warnings) are silenced. ``SUPERCOIL_DEBUG=1`` re-raises unexpected exceptions
     with their traceback and shows the warnings.
     """
-    from supercoil._numba import announce_compilation
-
-    announce_compilation(_compiling)
     args = list(sys.argv[1:] if argv is None else argv)
+    if _computes(args):
+        from supercoil._numba import cache_is_cold
+
+        if cache_is_cold():
+            _compiling()
     debug = os.environ.get("SUPERCOIL_DEBUG", "") not in ("", "0")
     try:
         with warnings.catch_warnings():

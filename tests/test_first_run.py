@@ -4,6 +4,10 @@ on a warm cache, for a help, or for a command that only draws a result."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import numba
 import numpy as np
 import pytest
@@ -22,14 +26,22 @@ def curve(tmp_path):
     return path
 
 
-def test_the_cache_is_cold_until_it_holds_a_kernel_of_the_package(monkeypatch, tmp_path):
-    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
-    assert _numba.cache_is_cold() is True
-    (tmp_path / "other.f-1.py311.nbi").write_bytes(b"")  # another package's kernel
-    assert _numba.cache_is_cold() is True
-    (tmp_path / "supercoil").mkdir()
-    (tmp_path / "supercoil" / "kernels.f-1.py311.nbi").write_bytes(b"")
-    assert _numba.cache_is_cold() is False
+def test_a_fresh_cache_folder_is_cold_until_a_command_has_compiled_into_it(tmp_path, curve):
+    """End to end, in new processes with numba's own cache in a fresh NUMBA_CACHE_DIR: the
+    first ``supercoil writhe`` says it compiles, the second loads and says nothing."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    program = "import sys; from supercoil.cli.main import run; sys.exit(run(sys.argv[1:]))"
+    said = []
+    for _ in range(2):
+        done = subprocess.run([sys.executable, "-c", program, "writhe", str(curve), "-q"],
+                              env=env, capture_output=True, text=True, timeout=600, check=True)
+        said.append(NOTICE in done.stderr)
+    assert said == [True, False]
+    (tmp_path / "other_0123").mkdir()
+    (tmp_path / "other_0123" / "f-1.py311.nbi").write_bytes(b"")  # another package's
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+        assert _numba.cache_is_cold() is True
 
 
 def test_a_computing_command_on_a_cold_cache_says_it_compiles(monkeypatch, tmp_path, curve,
@@ -44,8 +56,8 @@ def test_a_computing_command_on_a_cold_cache_says_it_compiles(monkeypatch, tmp_p
 
 
 def test_a_warm_cache_says_nothing(monkeypatch, tmp_path, curve, capsys):
-    (tmp_path / "supercoil").mkdir()
-    (tmp_path / "supercoil" / "kernels.f-1.py311.nbi").write_bytes(b"")
+    (tmp_path / "rod_0123").mkdir()  # numba's folder of the kernels of supercoil/rod
+    (tmp_path / "rod_0123" / "kernels.f-1.py311.nbi").write_bytes(b"")
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
     assert run(["writhe", str(curve), "--quiet"]) == 0
     assert capsys.readouterr().err == ""

@@ -33,8 +33,11 @@ def cache_is_cold() -> bool | None:
     import numba
 
     if numba.config.CACHE_DIR:
-        folder = Path(numba.config.CACHE_DIR)
-        return not any("supercoil" in p.parts for p in folder.rglob("*.nbi"))
+        # numba keeps the kernels of a source folder in a folder of NUMBA_CACHE_DIR named
+        # after it and a hash of its path (``rod_<hash>``)
+        folders = {p.parent.name for p in PACKAGE.rglob("*.py")}
+        return not any(p.parent.name.rsplit("_", 1)[0] in folders
+                       for p in Path(numba.config.CACHE_DIR).glob("*/*.nbi"))
     if not os.access(PACKAGE, os.W_OK):
         return None
     return next(PACKAGE.rglob("__pycache__/*.nbi"), None) is None

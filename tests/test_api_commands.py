@@ -308,3 +308,13 @@ def test_writhe_and_knot_commands_equal_their_functions(tmp_path):
     knot = sc.knot_type(points)
     data = json.loads((tmp_path / "k.json").read_text())
     assert (data["knot_type"], data["chirality"]) == (knot.name, knot.chirality) == ("3_1", 1)
+
+
+def test_tighten_command_equals_tighten(tmp_path):
+    assert cli(["tighten", "--knot", "3_1", "--nodes", "24", "--json",
+                str(tmp_path / "t.json"), "--quiet"]) == 0
+    data = json.loads((tmp_path / "t.json").read_text())
+    tight = sc.tighten("3_1", 24)
+    record = json.loads(json.dumps(tight.record()))
+    assert {k: data[k] for k in record} == record
+    assert len(repr(tight).splitlines()) <= 5

@@ -117,6 +117,14 @@ def test_a_diagram_stopped_by_its_point_limit_names_the_branch(tmp_path):
         assert result.message == "branch(es) alpha_contact stopped early"
 
 
+def test_load_reads_a_summary_as_the_result_beside_it(diagram_runs, tmp_path):
+    root, _, _ = diagram_runs
+    assert_same_branches(sc.load(root / "cli" / "diagram.json"), sc.load(root / "cli"))
+    (tmp_path / "diagram.json").write_text("{}")
+    with pytest.raises(sc.InputError, match="no result.h5"):
+        sc.load(tmp_path / "diagram.json")
+
+
 def test_on_point_sees_the_points_stored(diagram_runs):
     """Each branch continued with contact is final as computed: its stored states are
     exactly the reported ones, in order."""

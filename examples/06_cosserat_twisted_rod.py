@@ -4,7 +4,7 @@ The rod is clamped at both ends on the axis z, pulled by a small force and turne
 one end (the tweezers problem of supercoil.tweezers, here with the Cosserat model:
 shear and extension). The straight rod, twisted uniformly and stretched by F L / EA,
 buckles at Greenhill's condition (in the Kirchhoff limit); the buckled branch off
-it gives up turns as its writhe grows, the rod coiling into a loop (the seed
+it gives up turns as its writhe grows, the rod coiling into a loop (the
 problem of Chamekh, Mani-Aouadi & Moakher 2009). Without self-contact the loop may
 pass through itself further on.
 

@@ -7,7 +7,7 @@ from threadpoolctl import threadpool_limits
 from typer.testing import CliRunner
 
 # One BLAS thread for the whole test run, as the CLI uses
-# (supercoil.cli.main._single_threaded_blas): results then do not depend on the
+# (supercoil.cli.main, unless the environment sets the count): results then do not depend on the
 # machine's core count (a penalty solve landed on another state with two threads
 # than with one) and the many small dense solves run faster on a loaded machine.
 # (numpy is already loaded by pytest's plugins here, so the environment variable

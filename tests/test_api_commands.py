@@ -104,6 +104,27 @@ def test_diagram_ring_equals_ring_diagram(diagram_runs):
     assert by_cli.attributes == by_api.attributes
 
 
+def test_a_diagram_stopped_by_its_point_limit_names_the_branch(tmp_path):
+    """A contact branch cut by its point limit: the command's and the verb's result
+    files say which branch stopped early (the branch is ok, not complete)."""
+    short = [*DIAGRAM, "--contact-max-points", "3"]
+    assert cli([*short, "--out", str(tmp_path / "cli")]) == 1
+    options = {**DIAGRAM_OPTIONS, "contact_max_points": 3}
+    diagram = sc.ring_diagram(ROD, sc.Barrier(LOD), out=tmp_path / "api", **options)
+    stopped = [n for n, b in diagram.branches.items() if not b.status.complete]
+    assert stopped == ["alpha_contact"] and not diagram.ok
+    for result in (sc.load(tmp_path / "cli"), sc.load(tmp_path / "api")):
+        assert result.message == "branch(es) alpha_contact stopped early"
+
+
+def test_load_reads_a_summary_as_the_result_beside_it(diagram_runs, tmp_path):
+    root, _, _ = diagram_runs
+    assert_same_branches(sc.load(root / "cli" / "diagram.json"), sc.load(root / "cli"))
+    (tmp_path / "diagram.json").write_text("{}")
+    with pytest.raises(sc.InputError, match="no result.h5"):
+        sc.load(tmp_path / "diagram.json")
+
+
 def test_on_point_sees_the_points_stored(diagram_runs):
     """Each branch continued with contact is final as computed: its stored states are
     exactly the reported ones, in order."""
@@ -203,6 +224,23 @@ def test_ring_command_equals_equilibrium(tmp_path):
     assert_same_branches(sc.load(tmp_path / "cli"), sc.load(tmp_path / "api.h5"))
 
 
+def test_a_ring_with_contact_is_plotted_and_viewed_as_any_result(tmp_path):
+    """The folder of ``ring --out`` with self-contact (whose solve reports the route it
+    took, circle or contact) is drawn and viewed; its one point is of the stored
+    branch ``ring``."""
+    out = tmp_path / "cli"
+    assert cli(["ring", "--twist-ratio", "1.5", "--excess-link", "0.5", "--nodes", "24",
+                "--length-over-diameter", "20", "--out", str(out), "--quiet"]) == 0
+    points = json.loads((out / "ring.json").read_text())["points"]
+    assert [p["branch"] for p in points] == list(sc.load(out).branches) == ["ring"]
+    for given in (out, out / "result.h5", out / "ring.json"):
+        assert cli(["plot", str(given), "--kind", "diagram", "--format", "svg", "--out",
+                    str(tmp_path / "figures"), "--overwrite", "--quiet"]) == 0
+        assert cli(["view", str(given), "--out", str(tmp_path / f"{given.name}.html"),
+                    "--quiet"]) == 0
+    assert sc.plot(sc.load(out), "diagram", out=tmp_path, formats=("svg",))
+
+
 def test_run_command_equals_run(tmp_path):
     from supercoil.sweeps.grid import toml_text
 
@@ -278,3 +316,13 @@ def test_writhe_and_knot_commands_equal_their_functions(tmp_path):
     knot = sc.knot_type(points)
     data = json.loads((tmp_path / "k.json").read_text())
     assert (data["knot_type"], data["chirality"]) == (knot.name, knot.chirality) == ("3_1", 1)
+
+
+def test_tighten_command_equals_tighten(tmp_path):
+    assert cli(["tighten", "--knot", "3_1", "--nodes", "24", "--json",
+                str(tmp_path / "t.json"), "--quiet"]) == 0
+    data = json.loads((tmp_path / "t.json").read_text())
+    tight = sc.tighten("3_1", 24)
+    record = json.loads(json.dumps(tight.record()))
+    assert {k: data[k] for k in record} == record
+    assert len(repr(tight).splitlines()) <= 5

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import subprocess
 import sys
@@ -36,7 +37,7 @@ from typer.testing import CliRunner
 from supercoil import __version__
 from supercoil.cli import demo as demo_module
 from supercoil.cli import diagram_output
-from supercoil.cli.main import COMMANDS, app
+from supercoil.cli.main import BLAS_THREAD_VARIABLES, COMMANDS, app
 from supercoil.io.results import envelope, write_json
 
 # ---------------------------------------------------------------- help, version
@@ -48,6 +49,31 @@ def test_help_through_a_fresh_process():
     result = subprocess.run([sys.executable, "-m", "supercoil.cli.main", "--help"],
                             check=False, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0 and "ring" in result.stdout and result.stderr == ""
+
+
+# the BLAS threads a command runs with, seen from inside it (numpy loaded before, as by
+# the console script)
+BLAS_THREADS_PROGRAM = """
+import threadpoolctl
+import supercoil.cli.main as main
+seen = []
+def app(**kwargs):
+    seen.append(max(d["num_threads"] for d in threadpoolctl.threadpool_info()
+                    if d["user_api"] == "blas"))
+    return 0
+main.app = app
+main.run(["--version"])
+print(seen[0])
+"""
+
+
+@pytest.mark.parametrize(("variables", "threads"), [({}, "1"), ({"OPENBLAS_NUM_THREADS": "2"}, "2")])
+def test_a_command_runs_on_one_blas_thread_unless_the_environment_says(variables, threads):
+    env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
+    result = subprocess.run([sys.executable, "-c", BLAS_THREADS_PROGRAM],
+                            env={**env, **variables}, check=True, capture_output=True,
+                            text=True, timeout=300)
+    assert result.stdout.strip() == threads
 
 
 @pytest.mark.parametrize(
@@ -155,6 +181,18 @@ def test_help_fits_100_columns_and_speaks_of_the_tool(path):
     assert len(lines) > 3
     assert max(len(line) for line in lines) == 100  # the panels fill the width, no more
     assert HISTORY.findall(result.stdout) == []
+
+
+@pytest.mark.parametrize(("path", "command"), list(_commands()),
+                         ids=lambda p: " ".join(p) if isinstance(p, tuple) else "")
+def test_help_shows_every_bracketed_word_it_is_given(path, command):
+    """A word in brackets in an option's help (a study file's table, '[sweep]') is shown
+    as written, not taken for console markup and dropped."""
+    result = CliRunner().invoke(app, [*path, "--help"], env={"COLUMNS": "100"})
+    shown = " ".join(result.stdout.replace("│", " ").split())
+    for p in command.params:
+        for word in re.findall(r"\\?(\[[a-z_.]+\])", p.help or ""):
+            assert word in shown, (path, p.opts, word)
 
 
 @pytest.mark.parametrize(("path", "command"), list(_commands()),

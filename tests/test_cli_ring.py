@@ -32,6 +32,7 @@ from cli_helpers import (
     write_curve,
 )
 
+import supercoil as sc
 from supercoil import __version__
 from supercoil.io.results import CONVENTIONS
 
@@ -399,6 +400,20 @@ def test_ring_dna_plasmid_json_and_table(runner, tmp_path):
                 "closest approach (nm)", "L = 340 nm", "D = 5 nm (100 mM salt)",
                 "Athermal model (zero temperature)"):
         assert row in text, row
+
+
+def test_ring_dna_folder_exports_in_nm(runner, tmp_path):
+    """``ring --dna --out``: the result file carries the DNA scales, so its state exports
+    in nm (the stored centreline times L = 300 * 0.34 nm) and as PDB beads."""
+    out = tmp_path / "plasmid"
+    result = invoke(runner, "ring", "--dna", "--bp", "300", "--sigma", "-0.02",
+                    "--salt-mM", "100", "--nodes", "24", "--out", out, "--quiet")
+    assert result.exit_code == 0, result.stderr
+    assert invoke(runner, "export", out, "--out", tmp_path / "s.xyz", "--quiet").exit_code == 0
+    assert invoke(runner, "export", out, "--out", tmp_path / "s.pdb", "--quiet").exit_code == 0
+    nm = np.loadtxt(tmp_path / "s.xyz", skiprows=2, usecols=(1, 2, 3))
+    stored = sc.load(out).branches["ring"].states[0].reshape(-1, 3)
+    np.testing.assert_allclose(nm, stored * 300 * 0.34, rtol=0, atol=1e-9)
 
 
 def test_ring_dna_help_names_the_options_and_the_caveat(runner):

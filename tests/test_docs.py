@@ -22,7 +22,8 @@ import pytest
 import supercoil
 
 ROOT = Path(__file__).resolve().parents[1]
-HISTORY = re.compile(r"\bsessions?\b|\bissue [0-9]|seed 00[0-9]|DESIGN|\.\./shared", re.IGNORECASE)
+HISTORY = re.compile(r"\bsessions?\b|\bissue [0-9]|seed 00[0-9]|\bseed (paper|problem)|DESIGN|"
+                     r"\.\./shared", re.IGNORECASE)
 PUBLIC_API = ("Rod", "Ring", "Barrier", "Tweezers", "equilibrium", "ring_diagram", "tweezers",
               "save", "load", "writhe", "linking_number")
 
@@ -82,6 +83,7 @@ def _user_facing_files() -> list[Path]:
     files += sorted((ROOT / "docs").glob("*.md"))
     files += sorted((ROOT / "benchmarks" / "results").glob("*.md"))
     files += sorted((ROOT / "examples").glob("*.toml"))
+    files += sorted((ROOT / "examples").glob("*.py"))
     return files
 
 

@@ -107,7 +107,8 @@ __all__ = [
 
 def load(path):
     """Read a result -- ``result.h5``, or the output folder of any command that computes
-    (``demo``, ``diagram ring``, ``tweezers``, ``run``, ``ring --out``) -- into a
+    (``demo``, ``diagram ring``, ``tweezers``, ``run``, ``ring --out``), or its JSON
+    summary (``diagram.json``, ``branch.json``, ``ring.json``: the result beside it) -- into a
     :class:`supercoil.io.store.Result`: ``.branches`` maps names to ``Branch`` objects,
     with the settings, status and summary (see ``docs/results.md``). A sweep's folder
     (``supercoil sweep``'s, holding ``sweep.nc``) or its ``sweep.nc`` is read as an
@@ -116,6 +117,8 @@ def load(path):
     from pathlib import Path
 
     target = Path(path)
+    if target.suffix == ".json" and target.is_file():
+        target = target.parent  # a summary: the result file beside it
     if target.suffix == ".nc" or (target / "sweep.nc").is_file():
         from supercoil.sweeps import load_sweep
 

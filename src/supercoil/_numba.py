@@ -3,8 +3,8 @@
 Numba compiles a kernel at its first call and keeps the machine code in its cache:
 the ``__pycache__`` folder beside the module, or ``NUMBA_CACHE_DIR`` when set. A
 first run on a fresh install compiles every kernel it calls (about half a minute for
-the demo); later runs load them. :func:`announce_compilation` lets a command say so
-before it starts.
+the demo); later runs load them. :func:`cache_is_cold` lets a command say so before it
+starts.
 
 Numba's cache checks only the file of the function it caches: a kernel that calls a
 compiled function of another module keeps that callee's code as it was when the kernel
@@ -20,11 +20,9 @@ files in its ``__pycache__`` (a fresh checkout has none).
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
-_announce: Callable[[], None] | None = None
 
 
 def cache_is_cold() -> bool | None:
@@ -35,20 +33,14 @@ def cache_is_cold() -> bool | None:
     import numba
 
     if numba.config.CACHE_DIR:
-        folder = Path(numba.config.CACHE_DIR)
-        return not any("supercoil" in p.parts for p in folder.rglob("*.nbi"))
+        # numba keeps the kernels of a source folder in a folder of NUMBA_CACHE_DIR named
+        # after it and a hash of its path (``rod_<hash>``)
+        folders = {p.parent.name for p in PACKAGE.rglob("*.py")}
+        return not any(p.parent.name.rsplit("_", 1)[0] in folders
+                       for p in Path(numba.config.CACHE_DIR).glob("*/*.nbi"))
     if not os.access(PACKAGE, os.W_OK):
         return None
     return next(PACKAGE.rglob("__pycache__/*.nbi"), None) is None
-
-
-def announce_compilation(say: Callable[[], None]) -> None:
-    """Call ``say()`` once, when the first kernel module is imported and the cache is
-    cold (:func:`cache_is_cold`): before the first compilation. For a command's
-    process (the ``supercoil`` command says it on standard error); the library never
-    prints."""
-    global _announce
-    _announce = say
 
 
 def njit(**options: object):
@@ -56,16 +48,9 @@ def njit(**options: object):
 
     Numba raises ``RuntimeError`` at decoration time when neither the source tree's
     ``__pycache__`` nor a user-wide cache directory is writable; the kernels then
-    compile in memory in each new process. (numba is imported here, not with this
-    module: :func:`announce_compilation` costs a command nothing.)
+    compile in memory in each new process.
     """
     import numba
-
-    global _announce
-    if _announce is not None:
-        say, _announce = _announce, None
-        if cache_is_cold():
-            say()
 
     def decorate(function):
         try:

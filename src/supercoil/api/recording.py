@@ -191,7 +191,7 @@ def finish(writer, diagram) -> None:
     if diagram.ok:
         writer.set_status("complete", f"{len(diagram.branches)} branches computed")
     else:
-        failed = [name for name, b in diagram.branches.items() if not b.ok]
+        failed = [name for name, b in diagram.branches.items() if not b.status.complete]
         writer.set_status("incomplete", f"branch(es) {', '.join(failed)} stopped early"
                           if failed else diagram.message)
     writer.close()

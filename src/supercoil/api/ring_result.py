@@ -39,7 +39,9 @@ def ring_branch(state, summary: dict):
 
 
 def ring_payload(summary: dict, curvature) -> dict:
-    """``ring.json``'s payload: the summary, the curvature form and the one point."""
+    """``ring.json``'s payload: the summary, the curvature form and the one point, of the
+    stored branch ``ring`` (the summary's own ``branch``, the route the solve took,
+    ``circle`` or ``contact``, stays in its ``path``)."""
     return {**summary, "curvature_form": curvature, "branch": "ring",
-            "points": [{"branch": "ring", "index": 0, **{k: v for k, v in summary.items()
-                                                         if not isinstance(v, dict)}}]}
+            "points": [{**{k: v for k, v in summary.items() if not isinstance(v, dict)},
+                        "branch": "ring", "index": 0}]}

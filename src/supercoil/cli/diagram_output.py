@@ -74,8 +74,10 @@ def store_diagram(diagram, writer, summary: dict) -> None:
     if diagram.ok:
         writer.set_status("complete", f"{len(diagram.branches)} branches computed")
     else:
-        failed = [b.name for b in diagram.branches if not b.ok]
-        writer.set_status("incomplete", f"branch(es) {', '.join(failed)} stopped early")
+        failed = [b.name for b in diagram.branches if not diagram.branch_ok(b)]
+        writer.set_status("incomplete", f"branch(es) {', '.join(failed)} stopped early"
+                          if failed else next(n for n in diagram.notes
+                                              if n.startswith("failed:")))
     writer.close()
 
 

@@ -9,6 +9,7 @@ validate them; an :class:`~supercoil.errors.InputError` becomes the command's
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 import sys
@@ -49,6 +50,10 @@ UNITS_NOTE = (
 # the order a new user meets the commands in, which --help lists them in
 COMMANDS = ("demo", "ring", "diagram", "tweezers", "run", "sweep", "plot", "view", "export",
             "writhe", "knot", "tighten")
+# the commands that call the compiled kernels: a first run of one says it compiles them
+COMPUTING_COMMANDS = ("demo", "ring", "diagram", "tweezers", "run", "sweep", "writhe", "knot",
+                      "tighten")
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS")
 COMPILE_TIME = "half a minute, longer on a busy machine"  # measured: 34 s (demo, load 1.5)
 
 
@@ -116,19 +121,33 @@ app.command("knot")(knot.knot)
 app.command("tighten")(tighten.tighten)
 
 
-def _single_threaded_blas() -> None:
-    """Default the BLAS/LAPACK thread pools to one thread (the user's setting wins).
+def _one_blas_thread():
+    """One BLAS/LAPACK thread for the command, unless the user's environment sets the
+    count (OPENBLAS_NUM_THREADS, MKL_NUM_THREADS or OMP_NUM_THREADS).
 
     The solves of one rod call LAPACK on many small blocks; threads only add
-    contention there. Must run before numpy is imported, hence here.
+    contention there, and a solve may land on another state with two threads than
+    with one. numpy is loaded by ``import supercoil`` before the command runs, so the
+    environment variables would come too late: threadpoolctl limits the loaded
+    libraries.
     """
-    for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(name, "1")
+    if any(name in os.environ for name in BLAS_THREAD_VARIABLES):
+        return contextlib.nullcontext()
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 def _compiling() -> None:
     print(f"supercoil: first run: compiling the numerical kernels ({COMPILE_TIME}; "
           "cached for later runs)", file=sys.stderr, flush=True)
+
+
+def _computes(args: Sequence[str]) -> bool:
+    """Whether ``args`` ask for a command that runs numerical kernels (not for a help,
+    the version, or a figure, page or file drawn from a result)."""
+    return bool(args) and args[0] in COMPUTING_COMMANDS \
+        and not {"-h", "--help", "--version"} & set(args)
 
 
 def _one_line(text: object) -> str:
@@ -151,11 +170,12 @@ def run(argv: Sequence[str] | None = None) -> int:
     warnings) are silenced. ``SUPERCOIL_DEBUG=1`` re-raises unexpected exceptions
     with their traceback and shows the warnings.
     """
-    _single_threaded_blas()
-    from supercoil._numba import announce_compilation
-
-    announce_compilation(_compiling)
     args = list(sys.argv[1:] if argv is None else argv)
+    if _computes(args):
+        from supercoil._numba import cache_is_cold
+
+        if cache_is_cold():
+            _compiling()
     debug = os.environ.get("SUPERCOIL_DEBUG", "") not in ("", "0")
     try:
         with warnings.catch_warnings():
@@ -164,7 +184,8 @@ def run(argv: Sequence[str] | None = None) -> int:
                 # solver then rejects: the result's status and message say what
                 # happened, so they would only break the one-line stderr contract
                 warnings.simplefilter("ignore", RuntimeWarning)
-            status = app(args=args, prog_name="supercoil", standalone_mode=False)
+            with _one_blas_thread():
+                status = app(args=args, prog_name="supercoil", standalone_mode=False)
     except typer.TyperException as exc:  # typer's parse errors (click's, in typer's copy)
         ctx = getattr(exc, "ctx", None)
         command = ctx.command_path if ctx is not None else "supercoil"

@@ -45,6 +45,10 @@ def write_ring_folder(out: Path, state, summary: dict, data: dict, preset=None) 
                   "closed": True}
     if lod is not None:
         attributes.update(length_over_diameter=lod, diameter=1.0 / lod)
+    if preset is not None:  # the scales that export, plot and view read
+        from supercoil.units.tweezers import dna_attributes
+
+        attributes.update(dna_attributes(preset))
     settings = {"command": "ring", "twist_ratio": problem.rod.twist_ratio,
                 "excess_link": problem.excess_link, "length_over_diameter": lod,
                 "nodes": problem.rod.nodes, "contact": data["provenance"]["contact_treatment"],

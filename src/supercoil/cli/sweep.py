@@ -32,7 +32,7 @@ MAX_WORKERS = 1024
 
 def sweep_command(
     study: Annotated[Path, typer.Argument(
-        metavar="STUDY.toml", help="A study file (as 'supercoil run' takes) with a [sweep] "
+        metavar="STUDY.toml", help="A study file (as 'supercoil run' takes) with a \\[sweep] "
         "table mapping study keys (\"rod.twist_ratio\", \"problem.tension\", ...) to lists of "
         "values or to {start = ..., stop = ..., num = ...}; zip = [[\"KEY1\", \"KEY2\"]] pairs "
         "lists element by element instead of taking their product. See "

@@ -464,7 +464,7 @@ def figure_of(result: ResultData, kind: str):
                                "contact_intervals": p.get("contact_intervals") or []})
     if not configurations:
         raise ValueError(f"{result.path}: the branch files with the states are missing; "
-                         "configurations need them (branches/<name>.npz beside the result)")
+                         "configurations need them (result.h5 beside the summary)")
     return configurations_figure(configurations, diameter=result.diameter,
                                  title=result.title, closed=result.closed)
 

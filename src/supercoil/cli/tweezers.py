@@ -172,13 +172,13 @@ def tweezers(
     --out.
 
     With --model cosserat the rod shears and stretches (--stretch-stiffness,
-    --shear-stiffness): load control, with or without contact (its contact acts
-    on the centreline); the extension includes the stretch.
+    --shear-stiffness): load or displacement control, with or without contact
+    (its contact acts on the centreline); the extension and --end-distance include
+    the stretch.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    kirchhoff_only(model, (("--end-distance", end_distance is not None),
-                           ("--protocol", protocol != "up"), ("--resume", resume)),
-                   "load control, --protocol up")
+    kirchhoff_only(model, (("--protocol", protocol != "up"), ("--resume", resume)),
+                   "--protocol up")
     preset, span = None, None
     if dna:
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \

@@ -83,3 +83,47 @@ def test_end_distance_on_the_command_line(runner, tmp_path):
     for point in points:
         assert point["tension"] == pytest.approx(500.0 * (0.95 - 1.0), rel=1e-9)
         assert point["extension"] == pytest.approx(0.95, rel=1e-12)
+
+
+def test_quasistatic_path_jumps_where_the_straight_rod_buckles():
+    # the experiment's path minimises at every step: the straight rod (extension
+    # 1 + F L / EA exactly) until the first step at or past the buckling that the
+    # continuation locates, where it jumps to the plectoneme; on the way down it keeps
+    # the plectoneme below that (hysteresis) and jumps back to the straight rod
+    rod = sc.CosseratRod(0.8, 1e4, 1e4, nodes=24)
+    step = 0.1
+    problem = sc.Tweezers(rod, tension=5.0, contact=sc.Barrier(20.0))
+    path = sc.tweezers_path(problem, (0.0, 2.2), protocol="up-down", step=step)
+    assert path.ok, path.message
+    free = sc.tweezers(sc.Tweezers(rod, tension=5.0), (0.0, 2.2), max_points=20)
+    (buckling,) = free.branches["straight"].points_of_kind("bifurcation")
+    up, back = path.jumps[0], path.jumps[-1]
+    assert up["direction"] == 1 and up["count_left"] > 0
+    assert buckling.parameter <= up["turns"] < buckling.parameter + step
+    assert back["direction"] == -1 and back["turns"] < buckling.parameter - step
+    # reached by minimisation from the plectoneme (residual 1e-9, soft bending modes)
+    assert back["extension_after"] == pytest.approx(1 + 5.0 / 1e4, rel=1e-6)
+    for point in path.points:
+        assert point["unstable_count"] == 0
+        assert point["closure_error"] < 1e-8  # Fuller's closure, turns = Tw + Wr
+        assert point["min_gap_over_diameter"] > 1.0
+        if point["turns"] < buckling.parameter and point["direction"] == 1:
+            assert point["extension"] == pytest.approx(1 + 5.0 / 1e4, rel=1e-9)
+    assert path.states.shape == (len(path.points), 3 * 24)  # the centrelines
+
+
+def test_protocol_on_the_command_line_matches_the_api(runner, tmp_path):
+    out = tmp_path / "tw"
+    result = runner.invoke(app, ["tweezers", "--twist-ratio", "0.8", "--tension", "5",
+                                 "--turns", "0:1", "--nodes", "12", "--model", "cosserat",
+                                 "--stretch-stiffness", "500", "--protocol", "up-down",
+                                 "--step", "0.25", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    data = json.loads((out / "branch.json").read_text())
+    path = sc.tweezers_path(sc.Tweezers(sc.CosseratRod(0.8, 500.0, nodes=12), tension=5.0),
+                            (0.0, 1.0), protocol="up-down", step=0.25)
+    assert [p["turns"] for p in data["path"]] == pytest.approx(
+        [p["turns"] for p in path.points], abs=1e-15)
+    for point in data["path"]:  # below the buckling: the straight rod, stretched
+        assert point["extension"] == pytest.approx(1 + 5.0 / 500.0, rel=1e-9)
+        assert point["stable"]

@@ -8,6 +8,7 @@ Thin: parses and checks the options, calls :func:`supercoil.tweezers` through
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Annotated
 
@@ -177,8 +178,7 @@ def tweezers(
     the stretch.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    kirchhoff_only(model, (("--protocol", protocol != "up"), ("--resume", resume)),
-                   "--protocol up")
+    kirchhoff_only(model, (("--resume", resume),), "a run from the start")
     preset, span = None, None
     if dna:
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \
@@ -280,6 +280,8 @@ def tweezers(
         try:
             with terminate_as_interrupt():
                 problem, numerics = tweezers_arguments(options)
+                if model == "cosserat":
+                    problem = dataclasses.replace(problem, rod=rod)
                 path = tweezers_path(problem, protocol=protocol, step=step, force_range=ramp,
                                      force_step=force_step, **numerics)
         except KeyboardInterrupt:

@@ -24,6 +24,7 @@ from supercoil.cosserat.problem import CosseratEnergy
 from supercoil.cosserat.rod import CosseratRod
 from supercoil.cosserat.rotations import exp_so3
 from supercoil.errors import InputError
+from supercoil.rod.open import _axis_rotation_pin
 
 AXIS = np.array([0.0, 0.0, 1.0])
 
@@ -65,6 +66,7 @@ class ClampedCosseratEnergy(CosseratEnergy):
         if end_distance_control:
             fixed.append(6 * (n - 1) + 2)
         super().__init__(rod, positions, rotations, fixed=fixed)
+        self.gauge_dofs = np.zeros(0, dtype=np.int64)  # the azimuth pin (hold_azimuth)
         self.end_distance_control = bool(end_distance_control)
         self._turns = float(turns)
         self.tension = float(tension)
@@ -123,6 +125,24 @@ class ClampedCosseratEnergy(CosseratEnergy):
         out = H @ (2 * np.pi * AXIS)
         out[last + 3:] = 0.0
         return out
+
+    def hold_azimuth(self, dofs) -> None:
+        """Pin the rotation about the axis by the coordinates ``dofs`` (none: not
+        pinned), in place of the pin held so far; the clamps are kept.
+
+        Turning the centreline about the axis together with every section about its
+        ``d3`` leaves the clamps' frames and the energy unchanged (an isotropic
+        section): off the axis a zero mode, removed by holding a coordinate it moves."""
+        clamps = np.setdiff1d(self.fixed, self.gauge_dofs)
+        self.gauge_dofs = np.unique(np.asarray(dofs, dtype=np.int64))
+        self.fixed = np.union1d(clamps, self.gauge_dofs)
+
+    def repin(self, q: np.ndarray) -> None:
+        """Re-pick the azimuth pin for the state ``q``: the azimuthal coordinate of its
+        node farthest from the axis (as :meth:`ClampedRodEnergy.repin
+        <supercoil.rod.open.ClampedRodEnergy.repin>`), none for a straight rod."""
+        pins = _axis_rotation_pin(np.asarray(q, dtype=float).reshape(-1, 6)[:, :3])
+        self.hold_azimuth([6 * (d // 3) + d % 3 for d in pins])
 
     def end_force(self, q: np.ndarray) -> float:
         """The axial force on the end: the dead load under load control, the

@@ -117,15 +117,8 @@ def azimuth_pinned_direction(problem: ClampedCosseratEnergy, modes: np.ndarray
     a, b = xy[1, node, 1], -xy[0, node, 1]
     if np.hypot(a, b) == 0.0:
         a, b = 1.0, 0.0
-    problem.fixed = np.union1d(problem.fixed, [6 * node + 1])
+    problem.hold_azimuth([6 * node + 1])
     return a * modes[0] + b * modes[1]
-
-
-def pin_azimuth(problem: ClampedCosseratEnergy, q: np.ndarray) -> None:
-    """Pin the rotation about the axis (:func:`azimuth_pinned_direction`) of a state off
-    the axis: the ``y`` of its node farthest from it."""
-    node = int(np.argmax(np.linalg.norm(np.asarray(q).reshape(-1, 6)[:, :2], axis=1)))
-    problem.fixed = np.union1d(problem.fixed, [6 * node + 1])
 
 
 def cosserat_tweezers_records(problem: ClampedCosseratEnergy):
@@ -193,7 +186,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
         free_name = "clamped"
         say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")
         q0 = problem.initial_state()
-        pin_azimuth(problem, q0)
+        problem.repin(q0)
         solved = newton(problem, q0, NewtonOptions(mode="stationary"))
         if not solved.converged:
             notes.append(f"failed: the clamped buckle at z/L = {opts.end_distance:g} did not "

@@ -127,3 +127,17 @@ def test_protocol_on_the_command_line_matches_the_api(runner, tmp_path):
     for point in data["path"]:  # below the buckling: the straight rod, stretched
         assert point["extension"] == pytest.approx(1 + 5.0 / 500.0, rel=1e-9)
         assert point["stable"]
+
+
+def test_study_file_with_an_end_distance(tmp_path):
+    from supercoil.api.study_run import run_study
+    from supercoil.io.study import parse_study
+
+    study = parse_study('[rod]\ntwist_ratio = 0.8\nnodes = 12\nmodel = "cosserat"\n'
+                        'stretch_stiffness = 500\n[problem]\nkind = "tweezers"\n'
+                        'end_distance = 0.95\nturns = [0, 0.5]\n')
+    outcome = run_study(study, tmp_path)
+    assert outcome["status"] == "complete", outcome["message"]
+    points = [p for p in sc.load(tmp_path / "result.h5").points() if p["branch"] == "clamped"]
+    assert points and all(p["tension"] == pytest.approx(500.0 * (0.95 - 1.0), rel=1e-9)
+                          for p in points)

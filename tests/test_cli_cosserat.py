@@ -50,6 +50,8 @@ def test_kirchhoff_ring_json_states_its_model(runner, tmp_path):
      "--knot is not available with --model cosserat"),
     (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40", "--model",
       "cosserat", "--branch-depth", "2", "--out", "OUT"], "--branch-depth is not available"),
+    (["tweezers", "--twist-ratio", "0.8", "--tension", "5", "--turns", "0:3", "--model",
+      "cosserat", "--resume", "--out", "OUT"], "--resume is not available"),
     (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40",
       "--shear-stiffness", "5", "--out", "OUT"], "--shear-stiffness needs --model cosserat"),
 ])

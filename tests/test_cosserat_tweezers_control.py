@@ -129,6 +129,20 @@ def test_protocol_on_the_command_line_matches_the_api(runner, tmp_path):
         assert point["stable"]
 
 
+def test_force_ramp_stretches_the_straight_rod_by_f_l_over_ea():
+    # at 1 turn the straight rod is stable for every force of the ramp (it buckles
+    # above 1.7 turns unloaded): each step's extension is 1 + F L / EA
+    rod = sc.CosseratRod(0.8, 500.0, nodes=12)
+    path = sc.tweezers_path(sc.Tweezers(rod, tension=5.0), (0.0, 1.0), protocol="force-ramp",
+                            step=0.5, force_range=(0.0, 20.0), force_step=5.0)
+    assert path.ok, path.message
+    ramp = [p for p in path.points if p["ramp"] == "tension"]
+    assert sorted({p["tension"] for p in ramp}) == pytest.approx([0, 5, 10, 15, 20])
+    for point in path.points:
+        assert point["extension"] == pytest.approx(1 + point["tension"] / 500.0, rel=1e-9)
+        assert point["stable"]
+
+
 def test_study_file_with_an_end_distance(tmp_path):
     from supercoil.api.study_run import run_study
     from supercoil.io.study import parse_study

@@ -48,8 +48,8 @@ def test_invalid_cosserat_problems_are_refused():
         sc.equilibrium(sc.Ring(rod, 1.0, contact=sc.Penalty(30.0), knot="3_1"))
     with pytest.raises(sc.InputError, match="branch_depth"):
         sc.ring_diagram(rod, sc.Barrier(30.0), branch_depth=2)
-    with pytest.raises(sc.InputError, match="end_distance"):
-        sc.tweezers(sc.Tweezers(rod, end_distance=0.9))
+    with pytest.raises(sc.InputError, match="resume: continuing a stored tweezers run"):
+        sc.tweezers(sc.Tweezers(rod, tension=1.0), resume=True)
 
 
 def test_ring_equilibrium_and_its_recomputed_stability():

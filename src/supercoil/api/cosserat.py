@@ -145,16 +145,12 @@ def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
 
 def tweezers_driver(problem: Tweezers, resume):
     """The driver of the Cosserat rod in tweezers
-    (:mod:`supercoil.problems.cosserat_tweezers`, load control, with the problem's
-    self-contact) for :func:`supercoil.tweezers`. Its branches are stored when they
-    end."""
+    (:mod:`supercoil.problems.cosserat_tweezers`, under load or displacement control,
+    with the problem's self-contact) for :func:`supercoil.tweezers`. Its branches are
+    stored when they end."""
     from supercoil.problems.cosserat_tweezers import cosserat_tweezers
 
     _refuse_resume(resume, "tweezers run")
-    if problem.tension is None:
-        raise InputError("end_distance: displacement control with the Cosserat model is not "
-                         "available for tweezers; give tension (load control)",
-                         name="end_distance")
     rod = problem.rod
 
     def compute(settings, progress, *, on_point=None, on_branch=None, resume=None):

@@ -403,8 +403,11 @@ def tweezers_path(problem: Tweezers, turns: tuple[float, float] = (0.0, 5.0), *,
     settings = _tweezers_settings(problem, turns, options)
     ramp = None if force_range is None else tuple(force_range)
     check_path(settings, protocol, step, force_range=ramp, force_step=force_step)
+    rod = problem.rod
     return quasistatic_path(settings, protocol, step=step, force_range=ramp,
-                            force_step=force_step)
+                            force_step=force_step,
+                            cosserat=((rod.stretch_stiffness, rod.shear_stiffness)
+                                      if isinstance(rod, CosseratRod) else None))
 
 
 def diagram_of(options, rod=None, **kwargs) -> Diagram:

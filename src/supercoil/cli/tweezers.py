@@ -8,6 +8,7 @@ Thin: parses and checks the options, calls :func:`supercoil.tweezers` through
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Annotated
 
@@ -172,13 +173,12 @@ def tweezers(
     --out.
 
     With --model cosserat the rod shears and stretches (--stretch-stiffness,
-    --shear-stiffness): load control, with or without contact (its contact acts
-    on the centreline); the extension includes the stretch.
+    --shear-stiffness): load or displacement control, with or without contact
+    (its contact acts on the centreline); the extension and --end-distance include
+    the stretch.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    kirchhoff_only(model, (("--end-distance", end_distance is not None),
-                           ("--protocol", protocol != "up"), ("--resume", resume)),
-                   "load control, --protocol up")
+    kirchhoff_only(model, (("--resume", resume),), "a run from the start")
     preset, span = None, None
     if dna:
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \
@@ -280,6 +280,8 @@ def tweezers(
         try:
             with terminate_as_interrupt():
                 problem, numerics = tweezers_arguments(options)
+                if model == "cosserat":
+                    problem = dataclasses.replace(problem, rod=rod)
                 path = tweezers_path(problem, protocol=protocol, step=step, force_range=ramp,
                                      force_step=force_step, **numerics)
         except KeyboardInterrupt:

@@ -24,6 +24,7 @@ from supercoil.cosserat.problem import CosseratEnergy
 from supercoil.cosserat.rod import CosseratRod
 from supercoil.cosserat.rotations import exp_so3
 from supercoil.errors import InputError
+from supercoil.rod.open import _axis_rotation_pin
 
 AXIS = np.array([0.0, 0.0, 1.0])
 
@@ -66,6 +67,7 @@ class ClampedCosseratEnergy(CosseratEnergy):
         if end_distance_control:
             fixed.append(6 * (n - 1) + 2)
         super().__init__(rod, positions, rotations, fixed=fixed)
+        self.gauge_dofs = np.zeros(0, dtype=np.int64)  # the azimuth pin (hold_azimuth)
         self.end_distance_control = bool(end_distance_control)
         self._turns = float(turns)
         self.tension = float(tension)
@@ -131,6 +133,66 @@ class ClampedCosseratEnergy(CosseratEnergy):
         out[last + 3:] = 0.0
         return out
 
+    def hold_azimuth(self, dofs) -> None:
+        """Pin the rotation about the axis by the coordinates ``dofs`` (none: not
+        pinned), in place of the pin held so far; the clamps are kept.
+
+        Turning the centreline about the axis together with every section about its
+        ``d3`` leaves the clamps' frames and the energy unchanged (an isotropic
+        section): off the axis a zero mode, removed by holding a coordinate it moves."""
+        clamps = np.setdiff1d(self.fixed, self.gauge_dofs)
+        self.gauge_dofs = np.unique(np.asarray(dofs, dtype=np.int64))
+        self.fixed = np.union1d(clamps, self.gauge_dofs)
+
+    def repin(self, q: np.ndarray) -> None:
+        """Re-pick the azimuth pin for the state ``q``: the azimuthal coordinate of its
+        node farthest from the axis (as :meth:`ClampedRodEnergy.repin
+        <supercoil.rod.open.ClampedRodEnergy.repin>`), none for a straight rod."""
+        pins = _axis_rotation_pin(np.asarray(q, dtype=float).reshape(-1, 6)[:, :3])
+        self.hold_azimuth([6 * (d // 3) + d % 3 for d in pins])
+
+    def end_force(self, q: np.ndarray) -> float:
+        """The axial force on the end: the dead load under load control, the
+        reaction ``dE/dz_N`` of the elastic energy under end-distance control."""
+        if not self.end_distance_control:
+            return self.tension
+        return float(self.gradient(q)[6 * (self.rod.n_nodes - 1) + 2])
+
     def extension(self, q: np.ndarray) -> float:
         """End-to-end distance along the axis over ``L`` (1 for the unstretched straight rod)."""
         return float(np.asarray(q).reshape(-1, 6)[-1, 2]) / self.rod.length
+
+
+def planar_buckle(rod: CosseratRod, end_distance: float, turns: float = 0.0
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """A planar clamped buckle in the x-z plane with the end at height
+    ``end_distance * L`` on the axis, unstretched and unsheared, its sections turned
+    by ``turns`` uniformly: ``(positions, rotations)``, a start for Newton under
+    end-distance control.
+
+    Each element's tangent makes the angle ``a sin(2 pi s)`` with the axis (``s`` its
+    midpoint over L, so the sum of the ``x`` steps vanishes by the antisymmetry
+    about ``s = 1/2``); ``a`` solves ``sum h cos = z`` (Brent). Node ``i`` has the
+    frame ``exp(a sin(2 pi s_i) hat(e_2)) exp(2 pi turns s_i hat(e_3))``: identity at
+    the first clamp, the turned frame at the last."""
+    from scipy.optimize import brentq
+
+    if not 0.0 < end_distance < 1.0:
+        raise InputError(f"end_distance must lie in (0, 1) for a buckle, got {end_distance!r}")
+    h = rod.element_length
+    middle = (np.arange(rod.n_elements) + 0.5) / rod.n_elements
+
+    def height(a):
+        return float(np.sum(h * np.cos(a * np.sin(2 * np.pi * middle)))) / rod.length \
+            - end_distance
+
+    a = brentq(height, 0.0, 2.5)
+    angles = a * np.sin(2 * np.pi * middle)
+    steps = h * np.stack([np.sin(angles), np.zeros_like(angles), np.cos(angles)], axis=1)
+    positions = np.vstack([np.zeros(3), np.cumsum(steps, axis=0)])
+    positions[-1, 0] = 0.0  # zero up to round-off
+    s = np.linspace(0.0, 1.0, rod.n_nodes)
+    bend = exp_so3(np.outer(a * np.sin(2 * np.pi * s), [0.0, 1.0, 0.0]))
+    spin = exp_so3(np.outer(2 * np.pi * turns * s, AXIS))
+    bend[[0, -1]] = np.eye(3)
+    return positions, bend @ spin

@@ -10,9 +10,9 @@ MODELS = ("kirchhoff", "cosserat")
 
 def model_problem(s: Mapping, kind: str) -> str | None:
     """What is wrong with the study's model keys (the message after the file's name), or
-    None: stiffnesses only with the Cosserat model, which has no displacement control
-    and, in a ring diagram, computes the primary branches only (with their contact)."""
-    rod, problem = s["rod"], s["problem"]
+    None: stiffnesses only with the Cosserat model, which in a ring diagram computes
+    the primary branches only (with their contact)."""
+    rod = s["rod"]
     cosserat = rod.get("model") == "cosserat"
     for key in ("stretch_stiffness", "shear_stiffness"):
         if key in rod and not cosserat:
@@ -20,9 +20,6 @@ def model_problem(s: Mapping, kind: str) -> str | None:
                     "inextensible and unshearable)")
     if not cosserat:
         return None
-    if "end_distance" in problem:
-        return ("[problem] end_distance (displacement control) is not available with the "
-                "Cosserat model; give tension")
     if kind == "ring_diagram" and s.get("continuation", {}).get("branch_depth", 1) != 1:
         return ("[continuation] branch_depth: the Cosserat ring diagram computes the "
                 "primary branches only (branch_depth = 1)")

@@ -1,13 +1,18 @@
 """A Cosserat rod in magnetic tweezers: the straight rod in turns, its buckling, the
-buckled branch.
+buckled branch; or, under displacement control, the clamped buckle in turns.
 
-Load control only: the rod is clamped at both ends on the axis
-(:class:`~supercoil.cosserat.ClampedCosseratEnergy`), the turned end slides along it
-under the dead load ``tension``. The straight rod, uniformly twisted and stretched
-by ``tension / EA``, is followed in ``turns`` by the same continuation as the
-Kirchhoff rod's; it buckles where a pair of eigenvalues crosses zero (Greenhill's
-condition in the Kirchhoff limit), and the buckled branch is switched off that point
-along a critical mode and followed to the end of the turns' range. Without
+The rod is clamped at both ends on the axis
+(:class:`~supercoil.cosserat.ClampedCosseratEnergy`). Under load control the turned
+end slides along it under the dead load ``tension``: the straight rod, uniformly
+twisted and stretched by ``tension / EA``, is followed in ``turns`` by the same
+continuation as the Kirchhoff rod's; it buckles where a pair of eigenvalues crosses
+zero (Greenhill's condition in the Kirchhoff limit), and the buckled branch is
+switched off that point along a critical mode and followed to the end of the turns'
+range. Under displacement control (``end_distance``, the end's height over L, the
+stretch included) the branch ``clamped`` starts from the planar clamped buckle
+(:func:`~supercoil.cosserat.clamped.planar_buckle`) solved by Newton at the first
+turn, and is followed in turns the same way; ``tension`` is then the end's
+reaction. Without
 self-contact the rod may pass through itself there (``closure_failed``); with it
 (``options.length_over_diameter``) the buckled branch stops past its first contact
 and goes on with self-contact to the plectoneme
@@ -17,7 +22,8 @@ Per point the records are the Kirchhoff tweezers' (``turns``, ``extension``, ``t
 ``twist``, ``writhe``, ``closure_error``, ``closure_failed``, ``energy``,
 ``load_potential``, ``tension``, the contact counts and ``min_gap_over_diameter``) plus
 ``max_stretch_strain`` and ``max_shear_strain``;
-``extension`` is the end's height over L, stretch included. ``twist`` is that of
+``extension`` is the end's height over L, stretch included; ``load_potential`` is
+zero under displacement control. ``twist`` is that of
 the ribbon of ``d1`` projected normal to the centreline, closed by the clamps'
 frames along tails on the axis, so that ``twist + writhe = turns`` (Fuller's closure)
 holds with shear too.
@@ -35,7 +41,7 @@ import numpy as np
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import ContinuationOptions, continuation, switch_branch
 from supercoil.cosserat.centreline import StoredCentrelines
-from supercoil.cosserat.clamped import ClampedCosseratEnergy
+from supercoil.cosserat.clamped import ClampedCosseratEnergy, planar_buckle
 from supercoil.cosserat.rod import CosseratRod
 from supercoil.problems.contact_events import onset_event, stop_after_onset, truncate_after
 from supercoil.problems.cosserat_ring import centreline_branch
@@ -46,6 +52,7 @@ from supercoil.problems.cosserat_tweezers_contact import (
 )
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.result import TweezersResult
+from supercoil.solvers.newton import NewtonOptions, newton
 from supercoil.topology import twist_from_frames, writhe
 
 TAIL_WRAP = 0.5  # |Tw + Wr - turns| above this: the closure failed
@@ -55,11 +62,16 @@ SWITCH_AMPLITUDE = 2e-3
 
 def clamped_cosserat_problem(options: TweezersOptions, stretch_stiffness: float,
                              shear_stiffness: float) -> ClampedCosseratEnergy:
-    """The clamped Cosserat rod at ``turns = start`` under the options' tension, at its
-    straight state (``problem.straight_state()``)."""
+    """The clamped Cosserat rod at ``turns = start``: under the options' tension at its
+    straight state (``problem.straight_state()``), or with the end held at the options'
+    end distance at the planar buckle (``problem.initial_state()``)."""
     rod = CosseratRod(options.n_nodes - 1, twist_stiffness=options.twist_ratio,
                       shear_stiffness=shear_stiffness, stretch_stiffness=stretch_stiffness)
-    return ClampedCosseratEnergy(rod, options.turns[0], options.tension)
+    if options.load_control:
+        return ClampedCosseratEnergy(rod, options.turns[0], options.tension)
+    x, R = planar_buckle(rod, options.end_distance, options.turns[0])
+    return ClampedCosseratEnergy(rod, options.turns[0], end_distance_control=True,
+                                 positions=x, rotations=R)
 
 
 def axial_twist(problem: ClampedCosseratEnergy, q: np.ndarray) -> float:
@@ -105,7 +117,7 @@ def azimuth_pinned_direction(problem: ClampedCosseratEnergy, modes: np.ndarray
     a, b = xy[1, node, 1], -xy[0, node, 1]
     if np.hypot(a, b) == 0.0:
         a, b = 1.0, 0.0
-    problem.fixed = np.union1d(problem.fixed, [6 * node + 1])
+    problem.hold_azimuth([6 * node + 1])
     return a * modes[0] + b * modes[1]
 
 
@@ -123,8 +135,9 @@ def cosserat_tweezers_records(rod: ClampedCosseratEnergy):
                 "torque": end_torque(at, q), "twist": tw, "writhe": wr,
                 "closure_error": error, "closure_failed": bool(not error <= TAIL_WRAP),
                 "energy": at.rod.energy(x, R),
-                "load_potential": -at.tension * float(x[-1, 2]),
-                "tension": at.tension,
+                "load_potential": (0.0 if at.end_distance_control
+                                   else -at.tension * float(x[-1, 2])),
+                "tension": at.end_force(q),
                 "max_stretch_strain": at.max_stretch_strain(q),
                 "max_shear_strain": at.max_shear_strain(q),
                 "n_contact_points": 0, "n_contact_intervals": 0,
@@ -136,8 +149,9 @@ def cosserat_tweezers_records(rod: ClampedCosseratEnergy):
 def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
                       shear_stiffness: float,
                       progress: Callable[[str], None] | None = None) -> TweezersResult:
-    """The straight Cosserat rod in turns, its buckling and the buckled branch (module
-    doc); numerical failures end up in statuses and notes."""
+    """The straight Cosserat rod in turns, its buckling and the buckled branch, or the
+    clamped buckle in turns under displacement control (module doc); numerical
+    failures end up in statuses and notes."""
     opts = options
     say = progress or (lambda message: None)
     notes: list[str] = []
@@ -151,16 +165,85 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
         # the contact of the stored centrelines, for the outputs' contact lists
         view = ContactProblem(StoredCentrelines(problem.rod), cp.options)
         records = with_contact_records(records, cp, False)
+    free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
+                                    parameter_bounds=opts.turns, max_points=opts.max_points,
+                                    event_tolerance=opts.event_tolerance)
+    watched, at_onset = stop_after_onset() if cp is not None else (None, None)
+    events = () if cp is None else (onset_event(cp),)
+    seconds: dict[str, float] = {}
+    branches: list = []
+
+    def result(contact=frozenset(), cut=frozenset()):
+        return TweezersResult(opts, tuple(branches), contact, problem, view, seconds,
+                              tuple(notes), cut_at_contact=cut, model=model)
+
+    start_time = time.perf_counter()
+    if opts.load_control:
+        free_name = "buckled"
+        free = _buckled_off_straight(problem, opts, records, free_opts, events, watched,
+                                     at_onset, branches, notes, seconds, say)
+        if free is None:
+            return result()
+    else:
+        free_name = "clamped"
+        say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")
+        q0 = problem.initial_state()
+        problem.repin(q0)
+        solved = newton(problem, q0, NewtonOptions(mode="stationary"))
+        if not solved.converged:
+            notes.append(f"failed: the clamped buckle at z/L = {opts.end_distance:g} did not "
+                         f"converge ({solved.message})")
+            return result()
+        problem.accept(solved.q)
+        free = continuation(problem, solved.q, parameter="turns",
+                            options=free_opts, name=free_name, records=records,
+                            events=events, on_point=watched, stop=at_onset)
+    onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
+    if onsets:
+        free = truncate_after(free, onsets[0], f"stopped at the first contact "
+                              f"({onsets[0].parameter:.6g} turns); the contact-free run: "
+                              f"{free.message}")
+    elif not len(free):
+        notes.append(f"failed: {free_name}: no point found from its start ({free.message})")
+    elif not free.status.complete:
+        notes.append(f"incomplete: {free_name} stopped at {free.parameter_values[-1]:.6g} "
+                     f"turns: {free.message}")
+    elif cp is not None:
+        notes.append(f"{free_name}: no contact found ({free.message})")
+    seconds[free_name] = time.perf_counter() - start_time
+    branches.append(centreline_branch(free))
+    if not onsets:
+        return result()
+    contact_name = f"{free_name}_contact"
+    say(f"{contact_name}: from {onsets[0].parameter:.6g} turns, with self-contact (barrier)")
+    start_time = time.perf_counter()
+    contact = cosserat_contact_branch(opts, cp, free, onsets[0],
+                                      cosserat_tweezers_records(problem), contact_name)
+    contact = dataclasses.replace(contact, parent=free_name, origin=onsets[0])
+    if not contact.ok:
+        notes.append(f"failed: {contact_name}: {contact.message}")
+    elif contact.parameter_values[-1] < opts.turns[1] - 1e-9:
+        notes.append(f"incomplete: {contact_name} ended at "
+                     f"{contact.parameter_values[-1]:.6g} turns, before {opts.turns[1]:g}: "
+                     f"{contact.message}")
+    seconds[contact_name] = time.perf_counter() - start_time
+    branches.append(centreline_branch(contact))
+    return result(frozenset({contact_name}), frozenset({free_name}))
+
+
+def _buckled_off_straight(problem, opts, records, free_opts, events, watched, at_onset,
+                          branches, notes, seconds, say):
+    """The straight rod in turns (appended to ``branches``) and the first run of the
+    buckled branch switched off its first bifurcation, or None (no buckling: a note)."""
     say(f"straight Cosserat rod in turns at F L^2/A = {opts.tension:g}")
     cont = ContinuationOptions(initial_step=0.05, max_step=STRAIGHT_MAX_STEP,
                                parameter_bounds=opts.turns, max_points=opts.max_points,
                                event_tolerance=opts.event_tolerance)
-    seconds: dict[str, float] = {}
     start_time = time.perf_counter()
     straight = continuation(problem, problem.straight_state(), parameter="turns",
                             options=cont, name="straight", records=records)
     seconds["straight"] = time.perf_counter() - start_time
-    branches = [centreline_branch(straight)]
+    branches.append(centreline_branch(straight))
     bifurcations = [p for p in straight.points_of_kind("bifurcation") if p.count_before == 0]
     if not bifurcations:
         if straight.status.complete:
@@ -168,8 +251,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
         else:
             notes.append(f"incomplete: straight stopped at {straight.parameter_values[-1]:.6g} "
                          f"turns ({straight.message})")
-        return TweezersResult(opts, tuple(branches), frozenset(), problem, view, seconds,
-                              tuple(notes), model=model)
+        return None
     point = bifurcations[0]
     say(f"buckled: switched from the straight rod at {point.parameter:.6g} turns")
     # the straight rod at the point, exactly, in the current chart (a stored state is
@@ -180,46 +262,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     problem.accept(start.q)
     start = dataclasses.replace(start, frames=problem.frames)  # the chart of its q
     direction = azimuth_pinned_direction(problem, point.critical_modes)
-    free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
-                                    parameter_bounds=opts.turns, max_points=opts.max_points,
-                                    event_tolerance=opts.event_tolerance)
-    start_time = time.perf_counter()
-    watched, at_onset = stop_after_onset() if cp is not None else (None, None)
     buckled = switch_branch(problem, straight, start, free_opts, name="buckled",
                             amplitude=SWITCH_AMPLITUDE, records=records, direction=direction,
-                            events=() if cp is None else (onset_event(cp),),
-                            on_point=watched, stop=at_onset)
-    onsets = [p for p in buckled.points_of_kind("contact_onset") if p.index + 1 < len(buckled)]
-    if onsets:
-        buckled = truncate_after(buckled, onsets[0], f"stopped at the first contact "
-                                 f"({onsets[0].parameter:.6g} turns); the contact-free run: "
-                                 f"{buckled.message}")
-    elif not len(buckled):
-        notes.append(f"failed: buckled: no point found off the straight rod at "
-                     f"{point.parameter:.6g} turns ({buckled.message})")
-    elif not buckled.status.complete:
-        notes.append(f"incomplete: buckled stopped at {buckled.parameter_values[-1]:.6g} "
-                     f"turns: {buckled.message}")
-    elif cp is not None:
-        notes.append(f"buckled: no contact found ({buckled.message})")
-    seconds["buckled"] = time.perf_counter() - start_time
-    branches.append(centreline_branch(buckled))
-    if not onsets:
-        return TweezersResult(opts, tuple(branches), frozenset(), problem, view, seconds,
-                              tuple(notes), model=model)
-    say(f"buckled_contact: from {onsets[0].parameter:.6g} turns, with self-contact (barrier)")
-    start_time = time.perf_counter()
-    contact = cosserat_contact_branch(opts, cp, buckled, onsets[0],
-                                      cosserat_tweezers_records(problem), "buckled_contact")
-    contact = dataclasses.replace(contact, parent="buckled", origin=onsets[0])
-    if not contact.ok:
-        notes.append(f"failed: buckled_contact: {contact.message}")
-    elif contact.parameter_values[-1] < opts.turns[1] - 1e-9:
-        notes.append(f"incomplete: buckled_contact ended at "
-                     f"{contact.parameter_values[-1]:.6g} turns, before {opts.turns[1]:g}: "
-                     f"{contact.message}")
-    seconds["buckled_contact"] = time.perf_counter() - start_time
-    branches.append(centreline_branch(contact))
-    return TweezersResult(opts, tuple(branches), frozenset({"buckled_contact"}), problem, view,
-                          seconds, tuple(notes), cut_at_contact=frozenset({"buckled"}),
-                          model=model)
+                            events=events, on_point=watched, stop=at_onset)
+    return buckled

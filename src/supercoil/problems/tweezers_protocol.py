@@ -16,7 +16,9 @@ A step whose state moved far from the previous one (some node by more than
 special point of kind ``jump`` on branch ``path`` with the turns, the
 extension before and after and the unstable count of the state that was
 left. The path's points carry the records of
-:func:`~supercoil.problems.tweezers.problem.tweezers_records` plus
+:func:`~supercoil.problems.tweezers.problem.tweezers_records` (those of
+:func:`~supercoil.problems.cosserat_tweezers.cosserat_tweezers_records` for the
+Cosserat rod, whose states are its positions and rotation coordinates) plus
 ``unstable_count``, ``zero_modes``, ``direction`` (+1 up, -1 down) and
 ``stable``.
 
@@ -51,7 +53,7 @@ class PathResult:
     """The experiment's path: per-step records, states, jumps; ``ok`` when every step solved."""
 
     points: tuple[dict, ...]
-    states: np.ndarray  # (k, n_dofs)
+    states: np.ndarray  # (k, 3 n_nodes): the centrelines
     jumps: tuple[dict, ...]
     ok: bool
     message: str
@@ -129,10 +131,36 @@ def check_path(options: TweezersOptions, protocol: str, step: float,
                             f"{checks.MAX_POINTS} are valid: give a larger {what}")
 
 
+def _clamped_rod(options: TweezersOptions, contact: ContactProblem | None,
+                 cosserat: tuple[float, float] | None):
+    """``(rod problem, first state, records)`` of the straight rod at the first turn: the
+    Kirchhoff rod's, or with ``cosserat = (EA L^2/A, GA L^2/A)`` the Cosserat rod's;
+    ``contact``: the contact's options, None without."""
+    if cosserat is None:
+        rod, q = clamped_problem(options)
+        problem = rod if contact is None else ContactProblem(rod, contact)
+        return rod, problem, q, tweezers_records(problem, rod, contact is not None,
+                                                 None if contact is None else problem)
+    from supercoil.problems.cosserat_tweezers import (
+        clamped_cosserat_problem,
+        cosserat_tweezers_records,
+        with_contact_records,
+    )
+
+    rod = clamped_cosserat_problem(options, *cosserat)
+    q = rod.straight_state()
+    records = cosserat_tweezers_records(rod)
+    if contact is None:
+        return rod, rod, q, records
+    problem = ContactProblem(rod, contact)
+    return rod, problem, q, with_contact_records(records, problem, True)
+
+
 def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: float = 0.02,
                      kick: float = 0.02, jump_distance: float | None = None,
                      max_kicks: int = 6, force_range: tuple[float, float] | None = None,
-                     force_step: float | None = None) -> PathResult:
+                     force_step: float | None = None,
+                     cosserat: tuple[float, float] | None = None) -> PathResult:
     """The quasi-static path of ``protocol`` (module doc); load control only.
 
     ``up``: turns from start to stop; ``up-down``: and back; ``force-ramp``: up to
@@ -140,16 +168,18 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
     ramped down to ``force_range[0]``, up to ``force_range[1]`` and back to the
     options' tension in steps of ``force_step`` (default 1/50 of the range).
     Each point has ``ramp`` (``turns`` or ``tension``) and ``direction`` (+1 the
-    ramped parameter increases, -1 it decreases).
+    ramped parameter increases, -1 it decreases). ``cosserat``: ``(EA L^2/A, GA L^2/A)``
+    of a Cosserat rod to compute with instead of the Kirchhoff rod.
     """
     check_path(options, protocol, step, force_range, force_step)
     schedule = _schedule(options, protocol, step, force_range, force_step)
-    rod, q = clamped_problem(options)
     D = options.diameter
-    problem = (ContactProblem(rod, ContactOptions(diameter=D, curve=options.contact_curve,
-                                                  formulation=options.contact_formulation))
-               if D is not None else rod)
     contact = D is not None
+    rod, problem, q, records = _clamped_rod(
+        options, ContactOptions(diameter=D, curve=options.contact_curve,
+                                formulation=options.contact_formulation) if contact else None,
+        cosserat)
+    points_of = getattr(rod, "centreline", np.asarray)  # the positions among the unknowns
     reach = D if D is not None else 0.02
     jump_distance = reach if jump_distance is None else jump_distance
     points, states, jumps = [], [], []
@@ -193,12 +223,12 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
                                   f"not converge: {why}")
             break
         rod.accept(q_new)
-        records = tweezers_records(problem, rod, contact, problem if contact else None)
-        rec = dict(records(q_new, mu, float(turns)))
+        rec = dict(records(q_new, mu, float(turns), problem=problem))  # at this load
         rec.update(unstable_count=int(report.unstable_count), zero_modes=int(report.zero_modes),
                    stable=bool(report.unstable_count == 0 and report.zero_modes == 0),
                    direction=int(direction), ramp=ramp, branch="path", index=len(points))
-        moved = float(np.max(np.linalg.norm((q_new - q).reshape(-1, 3), axis=1)))
+        moved = float(np.max(np.linalg.norm((points_of(q_new) - points_of(q)).reshape(-1, 3),
+                                            axis=1)))
         if previous is not None and moved > jump_distance:
             jumps.append({"kind": "jump", "branch": "path", "index": len(points) - 1,
                           "turns": float(turns), "tension": float(tension), "ramp": ramp,
@@ -209,7 +239,7 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
                           "torque": previous["torque"], "torque_after": rec["torque"],
                           "largest_node_move": moved, "count_left": int(left)})
         points.append(rec)
-        states.append(q_new)
+        states.append(points_of(q_new))
         previous = rec
         q = q_new
     return PathResult(tuple(points), np.array(states), tuple(jumps), ok, message)

@@ -81,7 +81,7 @@ def tweezers_branches(options: TweezersOptions,
                                     parameter_bounds=opts.turns,
                                     max_points=min(opts.segment_points, opts.max_points),
                                     event_tolerance=opts.event_tolerance, chord_steps=True,
-                                    gauge="integral", rephase=True)
+                                    gauge="integral", rephase=True, midpoint_phase=True)
     # The contact-free runs end at the first point past a located contact onset (the
     # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
     # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).

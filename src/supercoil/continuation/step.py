@@ -59,11 +59,13 @@ def quadratic_term(system: ExtendedSystem, t_previous: np.ndarray, t_last: np.nd
 def midpoint_phase(system: ExtendedSystem, opts: ContinuationOptions, q_k: np.ndarray,
                    x_mid: np.ndarray) -> None:
     """Set the phase rows of a step from ``q_k`` to the modes at its predicted midpoint
-    ``x_mid``, anchored at ``q_k`` (``ContinuationOptions.midpoint_phase``); unchanged if
-    the modes there have another shape (a run keeps its number of rows)."""
+    ``x_mid``, anchored at ``q_k`` moved by the problem's ``phase_offset(q_k)`` if it has
+    one (``ContinuationOptions.midpoint_phase``); unchanged if the modes there have
+    another shape (a run keeps its number of rows)."""
     modes = branch_phase_modes(system.problem, system.q(x_mid), opts)
     if modes is not None and modes.shape == system.phase_modes.shape:
-        system.set_phase(modes, q_k)
+        offset = getattr(system.problem, "phase_offset", None)
+        system.set_phase(modes, q_k if offset is None else q_k + offset(q_k))
 
 
 @dataclass

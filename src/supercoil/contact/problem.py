@@ -149,6 +149,12 @@ class ContactProblem:
         the rod has none."""
         return self.base.near_symmetry_modes
 
+    @property
+    def phase_offset(self):
+        """The rod's ``phase_offset(q)`` (where a phase row of its sliding is anchored);
+        absent if the rod has none."""
+        return self.base.phase_offset
+
     # ----------------------------------------------------------- geometry
     @property
     def treatment(self) -> str:

@@ -10,7 +10,10 @@ between which the azimuth pin is picked again where needed
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
+
+import numpy as np
 
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, continuation
@@ -20,7 +23,7 @@ from supercoil.problems.contact_events import (
     contact_count_event,
     contact_start,
 )
-from supercoil.problems.segments import follow, set_pin
+from supercoil.problems.segments import either, follow, set_pin
 from supercoil.problems.tweezers.buckled import (
     RunRecords,
     resume_stored,
@@ -28,9 +31,9 @@ from supercoil.problems.tweezers.buckled import (
     stored_pins,
 )
 from supercoil.problems.tweezers.options import TweezersOptions
-from supercoil.problems.tweezers.pins import PIN_QUALITY
+from supercoil.problems.tweezers.pins import PIN_QUALITY, SLIDING_HYSTERESIS
 from supercoil.problems.tweezers.problem import tweezers_records
-from supercoil.rod.open import ClampedRodEnergy
+from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
 
 # The contact branch's corrector trust region, in steps (ContinuationOptions.
 # max_corrector_distance): where the branch turns back at the contact onset (80 degrees
@@ -44,6 +47,70 @@ CONTACT_CORRECTOR_DISTANCE = 1.0
 # left out of the count on the contact branch: the continuum's symmetry, whose discrete
 # eigenvalue is the contact's ripple, of either sign
 SLIDING_TAIL_CONTACT = 0.1
+
+
+class ContactSliding:
+    """The sliding's phase row on the contact branch's runs (``TweezersOptions.loop_sliding``).
+
+    Where no contact acts yet (before the barrier reaches, or after a release) the
+    structure's sliding is the free one of the contact-free branch, nearly null, and a
+    run carries its phase row as that branch's do (integral, rephased at the step's
+    midpoint, anchored towards the centred structure); where a contact acts it carries
+    none (docs/continuation.md, "Long open rods"). :meth:`options` gives a run's options
+    from its first state (the row beyond ``ENGAGE`` barrier layers of the contact),
+    :meth:`stop` the ``stop`` that ends it where the state needs the other: a run with
+    the row after its first point where the barrier acts (the next run starts there,
+    the sliding stiffened by the contact), or before one whose tails stop being
+    straight (by ``SLIDING_HYSTERESIS``); a run
+    without it where the gap opened ``RELEASE`` layers beyond its start (and beyond the
+    contact) while the tails are straight. Without the row the contact-free start of the contact
+    branch crawled (L/D = 200, lambda = 40, N = 202: 42 points from a gap of 1.12 D to
+    1.09 D in steps of 1e-8 D, the corrector moving along the sliding by the residual
+    over its eigenvalue, then "the tangent turned" at the minimum step)."""
+
+    ENGAGE = 2.0  # barrier layers (barrier_activation * D): start a run with the row beyond
+    RELEASE = 3.0  # ... end a run without the row beyond this many, and as many past its start
+
+    def __init__(self, rod: ClampedRodEnergy, cp: ContactProblem, base: ContinuationOptions,
+                 enabled: bool):
+        self.rod, self.cp, self.base, self.enabled = rod, cp, base, enabled
+        self.layer = (cp.options.barrier_activation if cp.treatment == "barrier" else 0.0)
+        self.threshold = sliding_threshold(rod.rod.n_nodes)
+        self.row = False
+
+    def gap(self, q: np.ndarray) -> float:
+        return self.cp.min_distance(q) / self.cp.diameter - 1.0
+
+    def options(self, q: np.ndarray) -> ContinuationOptions:
+        self.row = (self.enabled and self.gap(q) > self.ENGAGE * self.layer
+                    and self.rod.sliding(q)[1] <= self.threshold)
+        return dataclasses.replace(self.base, near_symmetry_gauge=self.row, gauge="integral",
+                                   rephase=self.row, midpoint_phase=self.row)
+
+    def stop(self, q_start: np.ndarray) -> Callable[[np.ndarray], str | None] | None:
+        if not self.enabled:
+            return None
+        if self.row:
+            touched = []
+
+            def refuse(q: np.ndarray) -> str | None:
+                if touched:
+                    return "the contact acts: the sliding's phase row is dropped"
+                if self.gap(q) <= self.layer:
+                    touched.append(True)  # kept: the next run starts in contact
+                    return None
+                if self.rod.sliding(q)[1] > self.threshold * SLIDING_HYSTERESIS:
+                    return "the sliding of the structure stopped being an approximate symmetry"
+                return None
+            return refuse
+        opened = max(self.gap(q_start), 0.0) + self.RELEASE * self.layer
+
+        def refuse(q: np.ndarray) -> str | None:
+            if (self.gap(q) > opened
+                    and self.rod.sliding(q)[1] <= self.threshold / SLIDING_HYSTERESIS):
+                return "no contact acts and the sliding is an approximate symmetry"
+            return None
+        return refuse
 
 
 def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
@@ -75,6 +142,7 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
         event_tolerance=opts.contact_event_tolerance,
         predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
         chord_steps=True, near_symmetry_gauge=False)
+    sliding = ContactSliding(rod, cp, contact_opts, opts.loop_sliding)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     old, complete = stored.get(name, (None, False))
@@ -85,13 +153,14 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     if first is not None:
         say(f"{name}: continued from point {len(old) - 1}")
     else:
-        first = continuation(cp, q, parameter="turns", options=contact_opts, name=name,
+        first = continuation(cp, q, parameter="turns", options=sliding.options(q), name=name,
                              records=records, events=events, on_point=on_point,
-                             stop=pinned)
+                             stop=either(pinned, sliding.stop(q)))
     contact, pins = follow(cp, rod, first, contact_opts, name, records, events,
                            max_points=opts.max_points, segment_points=opts.segment_points,
                            on_point=on_point, quality=PIN_QUALITY, refuse=pinned,
-                           on_run=records.begin)
+                           on_run=records.begin, run_options=sliding.options,
+                           restart=sliding.stop)
     if old is not None and len(old) >= 2:  # resumed: the pins of the stored points
         pins = resumed_pins(old, pins)
     return classify_contact_events(contact, cp), pins

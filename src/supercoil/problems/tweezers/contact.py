@@ -113,6 +113,20 @@ class ContactSliding:
         return refuse
 
 
+def contact_options(opts: TweezersOptions, direction: int = 1) -> ContinuationOptions:
+    """The continuation options of a contact branch's runs (no phase row)."""
+    D = opts.diameter
+    return ContinuationOptions(
+        initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
+        max_step=opts.contact_max_step * D,
+        max_points=min(opts.segment_points, opts.max_points),
+        parameter_bounds=opts.turns, direction=direction,
+        parameter_weight=D, tolerance=opts.contact_tolerance,
+        event_tolerance=opts.contact_event_tolerance,
+        predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
+        chord_steps=True, near_symmetry_gauge=False)
+
+
 def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
                    free: Branch, onset: SpecialPoint, name: str,
                    stored: Mapping[str, tuple[Branch, bool]], on_point=None, pinned=None,
@@ -122,7 +136,6 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     ``onset`` and its azimuth pins: the stored one when complete, else computed (an
     incomplete stored one continued) with its contact events classified. ``pinned``:
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`)."""
-    D = opts.diameter
     # in contact the discrete contact makes the sliding of the plectoneme stiff, of
     # either sign: no phase row, but out of the count while the tails are straight
     # (docs/continuation.md, "Long open rods: the sliding of a localised structure")
@@ -133,15 +146,7 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     cp.turns = float(free.parameter_values[k])
     cp.accept(q)
     set_pin(cp, rod, q)
-    contact_opts = ContinuationOptions(
-        initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
-        max_step=opts.contact_max_step * D,
-        max_points=min(opts.segment_points, opts.max_points),
-        parameter_bounds=opts.turns, direction=1 if free.tangents[k, -1] >= 0 else -1,
-        parameter_weight=D, tolerance=opts.contact_tolerance,
-        event_tolerance=opts.contact_event_tolerance,
-        predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
-        chord_steps=True, near_symmetry_gauge=False)
+    contact_opts = contact_options(opts, 1 if free.tangents[k, -1] >= 0 else -1)
     sliding = ContactSliding(rod, cp, contact_opts, opts.loop_sliding)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)

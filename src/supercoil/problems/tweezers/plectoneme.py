@@ -8,7 +8,7 @@ branches off the symmetric contact branch at a symmetry-breaking bifurcation, ne
 which that branch can turn and come back onto itself (a closed loop, reported as such):
 measured on the 3 kbp hat curve at 1 pN and 150 mM, the symmetric branch closed at 6.77
 turns, and the branch switched at its bifurcation at 6.767 turns (amplitude 5e-4 D, one
-side) grew the plectoneme (extension 0.93 to 0.77 L from 6.8 to 8.5 turns). So when the
+side) grew the plectoneme (extension 0.93 to 0.58 L from 6.8 to 12.9 turns). So when the
 contact branch ends before the last turn, :func:`switch_to_plectoneme` tries its
 located bifurcations, the latest first, along either side of the critical mode at the
 amplitudes of ``AMPLITUDES``, and follows the first switched branch that starts (and

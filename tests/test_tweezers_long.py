@@ -261,3 +261,44 @@ def test_a_branch_back_at_the_first_turn_without_contact_is_incomplete():
     assert not result.ok
     assert any(n.startswith("incomplete: buckled ended at 0 turns without contact")
                for n in result.notes)
+
+
+class ContactStarted(Exception):
+    """Raised by ``on_point`` once the contact branch has the points a test needs."""
+
+
+def test_centred_loop_stays_centred_and_its_contact_branch_starts():
+    """At L/D = 100, lambda = 40, C/A = 1.5, N = 102 the localised loop bifurcates from the
+    straight rod's symmetric critical mode: the clamped rod and the loop are invariant
+    under the rotation by pi about an axis across the rod's middle, so the nodes' distances
+    to the axis are mirror-symmetric (``r_i = r_{N-1-i}``) and the loop feels no force
+    along its sliding. The contact-free branch, whose sliding is held by a phase row,
+    keeps that symmetry (to 1e-3 of the largest radius; before the row's mode left out
+    the turned end's axial translation and took the modes at each step's midpoint the
+    loop slid off the middle, the radii's asymmetry 0.68, and the row held 2e-5 at the
+    contact), its states are equilibria without the row to the contact branch's
+    tolerance, and the contact branch's start from them converges (it diverged), its
+    points in the barrier's hard core (gap above D) with ``Lk = Tw + Wr``."""
+    kept = {}
+
+    def watch(branch):
+        if branch.name == "buckled_contact" and len(branch) >= 12:
+            kept["contact"] = branch
+            raise ContactStarted
+
+    def final(branch, contact):
+        kept[branch.name] = branch
+
+    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=1600,
+                              n_nodes=102, turns=(0.0, 12.0), max_points=400,
+                              loop_sliding=True)
+    with pytest.raises(ContactStarted):
+        tweezers_branches(options, on_point=watch, on_branch=final)
+    free, contact = kept["buckled"], kept["contact"]
+    radii = np.linalg.norm(free.states.reshape(len(free), -1, 3)[:, :, :2], axis=2)
+    asymmetry = np.abs(radii - radii[:, ::-1]).max(axis=1) / radii.max(axis=1)
+    assert np.all(asymmetry < 1e-3)
+    assert np.max(free.records["sliding_residual"]) < options.contact_tolerance
+    assert np.all(contact.records["min_gap_over_diameter"] > 1.0)
+    assert np.all(contact.records["closure_error"] < 1e-9)
+    assert np.max(contact.records["n_contact_points"]) >= 1

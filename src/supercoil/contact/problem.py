@@ -167,6 +167,12 @@ class ContactProblem:
         the rod has none."""
         return self.base.near_symmetry_modes
 
+    @property
+    def phase_offset(self):
+        """The rod's ``phase_offset(q)`` (where a phase row of its sliding is anchored);
+        absent if the rod has none."""
+        return self.base.phase_offset
+
     # ----------------------------------------------------------- geometry
     def centreline(self, q: np.ndarray) -> np.ndarray:
         """The centreline ``(3 n,)`` of ``q`` (module doc), linear in ``q``."""

@@ -23,6 +23,7 @@ import numpy as np
 
 from supercoil.continuation.corrector import Correction, correct, tangent
 from supercoil.continuation.options import ContinuationOptions
+from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.errors import SingularMatrixError
 
@@ -53,6 +54,18 @@ def quadratic_term(system: ExtendedSystem, t_previous: np.ndarray, t_last: np.nd
         return np.zeros_like(t_last)
     term = 0.5 * ds**2 * (t_last - t_previous) / last_step
     return term if system.norm(term) <= 0.5 * ds else np.zeros_like(t_last)
+
+
+def midpoint_phase(system: ExtendedSystem, opts: ContinuationOptions, q_k: np.ndarray,
+                   x_mid: np.ndarray) -> None:
+    """Set the phase rows of a step from ``q_k`` to the modes at its predicted midpoint
+    ``x_mid``, anchored at ``q_k`` moved by the problem's ``phase_offset(q_k)`` if it has
+    one (``ContinuationOptions.midpoint_phase``); unchanged if the modes there have
+    another shape (a run keeps its number of rows)."""
+    modes = branch_phase_modes(system.problem, system.q(x_mid), opts)
+    if modes is not None and modes.shape == system.phase_modes.shape:
+        offset = getattr(system.problem, "phase_offset", None)
+        system.set_phase(modes, q_k if offset is None else q_k + offset(q_k))
 
 
 @dataclass
@@ -96,6 +109,8 @@ def take_step(system: ExtendedSystem, opts: ContinuationOptions, x_k: np.ndarray
     if opts.predictor == "quadratic" and previous is not None:
         start = start + quadratic_term(system, previous[0], t_k, previous[1], ds)
     predicted = start
+    if opts.midpoint_phase and system.r:
+        midpoint_phase(system, opts, q_k, x_k + 0.5 * ds * d)
     if hasattr(problem, "step_bound"):
         fraction = float(problem.step_bound(q_k, system.q(start) - q_k))
         if fraction < 1.0:

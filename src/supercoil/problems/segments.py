@@ -170,6 +170,7 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
            refuse: Callable[[np.ndarray], str | None] | None = None,
            restart: Callable[[np.ndarray], Callable[[np.ndarray], str | None]] | None = None,
            on_run: Callable[[int], None] | None = None,
+           run_options: Callable[[np.ndarray], ContinuationOptions] | None = None,
            ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
     """Continue ``first`` (a computed run) in runs of ``segment_points``, re-pinning between.
 
@@ -204,6 +205,9 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
     ``on_run(index)``: called before each later run with the index of its first point
     on the merged branch (e.g. to record where each run starts, so that an interrupted
     run can be resumed up to its own end).
+
+    ``run_options(q)``: the options of a later run from its first state ``q`` (e.g. its
+    phase rows), instead of ``options``; asked before ``restart(q)``.
     """
     parts = [first]
     pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
@@ -229,7 +233,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         direction = 1 if run.tangents[-1, -1] >= 0 else -1
         step = float(np.clip(run.arclength[-1] - run.arclength[-2], options.min_step,
                              options.max_step))
-        opts = dataclasses.replace(options, direction=direction, initial_step=step,
+        opts = dataclasses.replace(options if run_options is None else run_options(q),
+                                   direction=direction, initial_step=step,
                                    max_points=min(segment_points, max_points - total + 1))
         # the runs so far merged once: merging them again at every point of the new
         # run made reporting quadratic in the branch length (same merged branch)

@@ -45,6 +45,11 @@ SLIDING_TAIL = 1e-4
 SLIDING_NODES = 160  # ... at up to this many nodes; beyond, sliding_threshold
 
 
+# the most a phase row's anchor moves a structure towards the rod's middle per step, in
+# segments (ClampedRodEnergy.phase_offset)
+RECENTRE = 0.1
+
+
 def sliding_threshold(n_nodes: int) -> float:
     """The tail ratio below which the sliding of a localised structure is an approximate
     symmetry of a clamped rod of ``n_nodes`` (:meth:`ClampedRodEnergy.near_symmetry_modes`):
@@ -258,7 +263,52 @@ class ClampedRodEnergy(RodEnergy):
         g, tail = self.sliding(q)
         if self.sliding_tail is None or tail > self.sliding_tail:
             return np.zeros((0, np.size(q)))
-        return g[None, :]
+        return self.axial_free(g)[None, :]
+
+    def phase_offset(self, q: np.ndarray) -> np.ndarray:
+        """The displacement along the sliding that carries the structure's centre towards
+        the rod's middle, by at most ``RECENTRE`` segments (zeros where the sliding is no
+        approximate symmetry): where the phase row of the sliding is anchored
+        (``ContinuationOptions.midpoint_phase``).
+
+        The centre is the mean arclength of the nodes weighted by ``|g_i|^2``, which the
+        rotation by pi about an axis across the middle maps to its mirror image: a
+        structure symmetric under it (a loop off the straight rod's symmetric critical
+        mode) is centred, and no force acts along its sliding there; elsewhere the
+        clamps pull it by ``exp(-lambda d)`` and the ripple of the discretisation, forces
+        below what a step resolves, so that a row anchored at the last point held the
+        structure wherever round-off had moved it (measured at L/D = 100, lambda = 80,
+        N = 204: moved before the row was needed, the loop's radii lost their mirror
+        symmetry by 4e-3, and the row's force grew to 1.3e-6 at the contact)."""
+        g, tail = self.sliding(q)
+        if self.sliding_tail is None or tail > self.sliding_tail:
+            return np.zeros(np.size(q))
+        h = self.rod.edge_length
+        weight = np.sum(g.reshape(-1, 3) ** 2, axis=1)
+        s = (np.arange(weight.size) - 0.5) * h
+        shift = 0.5 * self.rod.length - float(weight @ s) / float(weight.sum())
+        shift = float(np.clip(shift, -RECENTRE * h, RECENTRE * h))
+        return -(shift / h) * g  # x(s) -> x(s - a) + a e_z is -(a / h) g to first order
+
+    def axial_free(self, g: np.ndarray) -> np.ndarray:
+        """``g`` less its M-orthogonal projection on the uniform axial translation.
+
+        The turned end moves along the axis as the turns change (under a load), so the
+        tangent of a branch symmetric about the rod's middle (a centred loop: the
+        rotation by pi about an axis across the middle maps it onto itself) has the odd
+        part ``u/2`` along that translation, ``u`` the end's axial speed; the sliding,
+        odd too, is not M-orthogonal to it (its axial part is ``(t_z - 1) h`` in the
+        structure). As a phase row the bare sliding then refused the symmetric branch
+        and moved the structure along it at first order: measured on the localised
+        loop at L/D = 100, F L^2/A = 1600, N = 102, the row's product with the
+        symmetric tangent was 0.028 of their norms, on the way to its contact the
+        loop's radii lost their mirror symmetry by 0.68 of the largest, and the row
+        held a force of 2e-5 there; without the translation the product is 4e-7 of
+        the norms."""
+        g = np.array(g, dtype=float).reshape(-1, 3)
+        m = np.asarray(self.mass, dtype=float).reshape(-1, 3)[:, 2]
+        g[:, 2] -= float(m @ g[:, 2]) / float(m.sum())
+        return g.ravel()
 
     def sliding(self, q: np.ndarray) -> tuple[np.ndarray, float]:
         """The sliding generator ``g`` (``(n_dofs,)``, :meth:`near_symmetry_modes`) and

@@ -11,7 +11,7 @@ import numpy as np
 
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation import Branch, ContinuationOptions
+from supercoil.continuation import Branch, ContinuationOptions, ContinuationStatus
 from supercoil.problems.branch_options import coarse_mesh_note
 from supercoil.problems.contact_events import (
     cut_at_onset,
@@ -34,6 +34,7 @@ from supercoil.problems.tweezers.buckled import (
 from supercoil.problems.tweezers.contact import contact_branch
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
+from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
 from supercoil.problems.tweezers.result import TweezersResult
 from supercoil.problems.tweezers.straight import straight_branch
@@ -86,7 +87,7 @@ def tweezers_branches(options: TweezersOptions,
                                     parameter_bounds=opts.turns,
                                     max_points=min(opts.segment_points, opts.max_points),
                                     event_tolerance=opts.event_tolerance, chord_steps=True,
-                                    gauge="integral", rephase=True)
+                                    gauge="integral", rephase=True, midpoint_phase=True)
     # The contact-free runs end at the first point past a located contact onset (the
     # branch is cut there anyway): the switch's run computed 27 points, 12 beyond the
     # 15 kept (N = 100, L/D = 33, F L^2/A = 75, 0-5 turns).
@@ -200,12 +201,35 @@ def tweezers_branches(options: TweezersOptions,
     seconds[contact_name] = time.perf_counter() - start
     final(contact, True)
     branches.append(contact)
-    if not contact.ok:
-        notes.append(f"failed: {contact_name}: {contact.message}")
-    elif contact.parameter_values[-1] < opts.turns[1] - 1e-9:
-        notes.append(f"incomplete: {contact_name} ended at {contact.parameter_values[-1]:.6g} "
-                     f"turns, before {opts.turns[1]:g}: {contact.message}")
     pins[contact_name] = contact_pins
-    return TweezersResult(opts, tuple(branches), frozenset({contact_name}), rod, cp, seconds,
+    names = {contact_name}
+    last = contact
+    if contact.status is ContinuationStatus.CLOSED_LOOP \
+            and contact.parameter_values[-1] < opts.turns[1] - 1e-9:
+        # the contact branch of a centred loop comes back onto itself: the plectoneme
+        # branches off it at a bifurcation (supercoil.problems.tweezers.plectoneme)
+        start = time.perf_counter()
+        switched = switch_to_plectoneme(opts, rod, cp, contact, on_point, pinned, say)
+        if switched is None:
+            notes.append(f"incomplete: {contact_name} closed on itself before "
+                         f"{opts.turns[1]:g} turns ({contact.message}) and no switch at its "
+                         f"bifurcations gave a branch")
+        else:
+            last, switched_pins = switched
+            last = verify_bifurcations(last)
+            seconds[last.name] = time.perf_counter() - start
+            final(last, True)
+            branches.append(last)
+            names.add(last.name)
+            pins[last.name] = switched_pins
+            notes.append(f"{contact_name}: closed on itself ({contact.message}); switched at "
+                         f"its bifurcation at {last.origin.parameter:.6g} turns: {last.name}")
+    if not last.ok:
+        notes.append(f"failed: {last.name}: {last.message}")
+    elif last.parameter_values[-1] < opts.turns[1] - 1e-9 and not (
+            last is contact and contact.status is ContinuationStatus.CLOSED_LOOP):
+        notes.append(f"incomplete: {last.name} ended at {last.parameter_values[-1]:.6g} "
+                     f"turns, before {opts.turns[1]:g}: {last.message}")
+    return TweezersResult(opts, tuple(branches), frozenset(names), rod, cp, seconds,
                           tuple(notes), pins, frozenset({free_name}))
 

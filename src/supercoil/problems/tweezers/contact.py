@@ -10,7 +10,10 @@ between which the azimuth pin is picked again where needed
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
+
+import numpy as np
 
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, continuation
@@ -21,7 +24,7 @@ from supercoil.problems.contact_events import (
     contact_count_event,
     contact_start,
 )
-from supercoil.problems.segments import follow, set_pin
+from supercoil.problems.segments import either, follow, set_pin
 from supercoil.problems.tweezers.buckled import (
     RunRecords,
     resume_stored,
@@ -29,9 +32,9 @@ from supercoil.problems.tweezers.buckled import (
     stored_pins,
 )
 from supercoil.problems.tweezers.options import TweezersOptions
-from supercoil.problems.tweezers.pins import PIN_QUALITY
+from supercoil.problems.tweezers.pins import PIN_QUALITY, SLIDING_HYSTERESIS
 from supercoil.problems.tweezers.problem import tweezers_records
-from supercoil.rod.open import ClampedRodEnergy
+from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
 
 # The contact branch's corrector trust region, in steps (ContinuationOptions.
 # max_corrector_distance): where the branch turns back at the contact onset (80 degrees
@@ -47,6 +50,84 @@ CONTACT_CORRECTOR_DISTANCE = 1.0
 SLIDING_TAIL_CONTACT = 0.1
 
 
+class ContactSliding:
+    """The sliding's phase row on the contact branch's runs (``TweezersOptions.loop_sliding``).
+
+    Where no contact acts yet (before the barrier reaches, or after a release) the
+    structure's sliding is the free one of the contact-free branch, nearly null, and a
+    run carries its phase row as that branch's do (integral, rephased at the step's
+    midpoint, anchored towards the centred structure); where a contact acts it carries
+    none (docs/continuation.md, "Long open rods"). :meth:`options` gives a run's options
+    from its first state (the row beyond ``ENGAGE`` barrier layers of the contact),
+    :meth:`stop` the ``stop`` that ends it where the state needs the other: a run with
+    the row after its first point where the barrier acts (the next run starts there,
+    the sliding stiffened by the contact), or before one whose tails stop being
+    straight (by ``SLIDING_HYSTERESIS``); a run
+    without it where the gap opened ``RELEASE`` layers beyond its start (and beyond the
+    contact) while the tails are straight. Without the row the contact-free start of the contact
+    branch crawled (L/D = 200, lambda = 40, N = 202: 42 points from a gap of 1.12 D to
+    1.09 D in steps of 1e-8 D, the corrector moving along the sliding by the residual
+    over its eigenvalue, then "the tangent turned" at the minimum step)."""
+
+    ENGAGE = 2.0  # barrier layers (barrier_activation * D): start a run with the row beyond
+    RELEASE = 3.0  # ... end a run without the row beyond this many, and as many past its start
+
+    def __init__(self, rod: ClampedRodEnergy, cp: ContactProblem, base: ContinuationOptions,
+                 enabled: bool):
+        self.rod, self.cp, self.base, self.enabled = rod, cp, base, enabled
+        self.layer = (cp.options.barrier_activation if cp.treatment == "barrier" else 0.0)
+        self.threshold = sliding_threshold(rod.rod.n_nodes)
+        self.row = False
+
+    def gap(self, q: np.ndarray) -> float:
+        return self.cp.min_distance(q) / self.cp.diameter - 1.0
+
+    def options(self, q: np.ndarray) -> ContinuationOptions:
+        self.row = (self.enabled and self.gap(q) > self.ENGAGE * self.layer
+                    and self.rod.sliding(q)[1] <= self.threshold)
+        return dataclasses.replace(self.base, near_symmetry_gauge=self.row, gauge="integral",
+                                   rephase=self.row, midpoint_phase=self.row)
+
+    def stop(self, q_start: np.ndarray) -> Callable[[np.ndarray], str | None] | None:
+        if not self.enabled:
+            return None
+        if self.row:
+            touched = []
+
+            def refuse(q: np.ndarray) -> str | None:
+                if touched:
+                    return "the contact acts: the sliding's phase row is dropped"
+                if self.gap(q) <= self.layer:
+                    touched.append(True)  # kept: the next run starts in contact
+                    return None
+                if self.rod.sliding(q)[1] > self.threshold * SLIDING_HYSTERESIS:
+                    return "the sliding of the structure stopped being an approximate symmetry"
+                return None
+            return refuse
+        opened = max(self.gap(q_start), 0.0) + self.RELEASE * self.layer
+
+        def refuse(q: np.ndarray) -> str | None:
+            if (self.gap(q) > opened
+                    and self.rod.sliding(q)[1] <= self.threshold / SLIDING_HYSTERESIS):
+                return "no contact acts and the sliding is an approximate symmetry"
+            return None
+        return refuse
+
+
+def contact_options(opts: TweezersOptions, direction: int = 1) -> ContinuationOptions:
+    """The continuation options of a contact branch's runs (no phase row)."""
+    D = opts.diameter
+    return ContinuationOptions(
+        initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
+        max_step=opts.contact_max_step * D,
+        max_points=min(opts.segment_points, opts.max_points),
+        parameter_bounds=opts.turns, direction=direction,
+        parameter_weight=D, tolerance=opts.contact_tolerance,
+        event_tolerance=opts.contact_event_tolerance,
+        predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
+        chord_steps=True, near_symmetry_gauge=False)
+
+
 def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
                    free: Branch, onset: SpecialPoint, name: str,
                    stored: Mapping[str, tuple[Branch, bool]], on_point=None, pinned=None,
@@ -56,7 +137,6 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     ``onset`` and its azimuth pins: the stored one when complete, else computed (an
     incomplete stored one continued) with its contact events classified. ``pinned``:
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`)."""
-    D = opts.diameter
     # in contact the discrete contact makes the sliding of the plectoneme stiff, of
     # either sign: no phase row, but out of the count while the tails are straight
     # (docs/continuation.md, "Long open rods: the sliding of a localised structure")
@@ -65,15 +145,8 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     k = contact_start(free, onset, cp)
     q = free.states[k]
     set_pin(cp, rod, q)
-    contact_opts = ContinuationOptions(
-        initial_step=0.1 * opts.contact_max_step * D, min_step=CONTACT_MIN_STEP,
-        max_step=opts.contact_max_step * D,
-        max_points=min(opts.segment_points, opts.max_points),
-        parameter_bounds=opts.turns, direction=1 if free.tangents[k, -1] >= 0 else -1,
-        parameter_weight=D, tolerance=opts.contact_tolerance,
-        event_tolerance=opts.contact_event_tolerance,
-        predictor=opts.contact_predictor, max_corrector_distance=CONTACT_CORRECTOR_DISTANCE,
-        chord_steps=True, near_symmetry_gauge=False)
+    contact_opts = contact_options(opts, 1 if free.tangents[k, -1] >= 0 else -1)
+    sliding = ContactSliding(rod, cp, contact_opts, opts.loop_sliding)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     old, complete = stored.get(name, (None, False))
@@ -87,13 +160,14 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
         # from the frames of the contact-free branch's point k (cp unchanged)
         first = continuation(frames_at(cp, free, k), q, parameter="turns",
                              start=float(free.parameter_values[k]),
-                             options=contact_opts, name=name,
+                             options=sliding.options(q), name=name,
                              records=records, events=events, on_point=on_point,
-                             stop=pinned)
+                             stop=either(pinned, sliding.stop(q)))
     contact, pins = follow(cp, rod, first, contact_opts, name, records, events,
                            max_points=opts.max_points, segment_points=opts.segment_points,
                            on_point=on_point, quality=PIN_QUALITY, refuse=pinned,
-                           on_run=records.begin)
+                           on_run=records.begin, run_options=sliding.options,
+                           restart=sliding.stop)
     if old is not None and len(old) >= 2:  # resumed: the pins of the stored points
         pins = resumed_pins(old, pins)
     return classify_contact_events(contact, cp), pins

@@ -41,9 +41,10 @@ class TweezersOptions:
     (``ContactOptions.curve``); ``loop_sliding``: treat the sliding of a localised
     loop with straight tails as an approximate symmetry (a phase row on the
     contact-free branch, out of the unstable count; docs/continuation.md, "Long open
-    rods"): it lets long rods at lambda of about 20 reach their contact where the
-    corrector otherwise diverges along the nearly free sliding, but the 3 kbp hat
-    curve at 1 pN (lambda about 71) then stops at its contact onset, so it is off by
+    rods"): it lets long rods reach their contact where the corrector otherwise
+    diverges along the nearly free sliding and keeps a centred loop centred, but from
+    the centred loop the 3 kbp hat curve at 1 pN (lambda about 71) comes back onto
+    itself at a symmetry-breaking bifurcation of its contact branch, so it is off by
     default; ``contact_formulation``: ``"integral"``
     (default) or ``"pairs"`` (``ContactOptions.formulation``). The default,
     the double integral over the B-spline, counts a contact once wherever it

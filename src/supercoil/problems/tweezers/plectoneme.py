@@ -1,0 +1,78 @@
+"""The plectoneme from a contact branch that comes back onto itself: a switch at one of
+its bifurcations.
+
+From a centred localised loop (symmetric under the rotation by pi about an axis across
+the rod's middle) the first contact is symmetric too, and so is the contact branch that
+follows it; the plectoneme, whose end loop lies at one end of its ply, is not. It
+branches off the symmetric contact branch at a symmetry-breaking bifurcation, near
+which that branch can turn and come back onto itself (a closed loop, reported as such):
+measured on the 3 kbp hat curve at 1 pN and 150 mM, the symmetric branch closed at 6.77
+turns, and the branch switched at its bifurcation at 6.767 turns (amplitude 5e-4 D, one
+side) grew the plectoneme (extension 0.93 to 0.58 L from 6.8 to 12.9 turns). So when the
+contact branch ends before the last turn, :func:`switch_to_plectoneme` tries its
+located bifurcations, the latest first, along either side of the critical mode at the
+amplitudes of ``AMPLITUDES``, and follows the first switched branch that starts (and
+does not close at once) to the last turn.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from supercoil.contact.problem import ContactProblem
+from supercoil.continuation import Branch, ContinuationStatus, switch_branch
+from supercoil.problems.contact_events import classify_contact_events, contact_count_event
+from supercoil.problems.segments import follow, set_pin
+from supercoil.problems.tweezers.buckled import RunRecords
+from supercoil.problems.tweezers.contact import contact_options
+from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.problems.tweezers.pins import PIN_QUALITY, hold_azimuth
+from supercoil.problems.tweezers.problem import tweezers_records
+from supercoil.rod.open import ClampedRodEnergy
+
+AMPLITUDES = (5e-4, 5e-3)  # of D: the first point's distance from the bifurcation
+TRIES = 4  # the latest bifurcations tried
+
+
+def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
+                         contact: Branch, on_point=None, pinned=None,
+                         say: Callable[[str], None] = lambda message: None
+                         ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]] | None:
+    """The branch switched at a bifurcation of ``contact`` (module doc) that reaches
+    furthest in turns, followed as the contact branch is, with its azimuth pins; None
+    when no switch gives a branch."""
+    base = contact_options(opts)
+    records = RunRecords(tweezers_records(cp, rod, True))
+    events = (contact_count_event(cp),)
+    best = None
+    points = [p for p in contact.special_points if p.kind == "bifurcation"][::-1][:TRIES]
+    pin = contact.records["azimuth_pin"]
+    for point in points:
+        for amplitude in AMPLITUDES:
+            for side in (1, -1):
+                at = min(point.index + 1, len(contact) - 1)
+                if pin[at] >= 0:
+                    hold_azimuth(rod, (int(pin[at]),), cp)
+                else:
+                    set_pin(cp, rod, point.q)
+                name = f"{contact.name}/bifurcation{point.index}"
+                records.begin(0)
+                first = switch_branch(cp, contact, point, base, side=side,
+                                      amplitude=amplitude * opts.diameter, name=name,
+                                      records=records, events=events, on_point=on_point,
+                                      stop=pinned)
+                if len(first) < 2 or first.status is ContinuationStatus.CLOSED_LOOP:
+                    continue
+                say(f"{name}: switched at {point.parameter:.6g} turns")
+                branch, pins = follow(cp, rod, first, base, name, records, events,
+                                      max_points=opts.max_points,
+                                      segment_points=opts.segment_points, on_point=on_point,
+                                      quality=PIN_QUALITY, refuse=pinned,
+                                      on_run=records.begin)
+                branch = classify_contact_events(branch, cp)
+                if best is None or branch.parameter_values[-1] > best[0].parameter_values[-1]:
+                    best = (branch, pins)
+                if branch.status is ContinuationStatus.PARAMETER_BOUND \
+                        and branch.parameter_values[-1] >= opts.turns[1] - 1e-9:
+                    return best
+    return best

@@ -30,7 +30,7 @@ from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
 from supercoil.problems.tweezers.result import TweezersResult
-from supercoil.problems.tweezers.straight import straight_branch
+from supercoil.problems.tweezers.straight import resolution_note, straight_branch
 from supercoil.problems.tweezers.verify import verify_bifurcations
 
 # a note when the sliding's phase row holds a force above this (a hundred times the
@@ -113,6 +113,9 @@ def tweezers_branches(options: TweezersOptions,
             return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
                                   tuple(notes))
         point = bifurcations[0]
+        coarse = resolution_note(opts, point.parameter)
+        if coarse is not None:
+            notes.append(coarse)
         free_name = "buckled"
         start = time.perf_counter()
         free_complete = stored.get(free_name, (None, False))[1]

@@ -30,7 +30,6 @@ from supercoil.continuation import (
     continuation,
 )
 
-
 # a run that refused its first point is started again from the same point with its
 # first step shortened by this factor, at most this many times (see follow)
 REFUSED_SHRINK = 0.25

@@ -114,6 +114,9 @@ class ClampedRodEnergy(RodEnergy):
         # the tail ratio below which near_symmetry_modes offers the sliding of a
         # localised structure (None: never)
         self.sliding_tail: float | None = sliding_threshold(n)
+        # a rod with self-contact does not pass through itself (admissible); a phantom
+        # rod, without it, may
+        self.impenetrable = False
         self.refusal: str | None = None  # why admissible() refused the last state
 
     twist_parameter = "turns"
@@ -237,7 +240,8 @@ class ClampedRodEnergy(RodEnergy):
 
     def admissible(self, q: np.ndarray) -> bool:
         """Whether the rod has not passed through itself at ``q`` (the continuation's
-        per-step guard; ``refusal`` says why a state was refused).
+        per-step guard; ``refusal`` says why a state was refused); always True unless
+        ``impenetrable`` (a phantom rod may cross itself).
 
         Without self-contact nothing stops a strand of the rod from crossing another
         within one continuation step, and a localised loop closing on itself does so
@@ -252,6 +256,8 @@ class ClampedRodEnergy(RodEnergy):
         strand can have reached a tail."""
         from supercoil.topology import writhe
 
+        if not self.impenetrable:
+            return True
         x = np.asarray(q, dtype=float).reshape(-1, 3)
         z = x[:, 2]
         if not np.all((z[2:-2] > z[0]) & (z[2:-2] < z[-1])):

@@ -50,6 +50,8 @@ def clamped_problem(options: TweezersOptions) -> tuple[ClampedRodEnergy, np.ndar
         problem = ClampedRodEnergy(rod, pts, opts.turns[0], end_distance_control=True)
     if not opts.loop_sliding:
         problem.sliding_tail = None  # the sliding is never an approximate symmetry
+    # with self-contact, the contact-free branches must not pass through the rod
+    problem.impenetrable = opts.length_over_diameter is not None
     return problem, pts.ravel()
 
 

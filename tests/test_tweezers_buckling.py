@@ -4,6 +4,7 @@ branch and its localisation into a loop (Champneys & Thompson 1996)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -86,3 +87,17 @@ def test_loop_localises_past_the_sliding_threshold_at_lambda_150():
     assert tails[0] > sliding_threshold(202) > tails[-1]
     assert buckled.parameter_values[-1] < buckled.parameter_values[0] - 1.0
     assert math.isfinite(buckled.parameter_values[-1])
+
+
+def test_loop_sliding_applies_only_where_the_mesh_resolves_the_loops_core():
+    """The loop's core is sqrt(A/F) = L / lambda long: on segments longer than that the
+    mesh pins the loop, and its sliding is no approximate symmetry (no phase row)."""
+    def opts(n):
+        return TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=22500.0,
+                               n_nodes=n, loop_sliding=True)
+
+    assert not opts(102).loop_slides and opts(152).loop_slides
+    assert not dataclasses.replace(opts(152), loop_sliding=False).loop_slides
+    rod, _ = clamped_problem(opts(102))
+    assert rod.sliding_tail is None and rod.impenetrable
+    assert clamped_problem(opts(152))[0].sliding_tail == sliding_threshold(152)

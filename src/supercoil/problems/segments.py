@@ -202,6 +202,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
             break
         if len(run) >= 2:
             last = run
+        elif len(last) < 2:  # no step yet to start the next run from
+            break
         q = last.states[-1]
         setattr(problem, last.parameter, float(last.parameter_values[-1]))
         problem.accept(q)

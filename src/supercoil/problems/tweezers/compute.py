@@ -74,10 +74,6 @@ def tweezers_branches(options: TweezersOptions,
         notes.append(f"segments ({rod.rod.edge_length:.3g} L) are longer than the tube "
                      f"diameter ({D:.3g} L): contact lines are under-resolved; use --nodes >= "
                      f"{int(np.ceil(rod.rod.length / D)) + 2}")
-    if opts.loop_sliding and not opts.loop_slides:
-        notes.append(f"loop_sliding is not applied: the segments ({rod.rod.edge_length:.3g} L) "
-                     f"are longer than the loop's core sqrt(A/F) "
-                     f"({1 / np.sqrt(opts.tension):.3g} L), which the mesh pins")
     straight_records = tweezers_records(rod, rod, False, probe)
     free_records = RunRecords(straight_records)
     events = (onset_event(probe),) if probe is not None else ()
@@ -93,6 +89,10 @@ def tweezers_branches(options: TweezersOptions,
                               else (on_point, None))
     pinned = pin_stop(rod)
     free_stop = either(past_onset, pinned)
+    if opts.loop_sliding and not opts.loop_slides:
+        notes.append(f"loop_sliding is not applied: the segments ({rod.rod.edge_length:.3g} L) "
+                     f"are longer than the loop's core sqrt(A/F) "
+                     f"({1 / np.sqrt(opts.tension):.3g} L), which the mesh pins")
     branches: list[Branch] = []
     start = time.perf_counter()
     if opts.load_control:

@@ -224,3 +224,7 @@ def test_a_rod_with_self_contact_does_not_pass_through_itself():
     beyond = under.reshape(-1, 3).copy()
     beyond[100, 2] = -0.1
     assert p.admissible(beyond.ravel())
+    # from a state whose closure is off by 2 (as after a pass through a tail), the
+    # same closure is admitted and the crossing back refused
+    p.accept(under)
+    assert p.admissible(under) and not p.admissible(over)

@@ -117,6 +117,7 @@ class ClampedRodEnergy(RodEnergy):
         # a rod with self-contact does not pass through itself (admissible); a phantom
         # rod, without it, may
         self.impenetrable = False
+        self._accepted: tuple[np.ndarray | None, float | None] = (None, None)
         self.refusal: str | None = None  # why admissible() refused the last state
 
     twist_parameter = "turns"
@@ -159,6 +160,7 @@ class ClampedRodEnergy(RodEnergy):
         from supercoil.rod import kernels
 
         q = np.asarray(q, dtype=float)
+        self._accepted = (q.copy(), None)  # admissible's reference (its closure, lazily)
         t_new = self._edge_vectors(q)
         t_new = t_new / np.linalg.norm(t_new, axis=1, keepdims=True)
         jump = bool(np.min(np.sum(t_new * self._tangents, axis=1))
@@ -253,7 +255,8 @@ class ClampedRodEnergy(RodEnergy):
         (:meth:`writhe_local`) is continuous: Fuller's closure ``Tw + Wr = turns``
         then fails by 2. The rod passing through a tail does the same, so the test is
         made only where every node lies strictly between the ends' planes, where no
-        strand can have reached a tail."""
+        strand can have reached a tail, and against the closure of the last accepted
+        state (which an earlier pass through a tail left off by 2)."""
         from supercoil.topology import writhe
 
         if not self.impenetrable:
@@ -262,11 +265,20 @@ class ClampedRodEnergy(RodEnergy):
         z = x[:, 2]
         if not np.all((z[2:-2] > z[0]) & (z[2:-2] < z[-1])):
             return True
-        error = abs(writhe(x, closure="axis", self_crossing="nan") - self.writhe_local(q))
-        if error <= CROSSING_CLOSURE:
+        error = writhe(x, closure="axis", self_crossing="nan") - self.writhe_local(q)
+        # against the accepted state's closure (an earlier pass through a tail leaves it
+        # off by 2), computed once per accepted state
+        accepted, before = self._accepted
+        if before is None:
+            before = 0.0
+            if accepted is not None:
+                before = writhe(accepted.reshape(-1, 3), closure="axis",
+                                self_crossing="nan") - self.writhe_local(accepted)
+                self._accepted = (accepted, before)
+        if abs(error - before) <= CROSSING_CLOSURE:
             return True
         self.refusal = (f"the rod passed through itself (Fuller's closure Tw + Wr = turns "
-                        f"failed by {error:.3g})")
+                        f"changed by {error - before:.3g})")
         return False
 
     def near_symmetry_modes(self, q: np.ndarray) -> np.ndarray:

@@ -265,6 +265,8 @@ class ClampedRodEnergy(RodEnergy):
         z = x[:, 2]
         if not np.all((z[2:-2] > z[0]) & (z[2:-2] < z[-1])):
             return True
+        if np.max(np.abs(x[:, :2])) <= 1e-9 * self.rod.length:
+            return True  # straight: nothing to cross (and no double sum to pay)
         error = writhe(x, closure="axis", self_crossing="nan") - self.writhe_local(q)
         # against the accepted state's closure (an earlier pass through a tail leaves it
         # off by 2), computed once per accepted state

@@ -11,7 +11,7 @@ from supercoil.problems.branch_options import PREDICTORS, branch_tolerances, che
 
 # the loop's sliding is an approximate symmetry only on segments no longer than this
 # many times sqrt(A/F) (TweezersOptions.loop_slides)
-SLIDING_CORE = 1.0
+SLIDING_CORE = 0.5
 
 
 @dataclass(frozen=True)
@@ -45,7 +45,7 @@ class TweezersOptions:
     (``ContactOptions.curve``); ``loop_sliding``: treat the sliding of a localised
     loop with straight tails as an approximate symmetry (a phase row on the
     contact-free branch, out of the unstable count; docs/continuation.md, "Long open
-    rods"; not on segments longer than ``sqrt(A/F)``, :attr:`loop_slides`): it lets
+    rods"; not on segments longer than ``sqrt(A/F) / 2``, :attr:`loop_slides`): it lets
     long rods at lambda of about 20 reach their contact where the corrector otherwise
     diverges along the nearly free sliding, but the 3 kbp hat curve at 1 pN (lambda
     about 71) then stops at its contact onset, so it is off by default;
@@ -111,11 +111,15 @@ class TweezersOptions:
     @property
     def loop_slides(self) -> bool:
         """``loop_sliding`` where it applies: not on a mesh whose segments are longer than
-        ``SLIDING_CORE`` times the loop's core ``sqrt(A/F)`` (the core spans about a
-        segment, and moving it costs the energy of the mesh, which a phase row then
-        holds: measured at L/D = 100, lambda = 150, N = 102, a force of 4.4 held, and
-        the contact-free branch stopped where the row came and went; without the row it
-        reached its contact)."""
+        ``SLIDING_CORE`` times the loop's core ``sqrt(A/F)`` (the core spans a segment
+        or two, and moving it costs the energy of the mesh, which a phase row then
+        holds). Measured, the force held (the KKT residual without the row): 2e-5 to
+        5e-5 at ``h sqrt(F/A)`` = 0.37-0.4 (lambda = 40, 80, 150); 0.17-4.4 at 0.74-1.5
+        (lambda = 80, 150), where the contact-free states are no equilibria and the
+        contact branch, without the row, did not start from them (L/D = 200, lambda =
+        150, N = 202: without the row it starts and reaches 20.9 turns in 300 points),
+        or the branch stopped where the row came and went (N = 102: without it, it
+        reaches its contact)."""
         if not self.loop_sliding:
             return False
         if not self.load_control or not self.tension:

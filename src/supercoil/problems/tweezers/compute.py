@@ -91,7 +91,7 @@ def tweezers_branches(options: TweezersOptions,
     free_stop = either(past_onset, pinned)
     if opts.loop_sliding and not opts.loop_slides:
         notes.append(f"loop_sliding is not applied: the segments ({rod.rod.edge_length:.3g} L) "
-                     f"are longer than the loop's core sqrt(A/F) "
+                     f"are longer than half the loop's core sqrt(A/F) "
                      f"({1 / np.sqrt(opts.tension):.3g} L), which the mesh pins")
     branches: list[Branch] = []
     start = time.perf_counter()

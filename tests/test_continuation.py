@@ -188,6 +188,43 @@ def test_follow_repicks_pins_where_their_grip_is_lost_and_fails_when_fresh_pins_
         assert np.all(branch.states[:, 16] <= 0.6)
 
 
+def test_follow_lands_within_a_restart_stops_band_with_shorter_first_steps():
+    """segments.follow(restart=...): a stop with hysteresis, made for each run from its
+    first state, refuses states past its band on the far side (as the tweezers' sliding
+    stop does). A step that crosses the whole band is refused by the run that starts on
+    either side of it; the run is started again with shorter first steps until one lands
+    within the band, and the branch goes on to its bound. Oracles: the bound reached, a
+    point within the band, every run's states on one side of it."""
+    from supercoil.problems.segments import follow
+
+    low, high = 0.5, 0.52  # u(1/2): the band, narrower than a step
+    p = Bratu(32, 1.0)
+    opts = ContinuationOptions(parameter_bounds=(1.0, 3.0), initial_step=0.05, max_step=0.5,
+                               max_points=200)
+
+    def restart(q0):
+        above = q0[16] >= low
+
+        def refuse(q):
+            if not above and q[16] >= high:
+                return "crossed the band upwards"
+            if above and q[16] < low:
+                return "crossed the band downwards"
+            return None
+
+        return refuse
+
+    first = continuation(p, np.zeros(33), parameter="lam", options=opts,
+                         stop=restart(np.zeros(33)))
+    assert first.status is ContinuationStatus.STOPPED  # one step crossed the band
+    branch, _ = follow(p, _NoPins(p), first, opts, "bratu", None, max_points=200,
+                       segment_points=200, restart=restart)
+    assert branch.status is ContinuationStatus.PARAMETER_BOUND, branch.message
+    u = branch.states[:, 16]
+    assert np.any((u >= low) & (u < high))
+    assert u[-1] > high
+
+
 def test_bratu_through_the_fold_comes_back_down_the_upper_branch():
     user = UserEvent("threshold", lambda q, mu, lam: {"u_mid_minus_1": q[16] - 1.0})
     p = Bratu(32, 1.0)

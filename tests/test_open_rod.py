@@ -188,3 +188,43 @@ def test_accept_after_a_jump_restores_twist_from_the_writhe():
         p.accept(q)
         wr = writhe(q.reshape(-1, 3), closure="axis")
         assert p.twist(q) + wr == pytest.approx(p.turns, abs=1e-10)
+
+
+def looped_rod(n, gap):
+    """A clamped rod with a planar loop in the x-z plane whose strands cross, over each
+    other at ``gap > 0`` (along y) and under at ``gap < 0``."""
+    pts = straight_rod(n)
+    z = pts[:, 2]
+    inside = (z > 0.3) & (z < 0.7)
+    v = (z[inside] - 0.3) / 0.4
+    pts[inside, 2] = 0.3 + 0.4 * (v + np.sin(2 * np.pi * v) / np.pi)  # backwards for a while
+    pts[inside, 0] = 0.05 * (1 - np.cos(2 * np.pi * v))
+    pts[inside, 1] = gap * np.sin(2 * np.pi * v) * np.sin(np.pi * v) ** 2
+    return pts
+
+
+def test_a_rod_with_self_contact_does_not_pass_through_itself():
+    """Oracle: Fuller's closure turns = Tw + Wr. Moving one strand of a loop through the
+    other changes the double-sum writhe by 2 while the twist carried by the frames moves
+    continuously: the crossed state is refused, the phantom rod admits it."""
+    p, _pts = make(n=200)
+    over, under = (looped_rod(200, g).ravel() for g in (0.01, -0.01))
+    # 2 from the crossing, less the continuous change of the strands' 0.02 L move
+    assert abs(writhe(over.reshape(-1, 3), closure="axis") - writhe(
+        under.reshape(-1, 3), closure="axis")) == pytest.approx(2.0, abs=0.1)
+    p.accept(over)  # a jump from the straight rod: Tw = turns - Wr
+    assert p.admissible(over) and p.admissible(under)  # a phantom rod by default
+    p.impenetrable = True
+    assert p.admissible(over)
+    assert p.twist(over) + writhe(over.reshape(-1, 3), closure="axis") == pytest.approx(
+        p.turns, abs=1e-10)
+    assert not p.admissible(under)
+    assert "passed through itself" in p.refusal
+    # past a tail (a node beyond an end's plane) the closure cannot tell: admitted
+    beyond = under.reshape(-1, 3).copy()
+    beyond[100, 2] = -0.1
+    assert p.admissible(beyond.ravel())
+    # from a state whose closure is off by 2 (as after a pass through a tail), the
+    # same closure is admitted and the crossing back refused
+    p.accept(under)
+    assert p.admissible(under) and not p.admissible(over)

@@ -248,19 +248,28 @@ def test_every_branch_reaches_its_bound_on_a_small_grid(ld, lam):
     assert result.branches[-1].parameter_values[-1] == pytest.approx(stop, abs=1e-9)
 
 
-def test_a_branch_back_at_the_first_turn_without_contact_is_incomplete():
-    """C/A = 1.5, L/D = 200, lambda = 10, N = n0: the subcritical branch folds back to
-    0 turns before its loop touches itself; the plectoneme is not reached, and the
-    result says so (not ok: the command exits 1)."""
+def test_a_thin_rods_loop_touches_itself_just_above_one_turn():
+    """C/A = 1.5, L/D = 200, lambda = 10, N = n0: the subcritical branch is the localised
+    loop (Love; Coyne 1990), whose writhe approaches 1 while its twist and torque fall
+    with the end rotation; a thin rod's loop closes on itself where Tw is small, at
+    turns = Tw + Wr just above 1, long before the branch could come back to 0 turns.
+    Oracle: Fuller's closure at every point (the rod never passed through itself: a
+    phantom rod's step from 1.06 to 0.96 turns carries one strand through the other, Wr
+    jumping from 0.97 to -0.98 with the gap above D at both points), the writhe at the
+    onset and the contact branch's start."""
     result = tweezers_branches(TweezersOptions(
         twist_ratio=1.5, length_over_diameter=200, tension=100.0, n_nodes=202,
-        turns=(0.0, 3.34)))
+        turns=(0.0, 3.34), max_points=30))
     buckled = result.branch("buckled")
-    assert buckled.parameter_values[-1] == 0.0
-    assert not buckled.points_of_kind("contact_onset")
-    assert not result.ok
-    assert any(n.startswith("incomplete: buckled ended at 0 turns without contact")
-               for n in result.notes)
+    r = buckled.records
+    assert np.max(np.abs(r["twist"] + r["writhe"] - r["turns"])) < 1e-9
+    assert np.all(np.diff(buckled.parameter_values) < 0)  # subcritical, to the onset
+    (onset,) = buckled.points_of_kind("contact_onset")
+    assert 1.0 < onset.parameter < 1.1
+    assert onset.records["writhe"] == pytest.approx(1.0, abs=0.05)
+    assert 0 < onset.records["twist"] < 0.1
+    assert onset.records["min_gap_over_diameter"] == pytest.approx(1.0, abs=1e-6)
+    assert result.branches[-1].name == "buckled_contact"
 
 
 class ContactStarted(Exception):

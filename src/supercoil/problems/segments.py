@@ -33,6 +33,11 @@ from supercoil.continuation import (
 from supercoil.continuation.carry import frames_at
 from supercoil.solvers.carried import carried
 
+# a run that refused its first point is started again from the same point with its
+# first step shortened by this factor, at most this many times (see follow)
+REFUSED_SHRINK = 0.25
+REFUSED_RETRIES = 4
+
 
 class PinnedRod(Protocol):
     fixed: np.ndarray
@@ -200,7 +205,13 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
     ``restart(q)``: a ``stop`` made for each run from its first state ``q``, asked
     after ``refuse`` (e.g. the end of a run where the state's approximate symmetries
     change, so that the next run starts with the phase rows they need); the run
-    then ends ``STOPPED`` and the next one starts at its last point.
+    then ends ``STOPPED`` and the next one starts at its last point. A run that refuses
+    its very first point starts again from the same point with its first step shortened
+    by ``REFUSED_SHRINK``, at most ``REFUSED_RETRIES`` times: a stop with hysteresis
+    (:func:`~supercoil.problems.tweezers.pins.sliding_stop`) is refused by both sides
+    when one step crosses its whole band (measured at L/D = 200, lambda = 150, N = 202:
+    the sliding's tail ratio fell threefold a step on the localising loop, from 2.4e-4
+    to 8.4e-5 across the band 1.1e-4 to 2.4e-4), and a shorter step lands within it.
 
     ``on_run(index)``: called before each later run with the index of its first point
     on the merged branch (e.g. to record where each run starts, so that an interrupted
@@ -213,26 +224,39 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
     pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
     total = len(first)
     run = first
+    last = first  # the last run with a step (its tangent and step start the next run)
     stopped_at = None
     stuck = False
+    shorter = 1.0  # the next run's first step, as a fraction of the last run's last
     while run.ok and total < max_points and not (stop and stop(run)) \
             and run.status.name in ("MAX_POINTS", "STOPPED"):
         if run.status.name == "STOPPED":
-            if stopped_at == total:  # fresh pins refused the very next point too
-                stuck = True
-                break
+            if stopped_at == total:  # the fresh run refused its very first point too
+                # a shorter first step lands between the refusals' thresholds (a stop
+                # with hysteresis: one step crossed its whole band)
+                shorter *= REFUSED_SHRINK
+                if shorter < REFUSED_SHRINK ** REFUSED_RETRIES:
+                    stuck = True
+                    break
+            else:
+                shorter = 1.0
             stopped_at = total
         elif len(run) < 2:
             break
-        q = run.states[-1]
+        if len(run) >= 2:
+            last = run
+        elif len(last) < 2:  # no step yet to start the next run from
+            break
+        q = last.states[-1]
         if run.status.name == "STOPPED" or rod.pin_quality(q) < quality:
             set_pin(problem, rod, q)
             pins.append((total - 1, tuple(int(d) for d in rod.gauge_dofs)))
-        # the next run starts with the frames this one ended with (problem unchanged)
-        carrying = carried(frames_at(problem, run, len(run) - 1), q)
-        direction = 1 if run.tangents[-1, -1] >= 0 else -1
-        step = float(np.clip(run.arclength[-1] - run.arclength[-2], options.min_step,
-                             options.max_step))
+        # the next run starts with the frames the last run with a step ended with
+        # (problem unchanged)
+        carrying = carried(frames_at(problem, last, len(last) - 1), q)
+        direction = 1 if last.tangents[-1, -1] >= 0 else -1
+        step = float(np.clip(shorter * (last.arclength[-1] - last.arclength[-2]),
+                             options.min_step, options.max_step))
         opts = dataclasses.replace(options if run_options is None else run_options(q),
                                    direction=direction, initial_step=step,
                                    max_points=min(segment_points, max_points - total + 1))
@@ -244,8 +268,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         held = None if grip is None else grip_stop(grip, q, grip_fraction)
         if on_run is not None:
             on_run(total - 1)
-        run = continuation(carrying, q, run.multipliers[-1], parameter=run.parameter,
-                           start=float(run.parameter_values[-1]),
+        run = continuation(carrying, q, last.multipliers[-1], parameter=last.parameter,
+                           start=float(last.parameter_values[-1]),
                            options=opts, name=name, records=records, events=events,
                            on_point=report,
                            stop=either(held, refuse, None if restart is None else restart(q)))
@@ -256,7 +280,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         merged = dataclasses.replace(
             merged, status=ContinuationStatus.STEP_TOO_SMALL,
             message=f"stopped after {total} points: freshly picked pins refused the next "
-                    f"point too ({merged.message})")
+                    f"point too, with first steps down to {shorter / REFUSED_SHRINK:.2g} of "
+                    f"the last ({merged.message})")
     elif merged.ok and total >= max_points and merged.status.name in ("MAX_POINTS", "STOPPED"):
         merged = dataclasses.replace(merged, status=ContinuationStatus.MAX_POINTS,
                                      message=f"{total} points computed (max_points)")

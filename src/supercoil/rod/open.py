@@ -43,6 +43,9 @@ def straight_rod(n_nodes: int, length: float = 1.0) -> np.ndarray:
 SLIDING_ENDS = 0.05
 SLIDING_TAIL = 1e-4
 SLIDING_NODES = 160  # ... at up to this many nodes; beyond, sliding_threshold
+# the rod has passed through itself where Fuller's closure fails by more than this (a
+# crossing changes the writhe by 2; ClampedRodEnergy.admissible)
+CROSSING_CLOSURE = 0.5
 
 
 # the most a phase row's anchor moves a structure towards the rod's middle per step, in
@@ -116,6 +119,11 @@ class ClampedRodEnergy(RodEnergy):
         # the tail ratio below which near_symmetry_modes offers the sliding of a
         # localised structure (None: never)
         self.sliding_tail: float | None = sliding_threshold(n)
+        # a rod with self-contact does not pass through itself (admissible); a phantom
+        # rod, without it, may
+        self.impenetrable = False
+        self._accepted: tuple[np.ndarray | None, float | None] = (None, None)
+        self.refusal: str | None = None  # why admissible() refused the last state
 
     twist_parameter = "turns"
     parameters = ("turns", "tension")
@@ -160,6 +168,7 @@ class ClampedRodEnergy(RodEnergy):
         from supercoil.rod import kernels
 
         q = np.asarray(q, dtype=float)
+        self._accepted = (q.copy(), None)  # admissible's reference (its closure, lazily)
         t_new = self._edge_vectors(q)
         t_new = t_new / np.linalg.norm(t_new, axis=1, keepdims=True)
         jump = bool(np.min(np.sum(t_new * self._tangents, axis=1))
@@ -238,6 +247,49 @@ class ClampedRodEnergy(RodEnergy):
     def writhe_local(self, q: np.ndarray) -> float:
         """Writhe with axial tails from the reference twist (no double sum): ``turns - Tw``."""
         return self.turns - self.twist(q)
+
+    def admissible(self, q: np.ndarray) -> bool:
+        """Whether the rod has not passed through itself at ``q`` (the continuation's
+        per-step guard; ``refusal`` says why a state was refused); always True unless
+        ``impenetrable`` (a phantom rod may cross itself).
+
+        Without self-contact nothing stops a strand of the rod from crossing another
+        within one continuation step, and a localised loop closing on itself does so
+        (the loop of a thin rod, Coyne 1990: its crossing gap falls to zero as the
+        torque does): between two accepted points the closest approach went 1.8 D,
+        (crossing), 1.2 D, never below ``D`` at a point, and the contact onset was
+        missed (L/D = 200, F L^2/A = 100, N = 202). A crossing changes the double-sum
+        writhe of the rod closed by tails along the axis by 2, while ``turns - Tw``
+        (:meth:`writhe_local`) is continuous: Fuller's closure ``Tw + Wr = turns``
+        then fails by 2. The rod passing through a tail does the same, so the test is
+        made only where every node lies strictly between the ends' planes, where no
+        strand can have reached a tail, and against the closure of the last accepted
+        state (which an earlier pass through a tail left off by 2)."""
+        from supercoil.topology import writhe
+
+        if not self.impenetrable:
+            return True
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        z = x[:, 2]
+        if not np.all((z[2:-2] > z[0]) & (z[2:-2] < z[-1])):
+            return True
+        if np.max(np.abs(x[:, :2])) <= 1e-9 * self.rod.length:
+            return True  # straight: nothing to cross (and no double sum to pay)
+        error = writhe(x, closure="axis", self_crossing="nan") - self.writhe_local(q)
+        # against the accepted state's closure (an earlier pass through a tail leaves it
+        # off by 2), computed once per accepted state
+        accepted, before = self._accepted
+        if before is None:
+            before = 0.0
+            if accepted is not None:
+                before = writhe(accepted.reshape(-1, 3), closure="axis",
+                                self_crossing="nan") - self.writhe_local(accepted)
+                self._accepted = (accepted, before)
+        if abs(error - before) <= CROSSING_CLOSURE:
+            return True
+        self.refusal = (f"the rod passed through itself (Fuller's closure Tw + Wr = turns "
+                        f"changed by {error - before:.3g})")
+        return False
 
     def near_symmetry_modes(self, q: np.ndarray) -> np.ndarray:
         """Sliding a localised structure along the rod, ``(1, n_dofs)``, where it is an

@@ -34,10 +34,11 @@ from supercoil.problems.tweezers.pins import (
 from supercoil.rod.open import ClampedRodEnergy
 from supercoil.solvers.newton import NewtonOptions, newton
 
-SWITCH_AMPLITUDE = 2e-2  # first point of the buckled branch from the bifurcation (arclength)
-# tried in turn when the switch finds no point (the subcritical branch turns back sharply
-# under a large tension: measured at F L^2/A = 900, N = 120, 2e-2 diverged)
-SWITCH_AMPLITUDES = (SWITCH_AMPLITUDE, 5e-3, 1e-3)
+SWITCH_AMPLITUDE = 2e-2  # largest first step of the buckled branch (arclength)
+# The first point's distance from the bifurcation, as the largest angle (radians) by
+# which it turns an edge of the rod: tried in turn until one gives a point (see
+# switch_amplitudes)
+SWITCH_ANGLES = (0.2, 0.05, 0.01)
 
 
 def stored_pins(branch: Branch) -> tuple[tuple[int, tuple[int, ...]], ...]:
@@ -106,11 +107,12 @@ def switch_off_straight(rod: ClampedRodEnergy, straight: Branch, point: SpecialP
     """The first run of the buckled branch ``name``, switched from the straight rod's
     bifurcation ``point`` along its critical mode turned so that the pinned node moves
     along +x (:func:`~supercoil.problems.tweezers.pins.pin_node`); the amplitudes of
-    ``SWITCH_AMPLITUDES`` tried in turn until one gives a point."""
+    :func:`switch_amplitudes` tried in turn until one gives a point."""
     direction, node = rotated_mode(point.critical_modes[0])
     first = None
-    for amplitude in SWITCH_AMPLITUDES:
-        if amplitude == SWITCH_AMPLITUDES[0]:
+    amplitudes = switch_amplitudes(rod, direction)
+    for amplitude in amplitudes:
+        if amplitude == amplitudes[0]:
             say(f"{name}: switched from the straight rod at {point.parameter:.6g} turns")
         pin_node(rod, node)
         first = switch_branch(rod, straight, point,
@@ -120,6 +122,28 @@ def switch_off_straight(rod: ClampedRodEnergy, straight: Branch, point: SpecialP
         if len(first):
             break
     return first
+
+
+def switch_amplitudes(rod: ClampedRodEnergy, mode: np.ndarray) -> tuple[float, ...]:
+    """The first point's distances from the bifurcation along ``mode`` (arclength metric)
+    to try in turn: those at which the mode turns the rod's most bent edge by the angles
+    ``SWITCH_ANGLES``, at most ``SWITCH_AMPLITUDE``.
+
+    The critical mode of a long rod under tension is a helix of wavenumber close to
+    ``sqrt(F/A)`` under a slow envelope (Greenhill's clamped condition,
+    :mod:`supercoil.problems.greenhill`): its largest slope per unit amplitude grows
+    like ``L sqrt(F/A)`` (measured: 12 at ``lambda = 10``, 54 at 40, 98 at 80, 190-205 at
+    150, in the arclength metric), so a fixed amplitude is a small deflection at small
+    ``lambda`` and several radians at large ones. The branch is subcritical, its turns
+    falling like the square of the amplitude, and the straight rod's next bifurcations
+    (the envelope's next modes) lie close above (0.02-0.08 turns at ``lambda = 150``):
+    at ``lambda = 150`` the corrector diverged from amplitudes turning the rod by 0.1-3
+    radians and converged from 0.05 radians (N = 102 to 404)."""
+    x = np.asarray(mode, dtype=float).reshape(-1, 3)
+    slope = float(np.max(np.linalg.norm(np.diff(x, axis=0), axis=1))) / rod.rod.edge_length
+    norm = float(np.sqrt(np.sum(np.asarray(rod.mass, dtype=float) * np.ravel(mode) ** 2)))
+    per_angle = norm / slope if slope > 0 else SWITCH_AMPLITUDE
+    return tuple(min(SWITCH_AMPLITUDE, angle * per_angle) for angle in SWITCH_ANGLES)
 
 
 def clamped_buckle_run(rod: ClampedRodEnergy, q0: np.ndarray, options: ContinuationOptions,

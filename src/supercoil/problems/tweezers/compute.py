@@ -37,7 +37,7 @@ from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
 from supercoil.problems.tweezers.result import TweezersResult
-from supercoil.problems.tweezers.straight import straight_branch
+from supercoil.problems.tweezers.straight import resolution_note, straight_branch
 from supercoil.problems.tweezers.verify import verify_bifurcations
 
 # a note when the sliding's phase row holds a force above this (a hundred times the
@@ -95,6 +95,10 @@ def tweezers_branches(options: TweezersOptions,
                               else (on_point, None))
     pinned = pin_stop(rod)
     free_stop = either(past_onset, pinned)
+    if opts.loop_sliding and not opts.loop_slides:
+        notes.append(f"loop_sliding is not applied: the segments ({rod.rod.edge_length:.3g} L) "
+                     f"are longer than half the loop's core sqrt(A/F) "
+                     f"({1 / np.sqrt(opts.tension):.3g} L), which the mesh pins")
     branches: list[Branch] = []
     start = time.perf_counter()
     if opts.load_control:
@@ -119,6 +123,9 @@ def tweezers_branches(options: TweezersOptions,
             return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
                                   tuple(notes))
         point = bifurcations[0]
+        coarse = resolution_note(opts, point.parameter)
+        if coarse is not None:
+            notes.append(coarse)
         free_name = "buckled"
         start = time.perf_counter()
         free_complete = stored.get(free_name, (None, False))[1]

@@ -140,7 +140,7 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     # in contact the discrete contact makes the sliding of the plectoneme stiff, of
     # either sign: no phase row, but out of the count while the tails are straight
     # (docs/continuation.md, "Long open rods: the sliding of a localised structure")
-    if opts.loop_sliding:
+    if opts.loop_slides:
         rod.sliding_tail = SLIDING_TAIL_CONTACT
     k = contact_start(free, onset, cp)
     q = free.states[k]

@@ -9,6 +9,10 @@ from supercoil import checks
 from supercoil.contact.options import validate_contact_choice
 from supercoil.problems.branch_options import PREDICTORS, branch_tolerances, check_steps
 
+# the loop's sliding is an approximate symmetry only on segments no longer than this
+# many times sqrt(A/F) (TweezersOptions.loop_slides)
+SLIDING_CORE = 0.5
+
 
 @dataclass(frozen=True)
 class TweezersOptions:
@@ -41,11 +45,12 @@ class TweezersOptions:
     (``ContactOptions.curve``); ``loop_sliding``: treat the sliding of a localised
     loop with straight tails as an approximate symmetry (a phase row on the
     contact-free branch, out of the unstable count; docs/continuation.md, "Long open
-    rods"): it lets long rods reach their contact where the corrector otherwise
-    diverges along the nearly free sliding and keeps a centred loop centred, but from
-    the centred loop the 3 kbp hat curve at 1 pN (lambda about 71) comes back onto
-    itself at a symmetry-breaking bifurcation of its contact branch, so it is off by
-    default; ``contact_formulation``: ``"integral"``
+    rods"; not on segments longer than ``sqrt(A/F) / 2``, :attr:`loop_slides`): it lets
+    long rods reach their contact where the corrector otherwise diverges along the nearly
+    free sliding and keeps a centred loop centred, but from the centred loop the 3 kbp
+    hat curve at 1 pN (lambda about 71) comes back onto itself at a symmetry-breaking
+    bifurcation of its contact branch, so it is off by default; ``contact_formulation``:
+    ``"integral"``
     (default) or ``"pairs"`` (``ContactOptions.formulation``). The default,
     the double integral over the B-spline, counts a contact once wherever it
     lies relative to the nodes: the pair sum on the polygon made a sawtooth
@@ -100,6 +105,24 @@ class TweezersOptions:
     @property
     def load_control(self) -> bool:
         return self.tension is not None
+
+    @property
+    def loop_slides(self) -> bool:
+        """``loop_sliding`` where it applies: not on a mesh whose segments are longer than
+        ``SLIDING_CORE`` times the loop's core ``sqrt(A/F)`` (the core spans a segment
+        or two, and moving it costs the energy of the mesh, which a phase row then
+        holds). Measured, the force held (the KKT residual without the row): 2e-5 to
+        5e-5 at ``h sqrt(F/A)`` = 0.37-0.4 (lambda = 40, 80, 150); 0.17-4.4 at 0.74-1.5
+        (lambda = 80, 150), where the contact-free states are no equilibria and the
+        contact branch, without the row, did not start from them (L/D = 200, lambda =
+        150, N = 202: without the row it starts and reaches 20.9 turns in 300 points),
+        or the branch stopped where the row came and went (N = 102: without it, it
+        reaches its contact)."""
+        if not self.loop_sliding:
+            return False
+        if not self.load_control or not self.tension:
+            return True
+        return math.sqrt(self.tension) / (self.n_nodes - 2) <= SLIDING_CORE
 
     @property
     def diameter(self) -> float | None:

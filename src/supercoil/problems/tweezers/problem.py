@@ -48,8 +48,10 @@ def clamped_problem(options: TweezersOptions) -> tuple[ClampedRodEnergy, np.ndar
     else:
         pts = clamped_buckle(opts.n_nodes, opts.end_distance)
         problem = ClampedRodEnergy(rod, pts, opts.turns[0], end_distance_control=True)
-    if not opts.loop_sliding:
+    if not opts.loop_slides:
         problem.sliding_tail = None  # the sliding is never an approximate symmetry
+    # with self-contact, the contact-free branches must not pass through the rod
+    problem.impenetrable = opts.length_over_diameter is not None
     return problem, pts.ravel()
 
 

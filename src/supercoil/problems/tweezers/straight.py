@@ -22,6 +22,9 @@ STRAIGHT_MAX_STEP = 1.0  # arclength step of the straight branch (see straight_b
 # relative departure from linearity in turns of the straight rod's Hessian above which
 # the pencil is not trusted (measured: 1e-17 of its largest entry at N = 100)
 PENCIL_LINEARITY = 1e-10
+# the located buckling above Greenhill's clamped condition by more than this relative
+# gap: the mesh under-resolves the buckling helix (resolution_note)
+GREENHILL_GAP = 0.05
 
 
 def straight_branch(options: TweezersOptions, problem: ClampedRodEnergy, q0: np.ndarray,
@@ -191,6 +194,38 @@ def straight_bifurcations(problem: ClampedRodEnergy, branch: Branch,
             records=dict(records(q, mu, at)) if records is not None else {}))
         before = after
     return tuple(specials)
+
+
+def resolution_note(options: TweezersOptions, buckling: float) -> str | None:
+    """A note when the straight rod's located buckling ``buckling`` (turns) lies more than
+    ``GREENHILL_GAP`` above Greenhill's clamped condition: the mesh under-resolves the
+    buckling helix, and the note names the ``--nodes`` that bring it within that gap.
+    None otherwise (or without tension).
+
+    The critical mode of a rod under the tension ``F`` is a helix of wavenumber close to
+    ``k = sqrt(F/A)`` (:mod:`supercoil.problems.greenhill`: ``M -> 2 sqrt(A F)`` for
+    long rods); on segments of length ``h`` the discrete rod buckles late by about
+    ``(k h)^2 / 8`` (measured at L/D = 100 and 200, ``lambda = L k = 150``, C/A = 1.5:
+    25 %, 6.8 % and 1.7 % at ``k h`` = 1.5, 0.74 and 0.37, against 28 %, 6.9 % and 1.7 %
+    from the estimate). Beyond ``k h`` of about 1 the localised loop into which the
+    branch grows (its core is ``sqrt(A/F)`` long) spans a segment or two and is pinned
+    by the mesh."""
+    if not options.load_control or not options.tension:
+        return None
+    from supercoil.problems.greenhill import critical_turns
+
+    exact = critical_turns(options.twist_ratio, options.tension)
+    gap = buckling / exact - 1.0
+    if not gap > GREENHILL_GAP:
+        return None
+    k = math.sqrt(options.tension)  # sqrt(F/A) in units of 1/L
+    h = 1.0 / (options.n_nodes - 2)
+    nodes = 2 + math.ceil(k / math.sqrt(8.0 * GREENHILL_GAP))
+    return (f"the straight rod buckles at {buckling:.6g} turns, {100 * gap:.3g} % above "
+            f"Greenhill's clamped condition ({exact:.6g}): its segments ({h:.3g} L) are "
+            f"{k * h:.2g} times the length sqrt(A/F) = {1 / k:.3g} L of the buckling helix "
+            f"and the localised loop, which this mesh under-resolves; --nodes >= {nodes} "
+            f"brings the buckling within {100 * GREENHILL_GAP:g} %")
 
 
 def straight_force_branch(options: TweezersOptions, turns: float,

@@ -42,6 +42,10 @@ unknowns, :mod:`supercoil.cosserat.centreline`), the first at arc length
 ``base.centreline_origin``: distances, guards and collision bounds are the
 centreline's, and the contact derivatives are scattered into ``q`` by the map. A rod
 without ``centreline_dofs`` (the Kirchhoff rod) has its nodes as its unknowns.
+
+The problem's answers for its rod (unknowns, pins, parameters, symmetries, carried
+frames) are :class:`~supercoil.contact.over_rod.OverRod`'s, and the guards of its
+steps (topology, curvature, collisions) :class:`~supercoil.contact.step_guards.StepGuards`'.
 """
 
 from __future__ import annotations
@@ -55,14 +59,15 @@ from supercoil.contact import potentials
 from supercoil.contact.curve import ContactCurve, PairState
 from supercoil.contact.integral import integral_terms
 from supercoil.contact.options import ContactOptions
-from supercoil.contact.step import LinkGuard, step_bound
-from supercoil.geometry.curves import min_radius_of_curvature
+from supercoil.contact.over_rod import OverRod
+from supercoil.contact.step import LinkGuard
+from supercoil.contact.step_guards import StepGuards
 from supercoil.solvers.csr_sum import block_csr, csr_add_blocks
 from supercoil.solvers.problem import HessianParts
 from supercoil.topology.knots.guard import KnotGuard
 
 
-class ContactProblem:
+class ContactProblem(OverRod, StepGuards):
     """A rod energy plus impenetrability; see the module docstring.
 
     ``base`` is a :class:`~supercoil.rod.energy.RodEnergy` (closed or clamped);
@@ -104,74 +109,6 @@ class ContactProblem:
         self.curvature_limit: float | None = None
         self._integral_memo = None  # see _integral()
         self.summary_memo: dict = {}  # contact_summary's (supercoil.contact.report)
-
-    # --------------------------------------------- the rod's, by name
-    @property
-    def n_dofs(self) -> int:
-        return self.base.n_dofs
-
-    @property
-    def mass(self) -> np.ndarray:
-        return self.base.mass
-
-    @property
-    def fixed(self) -> np.ndarray:
-        """The rod's pinned DOFs (clamps and gauge pins; re-pinning moves them)."""
-        return self.base.fixed
-
-    @fixed.setter
-    def fixed(self, value: np.ndarray) -> None:
-        self.base.fixed = value
-
-    @property
-    def gauge_dofs(self) -> np.ndarray:
-        return getattr(self.base, "gauge_dofs", np.zeros(0, dtype=np.int64))
-
-    @property
-    def parameters(self) -> tuple[str, ...]:
-        """The rod's load parameters (:meth:`at`)."""
-        return self.base.parameters
-
-    def at(self, **values: float) -> ContactProblem:
-        """This contact problem over the rod at other parameter values
-        (``base.at(**values)``); the contact state (active set, multipliers, guards,
-        curve) is shared, and this problem is unchanged."""
-        new = copy.copy(self)
-        new.base = self.base.at(**values)
-        return new
-
-    @property
-    def excess_link(self) -> float:
-        """The closed rod's excess link, a continuation parameter (:meth:`at`)."""
-        return self.base.excess_link
-
-    @property
-    def turns(self) -> float:
-        """The clamped rod's turns of the end clamp, a continuation parameter (:meth:`at`)."""
-        return self.base.turns
-
-    @property
-    def tension(self) -> float:
-        """The clamped rod's dead load, a continuation parameter (:meth:`at`)."""
-        return self.base.tension
-
-    @property
-    def symmetry_modes(self):
-        """The rod's ``symmetry_modes(q)`` (the contact terms share its symmetries:
-        rigid motions, the rotation about the pulling axis); absent if the rod has none."""
-        return self.base.symmetry_modes
-
-    @property
-    def near_symmetry_modes(self):
-        """The rod's ``near_symmetry_modes(q)`` (a ring's material sliding); absent if
-        the rod has none."""
-        return self.base.near_symmetry_modes
-
-    @property
-    def phase_offset(self):
-        """The rod's ``phase_offset(q)`` (where a phase row of its sliding is anchored);
-        absent if the rod has none."""
-        return self.base.phase_offset
 
     # ----------------------------------------------------------- geometry
     def centreline(self, q: np.ndarray) -> np.ndarray:
@@ -452,99 +389,6 @@ class ContactProblem:
             return H
         _d, _grad, hess, dofs = self._pair_derivatives(q, self.active)
         return (H + block_csr(dofs, lam[m0:, None, None] * hess, self.n_dofs)).tocsr()
-
-    def accept(self, q: np.ndarray) -> None:
-        self.base.accept(q)
-        if self.closed:
-            self.knot_guard.accept(self.centreline(q))
-
-    @property
-    def frames(self):
-        """The rod's carried frames (:mod:`supercoil.solvers.carried`)."""
-        return self.base.frames
-
-    def with_frames(self, frames) -> ContactProblem:
-        """This contact problem over the rod carrying ``frames``; this one unchanged."""
-        new = copy.copy(self)
-        new.base = self.base.with_frames(frames)
-        return new
-
-    def carried_to(self, q: np.ndarray) -> ContactProblem:
-        """This contact problem over the rod carried to ``q`` (the knot guard, shared,
-        takes ``q``'s knot type if it has none yet); this one unchanged."""
-        new = copy.copy(self)
-        new.base = self.base.carried_to(q)
-        if self.closed:
-            self.knot_guard.accept(self.centreline(q))
-        return new
-
-    def keep_knot_type(self, points: np.ndarray):
-        """Make the knot type of ``points`` ``(n, 3)`` the one every state must keep
-        (else the first accepted state's); returns it (a ``KnotType``)."""
-        return self.knot_guard.keep(points)
-
-    def parameter_derivative(self, q: np.ndarray, multipliers: np.ndarray,
-                             parameter: str) -> np.ndarray | None:
-        """The rod's ``parameter_derivative`` (None if it has none for ``parameter``),
-        zero on the contact constraints: the contact terms depend on ``q`` alone."""
-        derivative = getattr(self.base, "parameter_derivative", None)
-        m0 = self.base.n_constraints
-        full = None if derivative is None else derivative(
-            q, np.asarray(multipliers, dtype=float)[:m0], parameter)
-        if full is None:
-            return None
-        return np.concatenate([np.asarray(full, dtype=float),
-                               np.zeros(self.n_constraints - m0)])
-
-    # ---------------------------------------------------- step guard (CCD)
-    def admissible(self, q: np.ndarray) -> bool:
-        """Whether the closed rod kept its linking number and its knot type at ``q``
-        (Newton's and the continuation's per-step guard,
-        :class:`supercoil.contact.step.LinkGuard`,
-        :class:`supercoil.topology.knots.KnotGuard`) and, with a ``curvature_limit``, a
-        discrete radius of curvature of at least that everywhere
-        (:func:`supercoil.geometry.curves.min_radius_of_curvature`); open rods: always True.
-        ``refusal`` says why the last refused state was refused."""
-        if not self.closed:
-            return True
-        x = self.centreline(q)
-        if not self.link_guard.admissible(self.curve, x, lambda: self.base.writhe_local(q)):
-            self.refusal = "the linking number would change (a strand through another)"
-            return False
-        if not self.knot_guard.admissible(
-                x, clearance=lambda state: self.curve.min_distance(state, polygon=True)):
-            self.refusal = self.knot_guard.refusal
-            return False
-        if self.curvature_limit is not None:
-            radius, vertex = min_radius_of_curvature(np.asarray(q, dtype=float).reshape(-1, 3))
-            if radius < self.curvature_limit:
-                self.refusal = (f"the radius of curvature would fall to {radius / self.diameter:.4g}"
-                                f" D at node {vertex}, below "
-                                f"{self.curvature_limit / self.diameter:.4g} D (a tube "
-                                "overlapping itself locally)")
-                return False
-        return True
-
-    def admissible_over(self, q: np.ndarray, problem=None) -> bool:
-        """:meth:`admissible` with the rod of ``problem`` (the rod a continuation carried
-        to the point, whose frames give the writhe it tracks): the guard of a run without
-        contact terms, which this problem only watches."""
-        if problem is None:
-            return self.admissible(q)
-        watched = copy.copy(self)
-        watched.base = getattr(problem, "base", problem)
-        return watched.admissible(q)
-
-    def step_size_ratio(self, q: np.ndarray, dq: np.ndarray) -> float:
-        """Largest node displacement of ``dq`` over the trust radius (one edge length)."""
-        dx = self.centreline(dq).reshape(-1, 3)
-        return float(np.max(np.linalg.norm(dx, axis=1))) / self.edge_length if dx.size else 0.0
-
-    def step_bound(self, q: np.ndarray, dq: np.ndarray) -> float:
-        """Largest fraction of the step ``dq`` free of collisions
-        (:func:`supercoil.contact.step.step_bound`)."""
-        return step_bound(self.curve, self.centreline(q), self.centreline(dq),
-                          self.treatment == "barrier")
 
     # ------------------------------------------------------------ forces
     def pair_forces(self, q: np.ndarray, multipliers: np.ndarray | None = None):

@@ -1,0 +1,127 @@
+"""What a contact problem takes from the rod under it.
+
+:class:`OverRod` is the part of :class:`~supercoil.contact.problem.ContactProblem`
+that answers for its rod ``base``: the unknowns, metric and pins, the load
+parameters (read from the rod; :meth:`OverRod.at` gives the contact problem over the
+rod at other values, this one unchanged), the rod's symmetries and the reference
+frames it carries from point to point (:mod:`supercoil.solvers.carried`), and the
+parameter derivative, which the contact terms (functions of the state alone) leave
+as the rod's.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+
+class OverRod:
+    """The rod's part of a contact problem (module doc): ``self.base`` is the rod; the
+    carried frames also hand the contact problem's ``knot_guard`` the centreline
+    (``centreline(q)``) of a closed rod's accepted states."""
+
+    @property
+    def n_dofs(self) -> int:
+        return self.base.n_dofs
+
+    @property
+    def mass(self) -> np.ndarray:
+        return self.base.mass
+
+    @property
+    def fixed(self) -> np.ndarray:
+        """The rod's pinned DOFs (clamps and gauge pins; re-pinning moves them)."""
+        return self.base.fixed
+
+    @fixed.setter
+    def fixed(self, value: np.ndarray) -> None:
+        self.base.fixed = value
+
+    @property
+    def gauge_dofs(self) -> np.ndarray:
+        return getattr(self.base, "gauge_dofs", np.zeros(0, dtype=np.int64))
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The rod's load parameters (:meth:`at`)."""
+        return self.base.parameters
+
+    def at(self, **values: float) -> OverRod:
+        """This contact problem over the rod at other parameter values
+        (``base.at(**values)``); the contact state (active set, multipliers, guards,
+        curve) is shared, and this problem is unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.at(**values)
+        return new
+
+    @property
+    def excess_link(self) -> float:
+        """The closed rod's excess link, a continuation parameter (:meth:`at`)."""
+        return self.base.excess_link
+
+    @property
+    def turns(self) -> float:
+        """The clamped rod's turns of the end clamp, a continuation parameter (:meth:`at`)."""
+        return self.base.turns
+
+    @property
+    def tension(self) -> float:
+        """The clamped rod's dead load, a continuation parameter (:meth:`at`)."""
+        return self.base.tension
+
+    @property
+    def symmetry_modes(self):
+        """The rod's ``symmetry_modes(q)`` (the contact terms share its symmetries:
+        rigid motions, the rotation about the pulling axis); absent if the rod has none."""
+        return self.base.symmetry_modes
+
+    @property
+    def near_symmetry_modes(self):
+        """The rod's ``near_symmetry_modes(q)`` (a ring's material sliding); absent if
+        the rod has none."""
+        return self.base.near_symmetry_modes
+
+    @property
+    def phase_offset(self):
+        """The rod's ``phase_offset(q)`` (where a phase row of its sliding is anchored);
+        absent if the rod has none."""
+        return self.base.phase_offset
+
+    def accept(self, q: np.ndarray) -> None:
+        self.base.accept(q)
+        if self.closed:
+            self.knot_guard.accept(self.centreline(q))
+
+    @property
+    def frames(self):
+        """The rod's carried frames (:mod:`supercoil.solvers.carried`)."""
+        return self.base.frames
+
+    def with_frames(self, frames) -> OverRod:
+        """This contact problem over the rod carrying ``frames``; this one unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.with_frames(frames)
+        return new
+
+    def carried_to(self, q: np.ndarray) -> OverRod:
+        """This contact problem over the rod carried to ``q`` (the knot guard, shared,
+        takes ``q``'s knot type if it has none yet); this one unchanged."""
+        new = copy.copy(self)
+        new.base = self.base.carried_to(q)
+        if self.closed:
+            self.knot_guard.accept(self.centreline(q))
+        return new
+
+    def parameter_derivative(self, q: np.ndarray, multipliers: np.ndarray,
+                             parameter: str) -> np.ndarray | None:
+        """The rod's ``parameter_derivative`` (None if it has none for ``parameter``),
+        zero on the contact constraints: the contact terms depend on ``q`` alone."""
+        derivative = getattr(self.base, "parameter_derivative", None)
+        m0 = self.base.n_constraints
+        full = None if derivative is None else derivative(
+            q, np.asarray(multipliers, dtype=float)[:m0], parameter)
+        if full is None:
+            return None
+        return np.concatenate([np.asarray(full, dtype=float),
+                               np.zeros(self.n_constraints - m0)])

@@ -1,0 +1,89 @@
+"""Branches switched from the bifurcation points of a knotted ring's diagram.
+
+As for the ring diagram (:mod:`supercoil.problems.ring_diagram.secondary`,
+whose loop, switch and names this uses): at every located ``bifurcation``
+special point of a branch of generation ``g < depth`` the half-branch on each
+side of the critical mode is switched onto
+(:func:`~supercoil.problems.ring_diagram.secondary.switch_half_branch`: its
+amplitudes, and at a double eigenvalue the combination of the critical modes
+that keeps a two-fold axis) and followed as the diagram's own branches are
+(:func:`~supercoil.problems.knot_branch.follow_knot`: in runs with the rigid
+pins re-picked, the first run's picked at the bifurcation point, every state
+vetted by the knot guard), within the diagram's range of ``dLk``.
+
+Families and names. ``knot_up`` and ``knot_down`` (in that order) are the
+family ``knot``, a pair ``deflated_K_up``/``_down`` (``relaxed_K_...``) the
+family ``deflated_K``; the bifurcation points of a family are numbered I, II,
+... and the half-branch on side ``+`` of the k-th is ``knot_I+``,
+``deflated_1_II-``; a tertiary branch from the j-th bifurcation point of
+``knot_I+`` is ``knot_I+_<j>+``. ``parent`` is the branch the point lies on,
+``origin`` the point.
+
+Resuming: a stored complete half-branch is kept, an incomplete one with at
+least two points continued from its last point within the run that computed it
+(as :func:`~supercoil.problems.knot_branch.follow_knot` continues any branch),
+one with fewer switched anew.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+from supercoil.problems.knot_branch import follow_knot
+from supercoil.problems.ring_diagram.secondary import (
+    Switched,
+    switch_half_branch,
+    switched_branches,
+)
+
+PAIR = re.compile(r"^(.*)_(up|down)$")
+
+
+def families(branches) -> list[tuple[str, list[str]]]:
+    """``(stem, names)`` of the diagram's generation-1 families: ``knot_up``/``knot_down`` is
+    ``knot``, ``deflated_K_up``/``_down`` is ``deflated_K`` (module doc)."""
+    out: dict[str, list[str]] = {}
+    for branch in branches:
+        match = PAIR.match(branch.name)
+        stem = match.group(1) if match else branch.name
+        out.setdefault(stem, []).append(branch.name)
+    return [(stem, sorted(names, key=lambda n: not n.endswith("_up")))
+            for stem, names in out.items()]
+
+
+def knot_switched(opts, cp, branches, stored: dict, say, on_point, on_branch,
+                  pins) -> tuple[list[Switched], list[str]]:
+    """The half-branches of generations 2 .. ``opts.branch_depth`` switched from the
+    located bifurcation points of ``branches`` (module doc), and the notes. ``stored``:
+    name -> ``(branch, complete)`` of an interrupted run; ``on_point(branch)`` after every
+    accepted point, ``on_branch(branch)`` as each is final; ``pins``: the rod's
+    ``(fixed, gauge_dofs)`` and the contact problem's ``fixed`` to restore after each."""
+    rod = cp.base
+    D = cp.diameter
+    low, high = opts.excess_link
+
+    def switch(parent, point, side, name):
+        old, complete = stored.get(name, (None, False))
+        if complete:
+            say(f"{name}: kept ({len(old)} points)")
+            return old
+
+        def first(options, records, events, report, stop):
+            return switch_half_branch(cp, parent, point, options, side, name, records,
+                                      events[0], report, D, stop=stop)
+
+        rod.fixed, rod.gauge_dofs, cp.fixed = pins
+        branch = follow_knot(cp, point.q.copy(), float(point.parameter), high,
+                             opts.secondary_max_points, opts.tolerance, name,
+                             on_point=on_point,
+                             old=old if old is not None and len(old) >= 2 else None,
+                             first=first, bounds=(low, high))
+        rod.fixed, rod.gauge_dofs, cp.fixed = pins
+        if branch is None:
+            return None
+        return dataclasses.replace(branch, parent=parent.name, origin=point)
+
+    return switched_branches(branches, families(branches), opts.branch_depth, switch, D,
+                             max_branches=opts.secondary_max_branches, say=say,
+                             on_branch=on_branch)

@@ -232,23 +232,34 @@ class ClosedCosseratEnergy(CosseratEnergy):
 
     def admissible(self, q: np.ndarray) -> bool:
         """Whether ``q`` kept the ring's link and the knot type of its start (module doc):
-        every element's rotation below :data:`MAX_ELEMENT_ROTATION`, and no strand passed
-        through another (:class:`~supercoil.topology.knots.StrandPassageGuard`, the
-        writhe carried by the link being ``link - Tw``). Newton's and the continuation's
-        per-step guard: a refused state's step is retried shorter. ``refusal`` says why
-        the last refused state was refused."""
+        no strand passed through another (``round(Tw + Wr)`` the ring's ``link``, and the
+        knot type, :class:`~supercoil.topology.knots.StrandPassageGuard`, the writhe
+        carried by the link being ``link - Tw``) and every element's rotation below
+        :data:`MAX_ELEMENT_ROTATION`. Newton's and the continuation's per-step guard: a
+        refused state's step is retried shorter. ``refusal`` says why the last refused
+        state was refused."""
         x, R = self.configuration(q)
+        # the link in full (the frames' twist and the double-sum writhe) at every state:
+        # the sections can slip a turn of twist with the centreline held, which the guard's
+        # shortcut (a centreline too close to the last verified one to have passed a
+        # strand) cannot see
+        lk = self._linking_number(x, R)
+        if abs(lk - self.link) > 0.5:
+            self.refusal = (f"the linking number would change from {self.link} to "
+                            f"{int(np.rint(lk))} (a strand through another, or the sections "
+                            "turned by whole turns)")
+            return False
+        if not self.passage_guard.admissible(x, lambda _x: self.link - twist_from_frames(
+                *self._ribbon(x, R), closed=True)):
+            self.refusal = self.passage_guard.refusal
+            return False
         largest = float(np.max(self.rod.elements(x, R).theta))
         if largest >= MAX_ELEMENT_ROTATION:
             self.refusal = (f"an element would turn by {np.degrees(largest):.1f} degrees (at "
                             f"most {np.degrees(MAX_ELEMENT_ROTATION):.0f}, so that its "
                             "relative rotation stays the short way)")
             return False
-        if self.passage_guard.admissible(x, lambda _x: self.link - twist_from_frames(
-                *self._ribbon(x, R), closed=True)):
-            return True
-        self.refusal = self.passage_guard.refusal
-        return False
+        return True
 
     def accept(self, q: np.ndarray) -> None:
         """Re-base the chart, then check that the link is kept (module doc): every

@@ -24,12 +24,11 @@ def over_crossing(x: np.ndarray) -> tuple[int, float]:
     raise AssertionError("no crossing")
 
 
-def pushed_down(x: np.ndarray, fraction: float, margin: float = 0.02, w: int = 4
-               ) -> np.ndarray:
+def pushed_down(x: np.ndarray, fraction: float, margin: float = 0.02) -> np.ndarray:
     """``x`` with the over-strand of its first crossing lowered by ``fraction`` of what
-    takes it ``margin`` below the under-strand (a smooth bump over ``2 w + 2`` nodes, z
-    only)."""
+    takes it ``margin`` below the under-strand (a smooth bump over 10 nodes, z only)."""
     i, dz = over_crossing(x)
+    w = 4
     idx = (i + np.arange(-w, w + 2)) % len(x)
     bump = np.cos(np.linspace(-np.pi / 2, np.pi / 2, len(idx) + 2)[1:-1])
     y = x.copy()

@@ -42,6 +42,12 @@ its parent's label.
 
 ``supercoil run --resume`` continues the primary branches of an interrupted
 study; its secondary branches are computed again.
+
+The loop over the families' bifurcation points, their sides and generations
+(:func:`switched_branches`) and the switch with its amplitudes
+(:func:`switch_half_branch`) are shared with the knotted ring's diagram
+(:mod:`supercoil.problems.knot_switching`), which follows each half-branch its own
+way.
 """
 
 from __future__ import annotations

@@ -11,6 +11,14 @@ that keeps a two-fold axis) and followed as the diagram's own branches are
 pins re-picked, the first run's picked at the bifurcation point, every state
 vetted by the knot guard), within the diagram's range of ``dLk``.
 
+Unlike the ring diagram, the unlocated bifurcation points are switched from
+too: on a knotted branch pressed together by the barrier, a change of the
+unstable count within the barrier's reach of a contact event is not located
+(the determinant's sign change is the event's), nor is one at which the
+branch stopped (at the Figure 5 parameters ``knot_up`` ended at the point
+where its count rose, dLk 4.927, its next run unable to start there), and a
+switch needs only the point's state and its critical mode.
+
 Families and names. ``knot_up`` and ``knot_down`` (in that order) are the
 family ``knot``, a pair ``deflated_K_up``/``_down`` (``relaxed_K_...``) the
 family ``deflated_K``; the bifurcation points of a family are numbered I, II,
@@ -86,4 +94,4 @@ def knot_switched(opts, cp, branches, stored: dict, say, on_point, on_branch,
 
     return switched_branches(branches, families(branches), opts.branch_depth, switch, D,
                              max_branches=opts.secondary_max_branches, say=say,
-                             on_branch=on_branch)
+                             on_branch=on_branch, located_only=False)

@@ -93,15 +93,18 @@ def roman(k: int) -> str:
     return "".join(out)
 
 
-def family_bifurcations(branches: list[Branch], family: list[str]) -> list[SpecialPoint]:
-    """The located bifurcation points of the branches named in ``family``, in order."""
+def family_bifurcations(branches: list[Branch], family: list[str],
+                        located_only: bool = True) -> list[SpecialPoint]:
+    """The located bifurcation points of the branches named in ``family``, in order (with
+    ``located_only`` False, the unlocated ones too)."""
     out = []
     by_name = {b.name: b for b in branches}
     for name in family:
         branch = by_name.get(name)
         if branch is None:
             continue
-        out += [p for p in branch.special_points if p.kind == "bifurcation" and p.located]
+        out += [p for p in branch.special_points if p.kind == "bifurcation"
+                and (p.located or not located_only)]
     return out
 
 
@@ -165,8 +168,8 @@ class Switched:
 
 
 def switched_branches(branches, families, depth: int, switch, diameter: float, *,
-                      max_branches: int, notes=(), say=None, on_branch=None
-                      ) -> tuple[list[Switched], list[str]]:
+                      max_branches: int, notes=(), say=None, on_branch=None,
+                      located_only: bool = True) -> tuple[list[Switched], list[str]]:
     """The half-branches of generations 2 .. ``depth`` switched from the located
     bifurcation points of ``families`` (module doc; the loop that the ring diagram's
     and the knotted-ring diagram's switching share), and the notes (``notes`` and
@@ -177,7 +180,8 @@ def switched_branches(branches, families, depth: int, switch, diameter: float, *
     in that order. ``switch(parent, point, side, name)``: the half-branch on ``side``
     (+1 / -1), final (contact events classified, ``parent`` and ``origin`` set), or
     None when it found no point. ``on_branch(branch)`` as each is final. A
-    half-branch that did not fall back is the family of the next generation."""
+    half-branch that did not fall back is the family of the next generation.
+    ``located_only`` False: the unlocated bifurcation points are switched from too."""
     say = say or (lambda message: None)
     notes = list(notes)
     known = list(branches)
@@ -185,7 +189,8 @@ def switched_branches(branches, families, depth: int, switch, diameter: float, *
     for generation in range(2, depth + 1):
         next_families = []
         for stem, family in families:
-            for k, point in enumerate(family_bifurcations(known, family), start=1):
+            for k, point in enumerate(family_bifurcations(known, family, located_only),
+                                      start=1):
                 parent = next(b for b in known if b.name == point.branch)
                 mirrored = mirror_axis(point)
                 for side, sign in ((1, "+"), (-1, "-")):

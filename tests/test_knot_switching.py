@@ -15,6 +15,8 @@ there are followed. Oracles:
   double sum) and the knot type (name and chirality) the start's;
 - the unstable count of a switched branch at its first point lies between the
   parent's counts on the two sides of the crossing;
+- a switch that runs along a computed branch is told apart from one that leaves it
+  (curves sampled by hand);
 - an interrupted run resumed ends with the uninterrupted run's branches (the
   switched ones included) to 1e-8.
 """
@@ -106,7 +108,9 @@ def test_the_count_of_a_switched_branch_is_one_side_of_the_crossing(full):
         count = int(by_name[name].unstable_count[0])
         assert min(before, after) <= count <= max(before, after)
     records = {b["name"]: b for b in full.summary["branches"]}
+    notes = " ".join(full.summary["notes"])
     for name in SWITCHED:
+        assert f"{name}: every point is a state of" not in notes  # they leave knot_down
         assert records[name]["parent"] == "knot_down" and records[name]["generation"] == 2
         assert records[name]["origin"]["kind"] == "bifurcation"
     assert {p["knot_type"] for p in full.summary["points"]} == {"3_1"}
@@ -143,3 +147,29 @@ def test_bad_switching_options_exit_2_before_writing(tmp_path, bad, capsys):
     assert cli(args) == 2
     assert bad[0] in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_switch_along_a_computed_branch_is_told_apart():
+    from types import SimpleNamespace
+
+    from supercoil.problems.knot_switching import retraced
+
+    def branch(name, lam, writhe, energy):
+        return SimpleNamespace(name=name, parameter_values=np.asarray(lam, float),
+                               records={"writhe": np.asarray(writhe, float),
+                                        "energy": np.asarray(energy, float)})
+
+    lam = np.linspace(0.0, 1.0, 11)
+    known = branch("knot_up", lam, 3.0 + 0.1 * lam, 100.0 + 10.0 * lam**2)
+    # the same curve sampled in between (linear interpolation exact in the writhe, the
+    # energy's error 10 h^2 / 8 of 110 at most, well within 2 %)
+    mid = lam[:-1] + 0.05
+    along = branch("knot_I+", mid, 3.0 + 0.1 * mid, 100.0 + 10.0 * mid**2)
+    assert "knot_up" in retraced(along, [known])
+    # its writhe off by 2e-3 turns at one point: a branch of its own
+    off = branch("knot_I-", mid, 3.0 + 0.1 * mid + 2e-3 * (mid > 0.5), 100.0 + 10.0 * mid**2)
+    assert retraced(off, [known]) is None
+    # beyond the computed range by less than 1e-3 in dLk, next to its end point: along
+    past = branch("knot_II+", [1.0005], [3.1], [110.0])
+    assert retraced(past, [known]) is not None
+    assert retraced(branch("knot_II-", [1.01], [3.1], [110.0]), [known]) is None

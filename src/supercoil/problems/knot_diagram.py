@@ -146,6 +146,7 @@ class KnotDiagram:
     origins: dict = dataclasses.field(default_factory=dict)  # deflated branches' origin
     notes: tuple = ()
     generations: dict = dataclasses.field(default_factory=dict)  # switched branches' (2, 3)
+    retraced: frozenset = frozenset()  # switched branches along computed families
 
     @property
     def ok(self) -> bool:
@@ -195,10 +196,11 @@ class KnotDiagram:
         opts = self.options
         low, high = opts.excess_link
         n_rows = min(MAX_ROWS, max(2, round((high - low) / TABLE_STEP) + 1))
+        counted = [b for b in self.branches if b.name not in self.retraced]
         table = states_by_excess_link(
             [(np.asarray(b.parameter_values, float), np.asarray(b.records["energy"], float),
-              b.stable) for b in self.branches], np.round(np.linspace(low, high, n_rows), 10),
-            [b.name for b in self.branches])
+              b.stable) for b in counted], np.round(np.linspace(low, high, n_rows), 10),
+            [b.name for b in counted])
         return {
             "description": "diagram of a knotted ring with self-contact in its excess link: "
             "the relaxed knot followed both ways from start_excess_link",
@@ -271,7 +273,7 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None, on_point=No
         notes.append(f"deflation and relaxation at {opts.deflation} dLk value(s): "
                      f"{len(found)} further half-branch(es) from new states")
     rod.fixed, rod.gauge_dofs, cp.fixed = pins
-    generations = {}
+    generations, retraced = {}, set()
     if opts.branch_depth >= 2 and branches:
         from supercoil.problems.knot_switching import knot_switched
 
@@ -281,9 +283,11 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None, on_point=No
             branches.append(item.branch)
             generations[item.branch.name] = item.generation
             seconds[item.branch.name] = item.seconds
+            if item.fell_back:
+                retraced.add(item.branch.name)
         notes += more
     return KnotDiagram(opts, tuple(branches), knot, cp, seconds, message, origins,
-                       tuple(notes), generations)
+                       tuple(notes), generations, frozenset(retraced))
 
 
 def _follower(opts: KnotDiagramOptions, stored: dict, say, on_point, on_branch):

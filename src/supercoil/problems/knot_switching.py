@@ -38,6 +38,8 @@ from __future__ import annotations
 import dataclasses
 import re
 
+import numpy as np
+
 from supercoil.problems.knot_branch import follow_knot
 from supercoil.problems.ring_diagram.secondary import (
     Switched,
@@ -46,6 +48,16 @@ from supercoil.problems.ring_diagram.secondary import (
 )
 
 PAIR = re.compile(r"^(.*)_(up|down)$")
+# a switched branch runs along a computed one when at every point its writhe and energy
+# are those of a computed segment at its dLk, linearly interpolated, to these (turns,
+# relative): measured at Figure 5's parameters, a switch at the fold at dLk 4.596 ran
+# back along the doubly covered circle to 3e-5 turns, and the energy interpolated on
+# steps of up to 0.4 in dLk missed by up to 1.1 %; the branches that leave differ in
+# writhe by more than 1.7e-3 turns somewhere
+RETRACE_WRITHE, RETRACE_ENERGY = 1e-3, 2e-2
+# or a computed point within this of its dLk (turns) agrees so: at a fold, the two
+# computations' turning points differ in dLk by about 1e-6
+RETRACE_LINK = 1e-3
 
 
 def families(branches) -> list[tuple[str, list[str]]]:
@@ -94,4 +106,37 @@ def knot_switched(opts, cp, branches, stored: dict, say, on_point, on_branch,
 
     return switched_branches(branches, families(branches), opts.branch_depth, switch, D,
                              max_branches=opts.secondary_max_branches, say=say,
-                             on_branch=on_branch, located_only=False)
+                             on_branch=on_branch, located_only=False, retraced=retraced)
+
+
+def retraced(branch, known) -> str | None:
+    """A note when every point of ``branch`` is a state of the branches ``known`` at its
+    ``dLk`` (its writhe and energy those of a segment of theirs there, linearly
+    interpolated, to :data:`RETRACE_WRITHE` turns and :data:`RETRACE_ENERGY`
+    relative, or one of their points within :data:`RETRACE_LINK` of it): the switch ran along a computed family (at a fold, whose critical mode
+    is the branch's own tangent), else None."""
+    others = [(b.name, np.asarray(b.parameter_values, float),
+               np.asarray(b.records["energy"], float), np.asarray(b.records["writhe"], float))
+              for b in known if b.name != branch.name and len(b.parameter_values) >= 2]
+    along = set()
+    for lam, energy, writhe in zip(branch.parameter_values, branch.records["energy"],
+                                   branch.records["writhe"]):
+        found = set()
+        for name, x, e, w in others:
+            lo, hi = np.minimum(x[:-1], x[1:]), np.maximum(x[:-1], x[1:])
+            for j in np.flatnonzero((lo <= lam) & (lam <= hi)):
+                t = 0.0 if x[j + 1] == x[j] else (lam - x[j]) / (x[j + 1] - x[j])
+                if (abs((1 - t) * w[j] + t * w[j + 1] - writhe) <= RETRACE_WRITHE
+                        and abs((1 - t) * e[j] + t * e[j + 1] - energy)
+                        <= RETRACE_ENERGY * abs(energy)):
+                    found.add(name)
+            near = ((np.abs(x - lam) <= RETRACE_LINK) & (np.abs(w - writhe) <= RETRACE_WRITHE)
+                    & (np.abs(e - energy) <= RETRACE_ENERGY * abs(energy)))
+            if near.any():  # a point of theirs next to it (past their fold, say)
+                found.add(name)
+        if not found:
+            return None
+        along |= found
+    return (f"{branch.name}: every point is a state of {', '.join(sorted(along))} at its dLk "
+            "(the switch ran along a computed family): kept as computed, not switched from "
+            "and not counted in by_excess_link")

@@ -160,16 +160,19 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
 
 @dataclasses.dataclass(frozen=True)
 class Switched:
-    """A half-branch switched from a bifurcation point: its generation, its seconds."""
+    """A half-branch switched from a bifurcation point: its generation, its seconds, and
+    whether it fell back onto a computed family."""
 
     branch: Branch
     generation: int
     seconds: float
+    fell_back: bool = False
 
 
 def switched_branches(branches, families, depth: int, switch, diameter: float, *,
                       max_branches: int, notes=(), say=None, on_branch=None,
-                      located_only: bool = True) -> tuple[list[Switched], list[str]]:
+                      located_only: bool = True, retraced=None
+                      ) -> tuple[list[Switched], list[str]]:
     """The half-branches of generations 2 .. ``depth`` switched from the located
     bifurcation points of ``families`` (module doc; the loop that the ring diagram's
     and the knotted-ring diagram's switching share), and the notes (``notes`` and
@@ -181,7 +184,9 @@ def switched_branches(branches, families, depth: int, switch, diameter: float, *
     (+1 / -1), final (contact events classified, ``parent`` and ``origin`` set), or
     None when it found no point. ``on_branch(branch)`` as each is final. A
     half-branch that did not fall back is the family of the next generation.
-    ``located_only`` False: the unlocated bifurcation points are switched from too."""
+    ``located_only`` False: the unlocated bifurcation points are switched from too.
+    ``retraced(branch, known)``: a note when ``branch`` runs along the computed branches
+    ``known`` (then treated as fallen back), else None."""
     say = say or (lambda message: None)
     notes = list(notes)
     known = list(branches)
@@ -222,9 +227,15 @@ def switched_branches(branches, families, depth: int, switch, diameter: float, *
                                      f"symmetry of {parent.name} at every point: it fell "
                                      "back onto that family (kept as computed, not "
                                      "switched from)")
+                    elif retraced is not None:
+                        note = retraced(branch, known)
+                        if note:
+                            notes.append(note)
+                            back = True
                     if on_branch is not None:
                         on_branch(branch)
-                    added.append(Switched(branch, generation, time.perf_counter() - start))
+                    added.append(Switched(branch, generation, time.perf_counter() - start,
+                                          back))
                     known.append(branch)
                     if not back:
                         next_families.append((name, [name]))

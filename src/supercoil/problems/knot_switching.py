@@ -1,9 +1,9 @@
 """Branches switched from the bifurcation points of a knotted ring's diagram.
 
 As for the ring diagram (:mod:`supercoil.problems.ring_diagram.secondary`,
-whose loop, switch and names this uses): at every located ``bifurcation``
-special point of a branch of generation ``g < depth`` the half-branch on each
-side of the critical mode is switched onto
+whose loop, switch and names this uses): at every ``bifurcation`` special
+point of a branch of generation ``g < depth`` the half-branch on each side of
+the critical mode is switched onto
 (:func:`~supercoil.problems.ring_diagram.secondary.switch_half_branch`: its
 amplitudes, and at a double eigenvalue the combination of the critical modes
 that keeps a two-fold axis) and followed as the diagram's own branches are
@@ -75,7 +75,7 @@ def families(branches) -> list[tuple[str, list[str]]]:
 def knot_switched(opts, cp, branches, stored: dict, say, on_point, on_branch,
                   pins) -> tuple[list[Switched], list[str]]:
     """The half-branches of generations 2 .. ``opts.branch_depth`` switched from the
-    located bifurcation points of ``branches`` (module doc), and the notes. ``stored``:
+    bifurcation points of ``branches``, located or not (module doc), and the notes. ``stored``:
     name -> ``(branch, complete)`` of an interrupted run; ``on_point(branch)`` after every
     accepted point, ``on_branch(branch)`` as each is final; ``pins``: the rod's
     ``(fixed, gauge_dofs)`` and the contact problem's ``fixed`` to restore after each."""

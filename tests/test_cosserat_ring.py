@@ -27,6 +27,7 @@ from supercoil.cosserat.rotations import exp_so3
 from supercoil.errors import InputError
 from supercoil.stability.analysis import sliding_phase_modes
 from supercoil.topology import twist_from_frames, writhe
+from supercoil.topology.crossings import closest_approach
 
 
 def perturbed(x, R, rng, size):
@@ -156,6 +157,8 @@ def test_losing_the_link_is_refused():
     # one section turned half a turn: its elements' relative rotations leave the short way
     R2 = R.copy()
     R2[5] = exp_so3(np.pi * 0.9 * R[5][:, 2]) @ R[5]
+    assert not problem.admissible(problem.state(x, R2))
+    assert "short way" in problem.refusal
     with pytest.raises(LinkingError, match="short way"):
         problem.accept(problem.state(x, R2))
     # a whole turn of the link slipped (d1 turned back once, smoothly): the integer changes
@@ -163,6 +166,9 @@ def test_losing_the_link_is_refused():
     x, R = problem.configuration(problem.initial_state())
     angles = -2 * np.pi * np.arange(24) / 24
     unwound = R @ exp_so3(angles[:, None] * np.array([0.0, 0.0, 1.0]))
+    assert problem.admissible(problem.initial_state())
+    assert not problem.admissible(problem.state(x, unwound))
+    assert "linking number would change from 1 to 0" in problem.refusal
     with pytest.raises(LinkingError, match="linking number changed from 1 to 0"):
         problem.accept(problem.state(x, unwound))
     # too coarse a mesh for the turns asked
@@ -278,9 +284,69 @@ def test_continuation_finds_michell_and_the_buckled_branch_keeps_the_link():
     assert np.all(np.diff(writhes) > 0) and np.all(np.diff(buckled.parameter_values) < 0)
     assert np.max(np.abs(buckled.records["link_error"])) < 1e-8
     assert np.all(buckled.unstable_count == 1)
-    # on along the branch from its last point (the state accepted last: the chart's)
+    # on along the branch from its last point (the state accepted last: the chart's): the
+    # guard refuses the step that would pass the centreline through itself, the step is
+    # retried shorter until it cannot be, and the branch ends there with the link kept
     onwards = ContinuationOptions(parameter_bounds=(0.5, 3.0), initial_step=0.05,
                                   max_step=0.1, max_points=30, direction=-1)
-    with pytest.raises(LinkingError, match="passed through itself"):
-        continuation(problem, buckled.states[-1], parameter="excess_link", options=onwards,
-                     start=float(buckled.parameter_values[-1]))
+    last = continuation(problem, buckled.states[-1], parameter="excess_link",
+                        options=onwards, records=records,
+                        start=float(buckled.parameter_values[-1]))
+    assert not last.ok and "linking number would change" in last.message
+    assert len(last) >= 2 and np.max(np.abs(last.records["link_error"])) < 1e-8
+    # the last point is the nearest to touching: closest approach far below the
+    # circle's (diameter 1 / pi), the centreline about to pass through itself
+    x = problem.configuration(last.states[-1])[0]
+    assert closest_approach(x) < 0.1 * closest_approach(problem.configuration(q0)[0])
+
+
+def _framed(points: np.ndarray, turns: float = 0.0) -> np.ndarray:
+    """Rotations ``(n, 3, 3)`` of a closed polygon's nodes: ``d3`` along the central
+    difference, ``d1`` from the polygon's parallel-transport frames, then turned about
+    ``d3`` by ``turns`` whole turns spread evenly along the ring."""
+    from supercoil.rod.closed import initial_reference_frames
+
+    n = len(points)
+    d3 = np.roll(points, -1, axis=0) - np.roll(points, 1, axis=0)
+    d3 /= np.linalg.norm(d3, axis=1, keepdims=True)
+    u = initial_reference_frames(points)
+    d1 = u - np.sum(u * d3, axis=1, keepdims=True) * d3
+    d1 /= np.linalg.norm(d1, axis=1, keepdims=True)
+    angle = 2 * np.pi * turns * np.arange(n) / n
+    d1, d2 = (np.cos(angle)[:, None] * d1 + np.sin(angle)[:, None] * np.cross(d3, d1),
+              -np.sin(angle)[:, None] * d1 + np.cos(angle)[:, None] * np.cross(d3, d1))
+    return np.stack([d1, d2, d3], axis=2)
+
+
+def test_a_crossing_change_that_keeps_the_link_is_refused_by_the_knot_type():
+    # a trefoil ring; its over-strand pushed through the under-strand (an unknot, the
+    # writhe changed by about 2) with the sections turned the other way by as many
+    # turns: the ribbon's link is kept, the knot type is not, and the guard refuses it
+    from knot_toys import pushed_down
+
+    from supercoil.topology.knots import identify, knot_curve
+
+    x = knot_curve("3_1", 120)
+    rod = CosseratRod(120, twist_stiffness=0.8, shear_stiffness=1e3,
+                      stretch_stiffness=1e3, closed=True)
+    problem = ClosedCosseratEnergy(rod, 0.0, x, _framed(x))
+    assert problem.admissible(problem.initial_state())
+    assert problem.passage_guard.knot_guard.reference.name == "3_1"
+    y = pushed_down(x, 1.0)
+    assert identify(y).name == "0_1"
+    jump = writhe(y) - writhe(x)
+    assert abs(abs(jump) - 2) < 0.2
+
+    def link(turns):
+        q = problem.state(y, _framed(y, turns))
+        return q, problem.frame_twist(q) + problem.writhe(q)
+
+    _q, untwisted = link(0.0)
+    per_turn = link(1.0)[1] - untwisted  # +-1: the sign of a turn of d1 about d3
+    assert abs(abs(per_turn) - 1) < 1e-6
+    q, kept = link(np.rint((problem.link - untwisted) / per_turn))
+    assert abs(kept - problem.link) < 1e-6  # the link is the start's
+    assert not problem.admissible(q)
+    assert "3_1" in problem.refusal and "0_1" in problem.refusal
+    # halfway down the strands have not passed: admitted
+    assert problem.admissible(problem.state(pushed_down(x, 0.4), _framed(x)))

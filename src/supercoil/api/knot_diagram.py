@@ -10,7 +10,7 @@ DIAGRAM_JSON = "diagram.json"
 
 @dataclasses.dataclass(frozen=True)
 class KnotDiagramResult:
-    """What :func:`knot_diagram` returns: the branches (``knot_up``, ``knot_down``), the
+    """What :func:`knot_diagram` returns: the branches (``knot_up``, ``knot_down``, ...), the
     summary (``diagram.json``'s data, with the JSON envelope) and the computed diagram
     (:class:`~supercoil.problems.knot_diagram.KnotDiagram`)."""
 
@@ -26,7 +26,8 @@ class KnotDiagramResult:
 def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
                  excess_link: tuple[float, float], *, nodes: int = 60,
                  max_points: int = 150, start: float | None = None, deflation: int = 3,
-                 out=None, resume=None, overwrite: bool = False,
+                 branch_depth: int = 1, secondary_max_points: int = 60,
+                 secondary_max_branches: int = 12, out=None, resume=None, overwrite: bool = False,
                  progress: Callable[[str], None] | None = None,
                  on_point: Callable | None = None) -> KnotDiagramResult:
     """The diagram of a knotted ring in its excess link, with self-contact (Coleman &
@@ -39,7 +40,10 @@ def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
     the knot type is kept at every step. At ``deflation`` computed points spread
     over the range further equilibria are sought by deflation (Farrell, Birkisson
     & Funke 2015) and by relaxing the knot anew, and each new one is followed both
-    ways (docs/knots.md, "A knotted ring's diagram").
+    ways (docs/knots.md, "A knotted ring's diagram"). ``branch_depth`` 2 also follows
+    the half-branches switched from the located bifurcation points of those branches
+    (``knot_I+``, ``knot_II-``, ...: at most ``secondary_max_points`` points each,
+    ``secondary_max_branches`` in all), 3 those switched from theirs too.
 
     ``out``: a folder (created if missing): every accepted point is appended to
     ``out/result.h5`` as it comes, before ``on_point(branch)`` sees it, so a run
@@ -62,7 +66,10 @@ def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
 
     options = KnotDiagramOptions(knot, twist_ratio, length_over_diameter,
                                  tuple(excess_link) if isinstance(excess_link, (list, tuple))
-                                 else excess_link, nodes, max_points, start, deflation)
+                                 else excess_link, nodes, max_points, start, deflation,
+                                 branch_depth=branch_depth,
+                                 secondary_max_points=secondary_max_points,
+                                 secondary_max_branches=secondary_max_branches)
 
     def compute(settings, say, *, on_point, on_branch, resume):
         return compute_knot_diagram(settings, progress=say, on_point=on_point,

@@ -30,7 +30,10 @@ from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
 KNOT_OPTIONS = {"knot": "--knot", "twist_ratio": "--twist-ratio",
                 "length_over_diameter": "--length-over-diameter",
                 "excess_link": "--excess-link", "n_nodes": "--nodes",
-                "max_points": "--max-points", "start": "--start", "deflation": "--deflation"}
+                "max_points": "--max-points", "start": "--start", "deflation": "--deflation",
+                "branch_depth": "--branch-depth",
+                "secondary_max_points": "--secondary-max-points",
+                "secondary_max_branches": "--secondary-max-branches"}
 Overwrite = overwrite_option("Write into an existing non-empty --out DIR, replacing the "
                              "diagram's own files (other files are left alone).")
 Quiet = quiet_option()
@@ -71,6 +74,17 @@ def diagram_knot(
         "--deflation", metavar="K", help="Computed points, spread over A:B, at which further "
         "equilibria are sought by deflation (Farrell, Birkisson & Funke 2015) and by "
         "relaxing the knot anew, each new one followed both ways; 0 to 50.")] = 3,
+    branch_depth: Annotated[int, typer.Option(
+        "--branch-depth", metavar="K", help="1 to 3. 1: the branches through the relaxed "
+        "knot and the states found by --deflation; 2: also the half-branches switched "
+        "from their bifurcation points (knot_I+, knot_II-, ...); 3: also those switched "
+        "from the bifurcation points of these.")] = 1,
+    secondary_max_points: Annotated[int, typer.Option(
+        "--secondary-max-points", metavar="K", help="With --branch-depth 2 or 3: most "
+        f"points of each switched half-branch, 2 to {checks.MAX_POINTS}.")] = 60,
+    secondary_max_branches: Annotated[int, typer.Option(
+        "--secondary-max-branches", metavar="K", help="With --branch-depth 2 or 3: most "
+        "switched half-branches in all, K >= 0.")] = 12,
     overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted diagram in --out DIR from its result.h5 "
@@ -90,7 +104,10 @@ def diagram_knot(
     heavy), energy.png (energy against dLk) and configurations.png.
     At --deflation K computed points further equilibria are sought, by deflation
     and by relaxing the knot anew, and each new one is followed both ways
-    (branches deflated_1_up, deflated_1_down, relaxed_1_up, ...).
+    (branches deflated_1_up, deflated_1_down, relaxed_1_up, ...). With
+    --branch-depth 2 the half-branches that bifurcate from the located bifurcation
+    points are switched onto along the critical mode and followed too (knot_I+,
+    knot_I-, ...; their parent and origin in diagram.json).
     """
     from supercoil.api.knot_diagram import DIAGRAM_JSON, finish
     from supercoil.api.recording import stored_branches
@@ -103,7 +120,10 @@ def diagram_knot(
                       "dLk_min:dLk_max in turns, like 2:5")
     with refused(KNOT_OPTIONS):
         options = KnotDiagramOptions(knot, twist_ratio, length_over_diameter, span, nodes,
-                                     max_points, start, deflation)
+                                     max_points, start, deflation,
+                                     branch_depth=branch_depth,
+                                     secondary_max_points=secondary_max_points,
+                                     secondary_max_branches=secondary_max_branches)
     stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="knot_diagram",
                             what="the diagram's files")
     if stored is not None:  # the stored options must be these (the verb's own check)
@@ -127,6 +147,9 @@ def diagram_knot(
         with refused(KNOT_OPTIONS):
             return sc.knot_diagram(knot, twist_ratio, length_over_diameter, span, nodes=nodes,
                                    max_points=max_points, start=start, deflation=deflation,
+                                   branch_depth=branch_depth,
+                                   secondary_max_points=secondary_max_points,
+                                   secondary_max_branches=secondary_max_branches,
                                    out=writer, resume=resume, progress=message,
                                    on_point=on_point)
 

@@ -13,9 +13,15 @@ invariant under every continuous deformation in which the centreline does not pa
 through itself and no element's relative rotation passes through ``pi`` (the short
 way would then jump to the other side and the interpolated frame by a half-turn).
 So the unknowns never carry the link: it is set by the start (:func:`twisted_circle`,
-``d1`` turned ``link`` times about the tangent) and kept by continuity, and
-:meth:`ClosedCosseratEnergy.accept` checks both conditions at every accepted state
-(every ``|psi| < pi / 2`` and ``round(Tw + Wr) = link``).
+``d1`` turned ``link`` times about the tangent) and kept by continuity.
+:meth:`ClosedCosseratEnergy.admissible`, Newton's and the continuation's per-step
+guard, refuses a state that breaks either condition (an element turning by
+``pi / 2`` or more; a strand passed through another, which changes the link, or the
+knot type of the start: :class:`~supercoil.topology.knots.StrandPassageGuard`), so
+that the step is retried shorter; :meth:`ClosedCosseratEnergy.accept` checks both
+conditions again at every accepted state (every ``|psi| < pi / 2`` and
+``round(Tw + Wr) = link``) and raises :class:`LinkingError` for a state handed to it
+that breaks them.
 
 A continuous excess link. A closed ribbon has an integer link, while the excess link
 ``dLk`` of a rod (DNA's ``Lk - Lk_0``) is any number: it is the link less the turns of
@@ -45,6 +51,7 @@ from supercoil.cosserat.rod import DOFS_PER_NODE, CosseratRod
 from supercoil.cosserat.rotations import dexp, exp_so3
 from supercoil.errors import InputError
 from supercoil.topology import twist_from_frames, writhe
+from supercoil.topology.knots.passage import StrandPassageGuard
 
 # largest relative rotation of an element at an accepted state (the short way, with margin)
 MAX_ELEMENT_ROTATION = np.pi / 2
@@ -155,6 +162,9 @@ class ClosedCosseratEnergy(CosseratEnergy):
         self._check_rotations(x, R, "the start")
         self.fixed = ring_pins(x, R)
         self.gauge_dofs = self.fixed
+        # every state keeps the link and the knot type of the start (admissible)
+        self.passage_guard = StrandPassageGuard(x)
+        self.refusal: str | None = None
 
     # -- the parameter ------------------------------------------------------------------
     @property
@@ -220,6 +230,37 @@ class ClosedCosseratEnergy(CosseratEnergy):
                                f"degrees (at most {np.degrees(MAX_ELEMENT_ROTATION):.0f}, so "
                                f"that its relative rotation stays the short way); use more "
                                f"nodes")
+
+    def admissible(self, q: np.ndarray) -> bool:
+        """Whether ``q`` kept the ring's link and the knot type of its start (module doc):
+        no strand passed through another (``round(Tw + Wr)`` the ring's ``link``, and the
+        knot type, :class:`~supercoil.topology.knots.StrandPassageGuard`, the writhe
+        carried by the link being ``link - Tw``) and every element's rotation below
+        :data:`MAX_ELEMENT_ROTATION`. Newton's and the continuation's per-step guard: a
+        refused state's step is retried shorter. ``refusal`` says why the last refused
+        state was refused."""
+        x, R = self.configuration(q)
+        # the link in full (the frames' twist and the double-sum writhe) at every state:
+        # the sections can slip a turn of twist with the centreline held, which the guard's
+        # shortcut (a centreline too close to the last verified one to have passed a
+        # strand) cannot see
+        lk = self._linking_number(x, R)
+        if abs(lk - self.link) > 0.5:
+            self.refusal = (f"the linking number would change from {self.link} to "
+                            f"{int(np.rint(lk))} (a strand through another, or the sections "
+                            "turned by whole turns)")
+            return False
+        if not self.passage_guard.admissible(x, lambda _x: self.link - twist_from_frames(
+                *self._ribbon(x, R), closed=True)):
+            self.refusal = self.passage_guard.refusal
+            return False
+        largest = float(np.max(self.rod.elements(x, R).theta))
+        if largest >= MAX_ELEMENT_ROTATION:
+            self.refusal = (f"an element would turn by {np.degrees(largest):.1f} degrees (at "
+                            f"most {np.degrees(MAX_ELEMENT_ROTATION):.0f}, so that its "
+                            "relative rotation stays the short way)")
+            return False
+        return True
 
     def accept(self, q: np.ndarray) -> None:
         """Re-base the chart, then check that the link is kept (module doc): every

@@ -97,20 +97,27 @@ def relaxed_knot(knot, twist_ratio: float, length_over_diameter: float, excess_l
 
 def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
                 max_points: int, tolerance: float = 1e-8, name: str = "knot",
-                on_point=None, old: Branch | None = None) -> Branch:
+                on_point=None, old: Branch | None = None, first=None,
+                bounds: tuple[float, float] | None = None) -> Branch | None:
     """The branch of ``cp`` (a knotted ring's contact problem) from its equilibrium ``q0``
     at ``dLk = start`` towards ``stop``, in runs with the rigid pins re-picked (module
     doc); its contact events classified. ``on_point(branch)`` after every point.
 
     ``old``: the same branch stored partially by an interrupted run (its records with
     ``run_start``): continued from its last point with the pins and the run the
-    interrupted computation had there, so that it ends as the uninterrupted run does."""
+    interrupted computation had there, so that it ends as the uninterrupted run does.
+
+    ``first(options, records, events, on_point, stop)``: the first run, instead of the
+    continuation from ``q0`` (a switch from the bifurcation point ``q0``, whose pins the
+    first run has); None from it (no point found) is returned as None. ``bounds``: the
+    ``dLk`` range of the branch (default from ``start`` to ``stop``)."""
     base = cp.base
     D = cp.diameter
     cp.accept(q0)
     options = ContinuationOptions(
         initial_step=0.05 * D, min_step=CONTACT_MIN_STEP, max_step=MAX_STEP * D,
-        max_points=max_points, parameter_bounds=(min(start, stop), max(start, stop)),
+        max_points=max_points,
+        parameter_bounds=bounds or (min(start, stop), max(start, stop)),
         direction=1 if stop >= start else -1, parameter_weight=D, tolerance=tolerance,
         near_symmetry_gauge=True, regauge=True, factor_refinement=True)
     records = RunRecords(_knot_records(contact_records(cp, ring_records(base), free=False)))
@@ -125,11 +132,16 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
             stop=grip_stop(base.pin_grip, q0 if run == 0 else old.states[run]))
     else:
         set_pin(cp, base, q0)
-        first = continuation(cp, q0, parameter="excess_link", start=start,
-                             options=dataclasses.replace(options, max_points=min(
-                                 SEGMENT_POINTS, max_points)),
-                             name=name, records=records, events=events, on_point=on_point,
-                             stop=grip_stop(base.pin_grip, q0))
+        run_options = dataclasses.replace(options, max_points=min(SEGMENT_POINTS, max_points))
+        if first is None:
+            first = continuation(cp, q0, parameter="excess_link", start=start, options=run_options,
+                                 name=name, records=records, events=events,
+                                 on_point=on_point, stop=grip_stop(base.pin_grip, q0))
+        else:
+            first = first(run_options, records, events, on_point,
+                          grip_stop(base.pin_grip, q0))
+            if first is None:
+                return None
     branch, _pins = follow(cp, base, first, options, name, records, events,
                            max_points=max_points, segment_points=SEGMENT_POINTS,
                            grip=base.pin_grip, on_point=on_point, on_run=records.begin)

@@ -27,6 +27,11 @@ states are sought by deflation of the point's state
 anew at that ``dLk``; a state whose energy or writhe differs from every
 computed state there (:func:`states_at`, :func:`is_new_state`) is followed
 both ways (``deflated_K_up``/``_down``, ``relaxed_K_up``/``_down``).
+
+Switched branches: with ``branch_depth`` 2 (3), the half-branches that
+bifurcate from the located bifurcation points of those branches (and of the
+switched ones) are followed too (:mod:`~supercoil.problems.knot_switching`:
+``knot_I+``, ``knot_II-``, ..., each with its ``parent`` and ``origin``).
 """
 
 from __future__ import annotations
@@ -50,7 +55,7 @@ from supercoil.problems.knot_diagram_points import (
 from supercoil.problems.knot_ring import parse_knot
 from supercoil.problems.model_keys import KIRCHHOFF, model_keys
 from supercoil.problems.ring_diagram.result import link_writhe_slope_sign
-from supercoil.problems.ring_diagram.secondary import SYMMETRY_TOLERANCE
+from supercoil.problems.ring_diagram.secondary import MAX_DEPTH, SYMMETRY_TOLERANCE
 from supercoil.topology.knots import identify
 
 TABLE_STEP = 0.1  # dLk between the rows of by_excess_link (at most MAX_ROWS rows)
@@ -77,6 +82,9 @@ class KnotDiagramOptions:
     start: float | None = None  # dLk of the relaxed knot; None: the middle of the range
     deflation: int = 3  # dLk values at which further states are sought by deflation
     tolerance: float = 1e-8
+    branch_depth: int = 1  # 1: no switching; 2: switched branches; 3: and from those
+    secondary_max_points: int = 60  # points of each switched half-branch
+    secondary_max_branches: int = 12  # switched half-branches in all
 
     def __post_init__(self):
         parse_knot(self.knot)
@@ -103,6 +111,13 @@ class KnotDiagramOptions:
         checks.integer("deflation", self.deflation, 0, MAX_DEFLATION,
                        meaning="dLk values searched by deflation")
         checks.number("tolerance", self.tolerance, 0.0, 1e-2, low_open=True)
+        checks.integer("branch_depth", self.branch_depth, 1, MAX_DEPTH,
+                       meaning="generations of branches: 1 without switching, 2 switched "
+                       "from bifurcation points, 3 switched from those too")
+        checks.integer("secondary_max_points", self.secondary_max_points, 2,
+                       checks.MAX_POINTS, meaning="points of each switched half-branch")
+        checks.integer("secondary_max_branches", self.secondary_max_branches, 0,
+                       checks.MAX_POINTS, meaning="switched half-branches in all")
 
     @property
     def start_excess_link(self) -> float:
@@ -130,6 +145,8 @@ class KnotDiagram:
     start_message: str
     origins: dict = dataclasses.field(default_factory=dict)  # deflated branches' origin
     notes: tuple = ()
+    generations: dict = dataclasses.field(default_factory=dict)  # switched branches' (2, 3)
+    retraced: frozenset = frozenset()  # switched branches along computed families
 
     @property
     def ok(self) -> bool:
@@ -179,10 +196,11 @@ class KnotDiagram:
         opts = self.options
         low, high = opts.excess_link
         n_rows = min(MAX_ROWS, max(2, round((high - low) / TABLE_STEP) + 1))
+        counted = [b for b in self.branches if b.name not in self.retraced]
         table = states_by_excess_link(
             [(np.asarray(b.parameter_values, float), np.asarray(b.records["energy"], float),
-              b.stable) for b in self.branches], np.round(np.linspace(low, high, n_rows), 10),
-            [b.name for b in self.branches])
+              b.stable) for b in counted], np.round(np.linspace(low, high, n_rows), 10),
+            [b.name for b in counted])
         return {
             "description": "diagram of a knotted ring with self-contact in its excess link: "
             "the relaxed knot followed both ways from start_excess_link",
@@ -196,9 +214,11 @@ class KnotDiagram:
             "start_excess_link": opts.start_excess_link,
             "start_message": self.start_message,
             "deflation": opts.deflation,
+            "branch_depth": opts.branch_depth,
             "branches": [{
-                "name": b.name, "parent": None, "origin": self.origins.get(b.name),
-                "contact": True, "generation": 1 if b.name in BRANCH_NAMES else 2,
+                "name": b.name, "parent": b.parent, "origin": self.origins.get(b.name, (
+                    None if b.origin is None else b.origin.entry("excess_link"))),
+                "contact": True, "generation": self.generations.get(b.name, 1),
                 "parameter": b.parameter, "n_points": len(b),
                 "status": b.status.name, "ok": b.status.complete, "message": b.message,
                 "seconds": round(self.seconds.get(b.name, float("nan")), 3),
@@ -226,8 +246,9 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None, on_point=No
     start = opts.start_excess_link
     low, high = opts.excess_link
     say = progress or (lambda message: None)
-    follow = _follower(opts, dict(resume or {}), say, on_point,
-                       on_branch or (lambda branch, contact: None))
+    stored = dict(resume or {})
+    final = on_branch or (lambda branch, contact: None)
+    follow = _follower(opts, stored, say, on_point, final)
     say(f"relaxing {opts.knot} at dLk = {start:g}")
     cp, q0, knot, message = relaxed_knot(opts.knot, opts.twist_ratio,
                                          opts.length_over_diameter, start, opts.n_nodes,
@@ -252,8 +273,21 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None, on_point=No
         notes.append(f"deflation and relaxation at {opts.deflation} dLk value(s): "
                      f"{len(found)} further half-branch(es) from new states")
     rod.fixed, rod.gauge_dofs, cp.fixed = pins
+    generations, retraced = {}, set()
+    if opts.branch_depth >= 2 and branches:
+        from supercoil.problems.knot_switching import knot_switched
+
+        switched, more = knot_switched(opts, cp, branches, stored, say, on_point,
+                                       lambda branch: final(branch, True), pins)
+        for item in switched:
+            branches.append(item.branch)
+            generations[item.branch.name] = item.generation
+            seconds[item.branch.name] = item.seconds
+            if item.fell_back:
+                retraced.add(item.branch.name)
+        notes += more
     return KnotDiagram(opts, tuple(branches), knot, cp, seconds, message, origins,
-                       tuple(notes))
+                       tuple(notes), generations, frozenset(retraced))
 
 
 def _follower(opts: KnotDiagramOptions, stored: dict, say, on_point, on_branch):

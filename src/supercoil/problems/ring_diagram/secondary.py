@@ -42,6 +42,12 @@ its parent's label.
 
 ``supercoil run --resume`` continues the primary branches of an interrupted
 study; its secondary branches are computed again.
+
+The loop over the families' bifurcation points, their sides and generations
+(:func:`switched_branches`) and the switch with its amplitudes
+(:func:`switch_half_branch`) are shared with the knotted ring's diagram
+(:mod:`supercoil.problems.knot_switching`), which follows each half-branch its own
+way.
 """
 
 from __future__ import annotations
@@ -87,15 +93,18 @@ def roman(k: int) -> str:
     return "".join(out)
 
 
-def family_bifurcations(branches: list[Branch], family: list[str]) -> list[SpecialPoint]:
-    """The located bifurcation points of the branches named in ``family``, in order."""
+def family_bifurcations(branches: list[Branch], family: list[str],
+                        located_only: bool = True) -> list[SpecialPoint]:
+    """The located bifurcation points of the branches named in ``family``, in order (with
+    ``located_only`` False, the unlocated ones too)."""
     out = []
     by_name = {b.name: b for b in branches}
     for name in family:
         branch = by_name.get(name)
         if branch is None:
             continue
-        out += [p for p in branch.special_points if p.kind == "bifurcation" and p.located]
+        out += [p for p in branch.special_points if p.kind == "bifurcation"
+                and (p.located or not located_only)]
     return out
 
 
@@ -121,27 +130,73 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
     final = on_branch or (lambda branch, contact: None)
     opts = diagram.options
     cp = diagram.contact_problem
-    branches = list(diagram.branches)
-    contact_names = set(diagram.contact_branches)
-    generations = dict(diagram.generations)
-    seconds = dict(diagram.seconds)
-    notes = list(diagram.notes)
     if depth == 1 or cp is None:
         return diagram
     D = opts.diameter
     base = _options(opts, max_points)
     records = contact_records(cp, ring_records(cp.base), free=False)
-    added = 0
-    # families: name stem -> branches of that family, one generation at a time
-    families = []
-    for mode in opts.modes:
-        stem = PRIMARY_NAMES.get(mode, f"mode{mode}")
-        families.append((stem, [stem, f"{stem}_contact"]))
+    event = contact_count_event(cp)
+
+    def switch(parent, point, side, name):
+        branch = switch_half_branch(cp, parent, point, base, side, name, records, event,
+                                    on_point, D)
+        if branch is None:
+            return None
+        branch = classify_contact_events(branch, cp)
+        return dataclasses.replace(branch, parent=parent.name, origin=point)
+
+    families = [(stem, [stem, f"{stem}_contact"]) for stem in
+                (PRIMARY_NAMES.get(mode, f"mode{mode}") for mode in opts.modes)]
+    added, notes = switched_branches(diagram.branches, families, depth, switch, D,
+                                     max_branches=max_branches, notes=diagram.notes,
+                                     say=say, on_branch=lambda b: final(b, True))
+    return dataclasses.replace(
+        diagram, branches=diagram.branches + tuple(a.branch for a in added),
+        contact_branches=frozenset(diagram.contact_branches) | {a.branch.name for a in added},
+        generations=dict(diagram.generations) | {a.branch.name: a.generation for a in added},
+        seconds=dict(diagram.seconds) | {a.branch.name: a.seconds for a in added},
+        notes=tuple(notes))
+
+
+@dataclasses.dataclass(frozen=True)
+class Switched:
+    """A half-branch switched from a bifurcation point: its generation, its seconds, and
+    whether it fell back onto a computed family."""
+
+    branch: Branch
+    generation: int
+    seconds: float
+    fell_back: bool = False
+
+
+def switched_branches(branches, families, depth: int, switch, diameter: float, *,
+                      max_branches: int, notes=(), say=None, on_branch=None,
+                      located_only: bool = True, retraced=None
+                      ) -> tuple[list[Switched], list[str]]:
+    """The half-branches of generations 2 .. ``depth`` switched from the located
+    bifurcation points of ``families`` (module doc; the loop that the ring diagram's
+    and the knotted-ring diagram's switching share), and the notes (``notes`` and
+    those added).
+
+    ``families``: ``(stem, names)`` pairs, the branches of ``branches`` named in
+    ``names`` forming one family whose bifurcation points are numbered I, II, ...
+    in that order. ``switch(parent, point, side, name)``: the half-branch on ``side``
+    (+1 / -1), final (contact events classified, ``parent`` and ``origin`` set), or
+    None when it found no point. ``on_branch(branch)`` as each is final. A
+    half-branch that did not fall back is the family of the next generation.
+    ``located_only`` False: the unlocated bifurcation points are switched from too.
+    ``retraced(branch, known)``: a note when ``branch`` runs along the computed branches
+    ``known`` (then treated as fallen back), else None."""
+    say = say or (lambda message: None)
+    notes = list(notes)
+    known = list(branches)
+    added: list[Switched] = []
     for generation in range(2, depth + 1):
         next_families = []
         for stem, family in families:
-            for k, point in enumerate(family_bifurcations(branches, family), start=1):
-                parent = next(b for b in branches if b.name == point.branch)
+            for k, point in enumerate(family_bifurcations(known, family, located_only),
+                                      start=1):
+                parent = next(b for b in known if b.name == point.branch)
                 mirrored = mirror_axis(point)
                 for side, sign in ((1, "+"), (-1, "-")):
                     if side == -1 and mirrored is not None:
@@ -151,41 +206,41 @@ def secondary_branches(diagram, depth: int = 2, *, max_points: int = 60,
                                      f"{point.parameter:.5g} (the critical mode is odd "
                                      "under it: a pitchfork)")
                         continue
-                    if added >= max_branches:
+                    if len(added) >= max_branches:
                         notes.append(f"secondary branches: stopped at max_branches = "
                                      f"{max_branches}")
-                        return _with(diagram, branches, contact_names, generations, seconds,
-                                     notes)
+                        return added, notes
                     name = f"{stem}_{roman(k)}{sign}"
                     say(f"{name}: switched from {parent.name} at dLk = "
                         f"{point.parameter:.4g}, side {sign}")
                     start = time.perf_counter()
-                    branch = _switch(cp, parent, point, base, side, name, records,
-                                     contact_count_event(cp), on_point, D)
+                    branch = switch(parent, point, side, name)
                     if branch is None:
                         notes.append(f"{name}: the switch from {parent.name} at dLk = "
                                      f"{point.parameter:.5g} found no point on side {sign} "
                                      f"(amplitudes {', '.join(f'{a:g}' for a in AMPLITUDES)} D)")
                         continue
-                    back = fell_back(branch, point, D)
+                    back = fell_back(branch, point, diameter)
                     if back:
                         notes.append(f"{name}: the switch from {parent.name} at dLk = "
                                      f"{point.parameter:.5g} on side {sign} kept the "
                                      f"symmetry of {parent.name} at every point: it fell "
                                      "back onto that family (kept as computed, not "
                                      "switched from)")
-                    branch = classify_contact_events(branch, cp)
-                    branch = dataclasses.replace(branch, parent=parent.name, origin=point)
-                    final(branch, True)
-                    seconds[name] = time.perf_counter() - start
-                    branches.append(branch)
-                    contact_names.add(name)
-                    generations[name] = generation
-                    added += 1
+                    elif retraced is not None:
+                        note = retraced(branch, known)
+                        if note:
+                            notes.append(note)
+                            back = True
+                    if on_branch is not None:
+                        on_branch(branch)
+                    added.append(Switched(branch, generation, time.perf_counter() - start,
+                                          back))
+                    known.append(branch)
                     if not back:
                         next_families.append((name, [name]))
         families = next_families
-    return _with(diagram, branches, contact_names, generations, seconds, notes)
+    return added, notes
 
 
 def _options(opts, max_points: int) -> ContinuationOptions:
@@ -216,8 +271,8 @@ def follow_bifurcating_branch(diagram, parent: Branch, point: SpecialPoint, side
     D = diagram.options.diameter
     label = name or f"{parent.name}/{point.kind}{point.index}{'+' if side > 0 else '-'}"
     records = contact_records(cp, ring_records(cp.base), free=False)
-    branch = _switch(cp, parent, point, _options(diagram.options, max_points), side, label,
-                     records, contact_count_event(cp), None, D)
+    branch = switch_half_branch(cp, parent, point, _options(diagram.options, max_points), side,
+                                label, records, contact_count_event(cp), None, D)
     if branch is None:
         return None
     branch = classify_contact_events(branch, cp)
@@ -295,22 +350,17 @@ def switch_direction(cp, point: SpecialPoint, diameter: float) -> np.ndarray | N
     return (a @ modes.reshape(modes.shape[0], -1)).ravel()
 
 
-def _switch(cp, parent: Branch, point: SpecialPoint, base: ContinuationOptions, side: int,
-            name: str, records, event, on_point, D: float) -> Branch | None:
-    """The half-branch on ``side`` (the first amplitude whose start succeeds), or None."""
+def switch_half_branch(cp, parent: Branch, point: SpecialPoint, base: ContinuationOptions,
+                       side: int, name: str, records, event, on_point, D: float,
+                       stop=None) -> Branch | None:
+    """The half-branch on ``side`` (the first amplitude whose start succeeds), or None.
+    ``stop`` as in :func:`~supercoil.continuation.switch_branch`."""
     direction = switch_direction(cp, point, D)
     for amplitude in AMPLITUDES:
         opts = dataclasses.replace(base, initial_step=min(amplitude * D, base.max_step))
         branch = switch_branch(cp, parent, point, opts, side=side, amplitude=amplitude * D,
                                name=name, records=records, events=(event,),
-                               on_point=on_point, direction=direction)
+                               on_point=on_point, direction=direction, stop=stop)
         if len(branch) >= 2:
             return branch
     return None
-
-
-def _with(diagram, branches, contact_names, generations, seconds, notes):
-    return dataclasses.replace(diagram, branches=tuple(branches),
-                               contact_branches=frozenset(contact_names),
-                               generations=dict(generations), seconds=dict(seconds),
-                               notes=tuple(notes))

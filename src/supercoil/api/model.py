@@ -248,6 +248,8 @@ def _initial_curve(points) -> np.ndarray:
 class Ring:
     """A closed rod at a fixed excess link ``dLk = Lk - Lk0`` (turns).
 
+    ``rod``: a :class:`Rod` or a :class:`CosseratRod` (whose ring starts from the
+    circle: ``initial`` and ``knot`` are Kirchhoff-only).
     Without ``contact`` nothing keeps the rod from reaching itself (the twisted
     circle is its equilibrium at every dLk, unstable above Michell's threshold
     ``dLk = (A/C) sqrt(3)``): a computation stops where a step would pass it
@@ -300,7 +302,7 @@ class Tweezers:
     """A rod clamped at both ends on the pulling axis z, one end turned (a magnetic
     tweezers experiment).
 
-    Exactly one of ``tension`` (F L^2 / A >= 0, load control) and ``end_distance``
+    ``rod``: a :class:`Rod` or a :class:`CosseratRod`. Exactly one of ``tension`` (F L^2 / A >= 0, load control) and ``end_distance``
     (z / L in (0, 1), displacement control). ``contact``: the tube's self-contact
     (None: the rod may pass through itself, so the branch stops meaning anything
     at its first self-crossing). ``dna``: the molecule of a problem in DNA units

@@ -334,7 +334,9 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
 
     The straight rod is followed from ``start`` turns to its buckling (Greenhill's
     condition for a clamped rod), the buckled branch off it, and with contact the
-    plectoneme's branch (its hat curve: extension against turns). A problem in DNA
+    plectoneme's branch (its hat curve: extension against turns); under displacement
+    control (``end_distance``) the branch ``clamped`` from the planar clamped buckle,
+    with ``tension`` the end's reaction. A problem in DNA
     units (:meth:`~supercoil.api.model.Tweezers.from_dna`) may be turned through
     ``superhelical_density = (start, stop)`` instead (σ = turns · 10.5 / N_bp; not
     both). Further ``options`` are those of

@@ -37,6 +37,7 @@ from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
 from supercoil.problems.tweezers.result import TweezersResult
+from supercoil.problems.tweezers.returned import close_on_return
 from supercoil.problems.tweezers.straight import resolution_note, straight_branch
 from supercoil.problems.tweezers.verify import verify_bifurcations
 
@@ -204,6 +205,9 @@ def tweezers_branches(options: TweezersOptions,
     start = time.perf_counter()
     contact, contact_pins = contact_branch(opts, rod, cp, free, onset, contact_name, stored,
                                            on_point, pinned, say)
+    # released every contact and back on the contact-free branch: closed (returned.py)
+    reach = 1.0 + (cp.options.barrier_activation if cp.treatment == "barrier" else 0.0)
+    contact = close_on_return(contact, free, D, reach)
     contact = verify_bifurcations(dataclasses.replace(contact, parent=free_name, origin=onset))
     seconds[contact_name] = time.perf_counter() - start
     final(contact, True)
@@ -213,12 +217,13 @@ def tweezers_branches(options: TweezersOptions,
     last = contact
     if contact.status is ContinuationStatus.CLOSED_LOOP \
             and contact.parameter_values[-1] < opts.turns[1] - 1e-9:
-        # the contact branch of a centred loop comes back onto itself: the plectoneme
-        # branches off it at a bifurcation (supercoil.problems.tweezers.plectoneme)
+        # the contact branch of a centred loop comes back onto itself or onto the
+        # contact-free branch: the plectoneme branches off it at a bifurcation
+        # (supercoil.problems.tweezers.plectoneme)
         start = time.perf_counter()
         switched = switch_to_plectoneme(opts, rod, cp, contact, on_point, pinned, say)
         if switched is None:
-            notes.append(f"incomplete: {contact_name} closed on itself before "
+            notes.append(f"incomplete: {contact_name} closed before "
                          f"{opts.turns[1]:g} turns ({contact.message}) and no switch at its "
                          f"bifurcations gave a branch")
         else:
@@ -229,7 +234,7 @@ def tweezers_branches(options: TweezersOptions,
             branches.append(last)
             names.add(last.name)
             pins[last.name] = switched_pins
-            notes.append(f"{contact_name}: closed on itself ({contact.message}); switched at "
+            notes.append(f"{contact_name}: closed ({contact.message}); switched at "
                          f"its bifurcation at {last.origin.parameter:.6g} turns: {last.name}")
     if not last.ok:
         notes.append(f"failed: {last.name}: {last.message}")

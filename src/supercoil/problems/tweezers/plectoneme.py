@@ -1,15 +1,17 @@
-"""The plectoneme from a contact branch that comes back onto itself: a switch at one of
+"""The plectoneme from a contact branch that comes back onto itself (or onto the
+contact-free branch, :mod:`supercoil.problems.tweezers.returned`): a switch at one of
 its bifurcations.
 
 From a centred localised loop (symmetric under the rotation by pi about an axis across
 the rod's middle) the first contact is symmetric too, and so is the contact branch that
 follows it; the plectoneme, whose end loop lies at one end of its ply, is not. It
 branches off the symmetric contact branch at a symmetry-breaking bifurcation, near
-which that branch can turn and come back onto itself (a closed loop, reported as such):
+which that branch can turn and come back onto itself, or release its contacts and
+follow the contact-free branch back (a closed loop either way, reported as such):
 measured on the 3 kbp hat curve at 1 pN and 150 mM, the symmetric branch closed at 6.77
 turns, and the branch switched at its bifurcation at 6.767 turns (amplitude 5e-4 D, one
 side) grew the plectoneme (extension 0.93 to 0.58 L from 6.8 to 12.9 turns). So when the
-contact branch ends before the last turn, :func:`switch_to_plectoneme` tries its
+closed contact branch ends before the last turn, :func:`switch_to_plectoneme` tries its
 located bifurcations, the latest first, along either side of the critical mode at the
 amplitudes of ``AMPLITUDES``, and follows the first switched branch that starts (and
 does not close at once) to the last turn.

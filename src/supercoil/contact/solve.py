@@ -385,3 +385,24 @@ def _params(problem, q, pairs):
     """``(pairs, s, t)``: closest parameters of the pairs at ``q`` on the contact curve."""
     _d, s, t = problem.pair_distances(q, pairs)
     return pairs, s, t
+
+
+def solved_contact_report(problem, res: ContactSolveResult, note: str):
+    """``(contact, message, converged)`` of a relaxed contact state ``res``: the
+    contact summary (:func:`supercoil.contact.report.contact_summary`) with the
+    largest penetration and its tolerance, ``note`` and the solver's message with
+    warnings for negative contact forces and an inadmissible state, and whether the
+    state is an admissible equilibrium (converged, admissible, no negative force)."""
+    from supercoil.contact.report import contact_summary
+
+    contact = contact_summary(problem, res.q, res.multipliers)
+    contact.update(max_penetration_over_diameter=max_penetration(problem, res.q),
+                   penetration_tolerance=problem.options.tolerance)
+    message = note + "; " + res.message
+    if contact["negative_contact_forces"]:
+        message += (f"; warning: {contact['negative_contact_forces']} contact force(s) are "
+                    "negative: not an admissible equilibrium")
+    if not res.admissible:
+        message += "; warning: the state is not admissible (penetration beyond tolerance)"
+    converged = bool(res.converged and res.admissible and not contact["negative_contact_forces"])
+    return contact, message, converged

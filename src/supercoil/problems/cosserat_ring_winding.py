@@ -35,8 +35,7 @@ import numpy as np
 
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.contact.report import contact_summary
-from supercoil.contact.solve import ContactSolveResult, max_penetration, solve_contact
+from supercoil.contact.solve import ContactSolveResult, solve_contact, solved_contact_report
 from supercoil.cosserat.closed import LinkingError
 from supercoil.cosserat.ring import (
     DEFAULT_STIFFNESS,
@@ -208,17 +207,7 @@ class _Winding:
             note += (f"; warning: segments ({problem.rod.edge_length:.3g} L) are longer than "
                      f"the tube diameter ({cp.diameter:.3g} L): contact lines are "
                      f"under-resolved, use --nodes >= {math.ceil(1.0 / cp.diameter)}")
-        contact = contact_summary(cp, q, res.multipliers)
-        contact.update(max_penetration_over_diameter=max_penetration(cp, q),
-                       penetration_tolerance=cp.options.tolerance)
-        message = note + "; " + res.message
-        if contact["negative_contact_forces"]:
-            message += (f"; warning: {contact['negative_contact_forces']} contact force(s) are "
-                        "negative: not an admissible equilibrium")
-        if not res.admissible:
-            message += "; warning: the state is not admissible (penetration beyond tolerance)"
-        converged = bool(res.converged and res.admissible
-                         and not contact["negative_contact_forces"])
+        contact, message, converged = solved_contact_report(cp, res, note)
         x, R = problem.configuration(q)
         twist, wr = problem.twist(q), problem.writhe(q)
         ratio, stretch, shear = self.constants

@@ -73,8 +73,7 @@ import numpy as np
 from supercoil import checks
 from supercoil.contact.options import DEFAULT_TREATMENT, TREATMENTS, ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.contact.report import contact_summary
-from supercoil.contact.solve import max_penetration, solve_contact
+from supercoil.contact.solve import solve_contact, solved_contact_report
 from supercoil.geometry.curves import resample_closed
 from supercoil.geometry.symmetry import axis_invariant_combination
 from supercoil.problems.ring import (
@@ -429,18 +428,7 @@ class _Winding:
                      f"tube diameter ({problem.diameter:.3g} L): contact lines are "
                      f"under-resolved, use --nodes >= "
                      f"{math.ceil(base.rod.length / problem.diameter)}")
-        contact = contact_summary(problem, res.q, res.multipliers)
-        penetration = max_penetration(problem, res.q)
-        contact.update(max_penetration_over_diameter=penetration,
-                       penetration_tolerance=problem.options.tolerance)
-        message = note + "; " + res.message
-        if contact["negative_contact_forces"]:
-            message += (f"; warning: {contact['negative_contact_forces']} contact force(s) are "
-                        "negative: not an admissible equilibrium")
-        if not res.admissible:
-            message += "; warning: the state is not admissible (penetration beyond tolerance)"
-        converged = bool(res.converged and res.admissible
-                         and not contact["negative_contact_forces"])
+        contact, message, converged = solved_contact_report(problem, res, note)
         # (ring_result adds "unstable equilibrium (k unstable directions)" to the status)
         result = ring_result(problem.base, res.q, res.multipliers, stab, converged=converged,
                              status=res.status, message=message, residual=res.residual,

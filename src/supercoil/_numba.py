@@ -2,7 +2,7 @@
 
 Numba compiles a kernel at its first call and keeps the machine code in its cache:
 the ``__pycache__`` folder beside the module, or ``NUMBA_CACHE_DIR`` when set. A
-first run on a fresh install compiles every kernel it calls (about half a minute for
+first run on a fresh install compiles every kernel it calls (under a minute for
 the demo); later runs load them. :func:`cache_is_cold` lets a command say so before it
 starts.
 

@@ -54,7 +54,7 @@ COMMANDS = ("demo", "ring", "diagram", "tweezers", "run", "sweep", "plot", "view
 COMPUTING_COMMANDS = ("demo", "ring", "diagram", "tweezers", "run", "sweep", "writhe", "knot",
                       "tighten")
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS")
-COMPILE_TIME = "half a minute, longer on a busy machine"  # measured: 34 s (demo, load 1.5)
+COMPILE_TIME = "under a minute, longer on a busy machine"  # measured: 45 s (demo, load 0.6)
 
 
 class _InUsersOrder(TyperGroup):

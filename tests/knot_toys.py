@@ -34,3 +34,19 @@ def pushed_down(x: np.ndarray, fraction: float, margin: float = 0.02) -> np.ndar
     y = x.copy()
     y[idx, 2] -= fraction * (dz + margin) * bump / bump[w:w + 2].min()
     return y
+
+
+SHORT_RUN = 3  # points per run of a knotted branch in the tests of resume and switching
+
+
+def short_knot_diagram(case: dict, out):
+    """``supercoil.knot_diagram(**case, out=out)`` with its branches' runs of
+    :data:`SHORT_RUN` points (so that interruptions fall within and between runs)."""
+    import pytest
+
+    import supercoil as sc
+    from supercoil.problems import knot_branch
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(knot_branch, "SEGMENT_POINTS", SHORT_RUN)
+        return sc.knot_diagram(**case, out=out)

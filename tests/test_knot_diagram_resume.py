@@ -16,6 +16,7 @@ import json
 
 import numpy as np
 import pytest
+from knot_toys import SHORT_RUN, short_knot_diagram
 
 import supercoil as sc
 from supercoil.cli.main import run as cli
@@ -31,14 +32,12 @@ TOL = 1e-8
 
 @pytest.fixture(autouse=True)
 def short_runs(monkeypatch):
-    monkeypatch.setattr(knot_branch, "SEGMENT_POINTS", 3)
+    monkeypatch.setattr(knot_branch, "SEGMENT_POINTS", SHORT_RUN)
 
 
 @pytest.fixture(scope="module")
 def full(tmp_path_factory):
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(knot_branch, "SEGMENT_POINTS", 3)
-        return sc.knot_diagram(**CASE, out=tmp_path_factory.mktemp("full"))
+    return short_knot_diagram(CASE, tmp_path_factory.mktemp("full"))
 
 
 def interrupted(folder, calls: int):

@@ -48,6 +48,13 @@ def overwrite_option(help: str):
     return Annotated[bool, typer.Option("--overwrite", help=help)]
 
 
+# the diagrams' --resume (diagram ring, diagram knot)
+DiagramResume = Annotated[bool, typer.Option(
+    "--resume", help="Continue the interrupted diagram in --out DIR from its result.h5 "
+    "(the same options): finished branches are kept, the others continued from their "
+    "last point.")]
+
+
 def result_argument(more: str = ""):
     """The RESULT argument of the commands that read a stored result; ``more``: what
     else the command reads."""

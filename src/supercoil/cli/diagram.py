@@ -22,7 +22,7 @@ from supercoil.cli._common import (
     refused,
     warn,
 )
-from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
+from supercoil.cli._options import MAGNITUDE, DiagramResume, overwrite_option, quiet_option
 from supercoil.cli.model_options import (
     ModelOption,
     ShearOption,
@@ -109,10 +109,7 @@ def diagram_ring(
     stretch_stiffness: StretchOption = None,
     shear_stiffness: ShearOption = None,
     overwrite: Overwrite = False,
-    resume: Annotated[bool, typer.Option(
-        "--resume", help="Continue the interrupted diagram in --out DIR from its result.h5 "
-        "(the same options): finished branches are kept, the others continued from their "
-        "last point.")] = False,
+    resume: DiagramResume = False,
     quiet: Quiet = False,
 ) -> None:
     """The ring's bifurcation diagram with self-contact (Coleman & Swigon 2002, Figures 1-4).

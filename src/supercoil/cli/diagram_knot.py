@@ -25,7 +25,7 @@ from supercoil.cli._common import (
     parse_span,
     refused,
 )
-from supercoil.cli._options import MAGNITUDE, overwrite_option, quiet_option
+from supercoil.cli._options import MAGNITUDE, DiagramResume, overwrite_option, quiet_option
 
 KNOT_OPTIONS = {"knot": "--knot", "twist_ratio": "--twist-ratio",
                 "length_over_diameter": "--length-over-diameter",
@@ -86,10 +86,7 @@ def diagram_knot(
         "--secondary-max-branches", metavar="K", help="With --branch-depth 2 or 3: most "
         "switched half-branches in all, K >= 0.")] = 12,
     overwrite: Overwrite = False,
-    resume: Annotated[bool, typer.Option(
-        "--resume", help="Continue the interrupted diagram in --out DIR from its result.h5 "
-        "(the same options): finished branches are kept, the others continued from their "
-        "last point.")] = False,
+    resume: DiagramResume = False,
     quiet: Quiet = False,
 ) -> None:
     """A knotted ring's diagram in its excess link, with self-contact (Coleman & Swigon

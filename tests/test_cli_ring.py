@@ -412,8 +412,12 @@ def test_ring_dna_folder_exports_in_nm(runner, tmp_path):
     assert invoke(runner, "export", out, "--out", tmp_path / "s.xyz", "--quiet").exit_code == 0
     assert invoke(runner, "export", out, "--out", tmp_path / "s.pdb", "--quiet").exit_code == 0
     nm = np.loadtxt(tmp_path / "s.xyz", skiprows=2, usecols=(1, 2, 3))
-    stored = sc.load(out).branches["ring"].states[0].reshape(-1, 3)
+    branch = sc.load(out).branches["ring"]
+    stored = branch.states[0].reshape(-1, 3)
     np.testing.assert_allclose(nm, stored * 300 * 0.34, rtol=0, atol=1e-9)
+    # one converged state at the requested dLk: complete, not cut by a point limit
+    assert branch.status.name == "PARAMETER_BOUND" and branch.status.complete
+    assert branch.parameter_values[0] == pytest.approx(-0.02 * 300 / 10.5, abs=1e-12)
 
 
 def test_ring_dna_help_names_the_options_and_the_caveat(runner):

@@ -156,7 +156,7 @@ def test_dataset_cells_hold_their_tasks_and_read_back(tmp_path):
         '"problem.excess_link" = [1.0, 2.0, 3.0]\n"rod.twist_ratio" = [0.5, 1.0]\n'))
     outcomes = {}
     for n, task in enumerate(sweep.tasks[:-1]):  # the last task is not run
-        values = {"writhe": 0.1 * n, "ring.status": "MAX_POINTS"}
+        values = {"writhe": 0.1 * n, "ring.status": "PARAMETER_BOUND"}
         if n % 2:
             values["folds"] = float(n)
         outcomes[task.key] = {"status": "complete" if n else "failed", "message": f"m{n}",

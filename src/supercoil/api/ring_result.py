@@ -32,7 +32,8 @@ def ring_branch(state, summary: dict):
         nearest_eigenvalue=np.array([eig[np.argmin(np.abs(eig))] if eig.size else math.nan]),
         tangents=np.zeros((1, q.size + mu.size + 1)), arclength=np.zeros(1),
         special_points=(),
-        status=(ContinuationStatus.MAX_POINTS if state.converged
+        # the one point lies at the requested dLk: the parameter's bound is reached
+        status=(ContinuationStatus.PARAMETER_BOUND if state.converged
                 else ContinuationStatus.START_FAILED),
         message=f"one state (a single solve, not a continuation): {state.message}",
         records=records)

@@ -210,12 +210,15 @@ def test_save_and_load_round_trip_every_array(tmp_path, circle_states):
         np.testing.assert_array_equal(again.unstable_count, branch.unstable_count)
         assert [p.kind for p in again.special_points] == [p.kind for p in branch.special_points]
     # the stored diagram draws: the figures of every kind it has data for
-    figures = sc.plot(path, out=tmp_path)
+    figures = sc.plot(path, out=tmp_path / "figures" / "ring")  # created, as by the command
+    assert {p.parent for p in figures} == {tmp_path / "figures" / "ring"}
     names = {p.name for p in figures}
     assert {"diagram.png", "contact_map.png", "configurations.png"} <= names, names
     assert all(p.stat().st_size > 5_000 for p in figures)
     with pytest.raises(sc.InputError):
         sc.plot(path, kind="no-such-figure", out=tmp_path)
+    with pytest.raises(sc.InputError, match="is a file"):
+        sc.plot(path, out=path)
     eq = circle_states[1]
     loaded = sc.load(sc.save(eq, tmp_path / "ring.h5"))
     np.testing.assert_array_equal(loaded.branch("ring").states[0], eq.points.ravel())

@@ -133,8 +133,7 @@ def test_command_and_python_write_every_sweep_figure(sweep_folder, tmp_path):
     assert cli(["plot", str(folder), "--out", str(tmp_path / "cli"), "--format", "png",
                 "-q"]) == 0
     assert sorted(p.name for p in (tmp_path / "cli").iterdir()) == names
-    (tmp_path / "py").mkdir()
-    written = supercoil.plot(folder, out=tmp_path / "py")
+    written = supercoil.plot(folder, out=tmp_path / "py")  # the folder is created
     assert sorted(p.name for p in written) == names
     for name in names:
         image = matplotlib.image.imread(tmp_path / "py" / name)

@@ -36,14 +36,25 @@ def plot(result, kind: str | None = None, out: str | Path = ".",
         raise InputError(f"formats: got {list(formats)!r}; valid: any of "
                          f"{', '.join(style.FORMATS)}")
     folder = Path(out)
-    if not folder.is_dir():
-        raise InputError(f"out: {folder} is not an existing folder")
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"out: {folder} is a file, not a folder; give a folder")
     if isinstance(result, (str, Path)) and is_sweep(result):
         return _plot_sweep(Path(result), kind, folder, tuple(formats), variable)
     if variable is not None:
         raise InputError(f"variable: only a sweep's map takes it; {result} is not a sweep")
     with stored(result) as source:
-        return _draw(load_result(source), kind, folder, formats)
+        data = load_result(source)
+        _make_folder(folder)
+        return _draw(data, kind, folder, formats)
+
+
+def _make_folder(folder: Path) -> None:
+    """Create ``folder`` (and its parents), as ``supercoil plot --out`` does."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"out: cannot create the folder {folder} ({exc.strerror}); give a "
+                         "folder in a writable location") from None
 
 
 def _draw(data, kind: str | None, folder: Path, formats: Sequence[str]) -> list[Path]:
@@ -67,6 +78,7 @@ def _plot_sweep(path: Path, kind, folder: Path, formats: tuple, variable) -> lis
     if kind is not None and kind not in kinds:
         raise InputError(f"kind: {kind!r} is not drawn for this sweep; valid: "
                          f"{', '.join(kinds)}")
+    _make_folder(folder)
     written: list[Path] = []
     for name in ([kind] if kind is not None else kinds):
         try:

@@ -18,17 +18,26 @@ nearest zero there, :func:`~supercoil.continuation.stability.eigenpairs`):
    hyperplane cuts the branch tangent to ``phi``, as a switch does
    (:func:`~supercoil.continuation.switch_branch`).
 
-The side tried first is ``+phi`` with ``direction`` +1, ``-phi`` with -1 (so that
-the two calls of a diagram that follows a start both ways take the two sides).
-A note says which start was used and why.
+The start is taken as singular when the plain start fails without a point,
+leaves the parameter bounds at once (fewer than two points: at a fold both halves
+of the branch lie on one side of the start), or gives a tangent along which the
+parameter does not change (``|dlambda|`` below :data:`FOLD_TANGENT` of the unit
+tangent in the arclength metric; the plain tangent's orientation is then
+arbitrary). The side tried first is ``+phi`` with ``direction`` +1, ``-phi`` with
+-1, so that the two calls of a diagram that follows a start both ways take the
+two sides; ``bounds`` widens the parameter bounds of the starts off the point
+(both halves of a fold run to the same side of it). A note says which start was
+used and why.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from supercoil.continuation.branch import Branch
-from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
+from supercoil.continuation.options import ContinuationOptions
 from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.pseudo_arclength import continuation
 from supercoil.continuation.stability import eigenpairs
@@ -36,6 +45,12 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.newton import least_squares_multipliers
 from supercoil.solvers.parameters import problem_at
+
+# a plain start whose tangent changes the parameter by less than this (the parameter's
+# part of the unit tangent, arclength metric) is at a fold: a fold located by the
+# continuation lies within 1e-10 of the arclength from the exact one, its tangent's
+# parameter part as small; elsewhere it is of order one
+FOLD_TANGENT = 1e-6
 
 
 def critical_mode(problem, q0: np.ndarray, parameter: str, start: float,
@@ -58,19 +73,33 @@ def critical_mode(problem, q0: np.ndarray, parameter: str, start: float,
     return float(values[k]), vectors[k]
 
 
+def singular(branch: Branch, options: ContinuationOptions) -> bool:
+    """Whether the plain start of ``branch`` was at a singular point (module doc)."""
+    if len(branch) < 2:
+        return True
+    t = np.asarray(branch.tangents[0], dtype=float)
+    return abs(t[-1]) * options.parameter_weight < FOLD_TANGENT
+
+
 def start_branch(problem, q0: np.ndarray, multipliers0: np.ndarray | None = None, *,
                  parameter: str, start: float, options: ContinuationOptions,
+                 bounds: tuple[float, float] | None = None,
                  **kwargs) -> tuple[Branch, str | None]:
     """``(branch, note)``: :func:`~supercoil.continuation.continuation` from ``q0`` at
-    ``start``; if its start fails (``START_FAILED``, no point), started again off the
-    singular point along its critical mode (module doc), ``note`` saying so (None for
-    the plain start). ``kwargs`` go to ``continuation`` (records, events, on_point,
-    stop, name, ...). When every start fails, the plain start's branch and a note."""
+    ``start``; if the start is singular (:func:`singular`), started again off the point
+    along its critical mode (module doc), ``note`` saying so (None for the plain
+    start). ``bounds``: the parameter bounds of the starts off the point (default
+    ``options``'). ``kwargs`` go to ``continuation`` (records, events, on_point, stop,
+    name, ...). The plain start is first tried with one step only (without ``on_point``)
+    to tell. When every start off the point fails, that trial's branch and a note."""
     q0 = np.asarray(q0, dtype=float)
-    plain = continuation(problem, q0, multipliers0, parameter=parameter, options=options,
-                         start=start, **kwargs)
-    if plain.status is not ContinuationStatus.START_FAILED or len(plain):
-        return plain, None
+    quiet = {k: v for k, v in kwargs.items() if k != "on_point"}
+    plain = continuation(problem, q0, multipliers0, parameter=parameter,
+                         options=dataclasses.replace(options, max_points=2), start=start,
+                         **quiet)  # the start and one step, to tell
+    if not singular(plain, options):
+        return continuation(problem, q0, multipliers0, parameter=parameter, options=options,
+                            start=start, **kwargs), None
     found = critical_mode(problem, q0, parameter, start, options)
     if found is None:
         return plain, (f"the start at {parameter} = {start:.6g} failed ({plain.message}) and "
@@ -81,18 +110,19 @@ def start_branch(problem, q0: np.ndarray, multipliers0: np.ndarray | None = None
     phi = mode / size if size > 0 else mode
     m = int(problem.n_constraints)
     first = 1.0 if options.direction >= 0 else -1.0
+    off = options if bounds is None else dataclasses.replace(options, parameter_bounds=bounds)
     for offset in (0.0, options.initial_step):
         for sign in (first, -first):
             guess = np.concatenate([sign * phi, np.zeros(m), [0.0]])
             branch = continuation(problem, q0 + offset * sign * phi, None, parameter=parameter,
-                                  options=options, start=start, guess=guess, **kwargs)
+                                  options=off, start=start, guess=guess, **kwargs)
             if len(branch) >= 2:
                 where = ("on the hyperplane through it orthogonal to its critical mode (a "
                          "fold's tangent)" if offset == 0.0 else
                          f"{offset:.3g} along its critical mode (arclength metric), on the "
                          "hyperplane orthogonal to it")
                 return branch, (f"the start at {parameter} = {start:.6g} is a singular point "
-                                f"(the plain start failed: {plain.message}; the constrained "
+                                f"(the plain start: {plain.message}; the constrained "
                                 f"Hessian's eigenvalue nearest zero is {value:.3g}): started "
                                 f"{where}, side {'+' if sign > 0 else '-'}")
     return plain, (f"the start at {parameter} = {start:.6g} failed ({plain.message}); "

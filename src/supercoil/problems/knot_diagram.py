@@ -1,4 +1,4 @@
-"""The knotted ring's diagram in its excess link (Coleman & Swigon 2000, Figure 5).
+"""The knotted ring's diagram in its excess link (Coleman & Swigon 2004, Figure 5).
 
 A knotted ring has no circle to start from: :func:`compute_knot_diagram`
 relaxes the knot with self-contact at ``start`` (by default the middle of the

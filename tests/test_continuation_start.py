@@ -127,3 +127,52 @@ def test_start_branch_starts_off_a_fold_and_off_a_pitchfork_along_the_critical_m
 
     plain, note = start_branch(quartic, np.zeros(3), parameter="lam", start=0.5, options=opts)
     assert note is None and plain.ok and plain.parameter_values[0] == 0.5
+
+
+def test_follow_starts_a_run_again_in_the_last_runs_gauge_when_a_fresh_gauge_fails(
+        monkeypatch):
+    """``segments.follow``: a run whose start in a gauge chosen afresh fails (as at the
+    trefoil ring's bifurcation point at L/D 170, made to happen here at every run
+    boundary) starts again in the last run's gauge and goes on. Oracles: the branch in
+    runs of 4 points with every fresh start failing reaches as far as one run of the
+    same points does, along the same curve (writhe against dLk, interpolated), with
+    Lk = Tw + Wr and the knot type at every point."""
+    import dataclasses
+
+    from scipy.interpolate import CubicSpline
+
+    from supercoil.continuation.resume import head
+    from supercoil.problems import knot_branch, segments
+    from supercoil.problems.knot_branch import follow_knot, relaxed_knot
+    from supercoil.problems.knot_switching import RETRACE_WRITHE
+
+    cp, q0, _knot, _message = relaxed_knot("3_1", 1.4, 40.0, 3.0, 36)
+    whole = follow_knot(cp, q0.copy(), 3.0, 5.0, 13, 1e-8, "whole")
+    plain = segments.continuation
+    failed = []
+
+    def fresh_fails(*args, **kwargs):
+        run = plain(*args, **kwargs)
+        if "phase" in kwargs:
+            return run
+        failed.append(kwargs["start"])  # a start in a fresh gauge: made to fail (no point)
+        return dataclasses.replace(head(run, 0), status=ContinuationStatus.START_FAILED,
+                                   message="the starting point did not converge")
+
+    monkeypatch.setattr(segments, "continuation", fresh_fails)
+    monkeypatch.setattr(knot_branch, "SEGMENT_POINTS", 4)
+    runs = follow_knot(cp, q0.copy(), 3.0, 5.0, 13, 1e-8, "runs")
+    assert len(failed) >= 3  # every run after the first
+    assert len(runs) == len(whole) == 13, runs.message
+    lam, wr = np.asarray(whole.parameter_values), np.asarray(whole.records["writhe"])
+    inside = np.asarray(runs.parameter_values) <= lam[-1]
+    keep = np.concatenate([[True], np.diff(lam) > 1e-12])  # a point repeated once
+    spline = CubicSpline(lam[keep], wr[keep])
+    # the same family to the criterion of a switch that ran along a computed one: the two
+    # gauges hold the material sliding at different places, and copies of one state slid
+    # along the mesh differ by its ripple (measured 3e-4 turns here)
+    np.testing.assert_allclose(np.asarray(runs.records["writhe"])[inside],
+                               spline(np.asarray(runs.parameter_values)[inside]),
+                               atol=RETRACE_WRITHE)
+    assert np.max(np.abs(runs.records["link_error"])) < 1e-10
+    assert np.all(runs.records["knot_determinant"] == 3)

@@ -39,6 +39,21 @@ def _writhe_on(branch, lo, hi, at):
     return CubicSpline(lam[order][keep], wr[order][keep])(at)
 
 
+def test_the_located_fold_is_singular(parent):
+    """At the located fold the constrained Hessian's eigenvalue nearest zero vanishes (to
+    the location's accuracy) while it is of order 1000 at the relaxed start."""
+    from supercoil.continuation import ContinuationOptions
+    from supercoil.continuation.singular_start import critical_mode
+
+    cp, branch, fold = parent
+    opts = ContinuationOptions(parameter_bounds=(3.0, 6.0), parameter_weight=cp.diameter)
+    at_fold, _mode = critical_mode(cp, np.asarray(fold.q), "excess_link",
+                                   float(fold.parameter), opts)
+    at_start, _mode = critical_mode(cp, branch.states[0], "excess_link",
+                                    float(branch.parameter_values[0]), opts)
+    assert abs(at_fold) < 1e-3 and abs(at_start) > 100.0  # measured 1.3e-5 and 2.3e3
+
+
 @pytest.mark.parametrize("stop", [6.0, 3.0])
 def test_a_start_at_a_fold_follows_one_side_of_it_and_says_so(parent, stop):
     cp, branch, fold = parent

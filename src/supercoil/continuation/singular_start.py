@@ -37,7 +37,7 @@ import dataclasses
 import numpy as np
 
 from supercoil.continuation.branch import Branch
-from supercoil.continuation.options import ContinuationOptions
+from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import branch_phase_modes
 from supercoil.continuation.pseudo_arclength import continuation
 from supercoil.continuation.stability import eigenpairs
@@ -75,8 +75,10 @@ def critical_mode(problem, q0: np.ndarray, parameter: str, start: float,
 
 def singular(branch: Branch, options: ContinuationOptions) -> bool:
     """Whether the plain start of ``branch`` was at a singular point (module doc)."""
-    if len(branch) < 2:
-        return True
+    if len(branch) == 0:
+        return branch.status is ContinuationStatus.START_FAILED
+    if len(branch) < 2:  # left the bounds at once; a first step that failed is not this
+        return branch.status is ContinuationStatus.PARAMETER_BOUND
     t = np.asarray(branch.tangents[0], dtype=float)
     return abs(t[-1]) * options.parameter_weight < FOLD_TANGENT
 

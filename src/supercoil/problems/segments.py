@@ -276,8 +276,9 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         if run.status is ContinuationStatus.START_FAILED and len(last.phase_modes):
             # the last point is an equilibrium of the last run's gauge, not of the one
             # chosen there: near a fold or a bifurcation point the state must move far to
-            # meet the new one and Newton diverges (measured at the trefoil's bifurcation
-            # point at dLk 4.927, C/A 1.4, L/D 170, N 180: a first step of 0.73 D). The
+            # meet the new one and Newton diverges (measured on the trefoil ring at C/A 1.4,
+            # L/D 170, N 180, at dLk 4.927 just past its bifurcation point at 4.920: a
+            # first step of 0.73 D). The
             # run starts again in the last run's gauge, on its tangent's hyperplane.
             run = continuation(carrying, q, last.multipliers[-1], parameter=last.parameter,
                                start=float(last.parameter_values[-1]), options=opts,

@@ -61,6 +61,22 @@ def test_knotted_ring_keeps_its_type_and_link():
     assert record["min_gap_over_diameter"] > 1.0  # min distance over D: no overlap
 
 
+def test_the_mirror_trefoil_at_the_opposite_excess_link_is_the_mirror_image():
+    """An isotropic rod's energy is unchanged by a reflection, which reverses dLk, Tw, Wr
+    and the knot's chirality: the left-handed trefoil at dLk = -3 is the mirror image of
+    the right-handed one at +3 (the same energy and contacts, the opposite writhe), and
+    its record's chirality is that of its own points (-1)."""
+    states = [sc.equilibrium(sc.Ring(sc.Rod(1.4, 48), dlk, contact=sc.Barrier(40.0),
+                                     knot=knot)) for knot, dlk in (("3_1", 3.0),
+                                                                   ("3_1*", -3.0))]
+    right, left = (s.record for s in states)
+    assert right["chirality"] == 1 and left["chirality"] == -1
+    assert identify(np.asarray(states[1].points)).chirality == -1
+    assert left["energy"] == pytest.approx(right["energy"], rel=1e-9)
+    assert left["writhe"] == pytest.approx(-right["writhe"], abs=1e-9)
+    assert left["n_contact_intervals"] == right["n_contact_intervals"]
+
+
 def test_built_knot_is_tightened_only_when_it_overlaps():
     free, note = knot_start("3_1", 60, 40.0)
     assert "free of overlap" in note and identify(free).name == "3_1"

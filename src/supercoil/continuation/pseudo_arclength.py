@@ -50,7 +50,9 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                  on_point: PointCallback | None = None,
                  stop: Callable[[np.ndarray], str | None] | None = None,
                  admissible: Callable[[np.ndarray], bool] | None = None,
-                 start: float | None = None) -> Branch:
+                 start: float | None = None,
+                 phase: tuple[np.ndarray, np.ndarray] | None = None,
+                 guess: np.ndarray | None = None) -> Branch:
     """Follow the equilibria of ``problem`` through ``q0`` as its ``parameter`` varies.
 
     ``q0`` (n_dofs,) is a (near-)equilibrium at the parameter value ``start``
@@ -76,6 +78,15 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     run carries new problems from point to point (``carried_to``), and the branch
     keeps their frames (``Branch.frames``). ``records`` and events that need the
     problem at the point take it as the keyword ``problem``.
+
+    ``phase``: the phase rows to start with, ``(modes, q_phase)`` (a computed branch's
+    ``phase_modes`` and ``phase_state``), instead of those chosen at ``q0``; ``guess``: a
+    tangent at ``q0`` on all DOFs (a computed branch's ``tangents[k]``). With ``guess``
+    the start is corrected on the hyperplane through ``q0`` orthogonal to it and its
+    tangent oriented along it (``direction`` unused), so that a start at a fold, where
+    the parameter cannot be held, converges; together they continue a computed branch
+    from one of its points in the gauge it was computed in (see
+    :func:`~supercoil.problems.segments.follow`).
     """
     opts = options or ContinuationOptions()
     if not hasattr(problem, parameter):
@@ -86,8 +97,12 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
         raise ValueError(f"the starting {parameter} = {lam0} is outside the bounds {low, high}")
     q0 = np.array(q0, dtype=float)
     at_start = problem_at(problem, **{parameter: lam0})
-    modes = branch_phase_modes(at_start, q0, opts)
-    system = ExtendedSystem(problem, parameter, q0, modes, q0, opts.parameter_weight,
+    if phase is None:
+        modes, q_phase = branch_phase_modes(at_start, q0, opts), q0
+    else:
+        modes, q_phase = phase
+        modes = None if np.size(modes) == 0 else np.asarray(modes, dtype=float)
+    system = ExtendedSystem(problem, parameter, q0, modes, q_phase, opts.parameter_weight,
                             opts.finite_difference_step)
     mu0 = (least_squares_multipliers(at_start, q0, system.free) if multipliers0 is None
            else np.asarray(multipliers0, dtype=float))
@@ -98,12 +113,15 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     x0 = system.pack(q0, mu0, lam0)
     e_lam = np.zeros(system.size)
     e_lam[-1] = 1.0
-    corr = correct(system, x0, e_lam, x0, 0.0, opts.tolerance, 4 * opts.max_corrector_iterations)
+    row, sign = e_lam, opts.direction
+    if guess is not None:
+        row, sign = system.weights * system.reduced(guess), 1
+    corr = correct(system, x0, row, x0, 0.0, opts.tolerance, 4 * opts.max_corrector_iterations)
     if not corr.ok:
         return tracer.branch(ContinuationStatus.START_FAILED,
                              f"the starting point did not converge: {corr.message}")
     try:
-        t0 = opts.direction * tangent(system, corr.x, e_lam, corr.hessian)
+        t0 = sign * tangent(system, corr.x, row, corr.hessian)
         tracer.add_point(corr.x, t0, next_step=opts.initial_step)
     except (SingularMatrixError, InertiaError) as exc:
         return tracer.branch(ContinuationStatus.START_FAILED,
@@ -111,3 +129,4 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                              f"and bifurcation points")
     status, message = tracer.run(opts.initial_step)
     return tracer.branch(status, message)
+

@@ -75,14 +75,6 @@ def join(first: Branch, rest: Branch, offset: float) -> Branch:
                                frames=frames, **arrays)
 
 
-def _reduced(system: ExtendedSystem, full: np.ndarray) -> np.ndarray:
-    """A stored tangent ``[dq (n_dofs), dmu (m), dlambda]`` in the system's layout."""
-    n_dofs, m = system.problem.n_dofs, system.m
-    full = np.asarray(full, dtype=float)
-    return np.concatenate([full[:n_dofs][system.free], full[n_dofs:n_dofs + m],
-                           np.zeros(system.r), full[-1:]])
-
-
 def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOptions,
                problem: ConstrainedEnergy) -> float:
     """The step the interrupted run would have taken next, for a branch stored without
@@ -106,7 +98,7 @@ def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOption
                            float(partial.parameter_values[i]))
 
     x_prev, x_last = packed(-2), packed(-1)
-    d = _reduced(system, partial.tangents[-2])
+    d = system.reduced(partial.tangents[-2])
     if opts.predictor == "secant" and k >= 3:
         d = x_prev - packed(-3)
     d = d / system.norm(d)
@@ -117,8 +109,8 @@ def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOption
     system.problem = with_frames(problem, partial.frames[-2])  # as the run had them there
     start = x_prev + ds * d
     if opts.predictor == "quadratic" and k >= 3:
-        start = start + quadratic_term(system, _reduced(system, partial.tangents[-3]),
-                                       _reduced(system, partial.tangents[-2]),
+        start = start + quadratic_term(system, system.reduced(partial.tangents[-3]),
+                                       system.reduced(partial.tangents[-2]),
                                        float(partial.arclength[-2] - partial.arclength[-3]), ds)
     replay = correct(system, start, row, x_prev, ds, opts.tolerance,
                      opts.max_corrector_iterations)
@@ -188,7 +180,7 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     if admissible is not None:
         tracer.admissible = admissible
     if k >= 2:
-        tracer.before = (_reduced(system, partial.tangents[-2]),
+        tracer.before = (system.reduced(partial.tangents[-2]),
                          float(partial.arclength[-1] - partial.arclength[-2]))
         tracer.point_before = system.pack(partial.states[-2], partial.multipliers[-2],
                                           float(partial.parameter_values[-2]))
@@ -210,7 +202,7 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
         again = branch_phase_modes(problem, q_again, opts)
         if again is not None and again.shape == system.phase_modes.shape:
             system.set_phase(again, q_again)
-    guess = _reduced(system, partial.tangents[-1])
+    guess = system.reduced(partial.tangents[-1])
     try:
         t0 = tangent(system, corr.x, system.weights * guess)
         tracer.add_point(corr.x, t0, next_step=step, publish=False)

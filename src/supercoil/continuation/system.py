@@ -99,6 +99,14 @@ class ExtendedSystem:
         return np.concatenate([np.asarray(q, float)[self.free],
                                np.asarray(multipliers, float).reshape(self.m), nu, [lam]])
 
+    def reduced(self, full: np.ndarray) -> np.ndarray:
+        """A stored tangent ``[dq (n_dofs), dmu (m), dlambda]`` (``Branch.tangents[k]``) in
+        the layout of ``x`` (the free DOFs; the phase multipliers' part zero)."""
+        n_dofs = self.problem.n_dofs
+        full = np.asarray(full, dtype=float)
+        return np.concatenate([full[:n_dofs][self.free], full[n_dofs:n_dofs + self.m],
+                               np.zeros(self.r), full[-1:]])
+
     def q(self, x: np.ndarray) -> np.ndarray:
         out = self.q_template.copy()
         out[self.free] = x[:self.n]

@@ -26,8 +26,9 @@ import numpy as np
 
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation import Branch, ContinuationOptions, continuation
+from supercoil.continuation import Branch, ContinuationOptions
 from supercoil.continuation.resume import resume_branch
+from supercoil.continuation.singular_start import start_branch
 from supercoil.problems.branch_options import CONTACT_MIN_STEP
 from supercoil.problems.contact_events import classify_contact_events, contact_count_event
 from supercoil.problems.knot_ring import knot_start, parse_knot
@@ -98,7 +99,9 @@ def relaxed_knot(knot, twist_ratio: float, length_over_diameter: float, excess_l
 def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
                 max_points: int, tolerance: float = 1e-8, name: str = "knot",
                 on_point=None, old: Branch | None = None, first=None,
-                bounds: tuple[float, float] | None = None) -> Branch | None:
+                bounds: tuple[float, float] | None = None,
+                notes: list | None = None,
+                singular_bounds: tuple[float, float] | None = None) -> Branch | None:
     """The branch of ``cp`` (a knotted ring's contact problem) from its equilibrium ``q0``
     at ``dLk = start`` towards ``stop``, in runs with the rigid pins re-picked (module
     doc); its contact events classified. ``on_point(branch)`` after every point.
@@ -110,7 +113,14 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
     ``first(options, records, events, on_point, stop)``: the first run, instead of the
     continuation from ``q0`` (a switch from the bifurcation point ``q0``, whose pins the
     first run has); None from it (no point found) is returned as None. ``bounds``: the
-    ``dLk`` range of the branch (default from ``start`` to ``stop``)."""
+    ``dLk`` range of the branch (default from ``start`` to ``stop``).
+
+    A start at a singular point (a fold or a bifurcation point of the branch, where the
+    plain start fails) is made off it along its critical mode
+    (:func:`~supercoil.continuation.singular_start.start_branch`: at a fold on the side
+    of its critical mode given by the sign of ``stop - start``, within
+    ``singular_bounds``, default ``bounds``), and ``notes`` (a list) gets a note saying
+    so."""
     base = cp.base
     D = cp.diameter
     cp.accept(q0)
@@ -122,7 +132,12 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
         near_symmetry_gauge=True, regauge=True, factor_refinement=True)
     records = RunRecords(_knot_records(contact_records(cp, ring_records(base), free=False)))
     events = (contact_count_event(cp),)
+    low, high = options.parameter_bounds
     if old is not None and len(old) and "run_start" in old.records:
+        lam = np.asarray(old.parameter_values, float)
+        if singular_bounds is not None and np.any((lam < low) | (lam > high)):
+            # a branch started off a singular point, within singular_bounds
+            options = dataclasses.replace(options, parameter_bounds=singular_bounds)
         run = replay_pins(cp, base, old, q0, SEGMENT_POINTS, max_points)
         records.begin(run)
         first = resume_branch(
@@ -134,9 +149,16 @@ def follow_knot(cp: ContactProblem, q0: np.ndarray, start: float, stop: float,
         set_pin(cp, base, q0)
         run_options = dataclasses.replace(options, max_points=min(SEGMENT_POINTS, max_points))
         if first is None:
-            first = continuation(cp, q0, parameter="excess_link", start=start, options=run_options,
-                                 name=name, records=records, events=events,
-                                 on_point=on_point, stop=grip_stop(base.pin_grip, q0))
+            first, note = start_branch(cp, q0, parameter="excess_link", start=start,
+                                       options=run_options, name=name, records=records,
+                                       events=events, on_point=on_point,
+                                       stop=grip_stop(base.pin_grip, q0),
+                                       bounds=singular_bounds)
+            if note is not None:
+                if notes is not None:
+                    notes.append(f"{name}: {note}")
+                if singular_bounds is not None:
+                    options = dataclasses.replace(options, parameter_bounds=singular_bounds)
         else:
             first = first(run_options, records, events, on_point,
                           grip_stop(base.pin_grip, q0))

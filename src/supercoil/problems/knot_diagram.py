@@ -1,4 +1,4 @@
-"""The knotted ring's diagram in its excess link (Coleman & Swigon 2000, Figure 5).
+"""The knotted ring's diagram in its excess link (Coleman & Swigon 2004, Figure 5).
 
 A knotted ring has no circle to start from: :func:`compute_knot_diagram`
 relaxes the knot with self-contact at ``start`` (by default the middle of the
@@ -248,7 +248,8 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None, on_point=No
     say = progress or (lambda message: None)
     stored = dict(resume or {})
     final = on_branch or (lambda branch, contact: None)
-    follow = _follower(opts, stored, say, on_point, final)
+    origins, notes = {}, []
+    follow = _follower(opts, stored, say, on_point, final, notes)
     say(f"relaxing {opts.knot} at dLk = {start:g}")
     cp, q0, knot, message = relaxed_knot(opts.knot, opts.twist_ratio,
                                          opts.length_over_diameter, start, opts.n_nodes,
@@ -264,7 +265,6 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None, on_point=No
         branches.append(follow(cp, q0, start, stop, name))
         seconds[name] = time.perf_counter() - began
     rod.fixed, rod.gauge_dofs, cp.fixed = pins
-    origins, notes = {}, []
     if opts.deflation and branches:
         found = _deflated_branches(opts, cp, branches, say, follow, seconds)
         for branch, origin in found:
@@ -290,9 +290,10 @@ def compute_knot_diagram(options: KnotDiagramOptions, progress=None, on_point=No
                        tuple(notes), generations, frozenset(retraced))
 
 
-def _follower(opts: KnotDiagramOptions, stored: dict, say, on_point, on_branch):
+def _follower(opts: KnotDiagramOptions, stored: dict, say, on_point, on_branch, notes: list):
     """``follow(cp, q0, start, stop, name)``: the branch ``name`` as stored when complete,
-    else followed (an incomplete stored one continued), and handed to ``on_branch``."""
+    else followed (an incomplete stored one continued), and handed to ``on_branch``; a
+    start at a singular point is made off it (``notes`` and ``say`` get the note)."""
 
     def follow(cp, q0, start: float, stop: float, name: str) -> Branch:
         old, complete = stored.get(name, (None, False))
@@ -301,8 +302,12 @@ def _follower(opts: KnotDiagramOptions, stored: dict, say, on_point, on_branch):
             return old
         say(f"{name}: dLk {start:g} -> {stop:g}" + (
             f", continued from point {len(old) - 1}" if old is not None and len(old) else ""))
+        before = len(notes)
         branch = follow_knot(cp, q0.copy(), start, stop, opts.max_points, opts.tolerance,
-                             name, on_point=on_point, old=old)
+                             name, on_point=on_point, old=old, notes=notes,
+                             singular_bounds=opts.excess_link)
+        for note in notes[before:]:
+            say(note)
         on_branch(branch, True)
         return branch
 

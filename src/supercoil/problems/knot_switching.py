@@ -15,9 +15,8 @@ Unlike the ring diagram, the unlocated bifurcation points are switched from
 too: on a knotted branch pressed together by the barrier, a change of the
 unstable count within the barrier's reach of a contact event is not located
 (the determinant's sign change is the event's), nor is one at which the
-branch stopped (at the Figure 5 parameters ``knot_up`` ended at the point
-where its count rose, dLk 4.927, its next run unable to start there), and a
-switch needs only the point's state and its critical mode.
+branch stopped, and a switch needs only the point's state and its critical
+mode.
 
 Families and names. ``knot_up`` and ``knot_down`` (in that order) are the
 family ``knot``, a pair ``deflated_K_up``/``_down`` (``relaxed_K_...``) the

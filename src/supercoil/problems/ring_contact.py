@@ -181,7 +181,8 @@ def reflected(points: np.ndarray) -> np.ndarray:
 def mirror_result(result: RingResult) -> RingResult:
     """The mirror image of a ring state (module docstring): the same energy, stability,
     tensions and contacts (distances and arc lengths are kept), the opposite excess
-    link, twist and writhe, the points reflected."""
+    link, twist, writhe and chirality (the knot type's name is kept), the points
+    reflected."""
     path = None if result.path is None else {
         **result.path, "excess_link": -result.path["excess_link"],
         "snap_at": None if result.path.get("snap_at") is None else -result.path["snap_at"],
@@ -190,7 +191,8 @@ def mirror_result(result: RingResult) -> RingResult:
                f"mirror image: " + result.message)
     return dataclasses.replace(result, excess_link=-result.excess_link,
                                points=reflected(result.points), twist=-result.twist,
-                               writhe=-result.writhe, path=path, message=message)
+                               writhe=-result.writhe, chirality=-result.chirality,
+                               path=path, message=message)
 
 
 def solve_supercoiled_ring(twist_ratio: float, excess_link: float, length_over_diameter: float,

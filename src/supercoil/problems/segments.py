@@ -268,11 +268,23 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         held = None if grip is None else grip_stop(grip, q, grip_fraction)
         if on_run is not None:
             on_run(total - 1)
+        stops = either(held, refuse, None if restart is None else restart(q))
         run = continuation(carrying, q, last.multipliers[-1], parameter=last.parameter,
                            start=float(last.parameter_values[-1]),
                            options=opts, name=name, records=records, events=events,
-                           on_point=report,
-                           stop=either(held, refuse, None if restart is None else restart(q)))
+                           on_point=report, stop=stops)
+        if run.status is ContinuationStatus.START_FAILED and len(last.phase_modes):
+            # the last point is an equilibrium of the last run's gauge, not of the one
+            # chosen there: near a fold or a bifurcation point the state must move far to
+            # meet the new one and Newton diverges (measured on the trefoil ring at C/A 1.4,
+            # L/D 170, N 180, at dLk 4.927 just past its bifurcation point at 4.920: a
+            # first step of 0.73 D). The
+            # run starts again in the last run's gauge, on its tangent's hyperplane.
+            run = continuation(carrying, q, last.multipliers[-1], parameter=last.parameter,
+                               start=float(last.parameter_values[-1]), options=opts,
+                               name=name, records=records, events=events, on_point=report,
+                               stop=stops, phase=(last.phase_modes, last.phase_state),
+                               guess=last.tangents[-1])
         parts.append(run)
         total += len(run) - 1
     merged = merge_branches(parts, name)

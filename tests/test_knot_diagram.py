@@ -94,6 +94,32 @@ def test_lowest_energy_marks_by_brute_force(runs):
         assert row["n_states"] >= 1 and 0 <= row["n_stable"] <= row["n_states"]
 
 
+@pytest.mark.parametrize("knot", ["4_1", "5_1", "5_2"])
+def test_diagrams_of_other_knots_keep_their_type_and_link(knot):
+    """The diagram of the figure-eight knot, the (2, 5) torus knot and 5_2: the table's
+    polynomials at every point (a state of 5_1 may have only views of ten or more
+    crossings, where 10_132 has the same polynomials: the guarded branch keeps the
+    built knot's name), Lk = Tw + Wr, the writhe against the double sum, and a repr of
+    a few lines."""
+    result = sc.knot_diagram(knot, 1.4, 100.0, (0.0, 1.5), nodes=80, max_points=4,
+                             deflation=0)
+    table = identify(sc.knot_curve(knot, 200))
+    assert table.name == knot
+    assert result.summary["knot_type"] == knot
+    assert result.summary["chirality"] == table.chirality
+    assert {p["knot_type"] for p in result.summary["points"]} == {knot}
+    for branch in result.branches:
+        assert len(branch) == 4
+        np.testing.assert_allclose(branch.records["twist"] + branch.records["writhe"],
+                                   branch.parameter_values, atol=1e-9)
+        for q, wr in zip(branch.states, branch.records["writhe"]):
+            points = q.reshape(-1, 3)
+            assert identify(points).same_invariants(table)
+            assert float(sc.writhe(points)) == pytest.approx(wr, abs=1e-9)
+    text = repr(result)
+    assert text.startswith(f"KnotDiagramResult({knot}") and len(text.splitlines()) <= 4
+
+
 def test_lowest_energy_of_crossing_lines():
     lam = np.linspace(0.0, 2.0, 5)
     flags = lowest_energy([(lam, lam, np.ones(5, bool)), (lam, 2.0 - lam, np.ones(5, bool))])

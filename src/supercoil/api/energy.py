@@ -52,7 +52,7 @@ class Energy:
     hessian: Callable[[Array, float], object]
     n_dofs: int
     fixed: tuple[int, ...] = ()
-    mass: Array | None = None
+    mass: Array | None = dataclasses.field(default=None, repr=False)
     n_constraints: int = 0
     constraints: Callable[[Array], Array] | None = None
     constraint_jacobian: Callable[[Array], object] | None = None

@@ -22,6 +22,17 @@ class KnotDiagramResult:
     def ok(self) -> bool:
         return bool(self.summary["ok"])
 
+    def __repr__(self) -> str:
+        names = ", ".join(f"{b.name} ({len(b)})" for b in self.branches)
+        kinds: dict[str, int] = {}
+        for point in self.summary.get("special_points", ()):
+            kinds[point["kind"]] = kinds.get(point["kind"], 0) + 1
+        special = ", ".join(f"{n} {k}" for k, n in kinds.items()) or "none"
+        low, high = self.summary["excess_link"]
+        return (f"KnotDiagramResult({self.summary['knot_type']}, dLk {low:g} to {high:g}, "
+                f"{'complete' if self.ok else 'incomplete'}: {len(self.branches)} branches\n"
+                f"  points per branch: {names}\n  special points: {special})")
+
 
 def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
                  excess_link: tuple[float, float], *, nodes: int = 60,

@@ -24,10 +24,11 @@ from supercoil.geometry.curves import min_radius_of_curvature
 class StepGuards:
     """Admissibility and step bounds of a contact problem (module doc)."""
 
-    def keep_knot_type(self, points: np.ndarray):
+    def keep_knot_type(self, points: np.ndarray, known=None):
         """Make the knot type of ``points`` ``(n, 3)`` the one every state must keep
-        (else the first accepted state's); returns it (a ``KnotType``)."""
-        return self.knot_guard.keep(points)
+        (else the first accepted state's); returns it (a ``KnotType``). ``known``: the
+        type of the curve it was deformed from (:meth:`KnotGuard.keep`)."""
+        return self.knot_guard.keep(points, known)
 
     def admissible(self, q: np.ndarray) -> bool:
         """Whether the closed rod kept its linking number and its knot type at ``q``

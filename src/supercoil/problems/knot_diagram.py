@@ -170,6 +170,8 @@ class KnotDiagram:
             for i in range(len(b)):
                 q = b.states[i]
                 knot = identify(q.reshape(-1, 3))
+                if knot.same_invariants(self.knot):  # guarded along the branch: its name
+                    knot = self.knot
                 symmetry = curve_symmetry(q.reshape(-1, 3), tolerance)
                 places = contact_summary(cp, q, b.multipliers[i], PLACE_KEYS)
                 n_two, arcs = sections_touching_two(opts.n_nodes, places["contact_points"],
@@ -196,7 +198,7 @@ class KnotDiagram:
         opts = self.options
         low, high = opts.excess_link
         n_rows = min(MAX_ROWS, max(2, round((high - low) / TABLE_STEP) + 1))
-        counted = [b for b in self.branches if b.name not in self.retraced]
+        counted = [b for b in self.branches if b.name not in self.retraced and len(b)]
         table = states_by_excess_link(
             [(np.asarray(b.parameter_values, float), np.asarray(b.records["energy"], float),
               b.stable) for b in counted], np.round(np.linspace(low, high, n_rows), 10),

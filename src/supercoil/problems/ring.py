@@ -154,10 +154,13 @@ def solve_ring(twist_ratio: float, excess_link: float, n_nodes: int = 100,
 
 def ring_result(problem, q: np.ndarray, multipliers: np.ndarray, stab, *, converged: bool,
                 status: str, message: str, residual: float, iterations: int,
-                zero_tolerance: float, **extra) -> RingResult:
+                zero_tolerance: float, known_knot=None, **extra) -> RingResult:
     """Assemble a :class:`RingResult`: topology from independent double sums and frames.
 
     ``problem`` is the :class:`ClosedRodEnergy` (of a contact problem, its ``base``).
+    ``known_knot``: the knot type the computation guarded (a ``KnotType``); the state's
+    type is named as it when their invariants agree (a view of the state may leave a
+    second candidate of the same polynomials, 5_1 and 10_132).
     """
     rod = problem.rod
     twist_ratio, excess_link, n_nodes = rod.twist_ratio, problem.excess_link, rod.n_nodes
@@ -178,6 +181,8 @@ def ring_result(problem, q: np.ndarray, multipliers: np.ndarray, stab, *, conver
                     f"resolve only m <= {n_nodes // 8}: use --nodes >= {8 * highest_mode}")
     wr = writhe(points)
     knot = _knot_of(points)
+    if knot is not None and known_knot is not None and knot.same_invariants(known_knot):
+        knot = known_knot
     d1 = problem.material_directors(q)
     frame_twist = twist_from_frames(points, d1, closed=True)
     tw = frame_twist - problem.reference_link + excess_link

@@ -435,6 +435,7 @@ class _Winding:
         result = ring_result(problem.base, res.q, res.multipliers, stab, converged=converged,
                              status=res.status, message=message, residual=res.residual,
                              iterations=self.iterations, zero_tolerance=self.zero_tolerance,
+                             known_knot=problem.knot_guard.reference,
                              length_over_diameter=self.length_over_diameter,
                              contact_treatment=self.treatment, contact=contact,
                              branch=path["branch"], path=path)

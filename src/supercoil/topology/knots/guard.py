@@ -2,9 +2,11 @@
 
 A closed rod's knot type can only change when a strand passes through another.
 Continuous collision detection keeps segments from meeting during a step, and
-:class:`KnotGuard` checks the result: the knot type (:func:`~.knot_type.identify`,
-both polynomials and the name) of every state asked about must equal the
-reference's. A state that differs is refused, and the caller (Newton's line
+:class:`KnotGuard` checks the result: the invariants of every state asked about
+(:func:`~.knot_type.identify`: the Alexander and Jones polynomials) must equal the
+reference's. The name is not compared: it can depend on the view, when a
+diagram with many crossings leaves a knot of more crossings with the same
+polynomials among the candidates (5_1 and 10_132). A state that differs is refused, and the caller (Newton's line
 search, the continuation's step control) retries the step shorter.
 
 Cost: :func:`~.knot_type.identify` takes about 0.1-1.3 ms at 100-400 nodes on
@@ -43,11 +45,16 @@ class KnotGuard:
         self.invariant_evaluations = 0
         self._verified: tuple[np.ndarray, float] | None = None
 
-    def keep(self, points: np.ndarray) -> KnotType:
+    def keep(self, points: np.ndarray, known: KnotType | None = None) -> KnotType:
         """Make the knot type of the polygon ``points`` ``(n, 3)`` (or a flat vector) the
-        reference, and return it."""
+        reference, and return it. ``known``: the type of a curve deformed into this one
+        with no strand through another (a guarded relaxation of a built knot); when the
+        invariants agree its name is kept, since a view of the deformed curve may leave
+        a second candidate of the same polynomials (5_1 and 10_132)."""
         x = np.asarray(points, dtype=float).reshape(-1, 3)
-        self.reference = identify(x)
+        found = identify(x)
+        self.reference = known if known is not None and known.same_invariants(found) \
+            else found
         self.invariant_evaluations += 1
         self._verified = None
         return self.reference
@@ -75,7 +82,7 @@ class KnotGuard:
             return False
         finally:
             self.invariant_evaluations += 1
-        if found != self.reference:
+        if not found.same_invariants(self.reference):
             self.refusal = (f"the knot type would change from {_label(self.reference)} to "
                             f"{_label(found)} (a strand through another)")
             log.debug("knot guard: %s", self.refusal)

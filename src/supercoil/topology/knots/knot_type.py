@@ -50,7 +50,7 @@ from supercoil.topology.knots.alexander import alexander_polynomial, knot_determ
 from supercoil.topology.knots.diagram import Diagram
 from supercoil.topology.knots.jones import jones_polynomial
 from supercoil.topology.knots.polynomials import ONE, Laurent, divide, mirror
-from supercoil.topology.knots.projection import check_polygon, project
+from supercoil.topology.knots.projection import check_polygon, principal_view, project
 from supercoil.topology.knots.table import KNOTS, MAX_CROSSINGS, TableKnot
 
 Factors = tuple[tuple[str, int], ...]
@@ -98,6 +98,12 @@ class KnotType:
     @property
     def ambiguous(self) -> bool:
         return len(self.candidates) > 1
+
+    def same_invariants(self, other: KnotType) -> bool:
+        """Whether ``other`` has this knot's Alexander and Jones polynomials (so the same
+        chirality and determinant): what a strand passage would have to change. The
+        name may still differ between views, through the crossing filter."""
+        return self.alexander == other.alexander and self.jones == other.jones
 
     def __repr__(self) -> str:
         hand = {1: "+1", -1: "-1", 0: "0"}[self.chirality]
@@ -231,6 +237,26 @@ def identify(points, seed: int = 0) -> KnotType:
     Raises :class:`~supercoil.errors.InputError` for an array that is not a
     polygon, or a curve whose strands meet.
     """
-    reduced = simplified_diagram(points, seed=seed)
-    return classify(alexander_polynomial(reduced), jones_polynomial(reduced),
-                    reduced.n_crossings)
+    p = check_polygon(points)
+    reduced = simplified_diagram(p, seed=seed)
+    alexander, jones = alexander_polynomial(reduced), jones_polynomial(reduced)
+    found = classify(alexander, jones, reduced.n_crossings)
+    # the polynomials are the view's invariants, the crossing filter is not: a view
+    # with fewer crossings than the largest candidate's crossing number drops it
+    # (5_1 against 10_132 seen in a diagram of 10 or more crossings): the view along
+    # the axis of least spread first, then random ones
+    for k in range(_MANY_VIEWS + 1):
+        if not found.ambiguous or reduced.n_crossings < _largest_candidate(found):
+            break
+        other = (project(p, rotation=principal_view(p)) if k == 0
+                 else project(p, seed=seed + 104729 * k)).simplified()
+        if other.n_crossings < reduced.n_crossings:
+            reduced = other
+            found = classify(alexander, jones, reduced.n_crossings)
+    return found
+
+
+def _largest_candidate(knot: KnotType) -> int:
+    """The largest crossing number of the prime candidates of ``knot`` (0 for sums)."""
+    return max((int(f[0][0].split("_")[0]) for f in knot.candidates if len(f) == 1),
+               default=0)

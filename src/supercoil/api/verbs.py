@@ -430,19 +430,19 @@ def diagram_of(options, rod=None, **kwargs) -> Diagram:
                             contact_from_name(options.contact, options.length_over_diameter),
                             **rest, **kwargs)
     if isinstance(options, TweezersOptions):
-        problem, rest = tweezers_arguments(options)
-        if rod is not None:
-            problem = dataclasses.replace(problem, rod=rod)
+        problem, rest = tweezers_arguments(options, rod)
         return tweezers(problem, **rest, **kwargs)
     raise InputError(f"options: expected DiagramOptions or TweezersOptions, got "
                      f"{type(options).__name__}")
 
 
-def tweezers_arguments(options) -> tuple[Tweezers, dict]:
+def tweezers_arguments(options, rod=None) -> tuple[Tweezers, dict]:
     """``(problem, options)`` of :func:`tweezers` and :func:`tweezers_path` for a
-    :class:`~supercoil.problems.tweezers.TweezersOptions` (``turns`` among the options)."""
+    :class:`~supercoil.problems.tweezers.TweezersOptions` (``turns`` among the options);
+    ``rod``: the problem's rod (default: the Kirchhoff rod the options describe)."""
     lod = options.length_over_diameter
-    problem = Tweezers(Rod(options.twist_ratio, options.n_nodes), tension=options.tension,
+    rod = Rod(options.twist_ratio, options.n_nodes) if rod is None else rod
+    problem = Tweezers(rod, tension=options.tension,
                        end_distance=options.end_distance,
                        contact=None if lod is None else Barrier(lod))
     rest = {k: v for k, v in dataclasses.asdict(options).items()

@@ -19,6 +19,11 @@ def model_problem(s: Mapping, kind: str) -> str | None:
             return (f'[rod] {key} needs model = "cosserat" (the Kirchhoff rod is '
                     "inextensible and unshearable)")
     if not cosserat:
+        end_distance = s.get("problem", {}).get("end_distance")
+        if kind == "tweezers" and isinstance(end_distance, (int, float)) \
+                and not end_distance < 1.0:
+            return ("[problem] end_distance: z/L must lie in (0, 1) for the inextensible "
+                    'Kirchhoff rod; a stretched rod needs model = "cosserat"')
         return None
     if kind == "ring_diagram" and s.get("continuation", {}).get("branch_depth", 1) != 1:
         return ("[continuation] branch_depth: the Cosserat ring diagram computes the "

@@ -12,7 +12,9 @@ range. Under displacement control (``end_distance``, the end's height over L, th
 stretch included) the branch ``clamped`` starts from the planar clamped buckle
 (:func:`~supercoil.cosserat.clamped.planar_buckle`) solved by Newton at the first
 turn, and is followed in turns the same way; ``tension`` is then the end's
-reaction. Without
+reaction. At ``end_distance >= 1`` (the rod stretched: its tension ``EA (z/L - 1)``
+exactly, twisted or not) the straight rod held there is followed in turns and the
+buckled branch switched off its first bifurcation, as under load control. Without
 self-contact the rod may pass through itself there (``closure_failed``); with it
 (``options.length_over_diameter``) the buckled branch stops past its first contact
 and goes on with self-contact to the plectoneme
@@ -64,14 +66,27 @@ def clamped_cosserat_problem(options: TweezersOptions, stretch_stiffness: float,
                              shear_stiffness: float) -> ClampedCosseratEnergy:
     """The clamped Cosserat rod at ``turns = start``: under the options' tension at its
     straight state (``problem.straight_state()``), or with the end held at the options'
-    end distance at the planar buckle (``problem.initial_state()``)."""
+    end distance at the planar buckle (``problem.initial_state()``); at an end distance
+    ``z/L >= 1`` at the straight rod stretched to it (its ``tension`` attribute
+    ``EA (z/L - 1)``, the reaction, which the straight state uses)."""
     rod = CosseratRod(options.n_nodes - 1, twist_stiffness=options.twist_ratio,
                       shear_stiffness=shear_stiffness, stretch_stiffness=stretch_stiffness)
     if options.load_control:
         return ClampedCosseratEnergy(rod, options.turns[0], options.tension)
+    if stretched(options):
+        # the straight rod stretched to the end distance: its tension EA (z/L - 1) is
+        # the end's reaction (the dead load is off under end-distance control)
+        tension = stretch_stiffness * (options.end_distance - 1.0)
+        return ClampedCosseratEnergy(rod, options.turns[0], tension,
+                                     end_distance_control=True)
     x, R = planar_buckle(rod, options.end_distance, options.turns[0])
     return ClampedCosseratEnergy(rod, options.turns[0], end_distance_control=True,
                                  positions=x, rotations=R)
+
+
+def stretched(options: TweezersOptions) -> bool:
+    """Displacement control at ``z/L >= 1``: the straight rod, stretched, is the start."""
+    return not options.load_control and options.end_distance >= 1.0
 
 
 def axial_twist(problem: ClampedCosseratEnergy, q: np.ndarray) -> float:
@@ -178,7 +193,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
                               tuple(notes), cut_at_contact=cut, model=model)
 
     start_time = time.perf_counter()
-    if opts.load_control:
+    if opts.load_control or stretched(opts):
         free_name = "buckled"
         free = _buckled_off_straight(problem, opts, records, free_opts, events, watched,
                                      at_onset, branches, notes, seconds, say)
@@ -235,7 +250,8 @@ def _buckled_off_straight(problem, opts, records, free_opts, events, watched, at
                           branches, notes, seconds, say):
     """The straight rod in turns (appended to ``branches``) and the first run of the
     buckled branch switched off its first bifurcation, or None (no buckling: a note)."""
-    say(f"straight Cosserat rod in turns at F L^2/A = {opts.tension:g}")
+    say(f"straight Cosserat rod in turns at F L^2/A = {opts.tension:g}" if opts.load_control
+        else f"straight Cosserat rod in turns held at z/L = {opts.end_distance:g}")
     cont = ContinuationOptions(initial_step=0.05, max_step=STRAIGHT_MAX_STEP,
                                parameter_bounds=opts.turns, max_points=opts.max_points,
                                event_tolerance=opts.event_tolerance)

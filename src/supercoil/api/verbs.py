@@ -197,11 +197,13 @@ def _tweezers_settings(problem: Tweezers, turns, options: dict):
 
 def _computed(kind: str, settings, compute, progress, on_point, out, resume, overwrite,
               attributes: dict, provenance: dict,
-              contact: Callable[[str], bool] = lambda name: name.endswith("_contact")):
+              contact: Callable[[str], bool] = lambda name: name.endswith("_contact"),
+              model: dict | None = None):
     """Run ``compute(settings, progress, on_point=, on_branch=, resume=)`` (a problem's
     driver) with the recording of ``out`` and the branches of ``resume``; returns
     ``(computed, writer, owned)``. ``contact(name)``: whether branch ``name`` has
-    self-contact (as its points are stored)."""
+    self-contact (as its points are stored). ``model``: a Cosserat rod's keys (stored
+    with the settings, and a resumed result's must be the same), None for Kirchhoff."""
     from supercoil.api import recording
     from supercoil.io.store import ResultWriter
 
@@ -219,14 +221,14 @@ def _computed(kind: str, settings, compute, progress, on_point, out, resume, ove
                          "stored result, overwrite replaces it")
     stored = None
     if source is not None:
-        stored = recording.stored_branches(source, kind, settings)
+        stored = recording.stored_branches(source, kind, settings, model)
     elif again and not given:
-        stored = recording.stored_branches(out, kind, settings)
+        stored = recording.stored_branches(out, kind, settings, model)
     writer = out if given else None
     if out is not None and not given:
         writer = recording.open_folder(out, kind=kind, options=settings,
                                        attributes=attributes, provenance=provenance,
-                                       overwrite=overwrite, resume=again)
+                                       overwrite=overwrite, resume=again, model=model)
     if again and given:
         stored = writer.stored_branches()
     say = progress or (lambda message: None)
@@ -285,8 +287,9 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
     compute = ring_diagram
-
+    model = None
     if isinstance(rod, CosseratRod):
+        model = _model_keys(rod)
         _check_contact(contact)
         tube = {} if contact is None else {
             "length_over_diameter": contact.length_over_diameter, "contact": contact.treatment}
@@ -311,12 +314,19 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     computed, writer, owned = _computed(
         "ring_diagram", settings, compute, progress, on_point, out, resume, overwrite,
         options_attributes(settings, closed=True),
-        {"contact_treatment": settings.contact, "n_nodes": settings.n_nodes})
+        {"contact_treatment": settings.contact, "n_nodes": settings.n_nodes}, model=model)
     status, message = _run_status(computed)
     diagram = Diagram(kind="ring_diagram", problem=problem, settings=settings,
                       branches={b.name: b for b in computed.branches}, status=status,
                       message=message, notes=tuple(computed.notes), computed=computed)
     return _finished(diagram, writer, owned, "diagram.json")
+
+
+def _model_keys(rod: CosseratRod) -> dict:
+    """A Cosserat rod's keys, which a result records and a resumed run must share."""
+    return {"model": "cosserat", "stretch_stiffness": rod.stretch_stiffness,
+            "shear_stiffness": rod.shear_stiffness, "slenderness": rod.slenderness,
+            "poisson_ratio": rod.poisson_ratio}
 
 
 def _check_contact(contact) -> None:

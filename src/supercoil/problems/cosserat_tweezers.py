@@ -46,7 +46,7 @@ from supercoil.cosserat.centreline import StoredCentrelines
 from supercoil.cosserat.clamped import ClampedCosseratEnergy, planar_buckle
 from supercoil.cosserat.rod import CosseratRod
 from supercoil.problems.contact_events import onset_event, stop_after_onset, truncate_after
-from supercoil.problems.cosserat_ring import centreline_branch
+from supercoil.problems.cosserat_stored import centreline_branch
 from supercoil.problems.cosserat_tweezers_contact import (
     cosserat_contact_branch,
     tweezers_contact_options,

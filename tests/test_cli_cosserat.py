@@ -48,8 +48,6 @@ def test_kirchhoff_ring_json_states_its_model(runner, tmp_path):
     (["ring", "--twist-ratio", "0.8", "--excess-link", "1", "--model", "cosserat",
       "--length-over-diameter", "40", "--knot", "3_1"],
      "--knot is not available with --model cosserat"),
-    (["tweezers", "--twist-ratio", "0.8", "--tension", "5", "--turns", "0:3", "--model",
-      "cosserat", "--resume", "--out", "OUT"], "--resume is not available"),
     (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40",
       "--shear-stiffness", "5", "--out", "OUT"], "--shear-stiffness needs --model cosserat"),
 ])

@@ -49,7 +49,7 @@ def test_invalid_cosserat_problems_are_refused():
     with pytest.raises(sc.InputError, match="branch_depth: the Cosserat ring's secondary "
                        "branches are followed with self-contact"):
         sc.ring_diagram(rod, branch_depth=2)
-    with pytest.raises(sc.InputError, match="resume: continuing a stored tweezers run"):
+    with pytest.raises(sc.InputError, match="resume=True continues the result in out"):
         sc.tweezers(sc.Tweezers(rod, tension=1.0), resume=True)
 
 

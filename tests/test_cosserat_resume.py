@@ -85,3 +85,30 @@ def test_a_run_interrupted_in_its_contact_branch_resumes_to_the_same_end(tmp_pat
         np.testing.assert_allclose(r.parameter_values, b.parameter_values, atol=1e-8, rtol=0)
         assert [(p.kind, p.index) for p in r.special_points] == \
             [(p.kind, p.index) for p in b.special_points], name
+
+
+def test_tweezers_interrupted_in_their_contact_branch_resume_to_the_same_end(tmp_path):
+    problem = sc.Tweezers(sc.CosseratRod(0.8, 1e4, 1e4, nodes=16), tension=5.0,
+                          contact=sc.Barrier(14.0))
+    whole = sc.tweezers(problem, (0.0, 2.2), out=tmp_path / "full")
+    assert "buckled_contact" in whole.branches, whole.notes
+    seen = defaultdict(int)
+
+    def stop_at_five(branch):
+        seen[branch.name] += 1
+        if seen["buckled_contact"] == 5:
+            raise KeyboardInterrupt
+
+    out = tmp_path / "cut"
+    with pytest.raises(KeyboardInterrupt):
+        sc.tweezers(problem, (0.0, 2.2), out=out, on_point=stop_at_five)
+    assert len(sc.load(out).branches["buckled_contact"]) == 5
+    resumed = sc.tweezers(problem, (0.0, 2.2), out=out, resume=True)
+    assert resumed.status == whole.status
+    a, b = sc.load(out), sc.load(tmp_path / "full")
+    assert list(a.branches) == list(b.branches)
+    for name, x in b.branches.items():
+        y = a.branches[name]
+        assert len(y) == len(x), name
+        np.testing.assert_allclose(y.states, x.states, atol=1e-8, rtol=0, err_msg=name)
+        np.testing.assert_allclose(y.parameter_values, x.parameter_values, atol=1e-8, rtol=0)

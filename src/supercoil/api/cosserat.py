@@ -140,24 +140,19 @@ def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
     return compute
 
 
-def _refuse_resume(resume, verb: str) -> None:
-    if resume is not None and resume is not False:
-        raise InputError(f"resume: continuing a stored {verb} is not available with the "
-                         "Cosserat model; compute it again", name="resume")
-
-
-def tweezers_driver(problem: Tweezers, resume):
+def tweezers_driver(problem: Tweezers):
     """The driver of the Cosserat rod in tweezers
     (:mod:`supercoil.problems.cosserat_tweezers`, under load or displacement control,
-    with the problem's self-contact) for :func:`supercoil.tweezers`. Its branches are
-    stored when they end."""
+    with the problem's self-contact) for :func:`supercoil.tweezers`. Every point is
+    stored as it comes (centrelines with the sections' frames), and a stored run is
+    continued (``resume``)."""
     from supercoil.problems.cosserat_tweezers import cosserat_tweezers
 
-    _refuse_resume(resume, "tweezers run")
     rod = problem.rod
 
     def compute(settings, progress, *, on_point=None, on_branch=None, resume=None):
         return cosserat_tweezers(settings, rod.stretch_stiffness, rod.shear_stiffness,
-                                 progress)
+                                 progress, on_point=on_point, on_branch=on_branch,
+                                 resume=resume)
 
     return compute

@@ -376,14 +376,14 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
         from supercoil.units.tweezers import dna_attributes
 
         attributes.update(dna_attributes(problem.dna, problem.force_pN))
-    compute = tweezers_branches
+    compute, model = tweezers_branches, None
     if isinstance(problem.rod, CosseratRod):
-        compute = cosserat.tweezers_driver(problem, resume)
+        compute, model = cosserat.tweezers_driver(problem), _model_keys(problem.rod)
     computed, writer, owned = _computed(
         "tweezers", settings, compute, progress, on_point, out, resume, overwrite,
         attributes,
         {"contact_treatment": "barrier" if settings.length_over_diameter else "none",
-         "n_nodes": settings.n_nodes})
+         "n_nodes": settings.n_nodes}, model=model)
     status, message = _run_status(computed)
     diagram = Diagram(kind="tweezers", problem=problem, settings=settings,
                       branches={b.name: b for b in computed.branches}, status=status,

@@ -29,7 +29,6 @@ from supercoil.cli.model_options import (
     ShearOption,
     StretchOption,
     check_model,
-    kirchhoff_only,
     make_rod,
     model_record,
 )
@@ -179,7 +178,6 @@ def tweezers(
     the stretch.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    kirchhoff_only(model, (("--resume", resume),), "a run from the start")
     preset, span = None, None
     if dna:
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \

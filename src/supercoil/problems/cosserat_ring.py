@@ -17,9 +17,11 @@ diagram ends at the first contacts.
 
 Per point the records are the Kirchhoff ring's (``excess_link``, ``writhe``, ``twist``,
 ``energy``, ``link_error``, ``min_gap_over_diameter``, contact counts) plus
-``max_stretch_strain`` and ``max_shear_strain``. The returned diagram's branch states
-are the centrelines (``(k, 3 N)``), so the diagram's outputs and viewer take them as
-they take the Kirchhoff ring's.
+``max_stretch_strain`` and ``max_shear_strain``. The diagram
+(:mod:`supercoil.problems.cosserat_ring_diagram`) returns and stores its branches with
+the centrelines as states (``(k, 3 N)``), so the outputs and viewer take them as they
+take the Kirchhoff ring's, and each point's frames beside them
+(:mod:`supercoil.problems.cosserat_stored`).
 """
 
 from __future__ import annotations

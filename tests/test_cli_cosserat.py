@@ -48,10 +48,6 @@ def test_kirchhoff_ring_json_states_its_model(runner, tmp_path):
     (["ring", "--twist-ratio", "0.8", "--excess-link", "1", "--model", "cosserat",
       "--length-over-diameter", "40", "--knot", "3_1"],
      "--knot is not available with --model cosserat"),
-    (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40", "--model",
-      "cosserat", "--branch-depth", "2", "--out", "OUT"], "--branch-depth is not available"),
-    (["tweezers", "--twist-ratio", "0.8", "--tension", "5", "--turns", "0:3", "--model",
-      "cosserat", "--resume", "--out", "OUT"], "--resume is not available"),
     (["diagram", "ring", "--twist-ratio", "0.8", "--length-over-diameter", "40",
       "--shear-stiffness", "5", "--out", "OUT"], "--shear-stiffness needs --model cosserat"),
 ])
@@ -97,3 +93,21 @@ def test_study_files_take_the_model():
         parse_study(text.replace('model = "cosserat"', 'model = "kirchhoff"'))
     with pytest.raises(StudyError, match="model"):
         parse_study(text.replace('model = "cosserat"', 'model = "rubber"'))
+
+
+def test_diagram_ring_resumes_only_with_the_same_rod(runner, tmp_path):
+    out = tmp_path / "d"
+    command = ["diagram", "ring", "--twist-ratio", "0.6667", "--length-over-diameter", "20",
+               "--nodes", "24", "--modes", "2", "--max-excess-link", "4",
+               "--contact-max-points", "6", "--quiet", "--out", str(out)]
+    cosserat = ["--model", "cosserat", "--stretch-stiffness", "1e5", "--shear-stiffness",
+                "1e5"]
+    first = runner.invoke(app, command + cosserat)
+    assert first.exit_code == 1, first.output  # alpha_contact stopped at its point limit
+    stored = sc.load(out)
+    assert stored.settings["rod"]["model"] == "cosserat"
+    assert stored.branches["alpha_contact"].frames  # the sections' rotations, stored
+    kirchhoff = runner.invoke(app, command + ["--resume"])
+    assert kirchhoff.exit_code == 2 and "rod" in kirchhoff.output, kirchhoff.output
+    again = runner.invoke(app, command + cosserat + ["--resume"])
+    assert again.exit_code != 2, again.output

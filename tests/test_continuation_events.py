@@ -235,3 +235,35 @@ def test_zeroin_that_does_not_converge_says_so():
     'not located'), not an unconverged point reported as located."""
     with pytest.raises(LocationFailed, match="no zero located"):
         zeroin(lambda x: np.exp(x) - 1.5, 0.0, 1.0, 1e-14, maxiter=2)
+
+
+def test_start_with_the_ends_tangents_is_the_cubic_through_them():
+    """Oracle: on a cubic x(u) = a + b u + c u^2 + e u^3, given the ends' tangents (as the
+    continuation keeps them, scaled by the segment's length) the start at any u is x(u)
+    itself (Hermite interpolation is exact for cubics), where the chord misses it by the
+    curvature; once a point inside is corrected, the quadratic through the nearest ones."""
+    p = Bratu(8, 3.0)
+    system = ExtendedSystem(p, "lam", np.zeros(9))
+    rng = np.random.default_rng(1)
+    a, c, e = (rng.standard_normal(system.size) for _ in range(3))
+    b = 4.0 * (c + e) + rng.standard_normal(system.size)  # along the chord at both ends
+
+    def cubic(u):
+        return a + b * u + c * u**2 + e * u**3
+
+    chord = Segment(system, a, cubic(1.0), 1e-10, 10, 1e-6)
+    length = chord.length
+    slopes = (b / length, (b + 2 * c + 3 * e) / length)
+    assert all((system.weights * t) @ chord.d > 0 for t in slopes)
+    segment = Segment(system, a, cubic(1.0), 1e-10, 10, 1e-6, tangents=slopes)
+    for u in (0.1, 0.37, 0.52, 0.9):
+        assert np.allclose(segment.start(u), cubic(u), rtol=0, atol=1e-12)
+        assert np.max(np.abs(chord.start(u) - cubic(u))) > 1e-3
+    # tangents given against the segment's direction are turned along it
+    flipped = Segment(system, a, cubic(1.0), 1e-10, 10, 1e-6,
+                      tangents=(-slopes[0], -slopes[1]))
+    assert np.allclose(flipped.start(0.37), cubic(0.37), rtol=0, atol=1e-12)
+    segment._points[0.5] = cubic(0.5)
+    quadratic = Segment(system, a, cubic(1.0), 1e-10, 10, 1e-6)
+    quadratic._points[0.5] = cubic(0.5)
+    assert np.allclose(segment.start(0.3), quadratic.start(0.3), rtol=0, atol=1e-14)

@@ -46,9 +46,10 @@ def test_invalid_cosserat_problems_are_refused():
     rod = sc.CosseratRod(0.8, nodes=20)
     with pytest.raises(sc.InputError, match="knot"):
         sc.equilibrium(sc.Ring(rod, 1.0, contact=sc.Penalty(30.0), knot="3_1"))
-    with pytest.raises(sc.InputError, match="branch_depth"):
-        sc.ring_diagram(rod, sc.Barrier(30.0), branch_depth=2)
-    with pytest.raises(sc.InputError, match="resume: continuing a stored tweezers run"):
+    with pytest.raises(sc.InputError, match="branch_depth: the Cosserat ring's secondary "
+                       "branches are followed with self-contact"):
+        sc.ring_diagram(rod, branch_depth=2)
+    with pytest.raises(sc.InputError, match="resume=True continues the result in out"):
         sc.tweezers(sc.Tweezers(rod, tension=1.0), resume=True)
 
 

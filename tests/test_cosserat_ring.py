@@ -350,3 +350,23 @@ def test_a_crossing_change_that_keeps_the_link_is_refused_by_the_knot_type():
     assert "3_1" in problem.refusal and "0_1" in problem.refusal
     # halfway down the strands have not passed: admitted
     assert problem.admissible(problem.state(pushed_down(x, 0.4), _framed(x)))
+
+
+def test_with_self_contact_an_element_turned_past_a_quarter_turn_is_refused():
+    # one section turned by 0.6 pi about its d3: the centreline (all that the contact's
+    # guards see) is the circle's and the link is kept, but its elements turn by more
+    # than pi / 2; the contact problem refuses the state as the ring does
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
+
+    problem = ring_problem(0.8, 1.0, 24, 1e3, 1e3)
+    x, R = problem.configuration(problem.initial_state())
+    R2 = R.copy()
+    R2[5] = exp_so3(0.6 * np.pi * R[5][:, 2]) @ R[5]
+    turned = problem.state(x, R2)
+    assert abs(problem.frame_twist(turned) + problem.writhe(turned) - problem.link) < 0.5
+    cp = ContactProblem(problem, ContactOptions(diameter=0.02, treatment="barrier"))
+    assert not cp.admissible(turned)
+    assert "short way" in cp.refusal
+    problem.state(x, R)
+    assert cp.admissible(problem.initial_state())

@@ -155,3 +155,42 @@ def test_study_file_with_an_end_distance(tmp_path):
     points = [p for p in sc.load(tmp_path / "result.h5").points() if p["branch"] == "clamped"]
     assert points and all(p["tension"] == pytest.approx(500.0 * (0.95 - 1.0), rel=1e-9)
                           for p in points)
+
+
+def test_rod_stretched_beyond_its_length_carries_tension_ea_times_the_strain():
+    # held at z/L = 1.02 the straight rod's strains are Gamma = (0, 0, 0.02) at every turn
+    # (the linear law decouples stretch from twist): the reaction is EA (z/L - 1) exactly
+    # along the straight branch, and the extension is z/L
+    rod = sc.CosseratRod(0.8, 500.0, nodes=12)
+    held = sc.tweezers(sc.Tweezers(rod, end_distance=1.02), (0.0, 0.5), max_points=40)
+    straight = held.branches["straight"]
+    assert len(straight) > 2 and straight.parameter_values[-1] == pytest.approx(0.5)
+    records = straight.records
+    assert np.allclose(records["tension"], 500.0 * 0.02, rtol=1e-9, atol=0.0)
+    assert np.allclose(records["extension"], 1.02, rtol=1e-13, atol=0.0)
+    assert np.allclose(records["max_stretch_strain"], 0.02, rtol=1e-9, atol=0.0)
+    assert np.all(records["load_potential"] == 0.0)
+
+
+@pytest.mark.parametrize("end_distance", [1.0, 1.3])
+def test_an_inextensible_rod_is_not_stretched(end_distance):
+    with pytest.raises(sc.InputError, match="inextensible"):
+        sc.Tweezers(sc.Rod(0.8, nodes=12), end_distance=end_distance)
+    sc.Tweezers(sc.CosseratRod(0.8, 500.0, nodes=12), end_distance=end_distance)
+    with pytest.raises(sc.InputError, match="end_distance"):
+        sc.Tweezers(sc.CosseratRod(0.8, 500.0, nodes=12), end_distance=2.5)
+
+
+def test_stretched_end_distance_on_the_command_line(runner, tmp_path):
+    args = ["tweezers", "--twist-ratio", "0.8", "--end-distance", "1.05", "--turns", "0:0.3",
+            "--nodes", "12"]
+    refused = runner.invoke(app, args + ["--out", str(tmp_path / "k")])
+    assert refused.exit_code == 2 and "inextensible" in refused.output
+    assert not (tmp_path / "k").exists()
+    out = tmp_path / "c"
+    result = runner.invoke(app, args + ["--model", "cosserat", "--stretch-stiffness", "400",
+                                        "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    data = json.loads((out / "branch.json").read_text())
+    tensions = [p["tension"] for p in data["points"] if p["branch"] == "straight"]
+    assert tensions and np.allclose(tensions, 400.0 * 0.05, rtol=1e-9)

@@ -118,7 +118,10 @@ def test_nothing_below_the_command_line_imports_it():
 RECORDS = {"supercoil.continuation.branch", "supercoil.continuation.branch.Branch",
            "supercoil.continuation.branch.SpecialPoint", "supercoil.continuation.branch.jsonable",
            "supercoil.continuation.options",
-           "supercoil.continuation.options.ContinuationStatus"}
+           "supercoil.continuation.options.ContinuationStatus",
+           # the carried frames a branch stores with its points: an immutable record of
+           # named arrays (the module holds no algorithm, only the Carried mixin)
+           "supercoil.solvers.carried", "supercoil.solvers.carried.Frames"}
 ALGORITHMS = ("supercoil.solvers", "supercoil.stability", "supercoil.continuation")
 
 

@@ -224,7 +224,7 @@ def test_records_function_matches_straight_state():
 @pytest.mark.parametrize("kwargs", [
     {"tension": None}, {"tension": 1.0, "end_distance": 0.5}, {"tension": -1.0},
     {"turns": (2.0, 1.0)}, {"twist_ratio": 0.0}, {"length_over_diameter": 2.0},
-    {"tension": None, "end_distance": 1.0}, {"n_nodes": 5}, {"contact_predictor": "cubic"}])
+    {"tension": None, "end_distance": 2.5}, {"n_nodes": 5}, {"contact_predictor": "cubic"}])
 def test_bad_options(kwargs):
     base = {"twist_ratio": 1.0, "length_over_diameter": 30.0, "tension": 1.0}
     base.update(kwargs)

@@ -116,45 +116,43 @@ def stability(state: Equilibrium, n_modes: int, zero_tolerance: float) -> Stabil
                      certified=bool(report.certified), message=report.message)
 
 
-def _refuse_resume(resume, verb: str) -> None:
-    if resume is not None and resume is not False:
-        raise InputError(f"resume: continuing a stored {verb} is not available with the "
-                         "Cosserat model; compute it again", name="resume")
-
-
 def ring_diagram_driver(rod: CosseratRod, contact, settings, resume):
-    """The driver of the Cosserat ring's diagram (:mod:`supercoil.problems.cosserat_ring`)
-    for :func:`supercoil.ring_diagram`: the circle, its bifurcations and the primary
-    branches up to their first self-contact, then with ``contact`` (the tube of
-    ``settings``) on with self-contact; without it the diagram ends at the first
-    contacts of the rod's own section (diameter L / ``rod.slenderness``). Its
-    branches are stored when they end."""
-    from supercoil.problems.cosserat_ring import cosserat_ring_diagram
+    """The driver of the Cosserat ring's diagram
+    (:mod:`supercoil.problems.cosserat_ring_diagram`) for :func:`supercoil.ring_diagram`:
+    the circle, its bifurcations and the primary branches up to their first
+    self-contact, then with ``contact`` (the tube of ``settings``) on with self-contact
+    and the branches switched at their bifurcation points (``branch_depth``); without
+    it the diagram ends at the first contacts of the rod's own section (diameter
+    L / ``rod.slenderness``). Every point is stored as it comes (centrelines with the
+    sections' frames), and a stored run is continued (``resume``)."""
+    from supercoil.problems.cosserat_ring_diagram import cosserat_ring_diagram
 
-    _refuse_resume(resume, "ring diagram")
-    if settings.branch_depth != 1:
-        raise InputError("branch_depth: the Cosserat ring diagram computes the primary "
-                         "branches only (branch_depth 1)", name="branch_depth")
+    if settings.branch_depth != 1 and contact is None:
+        raise InputError("branch_depth: the Cosserat ring's secondary branches are followed "
+                         "with self-contact; give a contact, or branch_depth 1",
+                         name="branch_depth")
 
     def compute(settings, progress, *, on_point=None, on_branch=None, resume=None):
         return cosserat_ring_diagram(settings, rod.stretch_stiffness, rod.shear_stiffness,
-                                     progress, contact=contact is not None)
+                                     progress, contact=contact is not None,
+                                     on_point=on_point, on_branch=on_branch, resume=resume)
 
     return compute
 
 
-def tweezers_driver(problem: Tweezers, resume):
+def tweezers_driver(problem: Tweezers):
     """The driver of the Cosserat rod in tweezers
     (:mod:`supercoil.problems.cosserat_tweezers`, under load or displacement control,
-    with the problem's self-contact) for :func:`supercoil.tweezers`. Its branches are
-    stored when they end."""
+    with the problem's self-contact) for :func:`supercoil.tweezers`. Every point is
+    stored as it comes (centrelines with the sections' frames), and a stored run is
+    continued (``resume``)."""
     from supercoil.problems.cosserat_tweezers import cosserat_tweezers
 
-    _refuse_resume(resume, "tweezers run")
     rod = problem.rod
 
     def compute(settings, progress, *, on_point=None, on_branch=None, resume=None):
         return cosserat_tweezers(settings, rod.stretch_stiffness, rod.shear_stiffness,
-                                 progress)
+                                 progress, on_point=on_point, on_branch=on_branch,
+                                 resume=resume)
 
     return compute

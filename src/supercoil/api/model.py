@@ -303,7 +303,8 @@ class Tweezers:
     tweezers experiment).
 
     ``rod``: a :class:`Rod` or a :class:`CosseratRod`. Exactly one of ``tension`` (F L^2 / A >= 0, load control) and ``end_distance``
-    (z / L in (0, 1), displacement control). ``contact``: the tube's self-contact
+    (z / L, displacement control: in (0, 1) for a :class:`Rod`, which is inextensible;
+    up to 2 for a :class:`CosseratRod`, stretched straight at z / L >= 1). ``contact``: the tube's self-contact
     (None: the rod may pass through itself, so the branch stops meaning anything
     at its first self-crossing). ``dna``: the molecule of a problem in DNA units
     (:meth:`from_dna`), whose results then carry nm, pN nm and σ beside the
@@ -361,10 +362,18 @@ class Tweezers:
             object.__setattr__(self, "tension", checks.number(
                 "tension", self.tension, 0.0, checks.MAX_MAGNITUDE, meaning="F L^2/A"))
         else:
-            # an inextensible rod is not longer than L, and at z/L = 1 it cannot deflect
+            from supercoil.problems.tweezers.options import (
+                MAX_END_DISTANCE,
+                check_inextensible,
+            )
+
+            # the extensible Cosserat rod may be stretched beyond L; an inextensible rod
+            # is not longer than L, and at z/L = 1 it cannot deflect
             object.__setattr__(self, "end_distance", checks.number(
-                "end_distance", self.end_distance, 0.0, 1.0, low_open=True, high_open=True,
+                "end_distance", self.end_distance, 0.0, MAX_END_DISTANCE, low_open=True,
                 meaning="z/L"))
+            if not isinstance(self.rod, CosseratRod):
+                check_inextensible(self.end_distance)
         _contact_or_none(self.contact)
         if self.contact is not None and self.contact.treatment not in ("barrier", "penalty"):
             raise InputError(f"contact: {type(self.contact).__name__} cannot be continued along "

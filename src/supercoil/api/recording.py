@@ -75,11 +75,12 @@ def _options_record(settings: Mapping, kind: str) -> dict:
     return out
 
 
-def stored_branches(stored, kind: str, options) -> dict:
+def stored_branches(stored, kind: str, options, model: dict | None = None) -> dict:
     """name -> ``(branch, complete)`` of the stored result ``stored`` (a
     :class:`~supercoil.io.store.Result`, a result file or its folder), which must be a
     ``kind`` result computed with ``options`` (an options dataclass): the options both
-    record must agree."""
+    record must agree, and the rod model (``model``: a Cosserat rod's keys, None for the
+    Kirchhoff rod, which records none)."""
     import dataclasses
 
     from supercoil.io.store import Result, load
@@ -95,6 +96,10 @@ def stored_branches(stored, kind: str, options) -> dict:
     if mismatch:
         raise InputError(f"resume: {result.path} was computed with other options "
                          f"({mismatch}); give the same options, or start anew")
+    mismatch = settings_mismatch(result.settings.get("rod"), plain(model), "rod")
+    if mismatch:
+        raise InputError(f"resume: {result.path} was computed with another rod "
+                         f"({mismatch}); give the same rod, or start anew")
     return {name: (b, name in result.complete_branches) for name, b in result.branches.items()}
 
 
@@ -108,10 +113,11 @@ def announce(stored: Mapping, say: Callable[[str], None]) -> None:
 
 
 def open_folder(out, *, kind: str, options, attributes: dict, provenance: dict,
-                overwrite: bool, resume: bool):
+                overwrite: bool, resume: bool, model: dict | None = None):
     """The :class:`~supercoil.io.store.ResultWriter` of ``out/result.h5``: continued with
     ``resume`` (it must exist), else started, the folder created. An existing result is
-    refused unless ``overwrite``; so is a result another process writes."""
+    refused unless ``overwrite``; so is a result another process writes. ``model``: a
+    Cosserat rod's keys, stored in the settings as ``rod`` (None: the Kirchhoff rod)."""
     import dataclasses
 
     from supercoil.io.store import ResultFileError, ResultWriter
@@ -133,8 +139,9 @@ def open_folder(out, *, kind: str, options, attributes: dict, provenance: dict,
     except OSError as exc:
         raise InputError(f"out: cannot create {folder} ({exc.strerror or exc})") from None
     try:
+        rod = {} if model is None else {"rod": plain(model)}
         return ResultWriter.create(path, problem=kind, settings={
-            "verb": kind, "options": plain(dataclasses.asdict(options))},
+            "verb": kind, "options": plain(dataclasses.asdict(options)), **rod},
             attributes=attributes, provenance=provenance, overwrite=True)
     except ResultFileError:
         raise

@@ -197,11 +197,13 @@ def _tweezers_settings(problem: Tweezers, turns, options: dict):
 
 def _computed(kind: str, settings, compute, progress, on_point, out, resume, overwrite,
               attributes: dict, provenance: dict,
-              contact: Callable[[str], bool] = lambda name: name.endswith("_contact")):
+              contact: Callable[[str], bool] = lambda name: name.endswith("_contact"),
+              model: dict | None = None):
     """Run ``compute(settings, progress, on_point=, on_branch=, resume=)`` (a problem's
     driver) with the recording of ``out`` and the branches of ``resume``; returns
     ``(computed, writer, owned)``. ``contact(name)``: whether branch ``name`` has
-    self-contact (as its points are stored)."""
+    self-contact (as its points are stored). ``model``: a Cosserat rod's keys (stored
+    with the settings, and a resumed result's must be the same), None for Kirchhoff."""
     from supercoil.api import recording
     from supercoil.io.store import ResultWriter
 
@@ -219,14 +221,14 @@ def _computed(kind: str, settings, compute, progress, on_point, out, resume, ove
                          "stored result, overwrite replaces it")
     stored = None
     if source is not None:
-        stored = recording.stored_branches(source, kind, settings)
+        stored = recording.stored_branches(source, kind, settings, model)
     elif again and not given:
-        stored = recording.stored_branches(out, kind, settings)
+        stored = recording.stored_branches(out, kind, settings, model)
     writer = out if given else None
     if out is not None and not given:
         writer = recording.open_folder(out, kind=kind, options=settings,
                                        attributes=attributes, provenance=provenance,
-                                       overwrite=overwrite, resume=again)
+                                       overwrite=overwrite, resume=again, model=model)
     if again and given:
         stored = writer.stored_branches()
     say = progress or (lambda message: None)
@@ -285,8 +287,9 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
     compute = ring_diagram
-
+    model = None
     if isinstance(rod, CosseratRod):
+        model = _model_keys(rod)
         _check_contact(contact)
         tube = {} if contact is None else {
             "length_over_diameter": contact.length_over_diameter, "contact": contact.treatment}
@@ -311,12 +314,19 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     computed, writer, owned = _computed(
         "ring_diagram", settings, compute, progress, on_point, out, resume, overwrite,
         options_attributes(settings, closed=True),
-        {"contact_treatment": settings.contact, "n_nodes": settings.n_nodes})
+        {"contact_treatment": settings.contact, "n_nodes": settings.n_nodes}, model=model)
     status, message = _run_status(computed)
     diagram = Diagram(kind="ring_diagram", problem=problem, settings=settings,
                       branches={b.name: b for b in computed.branches}, status=status,
                       message=message, notes=tuple(computed.notes), computed=computed)
     return _finished(diagram, writer, owned, "diagram.json")
+
+
+def _model_keys(rod: CosseratRod) -> dict:
+    """A Cosserat rod's keys, which a result records and a resumed run must share."""
+    return {"model": "cosserat", "stretch_stiffness": rod.stretch_stiffness,
+            "shear_stiffness": rod.shear_stiffness, "slenderness": rod.slenderness,
+            "poisson_ratio": rod.poisson_ratio}
 
 
 def _check_contact(contact) -> None:
@@ -366,14 +376,14 @@ def tweezers(problem: Tweezers, turns: tuple[float, float] | None = None, *,
         from supercoil.units.tweezers import dna_attributes
 
         attributes.update(dna_attributes(problem.dna, problem.force_pN))
-    compute = tweezers_branches
+    compute, model = tweezers_branches, None
     if isinstance(problem.rod, CosseratRod):
-        compute = cosserat.tweezers_driver(problem, resume)
+        compute, model = cosserat.tweezers_driver(problem), _model_keys(problem.rod)
     computed, writer, owned = _computed(
         "tweezers", settings, compute, progress, on_point, out, resume, overwrite,
         attributes,
         {"contact_treatment": "barrier" if settings.length_over_diameter else "none",
-         "n_nodes": settings.n_nodes})
+         "n_nodes": settings.n_nodes}, model=model)
     status, message = _run_status(computed)
     diagram = Diagram(kind="tweezers", problem=problem, settings=settings,
                       branches={b.name: b for b in computed.branches}, status=status,
@@ -430,19 +440,19 @@ def diagram_of(options, rod=None, **kwargs) -> Diagram:
                             contact_from_name(options.contact, options.length_over_diameter),
                             **rest, **kwargs)
     if isinstance(options, TweezersOptions):
-        problem, rest = tweezers_arguments(options)
-        if rod is not None:
-            problem = dataclasses.replace(problem, rod=rod)
+        problem, rest = tweezers_arguments(options, rod)
         return tweezers(problem, **rest, **kwargs)
     raise InputError(f"options: expected DiagramOptions or TweezersOptions, got "
                      f"{type(options).__name__}")
 
 
-def tweezers_arguments(options) -> tuple[Tweezers, dict]:
+def tweezers_arguments(options, rod=None) -> tuple[Tweezers, dict]:
     """``(problem, options)`` of :func:`tweezers` and :func:`tweezers_path` for a
-    :class:`~supercoil.problems.tweezers.TweezersOptions` (``turns`` among the options)."""
+    :class:`~supercoil.problems.tweezers.TweezersOptions` (``turns`` among the options);
+    ``rod``: the problem's rod (default: the Kirchhoff rod the options describe)."""
     lod = options.length_over_diameter
-    problem = Tweezers(Rod(options.twist_ratio, options.n_nodes), tension=options.tension,
+    rod = Rod(options.twist_ratio, options.n_nodes) if rod is None else rod
+    problem = Tweezers(rod, tension=options.tension,
                        end_distance=options.end_distance,
                        contact=None if lod is None else Barrier(lod))
     rest = {k: v for k, v in dataclasses.asdict(options).items()

@@ -28,7 +28,6 @@ from supercoil.cli.model_options import (
     ShearOption,
     StretchOption,
     check_model,
-    kirchhoff_only,
     make_rod,
 )
 from supercoil.problems.ring_diagram import CONTINUATION_TREATMENTS, MAX_MODE
@@ -124,13 +123,11 @@ def diagram_ring(
 
     With --model cosserat the rod shears and stretches (--stretch-stiffness,
     --shear-stiffness; by default those of a solid section of diameter D): the
-    circle and the primary branches, without and with self-contact (its contact
-    acts on the centreline); secondary branches are not computed for this model.
+    same branches, --branch-depth and --resume included; its contact acts on the
+    centreline, and result.h5 keeps every point's centreline with its sections'
+    rotations (frames/reference_rotations), from which --resume continues it.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    kirchhoff_only(model, (("--branch-depth", branch_depth != 1), ("--resume", resume)),
-                   "the Cosserat ring diagram computes the circle and the primary branches, "
-                   "without and with contact, in one run")
     words = modes.replace(",", " ").split()
     if not words or not all(w.isdigit() for w in words):
         fail(f"--modes {modes!r}: give distinct Michell modes from 2 to {MAX_MODE} separated "
@@ -149,8 +146,9 @@ def diagram_ring(
                                  secondary_max_branches=secondary_max_branches)
         rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness,
                        slenderness=length_over_diameter)
+    cosserat = rod if model == "cosserat" else None
     stored = prepare_folder(out, overwrite=overwrite, resume=resume, problem="ring_diagram",
-                            settings=diagram_settings(options, "diagram ring"),
+                            settings=diagram_settings(options, "diagram ring", cosserat),
                             what="the diagram's files")
     if nothing_to_resume(stored):
         return
@@ -158,7 +156,7 @@ def diagram_ring(
           f"N = {nodes}, modes {', '.join(words)}, dLk <= {max_excess_link:g}", flush=True)
     payload = run_diagram(options, out, quiet, resume=stored,
                           resume_hint="continue with the same command and --resume",
-                          rod=rod if model == "cosserat" else None)
+                          rod=cosserat)
     if payload is None:
         raise typer.Exit(EXIT_NOT_CONVERGED)
     message = incomplete_message(payload, out)

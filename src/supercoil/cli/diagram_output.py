@@ -24,9 +24,13 @@ DIAGRAM_FILES = (RESULT_FILE, "diagram.json", "link_writhe.png", "contact_map.pn
                  "configurations.png")
 
 
-def diagram_settings(options, command: str) -> dict:
-    """What a resumed run must share with the stored one: the command and its options."""
-    return {"command": command, "options": dataclasses.asdict(options)}
+def diagram_settings(options, command: str, rod=None) -> dict:
+    """What a resumed run must share with the stored one: the command and its options,
+    and for a Cosserat ``rod`` its model's keys (a Kirchhoff rod's add none)."""
+    from supercoil.cli.model_options import model_record
+
+    model = {} if rod is None else {"rod": model_record(rod)}
+    return {"command": command, "options": dataclasses.asdict(options), **model}
 
 
 def diagram_attributes(options) -> dict:
@@ -47,7 +51,7 @@ def run_diagram(options, out: Path, quiet: bool = False, *, resume=None,
     from supercoil.cli.saving import open_writer, run_saving
 
     writer = open_writer(out, resume=resume is not None, problem="ring_diagram",
-                         settings=diagram_settings(options, command),
+                         settings=diagram_settings(options, command, rod),
                          attributes=diagram_attributes(options),
                          provenance={"contact_treatment": options.contact,
                                      "n_nodes": options.n_nodes})

@@ -44,17 +44,6 @@ def check_model(model: str, stretch_stiffness: float | None,
              "inextensible and unshearable)")
 
 
-def kirchhoff_only(model: str, options, scope: str) -> None:
-    """Exit 2 when one of ``options``, pairs ``(option, given)``, is given with the
-    Cosserat model, whose command computes only ``scope``."""
-    if model != "cosserat":
-        return
-    for option, given in options:
-        if given:
-            fail(f"{option} is not available with --model cosserat ({scope}); drop it, or "
-                 "use --model kirchhoff")
-
-
 def model_record(rod) -> dict:
     """The JSON keys of the rod's model: ``model`` and, for a Cosserat rod, its
     stiffnesses."""

@@ -8,7 +8,6 @@ Thin: parses and checks the options, calls :func:`supercoil.tweezers` through
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 from typing import Annotated
 
@@ -30,7 +29,6 @@ from supercoil.cli.model_options import (
     ShearOption,
     StretchOption,
     check_model,
-    kirchhoff_only,
     make_rod,
     model_record,
 )
@@ -85,8 +83,10 @@ def tweezers(
         "--tension", metavar="F", help=f"Dead load F L^2/A, 0 <= F <= {MAGNITUDE}, on the "
         "turned end (load control, the magnetic tweezers).", show_default=False)] = None,
     end_distance: Annotated[float | None, typer.Option(
-        "--end-distance", metavar="Z/L", help="End-to-end distance z/L in (0, 1) held fixed "
-        "(displacement control).", show_default=False)] = None,
+        "--end-distance", metavar="Z/L", help="End-to-end distance z/L held fixed "
+        "(displacement control): in (0, 1) for the Kirchhoff rod (inextensible); up to 2 "
+        "with --model cosserat, whose rod is stretched straight at z/L >= 1 (tension EA "
+        "(z/L - 1)).", show_default=False)] = None,
     nodes: Annotated[int | None, typer.Option(
         "--nodes", metavar="N", help=f"Nodes of the discrete rod, {checks.MIN_CLAMPED_NODES} "
         f"to {checks.MAX_NODES}; contact lines need segments L/(N - 2) no longer than D "
@@ -178,7 +178,6 @@ def tweezers(
     the stretch.
     """
     check_model(model, stretch_stiffness, shear_stiffness)
-    kirchhoff_only(model, (("--resume", resume),), "a run from the start")
     preset, span = None, None
     if dna:
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \
@@ -201,7 +200,8 @@ def tweezers(
         nodes = 100 if nodes is None else nodes
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
-             "--end-distance Z/L (displacement control, 0 < z/L < 1)")
+             "--end-distance Z/L (displacement control, 0 < z/L < 1; up to 2 with --model "
+             "cosserat)")
     if protocol not in PROTOCOLS:
         fail(f"--protocol {protocol!r}: give one of {', '.join(PROTOCOLS)}")
     if protocol != "up" and tension is None:
@@ -216,6 +216,7 @@ def tweezers(
         fail("--force-range and --force-step need --protocol force-ramp")
     from supercoil.cli.saving import nothing_to_resume, prepare_folder
     from supercoil.problems.tweezers import TweezersOptions
+    from supercoil.problems.tweezers.options import check_inextensible
     from supercoil.problems.tweezers_protocol import check_path
 
     with refused(TWEEZERS_OPTIONS):
@@ -227,6 +228,8 @@ def tweezers(
                                   contact_formulation=contact_formulation)
         if protocol != "up":
             check_path(options, protocol, step, force_range=ramp, force_step=force_step)
+        if model != "cosserat":
+            check_inextensible(end_distance)
         rod = make_rod(model, twist_ratio, nodes, stretch_stiffness, shear_stiffness,
                        slenderness=length_over_diameter, preset=preset)
     settings = {"command": "tweezers", "twist_ratio": twist_ratio,
@@ -279,9 +282,8 @@ def tweezers(
         warn(f"  path: quasi-static up to {stop:g} turns {what}, steps of {step:g} turns")
         try:
             with terminate_as_interrupt():
-                problem, numerics = tweezers_arguments(options)
-                if model == "cosserat":
-                    problem = dataclasses.replace(problem, rod=rod)
+                problem, numerics = tweezers_arguments(
+                    options, rod if model == "cosserat" else None)
                 path = tweezers_path(problem, protocol=protocol, step=step, force_range=ramp,
                                      force_step=force_step, **numerics)
         except KeyboardInterrupt:

@@ -98,6 +98,12 @@ class OverRod:
         """The rod's carried frames (:mod:`supercoil.solvers.carried`)."""
         return self.base.frames
 
+    @property
+    def accept_moves_coordinates(self) -> bool:
+        """Whether the rod's ``accept`` re-bases its coordinates (a Cosserat rod's chart:
+        :class:`~supercoil.continuation.tracer.Tracer` then assembles the Hessian again)."""
+        return bool(getattr(self.base, "accept_moves_coordinates", False))
+
     def with_frames(self, frames) -> OverRod:
         """This contact problem over the rod carrying ``frames``; this one unchanged."""
         new = copy.copy(self)

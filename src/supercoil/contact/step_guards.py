@@ -7,7 +7,8 @@ its radius of curvature at least ``curvature_limit``: Carlen et al. 2005),
 ``step_bound(q, dq)`` (the fraction of a step free of collisions: continuous
 collision detection) and ``step_size_ratio(q, dq)`` (the step against the trust
 radius of one edge). It reads the contact problem's ``closed``, ``curve``,
-``diameter``, ``edge_length``, ``treatment``, ``base``, ``centreline(q)``,
+``diameter``, ``edge_length``, ``treatment``, ``base`` (and its ``rotations_admissible``,
+if it has one), ``centreline(q)``,
 ``link_guard``, ``knot_guard`` and ``curvature_limit``.
 """
 
@@ -37,7 +38,14 @@ class StepGuards:
         :class:`supercoil.topology.knots.KnotGuard`) and, with a ``curvature_limit``, a
         discrete radius of curvature of at least that everywhere
         (:func:`supercoil.geometry.curves.min_radius_of_curvature`); open rods: always True.
+        A rod whose unknowns hold more than the centreline guards the rest itself
+        (``base.rotations_admissible(q)``: a Cosserat ring's element rotations below
+        ``pi / 2``, :meth:`~supercoil.cosserat.closed.ClosedCosseratEnergy.rotations_admissible`).
         ``refusal`` says why the last refused state was refused."""
+        own = getattr(self.base, "rotations_admissible", None)
+        if own is not None and not own(q):
+            self.refusal = self.base.refusal
+            return False
         if not self.closed:
             return True
         x = self.centreline(q)

@@ -121,7 +121,8 @@ class Branch:
     ``frames`` (k,): what the problem carried at each point (its ``frames``,
     :mod:`supercoil.solvers.carried`), so that switching, checks and resumption start
     from a point's own frames; empty where unknown (a branch read from a file, whose
-    frames are carried again along its states).
+    frames are carried again along its states, unless its problem stores them:
+    :class:`~supercoil.solvers.carried.Frames` ``stored``).
     """
 
     name: str

@@ -5,9 +5,10 @@ along a branch (:mod:`supercoil.solvers.carried`); a state means the same
 configuration only with the frames it was computed with. The tracer keeps them per
 point (``Branch.frames``) and at each special point (``SpecialPoint.frames``), and
 switching, the consistency check and resumption start from those. A branch read
-from a file has none: its frames are carried again along its stored states from the
-branch's start, in order, as the run that computed it carried them; from the same
-problem that gives the same frames whatever was computed before.
+from a file has none (unless its problem stores them with its points,
+``Frames.stored``: a Cosserat rod's chart): its frames are carried again along its
+stored states from the branch's start, in order, as the run that computed it carried
+them; from the same problem that gives the same frames whatever was computed before.
 """
 
 from __future__ import annotations

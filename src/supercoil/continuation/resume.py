@@ -197,9 +197,11 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
         # step, or its moved gauge); the point corrected again lies a round-off away
         # (measured 3e-10), and rows left at the stored one differ from those of the
         # corrected point by as much: a failed step's regauge would take that for a
-        # moved gauge where the uninterrupted run saw none. Re-anchored here, as it was.
+        # moved gauge where the uninterrupted run saw none. Re-anchored here, as it was:
+        # by the problem at the point, with the point's frames (a Cosserat rod's sliding
+        # mode reads its sections' rotations through them)
         q_again = system.q(corr.x)
-        again = branch_phase_modes(problem, q_again, opts)
+        again = branch_phase_modes(system.problem_at(float(corr.x[-1])), q_again, opts)
         if again is not None and again.shape == system.phase_modes.shape:
             system.set_phase(again, q_again)
     guess = system.reduced(partial.tangents[-1])

@@ -37,8 +37,12 @@ def locate_events(system: ExtendedSystem, opts: ContinuationOptions,
     """The segment from ``x_a`` to ``x_b`` (tangents ``t_a``, ``t_b``, unstable counts
     ``count_a``, ``count_b``, the user events' values ``user_a``, ``user_b``) and the
     events located on it, in the order of their place on it."""
+    # the ends' tangents for the user events' first trial start, on a problem whose
+    # coordinates are rotation coordinates re-based at every point (a Cosserat rod's:
+    # Segment.start)
+    curved = getattr(system.problem, "accept_moves_coordinates", False)
     segment = Segment(system, x_a, x_b, opts.tolerance, opts.max_corrector_iterations,
-                      opts.zero_tolerance)
+                      opts.zero_tolerance, tangents=(t_a, t_b) if curved else None)
     xtol = opts.event_tolerance / segment.length
     found = []
     fold = (opts.detect_folds and t_a[-1] * t_b[-1] < 0)

@@ -126,11 +126,18 @@ class Tracer:
         ``x`` (the rod's reference frames transported there): that changes the Hessian by round-off
         only (measured on the ring's alpha branch at N = 200: at most 3e-16 of its
         largest entry, as much as assembling it twice at ``x`` with other states
-        evaluated in between does).
+        evaluated in between does). A problem whose ``accept`` moves its coordinates
+        (``accept_moves_coordinates``: a chart re-based at ``x``) has it assembled again.
         """
         system = self.system
         system.carry_to(system.q(x))
         self._accepted_hessian = None
+        if getattr(system.problem, "accept_moves_coordinates", False):
+            # a chart re-based at x (a Cosserat rod's rotations) changes the coordinates
+            # the Hessian is written in at first order in the step: the corrector's
+            # Hessian would give the tangent in the old chart (measured: 5e-4 rad off at
+            # steps of 2e-4, which moved the next point along the branch by 3e-9)
+            full_hessian = None
         full = system.full_hessian(x) if full_hessian is None else full_hessian
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
                                     full)

@@ -254,6 +254,15 @@ class ClosedCosseratEnergy(CosseratEnergy):
                 *self._ribbon(x, R), closed=True)):
             self.refusal = self.passage_guard.refusal
             return False
+        return self.rotations_admissible(q)
+
+    def rotations_admissible(self, q: np.ndarray) -> bool:
+        """Whether every element's relative rotation at ``q`` is below
+        :data:`MAX_ELEMENT_ROTATION` (the part of :meth:`admissible` that the
+        centreline cannot show: with self-contact the contact problem guards the link
+        and the knot type on the centreline, and asks this of its rod,
+        :class:`~supercoil.contact.step_guards.StepGuards`). ``refusal`` says why."""
+        x, R = self.configuration(q)
         largest = float(np.max(self.rod.elements(x, R).theta))
         if largest >= MAX_ELEMENT_ROTATION:
             self.refusal = (f"an element would turn by {np.degrees(largest):.1f} degrees (at "

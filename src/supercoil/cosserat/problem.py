@@ -55,6 +55,14 @@ class CosseratEnergy(CosseratCentreline, Parametrised, Carried):
     n_constraints = 0
     # the carried state (supercoil.solvers.carried): the chart
     frame_attributes = (("reference_rotations", "reference_rotations"), ("centres", "centres"))
+    # a result file keeps them with every point: at an accepted point they are its
+    # sections' rotation matrices and rotation coordinates (accept), what a centreline
+    # stored as the branch's state lacks (supercoil.io.branch_codec)
+    frames_stored = True
+    # accept re-bases the chart: the rotation coordinates, hence the Hessian and the
+    # tangents written in them, change at first order in the step (the continuation
+    # assembles the Hessian again at an accepted point)
+    accept_moves_coordinates = True
 
     def __init__(self, rod: CosseratRod, positions: np.ndarray, rotations: np.ndarray,
                  fixed=(), forces: np.ndarray | None = None):

@@ -11,10 +11,17 @@ Names inside a branch (``docs/results.md``, "Layout")::
     determinant_sign, nearest_eigenvalue, tangents, arclength   per point
     next_step, gauge_moved                      per point, optional (the step
                                                 controller's state; absent: unknown)
+    frames/<name>                               per point, optional: the carried frames
+                                                of a problem that stores them
+                                                (Frames.stored: a Cosserat rod's
+                                                reference_rotations (k, N, 3, 3) and
+                                                centres (k, N, 3)); absent: carried
+                                                again along the states when continued
     records/<record>                                            per point
     phase_modes, phase_state
     special_points/<iiii>/{q, multipliers, tangent, critical_eigenvalues,
-                           critical_modes, records/<record>}   (+ scalar attributes)
+                           critical_modes, records/<record>,
+                           frames/<name> (stored frames only)}  (+ scalar attributes)
     origin/...                                                  the same
 """
 
@@ -24,6 +31,7 @@ import numpy as np
 
 from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.options import ContinuationStatus
+from supercoil.solvers.carried import Frames
 
 POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength")
@@ -73,6 +81,10 @@ def _special(prefix: str, p: SpecialPoint, groups: dict, arrays: dict) -> None:
         arrays[f"{prefix}/{name}"] = np.asarray(getattr(p, name), dtype=float, order="C")
     for name, value in p.records.items():
         arrays[f"{prefix}/records/{key(name)}"] = _record_array(p.branch, name, value)
+    if p.frames is not None and p.frames.stored:
+        for name, value in p.frames.values.items():
+            arrays[f"{prefix}/frames/{key(name)}"] = np.asarray(value, dtype=float,
+                                                                order="C")
 
 
 def flatten(branch: Branch, start: int = 0, special_start: int = 0,
@@ -96,8 +108,12 @@ def flatten(branch: Branch, start: int = 0, special_start: int = 0,
     for name, values in branch.records.items():
         arrays[f"records/{key(name)}"] = _record_array(branch.name, name,
                                                        np.asarray(values)[start:])
+    arrays.update(_frames_arrays(branch, start))
     phase = np.asarray(branch.phase_modes, float)
-    arrays["phase_modes"] = (phase.reshape(-1, n_dofs) if phase.size
+    # the phase rows act on the problem's unknowns, which a branch stored as centrelines
+    # (a Cosserat rod's) has more of than its states
+    arrays["phase_modes"] = (phase if phase.ndim == 2 and phase.size
+                             else phase.reshape(-1, n_dofs) if phase.size
                              else np.zeros((0, n_dofs)))
     arrays["phase_state"] = np.asarray(branch.phase_state, dtype=float, order="C")
     groups: dict[str, dict] = {}
@@ -106,6 +122,19 @@ def flatten(branch: Branch, start: int = 0, special_start: int = 0,
     if origin and branch.origin is not None:
         _special("origin", branch.origin, groups, arrays)
     return meta, groups, arrays
+
+
+def _frames_arrays(branch: Branch, start: int) -> dict:
+    """``frames/<name>`` (k - start, ...) of the points from ``start`` on, when every
+    point's frames are known and stored (:class:`~supercoil.solvers.carried.Frames`)."""
+    frames = branch.frames
+    if not frames or not all(f is not None and f.stored for f in frames):
+        return {}
+    return {f"frames/{key(name)}": np.asarray([f.values[name] for f in frames[start:]],
+                                              dtype=float, order="C").reshape(
+                                                  (len(frames) - start,)
+                                                  + np.shape(frames[0].values[name]))
+            for name in frames[0].values}
 
 
 def _read_special(prefix: str, groups: dict, arrays: dict) -> SpecialPoint:
@@ -119,6 +148,10 @@ def _read_special(prefix: str, groups: dict, arrays: dict) -> SpecialPoint:
     head = f"{prefix}/records/"
     kwargs["records"] = {unkey(p[len(head):]): a for p, a in arrays.items()
                          if p.startswith(head)}
+    head = f"{prefix}/frames/"
+    frames = {unkey(p[len(head):]): a for p, a in arrays.items() if p.startswith(head)}
+    if frames:
+        kwargs["frames"] = Frames(frames, stored=True)
     return SpecialPoint(**kwargs)
 
 
@@ -129,6 +162,7 @@ class BranchBuilder:
         self.meta = dict(meta)
         self.chunks = {name: [] for name in (*POINT_ARRAYS, *STEP_ARRAYS)}
         self.records: dict[str, list] = {}
+        self.frames: dict[str, list] = {}
         self.specials: list[SpecialPoint] = []
         self.origin = None
         self.n_points = 0
@@ -139,6 +173,7 @@ class BranchBuilder:
         if start == 0:  # a whole branch: anything stored before is replaced
             self.chunks = {name: [] for name in (*POINT_ARRAYS, *STEP_ARRAYS)}
             self.records, self.specials, self.origin = {}, [], None
+            self.frames = {}
         elif start != self.n_points or special_start > len(self.specials):
             raise CodecError(f"branch {meta.get('name')!r}: an addition from point {start} "
                              f"to a branch of {self.n_points} points")
@@ -167,6 +202,16 @@ class BranchBuilder:
                 raise CodecError(f"branch {meta.get('name')!r}: record {name} has {len(a)} "
                                  f"rows, parameter_values {k}")
             self.records.setdefault(name, []).append(a)
+        frames = {unkey(p[len("frames/"):]): a for p, a in arrays.items()
+                  if p.startswith("frames/")}
+        if start > 0 and set(frames) != set(self.frames):
+            frames = {}  # points added without their frames: the frames are unknown
+            self.frames = {}
+        for name, a in frames.items():
+            if len(a) != k:
+                raise CodecError(f"branch {meta.get('name')!r}: frames {name} has {len(a)} "
+                                 f"rows, parameter_values {k}")
+            self.frames.setdefault(name, []).append(a)
         self.n_points = start + k
         n_special = int(meta["n_special"])
         self.specials += [_read_special(f"special_points/{i:04d}", groups, arrays)
@@ -188,6 +233,17 @@ class BranchBuilder:
         return {name: np.concatenate(c) if len(c) > 1 else c[0]
                 for name, c in self.records.items()}
 
+    def _frames(self) -> tuple:
+        """The points' :class:`~supercoil.solvers.carried.Frames` (stored), or ()."""
+        if not self.frames:
+            return ()
+        stacked = {name: np.concatenate(c) if len(c) > 1 else c[0]
+                   for name, c in self.frames.items()}
+        if any(len(a) != self.n_points for a in stacked.values()):
+            return ()
+        return tuple(Frames({name: a[i] for name, a in stacked.items()}, stored=True)
+                     for i in range(self.n_points))
+
     def build(self) -> Branch:
         meta = self.meta
         try:
@@ -200,10 +256,13 @@ class BranchBuilder:
                         special_points=tuple(self.specials), status=status,
                         message=str(meta["message"]), records=self._records(),
                         phase_modes=self.phase[0], phase_state=self.phase[1],
-                        **self._arrays())
+                        frames=self._frames(), **self._arrays())
         # the chunks are now one array each: later additions append to it
         self.chunks = {n: [getattr(branch, n)] for n in (*POINT_ARRAYS, *STEP_ARRAYS)}
         self.records = {n: [v] for n, v in branch.records.items()}
+        if branch.frames:
+            self.frames = {n: [np.asarray([f.values[n] for f in branch.frames])]
+                           for n in branch.frames[0].values}
         return branch
 
 

@@ -17,22 +17,21 @@ diagram ends at the first contacts.
 
 Per point the records are the Kirchhoff ring's (``excess_link``, ``writhe``, ``twist``,
 ``energy``, ``link_error``, ``min_gap_over_diameter``, contact counts) plus
-``max_stretch_strain`` and ``max_shear_strain``. The returned diagram's branch states
-are the centrelines (``(k, 3 N)``), so the diagram's outputs and viewer take them as
-they take the Kirchhoff ring's.
+``max_stretch_strain`` and ``max_shear_strain``. The diagram
+(:mod:`supercoil.problems.cosserat_ring_diagram`) returns and stores its branches with
+the centrelines as states (``(k, 3 N)``), so the outputs and viewer take them as they
+take the Kirchhoff ring's, and each point's frames beside them
+(:mod:`supercoil.problems.cosserat_stored`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import time
-from collections.abc import Callable
 
 import numpy as np
 
 from supercoil.contact.curve import ContactCurve
 from supercoil.contact.options import ContactOptions
-from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import (
     Branch,
     ContinuationOptions,
@@ -41,22 +40,17 @@ from supercoil.continuation import (
     continuation,
     switch_branch,
 )
-from supercoil.cosserat.centreline import StoredCentrelines
 from supercoil.cosserat.circle import circle_state
 from supercoil.cosserat.closed import ClosedCosseratEnergy
-from supercoil.cosserat.ring import michell_excess_link, relax_circle, ring_problem
+from supercoil.cosserat.ring import relax_circle, ring_problem
 from supercoil.cosserat.rod import DOFS_PER_NODE
 from supercoil.problems.circle_switch import (
-    SWITCH_AMPLITUDES,
     SWITCH_TRIAL_POINTS,
     leaves_circle,
-    mode_points,
     switch_attempts,
     switch_notes,
 )
-from supercoil.problems.contact_events import cut_at_onset, first_onset, stop_after_onset
-from supercoil.problems.ring_diagram.options import DiagramOptions
-from supercoil.problems.ring_diagram.result import RingDiagram
+from supercoil.problems.contact_events import stop_after_onset
 
 CIRCLE_MAX_STEP = 0.4  # largest step along the circle (dLk)
 # corrector tolerance: the ring's residual stagnates near 1.5e-10 in the trial
@@ -169,12 +163,12 @@ def cosserat_circle_branch(twist_ratio: float, n_nodes: int, max_excess_link: fl
 
 def _switch_attempt(problem: ClosedCosseratEnergy, circle: Branch, start: SpecialPoint,
                     options: ContinuationOptions, side_amplitude: tuple[int, float], name: str,
-                    records, curve: ContactCurve, judge: bool) -> Branch:
+                    records, curve: ContactCurve, judge: bool, on_point=None) -> Branch:
     """One switching run to the first contact; with ``judge``, stopped at its
     :data:`SWITCH_TRIAL_POINTS`-th point unless it leaves the circle there."""
     side, amplitude = side_amplitude
     fell_back = []
-    watched, at_onset = stop_after_onset()
+    watched, at_onset = stop_after_onset(on_point)
 
     def on_point(branch: Branch) -> None:
         if judge and len(branch) == SWITCH_TRIAL_POINTS and not leaves_circle(branch):
@@ -191,13 +185,14 @@ def _switch_attempt(problem: ClosedCosseratEnergy, circle: Branch, start: Specia
 
 def switch_off_circle(problem: ClosedCosseratEnergy, circle: Branch, point: SpecialPoint,
                       constants, options: ContinuationOptions, name: str,
-                      curve: ContactCurve, notes: list[str]) -> Branch:
+                      curve: ContactCurve, notes: list[str], on_point=None) -> Branch:
     """The primary branch from the circle's bifurcation ``point``, checked to leave the
     circle (its first :data:`SWITCH_TRIAL_POINTS` points must show the writhe growing;
     a run that does not is stopped there and the other side and larger amplitudes are
     tried). The point's state is re-based on the exact discrete circle at its ``dLk``
     first: a state stored along the circle describes it exactly only in the chart it
-    was accepted in (:mod:`supercoil.cosserat.problem`)."""
+    was accepted in (:mod:`supercoil.cosserat.problem`). ``on_point`` sees every
+    accepted point of the attempts (a later attempt's points replace an earlier one's)."""
     records = cosserat_ring_records(problem, curve)
     attempts = switch_attempts()
     for number, (amplitude, side) in enumerate(attempts):
@@ -206,107 +201,9 @@ def switch_off_circle(problem: ClosedCosseratEnergy, circle: Branch, point: Spec
         start = dataclasses.replace(point, q=q, frames=based.frames)
         opts = dataclasses.replace(options, initial_step=amplitude)
         branch = _switch_attempt(problem, circle, start, opts, (side, amplitude), name,
-                                 records, curve, judge=not last)
+                                 records, curve, judge=not last, on_point=on_point)
         leaves = leaves_circle(branch)
         if leaves or last:
             switch_notes(notes, name, number, amplitude, side, leaves)
             return branch
     raise AssertionError("unreachable")
-
-
-def centreline_branch(branch: Branch) -> Branch:
-    """The branch with its states as centrelines ``(k, 3 n)`` and tangents restricted to
-    the positions and the parameter, as the diagram's outputs read them."""
-    k = len(branch)
-    if not k:  # a branch without points (a failed start): nothing to restrict
-        return branch
-    states = np.asarray(branch.states, float).reshape(k, -1, DOFS_PER_NODE)[:, :, :3]
-    n_dofs = branch.states.shape[1]
-    tangents = np.asarray(branch.tangents, float)
-    position = tangents[:, :n_dofs].reshape(k, -1, DOFS_PER_NODE)[:, :, :3].reshape(k, -1)
-    tangents = np.concatenate([position, tangents[:, n_dofs:]], axis=1)
-    return dataclasses.replace(branch, states=states.reshape(k, -1), tangents=tangents)
-
-
-def cosserat_ring_diagram(options: DiagramOptions, stretch_stiffness: float,
-                          shear_stiffness: float,
-                          progress: Callable[[str], None] | None = None,
-                          contact: bool = False) -> RingDiagram:
-    """The circle, its bifurcations of ``options.modes`` and the primary branches to their
-    first self-contact at the tube diameter ``options.diameter``, for the Cosserat ring of
-    ``stretch_stiffness`` EA L^2/A and ``shear_stiffness`` GA L^2/A, and with ``contact``
-    on from there with self-contact (``options.contact``; module doc)."""
-    from supercoil.problems.cosserat_ring_contact import (
-        cosserat_contact_branch,
-        cosserat_contact_problem,
-    )
-
-    opts = options
-    diameter = opts.diameter
-    say = progress or (lambda message: None)
-    notes: list[str] = [] if contact else [
-        (f"the Cosserat model without contact: primary branches stop at their first "
-         f"self-contact (D = {diameter:.4g} L)")]
-    constants = (opts.twist_ratio, float(stretch_stiffness), float(shear_stiffness))
-    # with contact the onset is measured on the contact's own curve (as the Kirchhoff
-    # diagram's probe)
-    curve = gap_curve(opts.n_nodes, diameter, dataclasses.replace(
-        opts.contact_options(diameter), treatment="barrier") if contact else None)
-    top = max(michell_excess_link(opts.twist_ratio, m) for m in opts.modes)
-    circle_top = max(opts.max_excess_link, 1.1 * top)
-    say(f"circle up to dLk = {circle_top:.4g} (Cosserat rod)")
-    seconds: dict[str, float] = {}
-    start = time.perf_counter()
-    # d1 turned by the whole turns nearest the requested thresholds' mean
-    link = int(np.rint(np.mean([michell_excess_link(opts.twist_ratio, m) for m in opts.modes])))
-    circle, problem = cosserat_circle_branch(opts.twist_ratio, opts.n_nodes, circle_top,
-                                             *constants[1:], curve, link)
-    seconds["circle"] = time.perf_counter() - start
-    branches = [centreline_branch(circle)]
-    contact_names: set[str] = set()
-    cp = cosserat_contact_problem(problem, opts) if contact else None
-    # the contact of the stored centrelines, for the outputs' contact lists
-    view = None if cp is None else ContactProblem(StoredCentrelines(problem.rod), cp.options)
-    free_opts = ContinuationOptions(
-        initial_step=SWITCH_AMPLITUDES[0], max_step=opts.free_max_step,
-        max_points=opts.free_max_points, parameter_bounds=(0.0, circle_top),
-        event_tolerance=opts.event_tolerance, tolerance=TOLERANCE, predictor=PREDICTOR,
-        factor_refinement=True, chord_steps=True, fast_iterations=FAST_ITERATIONS)
-    for name, point in mode_points(circle, opts.modes, notes, say):
-        start = time.perf_counter()
-        free = switch_off_circle(problem, circle, point, constants, free_opts, name, curve,
-                                 notes)
-        onset = first_onset(free)
-        if onset is not None and not onset.located:
-            before = free.parameter_values[onset.index]
-            notes.append(f"{name}: the contact onset lies between dLk = {before:.6g} and "
-                         f"{onset.parameter:.6g}, where its location failed (a trial "
-                         "correction across the step did not converge); it is reported "
-                         "at the step's end")
-        if onset is not None:
-            free = cut_at_onset(free, onset, f"dLk = {onset.parameter:.6g}")
-        else:
-            notes.append(f"{name}: no contact found without contact ({free.message})")
-        seconds[name] = time.perf_counter() - start
-        branches.append(centreline_branch(free))
-        if onset is None or not contact:
-            continue
-        contact_name = f"{name}_contact"
-        say(f"{contact_name}: from dLk = {onset.parameter:.4g}, with self-contact "
-            f"({opts.contact})")
-        start = time.perf_counter()
-        with_contact = cosserat_contact_branch(cp, free, onset, opts,
-                                               cosserat_ring_records(problem, curve),
-                                               contact_name)
-        if with_contact is None:
-            notes.append(f"{contact_name}: contact at dLk = {onset.parameter:.4g} is "
-                         f"outside [0, {opts.max_excess_link:g}]: not computed")
-            continue
-        with_contact = dataclasses.replace(with_contact, parent=name, origin=onset)
-        seconds[contact_name] = time.perf_counter() - start
-        branches.append(centreline_branch(with_contact))
-        contact_names.add(contact_name)
-    model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
-             "shear_stiffness": float(shear_stiffness)}
-    return RingDiagram(opts, tuple(branches), frozenset(contact_names), seconds, tuple(notes),
-                       view, model=model)

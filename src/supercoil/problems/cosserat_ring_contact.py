@@ -25,6 +25,7 @@ import dataclasses
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, SpecialPoint, continuation
 from supercoil.continuation.carry import frames_at
+from supercoil.continuation.resume import resume_branch
 from supercoil.cosserat.closed import ClosedCosseratEnergy
 from supercoil.problems.contact_events import (
     classify_contact_events,
@@ -50,20 +51,29 @@ def cosserat_contact_problem(problem: ClosedCosseratEnergy, options: DiagramOpti
 
 
 def cosserat_contact_branch(cp: ContactProblem, free: Branch, onset: SpecialPoint,
-                            options: DiagramOptions, records, name: str) -> Branch | None:
+                            options: DiagramOptions, records, name: str,
+                            old: Branch | None = None, on_point=None) -> Branch | None:
     """The contact branch ``name`` from the contact-free branch ``free`` (states in the
     Cosserat unknowns) at its ``onset``, its contact events classified; None when its
     start lies outside ``[0, max_excess_link]``. ``records``: the ring's own per-point
-    records, to which the contact counts and the sliding force are added."""
+    records, to which the contact counts and the sliding force are added. ``old``: the
+    same branch stored by an interrupted run (in the Cosserat unknowns, with its
+    frames), continued from its last point
+    (:func:`~supercoil.continuation.resume.resume_branch`); ``on_point`` as for
+    :func:`~supercoil.continuation.continuation`."""
     k = contact_start(free, onset, cp)
     direction = 1 if free.tangents[k, -1] >= 0 else -1
     start = float(free.parameter_values[k])
     if not 0.0 <= start <= options.max_excess_link:
         return None
-    # from the frames of the contact-free branch's point k (cp unchanged)
-    branch = continuation(frames_at(cp, free, k), free.states[k], parameter="excess_link",
-                          start=start,
-                          options=contact_options(options, cp.diameter, direction), name=name,
-                          records=contact_records(cp, records, free=False),
-                          events=(contact_count_event(cp),))
+    opts = contact_options(options, cp.diameter, direction)
+    own = contact_records(cp, records, free=False)
+    events = (contact_count_event(cp),)
+    if old is not None and len(old):
+        branch = resume_branch(cp, old, opts, records=own, events=events, on_point=on_point)
+    else:
+        # from the frames of the contact-free branch's point k (cp unchanged)
+        branch = continuation(frames_at(cp, free, k), free.states[k],
+                              parameter="excess_link", start=start, options=opts, name=name,
+                              records=own, events=events, on_point=on_point)
     return classify_contact_events(branch, cp)

@@ -12,7 +12,9 @@ range. Under displacement control (``end_distance``, the end's height over L, th
 stretch included) the branch ``clamped`` starts from the planar clamped buckle
 (:func:`~supercoil.cosserat.clamped.planar_buckle`) solved by Newton at the first
 turn, and is followed in turns the same way; ``tension`` is then the end's
-reaction. Without
+reaction. At ``end_distance >= 1`` (the rod stretched: its tension ``EA (z/L - 1)``
+exactly, twisted or not) the straight rod held there is followed in turns and the
+buckled branch switched off its first bifurcation, as under load control. Without
 self-contact the rod may pass through itself there (``closure_failed``); with it
 (``options.length_over_diameter``) the buckled branch stops past its first contact
 and goes on with self-contact to the plectoneme
@@ -34,17 +36,18 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation import ContinuationOptions, continuation, switch_branch
+from supercoil.continuation import Branch, ContinuationOptions, continuation, switch_branch
+from supercoil.continuation.resume import resume_branch
 from supercoil.cosserat.centreline import StoredCentrelines
 from supercoil.cosserat.clamped import ClampedCosseratEnergy, planar_buckle
 from supercoil.cosserat.rod import CosseratRod
 from supercoil.problems.contact_events import onset_event, stop_after_onset, truncate_after
-from supercoil.problems.cosserat_ring import centreline_branch
+from supercoil.problems.cosserat_stored import centreline_branch, cosserat_stored
 from supercoil.problems.cosserat_tweezers_contact import (
     cosserat_contact_branch,
     tweezers_contact_options,
@@ -64,14 +67,27 @@ def clamped_cosserat_problem(options: TweezersOptions, stretch_stiffness: float,
                              shear_stiffness: float) -> ClampedCosseratEnergy:
     """The clamped Cosserat rod at ``turns = start``: under the options' tension at its
     straight state (``problem.straight_state()``), or with the end held at the options'
-    end distance at the planar buckle (``problem.initial_state()``)."""
+    end distance at the planar buckle (``problem.initial_state()``); at an end distance
+    ``z/L >= 1`` at the straight rod stretched to it (its ``tension`` attribute
+    ``EA (z/L - 1)``, the reaction, which the straight state uses)."""
     rod = CosseratRod(options.n_nodes - 1, twist_stiffness=options.twist_ratio,
                       shear_stiffness=shear_stiffness, stretch_stiffness=stretch_stiffness)
     if options.load_control:
         return ClampedCosseratEnergy(rod, options.turns[0], options.tension)
+    if stretched(options):
+        # the straight rod stretched to the end distance: its tension EA (z/L - 1) is
+        # the end's reaction (the dead load is off under end-distance control)
+        tension = stretch_stiffness * (options.end_distance - 1.0)
+        return ClampedCosseratEnergy(rod, options.turns[0], tension,
+                                     end_distance_control=True)
     x, R = planar_buckle(rod, options.end_distance, options.turns[0])
     return ClampedCosseratEnergy(rod, options.turns[0], end_distance_control=True,
                                  positions=x, rotations=R)
+
+
+def stretched(options: TweezersOptions) -> bool:
+    """Displacement control at ``z/L >= 1``: the straight rod, stretched, is the start."""
+    return not options.load_control and options.end_distance >= 1.0
 
 
 def axial_twist(problem: ClampedCosseratEnergy, q: np.ndarray) -> float:
@@ -148,12 +164,27 @@ def cosserat_tweezers_records(rod: ClampedCosseratEnergy):
 
 def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
                       shear_stiffness: float,
-                      progress: Callable[[str], None] | None = None) -> TweezersResult:
+                      progress: Callable[[str], None] | None = None, *,
+                      on_point: Callable[[Branch], None] | None = None,
+                      on_branch: Callable[[Branch, bool], None] | None = None,
+                      resume: Mapping[str, tuple[Branch, bool]] | None = None
+                      ) -> TweezersResult:
     """The straight Cosserat rod in turns, its buckling and the buckled branch, or the
     clamped buckle in turns under displacement control (module doc); numerical
-    failures end up in statuses and notes."""
+    failures end up in statuses and notes.
+
+    ``on_point`` sees every accepted point and ``on_branch(branch, contact)`` every
+    final branch, in their stored form (:mod:`supercoil.problems.cosserat_stored`);
+    ``resume`` maps branch names to ``(branch, complete)`` of an interrupted run with
+    the same options (stored form): complete branches are kept, an incomplete buckled,
+    clamped or contact branch is continued from its last point with the azimuth pin
+    the run had (:func:`~supercoil.continuation.resume.resume_branch`); the straight
+    rod is computed again."""
     opts = options
     say = progress or (lambda message: None)
+    stored = cosserat_stored(dict(resume or {}))
+    final = on_branch or (lambda branch, is_contact: None)
+    point_of = None if on_point is None else (lambda b: on_point(centreline_branch(b)))
     notes: list[str] = []
     model = {"model": "cosserat", "stretch_stiffness": float(stretch_stiffness),
              "shear_stiffness": float(shear_stiffness)}
@@ -168,20 +199,33 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     free_opts = ContinuationOptions(initial_step=SWITCH_AMPLITUDE, max_step=opts.free_max_step,
                                     parameter_bounds=opts.turns, max_points=opts.max_points,
                                     event_tolerance=opts.event_tolerance)
-    watched, at_onset = stop_after_onset() if cp is not None else (None, None)
+    watched, at_onset = stop_after_onset(point_of) if cp is not None else (point_of, None)
     events = () if cp is None else (onset_event(cp),)
     seconds: dict[str, float] = {}
     branches: list = []
 
     def result(contact=frozenset(), cut=frozenset()):
-        return TweezersResult(opts, tuple(branches), contact, problem, view, seconds,
-                              tuple(notes), cut_at_contact=cut, model=model)
+        return TweezersResult(opts, tuple(centreline_branch(b) for b in branches), contact,
+                              problem, view, seconds, tuple(notes), cut_at_contact=cut,
+                              model=model)
+
+    def continued(name: str, start):
+        """The stored branch ``name`` when complete; continued when partial; else
+        ``start()``. Returns ``(branch, complete)``."""
+        old, complete = stored.get(name, (None, False))
+        if complete:
+            return old, True
+        if old is not None and len(old) >= 2:
+            return resume_branch(problem, old, free_opts, records=records, events=events,
+                                 on_point=watched, stop=at_onset), False
+        return start(), False
 
     start_time = time.perf_counter()
-    if opts.load_control:
+    if opts.load_control or stretched(opts):
         free_name = "buckled"
-        free = _buckled_off_straight(problem, opts, records, free_opts, events, watched,
-                                     at_onset, branches, notes, seconds, say)
+        free, complete = _buckled_off_straight(problem, opts, records, free_opts, events,
+                                               watched, at_onset, branches, notes, seconds,
+                                               say, continued, final)
         if free is None:
             return result()
     else:
@@ -189,17 +233,25 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
         say(f"clamped buckle at z/L = {opts.end_distance:g}, in turns")
         q0 = problem.initial_state()
         problem.repin(q0)
-        solved = newton(problem, q0, NewtonOptions(mode="stationary"))
-        if not solved.converged:
-            notes.append(f"failed: the clamped buckle at z/L = {opts.end_distance:g} did not "
-                         f"converge ({solved.message})")
+
+        def clamped():
+            solved = newton(problem, q0, NewtonOptions(mode="stationary"))
+            if not solved.converged:
+                notes.append(f"failed: the clamped buckle at z/L = {opts.end_distance:g} "
+                             f"did not converge ({solved.message})")
+                return None
+            problem.accept(solved.q)
+            return continuation(problem, solved.q, parameter="turns",
+                                options=free_opts, name=free_name, records=records,
+                                events=events, on_point=watched, stop=at_onset)
+
+        free, complete = continued(free_name, clamped)
+        if free is None:
             return result()
-        problem.accept(solved.q)
-        free = continuation(problem, solved.q, parameter="turns",
-                            options=free_opts, name=free_name, records=records,
-                            events=events, on_point=watched, stop=at_onset)
     onsets = [p for p in free.points_of_kind("contact_onset") if p.index + 1 < len(free)]
-    if onsets:
+    if onsets and complete:
+        pass  # stored complete: cut after its onset already
+    elif onsets:
         free = truncate_after(free, onsets[0], f"stopped at the first contact "
                               f"({onsets[0].parameter:.6g} turns); the contact-free run: "
                               f"{free.message}")
@@ -211,14 +263,17 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     elif cp is not None:
         notes.append(f"{free_name}: no contact found ({free.message})")
     seconds[free_name] = time.perf_counter() - start_time
-    branches.append(centreline_branch(free))
+    final(centreline_branch(free), False)
+    branches.append(free)
     if not onsets:
         return result()
     contact_name = f"{free_name}_contact"
     say(f"{contact_name}: from {onsets[0].parameter:.6g} turns, with self-contact (barrier)")
     start_time = time.perf_counter()
-    contact = cosserat_contact_branch(opts, cp, free, onsets[0],
-                                      cosserat_tweezers_records(problem), contact_name)
+    old, complete = stored.get(contact_name, (None, False))
+    contact = old if complete else cosserat_contact_branch(
+        opts, cp, free, onsets[0], cosserat_tweezers_records(problem), contact_name,
+        old=old, on_point=point_of)
     contact = dataclasses.replace(contact, parent=free_name, origin=onsets[0])
     if not contact.ok:
         notes.append(f"failed: {contact_name}: {contact.message}")
@@ -227,15 +282,20 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
                      f"{contact.parameter_values[-1]:.6g} turns, before {opts.turns[1]:g}: "
                      f"{contact.message}")
     seconds[contact_name] = time.perf_counter() - start_time
-    branches.append(centreline_branch(contact))
+    final(centreline_branch(contact), True)
+    branches.append(contact)
     return result(frozenset({contact_name}), frozenset({free_name}))
 
 
 def _buckled_off_straight(problem, opts, records, free_opts, events, watched, at_onset,
-                          branches, notes, seconds, say):
-    """The straight rod in turns (appended to ``branches``) and the first run of the
-    buckled branch switched off its first bifurcation, or None (no buckling: a note)."""
-    say(f"straight Cosserat rod in turns at F L^2/A = {opts.tension:g}")
+                          branches, notes, seconds, say, continued, final):
+    """The straight rod in turns (appended to ``branches``) and the buckled branch
+    switched off its first bifurcation (or its stored form, through ``continued``):
+    ``(branch, complete)``, or ``(None, False)`` (no buckling: a note)."""
+    if opts.load_control:
+        say(f"straight Cosserat rod in turns at F L^2/A = {opts.tension:g}")
+    else:
+        say(f"straight Cosserat rod in turns held at z/L = {opts.end_distance:g}")
     cont = ContinuationOptions(initial_step=0.05, max_step=STRAIGHT_MAX_STEP,
                                parameter_bounds=opts.turns, max_points=opts.max_points,
                                event_tolerance=opts.event_tolerance)
@@ -243,7 +303,8 @@ def _buckled_off_straight(problem, opts, records, free_opts, events, watched, at
     straight = continuation(problem, problem.straight_state(), parameter="turns",
                             options=cont, name="straight", records=records)
     seconds["straight"] = time.perf_counter() - start_time
-    branches.append(centreline_branch(straight))
+    final(centreline_branch(straight), False)
+    branches.append(straight)
     bifurcations = [p for p in straight.points_of_kind("bifurcation") if p.count_before == 0]
     if not bifurcations:
         if straight.status.complete:
@@ -251,7 +312,7 @@ def _buckled_off_straight(problem, opts, records, free_opts, events, watched, at
         else:
             notes.append(f"incomplete: straight stopped at {straight.parameter_values[-1]:.6g} "
                          f"turns ({straight.message})")
-        return None
+        return None, False
     point = bifurcations[0]
     say(f"buckled: switched from the straight rod at {point.parameter:.6g} turns")
     # the straight rod at the point, exactly, in the current chart (a stored state is
@@ -262,7 +323,7 @@ def _buckled_off_straight(problem, opts, records, free_opts, events, watched, at
     problem.accept(start.q)
     start = dataclasses.replace(start, frames=problem.frames)  # the chart of its q
     direction = azimuth_pinned_direction(problem, point.critical_modes)
-    buckled = switch_branch(problem, straight, start, free_opts, name="buckled",
-                            amplitude=SWITCH_AMPLITUDE, records=records, direction=direction,
-                            events=events, on_point=watched, stop=at_onset)
-    return buckled
+    return continued("buckled", lambda: switch_branch(
+        problem, straight, start, free_opts, name="buckled", amplitude=SWITCH_AMPLITUDE,
+        records=records, direction=direction, events=events, on_point=watched,
+        stop=at_onset))

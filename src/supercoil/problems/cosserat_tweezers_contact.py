@@ -20,6 +20,7 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, contact_summary
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, continuation
 from supercoil.continuation.carry import frames_at
+from supercoil.continuation.resume import resume_branch
 from supercoil.problems.branch_options import CONTACT_MIN_STEP
 from supercoil.problems.contact_events import (
     classify_contact_events,
@@ -61,9 +62,12 @@ def with_contact_records(records, cp: ContactProblem, contact: bool):
 
 
 def cosserat_contact_branch(options: TweezersOptions, cp: ContactProblem, free: Branch,
-                            onset: SpecialPoint, records, name: str) -> Branch:
+                            onset: SpecialPoint, records, name: str,
+                            old: Branch | None = None, on_point=None) -> Branch:
     """The branch with self-contact from the contact-free ``free`` (states in the
-    Cosserat unknowns) past its ``onset`` (module doc)."""
+    Cosserat unknowns) past its ``onset`` (module doc); ``old``: the same branch stored
+    by an interrupted run (in the unknowns, with its frames), continued from its last
+    point; ``on_point`` as for :func:`~supercoil.continuation.continuation`."""
     opts = options
     D = opts.diameter
     k = contact_start(free, onset, cp)
@@ -75,11 +79,15 @@ def cosserat_contact_branch(options: TweezersOptions, cp: ContactProblem, free: 
         parameter_weight=D, tolerance=opts.contact_tolerance,
         event_tolerance=opts.contact_event_tolerance, predictor=opts.contact_predictor,
         max_corrector_distance=CONTACT_CORRECTOR_DISTANCE, chord_steps=True)
-    # from the frames of the contact-free branch's point k (cp unchanged)
-    branch = continuation(frames_at(cp, free, k), q, parameter="turns",
-                          start=float(free.parameter_values[k]), options=contact_opts,
-                          name=name,
-                          records=with_contact_records(records, cp, True),
-                          events=(contact_count_event(cp),))
+    own = with_contact_records(records, cp, True)
+    events = (contact_count_event(cp),)
+    if old is not None and len(old):
+        branch = resume_branch(cp, old, contact_opts, records=own, events=events,
+                               on_point=on_point)
+    else:
+        # from the frames of the contact-free branch's point k (cp unchanged)
+        branch = continuation(frames_at(cp, free, k), q, parameter="turns",
+                              start=float(free.parameter_values[k]), options=contact_opts,
+                              name=name, records=own, events=events, on_point=on_point)
     return classify_contact_events(branch, cp)
 

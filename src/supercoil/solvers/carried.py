@@ -33,9 +33,15 @@ def _read_only(value):
 
 @dataclass(frozen=True, eq=False)
 class Frames:
-    """The carried state of one problem: named read-only arrays and numbers."""
+    """The carried state of one problem: named read-only arrays and numbers.
+
+    ``stored``: the frames are part of the state a branch's points need to be
+    continued (a Cosserat rod's rotations, which its centreline does not give), so a
+    result file keeps them with every point (:mod:`supercoil.io.branch_codec`);
+    otherwise they are carried again along the stored states when read."""
 
     values: Mapping[str, object]
+    stored: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "values", MappingProxyType(
@@ -57,12 +63,15 @@ class Carried:
     name in :class:`Frames` and the attribute)."""
 
     frame_attributes: tuple[tuple[str, str], ...] = ()
+    # whether a result file keeps the frames with every point (Frames.stored)
+    frames_stored: bool = False
 
     @property
     def frames(self) -> Frames:
         """The carried state (a copy: later changes of the problem do not reach it)."""
         return Frames({name: getattr(self, attribute)
-                       for name, attribute in self.frame_attributes})
+                       for name, attribute in self.frame_attributes},
+                      stored=self.frames_stored)
 
     def with_frames(self, frames: Frames):
         """A new problem carrying ``frames`` (from ``frames`` of a problem of this

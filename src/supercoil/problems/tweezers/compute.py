@@ -32,7 +32,7 @@ from supercoil.problems.tweezers.buckled import (
     switch_off_straight,
 )
 from supercoil.problems.tweezers.contact import contact_branch
-from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.problems.tweezers.options import TweezersOptions, check_inextensible
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
@@ -66,6 +66,7 @@ def tweezers_branches(options: TweezersOptions,
     :func:`~supercoil.continuation.resume.resume_branch`, then in segments as usual.
     """
     opts = options
+    check_inextensible(opts.end_distance)
     final = on_branch or (lambda branch, contact: None)
     stored = dict(resume or {})
     say = progress or (lambda message: None)

@@ -12,6 +12,9 @@ from supercoil.problems.branch_options import PREDICTORS, branch_tolerances, che
 # the loop's sliding is an approximate symmetry only on segments no longer than this
 # many times sqrt(A/F) (TweezersOptions.loop_slides)
 SLIDING_CORE = 0.5
+# the largest end distance z/L: an extensible rod stretched to twice its length (a
+# stretch strain of 1); an inextensible one stays below 1 (check_inextensible)
+MAX_END_DISTANCE = 2.0
 
 
 @dataclass(frozen=True)
@@ -22,7 +25,9 @@ class TweezersOptions:
     ``twist_ratio`` C/A; ``length_over_diameter`` L/D (> pi), or None for a
     rod without self-contact (the contact-free branch is then followed to the
     last turn); exactly one of ``tension`` (F L^2/A >= 0, load control) and
-    ``end_distance`` (z/L in (0, 1), displacement control); ``turns`` the
+    ``end_distance`` (z/L in (0, 1) for the inextensible Kirchhoff rod, up to
+    ``MAX_END_DISTANCE`` for the extensible Cosserat rod: :func:`check_inextensible`;
+    displacement control); ``turns`` the
     interval ``(start, stop)`` of turns (``stop > start >= 0``; the straight
     branch starts at ``start``); ``n_nodes`` N. ``free_max_step``: largest
     arclength step without contact (units of L); ``contact_max_step``: with
@@ -92,8 +97,8 @@ class TweezersOptions:
         set_(self, "tension", checks.optional_number(
             "tension", self.tension, 0.0, checks.MAX_MAGNITUDE, meaning="F L^2/A"))
         set_(self, "end_distance", checks.optional_number(
-            "end_distance", self.end_distance, 0.0, 1.0, low_open=True, high_open=True,
-            meaning="z/L of an inextensible rod of length L"))
+            "end_distance", self.end_distance, 0.0, MAX_END_DISTANCE, low_open=True,
+            meaning="z/L; below 1 for an inextensible rod of length L"))
         set_(self, "turns", check_turns(self.turns))
         set_(self, "n_nodes", checks.integer("n_nodes", self.n_nodes, checks.MIN_CLAMPED_NODES,
                                              checks.MAX_NODES,
@@ -131,6 +136,15 @@ class TweezersOptions:
     @property
     def tolerances(self) -> dict:
         return branch_tolerances(self)
+
+
+def check_inextensible(end_distance: float | None) -> None:
+    """InputError for an end distance ``z/L >= 1`` of an inextensible rod (the Kirchhoff
+    rod: not longer than L, and at z/L = 1 straight and unable to deflect)."""
+    if end_distance is not None and not end_distance < 1.0:
+        raise checks.refuse("end_distance", f"(z/L) must lie in (0, 1) for the inextensible "
+                            f"Kirchhoff rod, got {end_distance!r}; a stretched rod (z/L up "
+                            f"to {MAX_END_DISTANCE:g}) needs the extensible Cosserat model")
 
 
 def check_turns(turns) -> tuple[float, float]:

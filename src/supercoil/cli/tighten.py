@@ -77,7 +77,8 @@ def tighten(
         write_json_or_fail(envelope(payload, n_nodes=nodes, tolerances={
             "relative_thickening": 1e-4}, contact_treatment="barrier"), json_path)
     if json_path != "-" and not quiet:
-        print(f"{record['knot_type']} (chirality {record['chirality']:+d}) at {nodes} nodes: "
+        hand = {1: "+1", -1: "-1", 0: "0"}[record["chirality"]]
+        print(f"{record['knot_type']} (chirality {hand}) at {nodes} nodes: "
               f"L/D = {record['length_over_diameter']:.5g}, writhe "
               f"{record['writhe']:.4g}, {record['n_contact_points']} contact points, "
               f"{record['n_contact_intervals']} contact intervals, smallest radius of "

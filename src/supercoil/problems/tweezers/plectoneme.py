@@ -9,10 +9,10 @@ branches off the symmetric contact branch at a symmetry-breaking bifurcation, ne
 which that branch can turn and come back onto itself, or release its contacts and
 follow the contact-free branch back (a closed loop either way, reported as such):
 measured on the 3 kbp hat curve at 1 pN and 150 mM, the symmetric branch closes on itself
-at 6.77 turns. Where the sliding of the loop changes the count (its discrete eigenvalue,
-of the mesh's ripple), a switch there grew the plectoneme (extension 0.93 to 0.58 L from
-6.8 to 12.9 turns); with the sliding out of the count that branch has one located
-bifurcation, from which no switch starts. So when the
+at 6.77 turns, with a bifurcation located at 6.767 turns from which no switched branch
+starts (measured with the loop's sliding in the count and out of it); without
+``loop_sliding`` the loop slides off the middle and its contact branch reaches the
+plectoneme by itself. So when the
 closed contact branch ends before the last turn, :func:`switch_to_plectoneme` tries its
 located bifurcations, the latest first, along either side of the critical mode at the
 amplitudes of ``AMPLITUDES``, and follows the first switched branch that starts (and

@@ -30,9 +30,8 @@ from supercoil.solvers.kkt import KKTFactor
 from supercoil.stability.analysis import (
     dense_constrained_eigenpairs,
     eigen_system,
-    goldstone_modes,
     lowest_pairs,
-    near_symmetry_gauge,
+    sliding_phase_modes,
 )
 
 _DENSE_BELOW = 100
@@ -59,44 +58,44 @@ class PointStability:
         return self.eigenvalues[idx], self.modes[idx]
 
 
-def count_gauge(system: ExtendedSystem, x: np.ndarray) -> np.ndarray:
-    """Positions (in ``system.free``) of the DOFs pinned out of the count at ``x``.
+def count_rows(system: ExtendedSystem, x: np.ndarray) -> np.ndarray:
+    """The rows ``(r, system.n)`` that remove the approximate symmetries from the count
+    at ``x``: one integral phase row ``(M g)^T v = 0`` per approximate symmetry ``g``
+    (:func:`~supercoil.stability.analysis.sliding_phase_modes`, M-orthogonal to the
+    exact ones) that the system's own phase rows do not already remove (a continuation
+    started with ``near_symmetry_gauge``: one row per mode, coupled to it).
 
-    The approximate symmetries (a closed rod's material sliding) leave the
-    count as in :func:`~supercoil.stability.analysis.analyse`: by pinning a DOF
-    (:func:`~supercoil.stability.analysis.near_symmetry_gauge`), unless the
-    system's phase rows already remove them (a continuation started with
-    ``near_symmetry_gauge``: one row per mode, coupled to it).
+    The count is then on the subspace of the eigenvalues (the symmetries projected
+    out M-orthogonally), as in :func:`~supercoil.stability.analysis.analyse`. Pinning
+    the DOF where ``|g|`` is largest instead counts on another subspace, with the same
+    inertia only while the sliding is nearly free: along a plectoneme in contact the
+    discrete contact gives the sliding a clear curvature of either sign (at L/D = 40,
+    F L^2/A = 320, N = 123 from 3.97 to 4.45 turns the sliding's Rayleigh quotient near
+    -1400 against a next eigenvalue of 600-950), and the pinned count stayed one above
+    the eigenvalues, which N = 82 did not (its quotient there positive).
     """
     problem = system.problem_at(x[-1])
     q = system.q(x)
-    modes = goldstone_modes(problem, q)
+    modes = sliding_phase_modes(problem, q)
     if modes.size == 0:
-        return np.zeros(0, dtype=np.int64)
+        return np.zeros((0, system.n))
+    g = modes[:, system.free]
     if system.r:
-        g = modes[:, system.free]
         coupling = np.abs(system.P @ g.T) / np.outer(np.linalg.norm(system.P, axis=1),
                                                       np.linalg.norm(g, axis=1))
-        if np.all(coupling.max(axis=0) > 0.1 / np.sqrt(system.n)):
-            return np.zeros(0, dtype=np.int64)
-        touched = system.free[np.flatnonzero(np.any(system.P != 0, axis=0))]
-    else:
-        touched = None
-    dofs = near_symmetry_gauge(problem, q, exclude=touched)
-    return np.searchsorted(system.free, dofs)
+        g = g[coupling.max(axis=0) <= 0.1 / np.sqrt(system.n)]
+    return g * system.mass[None, :] if g.size else np.zeros((0, system.n))
 
 
-def count_system(system: ExtendedSystem, x: np.ndarray, hessian=None, drop=None):
-    """``(H, J)`` of the count at ``x``: the system's, less the near-symmetry gauge
-    (``hessian``: ``system.hessian(x)`` if already known; ``drop``: ``count_gauge(system,
-    x)`` if already known)."""
+def count_system(system: ExtendedSystem, x: np.ndarray, hessian=None, rows=None):
+    """``(H, J)`` of the count at ``x``: the system's, with the rows that remove the
+    approximate symmetries below ``J`` (``hessian``: ``system.hessian(x)`` if already
+    known; ``rows``: ``count_rows(system, x)`` if already known)."""
     J = system.jacobian(x)
     H = system.hessian(x) if hessian is None else hessian
-    drop = count_gauge(system, x) if drop is None else drop
-    if drop.size:
-        keep = np.setdiff1d(np.arange(system.n), drop)
-        H = H.restrict(keep)
-        J = J[:, keep]
+    rows = count_rows(system, x) if rows is None else rows
+    if rows.shape[0]:
+        J = sp.vstack([sp.csr_matrix(J), sp.csr_matrix(rows)], format="csr")
     return H, J
 
 
@@ -105,7 +104,7 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     """``(negative count, determinant sign)`` of the constrained Hessian at ``x``.
 
     Near-symmetry directions are removed from the count as in
-    :func:`~supercoil.stability.analysis.analyse` (:func:`count_gauge`). With
+    :func:`~supercoil.stability.analysis.analyse` (:func:`count_rows`). With
     ``zero_tolerance``, an exactly singular Hessian (a special point located
     exactly) is handled: the count is then that of the eigenvalues below
     ``-zero_tolerance / 2`` (the inertia of ``H + M zero_tolerance / 2``) and
@@ -119,10 +118,9 @@ def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: f
                         hessian) -> tuple[int, int, KKTFactor, np.ndarray]:
     """:func:`inertia` with the factor it counted with and that factor's DOFs (indices
     into the problem's DOFs, ``(n_count,)``): its unknowns are those DOFs, then the
-    rows of ``system.jacobian(x)``."""
-    drop = count_gauge(system, x)
-    H, J = count_system(system, x, hessian, drop)
-    dofs = np.delete(system.free, drop) if drop.size else system.free
+    rows of ``system.jacobian(x)``, then the :func:`count_rows`."""
+    H, J = count_system(system, x, hessian)
+    dofs = system.free
     try:
         factor = KKTFactor(H, J)
         negative = factor.reduced_negative_count
@@ -130,8 +128,7 @@ def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: f
     except (SingularMatrixError, InertiaError):
         if zero_tolerance is None:
             raise
-        mass = system.mass[np.setdiff1d(np.arange(system.n), drop)]
-        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=mass)
+        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=system.mass)
         return factor.reduced_negative_count, 0, factor, dofs
 
 

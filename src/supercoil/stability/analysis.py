@@ -287,7 +287,8 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # Approximate symmetries (a closed rod's material sliding) are projected out
-    # of the eigenvalues above and pinned out of the inertia (near_symmetry_gauge).
+    # of the eigenvalues above and, by an integral phase row, out of the inertia
+    # (_reduced_system).
     # Eigenvalues within the tolerance are zero modes, whatever sign the
     # inertia gave them; the count of clearly negative ones is at least what
     # the eigensolver found and at least the inertia minus the zero modes.

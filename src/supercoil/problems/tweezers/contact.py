@@ -46,8 +46,12 @@ from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
 CONTACT_CORRECTOR_DISTANCE = 1.0
 # the tail ratio (ClampedRodEnergy.sliding) below which the sliding of the plectoneme is
 # left out of the count on the contact branch: the continuum's symmetry, whose discrete
-# eigenvalue is the contact's ripple, of either sign
-SLIDING_TAIL_CONTACT = 0.1
+# eigenvalue is the contact's ripple, of either sign. Measured at L/D = 40, F L^2/A = 320
+# (C/A = 1.5): the lowest eigenvalue is the sliding (overlap 0.8-0.9 with it) up to a tail
+# ratio of 0.2, -1700 to -140 at N = 123 where N = 82's lowest is +340 (overlap 0.3);
+# from 0.25 the lowest is another mode, the same at both meshes (248 and 257, 228 and
+# 228): with 0.1 N = 123 counted one from 4.8 to 5.4 turns and N = 82 zero
+SLIDING_TAIL_CONTACT = 0.25
 
 
 class ContactSliding:
@@ -139,9 +143,9 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`)."""
     # in contact the discrete contact makes the sliding of the plectoneme stiff, of
     # either sign: no phase row, but out of the count while the tails are straight
-    # (docs/continuation.md, "Long open rods: the sliding of a localised structure")
-    if opts.loop_slides:
-        rod.sliding_tail = SLIDING_TAIL_CONTACT
+    # (docs/continuation.md, "Long open rods: the sliding of a localised structure"),
+    # with or without loop_sliding (which decides the contact-free runs' phase rows)
+    rod.sliding_tail = SLIDING_TAIL_CONTACT
     k = contact_start(free, onset, cp)
     q = free.states[k]
     set_pin(cp, rod, q)

@@ -8,9 +8,11 @@ follows it; the plectoneme, whose end loop lies at one end of its ply, is not. I
 branches off the symmetric contact branch at a symmetry-breaking bifurcation, near
 which that branch can turn and come back onto itself, or release its contacts and
 follow the contact-free branch back (a closed loop either way, reported as such):
-measured on the 3 kbp hat curve at 1 pN and 150 mM, the symmetric branch closed at 6.77
-turns, and the branch switched at its bifurcation at 6.767 turns (amplitude 5e-4 D, one
-side) grew the plectoneme (extension 0.93 to 0.58 L from 6.8 to 12.9 turns). So when the
+measured on the 3 kbp hat curve at 1 pN and 150 mM, the symmetric branch closes on itself
+at 6.77 turns, with a bifurcation located at 6.767 turns from which no switched branch
+starts (measured with the loop's sliding in the count and out of it); without
+``loop_sliding`` the loop slides off the middle and its contact branch reaches the
+plectoneme by itself. So when the
 closed contact branch ends before the last turn, :func:`switch_to_plectoneme` tries its
 located bifurcations, the latest first, along either side of the critical mode at the
 amplitudes of ``AMPLITUDES``, and follows the first switched branch that starts (and

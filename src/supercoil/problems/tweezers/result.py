@@ -51,8 +51,8 @@ class TweezersResult(BranchSet):
             if start <= index:
                 dofs = chosen
         problem = self.contact_problem if name in self.contact_branches else rod
-        rod.sliding_tail = (None if not self.options.loop_slides
-                            else SLIDING_TAIL_CONTACT if name in self.contact_branches
+        rod.sliding_tail = (SLIDING_TAIL_CONTACT if name in self.contact_branches
+                            else None if not self.options.loop_slides
                             else sliding_threshold(rod.rod.n_nodes))
         hold_azimuth(rod, dofs, problem)
         return problem

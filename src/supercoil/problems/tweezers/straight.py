@@ -104,7 +104,7 @@ def straight_bifurcations(problem: ClampedRodEnergy, branch: Branch,
     """
     from scipy.linalg import LinAlgError, eigh, null_space
 
-    from supercoil.continuation.stability import count_gauge, inertia, point_stability
+    from supercoil.continuation.stability import count_rows, inertia, point_stability
     from supercoil.continuation.system import ExtendedSystem
     from supercoil.solvers.errors import InertiaError, SingularMatrixError
 
@@ -129,7 +129,7 @@ def straight_bifurcations(problem: ClampedRodEnergy, branch: Branch,
         return None
     sense = 1.0 if last > t0 else -1.0  # the direction of travel in turns
     try:
-        if count_gauge(system, x_at(t0)).size:
+        if count_rows(system, x_at(t0)).size:
             return None
         h0 = system.hessian(x_at(t0)).dense()
         slope = (system.hessian(x_at(last)).dense() - h0) / (last - t0)

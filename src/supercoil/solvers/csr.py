@@ -33,7 +33,10 @@ def _pattern_key(A: sp.csr_matrix) -> tuple:
 
 
 def is_canonical_float(A) -> bool:
-    """Whether ``A`` is a canonical CSR matrix of float64 entries."""
+    """Whether ``A`` is a canonical CSR matrix of float64 entries, or the
+    :class:`CSRArrays` of one."""
+    if isinstance(A, CSRArrays):
+        return A.canonical and A.data.dtype == np.float64
     return getattr(A, "format", None) == "csr" and A.dtype == np.float64 \
         and A.has_canonical_format
 

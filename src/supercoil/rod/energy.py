@@ -82,8 +82,9 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         self._bending = kernels.bending_kernels(rod.curvature)
         self._twist_coefficient = 4.0 * np.pi**2 * rod.twist_stiffness / rod.length
         # what depends on neither the parameters nor the frames, made once and shared by
-        # the problems ``at`` derives from this one: hessian()'s work array, the
-        # Jacobian's and the constraint curvature's layouts (by constrained set)
+        # the problems ``at`` and ``carried_to`` derive from this one: hessian()'s work
+        # array, the Jacobian's and the constraint curvature's layouts (by constrained
+        # set), the last state's edge-length terms and Jacobian
         self._shared: dict = {}
         self.mass = np.full(3 * n, rod.edge_length)
         self._set_frames(unit(self._edge_vectors(points.ravel())),
@@ -228,13 +229,13 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         as numpy steps cost 14 and 22 us at N = 100; the methods with this one call 4
         and 8 us, the call itself 2-3 us)."""
         key = _key(q)
-        cached = self.__dict__.get("_edge_terms_cache")
+        cached = self._shared.get("edge_terms")
         if cached is not None and cached[0] == key and cached[1] is self._constrained:
             return cached[2], cached[3]
         layout = self._jacobian_layout_of_constrained()
         values, data = kernels.edge_length_terms(np.asarray(q, dtype=np.float64), layout[4],
                                                  self.rod.edge_length, layout[1])
-        self._edge_terms_cache = (key, self._constrained, values, data)
+        self._shared["edge_terms"] = (key, self._constrained, values, data)
         return values, data
 
     def _jacobian_layout_of_constrained(self):
@@ -258,13 +259,17 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
 
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
         """Jacobian of :meth:`constraints`, ``(m, n_dofs)``; the last one is returned
-        again (the same object: callers must not modify it) for the same ``q``."""
+        again (the same object: callers must not modify it) for the same ``q`` and
+        constrained edges, also to the problems :meth:`at` and ``carried_to`` derive
+        from this one (it depends on neither the parameters nor the frames: a
+        continuation asks the problem at each new parameter value, and the problem
+        carried to an accepted point, for the Jacobian at a state already met)."""
         key = _key(q)
-        cached = self.__dict__.get("_jacobian_cache")
+        cached = self._shared.get("jacobian")
         if cached is not None and cached[0] == key and cached[1] is self._constrained:
             return cached[2]
         J = self._constraint_jacobian(q)
-        self._jacobian_cache = (key, self._constrained, J)
+        self._shared["jacobian"] = (key, self._constrained, J)
         return J
 
     def _constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:

@@ -254,6 +254,14 @@ def csr_rmatvec(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, x: np
     return _csr_rmatvec(indptr, indices, data, x, n_cols)
 
 
+def transpose_matvec(A, x: np.ndarray) -> np.ndarray:
+    """``A.T @ x`` for a sparse ``A`` ``(m, n)`` and ``x`` ``(m,)``: for a float64 CSR ``A``
+    by :func:`csr_rmatvec` (scipy's sums, without the transpose object), else scipy's."""
+    if getattr(A, "format", None) == "csr" and A.dtype == np.float64:
+        return csr_rmatvec(A.indptr, A.indices, A.data, x, A.shape[1])
+    return A.T @ x
+
+
 @njit()
 def _csr_rmatvec(indptr, indices, data, x, n_cols):
     y = np.zeros(n_cols)

@@ -21,7 +21,7 @@ from supercoil.rod import kernels
 from supercoil.rod.assembly import StencilPattern
 from supercoil.rod.model import Rod
 from supercoil.solvers.carried import Carried, Frames
-from supercoil.solvers.csr import csr_from_arrays
+from supercoil.solvers.csr import CSRArrays, csr_from_arrays
 from supercoil.solvers.parameters import Parametrised
 from supercoil.solvers.problem import HessianParts
 
@@ -292,7 +292,18 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         return np.concatenate([a, b, a, b]).ravel(), np.concatenate([a, b, b, a]).ravel()
 
     def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
-        """``sum_j mu_j hess c_j``: ``+-mu_j / h`` on the blocks of edge ``j``'s two nodes.
+        """``sum_j mu_j hess c_j``: ``+-mu_j / h`` on the blocks of edge ``j``'s two nodes
+        (the matrix of :meth:`_constraint_curvature`)."""
+        return self._constraint_curvature(q, multipliers).tocsr()
+
+    def lagrangian_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> HessianParts:
+        """``hessian(q)`` plus ``constraint_hessian(q, multipliers)`` (the sum of
+        :func:`~supercoil.solvers.newton.lagrangian_hessian`), bit for bit, summed on
+        the arrays of both: no matrix is made for the curvature."""
+        return self.hessian(q).plus_sparse(self._constraint_curvature(q, multipliers))
+
+    def _constraint_curvature(self, q: np.ndarray, multipliers: np.ndarray) -> CSRArrays:
+        """The canonical CSR arrays of :meth:`constraint_hessian`.
 
         The CSR pattern of these entries is fixed by the constrained edges and is
         built once: an entry gets at most two terms (a node's diagonal from its two
@@ -323,8 +334,7 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         _, first, second, indices, indptr = pattern
         values = _curvature_values(np.ascontiguousarray(multipliers, dtype=np.float64),
                                    float(self.rod.edge_length), first, second)
-        return csr_from_arrays(values, indices.copy(), indptr.copy(),
-                               (self.n_dofs, self.n_dofs), canonical=True)
+        return CSRArrays(values, indices, indptr, (self.n_dofs, self.n_dofs), canonical=True)
 
     # the load parameter that shifts ``twist_offset`` one for one (subclasses name it)
     twist_parameter: str = ""

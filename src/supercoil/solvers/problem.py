@@ -62,11 +62,18 @@ class HessianParts:
             restricted = csr_restrict(self.sparse, free)
         return HessianParts(restricted, vectors, self.coefficients)
 
-    def plus_sparse(self, other: sp.spmatrix) -> HessianParts:
-        a, b = self._arrays, CSRArrays.of(other)
+    def plus_sparse(self, other) -> HessianParts:
+        """The sparse part plus ``other`` (a ``scipy.sparse`` matrix or the
+        :class:`~supercoil.solvers.csr.CSRArrays` of one):
+        :func:`~supercoil.solvers.csr_sum.csr_add`, on the arrays when both are held
+        as canonical arrays."""
+        a = self._arrays
+        b = other if isinstance(other, CSRArrays) else CSRArrays.of(other)
         if a is not None and a.canonical and b is not None and b.canonical \
                 and a.shape == b.shape:
             return HessianParts(add_arrays(a, b), self.vectors, self.coefficients)
+        if isinstance(other, CSRArrays):
+            other = other.tocsr()
         return HessianParts(csr_add(self.sparse, other), self.vectors, self.coefficients)
 
     def plus_blocks(self, dofs: np.ndarray, blocks: np.ndarray,

@@ -336,7 +336,14 @@ class ContactProblem(OverRod, StepGuards):
             return parts
         parts = self.base.hessian(q)
         dofs, local = self._integral_blocks(q)
-        curvature = self.constraint_hessian(q, multipliers) if self.n_constraints else None
+        curvature = None
+        if self.base.n_constraints and not len(self.active):
+            # the rod's curvature as its arrays (constraint_curvature: the entries of
+            # constraint_hessian, no matrix made), the only term without active pairs
+            curvature = self.base.constraint_curvature(
+                q, np.asarray(multipliers, dtype=float)[:self.base.n_constraints])
+        elif self.n_constraints:
+            curvature = self.constraint_hessian(q, multipliers)
         return parts.plus_blocks(dofs, local, curvature)
 
     def stability_view(self) -> ContactProblem:

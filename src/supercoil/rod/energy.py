@@ -293,17 +293,19 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
 
     def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
         """``sum_j mu_j hess c_j``: ``+-mu_j / h`` on the blocks of edge ``j``'s two nodes
-        (the matrix of :meth:`_constraint_curvature`)."""
-        return self._constraint_curvature(q, multipliers).tocsr()
+        (the matrix of :meth:`constraint_curvature`)."""
+        return self.constraint_curvature(q, multipliers).tocsr()
 
     def lagrangian_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> HessianParts:
         """``hessian(q)`` plus ``constraint_hessian(q, multipliers)`` (the sum of
         :func:`~supercoil.solvers.newton.lagrangian_hessian`), bit for bit, summed on
         the arrays of both: no matrix is made for the curvature."""
-        return self.hessian(q).plus_sparse(self._constraint_curvature(q, multipliers))
+        return self.hessian(q).plus_sparse(self.constraint_curvature(q, multipliers))
 
-    def _constraint_curvature(self, q: np.ndarray, multipliers: np.ndarray) -> CSRArrays:
-        """The canonical CSR arrays of :meth:`constraint_hessian`.
+    def constraint_curvature(self, q: np.ndarray, multipliers: np.ndarray) -> CSRArrays:
+        """The canonical CSR arrays of :meth:`constraint_hessian` (read only: the index
+        arrays are the pattern's), for the sums that take them without a matrix
+        (:meth:`lagrangian_hessian`, a contact problem's).
 
         The CSR pattern of these entries is fixed by the constrained edges and is
         built once: an entry gets at most two terms (a node's diagonal from its two

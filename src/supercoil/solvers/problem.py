@@ -76,17 +76,19 @@ class HessianParts:
             other = other.tocsr()
         return HessianParts(csr_add(self.sparse, other), self.vectors, self.coefficients)
 
-    def plus_blocks(self, dofs: np.ndarray, blocks: np.ndarray,
-                    then: sp.spmatrix | None = None) -> HessianParts:
-        """The sparse part plus the dense ``blocks`` at ``dofs``, then plus ``then``
-        (:func:`~supercoil.solvers.csr_sum.csr_add_blocks`, the same entries bit for bit;
-        on the arrays when the sparse part is held as arrays)."""
+    def plus_blocks(self, dofs: np.ndarray, blocks: np.ndarray, then=None) -> HessianParts:
+        """The sparse part plus the dense ``blocks`` at ``dofs``, then plus ``then`` (a
+        ``scipy.sparse`` matrix or the :class:`~supercoil.solvers.csr.CSRArrays` of one):
+        :func:`~supercoil.solvers.csr_sum.csr_add_blocks`, the same entries bit for bit,
+        on the arrays when the sparse part is held as arrays."""
         arrays = self._arrays
-        c = None if then is None else CSRArrays.of(then)
+        c = then if then is None or isinstance(then, CSRArrays) else CSRArrays.of(then)
         summed = None
         if arrays is not None and (then is None or c is not None):
             summed = add_blocks_arrays(arrays, dofs, blocks, c)
         if summed is None:
+            if isinstance(then, CSRArrays):
+                then = then.tocsr()
             summed = csr_add_blocks(self.sparse, dofs, blocks, then)
         return HessianParts(summed, self.vectors, self.coefficients)
 

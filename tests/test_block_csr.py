@@ -77,15 +77,16 @@ def test_csr_add_blocks_is_csr_add_of_block_csr_bit_for_bit(seed):
 
 
 def test_merged_arrays_widen_indices_that_would_overflow():
-    """canonical_csr keeps the operands' index dtype unless the entry count or the
+    """canonical_arrays keeps the operands' index dtype unless the entry count or the
     shape exceeds it (then wider, as scipy upcasts; int8 operands stand in for int32
     ones past 2^31 entries)."""
-    from supercoil.solvers.csr_sum import canonical_csr
+    from supercoil.solvers.csr_sum import canonical_arrays
 
     A = sp.random(200, 200, density=0.01, format="csr", random_state=3)
     A.sum_duplicates()
-    narrow = canonical_csr(A.data, A.indices, A.indptr, A.shape, np.int8, np.int8)
+    narrow = canonical_arrays(A.data, A.indices, A.indptr, A.shape, np.int8, np.int8)
     # not wrapped around int8 (scipy may then take int32, the smallest that holds them)
-    assert np.iinfo(narrow.indptr.dtype).max >= A.nnz and (narrow != A).nnz == 0
-    kept = canonical_csr(A.data, A.indices, A.indptr, A.shape, np.int32, np.int32)
-    assert kept.indices.dtype == kept.indptr.dtype == np.int32 and (kept != A).nnz == 0
+    assert np.iinfo(narrow.indptr.dtype).max >= A.nnz and (narrow.tocsr() != A).nnz == 0
+    kept = canonical_arrays(A.data, A.indices, A.indptr, A.shape, np.int32, np.int32)
+    assert kept.indices.dtype == kept.indptr.dtype == np.int32
+    assert (kept.tocsr() != A).nnz == 0

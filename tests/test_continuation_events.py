@@ -267,3 +267,40 @@ def test_start_with_the_ends_tangents_is_the_cubic_through_them():
     quadratic = Segment(system, a, cubic(1.0), 1e-10, 10, 1e-6)
     quadratic._points[0.5] = cubic(0.5)
     assert np.allclose(segment.start(0.3), quadratic.start(0.3), rtol=0, atol=1e-14)
+
+
+def test_takes_problem_reads_each_function_once_and_keeps_none_alive():
+    """takes_problem answers as inspect.signature does (the oracle) for functions, bound
+    methods, callable objects, partials and builtins, also when asked again (the answer
+    remembered per function); the memo holds its functions weakly."""
+    import functools
+    import gc
+    import inspect
+    import weakref
+
+    class Records:
+        def with_problem(self, q, multipliers, parameter, problem=None):
+            return {}
+
+        def without(self, q, multipliers, parameter):
+            return {}
+
+        def __call__(self, q, multipliers, parameter, *, problem):
+            return {}
+
+    def plain(q, multipliers, parameter):
+        return {}
+
+    records = Records()
+    callables = [records.with_problem, records.without, records, plain, Records().without,
+                 lambda q, m, p, problem: {}, functools.partial(plain, 1.0), print]
+    for function in callables * 2:
+        try:
+            expected = "problem" in inspect.signature(function).parameters
+        except (TypeError, ValueError):
+            expected = False
+        assert events.takes_problem(function) is expected
+    held = weakref.ref(records)
+    del records, callables
+    gc.collect()
+    assert held() is None

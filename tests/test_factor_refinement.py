@@ -124,11 +124,14 @@ def test_the_stacked_jacobian_is_reused_only_while_its_parts_are():
     its entries are those of a fresh stack."""
     import scipy.sparse as sp
 
+    from supercoil.solvers.csr import csr_columns
+
     system, x = contact_ring_system(excess_link=2.5)
     first = system.jacobian(x)
     assert system.jacobian(x.copy()) is first
-    fresh = sp.vstack([system._free_jacobian(system.q(x)), sp.csr_matrix(system.P)],
-                      format="csr")
+    problem = system.problem_at(x[-1])
+    fresh = sp.vstack([csr_columns(problem.constraint_jacobian(system.q(x)), system.free),
+                       sp.csr_matrix(system.P)], format="csr")
     assert (first != fresh).nnz == 0
     moved = nearby_state(system, x, 1e-3)
     other = system.jacobian(moved)

@@ -7,7 +7,7 @@
   exact cancellations at either sum, repeated DOFs within a block, no blocks;
 * ContactProblem.lagrangian_hessian against ``hessian(q).plus_sparse(
   constraint_hessian(q, mu))`` for each formulation, and through
-  ``solvers.newton.lagrangian_hessian``;
+  ``solvers.newton.lagrangian_hessian``; RodEnergy.lagrangian_hessian likewise;
 * the rod's constraint curvature values against the numpy fill they replaced;
 * the integral contact's pair Hessians against a Python loop of the kernel's formula
   in its order.
@@ -132,6 +132,27 @@ def test_contact_lagrangian_hessian_is_the_hessian_plus_the_curvature(choice):
         mu[::7] = 0.0
         ref = problem.hessian(q).plus_sparse(problem.constraint_hessian(q, mu))
         assert len(problem.pair_state(q, 1.1 * D).pairs)  # pairs within the barrier's reach
+        for mine in (problem.lagrangian_hessian(q, mu), lagrangian_hessian(problem, q, mu)):
+            assert same_bits(mine.sparse, ref.sparse)
+            assert np.array_equal(mine.vectors, ref.vectors)
+            assert np.array_equal(mine.coefficients, ref.coefficients)
+
+
+def test_rod_lagrangian_hessian_is_the_hessian_plus_the_curvature():
+    """RodEnergy.lagrangian_hessian (the curvature summed on arrays) against
+    ``hessian(q).plus_sparse(constraint_hessian(q, mu))``, bit for bit, on the closed rod
+    and on a clamped one, directly and through ``solvers.newton.lagrangian_hessian``."""
+    from supercoil.rod.model import Rod
+    from supercoil.rod.open import ClampedRodEnergy, straight_rod
+
+    rod, x = _stadium(40)
+    clamped = ClampedRodEnergy(Rod(n_nodes=30, length=1.0, closed=False), straight_rod(30), 1.5)
+    rng = np.random.default_rng(11)
+    for problem, state in ((rod, x.ravel()), (clamped, straight_rod(30).ravel())):
+        q = state + 1e-3 * rng.standard_normal(state.size)
+        mu = rng.standard_normal(problem.n_constraints)
+        mu[::7] = 0.0
+        ref = problem.hessian(q).plus_sparse(problem.constraint_hessian(q, mu))
         for mine in (problem.lagrangian_hessian(q, mu), lagrangian_hessian(problem, q, mu)):
             assert same_bits(mine.sparse, ref.sparse)
             assert np.array_equal(mine.vectors, ref.vectors)

@@ -8,7 +8,7 @@
 * ``RodEnergy.gradient`` / ``constraints`` / ``constraint_jacobian``: the former numpy
   code on closed and clamped rods, for all curvature forms, bit for bit, also after
   the frames move (``accept``) and for repeated states (the memos);
-* ``ExtendedSystem._free_jacobian``: ``csr_columns`` of the problem's Jacobian.
+* ``ExtendedSystem.jacobian`` (no phase rows): ``csr_columns`` of the problem's Jacobian.
 """
 
 from __future__ import annotations
@@ -112,9 +112,10 @@ def test_free_jacobian_equals_csr_columns_of_the_problems_jacobian():
     system = ExtendedSystem(energy, "turns", x.ravel())
     rng = np.random.default_rng(2)
     for k in range(5):
-        q = x.ravel() + 1e-3 * k * rng.standard_normal(x.size)
-        J_free = system._free_jacobian(q)
-        ref = csr_columns(energy.constraint_jacobian(q), system.free)
+        state = system.pack(x.ravel() + 1e-3 * k * rng.standard_normal(x.size),
+                            np.zeros(system.m), energy.turns)
+        J_free = system.jacobian(state)
+        ref = csr_columns(energy.constraint_jacobian(system.q(state)), system.free)
         for mine, theirs in ((J_free.indptr, ref.indptr), (J_free.indices, ref.indices),
                              (J_free.data, ref.data)):
             assert mine.dtype == theirs.dtype and mine.tobytes() == theirs.tobytes()
@@ -122,7 +123,7 @@ def test_free_jacobian_equals_csr_columns_of_the_problems_jacobian():
     # another constrained set (another pattern): the map is made again
     energy.set_constrained_edges(np.arange(3, 20))
     system = ExtendedSystem(energy, "turns", x.ravel())
-    J_free = system._free_jacobian(x.ravel())
+    J_free = system.jacobian(system.pack(x.ravel(), np.zeros(system.m), energy.turns))
     ref = csr_columns(energy.constraint_jacobian(x.ravel()), system.free)
     assert J_free.shape == ref.shape and J_free.data.tobytes() == ref.data.tobytes()
     assert J_free.indices.tobytes() == ref.indices.tobytes()

@@ -62,7 +62,7 @@ from supercoil.contact.options import ContactOptions
 from supercoil.contact.over_rod import OverRod
 from supercoil.contact.step import LinkGuard
 from supercoil.contact.step_guards import StepGuards
-from supercoil.solvers.csr_sum import block_csr, csr_add_blocks
+from supercoil.solvers.csr_sum import block_csr
 from supercoil.solvers.problem import HessianParts
 from supercoil.topology.knots.guard import KnotGuard
 
@@ -314,22 +314,21 @@ class ContactProblem(OverRod, StepGuards):
 
     def hessian(self, q: np.ndarray) -> HessianParts:
         """The rod's Hessian plus :meth:`contact_hessian`. The integral formulation's pair
-        blocks are merged into the rod's matrix directly (:func:`csr_add_blocks`, the
-        entries of ``csr_add(rod, contact_hessian)`` bit for bit, without the
+        blocks are merged into the rod's matrix directly (:meth:`HessianParts.plus_blocks`,
+        the entries of ``csr_add(rod, contact_hessian)`` bit for bit, without the
         intermediate matrix)."""
         parts = self.base.hessian(q)
         if self.integral:
             dofs, local = self._integral_blocks(q)
-            return HessianParts(csr_add_blocks(parts.sparse, dofs, local), parts.vectors,
-                                parts.coefficients)
+            return parts.plus_blocks(dofs, local)
         return parts.plus_sparse(self.contact_hessian(q))
 
     def lagrangian_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> HessianParts:
         """``hessian(q)`` plus ``constraint_hessian(q, multipliers)`` (the sum of
         :func:`~supercoil.solvers.newton.lagrangian_hessian`), bit for bit. The integral
         formulation's pair blocks and the constraint curvature are merged into the rod's
-        matrix in one compiled pass (:func:`csr_add_blocks` with ``then``) instead of a
-        merge for the blocks and another for the curvature (``plus_sparse``)."""
+        matrix in one compiled pass (:meth:`HessianParts.plus_blocks` with ``then``)
+        instead of a merge for the blocks and another for the curvature (``plus_sparse``)."""
         if not self.integral:
             parts = self.hessian(q)
             if self.n_constraints:
@@ -337,9 +336,15 @@ class ContactProblem(OverRod, StepGuards):
             return parts
         parts = self.base.hessian(q)
         dofs, local = self._integral_blocks(q)
-        curvature = self.constraint_hessian(q, multipliers) if self.n_constraints else None
-        return HessianParts(csr_add_blocks(parts.sparse, dofs, local, curvature), parts.vectors,
-                            parts.coefficients)
+        curvature = None
+        if self.base.n_constraints and not len(self.active):
+            # the rod's curvature as its arrays (constraint_curvature: the entries of
+            # constraint_hessian, no matrix made), the only term without active pairs
+            curvature = self.base.constraint_curvature(
+                q, np.asarray(multipliers, dtype=float)[:self.base.n_constraints])
+        elif self.n_constraints:
+            curvature = self.constraint_hessian(q, multipliers)
+        return parts.plus_blocks(dofs, local, curvature)
 
     def stability_view(self) -> ContactProblem:
         """This problem as the stability analysis must see it (shares the state).

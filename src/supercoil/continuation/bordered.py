@@ -109,7 +109,11 @@ class BorderedFactor:
 
     def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix, column: np.ndarray,
                  row: np.ndarray, order: np.ndarray | None = None):
-        S = hessian.sparse.tocsr()
+        # the sparse part's arrays where they are canonical (a pattern met before needs
+        # nothing else of it); its scipy matrix for a new pattern (_pattern)
+        S = hessian.csr_arrays()
+        if S is None or not S.canonical:
+            S = hessian.sparse.tocsr()
         n = S.shape[0]
         if jacobian is None:
             J = sp.csr_matrix((0, n))
@@ -129,8 +133,8 @@ class BorderedFactor:
         self.row_scale = scale_k / scale_row if scale_k > 0 else 1.0
         scaled_row = self.row_scale * row  # the border row, then the corner
         border_row, corner = scaled_row[:-1], scaled_row[-1]
-        pattern, pinned, S, J, J_banded = self._pattern(S, J, column, border_row, corner,
-                                                        scaled_row, order)
+        pattern, pinned, S, J, J_banded = self._pattern(S, hessian, J, column, border_row,
+                                                        corner, scaled_row, order)
         self.kkt_order = pattern.kkt_order.copy()
         self.order = pattern.order
         band = pattern.band
@@ -170,11 +174,13 @@ class BorderedFactor:
             self._small = np.diag(1.0 / self._w) + self._V.T @ self._BV
 
     @staticmethod
-    def _pattern(S, J, column, border_row, corner, scaled_row, order):
+    def _pattern(S, hessian, J, column, border_row, corner, scaled_row, order):
         """What the factor of these operands takes from their pattern:
         ``(pattern, pinned, S, J, J_banded)`` (a :class:`_FactorPattern`, the
         :class:`~supercoil.solvers.pinned_rows.PinnedRows` of ``J`` or None, the canonical
-        ``S``, ``J`` and the banded block's ``J``).
+        ``S``, ``J`` and the banded block's ``J``). ``S``: the sparse part of ``hessian``
+        or its canonical :class:`~supercoil.solvers.csr.CSRArrays`; a pattern not
+        remembered takes its scipy matrix (``hessian.sparse``).
 
         Remembered per pattern (:data:`_PATTERNS`) when ``S``, ``J`` are canonical
         float64 CSR, ``order`` is None and ``J`` has no row long enough to be dense
@@ -204,6 +210,7 @@ class BorderedFactor:
             if found is not None and same_words(found[0].words, words) \
                     and found[0].order_memo.certifies(J):
                 return found[0], None, S, J, J
+        S = hessian.sparse.tocsr()
         pinned = PinnedRows.of(J) if m else None
         J_banded = J if pinned is None else pinned.sparse
         if order is None:
@@ -250,7 +257,9 @@ class BorderedFactor:
         :class:`~supercoil.continuation.band_bordered.BandBordered`'s own refinement, ``1e-14`` of ``|rhs| + max|B'| |z|``.
         Each step's solve with ``B`` is one block elimination (``solve(refine=False)``):
         refining it against ``B`` too would not make the result closer to ``B'``'s."""
-        S = hessian.sparse
+        S = hessian.csr_arrays()  # its values and shape
+        if S is None:
+            S = hessian.sparse
         J = jacobian if isinstance(jacobian, sp.csr_matrix) else sp.csr_matrix(jacobian)
         n = S.shape[0]
         column = np.asarray(column, dtype=float)

@@ -25,6 +25,7 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
 from __future__ import annotations
 
 import inspect
+import weakref
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
@@ -378,7 +379,44 @@ def _tangent_or_secant(segment: Segment, u: float) -> np.ndarray:
 
 
 def takes_problem(function) -> bool:
-    """Whether a record or event function takes the keyword ``problem`` (module doc)."""
+    """Whether a record or event function takes the keyword ``problem`` (module doc).
+
+    Read once per function (a bound method: per underlying function, held weakly), not
+    at every point: ``inspect.signature`` costs tens of microseconds a call, and the
+    records and user events are evaluated at every point and localisation trial."""
+    bound = getattr(function, "__func__", None)
+    key = function if bound is None else bound
+    try:
+        return _TAKES_PROBLEM[key, bound is not None]
+    except KeyError:
+        pass
+    except TypeError:  # neither hashable nor weakly referable: read it now
+        return _reads_problem(function)
+    answer = _reads_problem(function)
+    try:
+        _TAKES_PROBLEM[key, bound is not None] = answer
+    except TypeError:
+        pass
+    return answer
+
+
+class _ByFunction:
+    """A map from ``(function, bound)`` to a value that does not keep the functions."""
+
+    def __init__(self):
+        self._maps = (weakref.WeakKeyDictionary(), weakref.WeakKeyDictionary())
+
+    def __getitem__(self, key):
+        return self._maps[key[1]][key[0]]
+
+    def __setitem__(self, key, value):
+        self._maps[key[1]][key[0]] = value
+
+
+_TAKES_PROBLEM = _ByFunction()
+
+
+def _reads_problem(function) -> bool:
     try:
         return "problem" in inspect.signature(function).parameters
     except (TypeError, ValueError):

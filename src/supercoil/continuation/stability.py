@@ -22,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
@@ -133,15 +132,15 @@ def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: f
 
 
 def related_order(order: np.ndarray, dofs: np.ndarray, rows: int, new_dofs: np.ndarray,
-                  new_rows: int, pattern: sp.csr_matrix) -> np.ndarray | None:
+                  new_rows: int, pattern) -> np.ndarray | None:
     """A banded ordering of a KKT matrix on ``new_dofs`` with ``new_rows`` constraint rows,
     from the ordering ``order`` of one on ``dofs`` with ``rows`` rows (its unknowns: the
     DOFs, then the rows); ``dofs`` must lie in ``new_dofs`` and the new rows be the
     first ``new_rows`` of the old ones, else None. The old unknowns keep their relative
     order (the rows beyond ``new_rows`` are left out); each new DOF goes midway between
     the first and the last placed unknowns it couples to in ``pattern`` (the new sparse
-    Hessian, ``(n_new, n_new)``), at the end if none: its own band is half their
-    distance, the others' grow by one.
+    Hessian, ``(n_new, n_new)``, a CSR matrix or its arrays), at the end if none: its
+    own band is half their distance, the others' grow by one.
 
     What for: the shift-invert factor of the eigenproblem (the gauge pins released,
     the dense phase rows left out) needs a banded ordering of its own pattern, which
@@ -200,7 +199,9 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
     else:
         order = None
         if count is not None:
-            order = related_order(count[1], count[0], count[2], dofs, m, H.sparse.tocsr())
+            pattern = H.csr_arrays()  # the pattern's arrays only
+            order = related_order(count[1], count[0], count[2], dofs, m,
+                                  H.sparse.tocsr() if pattern is None else pattern)
         values, vectors = lowest_pairs(H, J, mass, n_wanted=min(n_wanted, dim - 2), n=dofs.size,
                                        m=m, symmetry=sym, force_sparse=True,
                                        factor_order=order)

@@ -31,9 +31,8 @@ from supercoil.solvers.carried import carried
 from supercoil.solvers.csr import (
     csr_columns,
     csr_columns_map,
-    csr_from_arrays,
-    csr_rmatvec,
-    csr_vstack,
+    csr_stack_arrays,
+    transpose_matvec,
 )
 from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.solvers.parameters import problem_at
@@ -77,7 +76,6 @@ class ExtendedSystem:
         self.weights = np.concatenate([mass, np.zeros(self.m + self.r),
                                        [parameter_weight**2]])
         self.fd_step = finite_difference_step
-        self._jacobian_source = self._jacobian_free = None
         self._phase_rows: tuple[np.ndarray, sp.csr_matrix] | None = None
         # (problem, value, the problem at that value): see problem_at
         self._at: tuple[object, float, object] | None = None
@@ -149,51 +147,40 @@ class ExtendedSystem:
         the one given before unchanged."""
         self.problem = carried(self.problem, q)
 
-    def _free_jacobian(self, q: np.ndarray, p=None) -> sp.csr_matrix:
-        """``constraint_jacobian(q)`` on the free DOFs; the restriction is redone only
-        when the problem returns another matrix object (a problem that keeps its
-        Jacobian for the same ``q`` saves the column slicing, 0.1 ms at N = 100).
-
-        The column map of :func:`csr_columns` is kept for the last pattern (shape,
-        ``indptr`` and ``indices`` compared as bytes): a Jacobian of that pattern is
-        restricted without ``csr_columns``' checks of the free DOFs and memo look-up
-        (15 -> 4 us at N = 100, a new Jacobian at every residual), the same matrix."""
-        J = (self.problem if p is None else p).constraint_jacobian(q)
-        if J is not self._jacobian_source:
-            self._jacobian_source = J
-            self._jacobian_free = self._free_columns(J)
-        return self._jacobian_free
-
-    def _free_columns(self, J) -> sp.csr_matrix:
+    def _free_columns(self, J):
+        """``(data, indices, indptr)`` of ``J[:, free]`` for a CSR float64 ``J`` (the
+        arrays of :func:`csr_columns`), None for another ``J``. The column map is kept
+        for the last pattern (shape, ``indptr`` and ``indices`` compared as bytes): a
+        Jacobian of that pattern is restricted without ``csr_columns``' checks of the
+        free DOFs and memo look-up (15 -> 4 us at N = 100)."""
+        if getattr(J, "format", None) != "csr" or J.dtype != np.float64:
+            return None
         remembered = self.__dict__.get("_free_columns_map")
-        if getattr(J, "format", None) != "csr":
-            return csr_columns(J, self.free)
         indptr, indices = J.indptr.tobytes(), J.indices.tobytes()
         if remembered is None or remembered[0] != J.shape or remembered[1] != indptr \
                 or remembered[2] != indices or remembered[4] is not self.free:
             maps = csr_columns_map(J, self.free)
             if maps is None:
-                return csr_columns(J, self.free)
+                return None
             remembered = (J.shape, indptr, indices, maps, self.free)
             self._free_columns_map = remembered
         selected, free_indices, free_indptr = remembered[3]
-        return csr_from_arrays(J.data[selected], free_indices.copy(), free_indptr.copy(),
-                               (J.shape[0], self.free.size))
+        return J.data[selected], free_indices, free_indptr
 
     def _kkt_residual(self, q: np.ndarray, mu: np.ndarray, p=None) -> np.ndarray:
-        """``[grad E + J^T mu ; c]`` on the free DOFs of ``p`` (default: the problem)."""
+        """``[grad E + J^T mu ; c]`` on the free DOFs of ``p`` (default: the problem).
+
+        ``J^T mu`` is summed on all DOFs and its free entries taken: each free column
+        gets the same terms in the same order as from ``J[:, free]`` (rows in order),
+        so the same sums, without the restricted matrix."""
         p = self.problem if p is None else p
-        g = p.gradient(q)[self.free]
+        g = p.gradient(q)
         if self.m:
-            J = self._free_jacobian(q, p)
-            if getattr(J, "format", None) == "csr" and J.dtype == np.float64:
-                # scipy's J.T @ mu (csc_matvec on the transpose, the same sums) without
-                # the transpose object and the operator dispatch (35 µs at N = 200)
-                g = g + csr_rmatvec(J.indptr, J.indices, J.data, mu, J.shape[1])
-            else:
-                g = g + J.T @ mu
-            return np.concatenate([g, p.constraints(q)])
-        return g
+            # scipy's J.T @ mu (csc_matvec on the transpose, the same sums) without the
+            # transpose object and the operator dispatch (35 µs at N = 200)
+            g = g + transpose_matvec(p.constraint_jacobian(q), mu)
+            return np.concatenate([g[self.free], p.constraints(q)])
+        return g[self.free]
 
     def residual(self, x: np.ndarray) -> np.ndarray:
         q = self.q(x)
@@ -216,25 +203,36 @@ class ExtendedSystem:
         return lagrangian_hessian(self.problem_at(x[-1]), self.q(x), x[self.n:self.n + self.m])
 
     def jacobian(self, x: np.ndarray) -> sp.csr_matrix:
-        """Constraint Jacobian with the phase rows, ``(m + r, n)``. The stacked matrix
-        is returned again (the same object: callers must not modify it) while the
-        problem returns the same Jacobian object and the phase rows are unchanged
-        (a corrector's residual, factor and refinement at one iterate)."""
-        rows = []
-        free = self._free_jacobian(self.q(x), self.problem_at(x[-1])) if self.m else None
+        """Constraint Jacobian on the free DOFs with the phase rows, ``(m + r, n)``: one
+        matrix, made from the arrays of the problem's Jacobian restricted to the free
+        columns and of the phase rows (:func:`csr_stack_arrays`). It is returned again
+        (the same object: callers must not modify it) while the problem returns the
+        same Jacobian object and the phase rows are unchanged (a corrector's residual,
+        factor and refinement at one iterate)."""
+        J = self.problem_at(x[-1]).constraint_jacobian(self.q(x)) if self.m else None
         if self.r and (self._phase_rows is None or self._phase_rows[0] is not self.P):
             self._phase_rows = (self.P, sp.csr_matrix(self.P))
         stacked = self.__dict__.get("_stacked")
-        if stacked is not None and stacked[0] is free and stacked[1] is self._phase_rows:
+        if stacked is not None and stacked[0] is J and stacked[1] is self._phase_rows:
             return stacked[2]
+        blocks = []
         if self.m:
-            rows.append(free if isinstance(free, sp.csr_matrix) else sp.csr_matrix(free))
+            free = self._free_columns(J)
+            if free is None:  # not CSR float64: scipy's slicing and stacking
+                rows = [sp.csr_matrix(csr_columns(J, self.free))]
+                if self.r:
+                    rows.append(self._phase_rows[1])
+                out = sp.vstack(rows, format="csr")
+                self._stacked = (J, self._phase_rows, out)
+                return out
+            blocks.append((*free, self.m))
         if self.r:
-            rows.append(self._phase_rows[1])
-        if not rows:
+            P = self._phase_rows[1]
+            blocks.append((P.data, P.indices, P.indptr, self.r))
+        if not blocks:
             return sp.csr_matrix((0, self.n))
-        out = csr_vstack(rows)
-        self._stacked = (free, self._phase_rows, out)
+        out = csr_stack_arrays(blocks, self.n)
+        self._stacked = (J, self._phase_rows, out)
         return out
 
     def parameter_derivative(self, x: np.ndarray) -> np.ndarray:

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from supercoil._numba import njit
-from supercoil.solvers.csr import csr_from_arrays
+from supercoil.solvers.csr import CSRArrays
 
 
 @njit()
@@ -54,18 +53,20 @@ class StencilPattern:
         return np.bincount(self.dofs.ravel(), weights=np.asarray(local).ravel(),
                            minlength=self.n_dofs)
 
-    def scatter_matrix(self, local: np.ndarray) -> sp.csr_matrix:
-        """Sum local Hessians ``(n_stencils, 9, 9)`` into a CSR matrix ``(n_dofs, n_dofs)``.
+    def scatter_matrix(self, local: np.ndarray) -> CSRArrays:
+        """Sum local Hessians ``(n_stencils, 9, 9)`` into the arrays of a CSR matrix
+        ``(n_dofs, n_dofs)`` of the stencils' pattern.
 
         Entries are summed in stencil order, so symmetric local Hessians give an
-        exactly symmetric matrix. The matrix owns its index arrays and is marked
-        canonical (the pattern's keys are sorted and unique), which spares the sums
-        that take it scipy's check.
+        exactly symmetric matrix. The arrays are canonical (the pattern's keys are
+        sorted and unique), which spares the sums that take them scipy's check; the
+        index arrays are the pattern's, shared (a matrix made from them copies them,
+        :meth:`~supercoil.solvers.csr.CSRArrays.tocsr`).
         """
         values = np.ascontiguousarray(local, dtype=np.float64).ravel()
         if values.size != self._slot.size:
             raise ValueError(f"local Hessians must have shape ({len(self.dofs)}, 9, 9)")
         data = np.zeros(self._nnz)
         _accumulate(self._slot, values, data)
-        return csr_from_arrays(data, self._indices.copy(), self._indptr.copy(),
-                               (self.n_dofs, self.n_dofs), canonical=True)
+        return CSRArrays(data, self._indices, self._indptr, (self.n_dofs, self.n_dofs),
+                         canonical=True)

@@ -21,7 +21,7 @@ from supercoil.rod import kernels
 from supercoil.rod.assembly import StencilPattern
 from supercoil.rod.model import Rod
 from supercoil.solvers.carried import Carried, Frames
-from supercoil.solvers.csr import csr_from_arrays
+from supercoil.solvers.csr import CSRArrays, csr_from_arrays
 from supercoil.solvers.parameters import Parametrised
 from supercoil.solvers.problem import HessianParts
 
@@ -82,8 +82,9 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         self._bending = kernels.bending_kernels(rod.curvature)
         self._twist_coefficient = 4.0 * np.pi**2 * rod.twist_stiffness / rod.length
         # what depends on neither the parameters nor the frames, made once and shared by
-        # the problems ``at`` derives from this one: hessian()'s work array, the
-        # Jacobian's and the constraint curvature's layouts (by constrained set)
+        # the problems ``at`` and ``carried_to`` derive from this one: hessian()'s work
+        # array, the Jacobian's and the constraint curvature's layouts (by constrained
+        # set), the last state's edge-length terms and Jacobian
         self._shared: dict = {}
         self.mass = np.full(3 * n, rod.edge_length)
         self._set_frames(unit(self._edge_vectors(points.ravel())),
@@ -228,13 +229,13 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         as numpy steps cost 14 and 22 us at N = 100; the methods with this one call 4
         and 8 us, the call itself 2-3 us)."""
         key = _key(q)
-        cached = self.__dict__.get("_edge_terms_cache")
+        cached = self._shared.get("edge_terms")
         if cached is not None and cached[0] == key and cached[1] is self._constrained:
             return cached[2], cached[3]
         layout = self._jacobian_layout_of_constrained()
         values, data = kernels.edge_length_terms(np.asarray(q, dtype=np.float64), layout[4],
                                                  self.rod.edge_length, layout[1])
-        self._edge_terms_cache = (key, self._constrained, values, data)
+        self._shared["edge_terms"] = (key, self._constrained, values, data)
         return values, data
 
     def _jacobian_layout_of_constrained(self):
@@ -258,13 +259,17 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
 
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
         """Jacobian of :meth:`constraints`, ``(m, n_dofs)``; the last one is returned
-        again (the same object: callers must not modify it) for the same ``q``."""
+        again (the same object: callers must not modify it) for the same ``q`` and
+        constrained edges, also to the problems :meth:`at` and ``carried_to`` derive
+        from this one (it depends on neither the parameters nor the frames: a
+        continuation asks the problem at each new parameter value, and the problem
+        carried to an accepted point, for the Jacobian at a state already met)."""
         key = _key(q)
-        cached = self.__dict__.get("_jacobian_cache")
+        cached = self._shared.get("jacobian")
         if cached is not None and cached[0] == key and cached[1] is self._constrained:
             return cached[2]
         J = self._constraint_jacobian(q)
-        self._jacobian_cache = (key, self._constrained, J)
+        self._shared["jacobian"] = (key, self._constrained, J)
         return J
 
     def _constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
@@ -287,7 +292,20 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         return np.concatenate([a, b, a, b]).ravel(), np.concatenate([a, b, b, a]).ravel()
 
     def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
-        """``sum_j mu_j hess c_j``: ``+-mu_j / h`` on the blocks of edge ``j``'s two nodes.
+        """``sum_j mu_j hess c_j``: ``+-mu_j / h`` on the blocks of edge ``j``'s two nodes
+        (the matrix of :meth:`constraint_curvature`)."""
+        return self.constraint_curvature(q, multipliers).tocsr()
+
+    def lagrangian_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> HessianParts:
+        """``hessian(q)`` plus ``constraint_hessian(q, multipliers)`` (the sum of
+        :func:`~supercoil.solvers.newton.lagrangian_hessian`), bit for bit, summed on
+        the arrays of both: no matrix is made for the curvature."""
+        return self.hessian(q).plus_sparse(self.constraint_curvature(q, multipliers))
+
+    def constraint_curvature(self, q: np.ndarray, multipliers: np.ndarray) -> CSRArrays:
+        """The canonical CSR arrays of :meth:`constraint_hessian` (read only: the index
+        arrays are the pattern's), for the sums that take them without a matrix
+        (:meth:`lagrangian_hessian`, a contact problem's).
 
         The CSR pattern of these entries is fixed by the constrained edges and is
         built once: an entry gets at most two terms (a node's diagonal from its two
@@ -318,8 +336,7 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         _, first, second, indices, indptr = pattern
         values = _curvature_values(np.ascontiguousarray(multipliers, dtype=np.float64),
                                    float(self.rod.edge_length), first, second)
-        return csr_from_arrays(values, indices.copy(), indptr.copy(),
-                               (self.n_dofs, self.n_dofs), canonical=True)
+        return CSRArrays(values, indices, indptr, (self.n_dofs, self.n_dofs), canonical=True)
 
     # the load parameter that shifts ``twist_offset`` one for one (subclasses name it)
     twist_parameter: str = ""

@@ -32,13 +32,11 @@ def _pattern_key(A: sp.csr_matrix) -> tuple:
     return (A.shape, A.indptr.tobytes(), A.indices.tobytes())
 
 
-def is_canonical_csr(A) -> bool:
-    """Whether ``A`` is a CSR matrix with sorted indices and no duplicates."""
-    return getattr(A, "format", None) == "csr" and A.has_canonical_format
-
-
 def is_canonical_float(A) -> bool:
-    """Whether ``A`` is a canonical CSR matrix of float64 entries."""
+    """Whether ``A`` is a canonical CSR matrix of float64 entries, or the
+    :class:`CSRArrays` of one."""
+    if isinstance(A, CSRArrays):
+        return A.canonical and A.data.dtype == np.float64
     return getattr(A, "format", None) == "csr" and A.dtype == np.float64 \
         and A.has_canonical_format
 
@@ -54,27 +52,40 @@ def csr_from_arrays(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray,
     return out
 
 def csr_restrict(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
-    """``A[keep][:, keep]`` as CSR (see module doc).
+    """``A[keep][:, keep]`` as CSR (see module doc): :func:`restrict_arrays` of a square
+    float64 CSR ``A``, else scipy's slicing."""
+    arrays = CSRArrays.of(A, check_canonical=False)
+    out = None if arrays is None else restrict_arrays(arrays, keep)
+    if out is None:
+        return A[keep][:, keep].tocsr()
+    # the restriction of a canonical matrix is canonical (flagged so, the sums that
+    # take it skip scipy's check)
+    out.canonical = A.has_canonical_format
+    return out.tocsr()
 
-    For sorted unique ``keep``, one compiled pass (:func:`_restrict_kernel`) copies the
-    kept entries of the kept rows in stored order. It replaced a memo of index maps per
-    pattern: on the tweezers' contact branch (N = 100) the Hessian's pattern changes
-    with the contact pairs, and a quarter of the calls missed the memo (0.14-0.20 ms
-    each, 0.03-0.04 ms a hit; the kernel takes about 0.01 ms).
+
+def restrict_arrays(A: CSRArrays, keep: np.ndarray) -> CSRArrays | None:
+    """``A[keep][:, keep]`` for the arrays of a square CSR matrix and sorted unique ``keep``
+    (None for anything else): one compiled pass (:func:`_restrict_kernel`) copies the
+    kept entries of the kept rows in stored order, explicit zeros included; canonical
+    if ``A`` is.
+
+    It replaced a memo of index maps per pattern: on the tweezers' contact branch
+    (N = 100) the Hessian's pattern changes with the contact pairs, and a quarter of
+    the calls missed the memo (0.14-0.20 ms each, 0.03-0.04 ms a hit; the kernel takes
+    about 0.01 ms).
     """
     keep = np.asarray(keep)
-    if getattr(A, "format", None) == "csr" and keep.ndim == 1 and keep.dtype.kind in "iu" \
-            and A.shape[0] == A.shape[1] and A.dtype == np.float64 \
-            and A.indices.dtype.kind == "i" and A.indptr.dtype.kind == "i":
-        out = _restrict_kernel(A.indptr, A.indices, A.data, keep.astype(np.int64, copy=False),
-                               A.shape[0])
-        if out is not None:
-            indptr, indices, data = out
-            # the restriction of a canonical matrix is canonical (flagged so, the sums
-            # that take it skip scipy's check)
-            return csr_from_arrays(data, indices, indptr, (keep.size, keep.size),
-                                   canonical=A.has_canonical_format)
-    return A[keep][:, keep].tocsr()
+    if keep.ndim != 1 or keep.dtype.kind not in "iu" or A.shape[0] != A.shape[1] \
+            or A.data.dtype != np.float64 or A.indices.dtype.kind != "i" \
+            or A.indptr.dtype.kind != "i":
+        return None
+    out = _restrict_kernel(A.indptr, A.indices, A.data, keep.astype(np.int64, copy=False),
+                           A.shape[0])
+    if out is None:
+        return None
+    indptr, indices, data = out
+    return CSRArrays(data, indices, indptr, (keep.size, keep.size), A.canonical)
 
 
 @njit()
@@ -149,24 +160,40 @@ def csr_columns_map(A: sp.csr_matrix, keep: np.ndarray):
 
 
 class CSRArrays:
-    """A square or rectangular CSR matrix held as its arrays, for the products of
-    refinement loops: ``A @ x`` (``x`` ``(n,)`` or ``(n, k)``) by :func:`csr_matvec`,
-    without a ``scipy.sparse`` object (its construction and operator dispatch cost
-    30 µs per factor and 20 µs per product at N = 100). ``tocsr``/``tocsc`` give
-    the scipy matrix (a sparse LU fallback)."""
+    """A square or rectangular CSR matrix held as its arrays: for the products of
+    refinement loops (``A @ x``, ``x`` ``(n,)`` or ``(n, k)``, by :func:`csr_matvec`,
+    without a ``scipy.sparse`` object: its construction and operator dispatch cost 30 µs
+    per factor and 20 µs per product at N = 100), and for the sums and restrictions
+    of a Hessian's assembly, whose intermediate matrices nobody reads
+    (:class:`~supercoil.solvers.problem.HessianParts`). ``canonical``: the indices of
+    each row are sorted, without duplicates. ``tocsr``/``tocsc`` give the scipy matrix,
+    which owns copies of the index arrays (the arrays may be a pattern's, shared)."""
 
-    __slots__ = ("data", "indices", "indptr", "shape")
+    __slots__ = ("canonical", "data", "indices", "indptr", "shape")
 
     def __init__(self, data: np.ndarray, indices: np.ndarray, indptr: np.ndarray,
-                 shape: tuple[int, int]):
+                 shape: tuple[int, int], canonical: bool = False):
         self.data, self.indices, self.indptr, self.shape = data, indices, indptr, shape
+        self.canonical = canonical
+
+    @classmethod
+    def of(cls, A, check_canonical: bool = True) -> CSRArrays | None:
+        """The arrays of a float64 ``scipy.sparse`` CSR matrix with integer indices (shared,
+        not copied), None for anything else; ``canonical`` as ``A.has_canonical_format``
+        (scipy checks the rows of a matrix not flagged either way), False without
+        ``check_canonical``."""
+        if getattr(A, "format", None) != "csr" or A.dtype != np.float64 \
+                or A.indices.dtype.kind != "i" or A.indptr.dtype.kind != "i":
+            return None
+        return cls(A.data, A.indices, A.indptr, A.shape,
+                   bool(A.has_canonical_format) if check_canonical else False)
 
     def __matmul__(self, x: np.ndarray) -> np.ndarray:
         return csr_matvec(self.indptr, self.indices, self.data, x, self.shape[1])
 
     def tocsr(self) -> sp.csr_matrix:
-        return sp.csr_matrix((self.data, self.indices.copy(), self.indptr.copy()),
-                             shape=self.shape)
+        return csr_from_arrays(self.data, self.indices.copy(), self.indptr.copy(), self.shape,
+                               canonical=self.canonical)
 
     def tocsc(self) -> sp.csc_matrix:
         return self.tocsr().tocsc()
@@ -227,6 +254,14 @@ def csr_rmatvec(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, x: np
     return _csr_rmatvec(indptr, indices, data, x, n_cols)
 
 
+def transpose_matvec(A, x: np.ndarray) -> np.ndarray:
+    """``A.T @ x`` for a sparse ``A`` ``(m, n)`` and ``x`` ``(m,)``: for a float64 CSR ``A``
+    by :func:`csr_rmatvec` (scipy's sums, without the transpose object), else scipy's."""
+    if getattr(A, "format", None) == "csr" and A.dtype == np.float64:
+        return csr_rmatvec(A.indptr, A.indices, A.data, x, A.shape[1])
+    return A.T @ x
+
+
 @njit()
 def _csr_rmatvec(indptr, indices, data, x, n_cols):
     y = np.zeros(n_cols)
@@ -239,23 +274,32 @@ def _csr_rmatvec(indptr, indices, data, x, n_cols):
 
 def csr_vstack(blocks: list) -> sp.csr_matrix:
     """``scipy.sparse.vstack(blocks, format="csr")`` for CSR blocks of float64 with the
-    same number of columns: their arrays concatenated (what scipy's own fast path for
-    CSR blocks does, without its checks and dispatch: 0.25 ms at N = 200 made 0.03 ms);
-    anything else goes to scipy."""
+    same number of columns: their arrays concatenated (:func:`csr_stack_arrays`, what
+    scipy's own fast path for CSR blocks does, without its checks and dispatch: 0.25 ms
+    at N = 200 made 0.03 ms); anything else goes to scipy."""
     if not blocks or any(getattr(b, "format", None) != "csr" or b.dtype != np.float64
                          or b.shape[1] != blocks[0].shape[1] for b in blocks):
         return sp.vstack(blocks, format="csr")
-    n_rows = sum(b.shape[0] for b in blocks)
-    nnz = sum(int(b.indptr[-1]) for b in blocks)
-    index = np.int32 if max(nnz, n_rows, blocks[0].shape[1]) < 2**31 - 1 else np.int64
+    return csr_stack_arrays([(b.data, b.indices, b.indptr, b.shape[0]) for b in blocks],
+                            blocks[0].shape[1])
+
+
+def csr_stack_arrays(blocks: list, n_cols: int) -> sp.csr_matrix:
+    """One CSR matrix of the row blocks ``(data, indices, indptr, n_rows)`` (CSR arrays of
+    float64 blocks of ``n_cols`` columns) stacked in order: the arrays of
+    ``scipy.sparse.vstack`` of their matrices, built once, without a matrix per block
+    (int32 indices where they fit, as scipy)."""
+    n_rows = sum(int(rows) for _, _, _, rows in blocks)
+    nnz = sum(int(indptr[rows] - indptr[0]) for _, _, indptr, rows in blocks)
+    index = np.int32 if max(nnz, n_rows, n_cols) < 2**31 - 1 else np.int64
     indptr = np.empty(n_rows + 1, dtype=index)
     indptr[0] = 0
     row = offset = 0
-    for b in blocks:
-        indptr[row + 1:row + b.shape[0] + 1] = b.indptr[1:b.shape[0] + 1] - b.indptr[0] + offset
-        row += b.shape[0]
-        offset += int(b.indptr[b.shape[0]] - b.indptr[0])
-    indices = np.concatenate([b.indices[b.indptr[0]:b.indptr[-1]] for b in blocks]).astype(
-        index, copy=False)
-    data = np.concatenate([b.data[b.indptr[0]:b.indptr[-1]] for b in blocks])
-    return csr_from_arrays(data, indices, indptr, (n_rows, blocks[0].shape[1]))
+    for _, _, b_ptr, rows in blocks:
+        indptr[row + 1:row + rows + 1] = b_ptr[1:rows + 1] - b_ptr[0] + offset
+        row += rows
+        offset += int(b_ptr[rows] - b_ptr[0])
+    indices = np.concatenate([b_idx[b_ptr[0]:b_ptr[rows]] for _, b_idx, b_ptr, rows in blocks]
+                             ).astype(index, copy=False)
+    data = np.concatenate([b_data[b_ptr[0]:b_ptr[rows]] for b_data, _, b_ptr, rows in blocks])
+    return csr_from_arrays(data, indices, indptr, (n_rows, n_cols))

@@ -25,33 +25,55 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil._numba import njit
-from supercoil.solvers.csr import csr_from_arrays, is_canonical_csr
+from supercoil.solvers.csr import CSRArrays, csr_from_arrays
 
 
 def csr_add(A: sp.csr_matrix, B: sp.spmatrix) -> sp.csr_matrix:
-    """``(A + B).tocsr()`` (see module doc).
-
-    Canonical float64 operands are merged row by row in one compiled pass
-    (:func:`merge_kernel`): ``a + b`` where both store an entry, ``a`` or
-    ``0.0 + b`` where one does (the sums of the former per-pattern maps, which
-    started from zeros), entries equal to zero dropped. The former path (a
-    memo of index maps keyed by both patterns' bytes) spent most of a call on
-    the key: 68 µs per hit at N = 200 (9000 + 12 800 entries), and a sort and
-    two binary searches on every new contact pattern.
-    """
-    if not (is_canonical_csr(A) and is_canonical_csr(B)) or A.shape != B.shape \
-            or A.dtype != np.float64 or B.dtype != np.float64:
+    """``(A + B).tocsr()`` (see module doc): :func:`add_arrays` of canonical float64
+    operands of one shape, else scipy's sum."""
+    a, b = CSRArrays.of(A), CSRArrays.of(B)
+    if a is None or b is None or not (a.canonical and b.canonical) or A.shape != B.shape:
         return (A + B).tocsr()
+    return add_arrays(a, b).tocsr()
+
+
+def add_arrays(A: CSRArrays, B: CSRArrays) -> CSRArrays:
+    """The arrays of scipy's ``A + B`` for canonical float64 CSR arrays of one shape.
+
+    Merged row by row in one compiled pass (:func:`merge_kernel`): ``a + b`` where both
+    store an entry, ``a`` or ``0.0 + b`` where one does (the sums of the former
+    per-pattern maps, which started from zeros), entries equal to zero dropped; the
+    index dtypes of ``A`` (see :func:`canonical_arrays`). The former path (a memo of
+    index maps keyed by both patterns' bytes) spent most of a call on the key: 68 µs
+    per hit at N = 200 (9000 + 12 800 entries), and a sort and two binary searches on
+    every new contact pattern.
+    """
     indptr, indices, data = merge_kernel(A.indptr, A.indices, A.data, B.indptr, B.indices,
                                           B.data, A.shape[0])
-    return canonical_csr(data, indices, indptr, A.shape, A.indices.dtype, A.indptr.dtype)
+    return canonical_arrays(data, indices, indptr, A.shape, A.indices.dtype, A.indptr.dtype)
 
 
 def csr_add_blocks(A: sp.csr_matrix, dofs: np.ndarray, blocks: np.ndarray,
                    then: sp.spmatrix | None = None) -> sp.csr_matrix:
     """``csr_add(A, block_csr(dofs, blocks, n))``, and with ``then`` ``csr_add`` of that
-    and ``then``, without the intermediate matrices: the same entries, bit for bit.
-    ``A`` and ``then`` square ``(n, n)``.
+    and ``then``, without the intermediate matrices: the same entries, bit for bit
+    (:func:`add_blocks_arrays` of canonical float64 operands, else those sums)."""
+    a = CSRArrays.of(A)
+    c = None if then is None else CSRArrays.of(then)
+    out = None
+    if a is not None and a.canonical and (then is None or (c is not None and c.canonical)):
+        out = add_blocks_arrays(a, dofs, blocks, c)
+    if out is None:
+        out = csr_add(A, block_csr(dofs, blocks, A.shape[0]))
+        return out if then is None else csr_add(out, then)
+    return out.tocsr()
+
+
+def add_blocks_arrays(A: CSRArrays, dofs: np.ndarray, blocks: np.ndarray,
+                      then: CSRArrays | None = None) -> CSRArrays | None:
+    """The arrays of ``csr_add(A, block_csr(dofs, blocks, n))``, and with ``then`` of
+    ``csr_add`` of that and ``then``, for canonical float64 CSR arrays ``A`` and ``then``
+    ``(n, n)``; None when ``A`` or ``then`` is not such or ``dofs`` is not ``(p, w)``.
 
     One compiled pass over the rows (:func:`_add_blocks_kernel`): a row's block entries
     summed in the blocks' order (as :func:`_block_csr_kernel`), its columns sorted,
@@ -68,31 +90,30 @@ def csr_add_blocks(A: sp.csr_matrix, dofs: np.ndarray, blocks: np.ndarray,
     dofs = np.ascontiguousarray(dofs, dtype=np.int64)
     p = dofs.shape[0]
     c = then
-    if dofs.ndim != 2 or not is_canonical_csr(A) or A.dtype != np.float64 or \
-            A.shape[1] != n or (c is not None and (not is_canonical_csr(c) or c.dtype != np.float64
-                               or c.shape != A.shape)):
-        out = csr_add(A, block_csr(dofs, blocks, n))
-        return out if c is None else csr_add(out, c)
+    if dofs.ndim != 2 or not A.canonical or A.data.dtype != np.float64 or A.shape[1] != n \
+            or (c is not None and (not c.canonical or c.data.dtype != np.float64
+                                   or c.shape != A.shape)):
+        return None
     blocks = np.ascontiguousarray(np.asarray(blocks, dtype=float)[:p])
     if p and (dofs.min() < 0 or dofs.max() >= n
               or blocks.shape != (p, dofs.shape[1], dofs.shape[1])):
         raise ValueError("csr_add_blocks: DOFs outside [0, n) or blocks of the wrong shape")
     if c is None:
-        c = _EMPTY_ROWS
-        c_ptr = np.zeros(n + 1, dtype=np.int32)
+        c_ptr, c_idx, c_data = np.zeros(n + 1, dtype=np.int32), _NO_INDICES, _NO_VALUES
     else:
-        c_ptr = c.indptr
+        c_ptr, c_idx, c_data = c.indptr, c.indices, c.data
     upper = int(A.indptr[n]) - int(A.indptr[0]) + blocks.size + int(c_ptr[n]) - int(c_ptr[0])
     index_dtype, indptr_dtype = A.indices.dtype, A.indptr.dtype
     if max(int(upper), n) > np.iinfo(indptr_dtype).max:
-        index_dtype = indptr_dtype = np.int64  # as scipy upcasts (see canonical_csr)
+        index_dtype = indptr_dtype = np.int64  # as scipy upcasts (see canonical_arrays)
     indptr, indices, data = _add_blocks_kernel(
-        A.indptr, A.indices, A.data, dofs, blocks, c_ptr, c.indices, c.data, n,
+        A.indptr, A.indices, A.data, dofs, blocks, c_ptr, c_idx, c_data, n,
         np.empty(0, dtype=index_dtype), np.empty(0, dtype=indptr_dtype))
-    return csr_from_arrays(data, indices, indptr, A.shape, canonical=True)
+    return CSRArrays(data, indices, indptr, A.shape, canonical=True)
 
 
-_EMPTY_ROWS = sp.csr_matrix((1, 1))  # the indices and data of no entries
+_NO_INDICES = np.zeros(0, dtype=np.int32)  # the indices and values of no entries
+_NO_VALUES = np.zeros(0)
 
 
 @njit()
@@ -179,14 +200,14 @@ def _add_blocks_kernel(a_ptr, a_idx, a_data, dofs, blocks, c_ptr, c_idx, c_data,
     return indptr, indices[:nnz].copy(), data[:nnz].copy()
 
 
-def canonical_csr(data, indices, indptr, shape, index_dtype, indptr_dtype) -> sp.csr_matrix:
-    """The merged arrays as a canonical csr_matrix with the operands' index dtypes, wider
+def canonical_arrays(data, indices, indptr, shape, index_dtype, indptr_dtype) -> CSRArrays:
+    """The merged arrays as canonical CSR arrays with the operands' index dtypes, wider
     (int64, as scipy would upcast) where those cannot hold the entry count or shape."""
     widest = np.iinfo(np.dtype(indptr_dtype)).max
     if max(int(indptr[-1]) if indptr.size else 0, *shape) > widest:
         index_dtype = indptr_dtype = np.int64
-    return csr_from_arrays(data, indices.astype(index_dtype), indptr.astype(indptr_dtype), shape,
-                           canonical=True)
+    return CSRArrays(data, indices.astype(index_dtype), indptr.astype(indptr_dtype), shape,
+                     canonical=True)
 
 
 @njit()

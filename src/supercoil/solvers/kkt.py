@@ -104,11 +104,18 @@ class KKTFactor:
     def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix | None = None,
                  shift: float = 0.0, mass: np.ndarray | None = None,
                  order: np.ndarray | None = None):
-        S = hessian.sparse.tocsr()
+        arrays = hessian.csr_arrays()
+        if shift != 0.0 and arrays is not None and arrays.canonical:
+            S = arrays  # only the shifted matrix is made
+        else:
+            S = hessian.sparse.tocsr()
         n = S.shape[0]
         if shift != 0.0:
             S = shifted(S, shift, mass if mass is not None else np.ones(n))
-        J = sp.csr_matrix((0, n)) if jacobian is None else sp.csr_matrix(jacobian)
+        if jacobian is None:
+            J = sp.csr_matrix((0, n))
+        else:  # scipy's csr_matrix of a csr_matrix shares its arrays
+            J = jacobian if type(jacobian) is sp.csr_matrix else sp.csr_matrix(jacobian)
         self.n = n
         self.m = J.shape[0]
         self._S = S

@@ -13,7 +13,8 @@ import scipy.sparse as sp
 
 from supercoil._numba import njit
 from supercoil.solvers.band import BandLayout, band_layout, band_layout_of_nonzeros
-from supercoil.solvers.csr_sum import csr_add
+from supercoil.solvers.csr import CSRArrays
+from supercoil.solvers.csr_sum import add_arrays, csr_add
 from supercoil.solvers.patterns import PatternMemo
 
 
@@ -145,11 +146,13 @@ def kkt_csr(S: sp.csr_matrix, J: sp.csr_matrix) -> sp.csr_matrix:
     return K
 
 
-def shifted(S: sp.csr_matrix, shift: float, mass: np.ndarray) -> sp.csr_matrix:
-    """``(S - shift * diags(mass)).tocsr()`` of scipy, entry for entry: ``S + D`` with
-    ``D`` the CSR of ``-(shift * mass)`` (zeros dropped, as scipy's conversion of the
-    diagonal does), summed by :func:`~supercoil.solvers.csr_sum.csr_add` (``a - b``
-    is ``a + (-b)`` exactly; zeros of the sum dropped as scipy's subtraction does)."""
+def shifted(S, shift: float, mass: np.ndarray) -> sp.csr_matrix:
+    """``(S - shift * diags(mass)).tocsr()`` of scipy, entry for entry (``S`` a scipy
+    matrix or the :class:`~supercoil.solvers.csr.CSRArrays` of one): ``S + D`` with
+    ``D`` the CSR arrays of ``-(shift * mass)`` (zeros dropped, as scipy's conversion of
+    the diagonal does), summed by :func:`~supercoil.solvers.csr_sum.add_arrays` (``a - b``
+    is ``a + (-b)`` exactly; zeros of the sum dropped as scipy's subtraction does),
+    one matrix made."""
     n = S.shape[0]
     diagonal = -(shift * np.asarray(mass, dtype=float))
     at = np.flatnonzero(diagonal != 0.0)
@@ -157,6 +160,8 @@ def shifted(S: sp.csr_matrix, shift: float, mass: np.ndarray) -> sp.csr_matrix:
     indptr = np.zeros(n + 1, dtype=index)
     indptr[at + 1] = 1
     np.cumsum(indptr, out=indptr)
-    D = sp.csr_matrix((diagonal[at], at.astype(index), indptr), shape=(n, n))
-    D.has_canonical_format = True
-    return csr_add(S, D)
+    D = CSRArrays(diagonal[at], at.astype(index), indptr, (n, n), canonical=True)
+    arrays = S if isinstance(S, CSRArrays) else CSRArrays.of(S)
+    if arrays is None or not arrays.canonical:
+        return csr_add(S.tocsr(), D.tocsr())
+    return add_arrays(arrays, D).tocsr()

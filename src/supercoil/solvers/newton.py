@@ -139,17 +139,17 @@ def roundoff_floor(H, q: np.ndarray) -> float:
     ``eps * ||H|| * ||q||`` (measured on the exact discrete circle: 0.04 to 0.3
     times this bound); asking for less would make Newton wander.
     """
-    S = H.sparse
-    if not S.nnz:
-        norm_h = 0.0
-    elif getattr(S, "format", None) == "csr":
+    arrays = H.csr_arrays()
+    if arrays is not None:
         # scipy's abs(S).sum(axis=1).max() (np.add.reduceat over the stored entries of
         # each non-empty row, the same sums) without the copy and matrix objects: 30 of
         # 35 us at N = 100, at every corrector iteration
-        filled = np.flatnonzero(np.diff(S.indptr))
-        norm_h = float(np.max(np.add.reduceat(np.abs(S.data), S.indptr[filled])))
+        filled = np.flatnonzero(np.diff(arrays.indptr))
+        norm_h = float(np.max(np.add.reduceat(np.abs(arrays.data), arrays.indptr[filled]))) \
+            if filled.size else 0.0
     else:
-        norm_h = float(abs(S).sum(axis=1).max())
+        S = H.sparse
+        norm_h = float(abs(S).sum(axis=1).max()) if S.nnz else 0.0
     return np.finfo(float).eps * norm_h * max(float(np.max(np.abs(q))), 1e-300)
 
 

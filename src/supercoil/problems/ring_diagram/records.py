@@ -19,6 +19,7 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, contact_summary
 from supercoil.continuation import Branch
 from supercoil.continuation.carry import branch_frames
+from supercoil.solvers.csr import transpose_matvec
 from supercoil.solvers.problem import free_dofs
 
 
@@ -61,7 +62,7 @@ def kkt_residual(problem, q: np.ndarray, multipliers: np.ndarray) -> float:
     free = free_dofs(problem)
     g = problem.gradient(q)
     if problem.n_constraints:
-        g = g + problem.constraint_jacobian(q).T @ multipliers
+        g = g + transpose_matvec(problem.constraint_jacobian(q), multipliers)
         c = np.abs(problem.constraints(q))
     else:
         c = np.zeros(0)

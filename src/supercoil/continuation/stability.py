@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.errors import InertiaError, SingularMatrixError

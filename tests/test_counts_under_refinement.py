@@ -105,3 +105,21 @@ def test_ring_counts_agree_at_n_and_one_and_a_half_n():
         for branch in (coarse, fine):
             assert not [p for p in branch.special_points if p.kind == "count_change"]
     assert diagrams[72].branch("alpha_contact").parameter_values[-1] == pytest.approx(4.0)
+
+
+@pytest.mark.parametrize(("m", "n", "r"), [(5, 12, 1), (30, 80, 2), (0, 7, 1)])
+def test_dense_rows_stacked_from_arrays_equal_scipys_vstack(m, n, r):
+    """Oracle: ``scipy.sparse.vstack`` of ``J`` and the rows' CSR matrix, entry for entry
+    and array for array (the rows' zeros left out, as scipy leaves them)."""
+    import scipy.sparse as sp
+
+    from supercoil.continuation.stability import with_dense_rows
+
+    J = sp.random(m, n, density=0.2, random_state=1, format="csr")
+    rows = np.random.default_rng(m).standard_normal((r, n))
+    rows[:, ::3] = 0.0
+    stacked = with_dense_rows(J, rows)
+    expected = sp.vstack([J, sp.csr_matrix(rows)], format="csr")
+    assert stacked.shape == expected.shape
+    for name in ("indptr", "indices", "data"):
+        np.testing.assert_array_equal(getattr(stacked, name), getattr(expected, name))

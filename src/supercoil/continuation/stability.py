@@ -25,6 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from supercoil.continuation.system import ExtendedSystem
+from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.kkt import KKTFactor
 from supercoil.stability.analysis import (
@@ -95,8 +96,21 @@ def count_system(system: ExtendedSystem, x: np.ndarray, hessian=None, rows=None)
     H = system.hessian(x) if hessian is None else hessian
     rows = count_rows(system, x) if rows is None else rows
     if rows.shape[0]:
-        J = sp.vstack([sp.csr_matrix(J), sp.csr_matrix(rows)], format="csr")
+        J = with_dense_rows(sp.csr_matrix(J), rows)
     return H, J
+
+
+def with_dense_rows(J: sp.csr_matrix, rows: np.ndarray) -> sp.csr_matrix:
+    """``J`` ``(m, n)`` with the nonzero entries of the dense ``rows`` ``(r, n)`` below it:
+    ``scipy.sparse.vstack([J, csr_matrix(rows)])`` made as one matrix from the arrays."""
+    nonzero = rows != 0
+    columns = np.nonzero(nonzero)[1].astype(J.indices.dtype, copy=False)
+    counts = np.cumsum(nonzero.sum(axis=1)).astype(J.indptr.dtype, copy=False)
+    return csr_from_arrays(np.concatenate([J.data, rows[nonzero]]),
+                           np.concatenate([J.indices, columns]),
+                           np.concatenate([J.indptr, J.indptr[-1] + counts]),
+                           (J.shape[0] + rows.shape[0], J.shape[1]),
+                           canonical=bool(J.has_canonical_format))
 
 
 def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None = None,

@@ -17,7 +17,6 @@ starting state), warm. Target: at most 0.1 s at N = 200.
 from __future__ import annotations
 
 import argparse
-import copy
 import statistics
 import sys
 import time
@@ -34,31 +33,37 @@ def main(argv=None) -> int:
     from supercoil.contact.options import ContactOptions
     from supercoil.contact.problem import ContactProblem
     from supercoil.contact.solve import solve_contact
-    from supercoil.problems.ring import twisted_circle_problem
-    from supercoil.problems.ring_contact import perturb_along_lowest_mode
-    from supercoil.solvers.newton import NewtonOptions, newton
+    from supercoil.problems.ring_contact import solve_supercoiled_ring
+    from supercoil.rod.closed import ClosedRodEnergy
+    from supercoil.rod.model import Rod
+    from supercoil.solvers.newton import NewtonOptions
 
     excess_link, lod = 3.0, 100.0
     t0 = time.perf_counter()
-    base, q0 = twisted_circle_problem(1.0, excess_link, args.nodes)
-    circle = newton(base, q0, NewtonOptions(mode="stationary"))
-    start = perturb_along_lowest_mode(base, circle.q, circle.multipliers)
-    problem = ContactProblem(base, ContactOptions(diameter=1.0 / lod, treatment=args.treatment))
-    options = NewtonOptions(tolerance=1e-9, max_iterations=1000)
-    relaxed = solve_contact(problem, start, options)
+    ring = solve_supercoiled_ring(1.0, excess_link, lod, args.nodes,
+                                  treatment=args.treatment)
     setup = time.perf_counter() - t0
-    if not relaxed.converged:
-        print(f"set-up relaxation failed: {relaxed.message}")
+    if not ring.converged:
+        print(f"set-up relaxation failed: {ring.message}")
         return 1
-    print(f"set-up: relaxed from the circle in {relaxed.newton_iterations} Newton iterations, "
-          f"{setup:.1f} s (includes compilation)")
+    print(f"set-up: relaxed from the circle, writhe {ring.writhe:.4f}, {setup:.1f} s "
+          "(includes compilation)")
+    rod = Rod(n_nodes=args.nodes, twist_stiffness=1.0)
+    options = NewtonOptions(tolerance=1e-9, max_iterations=1000)
+    problem = ContactProblem(ClosedRodEnergy(rod, ring.points, excess_link),
+                             ContactOptions(diameter=1.0 / lod, treatment=args.treatment))
+    relaxed = solve_contact(problem, ring.points.ravel(), options)  # the treatment's state
+    if not relaxed.converged:
+        print(f"set-up solve failed: {relaxed.message}")
+        return 1
+    q0 = relaxed.q
     times, iterations = [], []
     for k in range(args.repeat + 1):
-        trial = copy.deepcopy(problem)
-        trial.base.excess_link = excess_link + args.step
-        trial.invalidate()
+        # the problem at the raised excess link, from the relaxed state and the
+        # treatment's state there (multipliers, active set), as a continuation step
+        trial = problem.at(excess_link=excess_link + args.step)
         t = time.perf_counter()
-        res = solve_contact(trial, relaxed.q, options)
+        res = solve_contact(trial, q0, options)
         elapsed = time.perf_counter() - t
         if not res.converged:
             print(f"nearby solve failed: {res.message}")

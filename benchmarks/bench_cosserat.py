@@ -46,7 +46,7 @@ class Segments:
 
 def diagrams(nodes: int, modes: tuple[int, ...], stiffness: float) -> dict[str, float]:
     """Processor seconds of the contact-free branches of each model's diagram."""
-    from supercoil.problems.cosserat_ring import cosserat_ring_diagram
+    from supercoil.problems.cosserat_ring_diagram import cosserat_ring_diagram
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram
 
     options = DiagramOptions(2 / 3, 122.0, nodes, modes, max_excess_link=6.0,

@@ -222,7 +222,8 @@ def tweezers_branches(options: TweezersOptions,
         # contact-free branch: the plectoneme branches off it at a bifurcation
         # (supercoil.problems.tweezers.plectoneme)
         start = time.perf_counter()
-        switched = switch_to_plectoneme(opts, rod, cp, contact, on_point, pinned, say)
+        switched = switch_to_plectoneme(opts, rod, cp, contact, on_point, pinned, say,
+                                        free=free, reach=reach)
         if switched is None:
             notes.append(f"incomplete: {contact_name} closed before "
                          f"{opts.turns[1]:g} turns ({contact.message}) and no switch at its "

@@ -17,6 +17,15 @@ closed contact branch ends before the last turn, :func:`switch_to_plectoneme` tr
 located bifurcations, the latest first, along either side of the critical mode at the
 amplitudes of ``AMPLITUDES``, and follows the first switched branch that starts (and
 does not close at once) to the last turn.
+
+A switched branch can itself come back onto the contact-free branch: it is then closed
+there (:func:`~supercoil.problems.tweezers.returned.close_on_return`), as the contact
+branch is, and the next switch is tried. Measured at L/D = 200, lambda = 80, C/A = 1.5,
+N = 202: the branches switched at 9.495 and 9.498 turns lose turns in contact, release
+every contact at 3.95 turns onto the contact-free branch, and follow it up to the
+straight rod's bifurcation point (17.33 turns), where the rod is straight and the
+azimuth pin can no longer be picked; without the closure that run was reported as a
+failed plectoneme.
 """
 
 from __future__ import annotations
@@ -32,6 +41,7 @@ from supercoil.problems.tweezers.contact import contact_options
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, hold_azimuth
 from supercoil.problems.tweezers.problem import tweezers_records
+from supercoil.problems.tweezers.returned import close_on_return
 from supercoil.rod.open import ClampedRodEnergy
 
 AMPLITUDES = (5e-4, 5e-3)  # of D: the first point's distance from the bifurcation
@@ -40,11 +50,14 @@ TRIES = 4  # the latest bifurcations tried
 
 def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
                          contact: Branch, on_point=None, pinned=None,
-                         say: Callable[[str], None] = lambda message: None
+                         say: Callable[[str], None] = lambda message: None,
+                         free: Branch | None = None, reach: float = 1.0
                          ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]] | None:
     """The branch switched at a bifurcation of ``contact`` (module doc) that reaches
     furthest in turns, followed as the contact branch is, with its azimuth pins; None
-    when no switch gives a branch."""
+    when no switch gives a branch. ``free``: the contact-free branch, onto which a
+    switched branch that comes back is closed (``reach``: the closest approach, in D,
+    below which a contact acts)."""
     base = contact_options(opts)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
@@ -74,6 +87,8 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
                                       quality=PIN_QUALITY, refuse=pinned,
                                       on_run=records.begin)
                 branch = classify_contact_events(branch, cp)
+                if free is not None:
+                    branch = close_on_return(branch, free, opts.diameter, reach)
                 if best is None or branch.parameter_values[-1] > best[0].parameter_values[-1]:
                     best = (branch, pins)
                 if branch.status is ContinuationStatus.PARAMETER_BOUND \

@@ -1,0 +1,128 @@
+"""A branch switched at a bifurcation of a closed contact branch that comes back onto the
+contact-free branch is closed there, as the contact branch is
+(:mod:`supercoil.problems.tweezers.plectoneme`): the switch and the runs replaced by
+hand-made branches whose return point is known (bumps across the rod, as in
+``test_tweezers_returned``)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from supercoil.continuation import Branch, ContinuationStatus, SpecialPoint
+from supercoil.problems.tweezers import TweezersOptions
+from supercoil.problems.tweezers import plectoneme as module
+
+D = 0.01
+NODES = 41
+S = np.linspace(0.0, 1.0, NODES)
+
+
+def centreline(turns: float, angle: float = 0.0, shift: float = 0.0) -> np.ndarray:
+    """A bump of amplitude 0.05 turns^2 across the rod, centred at 1/2 + shift, turned by
+    ``angle`` about the z axis."""
+    a = 0.05 * turns**2 * np.sin(np.pi * np.clip(S - shift, 0.0, 1.0))
+    return np.column_stack([a * np.cos(angle), a * np.sin(angle), S]).ravel()
+
+
+def branch(name, turns, states, contacts, gaps) -> Branch:
+    k = len(turns)
+    n = states.shape[1]
+    return Branch(name=name, parent=None, origin=None, parameter="turns",
+                  parameter_values=np.asarray(turns, dtype=float), states=states,
+                  multipliers=np.zeros((k, 0)), unstable_count=np.zeros(k, dtype=int),
+                  zero_modes=np.zeros(k, dtype=int), determinant_sign=np.ones(k, dtype=int),
+                  nearest_eigenvalue=np.ones(k), tangents=np.zeros((k, n + 1)),
+                  arclength=np.arange(k, dtype=float), special_points=(),
+                  status=ContinuationStatus.MAX_POINTS, message="computed",
+                  records={"n_contact_points": np.asarray(contacts),
+                           "min_gap_over_diameter": np.asarray(gaps, dtype=float)})
+
+
+FREE_TURNS = np.linspace(1.0, 2.0, 11)
+FREE = branch("buckled", FREE_TURNS, np.array([centreline(t) for t in FREE_TURNS]),
+              np.zeros(11, dtype=int), np.full(11, 3.0))
+
+
+def contact_branch(back_shift: float) -> Branch:
+    """Two contact-free points on FREE, three in contact (a different shape), then three
+    contact-free points between FREE's turns, turned by 0.7 rad about the axis and moved
+    along the rod by ``back_shift``."""
+    turns = [2.0, 1.98, 1.9, 1.8, 1.7, 1.63, 1.47, 1.31]
+    states = [centreline(2.0), centreline(1.98), centreline(1.9, shift=0.1),
+              centreline(1.8, shift=0.2), centreline(1.7, shift=0.1)]
+    states += [centreline(t, angle=0.7, shift=back_shift) for t in turns[5:]]
+    return branch("buckled_contact", turns, np.array(states), [0, 0, 1, 2, 1, 0, 0, 0],
+                  [3.0, 3.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
+
+
+@pytest.fixture
+def switched(monkeypatch):
+    """``switch_to_plectoneme`` whose every switch gives ``candidates[k]`` for the k-th
+    switch tried (its first two points as the switch's run, the whole as the runs that
+    follow)."""
+    candidates = []
+    tried = []
+
+    def switch_branch(cp, contact, point, base, **kwargs):
+        tried.append(kwargs["name"])
+        whole = candidates[min(len(tried) - 1, len(candidates) - 1)]
+        return dataclasses.replace(whole, parameter_values=whole.parameter_values[:2],
+                                   states=whole.states[:2])
+
+    def follow(cp, rod, first, base, name, *args, **kwargs):
+        whole = candidates[min(len(tried) - 1, len(candidates) - 1)]
+        return dataclasses.replace(whole, name=name), ((0, (1,)),)
+
+    monkeypatch.setattr(module, "switch_branch", switch_branch)
+    monkeypatch.setattr(module, "follow", follow)
+    monkeypatch.setattr(module, "classify_contact_events", lambda b, cp: b)
+    monkeypatch.setattr(module, "set_pin", lambda cp, rod, q: None)
+    monkeypatch.setattr(module, "hold_azimuth", lambda rod, dofs, cp=None: None)
+    return candidates, tried
+
+
+def closed_contact():
+    """A closed contact branch with one located bifurcation at its point 3."""
+    contact = contact_branch(back_shift=0.0)
+    q = contact.states[3]
+    point = SpecialPoint(kind="bifurcation", label="BP", branch=contact.name, index=3,
+                         parameter=1.8, arclength=3.0, q=q, multipliers=np.zeros(0),
+                         tangent=np.zeros(q.size + 1))
+    records = dict(contact.records) | {"azimuth_pin": np.full(len(contact), -1)}
+    return dataclasses.replace(contact, special_points=(point,), records=records,
+                               status=ContinuationStatus.CLOSED_LOOP)
+
+
+OPTS = TweezersOptions(twist_ratio=1.5, length_over_diameter=1 / D, tension=100.0,
+                       turns=(0.0, 3.0), n_nodes=41)
+
+
+def test_a_switched_branch_back_on_the_contact_free_branch_is_closed_there(switched):
+    # oracle: the hand-made branch releases its contacts and lies on FREE (turned about
+    # the axis) from its point 5 (turns 1.63) on, between FREE's turns, where the chord
+    # errs by 0.05 (0.05)^2 < 0.1 D; past it, it goes on along FREE (as on to the
+    # straight rod)
+    candidates, tried = switched
+    candidates.append(contact_branch(back_shift=0.0))
+    best, _ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
+    assert best.status is ContinuationStatus.CLOSED_LOOP
+    assert len(best) == 6 and best.parameter_values[-1] == 1.63
+    # closed: every other switch was tried too (2 amplitudes x 2 sides)
+    assert len(tried) == 2 * len(module.AMPLITUDES)
+
+
+def test_a_switched_branch_elsewhere_is_followed_and_kept(switched):
+    # the bump moved along the rod by 2 D: 0.05 t^2 pi 0.02 > 0.1 D away from FREE, so
+    # the switched branch is kept whole, and preferred to the closed one as it reaches
+    # further in turns
+    candidates, _ = switched
+    candidates.append(contact_branch(back_shift=0.0))
+    away = contact_branch(back_shift=2 * D)
+    turns = np.array([1.8, 1.9, 2.0, 2.2, 2.4, 2.6, 2.8, 3.0])
+    candidates.append(branch("away", turns, np.array([centreline(t, shift=0.2) for t in turns]),
+                             away.records["n_contact_points"],
+                             away.records["min_gap_over_diameter"]))
+    best, _ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
+    assert best.status is ContinuationStatus.MAX_POINTS
+    assert best.parameter_values[-1] == 3.0

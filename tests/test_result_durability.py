@@ -110,7 +110,7 @@ def test_diagram_killed_mid_run_keeps_its_points_and_resumes(tmp_path, reference
     out = tmp_path / "cut"
     seen = kill_after(start(DIAGRAM, out), "alpha_contact", 10, sig)
     cut = supercoil.load(out)
-    assert cut.status == ("running" if sig == signal.SIGKILL else "interrupted")
+    assert cut.status == ("running" if sig == signal.SIGKILL else "interrupted"), cut.message
     assert cut.summary is None and not (out / "diagram.json").exists()
     # every point reported before the signal is stored, and is the uninterrupted run's
     for name, k in seen.items():

@@ -55,18 +55,34 @@ def test_stored_branches_rebuild_the_computed_states_bit_for_bit(full):
     assert ring.twist(q) + ring.writhe(q) == pytest.approx(dlk, abs=1e-9)
 
 
-def test_a_run_interrupted_in_its_contact_branch_resumes_to_the_same_end(tmp_path, full):
-    _, whole = full
+def interrupt_at(name: str, count: int):
+    """An ``on_point`` that raises KeyboardInterrupt at the ``count``-th point of branch
+    ``name``."""
     seen = defaultdict(int)
 
-    def stop_at_twelve(branch):
+    def on_point(branch):
         seen[branch.name] += 1
-        if seen["alpha_contact"] == 12:
+        if seen[name] == count:
             raise KeyboardInterrupt
+    return on_point
 
+
+def assert_same_branches(resumed, whole, atol: float = 1e-8):
+    """The resumed result's branches are the uninterrupted run's, point for point."""
+    assert list(resumed.branches) == list(whole.branches)
+    for name, b in whole.branches.items():
+        r = resumed.branches[name]
+        assert len(r) == len(b), name
+        np.testing.assert_allclose(r.states, b.states, atol=atol, rtol=0, err_msg=name)
+        np.testing.assert_allclose(r.parameter_values, b.parameter_values, atol=atol, rtol=0)
+
+
+def test_a_run_interrupted_in_its_contact_branch_resumes_to_the_same_end(tmp_path, full):
+    _, whole = full
     out = tmp_path / "cut"
     with pytest.raises(KeyboardInterrupt):
-        sc.ring_diagram(ROD, sc.Barrier(LOD), out=out, on_point=stop_at_twelve, **OPTIONS)
+        sc.ring_diagram(ROD, sc.Barrier(LOD), out=out, on_point=interrupt_at("alpha_contact", 12),
+                        **OPTIONS)
     cut = sc.load(out)
     assert cut.status == "interrupted" and len(cut.branches["alpha_contact"]) == 12
     with pytest.raises(sc.InputError, match="another rod"):
@@ -77,13 +93,9 @@ def test_a_run_interrupted_in_its_contact_branch_resumes_to_the_same_end(tmp_pat
                         resume=True, **OPTIONS)
     sc.ring_diagram(ROD, sc.Barrier(LOD), out=out, resume=True, **OPTIONS)
     resumed = sc.load(out)
-    assert list(resumed.branches) == list(whole.branches)
+    assert_same_branches(resumed, whole)
     for name, b in whole.branches.items():
-        r = resumed.branches[name]
-        assert len(r) == len(b), name
-        np.testing.assert_allclose(r.states, b.states, atol=1e-8, rtol=0, err_msg=name)
-        np.testing.assert_allclose(r.parameter_values, b.parameter_values, atol=1e-8, rtol=0)
-        assert [(p.kind, p.index) for p in r.special_points] == \
+        assert [(p.kind, p.index) for p in resumed.branches[name].special_points] == \
             [(p.kind, p.index) for p in b.special_points], name
 
 
@@ -92,23 +104,10 @@ def test_tweezers_interrupted_in_their_contact_branch_resume_to_the_same_end(tmp
                           contact=sc.Barrier(14.0))
     whole = sc.tweezers(problem, (0.0, 2.2), out=tmp_path / "full")
     assert "buckled_contact" in whole.branches, whole.notes
-    seen = defaultdict(int)
-
-    def stop_at_five(branch):
-        seen[branch.name] += 1
-        if seen["buckled_contact"] == 5:
-            raise KeyboardInterrupt
-
     out = tmp_path / "cut"
     with pytest.raises(KeyboardInterrupt):
-        sc.tweezers(problem, (0.0, 2.2), out=out, on_point=stop_at_five)
+        sc.tweezers(problem, (0.0, 2.2), out=out, on_point=interrupt_at("buckled_contact", 5))
     assert len(sc.load(out).branches["buckled_contact"]) == 5
     resumed = sc.tweezers(problem, (0.0, 2.2), out=out, resume=True)
     assert resumed.status == whole.status
-    a, b = sc.load(out), sc.load(tmp_path / "full")
-    assert list(a.branches) == list(b.branches)
-    for name, x in b.branches.items():
-        y = a.branches[name]
-        assert len(y) == len(x), name
-        np.testing.assert_allclose(y.states, x.states, atol=1e-8, rtol=0, err_msg=name)
-        np.testing.assert_allclose(y.parameter_values, x.parameter_values, atol=1e-8, rtol=0)
+    assert_same_branches(sc.load(out), sc.load(tmp_path / "full"))

@@ -50,7 +50,7 @@ from supercoil.topology.knots.alexander import alexander_polynomial, knot_determ
 from supercoil.topology.knots.diagram import Diagram
 from supercoil.topology.knots.jones import jones_polynomial
 from supercoil.topology.knots.polynomials import ONE, Laurent, divide, mirror
-from supercoil.topology.knots.projection import check_polygon, principal_view, project
+from supercoil.topology.knots.projection import check_polygon, project
 from supercoil.topology.knots.table import KNOTS, MAX_CROSSINGS, TableKnot
 
 Factors = tuple[tuple[str, int], ...]
@@ -233,30 +233,12 @@ def identify(points, seed: int = 0) -> KnotType:
     the crossings of the simplified diagram (module doc).
 
     Invariant under rigid motions, scaling and resampling of the curve (the
-    polynomials are knot invariants; only ``crossings`` depends on the view).
+    polynomials are knot invariants; only ``crossings`` depends on the view, and with
+    it whether a candidate of more crossings with the same polynomials is named:
+    :meth:`KnotType.same_invariants` compares what a view cannot change).
     Raises :class:`~supercoil.errors.InputError` for an array that is not a
     polygon, or a curve whose strands meet.
     """
-    p = check_polygon(points)
-    reduced = simplified_diagram(p, seed=seed)
-    alexander, jones = alexander_polynomial(reduced), jones_polynomial(reduced)
-    found = classify(alexander, jones, reduced.n_crossings)
-    # the polynomials are the view's invariants, the crossing filter is not: a view
-    # with fewer crossings than the largest candidate's crossing number drops it
-    # (5_1 against 10_132 seen in a diagram of 10 or more crossings): the view along
-    # the axis of least spread first, then random ones
-    for k in range(_MANY_VIEWS + 1):
-        if not found.ambiguous or reduced.n_crossings < _largest_candidate(found):
-            break
-        other = (project(p, rotation=principal_view(p)) if k == 0
-                 else project(p, seed=seed + 104729 * k)).simplified()
-        if other.n_crossings < reduced.n_crossings:
-            reduced = other
-            found = classify(alexander, jones, reduced.n_crossings)
-    return found
-
-
-def _largest_candidate(knot: KnotType) -> int:
-    """The largest crossing number of the prime candidates of ``knot`` (0 for sums)."""
-    return max((int(f[0][0].split("_")[0]) for f in knot.candidates if len(f) == 1),
-               default=0)
+    reduced = simplified_diagram(points, seed=seed)
+    return classify(alexander_polynomial(reduced), jones_polynomial(reduced),
+                    reduced.n_crossings)

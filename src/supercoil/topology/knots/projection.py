@@ -156,35 +156,16 @@ def check_polygon(points) -> np.ndarray:
     return p
 
 
-def principal_view(points) -> np.ndarray:
-    """The rotation ``(3, 3)`` that looks at the polygon ``points`` ``(n, 3)`` along
-    its axis of least spread (the normal of its best-fitting plane), where a knot
-    laid out round an axis, as a torus knot is, shows its fewest crossings; a proper
-    rotation, so the view never mirrors the knot."""
-    p = check_polygon(points)
-    _, vectors = np.linalg.eigh(np.cov((p - p.mean(axis=0)).T))
-    rotation = vectors[:, ::-1].T.copy()  # rows: largest spread first, the view axis last
-    if np.linalg.det(rotation) < 0:
-        rotation[0] = -rotation[0]
-    return rotation
-
-
-def project(points, seed: int = 0, attempts: int = 20,
-            rotation: np.ndarray | None = None) -> Diagram:
+def project(points, seed: int = 0, attempts: int = 20) -> Diagram:
     """The knot diagram of the closed polygon ``points`` ``(n, 3)`` (each vertex once)
-    in a generic projection (module doc): seen through ``rotation`` (a proper
-    rotation ``(3, 3)``) if given and generic, else the first of up to ``attempts``
-    rotations drawn from ``seed`` whose projection is generic.
+    in a generic projection (module doc): the first of up to ``attempts`` rotations
+    drawn from ``seed`` whose projection is generic.
 
     Raises :class:`~supercoil.errors.InputError` if none is (the strands meet, or
     consecutive vertices coincide).
     """
     p = check_polygon(points)
     p = p - p.mean(axis=0)
-    if rotation is not None:
-        diagram = _diagram_from_view(p @ np.asarray(rotation, float).T)
-        if diagram is not None:
-            return diagram
     rng = np.random.default_rng(seed)
     for _ in range(attempts):
         diagram = _diagram_from_view(p @ random_rotation(rng).T)

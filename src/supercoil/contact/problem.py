@@ -62,8 +62,9 @@ from supercoil.contact.options import ContactOptions
 from supercoil.contact.over_rod import OverRod
 from supercoil.contact.step import LinkGuard
 from supercoil.contact.step_guards import StepGuards
+from supercoil.solvers.csr import CSRArrays
 from supercoil.solvers.csr_sum import block_csr
-from supercoil.solvers.problem import HessianParts
+from supercoil.solvers.problem import HessianParts, jacobian_arrays
 from supercoil.topology.knots.guard import KnotGuard
 
 
@@ -385,6 +386,14 @@ class ContactProblem(OverRod, StepGuards):
         rows = np.repeat(np.arange(m), dofs.shape[1])
         Jc = sp.csr_matrix((grad.ravel(), (rows, dofs.ravel())), shape=(m, self.n_dofs))
         return sp.vstack([J, Jc]).tocsr()
+
+    def constraint_jacobian_arrays(self, q: np.ndarray) -> CSRArrays | None:
+        """The arrays of :meth:`constraint_jacobian`: the rod's own
+        (:func:`~supercoil.solvers.problem.jacobian_arrays`) without a sliding pin or
+        active contact constraints, else those of the stacked matrix."""
+        if self._slide_pin is None and len(self.active) == 0:
+            return jacobian_arrays(self.base, q)
+        return CSRArrays.of(self.constraint_jacobian(q))
 
     def constraint_hessian(self, q: np.ndarray, multipliers: np.ndarray) -> sp.csr_matrix:
         m0 = self.n_equalities  # the sliding gauge is linear: no Hessian

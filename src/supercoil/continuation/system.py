@@ -29,14 +29,21 @@ import scipy.sparse as sp
 
 from supercoil.solvers.carried import carried
 from supercoil.solvers.csr import (
+    CSRArrays,
     csr_columns,
     csr_columns_map,
+    csr_rmatvec,
     csr_stack_arrays,
     transpose_matvec,
 )
 from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.solvers.parameters import problem_at
-from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
+from supercoil.solvers.problem import (
+    ConstrainedEnergy,
+    HessianParts,
+    free_dofs,
+    jacobian_arrays,
+)
 
 
 class ExtendedSystem:
@@ -147,14 +154,12 @@ class ExtendedSystem:
         the one given before unchanged."""
         self.problem = carried(self.problem, q)
 
-    def _free_columns(self, J):
-        """``(data, indices, indptr)`` of ``J[:, free]`` for a CSR float64 ``J`` (the
-        arrays of :func:`csr_columns`), None for another ``J``. The column map is kept
-        for the last pattern (shape, ``indptr`` and ``indices`` compared as bytes): a
-        Jacobian of that pattern is restricted without ``csr_columns``' checks of the
-        free DOFs and memo look-up (15 -> 4 us at N = 100)."""
-        if getattr(J, "format", None) != "csr" or J.dtype != np.float64:
-            return None
+    def _free_columns(self, J: CSRArrays):
+        """``(data, indices, indptr)`` of ``J[:, free]`` for the arrays of a CSR float64
+        ``J`` (those of :func:`csr_columns`). The column map is kept for the last
+        pattern (shape, ``indptr`` and ``indices`` compared as bytes): a Jacobian of
+        that pattern is restricted without ``csr_columns``' checks of the free DOFs and
+        memo look-up (15 -> 4 us at N = 100)."""
         remembered = self.__dict__.get("_free_columns_map")
         indptr, indices = J.indptr.tobytes(), J.indices.tobytes()
         if remembered is None or remembered[0] != J.shape or remembered[1] != indptr \
@@ -177,8 +182,13 @@ class ExtendedSystem:
         g = p.gradient(q)
         if self.m:
             # scipy's J.T @ mu (csc_matvec on the transpose, the same sums) without the
-            # transpose object and the operator dispatch (35 µs at N = 200)
-            g = g + transpose_matvec(p.constraint_jacobian(q), mu)
+            # transpose object and the operator dispatch (35 µs at N = 200), from the
+            # Jacobian's arrays where the problem gives them
+            J = jacobian_arrays(p, q)
+            if J is None:
+                g = g + transpose_matvec(p.constraint_jacobian(q), mu)
+            else:
+                g = g + csr_rmatvec(J.indptr, J.indices, J.data, mu, J.shape[1])
             return np.concatenate([g[self.free], p.constraints(q)])
         return g[self.free]
 
@@ -209,7 +219,10 @@ class ExtendedSystem:
         (the same object: callers must not modify it) while the problem returns the
         same Jacobian object and the phase rows are unchanged (a corrector's residual,
         factor and refinement at one iterate)."""
-        J = self.problem_at(x[-1]).constraint_jacobian(self.q(x)) if self.m else None
+        p, q = self.problem_at(x[-1]), self.q(x)
+        J = jacobian_arrays(p, q) if self.m else None
+        if self.m and J is None:
+            J = p.constraint_jacobian(q)
         if self.r and (self._phase_rows is None or self._phase_rows[0] is not self.P):
             self._phase_rows = (self.P, sp.csr_matrix(self.P))
         stacked = self.__dict__.get("_stacked")
@@ -217,7 +230,7 @@ class ExtendedSystem:
             return stacked[2]
         blocks = []
         if self.m:
-            free = self._free_columns(J)
+            free = self._free_columns(J) if isinstance(J, CSRArrays) else None
             if free is None:  # not CSR float64: scipy's slicing and stacking
                 rows = [sp.csr_matrix(csr_columns(J, self.free))]
                 if self.r:

@@ -21,7 +21,7 @@ from supercoil.rod import kernels
 from supercoil.rod.assembly import StencilPattern
 from supercoil.rod.model import Rod
 from supercoil.solvers.carried import Carried, Frames
-from supercoil.solvers.csr import CSRArrays, csr_from_arrays
+from supercoil.solvers.csr import CSRArrays
 from supercoil.solvers.parameters import Parametrised
 from supercoil.solvers.problem import HessianParts
 
@@ -222,7 +222,7 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
 
     def _edge_length_terms(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(constraints (m,), Jacobian data (6 m,))`` at ``q`` in the layout of
-        :meth:`_constraint_jacobian` (:func:`~supercoil.rod.kernels.edge_length_terms`:
+        :meth:`constraint_jacobian_arrays` (:func:`~supercoil.rod.kernels.edge_length_terms`:
         the values of ``(np.sum(e * e, axis=1) - h * h) / (2 * h)`` and of the entries
         ``take_along_axis([-e / h, e / h], order)``). The last ``q``'s are kept: a
         residual asks for the Jacobian and then the constraints at one state (the two
@@ -240,7 +240,7 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
 
     def _jacobian_layout_of_constrained(self):
         """``(constrained, order, indices, indptr, edges)``: the CSR layout of the
-        Jacobian for the constrained edges (see :meth:`_constraint_jacobian`) and their
+        Jacobian for the constrained edges (see :meth:`constraint_jacobian_arrays`) and their
         end nodes ``(m, 2)``; made once per constrained set."""
         layout = self._shared.get("jacobian_layout")
         if layout is None or layout[0] is not self._constrained:
@@ -258,31 +258,41 @@ class RodEnergy(Parametrised, Carried, abc.ABC):
         return layout
 
     def constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
-        """Jacobian of :meth:`constraints`, ``(m, n_dofs)``; the last one is returned
-        again (the same object: callers must not modify it) for the same ``q`` and
-        constrained edges, also to the problems :meth:`at` and ``carried_to`` derive
-        from this one (it depends on neither the parameters nor the frames: a
-        continuation asks the problem at each new parameter value, and the problem
-        carried to an accepted point, for the Jacobian at a state already met)."""
+        """Jacobian of :meth:`constraints`, ``(m, n_dofs)``: the scipy matrix of
+        :meth:`constraint_jacobian_arrays`; the last one is returned again (the same
+        object: callers must not modify it) for the same ``q`` and constrained edges,
+        also to the problems :meth:`at` and ``carried_to`` derive from this one."""
         key = _key(q)
         cached = self._shared.get("jacobian")
         if cached is not None and cached[0] == key and cached[1] is self._constrained:
             return cached[2]
-        J = self._constraint_jacobian(q)
+        J = self.constraint_jacobian_arrays(q).tocsr()
         self._shared["jacobian"] = (key, self._constrained, J)
         return J
 
-    def _constraint_jacobian(self, q: np.ndarray) -> sp.csr_matrix:
-        """Row ``k``: ``-e_k`` on the first node of constrained edge ``k``, ``e_k`` on the
-        second (``e_k`` the edge over its rest length). Built as the CSR matrix that
-        scipy's COO path ``csr_matrix((data, (rows, cols)))`` gave (six distinct columns
-        per row, sorted; zeros stored), from a layout remembered per constrained set:
-        the COO path cost 0.5 ms of the corrector's every residual at N = 200."""
+    def constraint_jacobian_arrays(self, q: np.ndarray) -> CSRArrays:
+        """The arrays of :meth:`constraint_jacobian` (:class:`~supercoil.solvers.csr.
+        CSRArrays`, canonical), without a ``scipy.sparse`` object: what the continuation's
+        residual (``J^T mu``) and its factor (the free columns) read at every corrector
+        iterate (a scipy matrix made from them costs 10-30 us of checks, at each of the
+        about 950 iterates of the tweezers benchmark). The last one is returned again
+        (the same object) for the same ``q`` and constrained edges, as
+        :meth:`constraint_jacobian`.
+
+        Row ``k``: ``-e_k`` on the first node of constrained edge ``k``, ``e_k`` on the
+        second (``e_k`` the edge over its rest length), the matrix that scipy's COO path
+        ``csr_matrix((data, (rows, cols)))`` gives (six distinct columns per row,
+        sorted; zeros stored), from a layout remembered per constrained set."""
+        key = _key(q)
+        cached = self._shared.get("jacobian_arrays")
+        if cached is not None and cached[0] == key and cached[1] is self._constrained:
+            return cached[2]
         m = self.n_constraints
         _, _, indices, indptr, _ = self._jacobian_layout_of_constrained()
         data = self._edge_length_terms(q)[1].copy()
-        return csr_from_arrays(data, indices.copy(), indptr.copy(), (m, self.n_dofs),
-                               canonical=True)
+        J = CSRArrays(data, indices, indptr, (m, self.n_dofs), canonical=True)
+        self._shared["jacobian_arrays"] = (key, self._constrained, J)
+        return J
 
     def _constraint_hessian_entries(self):
         """``(rows, cols)`` of the constraint curvature's COO entries (see below)."""

@@ -134,14 +134,15 @@ def csr_columns(A: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
                            (A.shape[0], keep.size))
 
 
-def csr_columns_map(A: sp.csr_matrix, keep: np.ndarray):
+def csr_columns_map(A: sp.csr_matrix | CSRArrays, keep: np.ndarray):
     """``(selected, indices, indptr)`` with ``A[:, keep]`` equal to
     ``csr_from_arrays(A.data[selected], indices, indptr, (A.shape[0], keep.size))`` for
     every CSR matrix of ``A``'s pattern (what :func:`csr_columns` does), or None when
-    ``A`` is not CSR or ``keep`` is not sorted unique column indices (scipy's case).
-    Callers must not modify the arrays."""
+    ``A`` is not CSR (a scipy matrix or :class:`CSRArrays`) or ``keep`` is not sorted
+    unique column indices (scipy's case). Callers must not modify the arrays."""
     keep = np.asarray(keep)
-    if getattr(A, "format", None) != "csr" or keep.ndim != 1 or keep.dtype.kind not in "iu" \
+    is_csr = isinstance(A, CSRArrays) or getattr(A, "format", None) == "csr"
+    if not is_csr or keep.ndim != 1 or keep.dtype.kind not in "iu" \
             or (keep.size > 1 and not np.all(np.diff(keep) > 0)) \
             or (keep.size and (keep[0] < 0 or keep[-1] >= A.shape[1])):
         return None

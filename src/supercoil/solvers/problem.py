@@ -150,3 +150,14 @@ def free_dofs(problem: ConstrainedEnergy) -> np.ndarray:
     mask = np.ones(problem.n_dofs, dtype=bool)
     mask[np.asarray(problem.fixed, dtype=np.int64)] = False
     return np.flatnonzero(mask)
+
+
+def jacobian_arrays(problem: ConstrainedEnergy, q: np.ndarray) -> CSRArrays | None:
+    """The arrays of ``problem.constraint_jacobian(q)`` as :class:`~supercoil.solvers.csr.
+    CSRArrays`: the problem's optional ``constraint_jacobian_arrays(q)`` (the rods' and
+    contact problems', which make no ``scipy.sparse`` object), else those of its
+    Jacobian; None for a Jacobian that is not a float64 CSR matrix."""
+    own = getattr(problem, "constraint_jacobian_arrays", None)
+    if own is not None:
+        return own(q)
+    return CSRArrays.of(problem.constraint_jacobian(q))

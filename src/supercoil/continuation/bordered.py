@@ -90,7 +90,8 @@ def _all_finite(values) -> bool:
 class BorderedFactor:
     """Factorisation of ``[[H, J^T, f_x], [J, 0, f_mu], [b_x^T, b_mu^T, b_lambda]]``.
 
-    ``hessian`` is on the ``n`` free DOFs, ``jacobian`` ``(m, n)``, ``column``
+    ``hessian`` is on the ``n`` free DOFs, ``jacobian`` ``(m, n)`` (a CSR matrix or
+    its :class:`~supercoil.solvers.csr.CSRArrays`), ``column``
     (``F_lambda``) has length ``n + m`` and ``row`` (the arclength row, corner
     entry ``b_lambda`` last) ``n + m + 1``.
     ``order`` reuses a :func:`~supercoil.solvers.ordering.kkt_order` of the same pattern (of the pinned
@@ -107,7 +108,7 @@ class BorderedFactor:
     Raises :class:`~supercoil.solvers.errors.SingularMatrixError` when ``B`` is singular.
     """
 
-    def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix, column: np.ndarray,
+    def __init__(self, hessian: HessianParts, jacobian: sp.spmatrix | CSRArrays, column: np.ndarray,
                  row: np.ndarray, order: np.ndarray | None = None):
         # the sparse part's arrays where they are canonical (a pattern met before needs
         # nothing else of it); its scipy matrix for a new pattern (_pattern)
@@ -117,8 +118,10 @@ class BorderedFactor:
         n = S.shape[0]
         if jacobian is None:
             J = sp.csr_matrix((0, n))
-        else:  # scipy's csr_matrix of a csr_matrix shares its arrays (and costs 50 µs)
-            J = jacobian if type(jacobian) is sp.csr_matrix else sp.csr_matrix(jacobian)
+        elif isinstance(jacobian, CSRArrays) or type(jacobian) is sp.csr_matrix:
+            J = jacobian  # the arrays are read; a pattern not remembered converts them
+        else:
+            J = sp.csr_matrix(jacobian)
         m = J.shape[0]
         size = n + m + 1
         column = np.asarray(column, dtype=float)
@@ -211,6 +214,8 @@ class BorderedFactor:
                     and found[0].order_memo.certifies(J):
                 return found[0], None, S, J, J
         S = hessian.sparse.tocsr()
+        if isinstance(J, CSRArrays):
+            J = J.tocsr()
         pinned = PinnedRows.of(J) if m else None
         J_banded = J if pinned is None else pinned.sparse
         if order is None:
@@ -245,8 +250,8 @@ class BorderedFactor:
         out[self.order] = sol
         return out
 
-    def refined_solve(self, hessian: HessianParts, jacobian: sp.spmatrix, column: np.ndarray,
-                      row: np.ndarray, rhs: np.ndarray, max_steps: int = 6
+    def refined_solve(self, hessian: HessianParts, jacobian: sp.spmatrix | CSRArrays,
+                      column: np.ndarray, row: np.ndarray, rhs: np.ndarray, max_steps: int = 6
                       ) -> np.ndarray | None:
         """Solve ``B' z = rhs`` (``(size,)``) for the bordered matrix ``B'`` of these
         arguments (as the constructor's) by iterative refinement with this factor, of a
@@ -260,7 +265,8 @@ class BorderedFactor:
         S = hessian.csr_arrays()  # its values and shape
         if S is None:
             S = hessian.sparse
-        J = jacobian if isinstance(jacobian, sp.csr_matrix) else sp.csr_matrix(jacobian)
+        J = jacobian if isinstance(jacobian, (sp.csr_matrix, CSRArrays)) \
+            else sp.csr_matrix(jacobian)
         n = S.shape[0]
         column = np.asarray(column, dtype=float)
         row = np.asarray(row, dtype=float)
@@ -269,7 +275,7 @@ class BorderedFactor:
                 != self.size:
             raise ValueError("refined_solve: sizes differ from the factor's")
 
-        canonical_j = J.dtype == np.float64
+        canonical_j = J.data.dtype == np.float64
 
         def residual(z):
             x, multipliers, lam = z[:n], z[n:-1], z[-1]

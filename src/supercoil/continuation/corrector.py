@@ -60,7 +60,7 @@ class Correction:
 def bordered_factor(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
                     hessian=None) -> BorderedFactor:
     H = system.hessian(x) if hessian is None else hessian
-    return BorderedFactor(H, system.jacobian(x), system.parameter_derivative(x), row)
+    return BorderedFactor(H, system.jacobian_arrays(x), system.parameter_derivative(x), row)
 
 
 def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref: np.ndarray,
@@ -136,7 +136,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
             dx = None
             if refine_below is not None and factor is not None \
                     and res <= refine_below * factor_residual:
-                step = factor.refined_solve(H, system.jacobian(x),
+                step = factor.refined_solve(H, system.jacobian_arrays(x),
                                             system.parameter_derivative(x), row,
                                             np.concatenate([F, [row @ (x - x_ref) - sigma]]))
                 dx = None if step is None or not np.all(np.isfinite(step)) else -step
@@ -239,8 +239,8 @@ def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
     e_last[-1] = 1.0
     if preconditioner is not None and np.array_equal(preconditioner.row, row):
         H = system.hessian(x) if hessian is None else hessian
-        z = preconditioner.refined_solve(H, system.jacobian(x), system.parameter_derivative(x),
-                                         row, e_last)
+        z = preconditioner.refined_solve(H, system.jacobian_arrays(x),
+                                         system.parameter_derivative(x), row, e_last)
         if z is not None and np.all(np.isfinite(z)):
             return z / system.norm(z)
     factor = bordered_factor(system, x, row, hessian)

@@ -133,7 +133,7 @@ def rephased_tangent(system: ExtendedSystem, opts: ContinuationOptions, x: np.nd
     if factor is not None and hessian is not None:
         e_last = np.zeros(system.size)
         e_last[-1] = 1.0
-        z = factor.refined_solve(hessian, system.jacobian(x),
+        z = factor.refined_solve(hessian, system.jacobian_arrays(x),
                                  system.parameter_derivative(x), factor.row, e_last)
         if z is not None and np.all(np.isfinite(z)) and z @ row != 0.0:
             return np.sign(z @ row) * z / system.norm(z)

@@ -33,7 +33,7 @@ from supercoil.solvers.csr import (
     csr_columns,
     csr_columns_map,
     csr_rmatvec,
-    csr_stack_arrays,
+    stack_arrays,
     transpose_matvec,
 )
 from supercoil.solvers.newton import lagrangian_hessian
@@ -83,7 +83,7 @@ class ExtendedSystem:
         self.weights = np.concatenate([mass, np.zeros(self.m + self.r),
                                        [parameter_weight**2]])
         self.fd_step = finite_difference_step
-        self._phase_rows: tuple[np.ndarray, sp.csr_matrix] | None = None
+        self._phase_rows: tuple[np.ndarray, sp.csr_matrix, bool] | None = None
         # (problem, value, the problem at that value): see problem_at
         self._at: tuple[object, float, object] | None = None
 
@@ -213,22 +213,37 @@ class ExtendedSystem:
         return lagrangian_hessian(self.problem_at(x[-1]), self.q(x), x[self.n:self.n + self.m])
 
     def jacobian(self, x: np.ndarray) -> sp.csr_matrix:
-        """Constraint Jacobian on the free DOFs with the phase rows, ``(m + r, n)``: one
-        matrix, made from the arrays of the problem's Jacobian restricted to the free
-        columns and of the phase rows (:func:`csr_stack_arrays`). It is returned again
-        (the same object: callers must not modify it) while the problem returns the
-        same Jacobian object and the phase rows are unchanged (a corrector's residual,
-        factor and refinement at one iterate)."""
+        """Constraint Jacobian on the free DOFs with the phase rows, ``(m + r, n)``: the
+        scipy matrix of :meth:`jacobian_arrays`, returned again (the same object:
+        callers must not modify it) while those are the same."""
+        arrays = self.jacobian_arrays(x)
+        made = self.__dict__.get("_jacobian_csr")
+        if made is not None and made[0] is arrays:
+            return made[1]
+        out = arrays.tocsr() if isinstance(arrays, CSRArrays) else arrays
+        self._jacobian_csr = (arrays, out)
+        return out
+
+    def jacobian_arrays(self, x: np.ndarray) -> CSRArrays | sp.csr_matrix:
+        """The arrays of :meth:`jacobian` (:class:`~supercoil.solvers.csr.CSRArrays`),
+        which the corrector's factors read without a ``scipy.sparse`` object: those of
+        the problem's Jacobian restricted to the free columns and of the phase rows,
+        stacked (:func:`~supercoil.solvers.csr.stack_arrays`); the scipy matrix itself
+        for a problem whose Jacobian is not a float64 CSR matrix. Returned again (the
+        same object: callers must not modify it) while the problem returns the same
+        Jacobian and the phase rows are unchanged (a corrector's residual, factor and
+        refinement at one iterate)."""
         p, q = self.problem_at(x[-1]), self.q(x)
         J = jacobian_arrays(p, q) if self.m else None
         if self.m and J is None:
             J = p.constraint_jacobian(q)
         if self.r and (self._phase_rows is None or self._phase_rows[0] is not self.P):
-            self._phase_rows = (self.P, sp.csr_matrix(self.P))
+            P = sp.csr_matrix(self.P)
+            self._phase_rows = (self.P, P, bool(P.has_canonical_format))
         stacked = self.__dict__.get("_stacked")
         if stacked is not None and stacked[0] is J and stacked[1] is self._phase_rows:
             return stacked[2]
-        blocks = []
+        blocks, canonical = [], True
         if self.m:
             free = self._free_columns(J) if isinstance(J, CSRArrays) else None
             if free is None:  # not CSR float64: scipy's slicing and stacking
@@ -239,12 +254,16 @@ class ExtendedSystem:
                 self._stacked = (J, self._phase_rows, out)
                 return out
             blocks.append((*free, self.m))
+            canonical = J.canonical
         if self.r:
             P = self._phase_rows[1]
             blocks.append((P.data, P.indices, P.indptr, self.r))
+            canonical = canonical and self._phase_rows[2]
         if not blocks:
-            return sp.csr_matrix((0, self.n))
-        out = csr_stack_arrays(blocks, self.n)
+            out = CSRArrays(np.zeros(0), np.zeros(0, dtype=np.int32),
+                            np.zeros(1, dtype=np.int32), (0, self.n), True)
+        else:
+            out = stack_arrays(blocks, self.n, canonical)
         self._stacked = (J, self._phase_rows, out)
         return out
 

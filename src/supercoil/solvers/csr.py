@@ -287,9 +287,18 @@ def csr_vstack(blocks: list) -> sp.csr_matrix:
 
 def csr_stack_arrays(blocks: list, n_cols: int) -> sp.csr_matrix:
     """One CSR matrix of the row blocks ``(data, indices, indptr, n_rows)`` (CSR arrays of
-    float64 blocks of ``n_cols`` columns) stacked in order: the arrays of
+    float64 blocks of ``n_cols`` columns) stacked in order: the matrix of
+    :func:`stack_arrays`."""
+    out = stack_arrays(blocks, n_cols)
+    return csr_from_arrays(out.data, out.indices, out.indptr, out.shape)
+
+
+def stack_arrays(blocks: list, n_cols: int, canonical: bool = False) -> CSRArrays:
+    """The arrays of the row blocks ``(data, indices, indptr, n_rows)`` (CSR arrays of
+    float64 blocks of ``n_cols`` columns) stacked in order: those of
     ``scipy.sparse.vstack`` of their matrices, built once, without a matrix per block
-    (int32 indices where they fit, as scipy)."""
+    (int32 indices where they fit, as scipy). ``canonical``: the caller knows every
+    block to be canonical, and so is the stack."""
     n_rows = sum(int(rows) for _, _, _, rows in blocks)
     nnz = sum(int(indptr[rows] - indptr[0]) for _, _, indptr, rows in blocks)
     index = np.int32 if max(nnz, n_rows, n_cols) < 2**31 - 1 else np.int64
@@ -303,4 +312,4 @@ def csr_stack_arrays(blocks: list, n_cols: int) -> sp.csr_matrix:
     indices = np.concatenate([b_idx[b_ptr[0]:b_ptr[rows]] for _, b_idx, b_ptr, rows in blocks]
                              ).astype(index, copy=False)
     data = np.concatenate([b_data[b_ptr[0]:b_ptr[rows]] for b_data, _, b_ptr, rows in blocks])
-    return csr_from_arrays(data, indices, indptr, (n_rows, n_cols))
+    return CSRArrays(data, indices, indptr, (n_rows, n_cols), canonical)

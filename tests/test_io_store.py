@@ -13,6 +13,7 @@ import textwrap
 import time
 
 import h5py
+import interruptible
 import numpy as np
 import pytest
 
@@ -344,7 +345,7 @@ def test_killed_writer_leaves_a_readable_file(tmp_path, sig):
     path = tmp_path / "r.h5"
     script = WRITER.format(tests=os.path.dirname(__file__), path=str(path))
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
-    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+    proc = interruptible.popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
                             env=env)
     reported = 0
     deadline = time.monotonic() + 60

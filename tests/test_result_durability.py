@@ -14,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+import interruptible
 import numpy as np
 import pytest
 
@@ -43,9 +44,9 @@ def reference(tmp_path_factory):
 
 def start(args, out: Path) -> subprocess.Popen:
     env = dict(os.environ, PYTHONPATH=SRC, OPENBLAS_NUM_THREADS="1")
-    return subprocess.Popen([sys.executable, "-m", "supercoil.cli.main", *args, "--out",
-                             str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                            text=True, env=env)
+    return interruptible.popen([sys.executable, "-m", "supercoil.cli.main", *args, "--out",
+                                str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                               text=True, env=env)
 
 
 def reported(line: str) -> tuple[str, int] | None:

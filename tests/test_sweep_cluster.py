@@ -27,6 +27,7 @@ import pytest
 pytest.importorskip("distributed")
 xr = pytest.importorskip("xarray")
 
+import interruptible
 from test_sweep import sweep_text
 
 from supercoil import load
@@ -230,8 +231,8 @@ def test_killed_worker_and_interrupted_sweep_resume_to_the_same_dataset(tmp_path
     expected = load_sweep(tmp_path / "straight")
 
     out = tmp_path / "interrupted"
-    process = subprocess.Popen(_sweep_command(study, out, "--workers", "2"), env=_env(),
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process = interruptible.popen(_sweep_command(study, out, "--workers", "2"), env=_env(),
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         _wait_for(lambda: _started(out / "tasks") >= 2, process)  # both workers busy
         workers = _worker_processes(process.pid)

@@ -1,5 +1,5 @@
 """DNA in magnetic tweezers: σ for turns, n0 nodes and the quintic contact curve by default,
-the JSON and the figures, for the command line, study files and the library.
+and nm / pN nm / σ through the JSON and the figures, for the command line, study files and the library.
 
 Oracles: the unit conversions from the preset's constants (kT = 4.11 pN nm, A = 50 nm kT,
 0.34 nm/bp, 10.5 bp/turn), exact to rounding; n0 against a brute-force search over N and

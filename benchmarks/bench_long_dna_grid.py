@@ -15,7 +15,7 @@ that completed.
 
 Run: ``python benchmarks/bench_long_dna_grid.py [--ld 100,200,500] [--lambdas
 10,20,40,80,150] [--twist-ratio 1.5] [--multiples 1,2] [--factor 1.5] [--max-points
-4000] [--out benchmarks/results/long_dna_grid.md]``.
+4000] [--contact-curve spline] [--out benchmarks/results/long_dna_grid.md]``.
 """
 
 from __future__ import annotations
@@ -35,13 +35,13 @@ HEADER = ("| L/D | lambda | F L^2/A | N | target turns | reached | last turns | 
 
 
 def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
-        max_points: int) -> str:
-    """One table row (module doc)."""
+        max_points: int, contact_curve: str = "spline") -> str:
+    """One table row (module doc); ``contact_curve``: ``TweezersOptions.contact_curve``."""
     tension = lam**2
     target = factor * critical_turns(twist_ratio, tension)
     options = TweezersOptions(loop_sliding=True, twist_ratio=twist_ratio, length_over_diameter=ld,
                               tension=tension, n_nodes=nodes, turns=(0.0, target),
-                              max_points=max_points)
+                              max_points=max_points, contact_curve=contact_curve)
     start = time.perf_counter()
     result = tweezers_branches(options)
     seconds = time.perf_counter() - start
@@ -72,6 +72,8 @@ def main() -> None:
     parser.add_argument("--multiples", default="1,2", help="N as multiples of n0")
     parser.add_argument("--factor", type=float, default=1.5)
     parser.add_argument("--max-points", type=int, default=4000)
+    parser.add_argument("--contact-curve", default="spline", help="spline (the cubic "
+                        "B-spline) or quintic")
     parser.add_argument("--out", default="benchmarks/results/long_dna_grid.md")
     args = parser.parse_args()
     out = Path(args.out)
@@ -82,13 +84,16 @@ def main() -> None:
                 f"`python benchmarks/bench_long_dna_grid.py --ld {args.ld} --lambdas "
                 f"{args.lambdas} --twist-ratio {args.twist_ratio:g} --multiples "
                 f"{args.multiples} --factor {args.factor:g} --max-points "
-                f"{args.max_points}`\n\n{HEADER}\n|{'---|' * HEADER.count(' | ')}---|\n")
+                f"{args.max_points}"
+                + ("" if args.contact_curve == "spline"
+                   else f" --contact-curve {args.contact_curve}")
+                + f"`\n\n{HEADER}\n|{'---|' * HEADER.count(' | ')}---|\n")
     for ld in (float(v) for v in args.ld.split(",")):
         n0 = math.ceil(ld) + 2
         for lam in (float(v) for v in args.lambdas.split(",")):
             for multiple in (int(v) for v in args.multiples.split(",")):
                 row = run(ld, lam, args.twist_ratio, multiple * n0, args.factor,
-                          args.max_points)
+                          args.max_points, args.contact_curve)
                 print(row, flush=True)
                 with out.open("a") as f:
                     f.write(row + "\n")

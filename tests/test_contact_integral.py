@@ -316,11 +316,12 @@ def test_quintic_pieces_reproduce_lines_and_shift_circles_by_h2_over_4r():
     assert abs(shifts[-1] - 1) < 0.01 and abs(shifts[-1] - 1) < abs(shifts[0] - 1)
 
 
-def test_quintic_removes_the_cubic_phase_ripple_of_tight_strands():
-    # strands of radius 3 D, h = 0.6 D, crossing at 3 degrees: the cubic B-spline's shape
-    # depends on the nodes' phase at O(h^4 kappa^3), which the barrier amplifies by 1/g
-    # (force ripple 1.2e-2 whatever the samples); the quintic's at O(h^6 kappa^5)
-    h, radius = 0.6, 3.0
+def _phase_ripples(h: float, radius: float) -> list[float]:
+    """The contact force's peak-to-peak ripple over its mean as strand a's nodes slide
+    through one segment along the same arcs (radius ``radius``, segments ``h``, crossing
+    at 3 degrees, gap 0.005 D): ``[cubic, quintic]``. The arcs' own contact does not
+    depend on where the nodes lie on them (the material sliding), so the ripple is the
+    curve's error alone."""
     cubic, quintic = [], []
     for phase in np.linspace(0, 1, 10, endpoint=False):
         a, b = _arcs(phase, 0.05, 0.005, radius=radius, n=16, h=h, spline=True)
@@ -333,9 +334,31 @@ def test_quintic_removes_the_cubic_phase_ripple_of_tight_strands():
         stencil, weights = _quintic([a, b])
         quintic.append(integral_terms(x, stencil, weights, pairs, D, "barrier", 1.0, G_HAT, h,
                                       order=1)[3].sum())
-    ripple = [np.ptp(f) / np.mean(f) for f in (cubic, quintic)]
+    return [float(np.ptp(f) / np.mean(f)) for f in (cubic, quintic)]
+
+
+def test_quintic_removes_the_cubic_phase_ripple_of_tight_strands():
+    # strands of radius 3 D, h = 0.6 D, crossing at 3 degrees: the cubic B-spline's shape
+    # depends on the nodes' phase at O(h^4 kappa^3), which the barrier amplifies by 1/g
+    # (force ripple 1.2e-2 whatever the samples); the quintic's at O(h^6 kappa^5)
+    ripple = _phase_ripples(0.6, 3.0)
     assert ripple[0] > 5e-3  # measured 1.2e-2
     assert ripple[1] < 5e-4  # measured 5e-5
+
+
+def test_the_dna_contact_curve_keeps_the_ply_from_rippling_at_n0():
+    # a DNA run's default nodes n0 give segments of D, and its plectoneme's strands a
+    # radius of curvature of about 4.6 D (3 kbp at 1 pN, 150 mM): the cubic's force
+    # ripples by 2.7 % there as the ply slides (measured; 0.15 % at h = D / 2, the h^4 of
+    # its shape error), which made the 3 kbp contact branch turn back and forth for
+    # 1600 points at 9.1 turns; the DNA runs' curve (quintic) ripples by 5e-4
+    from supercoil.units.tweezers import DNA_CONTACT_CURVE
+
+    assert DNA_CONTACT_CURVE == "quintic"
+    cubic, quintic = _phase_ripples(1.0, 4.6)
+    assert cubic > 1.5e-2 and quintic < 1e-3 and quintic < cubic / 30
+    half = _phase_ripples(0.5, 4.6)[0]
+    assert 8 < cubic / half < 32  # about 2^4: the cubic's error is O(h^4)
 
 
 def test_quintic_kernel_derivatives_match_finite_differences():

@@ -1,5 +1,5 @@
-"""DNA in magnetic tweezers: σ for turns, n0 nodes by default, and nm / pN nm / σ through
-the JSON and the figures, for the command line, study files and the library.
+"""DNA in magnetic tweezers: σ for turns, n0 nodes and the quintic contact curve by default,
+and nm / pN nm / σ through the JSON and the figures, for the command line, study files and the library.
 
 Oracles: the unit conversions from the preset's constants (kT = 4.11 pN nm, A = 50 nm kT,
 0.34 nm/bp, 10.5 bp/turn), exact to rounding; n0 against a brute-force search over N and
@@ -114,6 +114,21 @@ def test_cli_sigma_and_default_nodes(dna_run):
         if "torque" in p:
             assert p["torque_pN_nm"] == pytest.approx(p["torque"] * torque, rel=1e-14)
     assert data["points"][-1]["turns"] == pytest.approx(0.04 * 300 / REPEAT, rel=1e-12)
+
+
+def test_contact_curve_defaults_to_the_quintic_with_dna(dna_run, tmp_path):
+    # DNA runs resolve the ply at segments of D, where the cubic B-spline's contact
+    # ripples (tests/test_contact_integral.py): their default curve is DNA_CONTACT_CURVE,
+    # on the command line, in study files and in the library; a given curve is kept
+    assert json.loads((dna_run / "branch.json").read_text())["contact_curve"] == "quintic"
+    assert sc.load(dna_run).settings["contact_curve"] == "quintic"
+    assert parse_study(STUDY).tweezers_options().contact_curve == "quintic"
+    plain = '[rod]\ntwist_ratio = 1.5\n[problem]\nkind = "tweezers"\ntension = 10\n'
+    assert parse_study(plain).tweezers_options().contact_curve == "spline"
+    out = tmp_path / "cubic"
+    assert run(["tweezers", "--dna", "--bp", "300", "--force-pN", "0.3", "--sigma",
+                "0:0.002", "--contact-curve", "spline", "--out", str(out), "--quiet"]) == 0
+    assert json.loads((out / "branch.json").read_text())["contact_curve"] == "spline"
 
 
 def _texts(fig) -> list[str]:
@@ -244,6 +259,9 @@ def test_library_from_dna_and_sigma(tmp_path):
         sc.Tweezers.from_dna(preset, 0.3, nodes=3)
     diagram = sc.tweezers(problem, superhelical_density=(0, 0.02), max_points=40)
     assert diagram.settings.turns == pytest.approx((0.0, 0.02 * 300 / REPEAT), rel=1e-15)
+    assert diagram.settings.contact_curve == "quintic"  # DNA_CONTACT_CURVE
+    assert sc.tweezers(problem, superhelical_density=(0, 0.002), max_points=5,
+                       contact_curve="spline").settings.contact_curve == "spline"
     saved = sc.load(sc.save(diagram, tmp_path / "r.h5"))
     assert saved.units == "dna"
     point = saved.summary["points"][-1]

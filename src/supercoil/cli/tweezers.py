@@ -112,11 +112,13 @@ def tweezers(
     max_points: Annotated[int, typer.Option(
         "--max-points", metavar="K", help=f"Largest number of points per branch, 2 to "
         f"{checks.MAX_POINTS} (a branch stopped by it is incomplete: exit status 1).")] = 2000,
-    contact_curve: Annotated[str, typer.Option(
+    contact_curve: Annotated[str | None, typer.Option(
         "--contact-curve", metavar="CURVE", help="Curve whose self-distance is the contact "
         "distance: spline (the cubic B-spline of the nodes, default), quintic (the quintic "
-        "B-spline, integral formulation only) or polygon (the segments, whose sag ripples "
-        "with period h; docs/contact.md).")] = "spline",
+        "B-spline, integral formulation only; default with --dna, whose segments of D "
+        "make the cubic's contact force ripple as the ply slides) or polygon (the "
+        "segments, whose sag ripples with period h; docs/contact.md).",
+        show_default=False)] = None,
     contact_formulation: Annotated[str, typer.Option(
         "--contact-formulation", metavar="FORM", help="How the contact potential is summed: "
         "integral (a double integral over the strands, which counts a contact once wherever "
@@ -183,6 +185,10 @@ def tweezers(
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \
             _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp,
                         force_pN, salt_mM, diameter_nm, temperature_K, turns, sigma, nodes)
+        if contact_curve is None:
+            from supercoil.units.tweezers import DNA_CONTACT_CURVE
+
+            contact_curve = DNA_CONTACT_CURVE
     else:
         for option, value in (("--bp", bp), ("--force-pN", force_pN), ("--salt-mM", salt_mM),
                               ("--diameter-nm", diameter_nm),
@@ -198,6 +204,7 @@ def tweezers(
                  "--turns 0:5")
         start, stop = parse_span("--turns", turns, "START:STOP in turns, like 0:5")
         nodes = 100 if nodes is None else nodes
+        contact_curve = "spline" if contact_curve is None else contact_curve
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
              "--end-distance Z/L (displacement control, 0 < z/L < 1; up to 2 with --model "

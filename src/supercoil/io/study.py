@@ -130,7 +130,16 @@ class Study:
             max_points=c["max_points"], segment_points=c["segment_points"],
             event_tolerance=c["event_tolerance"],
             contact_event_tolerance=c["contact_event_tolerance"],
-            contact_tolerance=c["contact_tolerance"])
+            contact_tolerance=c["contact_tolerance"], **self._dna_contact_curve())
+
+    def _dna_contact_curve(self) -> dict:
+        """A DNA study's contact curve (:data:`~supercoil.units.tweezers.DNA_CONTACT_CURVE`),
+        none otherwise (the options' default)."""
+        if self.units != "dna":
+            return {}
+        from supercoil.units.tweezers import DNA_CONTACT_CURVE
+
+        return {"contact_curve": DNA_CONTACT_CURVE}
 
     def rod(self):
         """The study's :class:`supercoil.Rod` or :class:`supercoil.CosseratRod` (the

@@ -34,6 +34,7 @@ from supercoil.problems.tweezers.buckled import (
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, SLIDING_HYSTERESIS
 from supercoil.problems.tweezers.problem import tweezers_records
+from supercoil.rod.mirror import mirror_asymmetry
 from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
 
 # The contact branch's corrector trust region, in steps (ContinuationOptions.
@@ -52,6 +53,13 @@ CONTACT_CORRECTOR_DISTANCE = 1.0
 # from 0.25 the lowest is another mode, the same at both meshes (248 and 257, 228 and
 # 228): with 0.1 N = 123 counted one from 4.8 to 5.4 turns and N = 82 zero
 SLIDING_TAIL_CONTACT = 0.25
+# of D: the largest distance of a node from its mirror image (supercoil.rod.mirror) on a
+# symmetric state: a contact branch held on its symmetry starts from one (the centred loop
+# at its contact: 1e-10 to 4e-7 D at L/D = 200 and 500, lambda = 10 and 20; a loop slid
+# off by round-off: a large part of its size), and refuses a state beyond it (a step to
+# a state that the phase row holds off the symmetric family: 0.05 D, holding 2.8e-4, at
+# L/D = 500, lambda = 10, N = 502, where the symmetric states lie within 4e-6 D)
+MIRROR_TOLERANCE = 1e-3
 
 
 class ContactSliding:
@@ -126,8 +134,15 @@ class ContactSliding:
     def _held_stop(self) -> Callable[[np.ndarray], str | None]:
         tail = SLIDING_TAIL_CONTACT
         if self.row:
-            return lambda q: ("the sliding of the structure stopped being left out of the "
-                              "count" if self.rod.sliding(q)[1] > tail else None)
+            def refuse(q: np.ndarray) -> str | None:
+                if self.rod.sliding(q)[1] > tail:
+                    return "the sliding of the structure stopped being left out of the count"
+                asymmetry = mirror_asymmetry(q) / self.cp.diameter
+                if asymmetry > MIRROR_TOLERANCE:
+                    return (f"the state lost its half-turn symmetry (by {asymmetry:.3g} D): "
+                            f"not on the symmetric branch")
+                return None
+            return refuse
         return lambda q: ("the sliding of the structure is left out of the count again"
                           if self.rod.sliding(q)[1] <= tail / SLIDING_HYSTERESIS**2 else None)
 

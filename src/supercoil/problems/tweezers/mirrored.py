@@ -35,15 +35,11 @@ from collections.abc import Callable, Mapping
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, SpecialPoint
 from supercoil.problems.contact_events import contact_start
-from supercoil.problems.tweezers.contact import contact_branch
+from supercoil.problems.tweezers.contact import MIRROR_TOLERANCE, contact_branch
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.rod.mirror import mirror_asymmetry
 from supercoil.rod.open import ClampedRodEnergy
 
-# of D: a contact branch starts symmetric when its first state lies this close to its
-# mirror image (the centred loop at its contact: 1e-10 to 4e-7 D at L/D = 200 and 500,
-# lambda = 10 and 20; a loop slid off by round-off: a large part of its size)
-MIRROR_TOLERANCE = 1e-3
 SUFFIX = "/mirrored"
 
 

@@ -240,6 +240,12 @@ def tweezers_branches(options: TweezersOptions,
             last = mirrored
             notes.append(f"{contact_name}: closed ({contact.message}); followed again held "
                          f"on its half-turn symmetry: {mirrored.name}")
+            held_force = mirrored.records.get("sliding_residual", np.zeros(0))
+            if len(mirrored) and np.max(held_force) > SLIDING_NOTE:
+                k = int(np.argmax(held_force))
+                notes.append(f"{mirrored.name}: the force its phase row holds, max |KKT "
+                             f"residual| without it, is at most {float(held_force[k]):.2e} "
+                             f"(at {float(mirrored.parameter_values[k]):.4g} turns)")
         if held is None or (mirrored.status is ContinuationStatus.CLOSED_LOOP
                             and mirrored.parameter_values[-1] < opts.turns[1] - 1e-9):
             start = time.perf_counter()

@@ -272,8 +272,8 @@ def tweezers_branches(options: TweezersOptions,
                          f"its bifurcation at {last.origin.parameter:.6g} turns: {last.name}")
     if not last.ok:
         notes.append(f"failed: {last.name}: {last.message}")
-    elif last.parameter_values[-1] < opts.turns[1] - 1e-9 and \
-            last.status is not ContinuationStatus.CLOSED_LOOP:
+    elif last.parameter_values[-1] < opts.turns[1] - 1e-9 and not any(
+            n.startswith(f"incomplete: {last.name} closed") for n in notes):
         notes.append(f"incomplete: {last.name} ended at {last.parameter_values[-1]:.6g} "
                      f"turns, before {opts.turns[1]:g}: {last.message}")
     return TweezersResult(opts, tuple(branches), frozenset(names), rod, cp, seconds,

@@ -11,14 +11,16 @@ symmetric too.
 
 from __future__ import annotations
 
+import dataclasses
 from itertools import pairwise
 
 import numpy as np
 import pytest
 
 from supercoil.continuation import ContinuationStatus
+from supercoil.continuation.resume import head
 from supercoil.problems.contact_events import first_onset
-from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+from supercoil.problems.tweezers import TweezersOptions, compute, tweezers_branches
 from supercoil.problems.tweezers.contact import MIRROR_TOLERANCE
 from supercoil.problems.tweezers.mirrored import SUFFIX, mirrored_contact
 from supercoil.problems.tweezers.returned import axis_distance
@@ -115,3 +117,31 @@ def chord_distance(q: np.ndarray, states: np.ndarray) -> float:
         u = float(np.clip((q - a) @ d / (d @ d), 0.0, 1.0)) if d @ d > 0 else 0.0
         best = min(best, axis_distance(q, a + u * d))
     return best
+
+
+def test_a_closed_contact_branch_is_followed_again_held_on_its_symmetry(monkeypatch):
+    """The driver's path: where the contact branch closes (here made to, at its 40th
+    point, by the closure test) the held branch is computed, reported as a contact
+    branch after it, and reaches the last turn; the result is complete, and the closed
+    branch keeps its status."""
+    real = compute.close_on_return
+
+    def closing(branch, other, diameter, reach=1.0):
+        if branch.name == "buckled_contact":
+            return dataclasses.replace(head(branch, 40), status=ContinuationStatus.CLOSED_LOOP,
+                                       message="made to close")
+        return real(branch, other, diameter, reach)
+
+    monkeypatch.setattr(compute, "close_on_return", closing)
+    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
+                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
+                              loop_sliding=True)
+    result = tweezers_branches(options)
+    names = [b.name for b in result.branches]
+    assert names[-2:] == ["buckled_contact", "buckled_contact" + SUFFIX]
+    assert result.branches[-2].status is ContinuationStatus.CLOSED_LOOP
+    held = result.branches[-1]
+    assert held.name in result.contact_branches
+    assert held.parameter_values[-1] == pytest.approx(options.turns[1])
+    assert result.ok, result.notes
+    assert any("followed again held on its half-turn symmetry" in n for n in result.notes)

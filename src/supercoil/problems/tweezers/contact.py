@@ -79,7 +79,12 @@ class ContactSliding:
     contact) while the tails are straight. Without the row the contact-free start of the contact
     branch crawled (L/D = 200, lambda = 40, N = 202: 42 points from a gap of 1.12 D to
     1.09 D in steps of 1e-8 D, the corrector moving along the sliding by the residual
-    over its eigenvalue, then "the tangent turned" at the minimum step)."""
+    over its eigenvalue, then "the tangent turned" at the minimum step).
+
+    ``hold``: the branch held on its half-turn symmetry
+    (:mod:`supercoil.problems.tweezers.mirrored`): the row in contact too, while the
+    sliding is left out of the count (tail ratio below ``SLIDING_TAIL_CONTACT``), a run
+    with it refusing a state off the symmetry by more than ``MIRROR_TOLERANCE`` D."""
 
     ENGAGE = 2.0  # barrier layers (barrier_activation * D): start a run with the row beyond
     RELEASE = 3.0  # ... end a run without the row beyond this many, and as many past its start
@@ -198,6 +203,8 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
 
 def _computed(opts, rod, cp, free, k, name, stored, on_point, pinned, say, contact_opts,
               sliding, records, events):
+    """:func:`contact_branch`'s computation from the contact-free branch's point ``k``
+    (or an incomplete stored branch continued), with the runs' phase rows of ``sliding``."""
     q = free.states[k]
     old = stored.get(name, (None, False))[0]
     first = resume_stored(stored, rod, cp, name, contact_opts, records, events, on_point,

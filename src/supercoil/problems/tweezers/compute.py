@@ -32,6 +32,7 @@ from supercoil.problems.tweezers.buckled import (
     switch_off_straight,
 )
 from supercoil.problems.tweezers.contact import contact_branch
+from supercoil.problems.tweezers.mirrored import mirrored_contact
 from supercoil.problems.tweezers.options import TweezersOptions, check_inextensible
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
@@ -222,13 +223,44 @@ def tweezers_branches(options: TweezersOptions,
         # contact-free branch: the plectoneme branches off it at a bifurcation
         # (supercoil.problems.tweezers.plectoneme)
         start = time.perf_counter()
-        switched = switch_to_plectoneme(opts, rod, cp, contact, on_point, pinned, say,
-                                        free=free, reach=reach)
-        if switched is None:
+        # first the same branch held on its half-turn symmetry (mirrored.py), which the
+        # freely followed one leaves at a pitchfork of the contact's ripple
+        held = mirrored_contact(opts, rod, cp, free, onset, contact_name, stored, on_point,
+                                pinned, say)
+        switched = None
+        if held is not None:
+            mirrored = close_on_return(held[0], free, D, reach)
+            mirrored = verify_bifurcations(dataclasses.replace(mirrored, parent=free_name,
+                                                               origin=onset))
+            seconds[mirrored.name] = time.perf_counter() - start
+            final(mirrored, True)
+            branches.append(mirrored)
+            names.add(mirrored.name)
+            pins[mirrored.name] = held[1]
+            last = mirrored
+            notes.append(f"{contact_name}: closed ({contact.message}); followed again held "
+                         f"on its half-turn symmetry: {mirrored.name}")
+            held_force = mirrored.records.get("sliding_residual", np.zeros(0))
+            if len(mirrored) and np.max(held_force) > SLIDING_NOTE:
+                k = int(np.argmax(held_force))
+                notes.append(f"{mirrored.name}: the force its phase row holds, max |KKT "
+                             f"residual| without it, is at most {float(held_force[k]):.2e} "
+                             f"(at {float(mirrored.parameter_values[k]):.4g} turns)")
+        if held is None or (mirrored.status is ContinuationStatus.CLOSED_LOOP
+                            and mirrored.parameter_values[-1] < opts.turns[1] - 1e-9):
+            start = time.perf_counter()
+            switched = switch_to_plectoneme(opts, rod, cp, last, on_point, pinned, say,
+                                            free=free, reach=reach)
+        if switched is None and held is None:
             notes.append(f"incomplete: {contact_name} closed before "
                          f"{opts.turns[1]:g} turns ({contact.message}) and no switch at its "
                          f"bifurcations gave a branch")
-        else:
+        elif switched is None and last.status is ContinuationStatus.CLOSED_LOOP \
+                and last.parameter_values[-1] < opts.turns[1] - 1e-9:
+            notes.append(f"incomplete: {last.name} closed before {opts.turns[1]:g} turns "
+                         f"({last.message}) and no switch at its bifurcations gave a branch")
+        elif switched is not None:
+            closed = last
             last, switched_pins = switched
             last = verify_bifurcations(last)
             seconds[last.name] = time.perf_counter() - start
@@ -236,12 +268,12 @@ def tweezers_branches(options: TweezersOptions,
             branches.append(last)
             names.add(last.name)
             pins[last.name] = switched_pins
-            notes.append(f"{contact_name}: closed ({contact.message}); switched at "
+            notes.append(f"{closed.name}: closed ({closed.message}); switched at "
                          f"its bifurcation at {last.origin.parameter:.6g} turns: {last.name}")
     if not last.ok:
         notes.append(f"failed: {last.name}: {last.message}")
-    elif last.parameter_values[-1] < opts.turns[1] - 1e-9 and not (
-            last is contact and contact.status is ContinuationStatus.CLOSED_LOOP):
+    elif last.parameter_values[-1] < opts.turns[1] - 1e-9 and not any(
+            n.startswith(f"incomplete: {last.name} closed") for n in notes):
         notes.append(f"incomplete: {last.name} ended at {last.parameter_values[-1]:.6g} "
                      f"turns, before {opts.turns[1]:g}: {last.message}")
     return TweezersResult(opts, tuple(branches), frozenset(names), rod, cp, seconds,

@@ -34,6 +34,7 @@ from supercoil.problems.tweezers.buckled import (
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, SLIDING_HYSTERESIS
 from supercoil.problems.tweezers.problem import tweezers_records
+from supercoil.rod.mirror import mirror_asymmetry
 from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
 
 # The contact branch's corrector trust region, in steps (ContinuationOptions.
@@ -52,6 +53,13 @@ CONTACT_CORRECTOR_DISTANCE = 1.0
 # from 0.25 the lowest is another mode, the same at both meshes (248 and 257, 228 and
 # 228): with 0.1 N = 123 counted one from 4.8 to 5.4 turns and N = 82 zero
 SLIDING_TAIL_CONTACT = 0.25
+# of D: the largest distance of a node from its mirror image (supercoil.rod.mirror) on a
+# symmetric state: a contact branch held on its symmetry starts from one (the centred loop
+# at its contact: 1e-10 to 4e-7 D at L/D = 200 and 500, lambda = 10 and 20; a loop slid
+# off by round-off: a large part of its size), and refuses a state beyond it (a step to
+# a state that the phase row holds off the symmetric family: 0.05 D, holding 2.8e-4, at
+# L/D = 500, lambda = 10, N = 502, where the symmetric states lie within 4e-6 D)
+MIRROR_TOLERANCE = 1e-3
 
 
 class ContactSliding:
@@ -71,14 +79,20 @@ class ContactSliding:
     contact) while the tails are straight. Without the row the contact-free start of the contact
     branch crawled (L/D = 200, lambda = 40, N = 202: 42 points from a gap of 1.12 D to
     1.09 D in steps of 1e-8 D, the corrector moving along the sliding by the residual
-    over its eigenvalue, then "the tangent turned" at the minimum step)."""
+    over its eigenvalue, then "the tangent turned" at the minimum step).
+
+    ``hold``: the branch held on its half-turn symmetry
+    (:mod:`supercoil.problems.tweezers.mirrored`): the row in contact too, while the
+    sliding is left out of the count (tail ratio below ``SLIDING_TAIL_CONTACT``), a run
+    with it refusing a state off the symmetry by more than ``MIRROR_TOLERANCE`` D."""
 
     ENGAGE = 2.0  # barrier layers (barrier_activation * D): start a run with the row beyond
     RELEASE = 3.0  # ... end a run without the row beyond this many, and as many past its start
 
     def __init__(self, rod: ClampedRodEnergy, cp: ContactProblem, base: ContinuationOptions,
-                 enabled: bool):
+                 enabled: bool, hold: bool = False):
         self.rod, self.cp, self.base, self.enabled = rod, cp, base, enabled
+        self.hold = enabled and hold
         self.layer = (cp.options.barrier_activation if cp.treatment == "barrier" else 0.0)
         self.threshold = sliding_threshold(rod.rod.n_nodes)
         self.row = False
@@ -87,14 +101,19 @@ class ContactSliding:
         return self.cp.min_distance(q) / self.cp.diameter - 1.0
 
     def options(self, q: np.ndarray) -> ContinuationOptions:
-        self.row = (self.enabled and self.gap(q) > self.ENGAGE * self.layer
-                    and self.rod.sliding(q)[1] <= self.threshold)
+        if self.hold:  # in contact too, while the sliding is left out of the count
+            self.row = self.rod.sliding(q)[1] <= SLIDING_TAIL_CONTACT / SLIDING_HYSTERESIS
+        else:
+            self.row = (self.enabled and self.gap(q) > self.ENGAGE * self.layer
+                        and self.rod.sliding(q)[1] <= self.threshold)
         return dataclasses.replace(self.base, near_symmetry_gauge=self.row, gauge="integral",
                                    rephase=self.row, midpoint_phase=self.row)
 
     def stop(self, q_start: np.ndarray) -> Callable[[np.ndarray], str | None] | None:
         if not self.enabled:
             return None
+        if self.hold:
+            return self._held_stop()
         if self.row:
             touched = []
 
@@ -117,6 +136,21 @@ class ContactSliding:
             return None
         return refuse
 
+    def _held_stop(self) -> Callable[[np.ndarray], str | None]:
+        tail = SLIDING_TAIL_CONTACT
+        if self.row:
+            def refuse(q: np.ndarray) -> str | None:
+                if self.rod.sliding(q)[1] > tail:
+                    return "the sliding of the structure stopped being left out of the count"
+                asymmetry = mirror_asymmetry(q) / self.cp.diameter
+                if asymmetry > MIRROR_TOLERANCE:
+                    return (f"the state lost its half-turn symmetry (by {asymmetry:.3g} D): "
+                            f"not on the symmetric branch")
+                return None
+            return refuse
+        return lambda q: ("the sliding of the structure is left out of the count again"
+                          if self.rod.sliding(q)[1] <= tail / SLIDING_HYSTERESIS**2 else None)
+
 
 def contact_options(opts: TweezersOptions, direction: int = 1) -> ContinuationOptions:
     """The continuation options of a contact branch's runs (no phase row)."""
@@ -135,12 +169,14 @@ def contact_options(opts: TweezersOptions, direction: int = 1) -> ContinuationOp
 def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
                    free: Branch, onset: SpecialPoint, name: str,
                    stored: Mapping[str, tuple[Branch, bool]], on_point=None, pinned=None,
-                   say: Callable[[str], None] = lambda message: None
+                   say: Callable[[str], None] = lambda message: None, hold: bool = False
                    ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]]:
     """The contact branch ``name`` from the contact-free branch ``free`` past its
     ``onset`` and its azimuth pins: the stored one when complete, else computed (an
     incomplete stored one continued) with its contact events classified. ``pinned``:
-    the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`)."""
+    the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`).
+    ``hold`` (with ``loop_sliding``): the sliding's phase row is carried in contact too,
+    anchored at the state's symmetric part (:mod:`supercoil.problems.tweezers.mirrored`)."""
     # in contact the discrete contact makes the sliding of the plectoneme stiff, of
     # either sign: no phase row, but out of the count while the tails are straight
     # (docs/continuation.md, "Long open rods: the sliding of a localised structure"),
@@ -150,12 +186,27 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     q = free.states[k]
     set_pin(cp, rod, q)
     contact_opts = contact_options(opts, 1 if free.tangents[k, -1] >= 0 else -1)
-    sliding = ContactSliding(rod, cp, contact_opts, opts.loop_sliding)
+    sliding = ContactSliding(rod, cp, contact_opts, opts.loop_sliding, hold)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     old, complete = stored.get(name, (None, False))
     if complete:
         return old, stored_pins(old)
+    rod.mirror_anchor = sliding.hold
+    try:
+        contact, pins = _computed(opts, rod, cp, free, k, name, stored, on_point, pinned, say,
+                                  contact_opts, sliding, records, events)
+    finally:
+        rod.mirror_anchor = False
+    return contact, pins
+
+
+def _computed(opts, rod, cp, free, k, name, stored, on_point, pinned, say, contact_opts,
+              sliding, records, events):
+    """:func:`contact_branch`'s computation from the contact-free branch's point ``k``
+    (or an incomplete stored branch continued), with the runs' phase rows of ``sliding``."""
+    q = free.states[k]
+    old = stored.get(name, (None, False))[0]
     first = resume_stored(stored, rod, cp, name, contact_opts, records, events, on_point,
                           pinned, sliding=False, max_points=opts.max_points)
     if first is not None:

@@ -4,16 +4,16 @@ its bifurcations.
 
 From a centred localised loop (symmetric under the rotation by pi about an axis across
 the rod's middle) the first contact is symmetric too, and so is the contact branch that
-follows it; the plectoneme, whose end loop lies at one end of its ply, is not. It
-branches off the symmetric contact branch at a symmetry-breaking bifurcation, near
-which that branch can turn and come back onto itself, or release its contacts and
-follow the contact-free branch back (a closed loop either way, reported as such):
-measured on the 3 kbp hat curve at 1 pN and 150 mM, the symmetric branch closes on itself
-at 6.77 turns, with a bifurcation located at 6.767 turns from which no switched branch
-starts (measured with the loop's sliding in the count and out of it); without
-``loop_sliding`` the loop slides off the middle and its contact branch reaches the
-plectoneme by itself. So when the
-closed contact branch ends before the last turn, :func:`switch_to_plectoneme` tries its
+follows it, the plectoneme's ply growing from the loop's crossing along that axis; the
+freely followed branch can leave that symmetric family at a pitchfork of the contact's
+ripple and close a loop, and is then followed again held on the symmetry first
+(:mod:`supercoil.problems.tweezers.mirrored`). A branch can also close near a
+bifurcation to another family: measured on the 3 kbp hat curve at 1 pN and 150 mM, the
+symmetric branch closes on itself at 6.77 turns, with a bifurcation located at 6.767
+turns from which no switched branch starts (measured with the loop's sliding in the
+count and out of it); without ``loop_sliding`` the loop slides off the middle and its
+contact branch reaches the plectoneme by itself. So when the closed contact branch (or
+the held one) ends before the last turn, :func:`switch_to_plectoneme` tries its
 located bifurcations, the latest first, along either side of the critical mode at the
 amplitudes of ``AMPLITUDES``, and follows the first switched branch that starts (and
 does not close at once) to the last turn.

@@ -1,0 +1,65 @@
+"""The contact branch held on its half-turn symmetry, where the one followed freely closed.
+
+From a centred localised loop (``loop_sliding``) the first contact lies at the loop's
+crossing, on the axis of the half-turn across the rod's middle that maps the rod onto
+itself (:mod:`supercoil.rod.mirror`), and the plectoneme grows from that crossing with
+its ply along the axis, the two strands exchanged: the branch is symmetric. Along it
+the sliding of the structure (odd under the half-turn) has the discrete contact's
+ripple as its eigenvalue, of either sign (docs/continuation.md, "Long open rods"), and
+every sign change is a pitchfork of the discrete problem, whose asymmetric branches,
+the structure slid by a fraction of a segment, are the mesh's. Followed without a
+phase row in contact, the branch leaves the symmetric family at one of them, folds where
+the slid structure's sliding eigenvalue crosses zero, and closes a loop (measured at
+C/A = 1.5: at L/D = 500, lambda = 10, N = 502 the symmetric branch is left at 1.82
+turns, its single contact at the crossing with the force growing, and closes on itself
+at 1.883 turns; at L/D = 200, lambda = 20, N = 404 it is left at 2.9 turns with a ply of
+11 contact pairs, goes to 3.06 turns slid by 0.04 D, comes back onto the symmetric
+branch at 2.86 turns and follows it down onto the contact-free branch at 1.165 turns).
+No bifurcation is located on either (the sliding is left out of the count while the
+tails are straight), so no switch gives a branch.
+
+:func:`mirrored_contact` follows the contact branch again from the same start with the
+sliding's phase row in contact too, anchored at each step at the state's symmetric part
+(:func:`~supercoil.rod.mirror.mirror_offset`): the row takes out the sliding that
+round-off gives the structure, and on the symmetric family, where the gradient is even
+and the sliding odd, holds no force (the record ``sliding_residual``, the KKT residual
+without the row, shows it). It is followed while the sliding is left out of the count
+(tail ratio below ``SLIDING_TAIL_CONTACT``); beyond, without the row, as the contact
+branch is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+from supercoil.contact.problem import ContactProblem
+from supercoil.continuation import Branch, SpecialPoint
+from supercoil.problems.contact_events import contact_start
+from supercoil.problems.tweezers.contact import MIRROR_TOLERANCE, contact_branch
+from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.rod.mirror import mirror_asymmetry
+from supercoil.rod.open import ClampedRodEnergy
+
+SUFFIX = "/mirrored"
+
+
+def symmetric_start(free: Branch, onset: SpecialPoint, cp: ContactProblem,
+                    diameter: float) -> bool:
+    """Whether the contact branch from ``free`` past ``onset`` starts from a state
+    symmetric under the half-turn (to ``MIRROR_TOLERANCE`` D)."""
+    q = free.states[contact_start(free, onset, cp)]
+    return mirror_asymmetry(q) <= MIRROR_TOLERANCE * diameter
+
+
+def mirrored_contact(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
+                     free: Branch, onset: SpecialPoint, name: str,
+                     stored: Mapping[str, tuple[Branch, bool]], on_point=None, pinned=None,
+                     say: Callable[[str], None] = lambda message: None
+                     ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]] | None:
+    """The contact branch ``name + SUFFIX`` held on its symmetry (module doc) and its
+    azimuth pins; None without ``loop_sliding`` or from an asymmetric start."""
+    if not opts.loop_sliding or not symmetric_start(free, onset, cp, opts.diameter):
+        return None
+    say(f"{name}{SUFFIX}: the contact branch again, held on its half-turn symmetry")
+    return contact_branch(opts, rod, cp, free, onset, name + SUFFIX, stored, on_point,
+                          pinned, say, hold=True)

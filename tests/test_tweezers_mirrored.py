@@ -1,0 +1,147 @@
+"""The half-turn symmetry of the clamped rod (``supercoil.rod.mirror``) and the contact
+branch held on it (``supercoil.problems.tweezers.mirrored``).
+
+Oracles: curves symmetric by construction under the rotation by pi about a known axis
+across the middle (with the node order reversed), turned about the rod's axis; for the
+held branch, the nodes' distances to the axis (``r_i = r_{N-1-i}`` on a symmetric state,
+whatever the axis), the KKT residual without the phase row (the force it holds) and the
+freely followed contact branch, which passes through the same states where it is
+symmetric too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from itertools import pairwise
+
+import numpy as np
+import pytest
+
+from supercoil.continuation import ContinuationStatus
+from supercoil.continuation.resume import head
+from supercoil.problems.contact_events import first_onset
+from supercoil.problems.tweezers import TweezersOptions, compute, tweezers_branches
+from supercoil.problems.tweezers.contact import MIRROR_TOLERANCE
+from supercoil.problems.tweezers.mirrored import SUFFIX, mirrored_contact
+from supercoil.problems.tweezers.returned import axis_distance
+from supercoil.rod.mirror import mirror_asymmetry, mirror_image, mirror_offset
+
+
+def symmetric_curve(n: int, angle: float) -> np.ndarray:
+    """A loop-like curve on the clamped rod's nodes, mapped onto itself by the half-turn
+    about the x axis through ``z = 1/2`` (``x(s) -> (x, -y, 1 - z)(1 - s)``), then turned
+    by ``angle`` about the rod's axis; ends on the axis."""
+    s = (np.arange(n) - 0.5) / (n - 2)
+    u = s - 0.5
+    bump = np.exp(-(u / 0.08) ** 2)
+    x = np.stack([0.05 * bump, 0.3 * u * bump, s + 0.02 * u * bump], axis=1)
+    c, d = np.cos(angle), np.sin(angle)
+    return (x @ np.array([[c, -d, 0.0], [d, c, 0.0], [0.0, 0.0, 1.0]]).T).ravel()
+
+
+def odd_field(n: int) -> np.ndarray:
+    """A displacement that the same half-turn maps to its opposite (``C w = -w``), along
+    the axis (so that the best axis of the moved curve stays the same)."""
+    s = (np.arange(n) - 0.5) / (n - 2)
+    w = np.zeros((n, 3))
+    w[:, 2] = np.exp(-((s - 0.5) / 0.08) ** 2)
+    w[[0, 1, -2, -1]] = 0.0
+    return w.ravel()
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.7, 2.9])
+def test_symmetric_curve_is_its_own_image_and_an_odd_part_is_taken_out(angle):
+    n = 81
+    q = symmetric_curve(n, angle)
+    assert mirror_asymmetry(q) < 1e-14
+    np.testing.assert_allclose(mirror_image(q), q, atol=1e-14)
+    w = odd_field(n)
+    for delta in (1e-6, 1e-4):
+        moved = q + delta * w
+        # to first order the image is q - delta w: the asymmetry is 2 delta |w|
+        biggest = np.max(np.linalg.norm(w.reshape(-1, 3), axis=1))
+        assert mirror_asymmetry(moved) == pytest.approx(2 * delta * biggest, rel=1e-2)
+        # the symmetric part is symmetric, and the image an involution
+        assert mirror_asymmetry(moved + mirror_offset(moved)) < 1e-12
+        np.testing.assert_allclose(mirror_image(mirror_image(moved)), moved, atol=1e-12)
+        np.testing.assert_allclose(mirror_offset(moved), -delta * w, atol=1e-14)
+
+
+def radii_asymmetry(states: np.ndarray) -> np.ndarray:
+    radii = np.linalg.norm(states.reshape(len(states), -1, 3)[:, :, :2], axis=2)
+    return np.abs(radii - radii[:, ::-1]).max(axis=1) / radii.max(axis=1)
+
+
+def test_contact_branch_held_on_its_symmetry_is_the_symmetric_one_and_holds_no_force():
+    """At L/D = 100, lambda = 10, C/A = 1.5, N = 102 (loop_sliding) the contact branch held
+    on its half-turn symmetry reaches the last turn; its states are symmetric (the radii
+    to 1e-6 of the largest, where the freely followed branch leaves the symmetry by
+    more), equilibria without the phase row to the contact tolerance (the row holds no
+    force on the symmetric family), and the freely followed branch, where it is
+    symmetric, passes through them."""
+    kept = {}
+    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
+                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
+                              loop_sliding=True)
+    result = tweezers_branches(options, on_branch=lambda b, contact: kept.update({b.name: b}))
+    free, contact = kept["buckled"], kept["buckled_contact"]
+    onset = first_onset(free) or free.points_of_kind("contact_onset")[0]
+    held, _pins = mirrored_contact(options, result.rod_problem, result.contact_problem, free,
+                                   onset, "buckled_contact", {})
+    assert held.name == "buckled_contact" + SUFFIX
+    assert held.status is ContinuationStatus.PARAMETER_BOUND, held.message
+    assert held.parameter_values[-1] == pytest.approx(options.turns[1])
+    assert np.all(radii_asymmetry(held.states) < 1e-6)
+    assert all(mirror_asymmetry(q) <= MIRROR_TOLERANCE * options.diameter
+               for q in held.states)
+    # the force the row holds: the KKT residual without it (3e-6 at most, where the
+    # contact forces reach 1e2)
+    assert np.max(held.records["sliding_residual"]) < 1e-5
+    assert np.all(held.records["min_gap_over_diameter"] > 1.0)
+    # the free branch where it is symmetric: its states on the held branch's chords (to
+    # their interpolation error, below 0.01 D; the branches that left the symmetry
+    # were slid by 0.04 to 0.7 D), the first ones exactly (the same steps)
+    symmetric = np.flatnonzero(radii_asymmetry(contact.states) < 1e-6)
+    assert symmetric.size >= 10
+    distances = [chord_distance(contact.states[k], held.states) for k in symmetric]
+    assert np.max(distances) < 0.01 * options.diameter
+    assert np.count_nonzero(np.array(distances) < 1e-6 * options.diameter) >= 10
+
+
+def chord_distance(q: np.ndarray, states: np.ndarray) -> float:
+    """The smallest largest-node distance (after the best turn about the axis) from ``q``
+    to the chords between consecutive ``states``."""
+    best = float("inf")
+    for a, b in pairwise(states):
+        d = b - a
+        u = float(np.clip((q - a) @ d / (d @ d), 0.0, 1.0)) if d @ d > 0 else 0.0
+        best = min(best, axis_distance(q, a + u * d))
+    return best
+
+
+def test_a_closed_contact_branch_is_followed_again_held_on_its_symmetry(monkeypatch):
+    """The driver's path: where the contact branch closes (here made to, at its 40th
+    point, by the closure test) the held branch is computed, reported as a contact
+    branch after it, and reaches the last turn; the result is complete, and the closed
+    branch keeps its status."""
+    real = compute.close_on_return
+
+    def closing(branch, other, diameter, reach=1.0):
+        if branch.name == "buckled_contact":
+            return dataclasses.replace(head(branch, 40), status=ContinuationStatus.CLOSED_LOOP,
+                                       message="made to close")
+        return real(branch, other, diameter, reach)
+
+    monkeypatch.setattr(compute, "close_on_return", closing)
+    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
+                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
+                              loop_sliding=True)
+    result = tweezers_branches(options)
+    names = [b.name for b in result.branches]
+    assert names[-2:] == ["buckled_contact", "buckled_contact" + SUFFIX]
+    assert result.branches[-2].status is ContinuationStatus.CLOSED_LOOP
+    held = result.branches[-1]
+    assert held.name in result.contact_branches
+    assert held.parameter_values[-1] == pytest.approx(options.turns[1])
+    assert result.ok, result.notes
+    assert any("followed again held on its half-turn symmetry" in n for n in result.notes)

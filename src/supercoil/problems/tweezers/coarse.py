@@ -6,15 +6,16 @@ plectoneme that grows from it, bend over the core length ``sqrt(A/F)``
 it (:attr:`~supercoil.problems.tweezers.options.TweezersOptions.mesh_pins_loop`) the
 core spans a segment or two and the mesh pins it: the energy of the discrete end loop
 depends on where the nodes sit in it, and the plectoneme grows by one node of each
-strand at a time, across a pair of folds per node (docs/tweezers.md, "Greenhill on
-coarse meshes"). Measured at L/D = 100, ``lambda = L sqrt(F/A)`` = 80, N = 102
+strand at a time, across a pair of folds per node (docs/tweezers.md, "The plectoneme
+on coarse meshes"). Measured at L/D = 100, ``lambda = L sqrt(F/A)`` = 80, N = 102
 (segments 0.8 of the core): the torque of the ply rises from 90.8 to 94.5 and falls
 back as each node enters, the turns going back by 0.3 across the period, and the
 contact branch folded 415 times between 6.5 and 13.6 turns in 4000 points; at
 ``lambda`` = 150, N = 204 (0.74 of the core) 204 times between 20 and 41.4 turns;
-at segments of 0.4 of the core (``lambda`` = 80, N = 204; 40, N = 102) the ply grows
-without folds. :func:`pinned_loop_note` names that cause where such a branch ends
-before its last turn.
+on segments of 0.37-0.4 of the core (``lambda`` = 40, N = 102; 80, N = 204; 150 at
+L/D = 200, N = 404) the contact branches reach the last turn in 863-2606 points.
+:func:`pinned_loop_note` names that cause where such a branch ends before its last
+turn.
 """
 
 from __future__ import annotations

@@ -31,6 +31,7 @@ from supercoil.problems.tweezers.buckled import (
     stored_pins,
     switch_off_straight,
 )
+from supercoil.problems.tweezers.coarse import pinned_loop_note
 from supercoil.problems.tweezers.contact import contact_branch
 from supercoil.problems.tweezers.mirrored import mirrored_contact
 from supercoil.problems.tweezers.options import TweezersOptions, check_inextensible
@@ -276,6 +277,9 @@ def tweezers_branches(options: TweezersOptions,
             n.startswith(f"incomplete: {last.name} closed") for n in notes):
         notes.append(f"incomplete: {last.name} ended at {last.parameter_values[-1]:.6g} "
                      f"turns, before {opts.turns[1]:g}: {last.message}")
+    pinned_loop = pinned_loop_note(opts, last)
+    if pinned_loop is not None:
+        notes.append(pinned_loop)
     return TweezersResult(opts, tuple(branches), frozenset(names), rod, cp, seconds,
                           tuple(notes), pins, frozenset({free_name}))
 

@@ -123,11 +123,23 @@ class TweezersOptions:
         150, N = 202: without the row it starts and reaches 20.9 turns in 300 points),
         or the branch stopped where the row came and went (N = 102: without it, it
         reaches its contact)."""
-        if not self.loop_sliding:
-            return False
+        return self.loop_sliding and not self.mesh_pins_loop
+
+    @property
+    def core_segments(self) -> float | None:
+        """``h sqrt(F/A)``: the segment ``h = L / (N - 2)`` over the localised loop's core
+        ``sqrt(A/F)`` (None without a tension: no core)."""
         if not self.load_control or not self.tension:
-            return True
-        return math.sqrt(self.tension) / (self.n_nodes - 2) <= SLIDING_CORE
+            return None
+        return math.sqrt(self.tension) / (self.n_nodes - 2)
+
+    @property
+    def mesh_pins_loop(self) -> bool:
+        """The segments are longer than ``SLIDING_CORE`` times the loop's core
+        (:attr:`core_segments`): the mesh pins the localised loop and the plectoneme's
+        end loop (:mod:`~supercoil.problems.tweezers.coarse`)."""
+        core = self.core_segments
+        return core is not None and core > SLIDING_CORE
 
     @property
     def diameter(self) -> float | None:

@@ -40,7 +40,11 @@ from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
 from supercoil.problems.tweezers.result import TweezersResult
 from supercoil.problems.tweezers.returned import close_on_return
-from supercoil.problems.tweezers.straight import resolution_note, straight_branch
+from supercoil.problems.tweezers.straight import (
+    resolution_note,
+    straight_branch,
+    unreached_note,
+)
 from supercoil.problems.tweezers.verify import verify_bifurcations
 
 # a note when the sliding's phase row holds a force above this (a hundred times the
@@ -119,6 +123,9 @@ def tweezers_branches(options: TweezersOptions,
             if straight.status.complete:
                 notes.append(f"the straight rod does not buckle below {opts.turns[1]:g} turns "
                              f"(exact threshold {exact:.6g})")
+                unreached = unreached_note(opts)
+                if unreached is not None:
+                    notes.append(unreached)
             else:  # no conclusion beyond the last point computed
                 notes.append(f"incomplete: straight stopped at "
                              f"{straight.parameter_values[-1]:.6g} turns ({straight.message}), "

@@ -52,8 +52,9 @@ def test_coarse_buckling_is_late_by_the_segments_estimate_and_the_note_names_eno
 def test_a_threshold_below_the_last_turn_that_the_mesh_does_not_reach_is_named():
     """At lambda = 40, N = 42 the discrete rod buckles 12 % above Greenhill's clamped
     condition (previous test): run up to 6 % above it, the straight rod does not buckle,
-    and the result says why and names N = 66, at which the rod buckles below that last
-    turn (oracle: the exact threshold and the located bifurcation at N = 66)."""
+    and the result says why and names N = 84 (the estimate (k h)^2 / 8 at half the 6 %),
+    at which the rod buckles below that last turn (oracle: the exact threshold and the
+    located bifurcation at N = 84)."""
     lam = 40.0
     exact = critical_turns(1.5, lam**2)
     opts = TweezersOptions(twist_ratio=1.5, length_over_diameter=None, tension=lam**2,
@@ -62,13 +63,12 @@ def test_a_threshold_below_the_last_turn_that_the_mesh_does_not_reach_is_named()
     assert [b.name for b in result.branches] == ["straight"]
     assert not result.branch("straight").points_of_kind("bifurcation")
     assert any("does not buckle below" in n for n in result.notes)
-    assert any("lies below the last turn" in n and "--nodes >= 66 " in n
-               for n in result.notes)
-    at_66 = dataclasses.replace(opts, n_nodes=66)
-    rod, q0 = clamped_problem(at_66)
-    found = straight_branch(at_66, rod, q0, None).points_of_kind("bifurcation")
-    assert found and found[0].parameter < at_66.turns[1]
-    assert unreached_note(at_66) is None
+    assert any("below the last turn" in n and "--nodes >= 84 " in n for n in result.notes)
+    at_84 = dataclasses.replace(opts, n_nodes=84)
+    rod, q0 = clamped_problem(at_84)
+    found = straight_branch(at_84, rod, q0, None).points_of_kind("bifurcation")
+    assert found and found[0].parameter < at_84.turns[1]
+    assert unreached_note(at_84) is None
     assert unreached_note(dataclasses.replace(opts, turns=(0.0, 0.99 * exact))) is None
 
 

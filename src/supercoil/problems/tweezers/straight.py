@@ -219,38 +219,42 @@ def resolution_note(options: TweezersOptions, buckling: float) -> str | None:
     if not gap > GREENHILL_GAP:
         return None
     return (f"the straight rod buckles at {buckling:.6g} turns, {100 * gap:.3g} % above "
-            f"Greenhill's clamped condition ({exact:.6g}): {_under_resolved(options)}")
+            f"Greenhill's clamped condition ({exact:.6g}): "
+            + _under_resolved(options, GREENHILL_GAP,
+                              f"brings the buckling within {100 * GREENHILL_GAP:g} %"))
 
 
 def unreached_note(options: TweezersOptions) -> str | None:
     """A note when the straight rod does not buckle up to the last turn although
-    Greenhill's clamped condition lies below it and the segments' estimate ``(k h)^2 / 8``
-    of the late buckling (:func:`resolution_note`) exceeds ``GREENHILL_GAP``: the mesh
-    under-resolves the buckling helix, and the note names the ``--nodes`` that bring it
-    within that gap. None otherwise (or without tension)."""
+    Greenhill's clamped condition lies below it, by less than the segments' estimate
+    ``(k h)^2 / 8`` of the discrete rod's late buckling (:func:`resolution_note`): the
+    note names the ``--nodes`` whose estimate is half the margin between the condition
+    and the last turn (at most ``GREENHILL_GAP``). None otherwise (or without tension)."""
     if not options.load_control or not options.tension:
         return None
     from supercoil.problems.greenhill import critical_turns
 
     exact = critical_turns(options.twist_ratio, options.tension)
+    margin = options.turns[1] / exact - 1.0
     late = (math.sqrt(options.tension) / (options.n_nodes - 2)) ** 2 / 8.0
-    if not (exact < options.turns[1] and late > GREENHILL_GAP):
+    if not 0.0 < margin < late:
         return None
-    return (f"Greenhill's clamped condition ({exact:.6g} turns) lies below the last turn, "
-            f"but the discrete rod buckles later by about (k h)^2/8 = {100 * late:.3g} %: "
-            f"{_under_resolved(options)}")
+    return (f"Greenhill's clamped condition ({exact:.6g} turns) lies {100 * margin:.2g} % "
+            f"below the last turn, and the discrete rod buckles later by about "
+            f"(k h)^2/8 = {100 * late:.2g} %: "
+            + _under_resolved(options, min(GREENHILL_GAP, 0.5 * margin),
+                              "brings the buckling below the last turn"))
 
 
-def _under_resolved(options: TweezersOptions) -> str:
+def _under_resolved(options: TweezersOptions, gap: float, goal: str) -> str:
     """The segments against ``sqrt(A/F)``, and the ``--nodes`` whose estimated late
-    buckling ``(k h)^2 / 8`` is ``GREENHILL_GAP``."""
+    buckling ``(k h)^2 / 8`` is ``gap`` (what they achieve: ``goal``)."""
     k = math.sqrt(options.tension)  # sqrt(F/A) in units of 1/L
     h = 1.0 / (options.n_nodes - 2)
-    nodes = 2 + math.ceil(k / math.sqrt(8.0 * GREENHILL_GAP))
+    nodes = 2 + math.ceil(k / math.sqrt(8.0 * gap))
     return (f"its segments ({h:.3g} L) are {k * h:.2g} times the length sqrt(A/F) = "
             f"{1 / k:.3g} L of the buckling helix and the localised loop, which this mesh "
-            f"under-resolves; --nodes >= {nodes} brings the buckling within "
-            f"{100 * GREENHILL_GAP:g} %")
+            f"under-resolves; --nodes >= {nodes} {goal}")
 
 
 def straight_force_branch(options: TweezersOptions, turns: float,

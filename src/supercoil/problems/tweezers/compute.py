@@ -181,13 +181,8 @@ def tweezers_branches(options: TweezersOptions,
         if old is not None and len(old) >= 2:  # resumed: the pins of the stored points
             free_pins = resumed_pins(old, free_pins)
     free = verify_bifurcations(free)
-    sliding = free.records.get("sliding_residual", np.zeros(0))
-    if len(free) and np.max(sliding) > SLIDING_NOTE:
-        k = int(np.argmax(sliding))
-        notes.append(f"{free_name}: the sliding of the localised loop is held by a phase row "
-                     f"(docs/continuation.md); the force it holds, max |KKT residual| "
-                     f"without it, is at most {float(sliding[k]):.2e} (at "
-                     f"{float(free.parameter_values[k]):.4g} turns)")
+    held_force_note(free, "the sliding of the localised loop is held by a phase row "
+                    "(docs/continuation.md); the force it holds", notes)
     onset = first_onset(free)
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
@@ -248,12 +243,7 @@ def tweezers_branches(options: TweezersOptions,
             last = mirrored
             notes.append(f"{contact_name}: closed ({contact.message}); followed again held "
                          f"on its half-turn symmetry: {mirrored.name}")
-            held_force = mirrored.records.get("sliding_residual", np.zeros(0))
-            if len(mirrored) and np.max(held_force) > SLIDING_NOTE:
-                k = int(np.argmax(held_force))
-                notes.append(f"{mirrored.name}: the force its phase row holds, max |KKT "
-                             f"residual| without it, is at most {float(held_force[k]):.2e} "
-                             f"(at {float(mirrored.parameter_values[k]):.4g} turns)")
+            held_force_note(mirrored, "the force its phase row holds", notes)
         if held is None or (mirrored.status is ContinuationStatus.CLOSED_LOOP
                             and mirrored.parameter_values[-1] < opts.turns[1] - 1e-9):
             start = time.perf_counter()
@@ -290,3 +280,14 @@ def tweezers_branches(options: TweezersOptions,
     return TweezersResult(opts, tuple(branches), frozenset(names), rod, cp, seconds,
                           tuple(notes), pins, frozenset({free_name}))
 
+
+def held_force_note(branch, what: str, notes: list[str]) -> None:
+    """Append to ``notes`` where the force a phase row holds along ``branch`` (its record
+    ``sliding_residual``, the KKT residual without the row) exceeds ``SLIDING_NOTE``:
+    ``what``, its largest value and the turns there."""
+    force = branch.records.get("sliding_residual", np.zeros(0))
+    if len(branch) and np.max(force) > SLIDING_NOTE:
+        k = int(np.argmax(force))
+        notes.append(f"{branch.name}: {what}, max |KKT residual| without it, is at most "
+                     f"{float(force[k]):.2e} (at {float(branch.parameter_values[k]):.4g} "
+                     f"turns)")

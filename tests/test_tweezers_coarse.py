@@ -3,6 +3,7 @@ resolves it, and the note that says so when the contact branch ends early."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -60,3 +61,17 @@ def test_the_note_names_the_cause_where_a_pinned_contact_branch_ends_early():
     assert "--nodes >= 162" in note and "4 points" in note
     assert pinned_loop_note(options(80, 204), early) is None
     assert pinned_loop_note(options(80, 102), Folded([6.5, 25.0], folds=415)) is None
+
+
+def test_no_branch_is_held_on_its_symmetry_where_the_mesh_pins_the_loop():
+    """The held branch's phase row would hold the mesh's force, not round-off, on a mesh
+    that pins the loop's core (the quintic contact curve at L/D = 100, lambda = 150,
+    N = 102: up to 6.4e-2 of KKT residual): :func:`mirrored_contact` declines there before
+    it reads the branch, as it does without ``loop_sliding``, and the contact branch's
+    runs carry no sliding row (``loop_slides``)."""
+    from supercoil.problems.tweezers.mirrored import mirrored_contact
+
+    for lam, nodes in ((150.0, 102), (80.0, 102)):
+        pinned = dataclasses.replace(options(lam, nodes), loop_sliding=True)
+        assert pinned.mesh_pins_loop and not pinned.loop_slides
+        assert mirrored_contact(pinned, None, None, None, None, "buckled_contact", {}) is None

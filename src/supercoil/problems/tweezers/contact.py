@@ -175,7 +175,7 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     ``onset`` and its azimuth pins: the stored one when complete, else computed (an
     incomplete stored one continued) with its contact events classified. ``pinned``:
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`).
-    ``hold`` (with ``loop_sliding``): the sliding's phase row is carried in contact too,
+    ``hold`` (where ``loop_sliding`` applies, ``loop_slides``): the sliding's phase row is carried in contact too,
     anchored at the state's symmetric part (:mod:`supercoil.problems.tweezers.mirrored`)."""
     # in contact the discrete contact makes the sliding of the plectoneme stiff, of
     # either sign: no phase row, but out of the count while the tails are straight
@@ -186,7 +186,7 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     q = free.states[k]
     set_pin(cp, rod, q)
     contact_opts = contact_options(opts, 1 if free.tangents[k, -1] >= 0 else -1)
-    sliding = ContactSliding(rod, cp, contact_opts, opts.loop_sliding, hold)
+    sliding = ContactSliding(rod, cp, contact_opts, opts.loop_slides, hold)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     old, complete = stored.get(name, (None, False))

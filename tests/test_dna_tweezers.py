@@ -125,6 +125,7 @@ def test_contact_curve_defaults_to_the_quintic_with_dna(dna_run, tmp_path):
     assert json.loads((dna_run / "branch.json").read_text())["contact_curve"] == "quintic"
     assert json.loads((dna_run / "branch.json").read_text())["loop_sliding"] is True
     assert sc.load(dna_run).settings["contact_curve"] == "quintic"
+    assert sc.load(dna_run).settings["loop_sliding"] is True  # a resume must match it
     dna = parse_study(STUDY).tweezers_options()
     assert dna.contact_curve == "quintic" and dna.loop_sliding
     plain = '[rod]\ntwist_ratio = 1.5\n[problem]\nkind = "tweezers"\ntension = 10\n'

@@ -19,6 +19,7 @@ from supercoil.cli.main import run
 from supercoil.io.study import StudyError, parse_study
 from supercoil.units.dna import DNAPreset
 from supercoil.units.tweezers import (
+    dna_numerics,
     dna_tweezers_inputs,
     resolving_nodes,
     turns_of_span,
@@ -119,16 +120,42 @@ def test_cli_sigma_and_default_nodes(dna_run):
 def test_contact_curve_defaults_to_the_quintic_with_dna(dna_run, tmp_path):
     # DNA runs resolve the ply at segments of D, where the cubic B-spline's contact
     # ripples (tests/test_contact_integral.py): their default curve is DNA_CONTACT_CURVE,
-    # on the command line, in study files and in the library; a given curve is kept
+    # on the command line, in study files and in the library; a given curve is kept.
+    # loop_sliding is on with them too (dna_numerics), where the mesh lets the loop slide
     assert json.loads((dna_run / "branch.json").read_text())["contact_curve"] == "quintic"
+    assert json.loads((dna_run / "branch.json").read_text())["loop_sliding"] is True
     assert sc.load(dna_run).settings["contact_curve"] == "quintic"
-    assert parse_study(STUDY).tweezers_options().contact_curve == "quintic"
+    assert sc.load(dna_run).settings["loop_sliding"] is True  # a resume must match it
+    dna = parse_study(STUDY).tweezers_options()
+    assert dna.contact_curve == "quintic" and dna.loop_sliding
     plain = '[rod]\ntwist_ratio = 1.5\n[problem]\nkind = "tweezers"\ntension = 10\n'
     assert parse_study(plain).tweezers_options().contact_curve == "spline"
+    assert not parse_study(plain).tweezers_options().loop_sliding
     out = tmp_path / "cubic"
     assert run(["tweezers", "--dna", "--bp", "300", "--force-pN", "0.3", "--sigma",
                 "0:0.002", "--contact-curve", "spline", "--out", str(out), "--quiet"]) == 0
     assert json.loads((out / "branch.json").read_text())["contact_curve"] == "spline"
+    assert json.loads((out / "branch.json").read_text())["loop_sliding"] is True
+
+
+@pytest.mark.parametrize("force,salt", [(1.0, 150), (4.0, 150), (1.0, 10)])
+def test_loop_sliding_is_on_with_dna_where_the_mesh_lets_the_loop_slide(force, salt):
+    """Where n0's segments h = L/(n0 - 2) are longer than half the loop's core sqrt(A/F)
+    (h sqrt(F/A) > 1/2, computed here from the preset's own L, D and A), the mesh pins
+    the loop and loop_sliding would not apply: DNA runs leave it off there."""
+    preset = DNAPreset(3000, salt_mM=salt)
+    nodes = resolving_nodes(preset.length_over_diameter)
+    core = 3000 * RISE / (nodes - 2) * math.sqrt(force / (P_B * KT))
+    text = STUDY.replace("salt_mM = 150", f"salt_mM = {salt}").replace(
+        "force_pN = 1.0", f"force_pN = {force}")
+    options = parse_study(text).tweezers_options()
+    assert options.n_nodes == nodes
+    assert options.core_segments == pytest.approx(core, rel=1e-12)
+    assert options.loop_sliding is (core <= 0.5)
+    tension = sc.Tweezers.from_dna(preset, force).tension
+    assert dna_numerics({}, tension, nodes) == {"contact_curve": "quintic",
+                                                "loop_sliding": core <= 0.5}
+    assert dna_numerics({"loop_sliding": False}, tension, nodes)["loop_sliding"] is False
 
 
 def _texts(fig) -> list[str]:
@@ -260,8 +287,10 @@ def test_library_from_dna_and_sigma(tmp_path):
     diagram = sc.tweezers(problem, superhelical_density=(0, 0.02), max_points=40)
     assert diagram.settings.turns == pytest.approx((0.0, 0.02 * 300 / REPEAT), rel=1e-15)
     assert diagram.settings.contact_curve == "quintic"  # DNA_CONTACT_CURVE
-    assert sc.tweezers(problem, superhelical_density=(0, 0.002), max_points=5,
-                       contact_curve="spline").settings.contact_curve == "spline"
+    assert diagram.settings.loop_sliding  # dna_numerics
+    given = sc.tweezers(problem, superhelical_density=(0, 0.002), max_points=5,
+                        contact_curve="spline", loop_sliding=False).settings
+    assert given.contact_curve == "spline" and not given.loop_sliding
     saved = sc.load(sc.save(diagram, tmp_path / "r.h5"))
     assert saved.units == "dna"
     point = saved.summary["points"][-1]

@@ -145,3 +145,79 @@ def test_a_closed_contact_branch_is_followed_again_held_on_its_symmetry(monkeypa
     assert held.parameter_values[-1] == pytest.approx(options.turns[1])
     assert result.ok, result.notes
     assert any("followed again held on its half-turn symmetry" in n for n in result.notes)
+
+
+def stopping(monkeypatch, module, name: str, points: int):
+    """Make ``module.contact_branch`` return branch ``name`` cut after ``points`` points as
+    stopped at the minimum step (as the free contact branch of a loop whose sliding the
+    turns drive does, benchmarks/results/long_dna_grid.md)."""
+    real = module.contact_branch
+
+    def stopped(*args, **kwargs):
+        branch, pins = real(*args, **kwargs)
+        if branch.name == name:
+            branch = dataclasses.replace(head(branch, points),
+                                         status=ContinuationStatus.STEP_TOO_SMALL,
+                                         message="made to stop")
+        return branch, pins
+    monkeypatch.setattr(module, "contact_branch", stopped)
+
+
+def test_a_stopped_contact_branch_is_followed_again_held_on_its_symmetry(monkeypatch):
+    """The driver's path where the free contact branch stops (here made to, after its
+    6th point, at the minimum step): from its symmetric start the held branch is computed
+    after it and reaches the last turn, its states symmetric and equilibria without the
+    row; the notes give the free branch's stop, then the held branch; the run is
+    complete, the stopped branch handed over."""
+    stopping(monkeypatch, compute, "buckled_contact", 6)
+    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
+                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
+                              loop_sliding=True)
+    result = tweezers_branches(options)
+    names = [b.name for b in result.branches]
+    assert names[-2:] == ["buckled_contact", "buckled_contact" + SUFFIX]
+    free, held = result.branches[-2:]
+    assert free.status is ContinuationStatus.STEP_TOO_SMALL and len(free) == 6
+    assert held.name in result.contact_branches
+    assert held.status is ContinuationStatus.PARAMETER_BOUND, held.message
+    assert held.parameter_values[-1] == pytest.approx(options.turns[1])
+    np.testing.assert_allclose(held.states[0], free.states[0], atol=1e-12)  # same start
+    assert all(mirror_asymmetry(q) <= MIRROR_TOLERANCE * options.diameter
+               for q in held.states)
+    assert np.all(radii_asymmetry(held.states) < 1e-6)
+    assert np.max(held.records["sliding_residual"]) < 1e-5
+    assert result.ok, result.notes
+    assert result.held_instead == {"buckled_contact"} and result.branch_ok(free)
+    stop = f"{free.parameter_values[-1]:.6g}"
+    assert (f"buckled_contact: stopped at {stop} turns (made to stop); followed again held "
+            f"on its half-turn symmetry: buckled_contact{SUFFIX}") in result.notes
+
+
+def test_a_held_branch_that_stops_too_says_why(monkeypatch):
+    """Where the held branch stops as well (here made to), the run is not complete: the
+    notes give the free branch's stop, then the held branch's failure."""
+    from supercoil.problems.tweezers import mirrored
+
+    stopping(monkeypatch, compute, "buckled_contact", 6)
+    stopping(monkeypatch, mirrored, "buckled_contact" + SUFFIX, 12)
+    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
+                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
+                              loop_sliding=True)
+    result = tweezers_branches(options)
+    assert [b.name for b in result.branches][-2:] == ["buckled_contact",
+                                                       "buckled_contact" + SUFFIX]
+    assert not result.ok
+    assert any(n.startswith("buckled_contact: stopped at") for n in result.notes)
+    assert f"failed: buckled_contact{SUFFIX}: made to stop" in result.notes
+
+
+def test_a_stopped_contact_branch_without_a_symmetric_start_fails(monkeypatch):
+    """Without loop_sliding there is no symmetric start to hold: the stopped free branch
+    is the last, and the run fails with its reason."""
+    stopping(monkeypatch, compute, "buckled_contact", 6)
+    result = tweezers_branches(TweezersOptions(
+        twist_ratio=1.5, length_over_diameter=100, tension=100, n_nodes=102,
+        turns=(0.0, 3.34), max_points=400))
+    assert result.branches[-1].name == "buckled_contact"
+    assert not result.ok and result.held_instead == frozenset()
+    assert "failed: buckled_contact: made to stop" in result.notes

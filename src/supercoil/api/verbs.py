@@ -184,16 +184,16 @@ def _settings(cls, fixed: dict, options: dict):
 
 def _tweezers_settings(problem: Tweezers, turns, options: dict):
     """The :class:`~supercoil.problems.tweezers.TweezersOptions` of ``problem`` over
-    ``turns`` with the numerical ``options`` (a problem in DNA units: the contact curve
-    :data:`~supercoil.units.tweezers.DNA_CONTACT_CURVE` unless given)."""
+    ``turns`` with the numerical ``options`` (a problem in DNA units: the DNA runs'
+    defaults, :func:`~supercoil.units.tweezers.dna_numerics`, for those not given)."""
     from supercoil.problems.tweezers import TweezersOptions
 
     rod = problem.rod
     lod = None if problem.contact is None else problem.contact.length_over_diameter
-    if problem.dna is not None and "contact_curve" not in options:
-        from supercoil.units.tweezers import DNA_CONTACT_CURVE
+    if problem.dna is not None:
+        from supercoil.units.tweezers import dna_numerics
 
-        options = {**options, "contact_curve": DNA_CONTACT_CURVE}
+        options = dna_numerics(options, problem.tension, rod.nodes)
     return _settings(TweezersOptions, {
         "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
         "tension": problem.tension, "end_distance": problem.end_distance}, {

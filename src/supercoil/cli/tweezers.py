@@ -132,7 +132,11 @@ def tweezers(
     dna: Annotated[bool, typer.Option(
         "--dna", help="A DNA molecule in physical units (--bp, --force-pN, --salt-mM or "
         "--diameter-nm, --temperature-K) instead of --twist-ratio, --tension and "
-        "--length-over-diameter. The model is athermal.")] = False,
+        "--length-over-diameter. The model is athermal. DNA runs hold the localised "
+        "loop's sliding by a phase row up to its contact (loop_sliding; not where the "
+        "segments are longer than half the loop's core sqrt(A/F)), and follow a contact "
+        "branch that stops or closes again held on its half-turn symmetry "
+        "(docs/tweezers.md).")] = False,
     bp: Annotated[int | None, typer.Option(
         "--bp", metavar="N", help=f"With --dna: number of base pairs, "
         f"{checks.MIN_BASE_PAIRS} to {checks.MAX_BASE_PAIRS}.", show_default=False)] = None,
@@ -185,10 +189,12 @@ def tweezers(
         preset, span, (twist_ratio, tension, length_over_diameter, (start, stop), nodes) = \
             _dna_inputs(twist_ratio, tension, length_over_diameter, end_distance, bp,
                         force_pN, salt_mM, diameter_nm, temperature_K, turns, sigma, nodes)
-        if contact_curve is None:
-            from supercoil.units.tweezers import DNA_CONTACT_CURVE
+        from supercoil.units.tweezers import dna_numerics
 
-            contact_curve = DNA_CONTACT_CURVE
+        numerics = dna_numerics({} if contact_curve is None else
+                                {"contact_curve": contact_curve}, tension, nodes)
+        contact_curve = numerics["contact_curve"]
+        loop_sliding = numerics["loop_sliding"]
     else:
         for option, value in (("--bp", bp), ("--force-pN", force_pN), ("--salt-mM", salt_mM),
                               ("--diameter-nm", diameter_nm),
@@ -205,6 +211,7 @@ def tweezers(
         start, stop = parse_span("--turns", turns, "START:STOP in turns, like 0:5")
         nodes = 100 if nodes is None else nodes
         contact_curve = "spline" if contact_curve is None else contact_curve
+        loop_sliding = False
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
              "--end-distance Z/L (displacement control, 0 < z/L < 1; up to 2 with --model "
@@ -232,7 +239,8 @@ def tweezers(
                                   end_distance=end_distance, turns=(start, stop),
                                   n_nodes=nodes, max_points=max_points,
                                   contact_curve=contact_curve,
-                                  contact_formulation=contact_formulation)
+                                  contact_formulation=contact_formulation,
+                                  loop_sliding=loop_sliding)
         if protocol != "up":
             check_path(options, protocol, step, force_range=ramp, force_step=force_step)
         if model != "cosserat":
@@ -243,7 +251,8 @@ def tweezers(
                 "length_over_diameter": length_over_diameter, "tension": tension,
                 "end_distance": end_distance, "turns": [start, stop], "nodes": nodes,
                 "max_points": max_points, "contact_curve": contact_curve,
-                "contact_formulation": contact_formulation, "protocol": protocol,
+                "contact_formulation": contact_formulation, "loop_sliding": loop_sliding,
+                "protocol": protocol,
                 "step": step, "force_range": ramp, "force_step": force_step,
                 "superhelical_density": None if span is None else list(span),
                 "dna": None if preset is None else preset.record(),

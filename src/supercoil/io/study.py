@@ -130,16 +130,17 @@ class Study:
             max_points=c["max_points"], segment_points=c["segment_points"],
             event_tolerance=c["event_tolerance"],
             contact_event_tolerance=c["contact_event_tolerance"],
-            contact_tolerance=c["contact_tolerance"], **self._dna_contact_curve())
+            contact_tolerance=c["contact_tolerance"], **self._dna_numerics())
 
-    def _dna_contact_curve(self) -> dict:
-        """A DNA study's contact curve (:data:`~supercoil.units.tweezers.DNA_CONTACT_CURVE`),
-        none otherwise (the options' default)."""
+    def _dna_numerics(self) -> dict:
+        """A DNA study's defaults (:func:`~supercoil.units.tweezers.dna_numerics`: the
+        contact curve, ``loop_sliding``), none otherwise (the options' defaults)."""
         if self.units != "dna":
             return {}
-        from supercoil.units.tweezers import DNA_CONTACT_CURVE
+        from supercoil.units.tweezers import dna_numerics
 
-        return {"contact_curve": DNA_CONTACT_CURVE}
+        s = self.settings
+        return dna_numerics({}, s["problem"].get("tension"), s["rod"]["nodes"])
 
     def rod(self):
         """The study's :class:`supercoil.Rod` or :class:`supercoil.CosseratRod` (the

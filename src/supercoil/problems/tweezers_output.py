@@ -101,6 +101,7 @@ def result_payload(result: TweezersResult, contacts: bool = True) -> dict:
         "n_nodes": opts.n_nodes,
         "contact_curve": opts.contact_curve,
         "contact_formulation": opts.contact_formulation,
+        "loop_sliding": opts.loop_sliding,
         "greenhill_turns": result.greenhill_turns,
         "branches": branches,
         "special_points": [special_summary(p) for p in result.special_points()],

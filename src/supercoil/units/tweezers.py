@@ -10,7 +10,9 @@ turns or as superhelical density, and the number of nodes:
   longer than the tube's diameter D, which the contact of a plectoneme's two strands
   needs (a coarser polygon cannot resolve the ply);
 * the contact curve defaults to :data:`DNA_CONTACT_CURVE`, the quintic B-spline, whose
-  self-distance does not ripple with the nodes' phase at segments of D.
+  self-distance does not ripple with the nodes' phase at segments of D, and
+  ``loop_sliding`` to on where the mesh lets the loop slide (:func:`dna_numerics`, the one
+  place these defaults are applied).
 
 :func:`dna_tweezers_inputs` is the one check of these inputs, shared by the command line
 (``supercoil tweezers --dna``), study files (``supercoil run``) and the library
@@ -24,6 +26,7 @@ and :func:`tweezers_payload_in_dna_units` add the DNA keys to a point and to a
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 from supercoil import checks
 from supercoil.errors import InputError
@@ -45,6 +48,32 @@ follows from one to the other (``supercoil tweezers --dna --bp 3000 --force-pN 1
 --salt-mM 150 --sigma 0:0.06`` turned back and forth between 9.07 and 9.22 turns for
 1600 points, the sliding's eigenvalue swinging from -3.3e5 to 3e4); with the quintic
 it grows the plectoneme to the last turn (docs/performance.md)."""
+
+
+def dna_numerics(options: Mapping[str, object], tension: float | None,
+                 n_nodes: int) -> dict:
+    """``options`` (of :class:`~supercoil.problems.tweezers.TweezersOptions`) with the DNA
+    runs' defaults for those not given: the contact curve :data:`DNA_CONTACT_CURVE`, and
+    ``loop_sliding`` on unless the mesh of ``n_nodes`` pins the loop at the tension F L^2/A
+    (:attr:`~supercoil.problems.tweezers.TweezersOptions.mesh_pins_loop`, where the
+    option would not apply).
+
+    With the sliding's phase row the localised loop stays centred up to its contact, and
+    a contact branch that stops or closes before the last turn is followed again held
+    on its half-turn symmetry from that centred start
+    (:mod:`supercoil.problems.tweezers.mirrored`). Measured on 3 kbp from sigma 0 to
+    0.06 (``benchmarks/results/long_dna_grid.md``, "DNA preset"): at 0.25 pN / 200 mM,
+    0.5 pN / 150 mM and 1 pN / 200 mM the free contact branch stops a few points into
+    its contact, the loop's sliding, driven by the turns, setting the tangent; held,
+    they reach sigma 0.06, where without the row the loop has slid off the middle before
+    its contact and no symmetric start is there to hold. At 1 pN / 150 mM the free
+    contact branch reaches sigma 0.06 either way, with the row in fewer seconds.
+    """
+    from supercoil.problems.tweezers.options import mesh_pins_loop
+
+    defaults = {"contact_curve": DNA_CONTACT_CURVE,
+                "loop_sliding": not mesh_pins_loop(tension, n_nodes)}
+    return {**defaults, **options}
 
 
 def tweezers_parameters(preset: DNAPreset, force_pN: float) -> dict[str, float]:

@@ -11,7 +11,7 @@ import numpy as np
 
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation import Branch, ContinuationOptions, ContinuationStatus
+from supercoil.continuation import Branch, ContinuationOptions
 from supercoil.problems.branch_options import coarse_mesh_note
 from supercoil.problems.contact_events import (
     cut_at_onset,
@@ -33,7 +33,7 @@ from supercoil.problems.tweezers.buckled import (
 )
 from supercoil.problems.tweezers.coarse import pinned_loop_note
 from supercoil.problems.tweezers.contact import contact_branch
-from supercoil.problems.tweezers.mirrored import mirrored_contact
+from supercoil.problems.tweezers.mirrored import closed_before, held_contact
 from supercoil.problems.tweezers.options import TweezersOptions, check_inextensible
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
@@ -219,46 +219,39 @@ def tweezers_branches(options: TweezersOptions,
     branches.append(contact)
     pins[contact_name] = contact_pins
     names = {contact_name}
-    last = contact
-    if contact.status is ContinuationStatus.CLOSED_LOOP \
-            and contact.parameter_values[-1] < opts.turns[1] - 1e-9:
+    last, handed = contact, frozenset()
+    closed = closed_before(contact, opts.turns[1])
+    if closed or contact.parameter_values[-1] < opts.turns[1] - 1e-9:
+        # closed, or stopped before the last turn: the same branch held on its half-turn
+        # symmetry (mirrored.py), which a freely followed one leaves at a pitchfork of the
+        # contact's ripple, or loses along the sliding that the turns drive
+        start = time.perf_counter()
+        held = held_contact(opts, rod, cp, free, onset, contact_name, stored, on_point,
+                            pinned, say, reach)
+        if held is not None:
+            last, pins[held[0].name] = held
+            seconds[last.name] = time.perf_counter() - start
+            final(last, True)
+            branches.append(last)
+            names.add(last.name)
+            handed = frozenset() if closed else frozenset({contact_name})
+            why = ("closed" if closed else
+                   f"stopped at {contact.parameter_values[-1]:.6g} turns")
+            notes.append(f"{contact_name}: {why} ({contact.message}); followed again held "
+                         f"on its half-turn symmetry: {last.name}")
+            held_force_note(last, "the force its phase row holds", notes)
+    if closed_before(last, opts.turns[1]):
         # the contact branch of a centred loop comes back onto itself or onto the
         # contact-free branch: the plectoneme branches off it at a bifurcation
         # (supercoil.problems.tweezers.plectoneme)
         start = time.perf_counter()
-        # first the same branch held on its half-turn symmetry (mirrored.py), which the
-        # freely followed one leaves at a pitchfork of the contact's ripple
-        held = mirrored_contact(opts, rod, cp, free, onset, contact_name, stored, on_point,
-                                pinned, say)
-        switched = None
-        if held is not None:
-            mirrored = close_on_return(held[0], free, D, reach)
-            mirrored = verify_bifurcations(dataclasses.replace(mirrored, parent=free_name,
-                                                               origin=onset))
-            seconds[mirrored.name] = time.perf_counter() - start
-            final(mirrored, True)
-            branches.append(mirrored)
-            names.add(mirrored.name)
-            pins[mirrored.name] = held[1]
-            last = mirrored
-            notes.append(f"{contact_name}: closed ({contact.message}); followed again held "
-                         f"on its half-turn symmetry: {mirrored.name}")
-            held_force_note(mirrored, "the force its phase row holds", notes)
-        if held is None or (mirrored.status is ContinuationStatus.CLOSED_LOOP
-                            and mirrored.parameter_values[-1] < opts.turns[1] - 1e-9):
-            start = time.perf_counter()
-            switched = switch_to_plectoneme(opts, rod, cp, last, on_point, pinned, say,
-                                            free=free, reach=reach)
-        if switched is None and held is None:
-            notes.append(f"incomplete: {contact_name} closed before "
-                         f"{opts.turns[1]:g} turns ({contact.message}) and no switch at its "
-                         f"bifurcations gave a branch")
-        elif switched is None and last.status is ContinuationStatus.CLOSED_LOOP \
-                and last.parameter_values[-1] < opts.turns[1] - 1e-9:
+        switched = switch_to_plectoneme(opts, rod, cp, last, on_point, pinned, say,
+                                        free=free, reach=reach)
+        if switched is None:
             notes.append(f"incomplete: {last.name} closed before {opts.turns[1]:g} turns "
                          f"({last.message}) and no switch at its bifurcations gave a branch")
-        elif switched is not None:
-            closed = last
+        else:
+            closed_branch = last
             last, switched_pins = switched
             last = verify_bifurcations(last)
             seconds[last.name] = time.perf_counter() - start
@@ -266,8 +259,9 @@ def tweezers_branches(options: TweezersOptions,
             branches.append(last)
             names.add(last.name)
             pins[last.name] = switched_pins
-            notes.append(f"{closed.name}: closed ({closed.message}); switched at "
-                         f"its bifurcation at {last.origin.parameter:.6g} turns: {last.name}")
+            notes.append(f"{closed_branch.name}: closed ({closed_branch.message}); switched "
+                         f"at its bifurcation at {last.origin.parameter:.6g} turns: "
+                         f"{last.name}")
     if not last.ok:
         notes.append(f"failed: {last.name}: {last.message}")
     elif last.parameter_values[-1] < opts.turns[1] - 1e-9 and not any(
@@ -278,7 +272,7 @@ def tweezers_branches(options: TweezersOptions,
     if pinned_loop is not None:
         notes.append(pinned_loop)
     return TweezersResult(opts, tuple(branches), frozenset(names), rod, cp, seconds,
-                          tuple(notes), pins, frozenset({free_name}))
+                          tuple(notes), pins, frozenset({free_name}), held_instead=handed)
 
 
 def held_force_note(branch, what: str, notes: list[str]) -> None:

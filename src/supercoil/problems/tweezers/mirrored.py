@@ -1,4 +1,5 @@
-"""The contact branch held on its half-turn symmetry, where the one followed freely closed.
+"""The contact branch held on its half-turn symmetry, where the one followed freely closed
+or stopped.
 
 From a centred localised loop (``loop_sliding``) the first contact lies at the loop's
 crossing, on the axis of the half-turn across the rod's middle that maps the rod onto
@@ -16,7 +17,13 @@ at 1.883 turns; at L/D = 200, lambda = 20, N = 404 it is left at 2.9 turns with 
 11 contact pairs, goes to 3.06 turns slid by 0.04 D, comes back onto the symmetric
 branch at 2.86 turns and follows it down onto the contact-free branch at 1.165 turns).
 No bifurcation is located on either (the sliding is left out of the count while the
-tails are straight), so no switch gives a branch.
+tails are straight), so no switch gives a branch. Where the loop's crossing is off the
+rod's middle by round-off, the turns drive the sliding, which the contact branch leaves
+out of the count but carries no phase row for; softer than any counted mode by 4-5
+decades, it sets the tangent by round-off, and the free branch stops a few points into
+its contact at the minimum step, its tangent turning by tens of degrees (measured on the
+3 kbp DNA at 0.25 pN / 200 mM, 1 pN / 200 mM and 0.5 pN / 150 mM:
+``benchmarks/results/long_dna_grid.md``, "DNA preset").
 
 :func:`mirrored_contact` follows the contact branch again from the same start with the
 sliding's phase row in contact too, anchored at each step at the state's symmetric part
@@ -30,13 +37,16 @@ branch is.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation import Branch, SpecialPoint
+from supercoil.continuation import Branch, ContinuationStatus, SpecialPoint
 from supercoil.problems.contact_events import contact_start
 from supercoil.problems.tweezers.contact import MIRROR_TOLERANCE, contact_branch
 from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.problems.tweezers.returned import close_on_return
+from supercoil.problems.tweezers.verify import verify_bifurcations
 from supercoil.rod.mirror import mirror_asymmetry
 from supercoil.rod.open import ClampedRodEnergy
 
@@ -65,3 +75,27 @@ def mirrored_contact(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactPr
     say(f"{name}{SUFFIX}: the contact branch again, held on its half-turn symmetry")
     return contact_branch(opts, rod, cp, free, onset, name + SUFFIX, stored, on_point,
                           pinned, say, hold=True)
+
+
+def closed_before(branch: Branch, last_turn: float) -> bool:
+    """Whether ``branch`` closed a loop before ``last_turn`` turns."""
+    return (branch.status is ContinuationStatus.CLOSED_LOOP
+            and branch.parameter_values[-1] < last_turn - 1e-9)
+
+
+def held_contact(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
+                 free: Branch, onset: SpecialPoint, name: str,
+                 stored: Mapping[str, tuple[Branch, bool]], on_point=None, pinned=None,
+                 say: Callable[[str], None] = lambda message: None, reach: float = 1.0
+                 ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]] | None:
+    """:func:`mirrored_contact` as the driver takes it where the free contact branch
+    ``name`` closed or stopped: closed where it comes back onto ``free`` (within
+    ``reach`` D, :func:`~supercoil.problems.tweezers.returned.close_on_return`), its
+    bifurcations verified, branched off ``free`` at ``onset``; None where no symmetric
+    start is held."""
+    held = mirrored_contact(opts, rod, cp, free, onset, name, stored, on_point, pinned, say)
+    if held is None:
+        return None
+    branch = close_on_return(held[0], free, opts.diameter, reach)
+    branch = verify_bifurcations(dataclasses.replace(branch, parent=free.name, origin=onset))
+    return branch, held[1]

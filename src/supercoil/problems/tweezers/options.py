@@ -52,9 +52,11 @@ class TweezersOptions:
     contact-free branch, out of the unstable count; docs/continuation.md, "Long open
     rods"; not on segments longer than ``sqrt(A/F) / 2``, :attr:`loop_slides`): it lets
     long rods reach their contact where the corrector otherwise diverges along the nearly
-    free sliding and keeps a centred loop centred, but from the centred loop the 3 kbp
-    hat curve at 1 pN (lambda about 71) comes back onto itself at a symmetry-breaking
-    bifurcation of its contact branch, so it is off by default; ``contact_formulation``:
+    free sliding and keeps a centred loop centred, from which a contact branch that
+    stops or closes is followed again held on its half-turn symmetry
+    (:mod:`~supercoil.problems.tweezers.mirrored`); off by default, on by default for
+    DNA runs where it applies (:func:`~supercoil.units.tweezers.dna_numerics`);
+    ``contact_formulation``:
     ``"integral"``
     (default) or ``"pairs"`` (``ContactOptions.formulation``). The default,
     the double integral over the B-spline, counts a contact once wherever it
@@ -129,17 +131,14 @@ class TweezersOptions:
     def core_segments(self) -> float | None:
         """``h sqrt(F/A)``: the segment ``h = L / (N - 2)`` over the localised loop's core
         ``sqrt(A/F)`` (None without a tension: no core)."""
-        if not self.load_control or not self.tension:
-            return None
-        return math.sqrt(self.tension) / (self.n_nodes - 2)
+        return core_segments(self.tension, self.n_nodes)
 
     @property
     def mesh_pins_loop(self) -> bool:
         """The segments are longer than ``SLIDING_CORE`` times the loop's core
         (:attr:`core_segments`): the mesh pins the localised loop and the plectoneme's
         end loop (:mod:`~supercoil.problems.tweezers.coarse`)."""
-        core = self.core_segments
-        return core is not None and core > SLIDING_CORE
+        return mesh_pins_loop(self.tension, self.n_nodes)
 
     @property
     def diameter(self) -> float | None:
@@ -148,6 +147,20 @@ class TweezersOptions:
     @property
     def tolerances(self) -> dict:
         return branch_tolerances(self)
+
+
+def core_segments(tension: float | None, n_nodes: int) -> float | None:
+    """``h sqrt(F/A)`` of N nodes under the tension F L^2/A (None without one)."""
+    if not tension:
+        return None
+    return math.sqrt(tension) / (n_nodes - 2)
+
+
+def mesh_pins_loop(tension: float | None, n_nodes: int) -> bool:
+    """Whether N nodes' segments are longer than ``SLIDING_CORE`` times the loop's core
+    ``sqrt(A/F)`` (:attr:`TweezersOptions.mesh_pins_loop`)."""
+    core = core_segments(tension, n_nodes)
+    return core is not None and core > SLIDING_CORE
 
 
 def check_inextensible(end_distance: float | None) -> None:

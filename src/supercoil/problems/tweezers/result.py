@@ -30,13 +30,19 @@ class TweezersResult(BranchSet):
     # contact-free branches cut at their first contact: complete whatever the run that
     # went on beyond the contact (penetrating) ended with
     cut_at_contact: frozenset[str] = frozenset()
+    # contact branches that stopped before the last turn and were followed again held on
+    # their half-turn symmetry (mirrored.py): the held branch's end decides
+    held_instead: frozenset[str] = frozenset()
     model: dict = field(default_factory=lambda: {"model": "kirchhoff"})  # the rod model's keys
 
     def branch_ok(self, branch: Branch) -> bool:
         """The branch is complete: it reached its bound (or closed a loop), or it is a
-        contact-free branch handed over at its first contact to the contact branch. A
-        branch stopped by the point limit, a step failure or an interrupt is not."""
-        return branch.status.complete or branch.name in self.cut_at_contact
+        contact-free branch handed over at its first contact to the contact branch, or a
+        contact branch handed over where it stopped to the same branch held on its
+        symmetry. A branch stopped by the point limit, a step failure or an interrupt is
+        not."""
+        return (branch.status.complete or branch.name in self.cut_at_contact
+                or branch.name in self.held_instead)
 
     def pin_branch(self, name: str, index: int = 0):
         """Set the azimuth pin with which point ``index`` of branch ``name`` was computed.

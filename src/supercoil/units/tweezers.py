@@ -62,12 +62,12 @@ def dna_numerics(options: Mapping[str, object], tension: float | None,
     a contact branch that stops or closes before the last turn is followed again held
     on its half-turn symmetry from that centred start
     (:mod:`supercoil.problems.tweezers.mirrored`). Measured on 3 kbp from sigma 0 to
-    0.06 (``benchmarks/results/long_dna_grid.md``, "DNA preset"): at 0.25 pN / 200 mM,
-    0.5 pN / 150 mM and 1 pN / 200 mM the free contact branch stops a few points into
-    its contact, the loop's sliding, driven by the turns, setting the tangent; held,
-    they reach sigma 0.06, where without the row the loop has slid off the middle before
-    its contact and no symmetric start is there to hold. At 1 pN / 150 mM the free
-    contact branch reaches sigma 0.06 either way, with the row in fewer seconds.
+    0.06 (``benchmarks/results/long_dna_grid.md``, "DNA preset"): without the row, at
+    0.25 pN / 200 mM, 0.5 pN / 150 mM and 1 pN / 200 mM the free contact branch stopped a
+    few points into its contact, the loop's sliding, driven by the turns, setting the
+    tangent. With it, the last two and 1 pN / 150 mM reach sigma 0.06 on the free contact
+    branch (1 pN / 150 mM in fewer seconds than without), and at 0.25 pN / 200 mM the
+    free branch stops after 6 points and the held one reaches sigma 0.06.
     """
     from supercoil.problems.tweezers.options import mesh_pins_loop
 

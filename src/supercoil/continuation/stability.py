@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from supercoil.continuation.sliding_count import sliding_left_out
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
@@ -138,12 +139,39 @@ def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: f
     try:
         factor = KKTFactor(H, J)
         negative = factor.reduced_negative_count
+        negative -= stiff_sliding(system, x, H, negative)
         return negative, int(factor.determinant_sign * (-1) ** J.shape[0]), factor, dofs
     except (SingularMatrixError, InertiaError):
         if zero_tolerance is None:
             raise
-        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=system.mass)
-        return factor.reduced_negative_count, 0, factor, dofs
+        shift = -0.5 * zero_tolerance
+        factor = KKTFactor(H, J, shift=shift, mass=system.mass)
+        negative = factor.reduced_negative_count
+        return negative - stiff_sliding(system, x, H, negative, shift), 0, factor, dofs
+
+
+def stiff_sliding(system: ExtendedSystem, x: np.ndarray, H, negative: int,
+                  shift: float = 0.0) -> int:
+    """1 where the ``negative`` eigenvalues counted on the complement of the approximate
+    symmetries (:func:`count_rows` or the system's own phase rows) include the stiff
+    sliding's, which that complement does not take out
+    (:mod:`~supercoil.continuation.sliding_count`), else 0. ``H``: the count's Hessian."""
+    if negative <= 0:
+        return 0
+    problem = system.problem_at(x[-1])
+    modes = sliding_phase_modes(problem, system.q(x))
+    if modes.size == 0:
+        return 0
+    g = modes[:, system.free]
+    J = sp.csr_matrix(system.jacobian(x))
+    keep = np.arange(J.shape[0])
+    if system.r:  # the phase rows that hold the sliding are left out
+        coupling = np.abs(system.P @ g.T) / np.outer(np.linalg.norm(system.P, axis=1),
+                                                      np.linalg.norm(g, axis=1))
+        held = coupling.max(axis=1) > 0.1 / np.sqrt(system.n)
+        keep = np.concatenate([keep[:J.shape[0] - system.r],
+                               keep[J.shape[0] - system.r:][~held]])
+    return sliding_left_out(H, J[keep], g, system.mass, negative, shift)
 
 
 def related_order(order: np.ndarray, dofs: np.ndarray, rows: int, new_dofs: np.ndarray,

@@ -322,18 +322,19 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
 
 
 def lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
-                 factor_order=None):
+                 factor_order=None, sigma: float = -1e-3):
     """The eigenpairs of ``H v = mu M v`` on ``ker J`` (the symmetry modes projected
     out) nearest zero, ``(values, vectors)``: the method of
     :func:`_lowest_pairs_threads`, computed with one BLAS thread (the same eigenpairs,
-    bit for bit, whatever the thread count of the process)."""
+    bit for bit, whatever the thread count of the process). ``sigma``: the shift of
+    the sparse path (the eigenpairs nearest it; below the spectrum: the lowest)."""
     with _one_blas_thread():
         return _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry, force_sparse,
-                                     factor_order)
+                                     factor_order, sigma)
 
 
 def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
-                          factor_order=None):
+                          factor_order=None, sigma: float = -1e-3):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
@@ -358,7 +359,6 @@ def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_spars
     if not force_sparse and (dim <= 400 or k >= dim // 4):
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         return values[:k], vectors[:, :k]
-    sigma = -1e-3
     opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma, factor_order)
     root = np.sqrt(mass)
     scaled = spla.LinearOperator((n, n), matvec=lambda y: root * opinv(root * np.ravel(y)),

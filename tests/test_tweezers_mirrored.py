@@ -163,7 +163,7 @@ def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
     constrained Hessian has one negative eigenvalue, the sliding's (its eigenvector odd
     under the half-turn, overlap with ``g`` above 0.7), and on the complement of ``g``
     still one, the rest of that eigenvector; the count is the one with the sliding mode
-    left out."""
+    left out, and so are the eigenvalues reported with the point."""
     dense = []
     real = tracing.point_stability
 
@@ -172,8 +172,8 @@ def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
         problem = system.problem_at(x[-1])
         if getattr(problem, "base", None) is not None and problem.base.mirror_anchor \
                 and x[-1] > 3.3:
-            dense.append((stability.unstable_count,) + dense_check(problem, system.q(x),
-                                                                    system.multipliers(x)))
+            dense.append((stability.unstable_count, float(np.min(stability.eigenvalues)))
+                         + dense_check(problem, system.q(x), system.multipliers(x)))
         return stability
 
     monkeypatch.setattr(tracing, "point_stability", checked)
@@ -196,8 +196,9 @@ def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
     assert np.all(counts[folds[2].index + 1:] == 0)
     assert not [p for p in held.special_points if p.kind in ("bifurcation", "count_change")]
     assert len(dense) >= 3
-    for count, negative, with_g, overlap, odd in dense:
+    for count, lowest, negative, with_g, overlap, odd in dense:
         assert (count, negative, with_g) == (0, 1, 1)
+        assert lowest > 0  # the eigenvalues reported: the sliding's pair left out
         assert overlap > 0.7 and odd > 0.95
 
 

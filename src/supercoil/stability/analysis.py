@@ -237,7 +237,7 @@ def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, dofs: np.ndarray,
 
 
 def eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
-                 full_hessian=None):
+                 full_hessian=None, near: bool = True):
     """``(dofs, H, J, mass, symmetry)`` of the constrained eigenproblem at ``(q,
     multipliers)``: its DOFs (:func:`eigen_dofs`), the Hessian of the Lagrangian and
     the constraint Jacobian on them, their masses, and the M-orthonormal symmetry
@@ -245,6 +245,7 @@ def eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndar
 
     ``full_hessian``: the Hessian of the Lagrangian at ``(q, multipliers)`` on all
     DOFs (:func:`~supercoil.solvers.newton.lagrangian_hessian`) if already assembled.
+    ``near``: the approximate symmetries projected out too.
     """
     dofs = eigen_dofs(problem)
     H = (lagrangian_hessian(problem, q, multipliers) if full_hessian is None
@@ -255,7 +256,7 @@ def eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndar
     if problem.n_constraints:
         J = problem.constraint_jacobian(q)
         J = csr_columns(J, dofs) if getattr(J, "format", None) == "csr" else J[:, dofs]
-    return dofs, H, J, problem.mass[dofs], _symmetry_basis(problem, q, dofs)
+    return dofs, H, J, problem.mass[dofs], _symmetry_basis(problem, q, dofs, near)
 
 
 def negative_count(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray) -> int:

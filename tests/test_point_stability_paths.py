@@ -155,7 +155,7 @@ def test_eigen_factor_ordered_from_the_count_equals_the_fresh_ordering(excess_li
     overlap = np.abs(np.einsum("ij,ij->i", stab.modes * system.problem.mass, fresh_modes))
     assert np.all(overlap > 1 - 1e-8)
 
-    _neg, _sign, factor, dofs = inertia_with_factor(system, x, tol, None)
+    _neg, _sign, factor, dofs, _left_out = inertia_with_factor(system, x, tol, None)
     problem = system.problem
     eigen_dofs, H, J, mass, _sym = eigen_system(problem, system.q(x), system.multipliers(x))
     assert eigen_dofs.size == dofs.size + 6 and factor.m == J.shape[0] + system.r

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from supercoil.continuation import ContinuationStatus
+from supercoil.continuation import tracer as tracing
 from supercoil.continuation.resume import head
 from supercoil.problems.contact_events import first_onset
 from supercoil.problems.tweezers import TweezersOptions, compute, tweezers_branches
@@ -25,6 +26,11 @@ from supercoil.problems.tweezers.contact import MIRROR_TOLERANCE
 from supercoil.problems.tweezers.mirrored import SUFFIX, mirrored_contact
 from supercoil.problems.tweezers.returned import axis_distance
 from supercoil.rod.mirror import mirror_asymmetry, mirror_image, mirror_offset
+from supercoil.stability.analysis import (
+    dense_constrained_eigenpairs,
+    eigen_system,
+    sliding_phase_modes,
+)
 
 
 def symmetric_curve(n: int, angle: float) -> np.ndarray:
@@ -221,3 +227,87 @@ def test_a_stopped_contact_branch_without_a_symmetric_start_fails(monkeypatch):
     assert result.branches[-1].name == "buckled_contact"
     assert not result.ok and result.held_instead == frozenset()
     assert "failed: buckled_contact: made to stop" in result.notes
+def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
+    """At L/D = 200, lambda = 10, C/A = 1, N = 202 (segments of D) the held plectoneme's
+    count is one only between its two folds (the S's middle, as at N = 303, where the
+    folds lie at 2.4961 and 2.2000 turns against 2.4964 and 2.1998), and zero beyond:
+    from 3.27 turns the count on the complement of the sliding's generator ``g`` was
+    one (a reported bifurcation at 3.274 turns, none at N = 303, whose own count of
+    one came and went elsewhere). Oracle at the points beyond 3.3 turns, dense: the
+    constrained Hessian has one negative eigenvalue, the sliding's (its eigenvector odd
+    under the half-turn, overlap with ``g`` above 0.7), and on the complement of ``g``
+    still one, the rest of that eigenvector; the count is the one with the sliding mode
+    left out, and so are the eigenvalues reported with the point."""
+    dense = []
+    real = tracing.point_stability
+
+    def checked(system, x, zero_tolerance, n_modes, full=None):
+        stability = real(system, x, zero_tolerance, n_modes, full)
+        problem = system.problem_at(x[-1])
+        if getattr(problem, "base", None) is not None and problem.base.mirror_anchor \
+                and x[-1] > 3.3:
+            dense.append((stability.unstable_count, float(np.min(stability.eigenvalues)))
+                         + dense_check(problem, system.q(x), system.multipliers(x)))
+        return stability
+
+    monkeypatch.setattr(tracing, "point_stability", checked)
+    kept = {}
+    options = TweezersOptions(twist_ratio=1.0, length_over_diameter=200, tension=100,
+                              n_nodes=202, turns=(0.0, 3.35), max_points=30,
+                              loop_sliding=True)
+    result = tweezers_branches(options, on_branch=lambda b, contact: kept.update({b.name: b}))
+    free = kept["buckled"]
+    onset = first_onset(free) or free.points_of_kind("contact_onset")[0]
+    held, _pins = mirrored_contact(dataclasses.replace(options, max_points=400),
+                                   result.rod_problem, result.contact_problem, free, onset,
+                                   "buckled_contact", {})
+    assert held.parameter_values[-1] == pytest.approx(options.turns[1])
+    folds = [p for p in held.special_points if p.kind == "fold"]
+    assert [round(p.parameter, 2) for p in folds] == [1.06, 2.5, 2.2]
+    counts = np.asarray(held.unstable_count)
+    assert set(np.flatnonzero(np.diff(counts))) <= {p.index for p in folds}
+    assert np.all(counts[folds[1].index + 1:folds[2].index + 1] == 1)
+    assert np.all(counts[folds[2].index + 1:] == 0)
+    assert not [p for p in held.special_points if p.kind in ("bifurcation", "count_change")]
+    assert len(dense) >= 3
+    for count, lowest, negative, with_g, overlap, odd in dense:
+        assert (count, negative, with_g) == (0, 1, 1)
+        assert lowest > 0  # the eigenvalues reported: the sliding's pair left out
+        assert overlap > 0.7 and odd > 0.95
+
+
+def dense_check(problem, q: np.ndarray, multipliers: np.ndarray):
+    """``(negative, with_g, overlap, odd)``: the dense counts of the constrained Hessian
+    with the sliding kept and on the complement of its generator ``g``, the M-overlap of
+    the lowest eigenvector with ``g`` and the M-norm of its odd part under the half-turn
+    (of 1)."""
+    rod = problem.base
+    g = sliding_phase_modes(problem, q)[0]
+    dofs, H, J, mass, exact = eigen_system(problem, q, multipliers)
+    assert exact.shape[1] == 2  # the rotation about the axis and the sliding
+    with_g = int(np.sum(dense_constrained_eigenpairs(H, J, mass, exact)[0] < 0))
+    tail, rod.sliding_tail = rod.sliding_tail, None  # the sliding kept
+    try:
+        dofs, H, J, mass, exact = eigen_system(problem, q, multipliers)
+    finally:
+        rod.sliding_tail = tail
+    values, vectors = dense_constrained_eigenpairs(H, J, mass, exact)
+    mode = np.zeros(problem.n_dofs)
+    mode[dofs] = vectors[:, 0]
+    m = np.asarray(problem.mass, dtype=float)
+    overlap = abs(mode @ (m * g)) / np.sqrt(g @ (m * g))
+    axis = mirror_axis(q)
+    image = (mode.reshape(-1, 3)[::-1] @ (2 * np.outer(axis, axis) - np.eye(3)).T).ravel()
+    odd = 0.5 * (mode - image)  # the displacement's odd part (mode M-normalised)
+    return int(np.sum(values < 0)), with_g, overlap, np.sqrt(odd @ (m * odd))
+
+
+def mirror_axis(q: np.ndarray) -> np.ndarray:
+    """The horizontal axis ``n`` of the half-turn that maps ``q`` closest onto itself
+    (``supercoil.rod.mirror``: the leading eigenvector of the symmetrised 2 x 2 form
+    ``sum a_i b_i^T``, ``a_i = x_i - c``, ``b_i = x_{n-1-i} - c``)."""
+    x = q.reshape(-1, 3)
+    a = x - np.array([0.0, 0.0, 0.5 * (x[0, 2] + x[-1, 2])])
+    form = a[:, :2].T @ a[::-1, :2]
+    vectors = np.linalg.eigh(0.5 * (form + form.T))[1]
+    return np.array([vectors[0, -1], vectors[1, -1], 0.0])

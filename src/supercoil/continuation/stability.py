@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from supercoil.continuation.sliding_count import SLIDING_SHARE, sliding_left_out
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
@@ -124,26 +125,58 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     ``-zero_tolerance / 2`` (the inertia of ``H + M zero_tolerance / 2``) and
     the determinant sign is 0. ``hessian``: ``system.hessian(x)`` if already known.
     """
-    negative, sign, _factor, _dofs = inertia_with_factor(system, x, zero_tolerance, hessian)
+    negative, sign, _factor, _dofs, _left_out = inertia_with_factor(system, x, zero_tolerance,
+                                                                     hessian)
     return negative, sign
 
 
 def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None,
-                        hessian) -> tuple[int, int, KKTFactor, np.ndarray]:
-    """:func:`inertia` with the factor it counted with and that factor's DOFs (indices
-    into the problem's DOFs, ``(n_count,)``): its unknowns are those DOFs, then the
-    rows of ``system.jacobian(x)``, then the :func:`count_rows`."""
+                        hessian) -> tuple[int, int, KKTFactor, np.ndarray, int]:
+    """:func:`inertia` with the factor it counted with, that factor's DOFs (indices
+    into the problem's DOFs, ``(n_count,)``: its unknowns are those DOFs, then the
+    rows of ``system.jacobian(x)``, then the :func:`count_rows`) and the number of
+    eigenvalues that :func:`stiff_sliding` left out of the factor's count (0 or 1), whose
+    sign the determinant's then leaves out too (the parity of the count returned)."""
     H, J = count_system(system, x, hessian)
     dofs = system.free
     try:
         factor = KKTFactor(H, J)
         negative = factor.reduced_negative_count
-        return negative, int(factor.determinant_sign * (-1) ** J.shape[0]), factor, dofs
+        left_out = stiff_sliding(system, x, H, negative)
+        sign = int(factor.determinant_sign * (-1) ** (J.shape[0] + left_out))
+        return negative - left_out, sign, factor, dofs, left_out
     except (SingularMatrixError, InertiaError):
         if zero_tolerance is None:
             raise
-        factor = KKTFactor(H, J, shift=-0.5 * zero_tolerance, mass=system.mass)
-        return factor.reduced_negative_count, 0, factor, dofs
+        shift = -0.5 * zero_tolerance
+        factor = KKTFactor(H, J, shift=shift, mass=system.mass)
+        negative = factor.reduced_negative_count
+        left_out = stiff_sliding(system, x, H, negative, shift)
+        return negative - left_out, 0, factor, dofs, left_out
+
+
+def stiff_sliding(system: ExtendedSystem, x: np.ndarray, H, negative: int,
+                  shift: float = 0.0) -> int:
+    """1 where the ``negative`` eigenvalues counted on the complement of the approximate
+    symmetries (:func:`count_rows` or the system's own phase rows) include the stiff
+    sliding's, which that complement does not take out
+    (:mod:`~supercoil.continuation.sliding_count`), else 0. ``H``: the count's Hessian."""
+    if negative <= 0:
+        return 0
+    problem = system.problem_at(x[-1])
+    modes = sliding_phase_modes(problem, system.q(x))
+    if modes.size == 0:
+        return 0
+    g = modes[:, system.free]
+    J = sp.csr_matrix(system.jacobian(x))
+    keep = np.arange(J.shape[0])
+    if system.r:  # the phase rows that hold the sliding are left out
+        coupling = np.abs(system.P @ g.T) / np.outer(np.linalg.norm(system.P, axis=1),
+                                                      np.linalg.norm(g, axis=1))
+        held = coupling.max(axis=1) > 0.1 / np.sqrt(system.n)
+        keep = np.concatenate([keep[:J.shape[0] - system.r],
+                               keep[J.shape[0] - system.r:][~held]])
+    return sliding_left_out(H, J[keep], g, system.mass, negative, shift)
 
 
 def related_order(order: np.ndarray, dofs: np.ndarray, rows: int, new_dofs: np.ndarray,
@@ -193,8 +226,8 @@ def related_order(order: np.ndarray, dofs: np.ndarray, rows: int, new_dofs: np.n
 
 
 def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
-               full=None, count: tuple[np.ndarray, np.ndarray, int] | None = None
-               ) -> tuple[np.ndarray, np.ndarray]:
+               full=None, count: tuple[np.ndarray, np.ndarray, int] | None = None,
+               near: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Eigenpairs of the constrained Hessian nearest zero: ``(values, (k, n_dofs) modes)``
     (:func:`~supercoil.stability.analysis.lowest_pairs`).
 
@@ -202,9 +235,11 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
     factor at ``x`` (its DOFs, :attr:`~supercoil.solvers.kkt.KKTFactor.order` and
     number of rows, as :func:`inertia_with_factor` gives them): the shift-invert factor is then
     ordered by :func:`related_order` rather than by a new ``kkt_order`` (the same
-    eigenpairs to round-off)."""
+    eigenpairs to round-off). ``near``: the approximate symmetries projected out (else
+    only the exact ones)."""
     problem = system.problem_at(x[-1])
-    dofs, H, J, mass, sym = eigen_system(problem, system.q(x), system.multipliers(x), full)
+    dofs, H, J, mass, sym = eigen_system(problem, system.q(x), system.multipliers(x), full,
+                                         near)
     m = J.shape[0] if J is not None else 0
     dim = dofs.size - m - sym.shape[1]
     if dim <= 0:
@@ -225,6 +260,21 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
     return values, modes
 
 
+def without_sliding(system: ExtendedSystem, x: np.ndarray, values: np.ndarray,
+                    modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The eigenpairs ``(values, modes)`` (M-orthonormal full DOF modes) less those
+    that are mostly an approximate symmetry ``g`` (``(v^T M g)^2 >= g^T M g / 2``,
+    :data:`~supercoil.continuation.sliding_count.SLIDING_SHARE`)."""
+    problem = system.problem_at(x[-1])
+    g = sliding_phase_modes(problem, system.q(x))
+    if g.size == 0 or values.size == 0:
+        return values, modes
+    mass = np.asarray(problem.mass, dtype=float)
+    share = (modes @ (mass[:, None] * g.T)) ** 2 / np.sum(g * mass * g, axis=1)[None, :]
+    keep = share.max(axis=1) < SLIDING_SHARE
+    return values[keep], modes[keep]
+
+
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
                     n_modes: int, full=None) -> PointStability:
     """Stability report at the point ``x`` of the extended system (see module doc).
@@ -234,9 +284,14 @@ def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float
     count's (``eigenpairs(count=...)``).
     """
     full = system.full_hessian(x) if full is None else full
-    neg, det_sign, factor, dofs = inertia_with_factor(system, x, zero_tolerance,
-                                                      full.restrict(system.free))
-    values, modes = eigenpairs(system, x, neg + n_modes, full, (dofs, factor.order, factor.m))
+    neg, det_sign, factor, dofs, left_out = inertia_with_factor(system, x, zero_tolerance,
+                                                                full.restrict(system.free))
+    count = (dofs, factor.order, factor.m)
+    if left_out:  # the stiff sliding's: its own eigenpair left out, not the direction g
+        values, modes = eigenpairs(system, x, neg + 1 + n_modes, full, count, near=False)
+        values, modes = without_sliding(system, x, values, modes)
+    else:
+        values, modes = eigenpairs(system, x, neg + n_modes, full, count)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # as analyse: at least what the eigensolver found below -tol, at least the

@@ -237,7 +237,7 @@ def _symmetry_basis(problem: ConstrainedEnergy, q: np.ndarray, dofs: np.ndarray,
 
 
 def eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
-                 full_hessian=None):
+                 full_hessian=None, near: bool = True):
     """``(dofs, H, J, mass, symmetry)`` of the constrained eigenproblem at ``(q,
     multipliers)``: its DOFs (:func:`eigen_dofs`), the Hessian of the Lagrangian and
     the constraint Jacobian on them, their masses, and the M-orthonormal symmetry
@@ -245,6 +245,7 @@ def eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndar
 
     ``full_hessian``: the Hessian of the Lagrangian at ``(q, multipliers)`` on all
     DOFs (:func:`~supercoil.solvers.newton.lagrangian_hessian`) if already assembled.
+    ``near``: the approximate symmetries projected out too.
     """
     dofs = eigen_dofs(problem)
     H = (lagrangian_hessian(problem, q, multipliers) if full_hessian is None
@@ -255,7 +256,7 @@ def eigen_system(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndar
     if problem.n_constraints:
         J = problem.constraint_jacobian(q)
         J = csr_columns(J, dofs) if getattr(J, "format", None) == "csr" else J[:, dofs]
-    return dofs, H, J, problem.mass[dofs], _symmetry_basis(problem, q, dofs)
+    return dofs, H, J, problem.mass[dofs], _symmetry_basis(problem, q, dofs, near)
 
 
 def negative_count(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray) -> int:
@@ -322,18 +323,19 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
 
 
 def lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
-                 factor_order=None):
+                 factor_order=None, sigma: float = -1e-3):
     """The eigenpairs of ``H v = mu M v`` on ``ker J`` (the symmetry modes projected
     out) nearest zero, ``(values, vectors)``: the method of
     :func:`_lowest_pairs_threads`, computed with one BLAS thread (the same eigenpairs,
-    bit for bit, whatever the thread count of the process)."""
+    bit for bit, whatever the thread count of the process). ``sigma``: the shift of
+    the sparse path (the eigenpairs nearest it; below the spectrum: the lowest)."""
     with _one_blas_thread():
         return _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry, force_sparse,
-                                     factor_order)
+                                     factor_order, sigma)
 
 
 def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
-                          factor_order=None):
+                          factor_order=None, sigma: float = -1e-3):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
 
     ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
@@ -358,7 +360,6 @@ def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_spars
     if not force_sparse and (dim <= 400 or k >= dim // 4):
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         return values[:k], vectors[:, :k]
-    sigma = -1e-3
     opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma, factor_order)
     root = np.sqrt(mass)
     scaled = spla.LinearOperator((n, n), matvec=lambda y: root * opinv(root * np.ravel(y)),

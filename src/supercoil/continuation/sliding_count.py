@@ -1,0 +1,86 @@
+"""The sliding's eigenvalue left out of the unstable count, where the sliding is stiff.
+
+The count leaves out an approximate symmetry ``g`` (the material sliding of a ring,
+the sliding of a localised loop or plectoneme along a long open rod) by counting on
+the M-orthogonal complement of ``g`` (:func:`~supercoil.continuation.stability.count_rows`,
+or the branch's own phase row). That is the count with the sliding's eigenvalue left out
+only while ``g`` is an eigenvector of the constrained Hessian, as in the continuum. In
+self-contact the discrete contact's ripple gives the sliding an eigenvalue of either
+sign much larger than the gap to the next ones (``-1e4`` to ``-1e5`` against a next
+eigenvalue of ``500-2000`` along the tweezers' plectoneme at L/D = 200, F L^2/A = 100,
+C/A = 1, N = 202 and 303), and the discrete sliding mode ``v_s`` is ``g`` only to
+an overlap of ``0.82-0.9``: on the complement of ``g`` the rest of ``v_s`` (odd under
+the half-turn, as ``g``) still has a negative curvature, and the count was one where
+the constrained Hessian's only negative eigenvalue is the sliding's. That count came
+and went with the ripple: at N = 202 from 3.27 to 3.90 and from 4.82 turns, at N = 303
+from 3.12 to 4.12 and from 4.57 turns; the fold-bounded instability between 2.20 and
+2.50 turns (an even mode) the same at both.
+
+With ``b = M g`` the bordered inertia gives ``n_g = n_f - 1 + [b^T H^-1 b > 0]``
+(``n_g`` the count on the complement of ``g``, ``n_f`` the count without the
+row): where ``n_g < n_f`` the row removed a negative eigenvalue, the sliding's. Where
+``n_g = n_f >= 1``, :func:`sliding_left_out` finds the ``n_f`` negative eigenpairs of
+the constrained Hessian without the row and leaves one out when ``g`` lies mostly in
+their span (``sum (v_i^T M g)^2 >= g^T M g / 2``, the v_i M-orthonormal): the
+sliding's eigenvalue is then one of them, and the count is ``n_f - 1``, as on the
+complement of ``v_s``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from supercoil.solvers.errors import InertiaError, SingularMatrixError
+from supercoil.solvers.kkt import KKTFactor
+from supercoil.stability.analysis import lowest_pairs
+
+# the share of |g|_M^2 in the span of the negative eigenvectors above which the sliding's
+# eigenvalue is one of them (more than half: at most one eigenvector of an orthonormal
+# set can carry it)
+SLIDING_SHARE = 0.5
+# shifts tried below the spectrum for the lowest eigenpairs: -1, -10, ..., -1e12
+_SHIFTS = -(10.0 ** np.arange(0, 13))
+
+
+def sliding_left_out(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray,
+                     negative: int, shift: float = 0.0) -> int:
+    """1 if the sliding's negative eigenvalue is among the ``negative`` that the count on
+    the complement of ``sliding`` found, else 0 (module doc).
+
+    ``H``: the Hessian of the Lagrangian on the count's DOFs (``(n, n)``,
+    :class:`~supercoil.assembly.HessianParts`), ``J``: the constraint rows without
+    the sliding's (``(m, n)``), ``sliding``: the approximate symmetry's generators on
+    those DOFs (``(r, n)``), ``mass``: ``(n,)``, ``shift``: the count's (the count of
+    eigenvalues below ``shift``)."""
+    if negative <= 0 or sliding.shape[0] == 0:
+        return 0
+    try:
+        full = KKTFactor(H, J, shift=shift, mass=mass).reduced_negative_count
+    except (SingularMatrixError, InertiaError):
+        return 0
+    if full != negative:
+        return 0  # the row took out a negative eigenvalue: the sliding's
+    values, vectors = _lowest(H, J, mass, full)
+    vectors = vectors[:, values < shift]
+    share = 0.0
+    for g in sliding:
+        norm = float(g @ (mass * g))
+        if norm > 0.0:
+            share = max(share, float(np.sum((vectors.T @ (mass * g)) ** 2)) / norm)
+    return int(share >= SLIDING_SHARE)
+
+
+def _lowest(H, J: sp.csr_matrix, mass: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``k`` lowest eigenpairs of ``H v = mu M v`` on ``ker J`` (M-orthonormal
+    vectors ``(n, k)``): shift-invert below the spectrum, at the first shift of
+    ``_SHIFTS`` below which no eigenvalue lies (dense for small systems)."""
+    n, m = mass.size, J.shape[0]
+    for sigma in _SHIFTS:
+        try:
+            below = KKTFactor(H, J, shift=float(sigma), mass=mass).reduced_negative_count
+        except (SingularMatrixError, InertiaError):
+            continue
+        if below == 0:
+            return lowest_pairs(H, J, mass, n_wanted=k, n=n, m=m, sigma=float(sigma))
+    return np.zeros(0), np.zeros((n, 0))

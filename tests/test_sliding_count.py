@@ -1,0 +1,91 @@
+"""The stiff sliding's eigenvalue left out of the unstable count
+(``supercoil.continuation.sliding_count``).
+
+Oracle: a constrained Hessian built from its spectrum on ``ker J`` (M-orthonormal
+eigenvectors chosen), with a sliding eigenvector ``v_s`` that is the approximate
+symmetry's generator ``g`` only to an overlap ``cos(theta)``. The count with the
+sliding's eigenvalue left out is the count on the M-complement of ``v_s`` itself,
+computed densely; the count on the complement of ``g`` (the phase row's) is corrected
+by :func:`sliding_left_out` to it, whatever the signs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.linalg import eigh, null_space
+
+from supercoil.continuation.sliding_count import sliding_left_out
+from supercoil.solvers.kkt import KKTFactor
+from supercoil.solvers.problem import HessianParts
+
+
+def spectral_problem(sliding: float, others: list[float], share: float, seed: int = 3,
+                     n: int = 14):
+    """``(H, J, mass, g, v_s)``: ``n`` unknowns, 3 constraint rows; on ``ker J`` the
+    eigenvalues ``sliding`` (eigenvector ``v_s``) and ``others`` (the first one, ``w``,
+    with ``v_s`` and ``g`` in one plane: ``g = cos v_s - sin w``, ``cos^2 = share``),
+    the rest of ``ker J`` at 5e3."""
+    rng = np.random.default_rng(seed)
+    m = 3
+    J = rng.standard_normal((m, n))
+    mass = rng.uniform(0.5, 2.0, n)
+    Z = null_space(J)
+    # M-orthonormal basis of ker J
+    values, vectors = eigh(Z.T @ (mass[:, None] * Z))
+    V = Z @ vectors / np.sqrt(values)
+    spectrum = np.full(V.shape[1], 5e3)
+    spectrum[0] = sliding
+    spectrum[1:1 + len(others)] = others
+    MV = mass[:, None] * V
+    H = MV @ np.diag(spectrum) @ MV.T
+    c, s = np.sqrt(share), np.sqrt(1.0 - share)
+    g = c * V[:, 0] - s * V[:, 1]
+    return H, sp.csr_matrix(J), mass, g, V[:, 0]
+
+
+def count_on_complement(H, J, mass, v) -> int:
+    """The dense count of negative eigenvalues of ``H`` on ``ker J`` less ``v`` (M-orth.)."""
+    Z = null_space(np.vstack([J.toarray(), mass * v]))
+    return int(np.sum(eigh(Z.T @ H @ Z, Z.T @ (mass[:, None] * Z), eigvals_only=True) < 0))
+
+
+@pytest.mark.parametrize("sliding, others, share", [
+    (-1e4, [600.0], 0.7),          # the ripple's leak: the complement of g counts one
+    (-1e4, [600.0, -50.0], 0.7),   # ... with a genuine unstable mode besides
+    (1e4, [600.0, -50.0], 0.7),    # the sliding stable: the genuine mode alone
+    (-1e4, [600.0, -50.0], 0.95),  # the row takes the sliding's eigenvalue out itself
+    (-1e4, [600.0], 0.95),
+    (-30.0, [600.0, 900.0], 0.9),  # a nearly free sliding: the row takes it out
+])
+def test_the_count_on_the_complement_of_g_corrected_is_the_one_without_the_sliding_mode(
+        sliding, others, share):
+    H, J, mass, g, v_s = spectral_problem(sliding, others, share)
+    parts = HessianParts(sp.csr_matrix(H))
+    with_row = sp.vstack([J, sp.csr_matrix(mass * g)], format="csr")
+    counted = KKTFactor(parts, with_row).reduced_negative_count
+    assert counted == count_on_complement(H, J, mass, g)  # the factor's inertia
+    corrected = counted - sliding_left_out(parts, J, g[None, :], mass, counted)
+    assert corrected == count_on_complement(H, J, mass, v_s)
+    if (sliding, others, share) == (-1e4, [600.0], 0.7):
+        assert (counted, corrected) == (1, 0)  # the case the correction is for
+
+
+def test_the_lowest_pairs_beyond_the_dense_size_by_shift_invert_below_the_spectrum():
+    """With ``ker J`` of more than 400 dimensions the negative eigenpairs come from
+    Lanczos shifted below the spectrum: the same correction."""
+    H, J, mass, g, v_s = spectral_problem(-1e4, [600.0, -50.0], 0.7, n=420)
+    parts = HessianParts(sp.csr_matrix(H))
+    with_row = sp.vstack([J, sp.csr_matrix(mass * g)], format="csr")
+    counted = KKTFactor(parts, with_row).reduced_negative_count
+    assert counted == 2
+    assert counted - sliding_left_out(parts, J, g[None, :], mass, counted) == 1 == \
+        count_on_complement(H, J, mass, v_s)
+
+
+def test_no_sliding_or_no_negative_count_leaves_the_count():
+    H, J, mass, g, _ = spectral_problem(-1e4, [600.0], 0.7)
+    parts = HessianParts(sp.csr_matrix(H))
+    assert sliding_left_out(parts, J, g[None, :], mass, 0) == 0
+    assert sliding_left_out(parts, J, np.zeros((0, g.size)), mass, 1) == 0

@@ -35,7 +35,8 @@ from supercoil.problems.ring_diagram.records import kkt_residual
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.problem import clamped_problem
 from supercoil.solvers.carried import carried
-from supercoil.stability.analysis import eigen_system, lowest_pairs
+from supercoil.stability.analysis import eigen_system
+from supercoil.stability.eigen import lowest_pairs
 
 
 def contact_problem(settings: dict) -> ContactProblem:

@@ -127,7 +127,8 @@ def test_the_hessian_before_accept_serves_the_point_after_it():
 def _dense_nearest(system, x, k):
     """The ``k`` eigenvalues nearest the shift-invert's shift (-1e-3), from the dense
     constrained eigenproblem (the oracle of the sparse paths), ascending."""
-    from supercoil.stability.analysis import dense_constrained_eigenpairs, eigen_system
+    from supercoil.stability.analysis import eigen_system
+    from supercoil.stability.eigen import dense_constrained_eigenpairs
 
     problem = system.problem
     _dofs, H, J, mass, sym = eigen_system(problem, system.q(x), system.multipliers(x))

@@ -13,7 +13,8 @@ from supercoil.problems.ring import (
 )
 from supercoil.solvers.newton import least_squares_multipliers
 from supercoil.solvers.problem import free_dofs
-from supercoil.stability.analysis import analyse, eigen_system, lowest_pairs
+from supercoil.stability.analysis import analyse, eigen_system
+from supercoil.stability.eigen import lowest_pairs
 
 
 @pytest.mark.parametrize("twist_ratio,excess_link", [(2 / 3, 0.0), (2 / 3, 1.5), (1.0, 3.3),
@@ -59,7 +60,7 @@ def test_lanczos_eigenvalues_equal_dense_oracle():
     p, q = twisted_circle_problem(1.0, 1.5, 200)
     lam = least_squares_multipliers(p, q, free_dofs(p))
     dofs, H, J, mass, sym = eigen_system(p, q, lam)
-    from supercoil.stability.analysis import dense_constrained_eigenpairs
+    from supercoil.stability.eigen import dense_constrained_eigenpairs
 
     dense, _ = dense_constrained_eigenpairs(H, J, mass, sym)
     sparse_vals, _ = lowest_pairs(H, J, mass, n_wanted=8, n=dofs.size, m=J.shape[0],

@@ -299,11 +299,8 @@ def test_link_writhe_lines_are_stable_up_to_the_located_bifurcation(diagram):
 def test_sparse_constrained_eigenvalues_equal_the_dense_oracle_with_contact(diagram):
     """On a contact state the material sliding is not an eigenvector, so removing it
     must be a constraint (as in the dense null-space oracle), not a projection."""
-    from supercoil.stability.analysis import (
-        dense_constrained_eigenpairs,
-        eigen_system,
-        lowest_pairs,
-    )
+    from supercoil.stability.analysis import eigen_system
+    from supercoil.stability.eigen import dense_constrained_eigenpairs, lowest_pairs
 
     contact = diagram.branch("alpha_contact")
     i = len(contact) - 1
@@ -400,7 +397,8 @@ def test_contact_branch_counts_do_not_depend_on_the_rigid_pins(diagram):
     N = 200 the construction pins gave a spurious count and fold pairs from dLk 3.40:
     benchmarks/bench_ring_diagram.py.)"""
     from supercoil.rod.closed import rigid_pins
-    from supercoil.stability.analysis import dense_constrained_eigenpairs, eigen_system
+    from supercoil.stability.analysis import eigen_system
+    from supercoil.stability.eigen import dense_constrained_eigenpairs
 
     contact = diagram.branch("alpha_contact")
     cp = ContactProblem(_problem(), OPTIONS.contact_options(OPTIONS.diameter))

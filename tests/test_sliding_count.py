@@ -1,5 +1,5 @@
 """The stiff sliding's eigenvalue left out of the unstable count
-(``supercoil.continuation.sliding_count``).
+(``supercoil.stability.sliding_count``).
 
 Oracle: a constrained Hessian built from its spectrum on ``ker J`` (M-orthonormal
 eigenvectors chosen), with a sliding eigenvector ``v_s`` that is the approximate
@@ -16,9 +16,9 @@ import pytest
 import scipy.sparse as sp
 from scipy.linalg import eigh, null_space
 
-from supercoil.continuation.sliding_count import sliding_left_out
 from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.problem import HessianParts
+from supercoil.stability.sliding_count import sliding_left_out
 
 
 def spectral_problem(sliding: float, others: list[float], share: float, seed: int = 3,

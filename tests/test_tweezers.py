@@ -423,7 +423,8 @@ def test_point_stability_equals_the_dense_eigenpairs(small_run, name):
     gauge pin inserted) against the freshly ordered eigenpairs and the dense
     constrained eigenproblem: the same eigenvalues to round-off, the branch's counts."""
     from supercoil.continuation.stability import eigenpairs, point_stability
-    from supercoil.stability.analysis import dense_constrained_eigenpairs, eigen_system
+    from supercoil.stability.analysis import eigen_system
+    from supercoil.stability.eigen import dense_constrained_eigenpairs
 
     for branch, i, problem, system, x, q, mu in _three_points(small_run, name):
         stab = point_stability(system, x, 1e-6, 2)

@@ -26,11 +26,8 @@ from supercoil.problems.tweezers.contact import MIRROR_TOLERANCE
 from supercoil.problems.tweezers.mirrored import SUFFIX, mirrored_contact
 from supercoil.problems.tweezers.returned import axis_distance
 from supercoil.rod.mirror import mirror_asymmetry, mirror_image, mirror_offset
-from supercoil.stability.analysis import (
-    dense_constrained_eigenpairs,
-    eigen_system,
-    sliding_phase_modes,
-)
+from supercoil.stability.analysis import analyse, eigen_system, sliding_phase_modes
+from supercoil.stability.eigen import dense_constrained_eigenpairs
 
 
 def symmetric_curve(n: int, angle: float) -> np.ndarray:
@@ -227,6 +224,8 @@ def test_a_stopped_contact_branch_without_a_symmetric_start_fails(monkeypatch):
     assert result.branches[-1].name == "buckled_contact"
     assert not result.ok and result.held_instead == frozenset()
     assert "failed: buckled_contact: made to stop" in result.notes
+
+
 def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
     """At L/D = 200, lambda = 10, C/A = 1, N = 202 (segments of D) the held plectoneme's
     count is one only between its two folds (the S's middle, as at N = 303, where the
@@ -237,7 +236,8 @@ def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
     constrained Hessian has one negative eigenvalue, the sliding's (its eigenvector odd
     under the half-turn, overlap with ``g`` above 0.7), and on the complement of ``g``
     still one, the rest of that eigenvector; the count is the one with the sliding mode
-    left out, and so are the eigenvalues reported with the point."""
+    left out, and so are the eigenvalues reported with the point and by the state's own
+    report (:func:`~supercoil.stability.analysis.analyse`)."""
     dense = []
     real = tracing.point_stability
 
@@ -246,8 +246,11 @@ def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
         problem = system.problem_at(x[-1])
         if getattr(problem, "base", None) is not None and problem.base.mirror_anchor \
                 and x[-1] > 3.3:
-            dense.append((stability.unstable_count, float(np.min(stability.eigenvalues)))
-                         + dense_check(problem, system.q(x), system.multipliers(x)))
+            q, multipliers = system.q(x), system.multipliers(x)
+            report = analyse(problem, q, multipliers)
+            dense.append((stability.unstable_count, float(np.min(stability.eigenvalues)),
+                          report.unstable_count, float(np.min(report.lowest_eigenvalues)))
+                         + dense_check(problem, q, multipliers))
         return stability
 
     monkeypatch.setattr(tracing, "point_stability", checked)
@@ -270,9 +273,11 @@ def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
     assert np.all(counts[folds[2].index + 1:] == 0)
     assert not [p for p in held.special_points if p.kind in ("bifurcation", "count_change")]
     assert len(dense) >= 3
-    for count, lowest, negative, with_g, overlap, odd in dense:
+    for count, lowest, analysed, analysed_lowest, negative, with_g, overlap, odd in dense:
         assert (count, negative, with_g) == (0, 1, 1)
         assert lowest > 0  # the eigenvalues reported: the sliding's pair left out
+        # a state's own report (supercoil.stability(state)) counts as its branch does
+        assert analysed == count and analysed_lowest == pytest.approx(lowest, rel=1e-6)
         assert overlap > 0.7 and odd > 0.95
 
 

@@ -24,16 +24,16 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from supercoil.continuation.sliding_count import SLIDING_SHARE, sliding_left_out
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.kkt import KKTFactor
-from supercoil.stability.analysis import (
-    dense_constrained_eigenpairs,
-    eigen_system,
-    lowest_pairs,
-    sliding_phase_modes,
+from supercoil.stability.analysis import eigen_system, sliding_phase_modes
+from supercoil.stability.eigen import dense_constrained_eigenpairs, lowest_pairs
+from supercoil.stability.sliding_count import (
+    contact_acts,
+    sliding_left_out,
+    without_sliding_pairs,
 )
 
 _DENSE_BELOW = 100
@@ -160,15 +160,11 @@ def stiff_sliding(system: ExtendedSystem, x: np.ndarray, H, negative: int,
     """1 where the ``negative`` eigenvalues counted on the complement of the approximate
     symmetries (:func:`count_rows` or the system's own phase rows) include the stiff
     sliding's, which that complement does not take out
-    (:mod:`~supercoil.continuation.sliding_count`), else 0. ``H``: the count's Hessian."""
+    (:mod:`~supercoil.stability.sliding_count`), else 0. ``H``: the count's Hessian."""
     if negative <= 0:
         return 0
     problem = system.problem_at(x[-1])
-    contact_energy = getattr(problem, "contact_energy", None)
-    if contact_energy is None or not contact_energy(system.q(x)) > 0.0:
-        # no contact acting: the sliding has no stiff contact part to leave behind on
-        # the complement of g (measured on the ring diagram of `supercoil demo`: 30 of
-        # the 40 eigen-solves were on its contact-free branches, none left one out)
+    if not contact_acts(problem, system.q(x)):
         return 0
     modes = sliding_phase_modes(problem, system.q(x))
     if modes.size == 0:
@@ -270,15 +266,10 @@ def without_sliding(system: ExtendedSystem, x: np.ndarray, values: np.ndarray,
                     modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The eigenpairs ``(values, modes)`` (M-orthonormal full DOF modes) less those
     that are mostly an approximate symmetry ``g`` (``(v^T M g)^2 >= g^T M g / 2``,
-    :data:`~supercoil.continuation.sliding_count.SLIDING_SHARE`)."""
+    :data:`~supercoil.stability.sliding_count.SLIDING_SHARE`)."""
     problem = system.problem_at(x[-1])
-    g = sliding_phase_modes(problem, system.q(x))
-    if g.size == 0 or values.size == 0:
-        return values, modes
-    mass = np.asarray(problem.mass, dtype=float)
-    share = (modes @ (mass[:, None] * g.T)) ** 2 / np.sum(g * mass * g, axis=1)[None, :]
-    keep = share.max(axis=1) < SLIDING_SHARE
-    return values[keep], modes[keep]
+    return without_sliding_pairs(values, modes, sliding_phase_modes(problem, system.q(x)),
+                                 np.asarray(problem.mass, dtype=float))
 
 
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,

@@ -31,30 +31,19 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
-from scipy.linalg import eigh, null_space
-from threadpoolctl import ThreadpoolController
 
 from supercoil.solvers.csr import csr_columns
 from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.solvers.problem import ConstrainedEnergy, free_dofs
+from supercoil.stability.eigen import lowest_pairs
+from supercoil.stability.sliding_count import (
+    contact_acts,
+    sliding_left_out,
+    without_sliding_pairs,
+)
 
 DEFAULT_ZERO_TOLERANCE = 1e-6
-_CONTROLLER: ThreadpoolController | None = None
-
-
-def _one_blas_thread():
-    """A context with BLAS on one thread: LAPACK's ``eigh`` and ARPACK's dot products
-    split their sums over the threads, so eigenvectors (their sign, and the basis of a
-    double eigenvalue) and the last bits of eigenvalues would depend on the thread count.
-    The controller is made once per process (a new one re-scans the loaded libraries)."""
-    global _CONTROLLER
-    if _CONTROLLER is None:
-        _CONTROLLER = ThreadpoolController()
-    return _CONTROLLER.limit(limits=1, user_api="blas")
-
-
 @dataclass(frozen=True)
 class StabilityReport:
     unstable_count: int
@@ -278,13 +267,23 @@ def eigenvalue_nearest_zero(problem: ConstrainedEnergy, q: np.ndarray,
 def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
             n_modes: int = 6, zero_tolerance: float = DEFAULT_ZERO_TOLERANCE) -> StabilityReport:
     """Full stability report at an equilibrium (see module docstring)."""
-    _dofs, H, J = _reduced_system(problem, q, multipliers)
+    free, H, J = _reduced_system(problem, q, multipliers)
     factor = KKTFactor(H, J)
     neg = factor.reduced_negative_count
-    det_sign = int(factor.determinant_sign * (-1) ** (J.shape[0] if J is not None else 0))
-    dofs, H_e, J_e, mass_e, sym = eigen_system(problem, q, multipliers)
-    values, vectors = lowest_pairs(H_e, J_e, mass_e, n_wanted=neg + n_modes, n=dofs.size,
-                                   m=J_e.shape[0] if J_e is not None else 0, symmetry=sym)
+    left_out = _stiff_sliding(problem, q, free, H, neg)
+    neg -= left_out
+    det_sign = int(factor.determinant_sign
+                   * (-1) ** ((J.shape[0] if J is not None else 0) + left_out))
+    # where the stiff sliding's eigenvalue is left out, its own eigenpair is, not g's
+    # direction (supercoil.stability.sliding_count)
+    dofs, H_e, J_e, mass_e, sym = eigen_system(problem, q, multipliers, near=not left_out)
+    values, vectors = lowest_pairs(H_e, J_e, mass_e, n_wanted=neg + left_out + n_modes,
+                                   n=dofs.size, m=J_e.shape[0] if J_e is not None else 0,
+                                   symmetry=sym)
+    if left_out:
+        sliding = sliding_phase_modes(problem, q)[:, dofs]
+        values, modes_t = without_sliding_pairs(values, vectors.T, sliding, mass_e)
+        vectors = modes_t.T
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
     # Approximate symmetries (a closed rod's material sliding) are projected out
@@ -322,106 +321,18 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     )
 
 
-def lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
-                 factor_order=None, sigma: float = -1e-3):
-    """The eigenpairs of ``H v = mu M v`` on ``ker J`` (the symmetry modes projected
-    out) nearest zero, ``(values, vectors)``: the method of
-    :func:`_lowest_pairs_threads`, computed with one BLAS thread (the same eigenpairs,
-    bit for bit, whatever the thread count of the process). ``sigma``: the shift of
-    the sparse path (the eigenpairs nearest it; below the spectrum: the lowest)."""
-    with _one_blas_thread():
-        return _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry, force_sparse,
-                                     factor_order, sigma)
-
-
-def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
-                          factor_order=None, sigma: float = -1e-3):
-    """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
-
-    ``symmetry`` is an M-orthonormal basis ``(n, r)`` of modes to project out.
-    The sparse path (shift-invert Lanczos) solves the problem constrained by
-    ``J v = 0`` and ``S^T M v = 0`` exactly, as the dense reference does: the
-    ``r`` dense symmetry rows are eliminated by a Schur complement
-    (:func:`_constrained_shift_invert`), so that the KKT factorisation keeps
-    its banded pattern. (Projecting ``v`` onto the M-complement of ``S``
-    instead agrees only when ``S`` spans an invariant subspace of ``H``, which
-    an approximate symmetry does not: measured 3606 against the dense 3630 for
-    the lowest eigenvalue on a contact branch at N = 200.)
-
-    Lanczos runs in ARPACK's standard mode on the symmetrically scaled operator
-    ``M^(1/2) (H - sigma M)^-1 M^(1/2)`` (constrained as above), whose eigenvalues
-    are ``1 / (mu - sigma)``: one operator application per Lanczos step (the
-    generalised mode needs two or three). ``factor_order``: the KKT factor's
-    ordering (``KKTFactor(order=...)``), if known.
-    """
-    r = 0 if symmetry is None else symmetry.shape[1]
-    dim = n - m - r
-    k = int(min(n_wanted, dim - 2))
-    if not force_sparse and (dim <= 400 or k >= dim // 4):
-        values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
-        return values[:k], vectors[:, :k]
-    opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma, factor_order)
-    root = np.sqrt(mass)
-    scaled = spla.LinearOperator((n, n), matvec=lambda y: root * opinv(root * np.ravel(y)),
-                                 dtype=float)
-    rng = np.random.default_rng(12345)
-    y0 = root * opinv(mass * rng.standard_normal(n))  # M^(1/2) of a shift-inverted start
-    # ncv: 12 Lanczos vectors (ARPACK's default 20) took 17 solves instead of 23 per
-    # call at the ring's points (N = 200), with the same eigenvalues to 2e-12 relative
-    nu, y = spla.eigsh(scaled, k=k, v0=y0, which="LM", tol=1e-12,
-                       ncv=min(n, max(2 * k + 1, 12)))
-    values, vectors = sigma + 1.0 / nu, y / root[:, None]
-    order = np.argsort(values)
-    return values[order], vectors[:, order]
-
-
-def _constrained_shift_invert(H, J, mass, symmetry, sigma: float,
-                              order: np.ndarray | None = None):
-    """``x -> v`` solving ``(H - sigma M) v + J^T a + M S b = x, J v = 0, S^T M v = 0``.
-
-    One sparse KKT factorisation of ``[[H - sigma M, J^T], [J, 0]]``; the ``r``
-    dense rows ``C = S^T M`` by block elimination: with ``K w = [x; 0]`` and
-    ``K W = [C^T; 0]``, ``b = (C W_v)^-1 C w_v`` and ``v = w_v - W_v b``. ``order``:
-    the factor's ordering (``KKTFactor(order=...)``; None: ``kkt_order``).
-    """
-    n = mass.size
-    m = J.shape[0] if J is not None else 0
-    factor = KKTFactor(H, J, shift=sigma, mass=mass, order=order)
-    r = 0 if symmetry is None else symmetry.shape[1]
-    if r:
-        C = (mass[:, None] * symmetry).T  # (r, n)
-        rhs = np.zeros((n + m, r))
-        rhs[:n] = C.T
-        W = factor.solve(rhs)[:n]
-        schur = C @ W
-
-    def opinv(x):
-        rhs = np.zeros(n + m)
-        rhs[:n] = np.ravel(x)
-        w = factor.solve(rhs)[:n]
-        if r:
-            w = w - W @ np.linalg.solve(schur, C @ w)
-        return w
-
-    return opinv
-
-
-def dense_constrained_eigenpairs(H, J, mass, symmetry=None):
-    """Dense reference: all eigenpairs of ``Z^T H Z y = mu Z^T M Z y`` (ascending).
-
-    ``Z`` spans ``ker J`` intersected with the M-orthogonal complement of
-    ``symmetry`` (``(n, r)`` or None). Returns eigenvalues ``(d,)`` and
-    M-orthonormal vectors ``(n, d)``. O(n^3): an oracle for tests and small systems.
-    """
-    Hd = H.dense()
-    rows = []
-    if J is not None and J.shape[0]:
-        rows.append(J.toarray())
-    if symmetry is not None and symmetry.shape[1]:
-        rows.append((mass[:, None] * symmetry).T)
-    with _one_blas_thread():
-        Z = null_space(np.vstack(rows)) if rows else np.eye(Hd.shape[0])
-        A = Z.T @ Hd @ Z
-        B = Z.T @ (mass[:, None] * Z)
-        values, y = eigh(0.5 * (A + A.T), 0.5 * (B + B.T))
-        return values, Z @ y
+def _stiff_sliding(problem: ConstrainedEnergy, q: np.ndarray, free: np.ndarray, H,
+                   negative: int) -> int:
+    """1 where the ``negative`` eigenvalues counted on the complement of the approximate
+    symmetries include the stiff sliding's (:mod:`supercoil.stability.sliding_count`),
+    as the branches' count leaves it out, else 0. ``H``: the count's Hessian on the
+    ``free`` DOFs."""
+    if negative <= 0 or not contact_acts(problem, q):
+        return 0
+    modes = sliding_phase_modes(problem, q)
+    if modes.size == 0:
+        return 0
+    J = (sp.csr_matrix(problem.constraint_jacobian(q))[:, free] if problem.n_constraints
+         else sp.csr_matrix((0, free.size)))
+    return sliding_left_out(H, J, modes[:, free], np.asarray(problem.mass, float)[free],
+                            negative)

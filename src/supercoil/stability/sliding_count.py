@@ -23,7 +23,9 @@ row): where ``n_g < n_f`` the row removed a negative eigenvalue, the sliding's. 
 the constrained Hessian without the row and leaves one out when ``g`` lies mostly in
 their span (``sum (v_i^T M g)^2 >= g^T M g / 2``, the v_i M-orthonormal): the
 sliding's eigenvalue is then one of them, and the count is ``n_f - 1``, as on the
-complement of ``v_s``.
+complement of ``v_s``. The branches' count (:mod:`supercoil.continuation.stability`)
+and a state's own report (:func:`~supercoil.stability.analysis.analyse`) both apply it,
+where a contact acts (:func:`contact_acts`).
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ import scipy.sparse as sp
 
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.kkt import KKTFactor
-from supercoil.stability.analysis import lowest_pairs
+from supercoil.stability.eigen import lowest_pairs
 
 # the share of |g|_M^2 in the span of the negative eigenvectors above which the sliding's
 # eigenvalue is one of them (more than half: at most one eigenvector of an orthonormal
@@ -41,6 +43,28 @@ from supercoil.stability.analysis import lowest_pairs
 SLIDING_SHARE = 0.5
 # shifts tried below the spectrum for the lowest eigenpairs: -1, -10, ..., -1e12
 _SHIFTS = -(10.0 ** np.arange(0, 13))
+
+
+def contact_acts(problem, q: np.ndarray) -> bool:
+    """Whether a contact acts on ``problem`` at ``q`` (its contact energy positive): only
+    there does the sliding carry the contact's stiff part that the complement of ``g``
+    keeps (measured on the ring diagram of ``supercoil demo``: 30 of the 40 eigen-solves
+    of :func:`sliding_left_out` were on its contact-free branches, none leaving one out)."""
+    energy = getattr(problem, "contact_energy", None)
+    return energy is not None and bool(energy(q) > 0.0)
+
+
+def without_sliding_pairs(values: np.ndarray, modes: np.ndarray, sliding: np.ndarray,
+                          mass: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The eigenpairs ``(values (k,), modes (k, n))`` (M-orthonormal) less those that are
+    mostly one of the approximate symmetries ``sliding`` ``(r, n)`` (``(v^T M g)^2 >=
+    SLIDING_SHARE g^T M g``)."""
+    if sliding.size == 0 or values.size == 0:
+        return values, modes
+    share = (modes @ (mass[:, None] * sliding.T)) ** 2 / np.sum(sliding * mass * sliding,
+                                                               axis=1)[None, :]
+    keep = share.max(axis=1) < SLIDING_SHARE
+    return values[keep], modes[keep]
 
 
 def sliding_left_out(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray,

@@ -29,6 +29,18 @@ from supercoil.rod.mirror import mirror_asymmetry, mirror_image, mirror_offset
 from supercoil.stability.analysis import analyse, eigen_system, sliding_phase_modes
 from supercoil.stability.eigen import dense_constrained_eigenpairs
 
+# a short rod whose contact branch starts from its centred loop (L/D = 100, lambda = 10)
+SMALL = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100, n_nodes=102,
+                        turns=(0.0, 3.34), max_points=400, loop_sliding=True)
+
+
+def held_after_free():
+    """The run of ``SMALL``, its last two branches the free contact branch and the held one."""
+    result = tweezers_branches(SMALL)
+    assert [b.name for b in result.branches][-2:] == ["buckled_contact",
+                                                       "buckled_contact" + SUFFIX]
+    return result
+
 
 def symmetric_curve(n: int, angle: float) -> np.ndarray:
     """A loop-like curve on the clamped rod's nodes, mapped onto itself by the half-turn
@@ -83,9 +95,7 @@ def test_contact_branch_held_on_its_symmetry_is_the_symmetric_one_and_holds_no_f
     force on the symmetric family), and the freely followed branch, where it is
     symmetric, passes through them."""
     kept = {}
-    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
-                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
-                              loop_sliding=True)
+    options = SMALL
     result = tweezers_branches(options, on_branch=lambda b, contact: kept.update({b.name: b}))
     free, contact = kept["buckled"], kept["buckled_contact"]
     onset = first_onset(free) or free.points_of_kind("contact_onset")[0]
@@ -136,12 +146,8 @@ def test_a_closed_contact_branch_is_followed_again_held_on_its_symmetry(monkeypa
         return real(branch, other, diameter, reach)
 
     monkeypatch.setattr(compute, "close_on_return", closing)
-    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
-                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
-                              loop_sliding=True)
-    result = tweezers_branches(options)
-    names = [b.name for b in result.branches]
-    assert names[-2:] == ["buckled_contact", "buckled_contact" + SUFFIX]
+    options = SMALL
+    result = held_after_free()
     assert result.branches[-2].status is ContinuationStatus.CLOSED_LOOP
     held = result.branches[-1]
     assert held.name in result.contact_branches
@@ -173,12 +179,8 @@ def test_a_stopped_contact_branch_is_followed_again_held_on_its_symmetry(monkeyp
     row; the notes give the free branch's stop, then the held branch; the run is
     complete, the stopped branch handed over."""
     stopping(monkeypatch, compute, "buckled_contact", 6)
-    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
-                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
-                              loop_sliding=True)
-    result = tweezers_branches(options)
-    names = [b.name for b in result.branches]
-    assert names[-2:] == ["buckled_contact", "buckled_contact" + SUFFIX]
+    options = SMALL
+    result = held_after_free()
     free, held = result.branches[-2:]
     assert free.status is ContinuationStatus.STEP_TOO_SMALL and len(free) == 6
     assert held.name in result.contact_branches
@@ -203,12 +205,7 @@ def test_a_held_branch_that_stops_too_says_why(monkeypatch):
 
     stopping(monkeypatch, compute, "buckled_contact", 6)
     stopping(monkeypatch, mirrored, "buckled_contact" + SUFFIX, 12)
-    options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=100,
-                              n_nodes=102, turns=(0.0, 3.34), max_points=400,
-                              loop_sliding=True)
-    result = tweezers_branches(options)
-    assert [b.name for b in result.branches][-2:] == ["buckled_contact",
-                                                       "buckled_contact" + SUFFIX]
+    result = held_after_free()
     assert not result.ok
     assert any(n.startswith("buckled_contact: stopped at") for n in result.notes)
     assert f"failed: buckled_contact{SUFFIX}: made to stop" in result.notes
@@ -218,9 +215,7 @@ def test_a_stopped_contact_branch_without_a_symmetric_start_fails(monkeypatch):
     """Without loop_sliding there is no symmetric start to hold: the stopped free branch
     is the last, and the run fails with its reason."""
     stopping(monkeypatch, compute, "buckled_contact", 6)
-    result = tweezers_branches(TweezersOptions(
-        twist_ratio=1.5, length_over_diameter=100, tension=100, n_nodes=102,
-        turns=(0.0, 3.34), max_points=400))
+    result = tweezers_branches(dataclasses.replace(SMALL, loop_sliding=False))
     assert result.branches[-1].name == "buckled_contact"
     assert not result.ok and result.held_instead == frozenset()
     assert "failed: buckled_contact: made to stop" in result.notes

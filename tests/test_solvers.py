@@ -302,6 +302,26 @@ def test_newton_reports_failure_as_a_status():
     assert "no convergence" in res.message
 
 
+@pytest.mark.parametrize("mode", ["minimize", "stationary"])
+def test_a_non_finite_newton_step_is_a_status_not_a_non_finite_state(mode, monkeypatch):
+    """Where the KKT solve overflows (here made to: every solve gives inf), the step is
+    refused before it reaches the state or the problem's own checks (the contact's step
+    guard raised on a NaN cutoff where a quasi-static minimisation's shifted solve
+    overflowed)."""
+    import supercoil.solvers.newton as newton_module
+
+    class Overflowing(newton_module.KKTFactor):
+        def solve(self, rhs):
+            return np.full_like(super().solve(rhs), np.inf)
+
+    monkeypatch.setattr(newton_module, "KKTFactor", Overflowing)
+    prob = CircleConstrainedQuadratic(np.array([3.0, -1.0, 2.0]), np.ones(3))
+    q0 = np.array([0.0, 1.0, 0.0])
+    res = newton(prob, q0, NewtonOptions(mode=mode, inertia_test="exact"))
+    assert res.status is Status.NONFINITE and "Newton step is not finite" in res.message
+    np.testing.assert_array_equal(res.q, q0)
+
+
 @pytest.mark.parametrize("bad", [{"tolerance": 0.0}, {"max_iterations": 0},
                                  {"mode": "maximize"}, {"max_step_norm": -1.0}])
 def test_newton_options_validate(bad):

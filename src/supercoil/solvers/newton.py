@@ -61,7 +61,7 @@ class Status(enum.Enum):
     MAX_ITERATIONS = "maximum number of iterations reached"
     LINE_SEARCH_FAILED = "line search failed to reduce the merit function"
     SINGULAR = "singular KKT matrix"
-    NONFINITE = "non-finite energy or gradient"
+    NONFINITE = "non-finite energy, gradient or Newton step"
 
     @property
     def ok(self) -> bool:
@@ -347,6 +347,11 @@ def newton(problem: ConstrainedEnergy, q0: np.ndarray, options: NewtonOptions | 
             return done(Status.SINGULAR, f"iteration {it}: {exc}", it)
         dq_free, lam_new = sol[:n], sol[n:]
         step_norm = float(np.linalg.norm(dq_free))
+        if not np.isfinite(step_norm):
+            # the shifted factor's solve overflowed (a KKT matrix near singular at every
+            # shift tried): no step to take, rather than a non-finite state
+            return done(Status.NONFINITE, f"iteration {it}: the Newton step is not finite",
+                        it)
         if step_norm > opts.max_step_norm:
             dq_free *= opts.max_step_norm / step_norm
         dq = np.zeros_like(q)

@@ -70,7 +70,8 @@ import numpy as np
 
 PROBLEM = {"twist_ratio": 1.3333, "length_over_diameter": 33, "tension": 75, "turns": (0, 5)}
 
-PHASES = ("predictor and step", "corrector", "tangent", "step bound", "stability", "events",
+PHASES = ("predictor and step", "corrector", "tangent", "step bound", "stability",
+          "stability: the stiff sliding's check", "events",
           "events: user events", "events: folds", "events: count changes",
           "events: special points", "records", "contact detection", "other")
 
@@ -200,6 +201,7 @@ def instrument() -> PhaseClock:
     clock.wrap(step, "tangent", "tangent")
     clock.wrap(contact.ContactProblem, "step_bound", "step bound")
     clock.wrap(tracer, "point_stability", "stability")
+    clock.wrap(stability, "stiff_sliding", "stability: the stiff sliding's check")
     clock.wrap(tracer, "user_values", "events")
     clock.wrap(tracer.Tracer, "_search_events", "events")
     clock.wrap(special_points, "locate_events", "events")

@@ -38,6 +38,12 @@ def lowest_pairs(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
                                      factor_order, sigma)
 
 
+def dense_path(dim: int, k: int) -> bool:
+    """Whether :func:`lowest_pairs` takes the dense path for ``k`` eigenpairs on a
+    constrained space of dimension ``dim`` (small, or a large share of it wanted)."""
+    return dim <= 400 or k >= dim // 4
+
+
 def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_sparse=False,
                           factor_order=None, sigma: float = -1e-3):
     """Eigenpairs of ``H v = mu M v`` on ``ker J`` (minus symmetry modes) nearest zero.
@@ -61,7 +67,7 @@ def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_spars
     r = 0 if symmetry is None else symmetry.shape[1]
     dim = n - m - r
     k = int(min(n_wanted, dim - 2))
-    if not force_sparse and (dim <= 400 or k >= dim // 4):
+    if not force_sparse and dense_path(dim, k):
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         return values[:k], vectors[:, :k]
     opinv = _constrained_shift_invert(H, J, mass, symmetry, sigma, factor_order)

@@ -138,6 +138,21 @@ def test_contact_curve_defaults_to_the_quintic_with_dna(dna_run, tmp_path):
     assert json.loads((out / "branch.json").read_text())["loop_sliding"] is True
 
 
+@pytest.mark.parametrize("given,dna,expected", [(["--no-loop-sliding"], True, False),
+                                                ([], False, False),
+                                                (["--loop-sliding"], False, True)])
+def test_the_command_line_keeps_a_given_loop_sliding(given, dna, expected, tmp_path):
+    """``--loop-sliding/--no-loop-sliding``: a given choice is kept, with or without
+    --dna (the run's settings and branch.json say which); without it, on only with --dna."""
+    out = tmp_path / "run"
+    problem = (["--dna", "--bp", "300", "--force-pN", "0.3", "--sigma", "0:0.002"] if dna
+               else ["--twist-ratio", "1.5", "--length-over-diameter", "40", "--tension",
+                     "100", "--turns", "0:0.2", "--nodes", "40"])
+    assert run(["tweezers", *problem, *given, "--out", str(out), "--quiet"]) == 0
+    assert json.loads((out / "branch.json").read_text())["loop_sliding"] is expected
+    assert sc.load(out).settings["loop_sliding"] is expected
+
+
 @pytest.mark.parametrize("force,salt", [(1.0, 150), (4.0, 150), (1.0, 10)])
 def test_loop_sliding_is_on_with_dna_where_the_mesh_lets_the_loop_slide(force, salt):
     """Where n0's segments h = L/(n0 - 2) are longer than half the loop's core sqrt(A/F)

@@ -49,6 +49,7 @@ TWEEZERS_OPTIONS = {"twist_ratio": "--twist-ratio",
                     "length_over_diameter": "--length-over-diameter", "tension": "--tension",
                     "end_distance": "--end-distance", "turns": "--turns", "n_nodes": "--nodes",
                     "max_points": "--max-points", "contact_curve": "--contact-curve",
+                    "loop_sliding": "--loop-sliding",
                     "contact_formulation": "--contact-formulation", "protocol": "--protocol",
                     "step": "--step", "force_range": "--force-range",
                     "force_step": "--force-step", "base_pairs": "--bp",
@@ -124,6 +125,14 @@ def tweezers(
         "integral (a double integral over the strands, which counts a contact once wherever "
         "it lies; default) or pairs (over segment pairs: a sawtooth of fold pairs along the "
         "plectoneme; docs/contact.md).")] = "integral",
+    loop_sliding: Annotated[bool | None, typer.Option(
+        "--loop-sliding/--no-loop-sliding", help="Hold the sliding of a localised loop "
+        "with straight tails along the rod by a phase row up to its contact, and follow a "
+        "contact branch that stops or closes again held on its half-turn symmetry "
+        "(docs/continuation.md, \"Long open rods\"): what long rods (L sqrt(F/A) of 20 "
+        "and more) need to reach their plectoneme. Default: on with --dna where the "
+        "segments are at most half the loop's core sqrt(A/F), off otherwise.",
+        show_default=False)] = None,
     overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in --out DIR from its result.h5 (the "
@@ -191,8 +200,9 @@ def tweezers(
                         force_pN, salt_mM, diameter_nm, temperature_K, turns, sigma, nodes)
         from supercoil.units.tweezers import dna_numerics
 
-        numerics = dna_numerics({} if contact_curve is None else
-                                {"contact_curve": contact_curve}, tension, nodes)
+        given = {"contact_curve": contact_curve, "loop_sliding": loop_sliding}
+        numerics = dna_numerics({k: v for k, v in given.items() if v is not None}, tension,
+                                nodes)
         contact_curve = numerics["contact_curve"]
         loop_sliding = numerics["loop_sliding"]
     else:
@@ -211,7 +221,7 @@ def tweezers(
         start, stop = parse_span("--turns", turns, "START:STOP in turns, like 0:5")
         nodes = 100 if nodes is None else nodes
         contact_curve = "spline" if contact_curve is None else contact_curve
-        loop_sliding = False
+        loop_sliding = bool(loop_sliding)
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
              "--end-distance Z/L (displacement control, 0 < z/L < 1; up to 2 with --model "

@@ -188,3 +188,56 @@ def test_interrupt_while_drawing_leaves_complete_data(tmp_path, reference, capsy
     monkeypatch.undo()
     assert cli(["plot", str(out), "--out", str(out), "--format", "png"]) == 0
     assert (out / "diagram.png").stat().st_size > 1000
+
+
+class StatusWriter:
+    """The parts of a result writer that :func:`~supercoil.api.recording.recording` uses
+    when a run ends: its status and message, and that it was closed."""
+
+    def __init__(self):
+        self.status, self.message, self.closed = "running", "", False
+
+    def set_status(self, status, message):
+        self.status, self.message = status, message
+
+    def close(self):
+        self.closed = True
+
+    def stored_branches(self):
+        return {}
+
+
+def interrupt_in_kernel():
+    """What Ctrl-C or SIGTERM arriving while a compiled kernel returns raises: the
+    interpreter's SystemError, caused by the KeyboardInterrupt."""
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt as interrupt:
+        raise SystemError("CPUDispatcher(<function kernel>) returned a result with an "
+                          "exception set") from interrupt
+
+
+def interrupt():
+    raise KeyboardInterrupt
+
+
+def bug():
+    raise ValueError("a bug")
+
+
+@pytest.mark.parametrize("raise_it, status, raised", [
+    (interrupt_in_kernel, "interrupted", KeyboardInterrupt),
+    (interrupt, "interrupted", KeyboardInterrupt),
+    (bug, "failed", ValueError)])
+def test_an_interrupt_inside_a_kernel_closes_the_result_as_interrupted(raise_it, status,
+                                                                       raised):
+    """An interrupt is an interrupt wherever it arrives (the result closed as
+    ``interrupted``, KeyboardInterrupt raised, so the command line says how to resume);
+    any other exception closes it as ``failed`` and propagates."""
+    from supercoil.api.recording import from_interrupt, recording
+
+    writer = StatusWriter()
+    with pytest.raises(raised) as caught, recording(writer, None, lambda name: False):
+        raise_it()
+    assert writer.status == status and writer.closed
+    assert from_interrupt(caught.value) is (raised is KeyboardInterrupt)

@@ -175,9 +175,27 @@ def recording(writer, on_point: Callable | None, contact: Callable[[str], bool])
         writer.close()
         raise
     except BaseException as exc:
+        if from_interrupt(exc):
+            writer.set_status("interrupted", f"interrupted; kept {kept(writer)}")
+            writer.close()
+            raise KeyboardInterrupt from exc
         writer.set_status("failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
         writer.close()
         raise
+
+
+def from_interrupt(exc: BaseException) -> bool:
+    """Whether ``exc`` is a KeyboardInterrupt or was raised because of one: Ctrl-C (or
+    SIGTERM, turned into it) that arrives while a compiled kernel returns surfaces as a
+    ``SystemError`` ("returned a result with an exception set") whose cause is the
+    KeyboardInterrupt."""
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 def store_branches(writer, branches, contact_names) -> None:

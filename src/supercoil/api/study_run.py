@@ -16,7 +16,7 @@ import logging
 from collections.abc import Callable
 from pathlib import Path
 
-from supercoil.api.recording import RESULT_FILE
+from supercoil.api.recording import RESULT_FILE, from_interrupt
 
 log = logging.getLogger(__name__)
 
@@ -60,15 +60,15 @@ def run_study(spec, out: Path, *, resume: bool = False,
             outcome = _run_tweezers(spec, writer, progress, counted, resume)
         else:
             outcome = _run_ring(spec, writer, progress)
-    except KeyboardInterrupt:
-        message = (f"interrupted by the user; {saved['points']} continuation points saved "
-                   "so far")
-        if writer.status == "running":  # the verbs close their result themselves
-            writer.set_status("interrupted", message)
-            writer.close()
-        return {"status": "interrupted", "message": message, "files": [RESULT_FILE],
-                "notes": []}
     except BaseException as exc:
+        if from_interrupt(exc):  # Ctrl-C, even inside a compiled kernel
+            message = (f"interrupted by the user; {saved['points']} continuation points "
+                       "saved so far")
+            if writer.status == "running":  # the verbs close their result themselves
+                writer.set_status("interrupted", message)
+                writer.close()
+            return {"status": "interrupted", "message": message, "files": [RESULT_FILE],
+                    "notes": []}
         if writer.status == "running":
             writer.set_status("failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
             writer.close()

@@ -17,7 +17,13 @@ import signal
 import threading
 from pathlib import Path
 
-from supercoil.api.recording import RESULT_FILE, kept, plain, settings_mismatch
+from supercoil.api.recording import (
+    RESULT_FILE,
+    from_interrupt,
+    kept,
+    plain,
+    settings_mismatch,
+)
 from supercoil.cli._common import MAX_NAME_BYTES, fail, path_kind, warn
 
 
@@ -136,10 +142,10 @@ def run_saving(compute, writer, quiet: bool = False, resume_hint: str = ""):
     with Progress(quiet) as progress, terminate_as_interrupt():
         try:
             return compute(progress.message, progress.on_point)
-        except KeyboardInterrupt:
-            interrupted(writer, resume_hint)
-            return None
         except BaseException as exc:
+            if from_interrupt(exc):  # Ctrl-C, or SIGTERM, even inside a compiled kernel
+                interrupted(writer, resume_hint)
+                return None
             if writer.status == "running":
                 _close_as(writer, "failed",
                           f"{type(exc).__name__}: {' '.join(str(exc).split())}")

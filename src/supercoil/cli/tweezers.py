@@ -278,6 +278,7 @@ def tweezers(
           + ("" if preset is None else f" (sigma {start / preset.relaxed_link:.4g} to "
              f"{stop / preset.relaxed_link:.4g}; DNA {preset.base_pairs} bp, "
              f"{force_pN:g} pN, D = {preset.effective_diameter_nm:.3g} nm)"), flush=True)
+    from supercoil.api.recording import from_interrupt
     from supercoil.api.verbs import diagram_of, tweezers_arguments, tweezers_path
     from supercoil.cli.saving import (
         interrupted,
@@ -312,7 +313,9 @@ def tweezers(
                     options, rod if model == "cosserat" else None)
                 path = tweezers_path(problem, protocol=protocol, step=step, force_range=ramp,
                                      force_step=force_step, **numerics)
-        except KeyboardInterrupt:
+        except BaseException as exc:
+            if not from_interrupt(exc):  # Ctrl-C or SIGTERM, even inside a kernel
+                raise
             interrupted(writer, hint + " (the quasi-static path is computed again)")
             raise typer.Exit(EXIT_NOT_CONVERGED) from None
     payload = write_tweezers(result, out, writer, path, preset)

@@ -28,10 +28,9 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.kkt import KKTFactor
-from supercoil.stability.analysis import eigen_system, sliding_phase_modes
+from supercoil.stability.analysis import eigen_system, sliding_phase_modes, stiff_sliding_modes
 from supercoil.stability.eigen import dense_constrained_eigenpairs, lowest_pairs
 from supercoil.stability.sliding_count import (
-    contact_acts,
     sliding_left_out,
     without_sliding_pairs,
 )
@@ -161,13 +160,8 @@ def stiff_sliding(system: ExtendedSystem, x: np.ndarray, H, negative: int,
     symmetries (:func:`count_rows` or the system's own phase rows) include the stiff
     sliding's, which that complement does not take out
     (:mod:`~supercoil.stability.sliding_count`), else 0. ``H``: the count's Hessian."""
-    if negative <= 0:
-        return 0
-    problem = system.problem_at(x[-1])
-    if not contact_acts(problem, system.q(x)):
-        return 0
-    modes = sliding_phase_modes(problem, system.q(x))
-    if modes.size == 0:
+    modes = stiff_sliding_modes(system.problem_at(x[-1]), system.q(x), negative)
+    if modes is None:
         return 0
     g = modes[:, system.free]
     J = sp.csr_matrix(system.jacobian(x))

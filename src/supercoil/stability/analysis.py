@@ -321,16 +321,26 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     )
 
 
+def stiff_sliding_modes(problem: ConstrainedEnergy, q: np.ndarray,
+                        negative: int) -> np.ndarray | None:
+    """The sliding modes (:func:`sliding_phase_modes`) where a count of ``negative`` may
+    include the stiff sliding's eigenvalue (:mod:`supercoil.stability.sliding_count`): a
+    positive count, a contact acting at ``q`` and a sliding present; None otherwise (no
+    eigen-solve needed)."""
+    if negative <= 0 or not contact_acts(problem, q):
+        return None
+    modes = sliding_phase_modes(problem, q)
+    return modes if modes.size else None
+
+
 def _stiff_sliding(problem: ConstrainedEnergy, q: np.ndarray, free: np.ndarray, H,
                    negative: int) -> int:
     """1 where the ``negative`` eigenvalues counted on the complement of the approximate
     symmetries include the stiff sliding's (:mod:`supercoil.stability.sliding_count`),
     as the branches' count leaves it out, else 0. ``H``: the count's Hessian on the
     ``free`` DOFs."""
-    if negative <= 0 or not contact_acts(problem, q):
-        return 0
-    modes = sliding_phase_modes(problem, q)
-    if modes.size == 0:
+    modes = stiff_sliding_modes(problem, q, negative)
+    if modes is None:
         return 0
     J = (sp.csr_matrix(problem.constraint_jacobian(q))[:, free] if problem.n_constraints
          else sp.csr_matrix((0, free.size)))

@@ -121,43 +121,47 @@ def test_contact_curve_defaults_to_the_quintic_with_dna(dna_run, tmp_path):
     # DNA runs resolve the ply at segments of D, where the cubic B-spline's contact
     # ripples (tests/test_contact_integral.py): their default curve is DNA_CONTACT_CURVE,
     # on the command line, in study files and in the library; a given curve is kept.
-    # loop_sliding is on with them too (dna_numerics), where the mesh lets the loop slide
-    assert json.loads((dna_run / "branch.json").read_text())["contact_curve"] == "quintic"
-    assert json.loads((dna_run / "branch.json").read_text())["loop_sliding"] is True
+    # loop_sliding, not given, is applied where the mesh lets the loop slide, DNA or not
+    data = json.loads((dna_run / "branch.json").read_text())
+    assert data["contact_curve"] == "quintic"
+    assert data["loop_sliding"] is None and data["loop_sliding_applied"] is True
     assert sc.load(dna_run).settings["contact_curve"] == "quintic"
-    assert sc.load(dna_run).settings["loop_sliding"] is True  # a resume must match it
+    assert sc.load(dna_run).settings["loop_sliding"] is None  # a resume must match it
     dna = parse_study(STUDY).tweezers_options()
-    assert dna.contact_curve == "quintic" and dna.loop_sliding
+    assert dna.contact_curve == "quintic" and dna.loop_sliding is None and dna.loop_slides
     plain = '[rod]\ntwist_ratio = 1.5\n[problem]\nkind = "tweezers"\ntension = 10\n'
     assert parse_study(plain).tweezers_options().contact_curve == "spline"
-    assert not parse_study(plain).tweezers_options().loop_sliding
+    assert parse_study(plain).tweezers_options().loop_slides
     out = tmp_path / "cubic"
     assert run(["tweezers", "--dna", "--bp", "300", "--force-pN", "0.3", "--sigma",
                 "0:0.002", "--contact-curve", "spline", "--out", str(out), "--quiet"]) == 0
     assert json.loads((out / "branch.json").read_text())["contact_curve"] == "spline"
-    assert json.loads((out / "branch.json").read_text())["loop_sliding"] is True
+    assert json.loads((out / "branch.json").read_text())["loop_sliding_applied"] is True
 
 
 @pytest.mark.parametrize("given,dna,expected", [(["--no-loop-sliding"], True, False),
-                                                ([], False, False),
+                                                ([], False, None),
                                                 (["--loop-sliding"], False, True)])
 def test_the_command_line_keeps_a_given_loop_sliding(given, dna, expected, tmp_path):
     """``--loop-sliding/--no-loop-sliding``: a given choice is kept, with or without
-    --dna (the run's settings and branch.json say which); without it, on only with --dna."""
+    --dna (the run's settings and branch.json say which); without it (None) it is
+    applied where the mesh lets the loop slide, here on both meshes."""
     out = tmp_path / "run"
     problem = (["--dna", "--bp", "300", "--force-pN", "0.3", "--sigma", "0:0.002"] if dna
                else ["--twist-ratio", "1.5", "--length-over-diameter", "40", "--tension",
                      "100", "--turns", "0:0.2", "--nodes", "40"])
     assert run(["tweezers", *problem, *given, "--out", str(out), "--quiet"]) == 0
-    assert json.loads((out / "branch.json").read_text())["loop_sliding"] is expected
+    data = json.loads((out / "branch.json").read_text())
+    assert data["loop_sliding"] is expected
+    assert data["loop_sliding_applied"] is (expected is not False)
     assert sc.load(out).settings["loop_sliding"] is expected
 
 
 @pytest.mark.parametrize("force,salt", [(1.0, 150), (4.0, 150), (1.0, 10)])
-def test_loop_sliding_is_on_with_dna_where_the_mesh_lets_the_loop_slide(force, salt):
+def test_loop_sliding_applies_with_dna_where_the_mesh_lets_the_loop_slide(force, salt):
     """Where n0's segments h = L/(n0 - 2) are longer than half the loop's core sqrt(A/F)
     (h sqrt(F/A) > 1/2, computed here from the preset's own L, D and A), the mesh pins
-    the loop and loop_sliding would not apply: DNA runs leave it off there."""
+    the loop and loop_sliding does not apply: the default leaves it off there."""
     preset = DNAPreset(3000, salt_mM=salt)
     nodes = resolving_nodes(preset.length_over_diameter)
     core = 3000 * RISE / (nodes - 2) * math.sqrt(force / (P_B * KT))
@@ -166,11 +170,9 @@ def test_loop_sliding_is_on_with_dna_where_the_mesh_lets_the_loop_slide(force, s
     options = parse_study(text).tweezers_options()
     assert options.n_nodes == nodes
     assert options.core_segments == pytest.approx(core, rel=1e-12)
-    assert options.loop_sliding is (core <= 0.5)
-    tension = sc.Tweezers.from_dna(preset, force).tension
-    assert dna_numerics({}, tension, nodes) == {"contact_curve": "quintic",
-                                                "loop_sliding": core <= 0.5}
-    assert dna_numerics({"loop_sliding": False}, tension, nodes)["loop_sliding"] is False
+    assert options.loop_sliding is None and options.loop_slides is (core <= 0.5)
+    assert dna_numerics({}) == {"contact_curve": "quintic"}
+    assert dna_numerics({"contact_curve": "spline"}) == {"contact_curve": "spline"}
 
 
 def _texts(fig) -> list[str]:
@@ -302,7 +304,7 @@ def test_library_from_dna_and_sigma(tmp_path):
     diagram = sc.tweezers(problem, superhelical_density=(0, 0.02), max_points=40)
     assert diagram.settings.turns == pytest.approx((0.0, 0.02 * 300 / REPEAT), rel=1e-15)
     assert diagram.settings.contact_curve == "quintic"  # DNA_CONTACT_CURVE
-    assert diagram.settings.loop_sliding  # dna_numerics
+    assert diagram.settings.loop_slides  # the default, where it applies
     given = sc.tweezers(problem, superhelical_density=(0, 0.002), max_points=5,
                         contact_curve="spline", loop_sliding=False).settings
     assert given.contact_curve == "spline" and not given.loop_sliding

@@ -193,7 +193,7 @@ def _tweezers_settings(problem: Tweezers, turns, options: dict):
     if problem.dna is not None:
         from supercoil.units.tweezers import dna_numerics
 
-        options = dna_numerics(options, problem.tension, rod.nodes)
+        options = dna_numerics(options)
     return _settings(TweezersOptions, {
         "twist_ratio": rod.twist_ratio, "length_over_diameter": lod, "n_nodes": rod.nodes,
         "tension": problem.tension, "end_distance": problem.end_distance}, {

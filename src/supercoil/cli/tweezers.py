@@ -130,8 +130,9 @@ def tweezers(
         "with straight tails along the rod by a phase row up to its contact, and follow a "
         "contact branch that stops or closes again held on its half-turn symmetry "
         "(docs/continuation.md, \"Long open rods\"): what long rods (L sqrt(F/A) of 20 "
-        "and more) need to reach their plectoneme. Default: on with --dna where the "
-        "segments are at most half the loop's core sqrt(A/F), off otherwise.",
+        "and more) need to reach their plectoneme. Default: on where the segments are at "
+        "most half the loop's core sqrt(A/F) (where it applies); --loop-sliding on a "
+        "coarser mesh adds a note that it does not apply there.",
         show_default=False)] = None,
     overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(
@@ -141,11 +142,8 @@ def tweezers(
     dna: Annotated[bool, typer.Option(
         "--dna", help="A DNA molecule in physical units (--bp, --force-pN, --salt-mM or "
         "--diameter-nm, --temperature-K) instead of --twist-ratio, --tension and "
-        "--length-over-diameter. The model is athermal. DNA runs hold the localised "
-        "loop's sliding by a phase row up to its contact (loop_sliding; not where the "
-        "segments are longer than half the loop's core sqrt(A/F)), and follow a contact "
-        "branch that stops or closes again held on its half-turn symmetry "
-        "(docs/tweezers.md).")] = False,
+        "--length-over-diameter. The model is athermal. DNA runs take the quintic contact "
+        "curve unless --contact-curve is given (docs/tweezers.md).")] = False,
     bp: Annotated[int | None, typer.Option(
         "--bp", metavar="N", help=f"With --dna: number of base pairs, "
         f"{checks.MIN_BASE_PAIRS} to {checks.MAX_BASE_PAIRS}.", show_default=False)] = None,
@@ -200,11 +198,9 @@ def tweezers(
                         force_pN, salt_mM, diameter_nm, temperature_K, turns, sigma, nodes)
         from supercoil.units.tweezers import dna_numerics
 
-        given = {"contact_curve": contact_curve, "loop_sliding": loop_sliding}
-        numerics = dna_numerics({k: v for k, v in given.items() if v is not None}, tension,
-                                nodes)
+        given = {"contact_curve": contact_curve}
+        numerics = dna_numerics({k: v for k, v in given.items() if v is not None})
         contact_curve = numerics["contact_curve"]
-        loop_sliding = numerics["loop_sliding"]
     else:
         for option, value in (("--bp", bp), ("--force-pN", force_pN), ("--salt-mM", salt_mM),
                               ("--diameter-nm", diameter_nm),
@@ -221,7 +217,6 @@ def tweezers(
         start, stop = parse_span("--turns", turns, "START:STOP in turns, like 0:5")
         nodes = 100 if nodes is None else nodes
         contact_curve = "spline" if contact_curve is None else contact_curve
-        loop_sliding = bool(loop_sliding)
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "
              "--end-distance Z/L (displacement control, 0 < z/L < 1; up to 2 with --model "

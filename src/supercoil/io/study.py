@@ -134,13 +134,12 @@ class Study:
 
     def _dna_numerics(self) -> dict:
         """A DNA study's defaults (:func:`~supercoil.units.tweezers.dna_numerics`: the
-        contact curve, ``loop_sliding``), none otherwise (the options' defaults)."""
+        contact curve), none otherwise (the options' defaults)."""
         if self.units != "dna":
             return {}
         from supercoil.units.tweezers import dna_numerics
 
-        s = self.settings
-        return dna_numerics({}, s["problem"].get("tension"), s["rod"]["nodes"])
+        return dna_numerics({})
 
     def rod(self):
         """The study's :class:`supercoil.Rod` or :class:`supercoil.CosseratRod` (the

@@ -101,7 +101,8 @@ def result_payload(result: TweezersResult, contacts: bool = True) -> dict:
         "n_nodes": opts.n_nodes,
         "contact_curve": opts.contact_curve,
         "contact_formulation": opts.contact_formulation,
-        "loop_sliding": opts.loop_sliding,
+        "loop_sliding": opts.loop_sliding,  # as given: None, where it applies
+        "loop_sliding_applied": opts.loop_slides,
         "greenhill_turns": result.greenhill_turns,
         "branches": branches,
         "special_points": [special_summary(p) for p in result.special_points()],

@@ -10,9 +10,8 @@ turns or as superhelical density, and the number of nodes:
   longer than the tube's diameter D, which the contact of a plectoneme's two strands
   needs (a coarser polygon cannot resolve the ply);
 * the contact curve defaults to :data:`DNA_CONTACT_CURVE`, the quintic B-spline, whose
-  self-distance does not ripple with the nodes' phase at segments of D, and
-  ``loop_sliding`` to on where the mesh lets the loop slide (:func:`dna_numerics`, the one
-  place these defaults are applied).
+  self-distance does not ripple with the nodes' phase at segments of D
+  (:func:`dna_numerics`, the one place this default is applied).
 
 :func:`dna_tweezers_inputs` is the one check of these inputs, shared by the command line
 (``supercoil tweezers --dna``), study files (``supercoil run``) and the library
@@ -50,30 +49,24 @@ follows from one to the other (``supercoil tweezers --dna --bp 3000 --force-pN 1
 it grows the plectoneme to the last turn (docs/performance.md)."""
 
 
-def dna_numerics(options: Mapping[str, object], tension: float | None,
-                 n_nodes: int) -> dict:
+def dna_numerics(options: Mapping[str, object]) -> dict:
     """``options`` (of :class:`~supercoil.problems.tweezers.TweezersOptions`) with the DNA
-    runs' defaults for those not given: the contact curve :data:`DNA_CONTACT_CURVE`, and
-    ``loop_sliding`` on unless the mesh of ``n_nodes`` pins the loop at the tension F L^2/A
-    (:attr:`~supercoil.problems.tweezers.TweezersOptions.mesh_pins_loop`, where the
-    option would not apply).
+    runs' default for the contact curve, :data:`DNA_CONTACT_CURVE`, where not given.
 
-    With the sliding's phase row the localised loop stays centred up to its contact, and
-    a contact branch that stops or closes before the last turn is followed again held
-    on its half-turn symmetry from that centred start
-    (:mod:`supercoil.problems.tweezers.mirrored`). Measured on 3 kbp from sigma 0 to
-    0.06 (``benchmarks/results/long_dna_grid.md``, "DNA preset"): without the row, at
-    0.25 pN / 200 mM, 0.5 pN / 150 mM and 1 pN / 200 mM the free contact branch stopped a
-    few points into its contact, the loop's sliding, driven by the turns, setting the
-    tangent. With it, the last two and 1 pN / 150 mM reach sigma 0.06 on the free contact
-    branch (1 pN / 150 mM in fewer seconds than without), and at 0.25 pN / 200 mM the
-    free branch stops after 6 points and the held one reaches sigma 0.06.
+    ``loop_sliding`` needs no DNA default: every run takes it where the mesh lets the
+    loop slide (``TweezersOptions.loop_sliding = None``). With the sliding's phase row
+    the localised loop stays centred up to its contact, and a contact branch that stops
+    or closes before the last turn is followed again held on its half-turn symmetry
+    from that centred start (:mod:`supercoil.problems.tweezers.mirrored`). Measured on
+    3 kbp from sigma 0 to 0.06 (``benchmarks/results/long_dna_grid.md``, "DNA preset"):
+    without the row, at 0.25 pN / 200 mM, 0.5 pN / 150 mM and 1 pN / 200 mM the free
+    contact branch stopped a few points into its contact, the loop's sliding, driven by
+    the turns, setting the tangent. With it, the last two and 1 pN / 150 mM reach sigma
+    0.06 on the free contact branch (1 pN / 150 mM in fewer seconds than without), and
+    at 0.25 pN / 200 mM the free branch stops after 6 points and the held one reaches
+    sigma 0.06.
     """
-    from supercoil.problems.tweezers.options import mesh_pins_loop
-
-    defaults = {"contact_curve": DNA_CONTACT_CURVE,
-                "loop_sliding": not mesh_pins_loop(tension, n_nodes)}
-    return {**defaults, **options}
+    return {"contact_curve": DNA_CONTACT_CURVE, **options}
 
 
 def tweezers_parameters(preset: DNAPreset, force_pN: float) -> dict[str, float]:

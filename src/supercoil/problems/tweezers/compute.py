@@ -103,7 +103,7 @@ def tweezers_branches(options: TweezersOptions,
                               else (on_point, None))
     pinned = pin_stop(rod)
     free_stop = either(past_onset, pinned)
-    if opts.loop_sliding and not opts.loop_slides:
+    if opts.loop_sliding is True and not opts.loop_slides:
         notes.append(f"loop_sliding is not applied: the segments ({rod.rod.edge_length:.3g} L) "
                      f"are longer than half the loop's core sqrt(A/F) "
                      f"({1 / np.sqrt(opts.tension):.3g} L), which the mesh pins")

@@ -54,8 +54,9 @@ class TweezersOptions:
     long rods reach their contact where the corrector otherwise diverges along the nearly
     free sliding and keeps a centred loop centred, from which a contact branch that
     stops or closes is followed again held on its half-turn symmetry
-    (:mod:`~supercoil.problems.tweezers.mirrored`); off by default, on by default for
-    DNA runs where it applies (:func:`~supercoil.units.tweezers.dna_numerics`);
+    (:mod:`~supercoil.problems.tweezers.mirrored`). ``None`` (default): on where it
+    applies; ``True``: asked for (a note says where the mesh does not let it apply);
+    ``False``: off;
     ``contact_formulation``:
     ``"integral"``
     (default) or ``"pairs"`` (``ContactOptions.formulation``). The default,
@@ -82,7 +83,7 @@ class TweezersOptions:
     contact_tolerance: float = 1e-8
     contact_curve: str = "spline"
     contact_formulation: str = "integral"
-    loop_sliding: bool = False
+    loop_sliding: bool | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -108,6 +109,9 @@ class TweezersOptions:
         check_steps(self, points=("max_points", "segment_points"))
         checks.choice("contact_predictor", self.contact_predictor, PREDICTORS)
         validate_contact_choice(self.contact_curve, self.contact_formulation)
+        if self.loop_sliding not in (None, True, False):
+            raise checks.refuse("loop_sliding", f"must be True, False or None (where it "
+                                f"applies), got {self.loop_sliding!r}")
 
     @property
     def load_control(self) -> bool:
@@ -125,7 +129,7 @@ class TweezersOptions:
         150, N = 202: without the row it starts and reaches 20.9 turns in 300 points),
         or the branch stopped where the row came and went (N = 102: without it, it
         reaches its contact)."""
-        return self.loop_sliding and not self.mesh_pins_loop
+        return self.loop_sliding is not False and not self.mesh_pins_loop
 
     @property
     def core_segments(self) -> float | None:

@@ -11,7 +11,7 @@ import numpy as np
 
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation import Branch, ContinuationOptions
+from supercoil.continuation import Branch, ContinuationOptions, ContinuationStatus
 from supercoil.problems.branch_options import coarse_mesh_note
 from supercoil.problems.contact_events import (
     cut_at_onset,
@@ -221,10 +221,12 @@ def tweezers_branches(options: TweezersOptions,
     names = {contact_name}
     last, handed = contact, frozenset()
     closed = closed_before(contact, opts.turns[1])
-    if closed or contact.parameter_values[-1] < opts.turns[1] - 1e-9:
-        # closed, or stopped before the last turn: the same branch held on its half-turn
-        # symmetry (mirrored.py), which a freely followed one leaves at a pitchfork of the
-        # contact's ripple, or loses along the sliding that the turns drive
+    if closed or (contact.parameter_values[-1] < opts.turns[1] - 1e-9
+                  and contact.status is not ContinuationStatus.MAX_POINTS):
+        # closed, or stopped before the last turn (not by the points it was given): the
+        # same branch held on its half-turn symmetry (mirrored.py), which a freely
+        # followed one leaves at a pitchfork of the contact's ripple, or loses along the
+        # sliding that the turns drive
         start = time.perf_counter()
         held = held_contact(opts, rod, cp, free, onset, contact_name, stored, on_point,
                             pinned, say, reach)

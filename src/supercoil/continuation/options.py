@@ -149,7 +149,10 @@ class ContinuationOptions:
       unstable counts are equal. A solution curve through a regular point is
       unique, so the branch would only retrace itself (isolas, loops left
       over by the discretisation); without the check the run circles until
-      ``max_points``.
+      ``max_points``. With it, a corrected point that lies on the branch's own
+      earlier path (within ``closed_loop_tolerance`` times the step), its
+      tangent the other way, is refused and the step shortened: a jump back
+      across the sheets of a fold (:func:`~supercoil.continuation.closure.retraced`).
     * ``max_corrector_distance``: the corrector's trust region, in units of the
       step: a correction whose iterate lies farther than
       ``max_corrector_distance * ds`` from the predicted point (before a

@@ -29,7 +29,7 @@ import numpy as np
 
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
-from supercoil.continuation.closure import returned_to
+from supercoil.continuation.closure import retraced, returned_to
 from supercoil.continuation.events import UserEvent, point_values, takes_problem, user_values
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
@@ -250,6 +250,12 @@ class Tracer:
                 return ContinuationStatus.PARAMETER_BOUND, (
                     f"{system.parameter} = {taken.bound:.10g} is a bound and the branch leaves "
                     f"the interval there ({len(self.xs)} points)")
+            if taken.failure is None and opts.detect_closed_loops:
+                j = retraced(system, opts, self.xs, self.ts, taken.x, taken.t)
+                if j is not None:
+                    taken.failure = (f"the corrected point lies on the branch's own path "
+                                     f"near its point {j}, followed the other way (a jump "
+                                     f"back across a fold's sheets)")
             if taken.failure is not None:
                 log.debug("step %.3g rejected: %s", ds, taken.failure)
                 if opts.regauge and system.r and not regauged_here:

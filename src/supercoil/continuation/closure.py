@@ -17,7 +17,11 @@ already followed. Measured on the tweezers' contact branch held on its symmetry 
 the second sheet down to 1.8026 turns (0.2 D from the first) with steps growing to
 0.36 D, then converged within 1e-3 D of the first sheet and followed it back down to
 the contact-free branch, its count falling from 1 to 0 with no fold, a "count change"
-whose location failed. The tracer refuses such a point and shortens the step.
+whose location failed. The tracer refuses such a point and shortens the step where
+its unstable count is the earlier chord's and not the step start's (the two sheets of a
+fold differ by one): close to a sharp fold the sheet ahead runs within the step's
+tolerance of the one followed, with the count of the step's start (measured on the same
+branch at 1.838 turns, where without the count the steps fell to the minimum).
 """
 
 from __future__ import annotations

@@ -34,7 +34,7 @@ from supercoil.continuation.events import UserEvent, point_values, takes_problem
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
 from supercoil.continuation.special_points import locate_events, special_point
-from supercoil.continuation.stability import point_stability
+from supercoil.continuation.stability import inertia, point_stability
 from supercoil.continuation.step import take_step
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.carried import frames_of
@@ -225,6 +225,24 @@ class Tracer:
         except (SingularMatrixError, InertiaError) as exc:
             return self._stability_failed(exc)
 
+    def _back_on_sheet(self, j: int, taken) -> bool:
+        """Whether the corrected point of ``taken``, found on the earlier chord ``j`` followed
+        the other way (:func:`~supercoil.continuation.closure.retraced`), has that chord's
+        raw count and not the step start's: the two sheets of a fold differ by one, so a
+        point of the sheet ahead that runs close beside the one followed (a sharp fold,
+        whose sheets part like the square root of the distance from it) keeps the count of
+        the step's start."""
+        before = {self.stabs[j].negative_count, self.stabs[j + 1].negative_count}
+        if len(before) != 1 or self.stabs[-1].negative_count in before:
+            return False
+        full = taken.full_hessian
+        try:
+            negative, _sign = inertia(self.system, taken.x, self.opts.zero_tolerance,
+                                      None if full is None else full.restrict(self.system.free))
+        except (SingularMatrixError, InertiaError):
+            return False
+        return negative in before
+
     def _stability_failed(self, exc: Exception) -> tuple[ContinuationStatus, str]:
         return ContinuationStatus.STEP_TOO_SMALL, (
             f"stability at point {len(self.xs)} failed: {exc}")
@@ -252,7 +270,7 @@ class Tracer:
                     f"the interval there ({len(self.xs)} points)")
             if taken.failure is None and opts.detect_closed_loops:
                 j = retraced(system, opts, self.xs, self.ts, taken.x, taken.t)
-                if j is not None:
+                if j is not None and self._back_on_sheet(j, taken):
                     taken.failure = (f"the corrected point lies on the branch's own path "
                                      f"near its point {j}, followed the other way (a jump "
                                      f"back across a fold's sheets)")

@@ -3,7 +3,7 @@
 Oracle: geometry of a computed branch (Bratu's, through its fold): a point on one of
 its earlier chords with the chord's tangent reversed is found on that chord; the same
 point with the tangent along the chord, the next point of the branch past its fold, and
-the fold's own turn (the last chords) are not.
+a step back along the last chord are not.
 """
 
 import numpy as np
@@ -45,6 +45,6 @@ def test_the_branch_ahead_and_the_folds_turn_are_not_retraced():
     system, opts, X, T, i = bratu_through_its_fold()
     for k in range(i + 2, len(X) - 1):  # each next point past the fold, from the run before it
         assert retraced(system, opts, list(X[:k]), list(T[:k]), X[k], T[k]) is None
-    # back along the last chord: the turn a fold makes, not asked
+    # back along the last chord (every step back lies on it): not asked
     xs, ts = list(X[:i + 2]), list(T[:i + 2])
     assert retraced(system, opts, xs, ts, 0.5 * (X[i] + X[i + 1]), -T[i]) is None

@@ -98,17 +98,18 @@ def retraced(system: ExtendedSystem, opts: ContinuationOptions, xs: Sequence[np.
     (tangents ``ts``) on which the corrected point ``x_new`` of the step from ``xs[-1]``
     lies, traversed the other way (module doc), or None: within ``closed_loop_tolerance``
     times the step's length of the chord, and its tangent ``t_new`` within 15 degrees of
-    the reverse of the chord's end tangents. Chords from the step's start and the one
-    before it are not asked (a fold turns the branch there)."""
+    the reverse of the chord's end tangents. The chord that ends at the step's start is
+    not asked (every step back along the branch lies on it); on the others a fold's turn
+    is told from a jump by the unstable counts (the tracer's ``_back_on_sheet``)."""
     k = len(xs) - 1
-    if k < 3:
+    if k < 2:
         return None
     length = system.norm(x_new - xs[-1])
     if length == 0.0:
         return None
     reach = opts.closed_loop_tolerance * length
     w = system.weights
-    lam = np.array([x[-1] for x in xs[:k - 1]])  # chords j -> j + 1 for j < k - 2
+    lam = np.array([x[-1] for x in xs[:k]])  # chords j -> j + 1 for j < k - 1
     low, high = np.minimum(lam[:-1], lam[1:]), np.maximum(lam[:-1], lam[1:])
     off = np.maximum(np.maximum(low - x_new[-1], x_new[-1] - high), 0.0)
     near = np.flatnonzero(off * np.sqrt(w[-1]) <= reach)

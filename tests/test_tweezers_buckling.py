@@ -10,6 +10,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from supercoil.errors import InputError
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 from supercoil.problems.tweezers.problem import clamped_problem
@@ -103,6 +104,11 @@ def test_loop_sliding_applies_only_where_the_mesh_resolves_the_loops_core():
 
     assert not opts(202).loop_slides and opts(302).loop_slides
     assert not dataclasses.replace(opts(302), loop_sliding=False).loop_slides
+    # the default, None, is the same as True: on wherever the mesh lets the loop slide
+    for n in (202, 302):
+        assert dataclasses.replace(opts(n), loop_sliding=None).loop_slides == opts(n).loop_slides
+    with pytest.raises(InputError, match="^loop_sliding must be True, False or None"):
+        dataclasses.replace(opts(302), loop_sliding="yes")
     rod, _ = clamped_problem(opts(202))
     assert rod.sliding_tail is None and rod.impenetrable
     assert clamped_problem(opts(302))[0].sliding_tail == sliding_threshold(302)

@@ -11,7 +11,8 @@ that change it. Each point of the finer branch is matched with the coarser branc
 point nearest in the mesh-independent observables (turns, writhe); the counts of the two
 must agree, except near a count event, where the matched states may lie on the two
 sheets of one fold. Every disagreement is listed with its distance in turns to the
-nearest count change of either branch, so none is hidden by the ``--window``.
+nearest count change of either branch (0 when one lies between the point's turns and its
+match's), so none is hidden by the ``--window``.
 
 Run: ``python benchmarks/grid_counts_refinement.py --ld 200 --lam 40 --nodes 202,404
 [--twist-ratio 1.5] [--factor 1.5] [--max-points 4000] [--window 0.1]``.
@@ -59,8 +60,12 @@ def compare(coarse, fine, window: float) -> dict:
     cf = np.asarray(fine.unstable_count)
     events = np.concatenate([count_changes(coarse), count_changes(fine)])
     gap, match = cKDTree(fc).query(ff)
-    near = (np.min(np.abs(ff[:, :1] - events[None, :]), axis=1) if events.size
-            else np.full(len(ff), np.inf))
+    # distance in turns from the turns spanned by a point and its match to the nearest
+    # count change (0 when one lies between them)
+    low = np.minimum(ff[:, 0], fc[match, 0])[:, None]
+    high = np.maximum(ff[:, 0], fc[match, 0])[:, None]
+    near = (np.min(np.maximum(np.maximum(low - events, events - high), 0.0), axis=1)
+            if events.size else np.full(len(ff), np.inf))
     differ = cf != cc[match]
     rows = [(int(i), float(ff[i, 0]), int(cf[i]), int(match[i]), int(cc[match[i]]),
              float(near[i])) for i in np.flatnonzero(differ)]
@@ -101,8 +106,9 @@ def main() -> None:
           f"change, {out['differ_elsewhere']} elsewhere; largest (turns, writhe) gap to "
           f"the match {out['largest_match_gap']:.3g}")
     for i, t, c, j, cj, d in out["disagreements"]:
-        print(f"    fine point {i} at {t:.4f} turns counts {c}, its match {j} counts {cj}; "
-              f"{d:.3g} turns from a count change")
+        print(f"    fine point {i} at {t:.4f} turns counts {c}, its match {j} at "
+              f"{coarse.parameter_values[j]:.4f} counts {cj}; {d:.3g} turns from a count "
+              f"change")
 
 
 if __name__ == "__main__":

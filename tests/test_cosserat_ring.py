@@ -288,7 +288,7 @@ def test_continuation_finds_michell_and_the_buckled_branch_keeps_the_link():
     # guard refuses the step that would pass the centreline through itself, the step is
     # retried shorter until it cannot be, and the branch ends there with the link kept
     onwards = ContinuationOptions(parameter_bounds=(0.5, 3.0), initial_step=0.05,
-                                  max_step=0.1, max_points=30, direction=-1)
+                                  max_step=0.1, max_points=60, direction=-1)
     last = continuation(problem, buckled.states[-1], parameter="excess_link",
                         options=onwards, records=records,
                         start=float(buckled.parameter_values[-1]))

@@ -31,9 +31,9 @@ from supercoil.problems.ring_diagram.records import kkt_residual
 from supercoil.solvers.newton import NewtonOptions, lagrangian_hessian
 from supercoil.stability.analysis import analyse
 
-# β of a coarse ring (about 6 s): its contact branch from the onset through B₁ and P to ΔLk 6
+# β of a coarse ring (about 7 s): its contact branch from the onset through B₁ and P to ΔLk 6
 OPTIONS = DiagramOptions(2 / 3, 40.0, n_nodes=48, modes=(3,), max_excess_link=6.0,
-                         free_max_points=60, contact_max_points=80)
+                         free_max_points=60, contact_max_points=120)
 
 
 @pytest.fixture(scope="module")

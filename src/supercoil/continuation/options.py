@@ -153,6 +153,11 @@ class ContinuationOptions:
       earlier path (within ``closed_loop_tolerance`` times the step), its
       tangent the other way, is refused and the step shortened: a jump back
       across the sheets of a fold (:func:`~supercoil.continuation.closure.retraced`).
+      And a corrected point whose raw unstable count differs from the step start's
+      with no fold between them (a bifurcation crossed, or a step over a fold onto
+      the sheet beyond it) is taken again at half the step; the half step is kept
+      when it does not change the count (docs/continuation.md, "Steps across a fold
+      onto another sheet").
     * ``max_corrector_distance``: the corrector's trust region, in units of the
       step: a correction whose iterate lies farther than
       ``max_corrector_distance * ds`` from the predicted point (before a

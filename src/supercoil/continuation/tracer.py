@@ -243,6 +243,19 @@ class Tracer:
             return False
         return negative in before
 
+    def _count_jumped(self, taken) -> bool:
+        """Whether the corrected point of ``taken`` has another raw count than the step's
+        start while the parameter keeps its direction (no fold between them)."""
+        if taken.t[-1] * self.ts[-1][-1] <= 0.0:
+            return False
+        full = taken.full_hessian
+        try:
+            negative, _sign = inertia(self.system, taken.x, self.opts.zero_tolerance,
+                                      None if full is None else full.restrict(self.system.free))
+        except (SingularMatrixError, InertiaError):
+            return False
+        return negative != self.stabs[-1].negative_count
+
     def _stability_failed(self, exc: Exception) -> tuple[ContinuationStatus, str]:
         return ContinuationStatus.STEP_TOO_SMALL, (
             f"stability at point {len(self.xs)} failed: {exc}")
@@ -268,6 +281,19 @@ class Tracer:
                 return ContinuationStatus.PARAMETER_BOUND, (
                     f"{system.parameter} = {taken.bound:.10g} is a bound and the branch leaves "
                     f"the interval there ({len(self.xs)} points)")
+            if (taken.failure is None and opts.detect_closed_loops and ds >= 4 * opts.min_step
+                    and self._count_jumped(taken)):
+                # a count change with no fold: a bifurcation crossed, or a step across the
+                # sheets of a fold onto another sheet; half the step tells them apart
+                half = take_step(system, opts, x_k, self.ts[-1],
+                                 self.xs[-2] if len(self.xs) >= 2 else self.point_before,
+                                 self._previous_tangent(), 0.5 * ds,
+                                 None if self.admissible is None else self._vet, self.stop)
+                if (not half.refusal and not half.leaves_bound and half.failure is None
+                        and not self._count_jumped(half)):
+                    log.debug("step %.3g changed the count with no fold; half of it did not",
+                              ds)
+                    taken, ds = half, 0.5 * ds
             if taken.failure is None and opts.detect_closed_loops:
                 j = retraced(system, opts, self.xs, self.ts, taken.x, taken.t)
                 if j is not None and self._back_on_sheet(j, taken):

@@ -129,6 +129,14 @@ def inertia(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None 
     return negative, sign
 
 
+def factor_count(system: ExtendedSystem, x: np.ndarray, hessian=None) -> int:
+    """The negative count of the constrained Hessian at ``x`` as the factor of
+    :func:`inertia` counts it, before :func:`stiff_sliding` leaves anything out: one
+    sparse factorisation, no eigenproblem. Raises on a singular matrix."""
+    H, J = count_system(system, x, hessian)
+    return KKTFactor(H, J).reduced_negative_count
+
+
 def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None,
                         hessian) -> tuple[int, int, KKTFactor, np.ndarray, int]:
     """:func:`inertia` with the factor it counted with, that factor's DOFs (indices

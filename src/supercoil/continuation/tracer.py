@@ -34,7 +34,7 @@ from supercoil.continuation.events import UserEvent, point_values, takes_problem
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
 from supercoil.continuation.special_points import locate_events, special_point
-from supercoil.continuation.stability import inertia, point_stability
+from supercoil.continuation.stability import factor_count, inertia, point_stability
 from supercoil.continuation.step import take_step
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.carried import frames_of
@@ -245,13 +245,22 @@ class Tracer:
 
     def _count_jumped(self, taken) -> bool:
         """Whether the corrected point of ``taken`` has another raw count than the step's
-        start while the parameter keeps its direction (no fold between them)."""
+        start while the parameter keeps its direction (no fold between them). The
+        factors' counts are compared first (one sparse factorisation at each end); only
+        where they differ is the count with the stiff sliding left out computed."""
         if taken.t[-1] * self.ts[-1][-1] <= 0.0:
             return False
+        system = self.system
         full = taken.full_hessian
+        hessian = None if full is None else full.restrict(system.free)
+        kept = self._accepted_hessian
+        start = (kept[1] if kept is not None and kept[0] is self.xs[-1]
+                 else system.full_hessian(self.xs[-1]))
         try:
-            negative, _sign = inertia(self.system, taken.x, self.opts.zero_tolerance,
-                                      None if full is None else full.restrict(self.system.free))
+            if (factor_count(system, taken.x, hessian)
+                    == factor_count(system, self.xs[-1], start.restrict(system.free))):
+                return False
+            negative, _sign = inertia(system, taken.x, self.opts.zero_tolerance, hessian)
         except (SingularMatrixError, InertiaError):
             return False
         return negative != self.stabs[-1].negative_count

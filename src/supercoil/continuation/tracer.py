@@ -235,13 +235,18 @@ class Tracer:
         before = {self.stabs[j].negative_count, self.stabs[j + 1].negative_count}
         if len(before) != 1 or self.stabs[-1].negative_count in before:
             return False
+        return self._count_at(taken) in before
+
+    def _count_at(self, taken) -> int | None:
+        """The raw count (:func:`~supercoil.continuation.stability.inertia`) at the
+        corrected point of ``taken``, or None where the factorisation fails."""
         full = taken.full_hessian
         try:
             negative, _sign = inertia(self.system, taken.x, self.opts.zero_tolerance,
                                       None if full is None else full.restrict(self.system.free))
         except (SingularMatrixError, InertiaError):
-            return False
-        return negative in before
+            return None
+        return negative
 
     def _count_jumped(self, taken) -> bool:
         """Whether the corrected point of ``taken`` has another raw count than the step's
@@ -252,18 +257,17 @@ class Tracer:
             return False
         system = self.system
         full = taken.full_hessian
-        hessian = None if full is None else full.restrict(system.free)
         kept = self._accepted_hessian
         start = (kept[1] if kept is not None and kept[0] is self.xs[-1]
                  else system.full_hessian(self.xs[-1]))
         try:
-            if (factor_count(system, taken.x, hessian)
+            if (factor_count(system, taken.x, None if full is None else full.restrict(system.free))
                     == factor_count(system, self.xs[-1], start.restrict(system.free))):
                 return False
-            negative, _sign = inertia(system, taken.x, self.opts.zero_tolerance, hessian)
         except (SingularMatrixError, InertiaError):
             return False
-        return negative != self.stabs[-1].negative_count
+        negative = self._count_at(taken)
+        return negative is not None and negative != self.stabs[-1].negative_count
 
     def _stability_failed(self, exc: Exception) -> tuple[ContinuationStatus, str]:
         return ContinuationStatus.STEP_TOO_SMALL, (

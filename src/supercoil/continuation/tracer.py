@@ -269,6 +269,13 @@ class Tracer:
         negative = self._count_at(taken)
         return negative is not None and negative != self.stabs[-1].negative_count
 
+    def _attempt(self, length: float):
+        """A step of ``length`` from the last point (:func:`take_step`)."""
+        return take_step(self.system, self.opts, self.xs[-1], self.ts[-1],
+                         self.xs[-2] if len(self.xs) >= 2 else self.point_before,
+                         self._previous_tangent(), length,
+                         None if self.admissible is None else self._vet, self.stop)
+
     def _stability_failed(self, exc: Exception) -> tuple[ContinuationStatus, str]:
         return ContinuationStatus.STEP_TOO_SMALL, (
             f"stability at point {len(self.xs)} failed: {exc}")
@@ -282,10 +289,7 @@ class Tracer:
                 return ContinuationStatus.MAX_ARCLENGTH, (
                     f"arclength {self.s[-1]:.4g} reached max_arclength after {len(self.xs)} points")
             x_k = self.xs[-1]
-            taken = take_step(system, opts, x_k, self.ts[-1],
-                              self.xs[-2] if len(self.xs) >= 2 else self.point_before,
-                              self._previous_tangent(), ds,
-                              None if self.admissible is None else self._vet, self.stop)
+            taken = self._attempt(ds)
             if taken.refusal:
                 return ContinuationStatus.STOPPED, (
                     f"stopped after {len(self.xs)} points at {system.parameter} = "
@@ -298,10 +302,7 @@ class Tracer:
                     and self._count_jumped(taken)):
                 # a count change with no fold: a bifurcation crossed, or a step across the
                 # sheets of a fold onto another sheet; half the step tells them apart
-                half = take_step(system, opts, x_k, self.ts[-1],
-                                 self.xs[-2] if len(self.xs) >= 2 else self.point_before,
-                                 self._previous_tangent(), 0.5 * ds,
-                                 None if self.admissible is None else self._vet, self.stop)
+                half = self._attempt(0.5 * ds)
                 if (not half.refusal and not half.leaves_bound and half.failure is None
                         and not self._count_jumped(half)):
                     log.debug("step %.3g changed the count with no fold; half of it did not",

@@ -248,21 +248,29 @@ class Tracer:
             return None
         return negative
 
-    def _count_jumped(self, taken) -> bool:
+    def _start_factor_count(self) -> int | None:
+        """The factor's count (:func:`~supercoil.continuation.stability.factor_count`) at
+        the last point, in the current phase rows; None where the factorisation fails."""
+        kept = self._accepted_hessian
+        full = (kept[1] if kept is not None and kept[0] is self.xs[-1]
+                else self.system.full_hessian(self.xs[-1]))
+        try:
+            return factor_count(self.system, self.xs[-1], full.restrict(self.system.free))
+        except (SingularMatrixError, InertiaError):
+            return None
+
+    def _count_jumped(self, taken, start: int | None) -> bool:
         """Whether the corrected point of ``taken`` has another raw count than the step's
         start while the parameter keeps its direction (no fold between them). The
-        factors' counts are compared first (one sparse factorisation at each end); only
-        where they differ is the count with the stiff sliding left out computed."""
-        if taken.t[-1] * self.ts[-1][-1] <= 0.0:
+        factors' counts are compared first (``start``: the start's, one sparse
+        factorisation at each end); only where they differ is the count with the stiff
+        sliding left out computed."""
+        if start is None or taken.t[-1] * self.ts[-1][-1] <= 0.0:
             return False
-        system = self.system
         full = taken.full_hessian
-        kept = self._accepted_hessian
-        start = (kept[1] if kept is not None and kept[0] is self.xs[-1]
-                 else system.full_hessian(self.xs[-1]))
         try:
-            if (factor_count(system, taken.x, None if full is None else full.restrict(system.free))
-                    == factor_count(system, self.xs[-1], start.restrict(system.free))):
+            if factor_count(self.system, taken.x,
+                            None if full is None else full.restrict(self.system.free)) == start:
                 return False
         except (SingularMatrixError, InertiaError):
             return False
@@ -298,13 +306,14 @@ class Tracer:
                 return ContinuationStatus.PARAMETER_BOUND, (
                     f"{system.parameter} = {taken.bound:.10g} is a bound and the branch leaves "
                     f"the interval there ({len(self.xs)} points)")
-            if (taken.failure is None and opts.detect_closed_loops and ds >= 4 * opts.min_step
-                    and self._count_jumped(taken)):
+            start = (self._start_factor_count() if taken.failure is None
+                     and opts.detect_closed_loops and ds >= 4 * opts.min_step else None)
+            if self._count_jumped(taken, start):
                 # a count change with no fold: a bifurcation crossed, or a step across the
                 # sheets of a fold onto another sheet; half the step tells them apart
                 half = self._attempt(0.5 * ds)
                 if (not half.refusal and not half.leaves_bound and half.failure is None
-                        and not self._count_jumped(half)):
+                        and not self._count_jumped(half, start)):
                     log.debug("step %.3g changed the count with no fold; half of it did not",
                               ds)
                     taken, ds = half, 0.5 * ds

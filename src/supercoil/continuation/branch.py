@@ -19,6 +19,11 @@ SPECIAL_KINDS = ("fold", "bifurcation", "count_change", "endpoint")
 
 
 def _frozen(a) -> np.ndarray:
+    """``a`` as a read-only array: copied unless it is a read-only array already (a
+    partial branch's views of its tracer's columns, which never change:
+    :mod:`~supercoil.continuation.columns`)."""
+    if isinstance(a, np.ndarray) and not a.flags.writeable:
+        return a
     a = np.array(a)
     a.setflags(write=False)
     return a

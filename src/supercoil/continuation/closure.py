@@ -39,9 +39,11 @@ CLOSURE_TOLERANCE = 1e-6  # a closed branch passes through its earlier point to 
 
 
 def returned_to(system: ExtendedSystem, opts: ContinuationOptions, xs: Sequence[np.ndarray],
-                ts: Sequence[np.ndarray], unstable_counts: Sequence[int]) -> int | None:
+                ts: Sequence[np.ndarray], unstable_counts: Sequence[int],
+                parameters: np.ndarray | None = None) -> int | None:
     """Index of an earlier point of the branch ``xs`` (tangents ``ts``) that its last
-    step passed through (see ``ContinuationOptions.detect_closed_loops``), or None."""
+    step passed through (see ``ContinuationOptions.detect_closed_loops``), or None.
+    ``parameters``: the points' parameter values (``x[-1]``) if kept by the caller."""
     k = len(xs) - 1
     if k < 4:
         return None
@@ -54,7 +56,8 @@ def returned_to(system: ExtendedSystem, opts: ContinuationOptions, xs: Sequence[
     # The metric weighs the parameter by w (its last weight is w^2), so a point whose
     # parameter lies farther than reach / w from the chord's is not within reach:
     # only the others are stacked (this runs at every point).
-    lam = np.array([x[-1] for x in xs[:k - 2]])
+    lam = (np.array([x[-1] for x in xs[:k - 2]]) if parameters is None
+           else parameters[:k - 2])
     low, high = sorted((a[-1], b[-1]))
     off = np.maximum(np.maximum(low - lam, lam - high), 0.0)
     near = np.flatnonzero(off * np.sqrt(system.weights[-1]) <= reach)
@@ -93,14 +96,16 @@ def _closes_at(system: ExtendedSystem, opts: ContinuationOptions, start: np.ndar
 
 
 def retraced(system: ExtendedSystem, opts: ContinuationOptions, xs: Sequence[np.ndarray],
-             ts: Sequence[np.ndarray], x_new: np.ndarray, t_new: np.ndarray) -> int | None:
+             ts: Sequence[np.ndarray], x_new: np.ndarray, t_new: np.ndarray,
+             parameters: np.ndarray | None = None) -> int | None:
     """Index ``j`` of the earlier chord ``xs[j] -> xs[j + 1]`` (the nearest) of the branch ``xs``
     (tangents ``ts``) on which the corrected point ``x_new`` of the step from ``xs[-1]``
     lies, traversed the other way (module doc), or None: within ``closed_loop_tolerance``
     times the step's length of the chord, and its tangent ``t_new`` within 15 degrees of
     the reverse of the chord's end tangents. The chord that ends at the step's start is
     not asked (every step back along the branch lies on it); on the others a fold's turn
-    is told from a jump by the unstable counts (the tracer's ``_back_on_sheet``)."""
+    is told from a jump by the unstable counts (the tracer's ``_back_on_sheet``).
+    ``parameters``: the points' parameter values (``x[-1]``) if kept by the caller."""
     k = len(xs) - 1
     if k < 2:
         return None
@@ -109,7 +114,8 @@ def retraced(system: ExtendedSystem, opts: ContinuationOptions, xs: Sequence[np.
         return None
     reach = opts.closed_loop_tolerance * length
     w = system.weights
-    lam = np.array([x[-1] for x in xs[:k]])  # chords j -> j + 1 for j < k - 1
+    # chords j -> j + 1 for j < k - 1
+    lam = np.array([x[-1] for x in xs[:k]]) if parameters is None else parameters[:k]
     low, high = np.minimum(lam[:-1], lam[1:]), np.maximum(lam[:-1], lam[1:])
     off = np.maximum(np.maximum(low - x_new[-1], x_new[-1] - high), 0.0)
     near = np.flatnonzero(off * np.sqrt(w[-1]) <= reach)

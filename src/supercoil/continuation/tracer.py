@@ -30,6 +30,7 @@ import numpy as np
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
 from supercoil.continuation.closure import retraced, returned_to
+from supercoil.continuation.columns import Columns
 from supercoil.continuation.events import UserEvent, point_values, takes_problem, user_values
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
@@ -85,10 +86,15 @@ class Tracer:
         # (x, full Hessian) of the last point added, assembled after its carry: the
         # rephase tangent there needs no new one (phase rows are linear)
         self._accepted_hessian: tuple[np.ndarray, object] | None = None
-        # converted per point and per record for branch() (the recorded values are only
-        # ever appended)
-        self._rows: list[tuple] = []
-        self._columns: dict[str, list] = {}
+        # each point converted once for branch(): its columns, the (x, tangent,
+        # stability, next step, gauge moved) each row was written from, and how many
+        # written points have no frames
+        self._table = Columns()
+        self._row_keys: list[tuple] = []
+        self._unknown_frames = 0
+        # each point's parameter value and unstable count, for the closure tests
+        self._parameters = Columns()
+        self._counts: list[int] = []
 
     def _previous_tangent(self) -> tuple[np.ndarray, float] | None:
         """The tangent at the point before the last and the arclength between the two."""
@@ -147,6 +153,8 @@ class Tracer:
         self.xs.append(x)
         self.ts.append(t)
         self.stabs.append(stability)
+        self._parameters.put("p", len(self.xs) - 1, x[-1])
+        self._counts.append(stability.unstable_count)
         self.recs.append(records)
         self.frames.append(frames_of(system.problem))
         self.user.append(user)
@@ -194,6 +202,7 @@ class Tracer:
             self.add_point(x, t, search_events=False, publish=False)
         else:
             self.xs[-1], self.ts[-1] = x, t
+            self._parameters.put("p", len(self.xs) - 1, x[-1])
         self.steps[-1], self.moved[-1] = ds, True
         try:
             if self.opts.rephase:
@@ -318,7 +327,8 @@ class Tracer:
                               ds)
                     taken, ds = half, 0.5 * ds
             if taken.failure is None and opts.detect_closed_loops:
-                j = retraced(system, opts, self.xs, self.ts, taken.x, taken.t)
+                j = retraced(system, opts, self.xs, self.ts, taken.x, taken.t,
+                             self._parameters.view("p", len(self.xs)))
                 if j is not None and self._back_on_sheet(j, taken):
                     taken.failure = (f"the corrected point lies on the branch's own path "
                                      f"near its point {j}, followed the other way (a jump "
@@ -364,8 +374,8 @@ class Tracer:
                     f"reached {system.parameter} = {bound:.10g} after {len(self.xs)} points")
             if opts.detect_closed_loops:
                 try:
-                    j = returned_to(system, opts, self.xs, self.ts,
-                                    [s.unstable_count for s in self.stabs])
+                    j = returned_to(system, opts, self.xs, self.ts, self._counts,
+                                    self._parameters.view("p", len(self.xs)))
                 except (SingularMatrixError, InertiaError) as exc:
                     return self._stability_failed(exc)
                 if j is not None:
@@ -378,52 +388,74 @@ class Tracer:
     # -- result -------------------------------------------------------------------------------
     def branch(self, status: ContinuationStatus, message: str) -> Branch:
         """The branch so far (also the partial branch handed to ``on_point`` at every
-        point): each point's full-DOF rows and each record's values are converted once
-        and kept (:meth:`_point_rows`, :attr:`_columns`), so that a partial branch costs
-        the arrays' stacking, not a conversion of every point."""
+        point). Each point is converted once into growing columns
+        (:mod:`~supercoil.continuation.columns`; only the last point is ever replaced,
+        by a regauge or a rephase, and converted again), and the branch's arrays are
+        read-only views of them: a partial branch costs O(1) a point, not a stacking
+        of every point."""
         system = self.system
         n_dofs, m = system.problem.n_dofs, system.m
         k = len(self.xs)
-        records = {}
-        if k and self.recs[0]:
-            for name in self.recs[0]:
-                column = self._columns.setdefault(name, [])
-                column.extend(np.asarray(r[name]) for r in self.recs[len(column):k])
-            records = {name: np.array(self._columns[name][:k]) for name in self.recs[0]}
-        rows = self._point_rows(k)
-        stabs = self.stabs[:k]
+        if k == 0:
+            return Branch(
+                name=self.name, parent=self.parent, origin=self.origin,
+                parameter=system.parameter, parameter_values=np.zeros(0),
+                states=np.zeros((0, n_dofs)), multipliers=np.zeros((0, m)),
+                unstable_count=np.zeros(0, dtype=np.int64),
+                zero_modes=np.zeros(0, dtype=np.int64),
+                determinant_sign=np.zeros(0, dtype=np.int64), nearest_eigenvalue=np.zeros(0),
+                tangents=np.zeros((0, n_dofs + m + 1)), arclength=np.zeros(0),
+                special_points=tuple(self.specials), status=status, message=message,
+                records={}, phase_modes=system.phase_modes, phase_state=system.q_phase_full)
+        self._convert(k)
+        cols = self._table
+        records = {name: cols.view("record:" + name, k) for name in self.recs[0]}
+        frames_known = self._unknown_frames == 0
         return Branch(
             name=self.name, parent=self.parent, origin=self.origin,
             parameter=system.parameter,
-            parameter_values=np.array([x[-1] for x in self.xs[:k]]),
-            states=np.array([row[3] for row in rows]).reshape(k, n_dofs),
-            multipliers=np.array([row[4] for row in rows]).reshape(k, m),
-            unstable_count=np.array([s.unstable_count for s in stabs], dtype=np.int64),
-            zero_modes=np.array([s.zero_modes for s in stabs], dtype=np.int64),
-            determinant_sign=np.array([s.determinant_sign for s in stabs], dtype=np.int64),
-            nearest_eigenvalue=np.array([row[6] for row in rows]),
-            tangents=np.array([row[5] for row in rows]).reshape(k, n_dofs + m + 1),
-            arclength=np.array(self.s[:k]),
+            parameter_values=cols.view("parameter", k),
+            states=cols.view("q", k), multipliers=cols.view("multipliers", k),
+            unstable_count=cols.view("unstable_count", k),
+            zero_modes=cols.view("zero_modes", k),
+            determinant_sign=cols.view("determinant_sign", k),
+            nearest_eigenvalue=cols.view("nearest_eigenvalue", k),
+            tangents=cols.view("tangent", k), arclength=cols.view("arclength", k),
             special_points=tuple(self.specials), status=status, message=message,
             records=records, phase_modes=system.phase_modes,
-            phase_state=system.q_phase_full, next_step=np.array(self.steps[:k], dtype=float),
-            gauge_moved=np.array(self.moved[:k], dtype=bool),
-            frames=tuple(self.frames[:k]) if all(f is not None for f in self.frames[:k])
-            else ())
+            phase_state=system.q_phase_full, next_step=cols.view("next_step", k),
+            gauge_moved=cols.view("gauge_moved", k),
+            frames=tuple(self.frames[:k]) if frames_known else ())
 
-    def _point_rows(self, count: int) -> list[tuple]:
-        """Per point of the first ``count``, ``(x, t, stability, q, multipliers, full
-        tangent, nearest eigenvalue)``, converted when the point's ``x``, ``t`` or
-        stability object is new (a regauged point's ``x`` and a rephased point's tangent
-        are replaced)."""
-        system, rows = self.system, self._rows
-        for i, (x, t, stab) in enumerate(zip(self.xs[:count], self.ts, self.stabs)):
-            if i < len(rows) and rows[i][0] is x and rows[i][1] is t and rows[i][2] is stab:
-                continue
-            row = (x, t, stab, system.q(x), system.multipliers(x), system.full_tangent(t),
-                   stab.nearest_eigenvalue)
-            if i < len(rows):
-                rows[i] = row
+    def _convert(self, count: int) -> None:
+        """Write the first ``count`` points into the columns: the points not written
+        yet, and the last one written before if its ``x``, tangent or step controller
+        state changed since (the only point ever replaced is the last)."""
+        system, cols, keys = self.system, self._table, self._row_keys
+        for i in range(max(len(keys) - 1, 0), count):
+            x, t, stab = self.xs[i], self.ts[i], self.stabs[i]
+            old = keys[i] if i < len(keys) else (None, None, None, None, None)
+            if old[0] is not x:
+                cols.put("parameter", i, x[-1])
+                cols.put("q", i, system.q(x))
+                cols.put("multipliers", i, system.multipliers(x))
+            if old[1] is not t:
+                cols.put("tangent", i, system.full_tangent(t))
+            if old[2] is not stab:
+                cols.put("unstable_count", i, np.int64(stab.unstable_count))
+                cols.put("zero_modes", i, np.int64(stab.zero_modes))
+                cols.put("determinant_sign", i, np.int64(stab.determinant_sign))
+                cols.put("nearest_eigenvalue", i, float(stab.nearest_eigenvalue))
+                cols.put("arclength", i, float(self.s[i]))
+                for name, value in self.recs[i].items():
+                    cols.put("record:" + name, i, value)
+            if old[3] != self.steps[i]:
+                cols.put("next_step", i, float(self.steps[i]))
+            if old[4] != self.moved[i]:
+                cols.put("gauge_moved", i, bool(self.moved[i]))
+            key = (x, t, stab, self.steps[i], self.moved[i])
+            if i < len(keys):
+                keys[i] = key
             else:
-                rows.append(row)
-        return rows[:count]
+                keys.append(key)
+                self._unknown_frames += self.frames[i] is None

@@ -36,6 +36,7 @@ def test_the_contact_branch_goes_through_the_fold_it_used_to_step_over():
     # the fold at 12.028 turns is passed and the branch goes on beyond the fold before it
     folds = [p.parameter for p in branch.special_points if p.kind == "fold"]
     assert any(abs(f - 12.028) < 2e-3 for f in folds), folds
-    after = branch.parameter_values[[p.index for p in branch.special_points
-                                     if p.kind == "fold" and abs(p.parameter - 12.028) < 2e-3][0]:]
+    after = branch.parameter_values[next(p.index for p in branch.special_points
+                                         if p.kind == "fold"
+                                         and abs(p.parameter - 12.028) < 2e-3):]
     assert after.max() > 12.19

@@ -59,6 +59,13 @@ class Columns:
             self._data[name], self._shared[name] = column, 0
         column[i] = value
 
+    def fill(self, name: str, rows) -> None:
+        """Write rows ``0..len(rows)-1`` of a new column ``name`` at once."""
+        rows = np.asarray(rows)
+        column = np.empty((max(16, 2 * len(rows)),) + rows.shape[1:], dtype=rows.dtype)
+        column[:len(rows)] = rows
+        self._data[name], self._shared[name] = column, 0
+
     def get(self, name: str, i: int):
         """Row ``i`` of column ``name``."""
         if name in self._ragged:

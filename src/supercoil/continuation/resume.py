@@ -46,35 +46,6 @@ def head(branch: Branch, k: int) -> Branch:
         **{n: getattr(branch, n)[:k] for n in _POINT_ARRAYS})
 
 
-def join(first: Branch, rest: Branch, offset: float) -> Branch:
-    """``first`` followed by ``rest``: indices of ``rest`` shifted by ``len(first)``, its
-    arclength by ``offset`` (the arclength of its point 0 on the whole branch);
-    ``rest``'s status, message and phase conditions (those of the last point)."""
-    k = len(first)
-    shifted = tuple(dataclasses.replace(p, index=p.index + k, arclength=p.arclength + offset)
-                    for p in rest.special_points)
-    arrays = {}
-    for name in _POINT_ARRAYS:
-        a, b = getattr(first, name), getattr(rest, name)
-        if name == "arclength":
-            b = b + offset
-        arrays[name] = np.concatenate([a, b]) if len(a) else b
-    records = {}
-    for name in set(first.records) | set(rest.records):
-        if name in first.records and name in rest.records:
-            records[name] = np.concatenate([first.records[name], rest.records[name]])
-        elif len(first) == 0:
-            records[name] = rest.records[name]
-        elif len(rest) == 0:
-            records[name] = first.records[name]
-    frames = (first.frames + rest.frames if (first.frames or not len(first)) and rest.frames
-              else ())
-    return dataclasses.replace(first, special_points=first.special_points + shifted,
-                               records=records, status=rest.status, message=rest.message,
-                               phase_modes=rest.phase_modes, phase_state=rest.phase_state,
-                               frames=frames, **arrays)
-
-
 def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOptions,
                problem: ConstrainedEnergy) -> float:
     """The step the interrupted run would have taken next, for a branch stored without
@@ -170,12 +141,9 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
         p for p in partial.special_points if p.index + 1 < k))
     offset = float(partial.arclength[-1])
 
-    def joined(branch: Branch) -> None:
-        on_point(join(before, branch, offset))
-
     tracer = Tracer(system, dataclasses.replace(opts, max_points=opts.max_points - (k - 1)),
                      partial.name, partial.parent, partial.origin, records, events,
-                     None if on_point is None else joined)
+                     on_point, prefix=before, prefix_arclength=offset)
     tracer.stop = stop
     if admissible is not None:
         tracer.admissible = admissible
@@ -214,7 +182,7 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
         return dataclasses.replace(partial, status=ContinuationStatus.START_FAILED,
                                    message=f"resume: the last stored point is singular ({exc})")
     status, message = tracer.run(step, gauge_moved)
-    whole = join(before, tracer.branch(status, message), offset)
+    whole = tracer.branch(status, message)
     if status is ContinuationStatus.MAX_POINTS:
         message = f"{len(whole)} points computed (max_points)"
     return dataclasses.replace(whole, message=f"{message} (resumed after point {k - 1})")

@@ -22,6 +22,7 @@ problem at the point (its parameter value and its carried frames).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Callable, Mapping, Sequence
 
@@ -46,6 +47,13 @@ log = logging.getLogger(__name__)
 RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
 PointCallback = Callable[[Branch], None]
 PARTIAL_MESSAGE = "in progress: the branch so far (its computation has not ended)"
+# the Branch array behind each column of Tracer._table
+_COLUMN_OF = {"parameter_values": "parameter", "states": "q", "multipliers": "multipliers",
+              "unstable_count": "unstable_count", "zero_modes": "zero_modes",
+              "determinant_sign": "determinant_sign",
+              "nearest_eigenvalue": "nearest_eigenvalue", "tangents": "tangent",
+              "arclength": "arclength", "next_step": "next_step",
+              "gauge_moved": "gauge_moved"}
 
 
 
@@ -55,7 +63,12 @@ class Tracer:
     def __init__(self, system: ExtendedSystem, options: ContinuationOptions, name: str,
                  parent: str | None, origin: SpecialPoint | None,
                  records: RecordFunction | None, events: Sequence[UserEvent],
-                 on_point: PointCallback | None = None):
+                 on_point: PointCallback | None = None, prefix: Branch | None = None,
+                 prefix_arclength: float = 0.0):
+        """``prefix``: points that come before this run's on the branch (a resumed
+        branch's stored points): :meth:`branch` is ``prefix`` followed by this run's
+        points, their indices shifted by ``len(prefix)`` and their arclength by
+        ``prefix_arclength`` (that of this run's first point on the whole branch)."""
         self.system = system
         self.on_point = on_point
         self.stop: Callable[[np.ndarray], str | None] | None = None  # see pseudo_arclength.continuation()
@@ -92,6 +105,13 @@ class Tracer:
         self._table = Columns()
         self._row_keys: list[tuple] = []
         self._unknown_frames = 0
+        self.prefix, self.prefix_arclength = prefix, float(prefix_arclength)
+        self._k0 = 0 if prefix is None else len(prefix)
+        if self._k0:
+            for field_name, column in _COLUMN_OF.items():
+                self._table.fill(column, getattr(prefix, field_name))
+            for record, values in prefix.records.items():
+                self._table.fill("record:" + record, values)
         # each point's parameter value and unstable count, for the closure tests
         self._parameters = Columns()
         self._counts: list[int] = []
@@ -388,14 +408,18 @@ class Tracer:
     # -- result -------------------------------------------------------------------------------
     def branch(self, status: ContinuationStatus, message: str) -> Branch:
         """The branch so far (also the partial branch handed to ``on_point`` at every
-        point). Each point is converted once into growing columns
-        (:mod:`~supercoil.continuation.columns`; only the last point is ever replaced,
-        by a regauge or a rephase, and converted again), and the branch's arrays are
-        read-only views of them: a partial branch costs O(1) a point, not a stacking
-        of every point."""
+        point), after the ``prefix`` if given. Each point is converted once into
+        growing columns (:mod:`~supercoil.continuation.columns`; only the last point is
+        ever replaced, by a regauge or a rephase, and converted again), and the
+        branch's arrays are read-only views of them: a partial branch costs O(1) a
+        point, not a stacking of every point."""
         system = self.system
         n_dofs, m = system.problem.n_dofs, system.m
-        k = len(self.xs)
+        k, k0 = len(self.xs), self._k0
+        if k == 0 and self.prefix is not None:
+            return dataclasses.replace(self.prefix, status=status, message=message,
+                                       phase_modes=system.phase_modes,
+                                       phase_state=system.q_phase_full)
         if k == 0:
             return Branch(
                 name=self.name, parent=self.parent, origin=self.origin,
@@ -408,51 +432,60 @@ class Tracer:
                 special_points=tuple(self.specials), status=status, message=message,
                 records={}, phase_modes=system.phase_modes, phase_state=system.q_phase_full)
         self._convert(k)
-        cols = self._table
-        records = {name: cols.view("record:" + name, k) for name in self.recs[0]}
-        frames_known = self._unknown_frames == 0
+        cols, total = self._table, k0 + k
+        names = [name for name in self.recs[0]
+                 if self.prefix is None or not k0 or name in self.prefix.records]
+        records = {name: cols.view("record:" + name, total) for name in names}
+        specials = tuple(self.specials)
+        frames = tuple(self.frames[:k]) if self._unknown_frames == 0 else ()
+        if self.prefix is not None:
+            specials = self.prefix.special_points + tuple(
+                dataclasses.replace(p, index=p.index + k0,
+                                    arclength=p.arclength + self.prefix_arclength)
+                for p in specials)
+            frames = (tuple(self.prefix.frames) + frames
+                      if frames and (self.prefix.frames or not k0) else ())
         return Branch(
             name=self.name, parent=self.parent, origin=self.origin,
             parameter=system.parameter,
-            parameter_values=cols.view("parameter", k),
-            states=cols.view("q", k), multipliers=cols.view("multipliers", k),
-            unstable_count=cols.view("unstable_count", k),
-            zero_modes=cols.view("zero_modes", k),
-            determinant_sign=cols.view("determinant_sign", k),
-            nearest_eigenvalue=cols.view("nearest_eigenvalue", k),
-            tangents=cols.view("tangent", k), arclength=cols.view("arclength", k),
-            special_points=tuple(self.specials), status=status, message=message,
+            parameter_values=cols.view("parameter", total),
+            states=cols.view("q", total), multipliers=cols.view("multipliers", total),
+            unstable_count=cols.view("unstable_count", total),
+            zero_modes=cols.view("zero_modes", total),
+            determinant_sign=cols.view("determinant_sign", total),
+            nearest_eigenvalue=cols.view("nearest_eigenvalue", total),
+            tangents=cols.view("tangent", total), arclength=cols.view("arclength", total),
+            special_points=specials, status=status, message=message,
             records=records, phase_modes=system.phase_modes,
-            phase_state=system.q_phase_full, next_step=cols.view("next_step", k),
-            gauge_moved=cols.view("gauge_moved", k),
-            frames=tuple(self.frames[:k]) if frames_known else ())
+            phase_state=system.q_phase_full, next_step=cols.view("next_step", total),
+            gauge_moved=cols.view("gauge_moved", total), frames=frames)
 
     def _convert(self, count: int) -> None:
         """Write the first ``count`` points into the columns: the points not written
         yet, and the last one written before if its ``x``, tangent or step controller
         state changed since (the only point ever replaced is the last)."""
-        system, cols, keys = self.system, self._table, self._row_keys
+        system, cols, keys, k0 = self.system, self._table, self._row_keys, self._k0
         for i in range(max(len(keys) - 1, 0), count):
-            x, t, stab = self.xs[i], self.ts[i], self.stabs[i]
+            x, t, stab, r = self.xs[i], self.ts[i], self.stabs[i], k0 + i
             old = keys[i] if i < len(keys) else (None, None, None, None, None)
             if old[0] is not x:
-                cols.put("parameter", i, x[-1])
-                cols.put("q", i, system.q(x))
-                cols.put("multipliers", i, system.multipliers(x))
+                cols.put("parameter", r, x[-1])
+                cols.put("q", r, system.q(x))
+                cols.put("multipliers", r, system.multipliers(x))
             if old[1] is not t:
-                cols.put("tangent", i, system.full_tangent(t))
+                cols.put("tangent", r, system.full_tangent(t))
             if old[2] is not stab:
-                cols.put("unstable_count", i, np.int64(stab.unstable_count))
-                cols.put("zero_modes", i, np.int64(stab.zero_modes))
-                cols.put("determinant_sign", i, np.int64(stab.determinant_sign))
-                cols.put("nearest_eigenvalue", i, float(stab.nearest_eigenvalue))
-                cols.put("arclength", i, float(self.s[i]))
+                cols.put("unstable_count", r, np.int64(stab.unstable_count))
+                cols.put("zero_modes", r, np.int64(stab.zero_modes))
+                cols.put("determinant_sign", r, np.int64(stab.determinant_sign))
+                cols.put("nearest_eigenvalue", r, float(stab.nearest_eigenvalue))
+                cols.put("arclength", r, float(self.s[i]) + self.prefix_arclength)
                 for name, value in self.recs[i].items():
-                    cols.put("record:" + name, i, value)
+                    cols.put("record:" + name, r, value)
             if old[3] != self.steps[i]:
-                cols.put("next_step", i, float(self.steps[i]))
+                cols.put("next_step", r, float(self.steps[i]))
             if old[4] != self.moved[i]:
-                cols.put("gauge_moved", i, bool(self.moved[i]))
+                cols.put("gauge_moved", r, bool(self.moved[i]))
             key = (x, t, stab, self.steps[i], self.moved[i])
             if i < len(keys):
                 keys[i] = key

@@ -31,6 +31,7 @@ from supercoil.continuation import (
     continuation,
 )
 from supercoil.continuation.carry import frames_at
+from supercoil.continuation.columns import Columns
 from supercoil.solvers.carried import carried
 
 # a run that refused its first point is started again from the same point with its
@@ -166,6 +167,83 @@ def either(*stops: Callable[[np.ndarray], str | None] | None
     return refuse
 
 
+_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+           "determinant_sign", "nearest_eigenvalue", "tangents")
+_STEPS = ("next_step", "gauge_moved")
+
+
+class MergedRuns:
+    """The branch merged from consecutive runs (:func:`merge_branches`) at every point
+    of the run in progress, in O(n) a point. The runs are written into growing
+    columns (:mod:`~supercoil.continuation.columns`): ``first`` once, each point of a
+    run as it comes (its last point again where it changed: a run replaces only its
+    last point), and the merged branch's arrays are views of them. Merging the runs
+    again at every point cost O(k n) a point, O(k^2 n) over the branch.
+
+    Call it with each partial branch of the run in progress (it starts at the merged
+    branch's last point), then :meth:`commit` the run when it ends."""
+
+    def __init__(self, first: Branch, name: str):
+        self.first, self.name = first, name
+        self.k0 = len(first)  # points of the runs committed
+        self.s0 = float(first.arclength[-1]) if self.k0 else 0.0
+        self.columns = Columns()
+        for key in _ARRAYS + _STEPS + ("arclength",):
+            self.columns.fill(key, getattr(first, key))
+        for key, values in first.records.items():
+            self.columns.fill("record:" + key, values)
+        self.specials = [dataclasses.replace(p, branch=name) for p in first.special_points]
+        self.committed = len(self.specials)  # special points of the committed runs
+        self.phase = first  # the last run with a step (its phase conditions)
+        self.merged_runs = 0
+        self.written = 0  # points of the run in progress written so far
+
+    def __call__(self, partial: Branch) -> Branch:
+        """The runs so far followed by ``partial``, the run in progress, as
+        ``merge_branches([*runs, partial], name)`` gives it."""
+        if self.merged_runs == 0 and len(partial) < 2 or not self.k0:
+            return merge_branches([self.first, partial], self.name)
+        cols, k0 = self.columns, self.k0
+        # a run of one point adds nothing (merge_branches skips it)
+        for i in range(max(self.written - 1, 0), len(partial) if len(partial) >= 2 else 0):
+            r = k0 - 1 + i
+            fresh = i >= self.written
+            values = {key: getattr(partial, key)[i] for key in _STEPS}
+            if i:
+                values.update({key: getattr(partial, key)[i] for key in _ARRAYS})
+                values["arclength"] = partial.arclength[i] + self.s0
+                values.update({"record:" + key: v[i] for key, v in partial.records.items()})
+            for key, value in values.items():
+                if fresh or not np.array_equal(cols.get(key, r), value, equal_nan=True):
+                    cols.put(key, r, value)
+        self.written = len(partial) if len(partial) >= 2 else 0
+        del self.specials[self.committed:]
+        self.specials += [dataclasses.replace(p, index=p.index + k0 - 1,
+                                              arclength=p.arclength + self.s0, branch=self.name)
+                          for p in partial.special_points]
+        total = k0 + len(partial) - 1 if len(partial) >= 2 else k0
+        phase = partial if len(partial) >= 2 else self.phase
+        return dataclasses.replace(
+            self.first, name=self.name,
+            records={key: cols.view("record:" + key, total) for key in self.first.records},
+            special_points=tuple(self.specials), status=partial.status,
+            message=partial.message, phase_modes=phase.phase_modes,
+            phase_state=phase.phase_state,
+            **{key: cols.view(key, total) for key in _ARRAYS + _STEPS + ("arclength",)})
+
+    def commit(self, run: Branch) -> None:
+        """The run in progress ended as ``run`` (its final branch): the next calls
+        continue after it."""
+        if len(run) >= 2 and self.k0:
+            self(run)
+            self.k0 += len(run) - 1
+            self.s0 += float(run.arclength[-1])
+            self.committed = len(self.specials)
+            self.phase = run
+            self.merged_runs += 1
+        self.written = 0
+
+
 def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
            name: str, records, events: tuple[UserEvent, ...] = (),
            stop: Callable[[Branch], bool] | None = None, max_points: int = 400,
@@ -221,6 +299,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
     phase rows), instead of ``options``; asked before ``restart(q)``.
     """
     parts = [first]
+    # the runs merged so far, extended at every point of the run in progress
+    merger = MergedRuns(first, name) if on_point is not None else None
     pins = [(0, tuple(int(d) for d in rod.gauge_dofs))]
     total = len(first)
     run = first
@@ -260,11 +340,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         opts = dataclasses.replace(options if run_options is None else run_options(q),
                                    direction=direction, initial_step=step,
                                    max_points=min(segment_points, max_points - total + 1))
-        # the runs so far merged once: merging them again at every point of the new
-        # run made reporting quadratic in the branch length (same merged branch)
-        done = merge_branches(parts, name) if on_point is not None else None
-        report = None if on_point is None else (
-            lambda partial, done=done: on_point(merge_branches([done, partial], name)))
+        report = None if merger is None else (
+            lambda partial, merger=merger: on_point(merger(partial)))
         held = None if grip is None else grip_stop(grip, q, grip_fraction)
         if on_run is not None:
             on_run(total - 1)
@@ -286,6 +363,8 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
                                stop=stops, phase=(last.phase_modes, last.phase_state),
                                guess=last.tangents[-1])
         parts.append(run)
+        if merger is not None:
+            merger.commit(run)
         total += len(run) - 1
     merged = merge_branches(parts, name)
     if stuck:

@@ -57,6 +57,13 @@ _COLUMN_OF = {"parameter_values": "parameter", "states": "q", "multipliers": "mu
 
 
 
+def _owned(view: np.ndarray) -> np.ndarray:
+    """A read-only copy of ``view`` (a branch then holds only its own points)."""
+    copy = view.copy()
+    copy.flags.writeable = False
+    return copy
+
+
 class Tracer:
     """Follows one branch from a corrected point and tangent; collects points and events."""
 
@@ -191,7 +198,8 @@ class Tracer:
         tangent and phase rows final (after a rephase), and the step controller's
         state from it known, so that a run resumed from it takes the same steps."""
         if self.on_point is not None:
-            self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE))
+            self.on_point(self.branch(ContinuationStatus.MAX_POINTS, PARTIAL_MESSAGE,
+                                      partial=True))
 
     # -- events between the last two points -------------------------------------------------
     def _search_events(self) -> None:
@@ -406,13 +414,15 @@ class Tracer:
         return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"
 
     # -- result -------------------------------------------------------------------------------
-    def branch(self, status: ContinuationStatus, message: str) -> Branch:
-        """The branch so far (also the partial branch handed to ``on_point`` at every
-        point), after the ``prefix`` if given. Each point is converted once into
-        growing columns (:mod:`~supercoil.continuation.columns`; only the last point is
-        ever replaced, by a regauge or a rephase, and converted again), and the
-        branch's arrays are read-only views of them: a partial branch costs O(1) a
-        point, not a stacking of every point."""
+    def branch(self, status: ContinuationStatus, message: str,
+               partial: bool = False) -> Branch:
+        """The branch so far, after the ``prefix`` if given. Each point is converted
+        once into growing columns (:mod:`~supercoil.continuation.columns`; only the
+        last point is ever replaced, by a regauge or a rephase, and converted again).
+        A ``partial`` branch (the one handed to ``on_point`` at every point) has
+        read-only views of them for arrays: it costs O(1) a point, not a stacking of
+        every point. Otherwise the arrays are copies of the points only (a column
+        holds up to twice as many rows as it has points)."""
         system = self.system
         n_dofs, m = system.problem.n_dofs, system.m
         k, k0 = len(self.xs), self._k0
@@ -433,9 +443,10 @@ class Tracer:
                 records={}, phase_modes=system.phase_modes, phase_state=system.q_phase_full)
         self._convert(k)
         cols, total = self._table, k0 + k
+        view = cols.view if partial else (lambda name, rows: _owned(cols.view(name, rows)))
         names = [name for name in self.recs[0]
                  if self.prefix is None or not k0 or name in self.prefix.records]
-        records = {name: cols.view("record:" + name, total) for name in names}
+        records = {name: view("record:" + name, total) for name in names}
         specials = tuple(self.specials)
         frames = tuple(self.frames[:k]) if self._unknown_frames == 0 else ()
         if self.prefix is not None:
@@ -448,17 +459,17 @@ class Tracer:
         return Branch(
             name=self.name, parent=self.parent, origin=self.origin,
             parameter=system.parameter,
-            parameter_values=cols.view("parameter", total),
-            states=cols.view("q", total), multipliers=cols.view("multipliers", total),
-            unstable_count=cols.view("unstable_count", total),
-            zero_modes=cols.view("zero_modes", total),
-            determinant_sign=cols.view("determinant_sign", total),
-            nearest_eigenvalue=cols.view("nearest_eigenvalue", total),
-            tangents=cols.view("tangent", total), arclength=cols.view("arclength", total),
+            parameter_values=view("parameter", total),
+            states=view("q", total), multipliers=view("multipliers", total),
+            unstable_count=view("unstable_count", total),
+            zero_modes=view("zero_modes", total),
+            determinant_sign=view("determinant_sign", total),
+            nearest_eigenvalue=view("nearest_eigenvalue", total),
+            tangents=view("tangent", total), arclength=view("arclength", total),
             special_points=specials, status=status, message=message,
             records=records, phase_modes=system.phase_modes,
-            phase_state=system.q_phase_full, next_step=cols.view("next_step", total),
-            gauge_moved=cols.view("gauge_moved", total), frames=frames)
+            phase_state=system.q_phase_full, next_step=view("next_step", total),
+            gauge_moved=view("gauge_moved", total), frames=frames)
 
     def _convert(self, count: int) -> None:
         """Write the first ``count`` points into the columns: the points not written

@@ -1065,3 +1065,20 @@ def test_a_trust_region_of_one_step_keeps_the_branch_through_a_sharp_fold_with_f
     stopped = [c for c in guarded_calls if "farther than" in c.message]
     assert stopped and all(c.iterations <= 2 for c in stopped)
     assert sum(c.iterations for c in guarded_calls) < sum(c.iterations for c in plain_calls)
+
+
+def test_a_stop_at_the_minimum_step_names_the_failures_that_shrank_the_step():
+    """The message of a run stopped at the minimum step gives the last failure and, of
+    each other kind among the steps that shrank to it (their numbers aside), the last
+    message, how many steps and their range."""
+    from supercoil.continuation.tracer import _earlier_failures
+
+    failed = [(1.7e-6, "corrector diverging at iteration 2 (residual 1.02e-06 > 7.82e-07)"),
+              (8e-7, "corrector diverging at iteration 3 (residual 1.01e-06 > 7.80e-07)"),
+              (1e-7, "iterate 1 lies farther than 1.01e-07 from the predictor"),
+              (1e-12, "iterate 1 lies farther than 1.00e-12 from the predictor")]
+    assert _earlier_failures(failed) == (
+        "; before it, corrector diverging at iteration 3 (residual 1.01e-06 > 7.80e-07) "
+        "at 2 steps of 8e-07 to 1.7e-06")
+    assert _earlier_failures(failed[2:]) == ""
+    assert _earlier_failures([]) == ""

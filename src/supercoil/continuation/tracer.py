@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import re
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
@@ -55,6 +56,35 @@ _COLUMN_OF = {"parameter_values": "parameter", "states": "q", "multipliers": "mu
               "arclength": "arclength", "next_step": "next_step",
               "gauge_moved": "gauge_moved"}
 
+
+
+def _failure_kind(failure: str) -> str:
+    """``failure`` without its numbers: failures of one kind at different steps."""
+    return re.sub(r"[-+]?\d+(\.\d*)?(e[-+]?\d+)?", "#", failure)
+
+
+def _earlier_failures(failed: list[tuple[float, str]]) -> str:
+    """``"; before it, ..."``: the failures of other kinds than the last among the steps
+    that shrank to the minimum from the last point (``(step, failure)`` in order), each
+    kind with its last message, its steps and their number; empty if there were none.
+    The last failure alone can mislead: measured on a tweezers contact branch, the
+    corrector raised the residual from 7.7e-7 (the point's own, far above the
+    tolerance) at every step from 1.7e-6 down to 2e-7, and below that the trust
+    region, scaled with the step, stopped every first iterate."""
+    last = _failure_kind(failed[-1][1]) if failed else ""
+    kinds: dict[str, list] = {}
+    for step, failure in failed:
+        kind = _failure_kind(failure)
+        if kind != last:
+            entry = kinds.setdefault(kind, [failure, step, step, 0])
+            entry[0], entry[1], entry[2] = failure, min(entry[1], step), max(entry[2], step)
+            entry[3] += 1
+    if not kinds:
+        return ""
+    return "; before it, " + "; ".join(
+        f"{failure} at {n} step{'s' if n > 1 else ''} of {low:.2g}"
+        + (f" to {high:.2g}" if high > low else "")
+        for failure, low, high, n in kinds.values())
 
 
 def _owned(view: np.ndarray) -> np.ndarray:
@@ -329,6 +359,7 @@ class Tracer:
         system, opts = self.system, self.opts
         low, high = opts.parameter_bounds
         ds = step
+        failed: list[tuple[float, str]] = []  # (step, failure) since the last point
         while len(self.xs) < opts.max_points:
             if self.s[-1] >= opts.max_arclength:
                 return ContinuationStatus.MAX_ARCLENGTH, (
@@ -363,6 +394,7 @@ class Tracer:
                                      f"back across a fold's sheets)")
             if taken.failure is not None:
                 log.debug("step %.3g rejected: %s", ds, taken.failure)
+                failed.append((ds, taken.failure))
                 if opts.regauge and system.r and not regauged_here:
                     try:
                         moved = self._regauge(ds)
@@ -377,10 +409,11 @@ class Tracer:
                     return ContinuationStatus.STEP_TOO_SMALL, (
                         f"stopped after {len(self.xs)} points at {system.parameter} = "
                         f"{x_k[-1]:.10g}: {taken.failure} at the minimum step "
-                        f"{opts.min_step:.1e}")
+                        f"{opts.min_step:.1e}{_earlier_failures(failed)}")
                 ds = max(ds * opts.shrink, opts.min_step)
                 continue
             regauged_here = False
+            failed.clear()
             x_new, bound, corr = taken.x, taken.bound, taken.correction
             if corr.iterations <= opts.fast_iterations:
                 ds = min(ds * opts.growth, opts.max_step)

@@ -22,7 +22,6 @@ problem at the point (its parameter value and its carried frames).
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import re
 from collections.abc import Callable, Mapping, Sequence
@@ -31,6 +30,7 @@ import numpy as np
 
 from supercoil.continuation.bordered import BorderedFactor
 from supercoil.continuation.branch import Branch, SpecialPoint
+from supercoil.continuation.branch_rows import BranchRows
 from supercoil.continuation.closure import retraced, returned_to
 from supercoil.continuation.columns import Columns
 from supercoil.continuation.events import UserEvent, point_values, takes_problem, user_values
@@ -48,16 +48,6 @@ log = logging.getLogger(__name__)
 RecordFunction = Callable[[np.ndarray, np.ndarray, float], Mapping[str, object]]
 PointCallback = Callable[[Branch], None]
 PARTIAL_MESSAGE = "in progress: the branch so far (its computation has not ended)"
-# the Branch array behind each column of Tracer._table
-_COLUMN_OF = {"parameter_values": "parameter", "states": "q", "multipliers": "multipliers",
-              "unstable_count": "unstable_count", "zero_modes": "zero_modes",
-              "determinant_sign": "determinant_sign",
-              "nearest_eigenvalue": "nearest_eigenvalue", "tangents": "tangent",
-              "arclength": "arclength", "next_step": "next_step",
-              "gauge_moved": "gauge_moved"}
-
-
-
 def _failure_kind(failure: str) -> str:
     """``failure`` without its numbers: failures of one kind at different steps."""
     return re.sub(r"[-+]?\d+(\.\d*)?(e[-+]?\d+)?", "#", failure)
@@ -85,13 +75,6 @@ def _earlier_failures(failed: list[tuple[float, str]]) -> str:
         f"{failure} at {n} step{'s' if n > 1 else ''} of {low:.2g}"
         + (f" to {high:.2g}" if high > low else "")
         for failure, low, high, n in kinds.values())
-
-
-def _owned(view: np.ndarray) -> np.ndarray:
-    """A read-only copy of ``view`` (a branch then holds only its own points)."""
-    copy = view.copy()
-    copy.flags.writeable = False
-    return copy
 
 
 class Tracer:
@@ -136,19 +119,8 @@ class Tracer:
         # (x, full Hessian) of the last point added, assembled after its carry: the
         # rephase tangent there needs no new one (phase rows are linear)
         self._accepted_hessian: tuple[np.ndarray, object] | None = None
-        # each point converted once for branch(): its columns, the (x, tangent,
-        # stability, next step, gauge moved) each row was written from, and how many
-        # written points have no frames
-        self._table = Columns()
-        self._row_keys: list[tuple] = []
-        self._unknown_frames = 0
-        self.prefix, self.prefix_arclength = prefix, float(prefix_arclength)
-        self._k0 = 0 if prefix is None else len(prefix)
-        if self._k0:
-            for field_name, column in _COLUMN_OF.items():
-                self._table.fill(column, getattr(prefix, field_name))
-            for record, values in prefix.records.items():
-                self._table.fill("record:" + record, values)
+        # each point converted once into the columns branch() reads
+        self.rows = BranchRows(prefix, prefix_arclength)
         # each point's parameter value and unstable count, for the closure tests
         self._parameters = Columns()
         self._counts: list[int] = []
@@ -449,90 +421,7 @@ class Tracer:
     # -- result -------------------------------------------------------------------------------
     def branch(self, status: ContinuationStatus, message: str,
                partial: bool = False) -> Branch:
-        """The branch so far, after the ``prefix`` if given. Each point is converted
-        once into growing columns (:mod:`~supercoil.continuation.columns`; only the
-        last point is ever replaced, by a regauge or a rephase, and converted again).
-        A ``partial`` branch (the one handed to ``on_point`` at every point) has
-        read-only views of them for arrays: it costs O(1) a point, not a stacking of
-        every point. Otherwise the arrays are copies of the points only (a column
-        holds up to twice as many rows as it has points)."""
-        system = self.system
-        n_dofs, m = system.problem.n_dofs, system.m
-        k, k0 = len(self.xs), self._k0
-        if k == 0 and self.prefix is not None:
-            return dataclasses.replace(self.prefix, status=status, message=message,
-                                       phase_modes=system.phase_modes,
-                                       phase_state=system.q_phase_full)
-        if k == 0:
-            return Branch(
-                name=self.name, parent=self.parent, origin=self.origin,
-                parameter=system.parameter, parameter_values=np.zeros(0),
-                states=np.zeros((0, n_dofs)), multipliers=np.zeros((0, m)),
-                unstable_count=np.zeros(0, dtype=np.int64),
-                zero_modes=np.zeros(0, dtype=np.int64),
-                determinant_sign=np.zeros(0, dtype=np.int64), nearest_eigenvalue=np.zeros(0),
-                tangents=np.zeros((0, n_dofs + m + 1)), arclength=np.zeros(0),
-                special_points=tuple(self.specials), status=status, message=message,
-                records={}, phase_modes=system.phase_modes, phase_state=system.q_phase_full)
-        self._convert(k)
-        cols, total = self._table, k0 + k
-        view = cols.view if partial else (lambda name, rows: _owned(cols.view(name, rows)))
-        names = [name for name in self.recs[0]
-                 if self.prefix is None or not k0 or name in self.prefix.records]
-        records = {name: view("record:" + name, total) for name in names}
-        specials = tuple(self.specials)
-        frames = tuple(self.frames[:k]) if self._unknown_frames == 0 else ()
-        if self.prefix is not None:
-            specials = self.prefix.special_points + tuple(
-                dataclasses.replace(p, index=p.index + k0,
-                                    arclength=p.arclength + self.prefix_arclength)
-                for p in specials)
-            frames = (tuple(self.prefix.frames) + frames
-                      if frames and (self.prefix.frames or not k0) else ())
-        return Branch(
-            name=self.name, parent=self.parent, origin=self.origin,
-            parameter=system.parameter,
-            parameter_values=view("parameter", total),
-            states=view("q", total), multipliers=view("multipliers", total),
-            unstable_count=view("unstable_count", total),
-            zero_modes=view("zero_modes", total),
-            determinant_sign=view("determinant_sign", total),
-            nearest_eigenvalue=view("nearest_eigenvalue", total),
-            tangents=view("tangent", total), arclength=view("arclength", total),
-            special_points=specials, status=status, message=message,
-            records=records, phase_modes=system.phase_modes,
-            phase_state=system.q_phase_full, next_step=view("next_step", total),
-            gauge_moved=view("gauge_moved", total), frames=frames)
-
-    def _convert(self, count: int) -> None:
-        """Write the first ``count`` points into the columns: the points not written
-        yet, and the last one written before if its ``x``, tangent or step controller
-        state changed since (the only point ever replaced is the last)."""
-        system, cols, keys, k0 = self.system, self._table, self._row_keys, self._k0
-        for i in range(max(len(keys) - 1, 0), count):
-            x, t, stab, r = self.xs[i], self.ts[i], self.stabs[i], k0 + i
-            old = keys[i] if i < len(keys) else (None, None, None, None, None)
-            if old[0] is not x:
-                cols.put("parameter", r, x[-1])
-                cols.put("q", r, system.q(x))
-                cols.put("multipliers", r, system.multipliers(x))
-            if old[1] is not t:
-                cols.put("tangent", r, system.full_tangent(t))
-            if old[2] is not stab:
-                cols.put("unstable_count", r, np.int64(stab.unstable_count))
-                cols.put("zero_modes", r, np.int64(stab.zero_modes))
-                cols.put("determinant_sign", r, np.int64(stab.determinant_sign))
-                cols.put("nearest_eigenvalue", r, float(stab.nearest_eigenvalue))
-                cols.put("arclength", r, float(self.s[i]) + self.prefix_arclength)
-                for name, value in self.recs[i].items():
-                    cols.put("record:" + name, r, value)
-            if old[3] != self.steps[i]:
-                cols.put("next_step", r, float(self.steps[i]))
-            if old[4] != self.moved[i]:
-                cols.put("gauge_moved", r, bool(self.moved[i]))
-            key = (x, t, stab, self.steps[i], self.moved[i])
-            if i < len(keys):
-                keys[i] = key
-            else:
-                keys.append(key)
-                self._unknown_frames += self.frames[i] is None
+        """The branch so far, after the ``prefix`` if given; a ``partial`` one (handed
+        to ``on_point`` at every point) costs O(1) a point
+        (:class:`~supercoil.continuation.branch_rows.BranchRows`)."""
+        return self.rows.branch(self, status, message, partial)

@@ -65,3 +65,12 @@ def test_a_view_is_not_a_copy():
         cols.put("q", i, np.full(50, float(i)))
     first, second = cols.view("q", 1999), cols.view("q", 2000)
     assert np.shares_memory(first, second)
+
+
+def test_a_row_past_the_capacity_grows_the_column_and_keeps_the_rows_before():
+    cols = Columns()
+    for i in range(3):
+        cols.put("x", i, float(i))
+    cols.put("x", 40, 40.0)  # beyond the first capacity (16)
+    assert cols.get("x", 40) == 40.0
+    assert np.array_equal(cols.view("x", 3), [0.0, 1.0, 2.0])

@@ -51,7 +51,8 @@ class Columns:
         if i >= column.shape[0]:
             grown = np.empty((max(2 * column.shape[0], i + 1),) + column.shape[1:],
                              dtype=column.dtype)
-            grown[:i] = column[:i]
+            kept = min(i, column.shape[0])
+            grown[:kept] = column[:kept]
             column = grown
             self._data[name], self._shared[name] = column, 0
         elif i < self._shared[name]:

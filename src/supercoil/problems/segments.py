@@ -93,16 +93,21 @@ def replay_pins(problem, rod: PinnedRod, branch: Branch, q0: np.ndarray,
     return starts[-1]
 
 
+# a branch's per-point arrays: those a merge takes from each run after its first point,
+# and the step controller's state, taken from a run's first point on
+_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+           "determinant_sign", "nearest_eigenvalue", "tangents")
+_STEPS = ("next_step", "gauge_moved")
+
+
 def merge_branches(parts: list[Branch], name: str) -> Branch:
     """One branch from consecutive runs (each starts at the last point of the previous).
     The step controller's state at a junction is the next run's at its first point
     (the step that run tried first from it); the phase conditions are the last run's
     (those its last point was computed with, which a resumed run continues with)."""
     first = parts[0]
-    arrays = {k: [getattr(first, k)] for k in (
-        "parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
-        "determinant_sign", "nearest_eigenvalue", "tangents")}
-    steps = {k: [getattr(first, k)] for k in ("next_step", "gauge_moved")}
+    arrays = {k: [getattr(first, k)] for k in _ARRAYS}
+    steps = {k: [getattr(first, k)] for k in _STEPS}
     arclength = [first.arclength]
     records = {k: [v] for k, v in first.records.items()}
     specials = list(first.special_points)
@@ -165,11 +170,6 @@ def either(*stops: Callable[[np.ndarray], str | None] | None
         return None
 
     return refuse
-
-
-_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
-           "determinant_sign", "nearest_eigenvalue", "tangents")
-_STEPS = ("next_step", "gauge_moved")
 
 
 class MergedRuns:

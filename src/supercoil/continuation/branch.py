@@ -18,6 +18,12 @@ SCHEMA_VERSION = 1
 SPECIAL_KINDS = ("fold", "bifurcation", "count_change", "endpoint")
 
 
+# a Branch's per-point arrays, one row per point
+POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
+                "determinant_sign", "nearest_eigenvalue", "tangents", "arclength",
+                "next_step", "gauge_moved")
+
+
 def _frozen(a) -> np.ndarray:
     """``a`` as a read-only array: copied unless it is a read-only array already (a
     partial branch's views of its tracer's columns, which never change:

@@ -14,18 +14,9 @@ import dataclasses
 
 import numpy as np
 
-from supercoil.continuation.branch import Branch
+from supercoil.continuation.branch import POINT_ARRAYS, Branch
 from supercoil.continuation.columns import Columns
 from supercoil.continuation.options import ContinuationStatus
-
-# the Branch array behind each column
-_COLUMN_OF = {"parameter_values": "parameter", "states": "q", "multipliers": "multipliers",
-              "unstable_count": "unstable_count", "zero_modes": "zero_modes",
-              "determinant_sign": "determinant_sign",
-              "nearest_eigenvalue": "nearest_eigenvalue", "tangents": "tangent",
-              "arclength": "arclength", "next_step": "next_step",
-              "gauge_moved": "gauge_moved"}
-
 
 
 def _owned(view: np.ndarray) -> np.ndarray:
@@ -48,8 +39,8 @@ class BranchRows:
         self.prefix, self.prefix_arclength = prefix, float(prefix_arclength)
         self.k0 = 0 if prefix is None else len(prefix)
         if self.k0:
-            for field_name, column in _COLUMN_OF.items():
-                self.columns.fill(column, getattr(prefix, field_name))
+            for name in POINT_ARRAYS:
+                self.columns.fill(name, getattr(prefix, name))
             for record, values in prefix.records.items():
                 self.columns.fill("record:" + record, values)
 
@@ -98,13 +89,13 @@ class BranchRows:
         return Branch(
             name=tracer.name, parent=tracer.parent, origin=tracer.origin,
             parameter=system.parameter,
-            parameter_values=view("parameter", total),
-            states=view("q", total), multipliers=view("multipliers", total),
+            parameter_values=view("parameter_values", total),
+            states=view("states", total), multipliers=view("multipliers", total),
             unstable_count=view("unstable_count", total),
             zero_modes=view("zero_modes", total),
             determinant_sign=view("determinant_sign", total),
             nearest_eigenvalue=view("nearest_eigenvalue", total),
-            tangents=view("tangent", total), arclength=view("arclength", total),
+            tangents=view("tangents", total), arclength=view("arclength", total),
             special_points=specials, status=status, message=message,
             records=records, phase_modes=system.phase_modes,
             phase_state=system.q_phase_full, next_step=view("next_step", total),
@@ -119,11 +110,11 @@ class BranchRows:
             x, t, stab, r = tracer.xs[i], tracer.ts[i], tracer.stabs[i], k0 + i
             old = keys[i] if i < len(keys) else (None, None, None, None, None)
             if old[0] is not x:
-                cols.put("parameter", r, x[-1])
-                cols.put("q", r, system.q(x))
+                cols.put("parameter_values", r, x[-1])
+                cols.put("states", r, system.q(x))
                 cols.put("multipliers", r, system.multipliers(x))
             if old[1] is not t:
-                cols.put("tangent", r, system.full_tangent(t))
+                cols.put("tangents", r, system.full_tangent(t))
             if old[2] is not stab:
                 cols.put("unstable_count", r, np.int64(stab.unstable_count))
                 cols.put("zero_modes", r, np.int64(stab.zero_modes))

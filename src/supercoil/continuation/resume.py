@@ -20,7 +20,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from supercoil.continuation.branch import Branch
+from supercoil.continuation.branch import POINT_ARRAYS, Branch
 from supercoil.continuation.carry import branch_frames
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.events import UserEvent
@@ -33,17 +33,13 @@ from supercoil.solvers.carried import with_frames
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.problem import ConstrainedEnergy
 
-_POINT_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
-                 "determinant_sign", "nearest_eigenvalue", "tangents", "arclength",
-                 "next_step", "gauge_moved")
-
 
 def head(branch: Branch, k: int) -> Branch:
     """The first ``k`` points of ``branch`` with the special points between them."""
     return dataclasses.replace(
         branch, special_points=tuple(p for p in branch.special_points if p.index + 1 < k),
         records={n: v[:k] for n, v in branch.records.items()}, frames=branch.frames[:k],
-        **{n: getattr(branch, n)[:k] for n in _POINT_ARRAYS})
+        **{n: getattr(branch, n)[:k] for n in POINT_ARRAYS})
 
 
 def _next_step(system: ExtendedSystem, partial: Branch, opts: ContinuationOptions,

@@ -30,6 +30,7 @@ from supercoil.continuation import (
     UserEvent,
     continuation,
 )
+from supercoil.continuation.branch import POINT_ARRAYS
 from supercoil.continuation.carry import frames_at
 from supercoil.continuation.columns import Columns
 from supercoil.solvers.carried import carried
@@ -95,9 +96,8 @@ def replay_pins(problem, rod: PinnedRod, branch: Branch, q0: np.ndarray,
 
 # a branch's per-point arrays: those a merge takes from each run after its first point,
 # and the step controller's state, taken from a run's first point on
-_ARRAYS = ("parameter_values", "states", "multipliers", "unstable_count", "zero_modes",
-           "determinant_sign", "nearest_eigenvalue", "tangents")
 _STEPS = ("next_step", "gauge_moved")
+_ARRAYS = tuple(n for n in POINT_ARRAYS if n not in _STEPS + ("arclength",))
 
 
 def merge_branches(parts: list[Branch], name: str) -> Branch:

@@ -4,9 +4,10 @@ For each ``L/D`` and ``lambda = L sqrt(F/A)`` (``F L^2/A = lambda^2``) at ``C/A`
 branches from 0 turns through buckling, the first contact and the plectoneme's growth
 up to ``--factor`` (default 1.5) times the straight rod's exact buckling turns, at
 ``N = n0`` and ``2 n0`` nodes (``n0 = ceil(L/D) + 2``, the smallest N whose segments are
-no longer than D). One row per run: whether the last branch reached the last turn, the
-turns reached, the points and seconds per run, the unstable counts met on the
-plectoneme (contact) branch, the verified bifurcations and the unverified count changes
+no longer than D), or with ``--resolving`` at ``N = max(n0, 2 lambda + 2)``, the fewest
+nodes whose segments are also at most half the loop's core ``sqrt(A/F)``. One row per
+run: whether the last branch reached the last turn, the turns reached, the points and
+seconds per run, the unstable counts met on the plectoneme (contact) branch, the verified bifurcations and the unverified count changes
 located off the straight rod, and the notes (why a run stopped).
 
 The runs are long (minutes each at L/D = 500): run it niced in the background; each row
@@ -14,8 +15,8 @@ is appended to the table as soon as it is computed, so a partial run leaves the 
 that completed.
 
 Run: ``python benchmarks/bench_long_dna_grid.py [--ld 100,200,500] [--lambdas
-10,20,40,80,150] [--twist-ratio 1.5] [--multiples 1,2] [--factor 1.5] [--max-points
-4000] [--contact-curve spline] [--out benchmarks/results/long_dna_grid.md]``.
+10,20,40,80,150] [--twist-ratio 1.5] [--multiples 1,2 | --resolving] [--factor 1.5]
+[--max-points 4000] [--contact-curve spline] [--out benchmarks/results/long_dna_grid.md]``.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import numpy as np
 
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+from supercoil.problems.tweezers.options import SLIDING_CORE
 
 HEADER = ("| L/D | lambda | F L^2/A | N | target turns | reached | last turns | points | "
           "seconds | counts on the contact branch | bifurcations | count changes | notes |")
@@ -70,6 +72,9 @@ def main() -> None:
     parser.add_argument("--lambdas", default="10,20,40,80,150")
     parser.add_argument("--twist-ratio", type=float, default=1.5)
     parser.add_argument("--multiples", default="1,2", help="N as multiples of n0")
+    parser.add_argument("--resolving", action="store_true", help="N = max(n0, 2 lambda + 2) "
+                        "instead of the multiples: the fewest nodes whose segments are at "
+                        "most half the loop's core sqrt(A/F)")
     parser.add_argument("--factor", type=float, default=1.5)
     parser.add_argument("--max-points", type=int, default=4000)
     parser.add_argument("--contact-curve", default="spline", help="spline (the cubic "
@@ -83,7 +88,8 @@ def main() -> None:
                 f"{args.factor:g} x the buckling turns\n\n"
                 f"`python benchmarks/bench_long_dna_grid.py --ld {args.ld} --lambdas "
                 f"{args.lambdas} --twist-ratio {args.twist_ratio:g} --multiples "
-                f"{args.multiples} --factor {args.factor:g} --max-points "
+                f"{args.multiples}{' --resolving' if args.resolving else ''} --factor "
+                f"{args.factor:g} --max-points "
                 f"{args.max_points}"
                 + ("" if args.contact_curve == "spline"
                    else f" --contact-curve {args.contact_curve}")
@@ -91,8 +97,11 @@ def main() -> None:
     for ld in (float(v) for v in args.ld.split(",")):
         n0 = math.ceil(ld) + 2
         for lam in (float(v) for v in args.lambdas.split(",")):
-            for multiple in (int(v) for v in args.multiples.split(",")):
-                row = run(ld, lam, args.twist_ratio, multiple * n0, args.factor,
+            meshes = ([max(n0, 2 + math.ceil(lam / SLIDING_CORE))]
+                      if args.resolving else
+                      [int(v) * n0 for v in args.multiples.split(",")])
+            for nodes in meshes:
+                row = run(ld, lam, args.twist_ratio, nodes, args.factor,
                           args.max_points, args.contact_curve)
                 print(row, flush=True)
                 with out.open("a") as f:

@@ -7,8 +7,9 @@ up to ``--factor`` (default 1.5) times the straight rod's exact buckling turns, 
 no longer than D), or with ``--resolving`` at ``N = max(n0, 2 lambda + 2)``, the fewest
 nodes whose segments are also at most half the loop's core ``sqrt(A/F)``. One row per
 run: whether the last branch reached the last turn, the turns reached, the points and
-seconds per run, the unstable counts met on the plectoneme (contact) branch, the verified bifurcations and the unverified count changes
-located off the straight rod, and the notes (why a run stopped).
+seconds per run, the unstable counts met on the plectoneme (contact) branch, the
+verified bifurcations and the unverified count changes located off the straight rod,
+and the notes (why a run stopped).
 
 The runs are long (minutes each at L/D = 500): run it niced in the background; each row
 is appended to the table as soon as it is computed, so a partial run leaves the rows

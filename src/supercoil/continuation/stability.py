@@ -133,17 +133,33 @@ def factor_count(system: ExtendedSystem, x: np.ndarray, hessian=None) -> int:
     """The negative count of the constrained Hessian at ``x`` as the factor of
     :func:`inertia` counts it, before :func:`stiff_sliding` leaves anything out: one
     sparse factorisation, no eigenproblem. Raises on a singular matrix."""
+    return count_factor(system, x, hessian).reduced_negative_count
+
+
+def count_factor(system: ExtendedSystem, x: np.ndarray, hessian=None) -> KKTFactor:
+    """The factor whose count :func:`factor_count` reads, its inertia computed; given to
+    :func:`point_stability` at the same ``x``, Hessian and phase rows, it spares the
+    same factorisation. Raises on a singular matrix."""
     H, J = count_system(system, x, hessian)
-    return KKTFactor(H, J).reduced_negative_count
+    factor = KKTFactor(H, J)
+    factor.reduced_negative_count  # noqa: B018 (the inertia, computed once: it may raise)
+    return factor
 
 
 def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float | None,
-                        hessian) -> tuple[int, int, KKTFactor, np.ndarray, int]:
+                        hessian, factor: KKTFactor | None = None
+                        ) -> tuple[int, int, KKTFactor, np.ndarray, int]:
     """:func:`inertia` with the factor it counted with, that factor's DOFs (indices
     into the problem's DOFs, ``(n_count,)``: its unknowns are those DOFs, then the
     rows of ``system.jacobian(x)``, then the :func:`count_rows`) and the number of
     eigenvalues that :func:`stiff_sliding` left out of the factor's count (0 or 1), whose
-    sign the determinant's then leaves out too (the parity of the count returned)."""
+    sign the determinant's then leaves out too (the parity of the count returned).
+    ``factor``: :func:`count_factor` at ``x`` with the Hessian ``hessian``, if made."""
+    if factor is not None:
+        negative = factor.reduced_negative_count
+        left_out = stiff_sliding(system, x, hessian, negative)
+        sign = int(factor.determinant_sign * (-1) ** (factor.m + left_out))
+        return negative - left_out, sign, factor, system.free, left_out
     H, J = count_system(system, x, hessian)
     dofs = system.free
     try:
@@ -275,16 +291,18 @@ def without_sliding(system: ExtendedSystem, x: np.ndarray, values: np.ndarray,
 
 
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
-                    n_modes: int, full=None) -> PointStability:
+                    n_modes: int, full=None, factor: KKTFactor | None = None
+                    ) -> PointStability:
     """Stability report at the point ``x`` of the extended system (see module doc).
 
     ``full``: ``system.full_hessian(x)`` if already assembled (a converged
-    correction's). The shift-invert factor of the eigenpairs is ordered from the
-    count's (``eigenpairs(count=...)``).
+    correction's); ``factor``: :func:`count_factor` at ``x`` with that Hessian, if
+    made. The shift-invert factor of the eigenpairs is ordered from the count's
+    (``eigenpairs(count=...)``).
     """
     full = system.full_hessian(x) if full is None else full
-    neg, det_sign, factor, dofs, left_out = inertia_with_factor(system, x, zero_tolerance,
-                                                                full.restrict(system.free))
+    neg, det_sign, factor, dofs, left_out = inertia_with_factor(
+        system, x, zero_tolerance, full.restrict(system.free), factor)
     count = (dofs, factor.order, factor.m)
     if left_out:  # the stiff sliding's: its own eigenpair left out, not the direction g
         values, modes = eigenpairs(system, x, neg + 1 + n_modes, full, count, near=False)

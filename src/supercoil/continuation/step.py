@@ -76,7 +76,8 @@ class Step:
     interval (the run ends). Else ``x``, ``t``: the new point and its tangent;
     ``full_hessian``: the Hessian on all DOFs at ``x`` (None after landing on a
     bound); ``bound``: the bound landed on, if any; ``correction``: the corrector's
-    result."""
+    result; ``counted``: the count's factor at ``x``
+    (:func:`~supercoil.continuation.stability.count_factor`) where the caller made it."""
 
     x: np.ndarray | None = None
     t: np.ndarray | None = None
@@ -86,6 +87,7 @@ class Step:
     failure: str | None = None
     refusal: str | None = None
     leaves_bound: bool = False
+    counted: object = None
 
 
 def take_step(system: ExtendedSystem, opts: ContinuationOptions, x_k: np.ndarray,

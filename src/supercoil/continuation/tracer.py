@@ -37,7 +37,12 @@ from supercoil.continuation.events import UserEvent, point_values, takes_problem
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
 from supercoil.continuation.special_points import locate_events, special_point
-from supercoil.continuation.stability import factor_count, inertia, point_stability
+from supercoil.continuation.stability import (
+    count_factor,
+    factor_count,
+    inertia,
+    point_stability,
+)
 from supercoil.continuation.step import take_step
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.carried import frames_of
@@ -149,7 +154,7 @@ class Tracer:
 
     def add_point(self, x: np.ndarray, t: np.ndarray, search_events: bool = True,
                   full_hessian=None, next_step: float = float("nan"),
-                  publish: bool = True) -> None:
+                  publish: bool = True, counted=None) -> None:
         """Keep ``x``: stability, records and user values first (an exception leaves the
         branch as it was), then the point, then the events since the previous one;
         then, with ``publish``, hand the branch to ``on_point`` (:meth:`publish`).
@@ -163,6 +168,9 @@ class Tracer:
         largest entry, as much as assembling it twice at ``x`` with other states
         evaluated in between does). A problem whose ``accept`` moves its coordinates
         (``accept_moves_coordinates``: a chart re-based at ``x``) has it assembled again.
+        ``counted``: the count's factor at ``x`` with that Hessian in the current phase
+        rows (:func:`~supercoil.continuation.stability.count_factor`, made by the
+        check of a count change without a fold, :meth:`_count_jumped`), or None.
         """
         system = self.system
         system.carry_to(system.q(x))
@@ -175,7 +183,7 @@ class Tracer:
             full_hessian = None
         full = system.full_hessian(x) if full_hessian is None else full_hessian
         stability = point_stability(system, x, self.opts.zero_tolerance, self.opts.n_modes,
-                                    full)
+                                    full, None if full_hessian is None else counted)
         records = self._records(x)
         user = [user_values(ev, system, x) for ev in self.events]
         self.s.append(0.0 if not self.xs else self.s[-1] + system.norm(x - self.xs[-1]))
@@ -303,15 +311,18 @@ class Tracer:
         start while the parameter keeps its direction (no fold between them). The
         factors' counts are compared first (``start``: the start's, one sparse
         factorisation at each end); only where they differ is the count with the stiff
-        sliding left out computed."""
+        sliding left out computed. The end's factor is kept with ``taken``
+        (``taken.counted``) for the point's stability, should it be accepted."""
         if start is None or taken.t[-1] * self.ts[-1][-1] <= 0.0:
             return False
         full = taken.full_hessian
         try:
-            if factor_count(self.system, taken.x,
-                            None if full is None else full.restrict(self.system.free)) == start:
-                return False
+            factor = count_factor(self.system, taken.x,
+                                  None if full is None else full.restrict(self.system.free))
         except (SingularMatrixError, InertiaError):
+            return False
+        taken.counted = factor
+        if factor.reduced_negative_count == start:
             return False
         negative = self._count_at(taken)
         return negative is not None and negative != self.stabs[-1].negative_count
@@ -391,7 +402,7 @@ class Tracer:
                 ds = min(ds * opts.growth, opts.max_step)
             try:
                 self.add_point(x_new, taken.t, full_hessian=taken.full_hessian, next_step=ds,
-                               publish=False)
+                               publish=False, counted=taken.counted)
                 try:
                     if opts.rephase and system.r:
                         self._rephase(corr.factor if opts.factor_refinement and bound is None

@@ -236,8 +236,8 @@ def test_held_plectoneme_counts_no_remnant_of_its_stiff_sliding(monkeypatch):
     dense = []
     real = tracing.point_stability
 
-    def checked(system, x, zero_tolerance, n_modes, full=None):
-        stability = real(system, x, zero_tolerance, n_modes, full)
+    def checked(system, x, zero_tolerance, n_modes, full=None, factor=None):
+        stability = real(system, x, zero_tolerance, n_modes, full, factor)
         problem = system.problem_at(x[-1])
         if getattr(problem, "base", None) is not None and problem.base.mirror_anchor \
                 and x[-1] > 3.3:

@@ -29,6 +29,13 @@ BACKTRACKS = 4  # step halvings per corrector iteration (damped Newton)
 # step below NEGLIGIBLE_STEP relative (arclength metric)
 ROUNDOFF_RESIDUALS = 1e3
 NEGLIGIBLE_STEP = 1e-10
+# ... or: an iterate within FLOOR_MARGIN round-off floors (roundoff_floor's estimate at
+# it) whose Newton step raised the residual. The estimate is tight on long rods under
+# tension (converged residuals at 0.83-1.11 of it at F L^2/A = 22500); along a soft
+# mode the noise-driven Newton step overshoots from there (measured at lambda = 150,
+# N = 302, on the localising loop: from 1.02 floors to 1.9e4 floors, step after step,
+# the branch held at the minimum step; accepted there, it goes on with its count)
+FLOOR_MARGIN = 2.0
 # a chord step is tried only within this many tolerances: its contraction is 1e-4-1e-2
 # (measured on the tweezers' contact branch, where it landed from residuals up to 7e-6
 # against a tolerance of 1e-8, and not from 1e-5 and above)
@@ -99,6 +106,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     factor = None
     factor_residual = np.inf
     floor = 0.0  # round-off floor at the last iterate with a Hessian
+    previous_floor = 0.0  # ... at x_previous
     F = system.residual(x)
     for it in range(max_iterations + 1):
         if not np.all(np.isfinite(F)):
@@ -129,6 +137,11 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
         if it == max_iterations:
             break
         rising = it >= 2 and res > previous
+        if rising and previous <= FLOOR_MARGIN * previous_floor:
+            return Correction(x_previous, True, it - 1, previous,
+                              f"converged in {it - 1} iterations to round-off (residual "
+                              f"{previous:.2e}, {previous / previous_floor:.2f} of the floor "
+                              f"estimate; the next rose to {res:.2e})")
         if rising and res > ROUNDOFF_RESIDUALS * tolerance:
             return Correction(None, False, it, res, f"corrector diverging at iteration {it} "
                               f"(residual {res:.2e} > {previous:.2e})")
@@ -165,6 +178,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
                               f"(residual {res:.2e} > {previous:.2e})")
         x_previous = x
         previous = res
+        previous_floor = floor
         alpha = 1.0
         if bounded:
             dq = np.zeros(problem.n_dofs)

@@ -71,6 +71,34 @@ def test_lanczos_eigenvalues_equal_dense_oracle():
     assert dense[0] > 0 and dense[1] == pytest.approx(dense[0], rel=1e-8)
 
 
+def test_lanczos_that_does_not_converge_falls_back_on_the_dense_pairs(monkeypatch):
+    """Where ARPACK gives up (``ArpackNoConvergence``), the pairs nearest the shift come
+    from the dense reference: the same values as the converged Lanczos run gives (oracle),
+    ascending, M-orthonormal vectors."""
+    import scipy.sparse.linalg as spla
+
+    p, q = twisted_circle_problem(1.0, 3.2, 200)  # past sqrt(8): four negative
+    lam = least_squares_multipliers(p, q, free_dofs(p))
+    dofs, H, J, mass, sym = eigen_system(p, q, lam)
+    args = {"n_wanted": 6, "n": dofs.size, "m": J.shape[0], "symmetry": sym,
+            "force_sparse": True, "sigma": -50.0}
+    converged, _ = lowest_pairs(H, J, mass, **args)
+
+    calls = []
+
+    def gives_up(*_args, **_kwargs):
+        calls.append(1)
+        raise spla.ArpackNoConvergence("no convergence", np.zeros(0), np.zeros((0, 0)))
+
+    monkeypatch.setattr(spla, "eigsh", gives_up)
+    values, vectors = lowest_pairs(H, J, mass, **args)
+    assert calls == [1]
+    assert np.all(np.diff(values) >= 0)
+    assert np.allclose(values, converged, rtol=1e-8, atol=1e-6)
+    gram = vectors.T @ (mass[:, None] * vectors)
+    assert np.allclose(gram, np.eye(values.size), atol=1e-8)
+
+
 def test_analyse_matches_dense_count():
     p, q = twisted_circle_problem(1.0, 3.2, 40)
     lam = least_squares_multipliers(p, q, free_dofs(p))

@@ -30,12 +30,15 @@ BACKTRACKS = 4  # step halvings per corrector iteration (damped Newton)
 ROUNDOFF_RESIDUALS = 1e3
 NEGLIGIBLE_STEP = 1e-10
 # ... or: an iterate within FLOOR_MARGIN round-off floors (roundoff_floor's estimate at
-# it) whose Newton step raised the residual. The estimate is tight on long rods under
-# tension (converged residuals at 0.83-1.11 of it at F L^2/A = 22500); along a soft
-# mode the noise-driven Newton step overshoots from there (measured at lambda = 150,
-# N = 302, on the localising loop: from 1.02 floors to 1.9e4 floors, step after step,
-# the branch held at the minimum step; accepted there, it goes on with its count)
-FLOOR_MARGIN = 2.0
+# it) whose Newton step raised the residual. The estimate takes one rounding of each
+# coordinate through the stiffness; the gradient's differences and products round a
+# few times more. It is tight on long rods under tension: converged residuals at
+# 0.83-1.11 of it at F L^2/A = 22500, and Newton stalled at 2.57 of it at a run's start
+# (lambda = 150, C/A = 1, N = 302, 48.85 turns). Along a soft mode the noise-driven
+# Newton step overshoots from there (lambda = 150, C/A = 1.5, N = 302, the localising
+# loop: from 1.02 floors to 1.9e4 floors, step after step, the branch held at the
+# minimum step; accepted there, it goes on with its count)
+FLOOR_MARGIN = 4.0
 # a chord step is tried only within this many tolerances: its contraction is 1e-4-1e-2
 # (measured on the tweezers' contact branch, where it landed from residuals up to 7e-6
 # against a tolerance of 1e-8, and not from 1e-5 and above)

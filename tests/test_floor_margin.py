@@ -59,7 +59,7 @@ def test_the_localising_loop_passes_on_iterates_within_a_few_floors(monkeypatch)
     monkeypatch.setattr(step, "correct", correct)
     buckled = _buckled(tweezers_branches(OPTIONS))
     assert buckled.parameter_values[-1] < 30.0  # past 32.5587, where it stopped
-    assert any(abs(turns - 32.5587) < 0.05 for turns, _ in accepted)
+    assert any(32.4 < turns < 32.6 for turns, _ in accepted)  # as the loop localises
     assert all(1.0 < ratio <= corrector.FLOOR_MARGIN for _, ratio in accepted)
     assert np.all(buckled.unstable_count == 1)
     assert np.all(buckled.determinant_sign == -1)

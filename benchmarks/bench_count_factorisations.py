@@ -23,12 +23,8 @@ Run from the repository root:
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import statistics
-import subprocess
-import sys
-import tempfile
+
+from trees import alternated, print_ratios, run_json
 
 RUN = r'''
 import hashlib, importlib, json, sys, time
@@ -61,17 +57,6 @@ print(json.dumps({"total": total, "factorisations": made[0],
 '''
 
 
-def run(src: str | None, args) -> dict:
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
-    if src:
-        env["PYTHONPATH"] = os.path.abspath(src) + os.pathsep + env.get("PYTHONPATH", "")
-    with tempfile.TemporaryDirectory() as cwd:
-        out = subprocess.run([sys.executable, "-c", RUN, str(args.ld), str(args.lam),
-                              str(args.nodes), str(args.twist_ratio)], env=env, cwd=cwd,
-                             capture_output=True, text=True, check=True)
-    return json.loads(out.stdout.strip().splitlines()[-1])
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=1)
@@ -82,20 +67,18 @@ def main() -> None:
     parser.add_argument("--twist-ratio", type=float, default=1.5)
     args = parser.parse_args()
     trees = [None] + ([args.against] if args.against else [])
-    results: dict = {tree: [] for tree in trees}
-    for _ in range(args.repeat):
-        for tree in trees:
-            r = run(tree, args)
-            results[tree].append(r)
-            print(f"{tree or 'this tree'}: {r['points']} points, {r['total']:.1f} s CPU, "
-                  f"{r['factorisations']} factorisations of the count "
-                  f"({r['factorisations'] / r['points']:.2f} a point)", flush=True)
+    row = (args.ld, args.lam, args.nodes, args.twist_ratio)
+
+    def report(tree, r):
+        print(f"{tree or 'this tree'}: {r['points']} points, {r['total']:.1f} s CPU, "
+              f"{r['factorisations']} factorisations of the count "
+              f"({r['factorisations'] / r['points']:.2f} a point)", flush=True)
+
+    results = alternated(trees, args.repeat,
+                         lambda tree: run_json(RUN, row, tree, {"OPENBLAS_NUM_THREADS": "1"}),
+                         report)
     if args.against:
-        for key in ("total", "factorisations"):
-            here = statistics.median(r[key] for r in results[None])
-            there = statistics.median(r[key] for r in results[args.against])
-            print(f"median {key}: this tree {here:.1f}, against {there:.1f}, "
-                  f"ratio {here / there:.3f}")
+        print_ratios(results, args.against, ("total", "factorisations"))
         same = results[None][-1]["digest"] == results[args.against][-1]["digest"]
         print("branches equal bit for bit (every per-point array, special points):", same)
 

@@ -23,12 +23,8 @@ Run from the repository root:
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import statistics
-import subprocess
-import sys
-import tempfile
+
+from trees import alternated, print_ratios, run_json
 
 RUN = r'''
 import json, sys, tempfile, time
@@ -63,18 +59,6 @@ print(json.dumps({
 '''
 
 
-def run(src: str | None, points: int) -> dict:
-    # BLAS threads as the user has them: with one thread (OPENBLAS_NUM_THREADS=1) the
-    # buckled branch of this coarse mesh stops near a bifurcation at 37.97 turns
-    env = dict(os.environ)
-    if src:
-        env["PYTHONPATH"] = os.path.abspath(src) + os.pathsep + env.get("PYTHONPATH", "")
-    with tempfile.TemporaryDirectory() as cwd:
-        out = subprocess.run([sys.executable, "-c", RUN, str(points)], env=env, cwd=cwd,
-                             capture_output=True, text=True, check=True)
-    return json.loads(out.stdout.strip().splitlines()[-1])
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=int, default=3000)
@@ -82,20 +66,18 @@ def main() -> None:
     parser.add_argument("--against", metavar="SRC", default=None)
     args = parser.parse_args()
     trees = [None] + ([args.against] if args.against else [])
-    results: dict = {tree: [] for tree in trees}
-    for _ in range(args.repeat):
-        for tree in trees:
-            r = run(tree, args.points)
-            results[tree].append(r)
-            print(f"{tree or 'this tree'}: {r['calls']} points, total {r['total']:.1f} s CPU, "
-                  f"hand-over {r['publish']:.1f} s ({1e3 * r['first']:.2f} ms a point over "
-                  f"the first tenth, {1e3 * r['last']:.2f} ms over the last)", flush=True)
+
+    def report(tree, r):
+        print(f"{tree or 'this tree'}: {r['calls']} points, total {r['total']:.1f} s CPU, "
+              f"hand-over {r['publish']:.1f} s ({1e3 * r['first']:.2f} ms a point over "
+              f"the first tenth, {1e3 * r['last']:.2f} ms over the last)", flush=True)
+
+    # BLAS threads as the user has them: with one thread (OPENBLAS_NUM_THREADS=1) the
+    # buckled branch of this coarse mesh stops near a bifurcation at 37.97 turns
+    results = alternated(trees, args.repeat,
+                         lambda tree: run_json(RUN, [args.points], tree), report)
     if args.against:
-        for key in ("total", "publish"):
-            here = statistics.median(r[key] for r in results[None])
-            there = statistics.median(r[key] for r in results[args.against])
-            print(f"median {key}: this tree {here:.1f} s, against {there:.1f} s, "
-                  f"ratio {here / there:.3f}")
+        print_ratios(results, args.against, ("total", "publish"), " s")
         same = results[None][-1]["branches"] == results[args.against][-1]["branches"]
         print("branches equal point for point (parameters, unstable counts):", same)
 

@@ -82,9 +82,9 @@ def _lowest_pairs_threads(H, J, mass, n_wanted, n, m, symmetry=None, force_spars
         nu, y = spla.eigsh(scaled, k=k, v0=y0, which="LM", tol=1e-12,
                            ncv=min(n, max(2 * k + 1, 12)))
     except spla.ArpackNoConvergence:
-        # Lanczos stalls on a shift among a cluster of eigenvalues (measured: ARPACK
-        # gave up after 8951 iterations with 1 of 2 pairs on the tweezers' contact
-        # branch at lambda = 150, N = 302); the dense reference has them all
+        # ARPACK may give up (measured: after 8951 iterations with 1 of 2 pairs, in the
+        # stiff sliding's count on the tweezers' contact branch at lambda = 150,
+        # N = 302; the spectrum there was not examined); the dense reference has them all
         values, vectors = dense_constrained_eigenpairs(H, J, mass, symmetry)
         nearest = np.sort(np.argsort(np.abs(values - sigma), kind="stable")[:k])
         return values[nearest], vectors[:, nearest]

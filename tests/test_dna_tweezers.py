@@ -43,12 +43,15 @@ def test_sigma_turns_and_scales_exact(bp):
     assert numbers["tension"] == pytest.approx(1.0 * length**2 / (P_B * KT), rel=1e-14)
     assert numbers["turns"] == pytest.approx((0.0, 0.06 * bp / REPEAT), rel=1e-15)
     payload = {"turns_range": [0.0, 2.0], "greenhill_turns": 1.5,
+               "hard_core_ply": {"spanning_turns": 4.0, "torque": 2.5},
                "points": [{"turns": 2.0, "extension": 0.25, "torque": 3.0, "tension": 7.0}]}
     out = tweezers_payload_in_dna_units(payload, preset, 1.0)
     assert out["force_scale_pN"] == pytest.approx(P_B * KT / length**2, rel=1e-14)
     assert out["torque_scale_pN_nm"] == pytest.approx(P_B * KT / length, rel=1e-14)
     assert out["superhelical_density_range"] == pytest.approx([0.0, 2.0 * REPEAT / bp])
     assert out["greenhill_superhelical_density"] == pytest.approx(1.5 * REPEAT / bp)
+    assert out["ply_spanning_superhelical_density"] == pytest.approx(4.0 * REPEAT / bp)
+    assert out["ply_torque_pN_nm"] == pytest.approx(2.5 * P_B * KT / length, rel=1e-14)
     p = out["points"][0]
     assert p["extension_nm"] == pytest.approx(0.25 * length, rel=1e-15)
     assert p["torque_pN_nm"] == pytest.approx(3.0 * P_B * KT / length, rel=1e-14)

@@ -8,6 +8,7 @@ import pytest
 import supercoil
 from supercoil.cli.main import run
 from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.ply import hard_core_ply
 
 POINT_KEYS = ("turns", "extension", "torque", "writhe", "twist", "energy", "load_potential",
               "unstable_count", "zero_modes", "n_contact_points", "n_contact_intervals",
@@ -43,6 +44,11 @@ def test_branch_json_keys_and_invariants(folder):
     exact = critical_turns(1.3333333333333333, 20.0)
     assert abs(bif["turns"] - exact) / exact < 1e-2
     assert data["greenhill_turns"] == pytest.approx(exact, rel=1e-12)
+    ply = hard_core_ply(1 / 20, 20.0, 1.3333333333333333)
+    assert data["hard_core_ply"]["spanning_turns"] == pytest.approx(ply.spanning_turns,
+                                                                    rel=1e-12)
+    assert data["hard_core_ply"]["torque"] == pytest.approx(ply.torque, rel=1e-12)
+    assert not any("span the whole rod" in n for n in data["notes"])  # 1.6 < 2.06 turns
     contact = [p for p in data["points"] if p["branch"] == "buckled_contact"]
     assert min(p["min_gap_over_diameter"] for p in contact) > 1.0
 

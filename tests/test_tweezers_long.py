@@ -9,9 +9,9 @@ import math
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from supercoil.continuation import SpecialPoint
+from supercoil.problems.ply import hard_core_ply, spanning_note
 from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 from supercoil.problems.tweezers.verify import VERIFY_POINTS, verify_bifurcations
 from supercoil.rod.model import Rod
@@ -182,24 +182,37 @@ def test_a_fold_bounds_the_window(small_run):
     assert VERIFY_POINTS >= 3  # the window is wider than the two points the fold leaves
 
 
-def ply(tension_r2: float) -> tuple[float, float, float]:
-    """The uniform hard-core two-ply (strand axes at R = D/2 from the ply's axis, ply
-    angle theta): ``(theta, M R/A, (dz/dn) / R)`` at ``T R^2/A``.
+def ply_energy(ply, length: float, angle: float, turns: float) -> float:
+    """``U/A`` of a rod of length 1 with ``length`` of it in a uniform two-ply of
+    ``angle`` and the rest straight, the end turned by ``turns`` (``hard_core_ply``'s
+    model): the strands' bending ``kappa^2 l / 2`` with ``kappa = sin^2(angle)/R``, the
+    twist ``C (2 pi Tw)^2 / 2`` with ``Tw = turns - l sin(2 angle)/(4 pi R)`` (Fuller;
+    White & Bauer) and the dead load's ``-T (1 - l)``."""
+    R = 0.5 * ply.diameter
+    kappa = math.sin(angle) ** 2 / R
+    twist = turns - length * math.sin(2 * angle) / (4 * math.pi * R)
+    return (0.5 * kappa**2 * length + 0.5 * ply.twist_ratio * (2 * math.pi * twist) ** 2
+            - ply.tension * (1 - length))
 
-    The plectoneme's length l of rod grows at the expense of the straight tails under
-    the dead load T with the torque M uniform: with the strand curvature
-    ``kappa = sin^2(theta)/R`` and the writhe ``l sin(2 theta)/(4 pi R)`` (Fuller; White
-    & Bauer), stationarity of the energy in l and theta gives ``M R/A = sin^2 theta
-    sin 2theta / cos 2theta`` and ``T R^2/A = sin^4 theta (1 + 2 cos^2 theta) / (2 cos
-    2theta)``, and one turn lengthens the ply by ``4 pi R / sin 2theta`` of rod, taken
-    from the extension (Neukirch & van der Heijden 2002; Clauvelin, Audoly & Neukirch
-    2009 without electrostatics)."""
-    def tension(theta):
-        return math.sin(theta) ** 4 * (1 + 2 * math.cos(theta) ** 2) / (2 * math.cos(2 * theta))
 
-    theta = brentq(lambda t: tension(t) - tension_r2, 1e-6, math.pi / 4 - 1e-9)
-    torque = math.sin(theta) ** 2 * math.sin(2 * theta) / math.cos(2 * theta)
-    return theta, torque, -4 * math.pi / math.sin(2 * theta)
+@pytest.mark.parametrize("ld,tension", [(40, 320), (100, 6400), (200, 22500)])
+def test_hard_core_ply_is_stationary_in_its_length_and_angle(ld, tension):
+    """The ply of :func:`~supercoil.problems.ply.hard_core_ply` makes ``ply_energy``
+    stationary in the ply's length and angle (central differences, 4th order) at the
+    turns that put half the rod in it, and spans the rod where its twist and writhe add
+    up to the turns with all of it in the ply."""
+    ply = hard_core_ply(1 / ld, tension, 1.5)
+    turns = ply.twist_turns + 0.5 / ply.rod_per_turn
+    h = 1e-4
+    for dl, da in ((h, 0.0), (0.0, h)):
+        def f(k, dl=dl, da=da):
+            return ply_energy(ply, 0.5 + k * dl, ply.angle + k * da, turns)
+        derivative = (8 * (f(1) - f(-1)) - (f(2) - f(-2))) / (12 * h)
+        assert abs(derivative) < 1e-7 * tension
+    R = 0.5 / ld
+    writhe = math.sin(2 * ply.angle) / (4 * math.pi * R)
+    assert ply.spanning_turns == pytest.approx(ply.twist_turns + writhe, rel=1e-12)
+    assert 2 * math.pi * 1.5 * ply.twist_turns == pytest.approx(ply.torque, rel=1e-12)
 
 
 def test_plectoneme_torque_plateau_and_slope_are_the_hard_core_plys():
@@ -213,8 +226,7 @@ def test_plectoneme_torque_plateau_and_slope_are_the_hard_core_plys():
         twist_ratio=1.5, length_over_diameter=ld, tension=tension, n_nodes=82,
         turns=(0.0, 4.4)))
     assert result.ok
-    R = 0.5 / ld
-    theta, torque_r, slope_r = ply(tension * R**2)
+    ply = hard_core_ply(1 / ld, tension, 1.5)
     contact = result.branches[-1]
     last_fold = max(p.index for p in contact.special_points if p.kind == "fold")
     turns = contact.parameter_values[last_fold + 1:]
@@ -224,10 +236,34 @@ def test_plectoneme_torque_plateau_and_slope_are_the_hard_core_plys():
     plateau = (intervals > 0) & (torque <= 1.02 * torque.min())
     assert np.count_nonzero(plateau) >= 8
     assert np.all(np.diff(turns) > 0)
-    assert torque.min() == pytest.approx(torque_r / R, rel=0.02)
+    assert torque.min() == pytest.approx(ply.torque, rel=0.02)
     slope = np.polyfit(turns[plateau], extension[plateau], 1)[0]
-    assert slope == pytest.approx(slope_r * R, rel=0.02)
-    assert math.degrees(theta) == pytest.approx(23.53, abs=0.01)  # the ply at 0.05
+    assert slope == pytest.approx(ply.extension_per_turn, rel=0.02)
+    assert math.degrees(ply.angle) == pytest.approx(23.53, abs=0.01)  # the ply at 0.05
+
+
+def test_a_run_past_the_spanning_ply_says_so_and_its_torque_rises():
+    """C/A = 4/3, L/D = 20, F L^2/A = 100, N = 44 to 4.2 turns: the hard-core ply would
+    span the rod at 3.397 turns; the run's note says so, and past it the contact
+    branch's torque lies above the ply's and rises with the turns (the turns go into
+    twist), its extension falling more slowly than on the ply (measured 0.167 at 4.2
+    turns where the ply would have none left)."""
+    result = tweezers_branches(TweezersOptions(
+        twist_ratio=4 / 3, length_over_diameter=20, tension=100.0, n_nodes=44,
+        turns=(0.0, 4.2)))
+    assert result.ok
+    ply = result.ply
+    assert spanning_note(ply, 3.0) is None
+    assert spanning_note(ply, 4.2) in result.notes
+    contact = result.branches[-1]
+    past = contact.parameter_values > ply.spanning_turns
+    assert np.count_nonzero(past) >= 3
+    torque = contact.records["torque"][past]
+    assert np.all(torque > ply.torque) and np.all(np.diff(torque) > 0)
+    extension = contact.records["extension"][past]
+    turns = contact.parameter_values[past]
+    slope = (extension[-1] - extension[0]) / (turns[-1] - turns[0])
+    assert ply.extension_per_turn < slope < 0
 
 
 @pytest.mark.parametrize("ld,lam", [(20, 10), (40, 10)])

@@ -105,6 +105,11 @@ def write_tweezers(result, out: Path, writer, path=None, preset=None) -> dict:
     if payload.get("greenhill_turns") is not None:
         print(f"  exact buckling of the straight rod (clamped Greenhill with tension): "
               f"{payload['greenhill_turns']:.6f} turns")
+    ply = payload.get("hard_core_ply")
+    if ply is not None:
+        print(f"  hard-core ply (Neukirch & van der Heijden 2002): torque {ply['torque']:.4g} A/L, "
+              f"extension {ply['extension_per_turn']:.4g} L per turn, spans the rod at "
+              f"{ply['spanning_turns']:.4g} turns")
     if path is not None:
         jumps = ", ".join(f"{j['turns']:.3f} ({'up' if j['direction'] > 0 else 'down'}, "
                           f"z/L {j['extension']:.3f} -> {j['extension_after']:.3f})"

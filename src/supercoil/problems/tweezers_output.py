@@ -104,6 +104,7 @@ def result_payload(result: TweezersResult, contacts: bool = True) -> dict:
         "loop_sliding": opts.loop_sliding,  # as given: None, where it applies
         "loop_sliding_applied": opts.loop_slides,
         "greenhill_turns": result.greenhill_turns,
+        "hard_core_ply": None if result.ply is None else result.ply.summary(),
         "branches": branches,
         "special_points": [special_summary(p) for p in result.special_points()],
         "points": result_points(result, contacts),

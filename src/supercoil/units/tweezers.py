@@ -252,6 +252,11 @@ def tweezers_payload_in_dna_units(payload: dict, preset: DNAPreset, force_pN: fl
     greenhill = payload.get("greenhill_turns")
     if isinstance(greenhill, (int, float)):
         out["greenhill_superhelical_density"] = preset.superhelical_density_of(greenhill)
+    ply = payload.get("hard_core_ply")
+    if isinstance(ply, dict):
+        out["ply_spanning_superhelical_density"] = preset.superhelical_density_of(
+            ply["spanning_turns"])
+        out["ply_torque_pN_nm"] = ply["torque"] * preset.torque_scale_pN_nm
     return out
 
 

@@ -20,6 +20,7 @@ from supercoil.problems.contact_events import (
     stop_after_onset,
 )
 from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.ply import hard_core_ply, spanning_note
 from supercoil.problems.segments import either, follow
 from supercoil.problems.tweezers.buckled import (
     SWITCH_AMPLITUDE,
@@ -137,6 +138,10 @@ def tweezers_branches(options: TweezersOptions,
         coarse = resolution_note(opts, point.parameter)
         if coarse is not None:
             notes.append(coarse)
+        spanning = spanning_note(hard_core_ply(D, opts.tension, opts.twist_ratio)
+                                 if D is not None and opts.tension else None, opts.turns[1])
+        if spanning is not None:
+            notes.append(spanning)
         free_name = "buckled"
         start = time.perf_counter()
         free_complete = stored.get(free_name, (None, False))[1]

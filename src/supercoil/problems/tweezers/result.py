@@ -8,6 +8,7 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch
 from supercoil.problems.branch_set import BranchSet
 from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.ply import HardCorePly, hard_core_ply
 from supercoil.problems.tweezers.contact import SLIDING_TAIL_CONTACT
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import hold_azimuth
@@ -75,3 +76,15 @@ class TweezersResult(BranchSet):
         if not self.options.load_control:
             return None
         return critical_turns(self.options.twist_ratio, self.options.tension)
+
+    @property
+    def ply(self) -> HardCorePly | None:
+        """The uniform hard-core two-ply at this force and diameter
+        (:mod:`supercoil.problems.ply`): the plectoneme's torque plateau, extension per
+        turn and the turns at which it would span the rod; None without a diameter or a
+        force, or for the extensible rod."""
+        opts = self.options
+        if (opts.diameter is None or not opts.load_control or not opts.tension
+                or self.model.get("model", "kirchhoff") != "kirchhoff"):
+            return None
+        return hard_core_ply(opts.diameter, opts.tension, opts.twist_ratio)

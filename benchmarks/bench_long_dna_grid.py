@@ -6,7 +6,9 @@ up to ``--factor`` (default 1.5) times the straight rod's exact buckling turns, 
 ``N = n0`` and ``2 n0`` nodes (``n0 = ceil(L/D) + 2``, the smallest N whose segments are
 no longer than D), or with ``--resolving`` at ``N = max(n0, 2 lambda + 2)``, the fewest
 nodes whose segments are also at most half the loop's core ``sqrt(A/F)``. One row per
-run: whether the last branch reached the last turn, the turns reached, the points and
+run: the turns at which the hard-core ply would span the whole rod
+(:mod:`supercoil.problems.ply`; a target beyond them lies past the plectoneme's growth),
+whether the last branch reached the last turn, the turns reached, the points and
 seconds per run, the unstable counts met on the plectoneme (contact) branch, the
 verified bifurcations and the unverified count changes located off the straight rod,
 and the notes (why a run stopped).
@@ -30,10 +32,11 @@ from pathlib import Path
 import numpy as np
 
 from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.ply import hard_core_ply
 from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 from supercoil.problems.tweezers.options import SLIDING_CORE
 
-HEADER = ("| L/D | lambda | F L^2/A | N | target turns | reached | last turns | points | "
+HEADER = ("| L/D | lambda | F L^2/A | N | target turns | ply spans | reached | last turns | points | "
           "seconds | counts on the contact branch | bifurcations | count changes | notes |")
 
 
@@ -42,6 +45,7 @@ def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
     """One table row (module doc); ``contact_curve``: ``TweezersOptions.contact_curve``."""
     tension = lam**2
     target = factor * critical_turns(twist_ratio, tension)
+    spans = hard_core_ply(1.0 / ld, tension, twist_ratio).spanning_turns
     options = TweezersOptions(loop_sliding=True, twist_ratio=twist_ratio, length_over_diameter=ld,
                               tension=tension, n_nodes=nodes, turns=(0.0, target),
                               max_points=max_points, contact_curve=contact_curve)
@@ -63,7 +67,7 @@ def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
     ok = result.ok and reached >= target - 1e-9
     notes = "; ".join(result.notes).replace("|", "/") or "-"
     return (f"| {ld:g} | {lam:g} | {tension:g} | {nodes} | {target:.4g} | "
-            f"{'yes' if ok else 'no'} | {reached:.4g} | {points} | {seconds:.0f} | {counts} | "
+            f"{spans:.4g} | {'yes' if ok else 'no'} | {reached:.4g} | {points} | {seconds:.0f} | {counts} | "
             f"{bifurcations} | {changes} | {notes} |")
 
 

@@ -10,6 +10,7 @@ nondimensional ones times the scales; bad input refused before any file is writt
 import json
 import math
 
+import numpy as np
 import pytest
 from matplotlib.text import Text
 
@@ -208,6 +209,10 @@ def test_figures_speak_dna_units(dna_run):
     assert sum("Athermal" in t for t in texts) == 1  # the caveat, once
     torque = built["torque.png"].axes[0]
     assert torque.get_ylabel() == r"torque $M$ (pN nm)"
+    plateau = [line for line in torque.get_lines()
+               if np.ptp(line.get_ydata()) == 0 and len(line.get_ydata()) == 2]
+    assert [line.get_ydata()[0] for line in plateau] == pytest.approx(
+        [data["ply_torque_pN_nm"]], rel=1e-12)  # the hard-core ply's, in pN nm
     assert r"superhelical density $\sigma$" in _texts(built["torque.png"])
     assert not any("Athermal" in t for t in _texts(built["writhe.png"]))
     # the same from the stored result (supercoil plot, supercoil run)

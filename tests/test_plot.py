@@ -357,6 +357,32 @@ def test_tweezers_lines_are_stable_up_to_the_located_buckling():
         assert stable_turns.max() == 2.2
 
 
+def test_the_torque_figure_draws_the_hard_core_plys_plateau():
+    """With ``hard_core_ply`` in the payload the torque's figure (only) gains a line at
+    the ply's torque from the turns whose straight twist carries it to those at which
+    the ply spans the rod (:func:`~supercoil.problems.ply.hard_core_ply`)."""
+    from supercoil.plotting.tweezers import figure_jobs
+    from supercoil.problems.ply import hard_core_ply
+
+    ply = hard_core_ply(0.01, 6400.0, 1.5)
+    points = [{"branch": "straight", "turns": t, "extension": 1.0, "torque": 3 * np.pi * t,
+               "writhe": 0.0, "stable": True} for t in (0.0, 30.0)]
+    payload = {"branches": [{"name": "straight"}], "points": points, "twist_ratio": 1.5,
+               "n_nodes": 102, "special_points": [], "hard_core_ply": ply.summary()}
+    jobs = {path.name: kwargs for path, _builder, kwargs in figure_jobs(payload, [], "unused")}
+    (line,) = [b for b in jobs["torque.png"]["branches"] if b["name"] == "hard-core ply"]
+    assert line["turns"] == [ply.twist_turns, ply.spanning_turns]
+    payload["turns_range"] = [0.0, 20.0]  # the run ends before the ply spans the rod
+    (short,) = [b for b in figure_jobs(payload, [], "unused")[1][2]["branches"]
+                if b["name"] == "hard-core ply"]
+    assert short["turns"] == [ply.twist_turns, 20.0]
+    assert line["torque"] == [ply.torque, ply.torque]
+    # the straight rod's torque 2 pi (C/A) turns meets the plateau where the line starts
+    assert 3 * np.pi * line["turns"][0] == pytest.approx(ply.torque, rel=1e-12)
+    for name in ("hat_curve.png", "writhe.png"):
+        assert [b["name"] for b in jobs[name]["branches"]] == ["straight"]
+
+
 @pytest.mark.parametrize("made_at", [100, 150])  # 150: as draw_job makes the figures
 @pytest.mark.parametrize("scale, names", [
     (1.0, ("straight", "buckled")),

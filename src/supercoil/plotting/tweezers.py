@@ -94,8 +94,9 @@ def figure_jobs(payload: Mapping, configurations: Sequence[Mapping],
     for name, y in figures.items():
         x, y, secondary = ("turns", y, {}) if dna is None else dna.axes("turns", y)
         specials = [p for p in payload["special_points"] if y in p and x in p]
+        lines = _branches(payload, y, x) + _ply_plateau(payload, dna, x, y)
         jobs.append((folder / name, "diagram", {
-            "branches": _branches(payload, y, x), "special_points": specials, "title": title,
+            "branches": lines, "special_points": specials, "title": title,
             "x": x, "y": y, **_dna_extras(dna, secondary, y)}))
     ramp = [p for p in payload.get("path") or [] if p.get("ramp") == "tension"]
     if ramp:
@@ -109,6 +110,25 @@ def figure_jobs(payload: Mapping, configurations: Sequence[Mapping],
             "branches": [rows], "special_points": specials, "title": title, "x": x,
             "y": y, **_dna_extras(dna, secondary, y)}))
     return jobs
+
+
+def _ply_plateau(payload: Mapping, dna: DNAScales | None, x: str, y: str) -> list[dict]:
+    """On the torque's figure, the hard-core ply's torque plateau (``hard_core_ply``,
+    :mod:`supercoil.problems.ply`) as a grey dashed line: from the turns at which the
+    straight rod's twist carries that torque to those at which the ply spans the rod, or
+    to the run's last turn if that comes first."""
+    ply = payload.get("hard_core_ply")
+    if not ply or x != "turns" or y not in ("torque", "torque_pN_nm"):
+        return []
+    torque = ply["torque"] * (1.0 if dna is None else dna.torque_scale_pN_nm)
+    drawn = [p["turns"] for p in payload["points"] if "turns" in p]
+    last = max(payload.get("turns_range") or drawn or [ply["spanning_turns"]])
+    end = min(ply["spanning_turns"], last)
+    if not end > ply["twist_turns"]:
+        return []
+    return [{"name": "hard-core ply", x: [ply["twist_turns"], end],
+             y: [torque, torque], "stable": [False, False], "color": "0.55",
+             "linestyle": (0, (4, 3))}]
 
 
 def _dna_extras(dna: DNAScales | None, secondary: dict, y: str) -> dict:

@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from supercoil.cli.main import run as cli
 from supercoil.errors import InputError
 from supercoil.io.study import parse_study
+from supercoil.problems.ply import hard_core_ply
 from supercoil.sweeps.dataset import build_dataset, load_sweep, write_dataset
 from supercoil.sweeps.grid import parse_sweep_study, task_key, toml_text
 
@@ -238,6 +239,9 @@ def test_tweezers_summary(tweezers_sweep):
     # the reduced twist is uniform: torque = 2 pi (C/A) twist, at the plateau too
     assert s["torque_plateau"] == pytest.approx(
         2 * math.pi * (4 / 3) * s["buckled_contact.end.twist"], rel=1e-9)
+    ply = hard_core_ply(1 / 20, 20.0, 4 / 3)
+    assert s["ply_torque"] == pytest.approx(ply.torque, rel=1e-12)
+    assert s["ply_spanning_turns"] == pytest.approx(ply.spanning_turns, rel=1e-12)
     assert s["folds"] == sum(p.kind == "fold" for b in branches.values()
                              for p in b.special_points)
     assert s["first_contact_turns"] == s["buckled.contact_onset"]

@@ -15,7 +15,9 @@ sweep is resumed gives the same values):
   contact onset, in the order the branches were computed);
 * tweezers: ``buckling_turns`` (the straight rod's bifurcation, with
   ``buckling_torque`` and ``buckling_extension`` there), ``greenhill_turns`` (the
-  clamped Greenhill value the run reports), ``torque_plateau`` (the torque at the
+  clamped Greenhill value the run reports), ``ply_torque`` and ``ply_spanning_turns``
+  (the hard-core ply's torque and the turns at which it spans the rod,
+  :mod:`supercoil.problems.ply`), ``torque_plateau`` (the torque at the
   last point of the last contact branch: the plectoneme's plateau under a dead
   load) and ``end_extension``, ``end_writhe`` at the last point computed;
 * ring diagrams: ``michell_excess_link.M`` per Michell mode ``M`` (Michell 1889).
@@ -106,6 +108,11 @@ def _tweezers(result, branches: list, summary: dict) -> dict:
            "torque_plateau": nan, "end_extension": nan, "end_writhe": nan}
     greenhill = summary.get("greenhill_turns")
     out["greenhill_turns"] = float(greenhill) if isinstance(greenhill, (int, float)) else nan
+    ply = summary.get("hard_core_ply")
+    ply = ply if isinstance(ply, dict) else {}
+    for key, name in (("torque", "ply_torque"), ("spanning_turns", "ply_spanning_turns")):
+        value = ply.get(key)
+        out[name] = float(value) if isinstance(value, (int, float)) else nan
     straight = [b for b in branches if b.name == STRAIGHT_BRANCH]
     buckling = [p for b in straight for p in _specials(b) if p.kind == "bifurcation"]
     if buckling:

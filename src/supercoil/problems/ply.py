@@ -86,9 +86,14 @@ def hard_core_ply(diameter: float, tension: float, twist_ratio: float) -> HardCo
             raise ValueError(f"{name} must be positive and finite, got {value!r}")
     R = 0.5 * diameter
     target = tension * R * R
-    # T R^2/A grows monotonically from 0 at theta = 0 to infinity at theta = pi/4
+    # T R^2/A grows monotonically from 0 at theta = 0 (as 3 theta^4 / 2) to infinity at
+    # theta = pi/4: the root lies between half the small angles' estimate and pi/4
+    low = min(0.5 * (2.0 * target / 3.0) ** 0.25, 1e-3)
     high = math.pi / 4 - 1e-12
-    theta = brentq(lambda t: _tension_r2(t) - target, 1e-9, high, xtol=1e-15, rtol=1e-14)
+    if not target < _tension_r2(high):
+        raise ValueError(f"tension * (diameter/2)^2 = {target!r} is beyond the ply's range "
+                         f"(below {_tension_r2(high):.3g})")
+    theta = brentq(lambda t: _tension_r2(t) - target, low, high, xtol=1e-15, rtol=1e-14)
     torque = math.sin(theta) ** 2 * math.sin(2 * theta) / math.cos(2 * theta) / R
     rod_per_turn = 4 * math.pi * R / math.sin(2 * theta)
     return HardCorePly(diameter=diameter, tension=tension, twist_ratio=twist_ratio,

@@ -5,8 +5,9 @@ into a loop near 32.56 turns with two soft modes (the loop's sliding and one of
 eigenvalue 0.4 against 2.2e5 for the next). There the corrector reaches 1.02 round-off
 floors (``eps ||H|| ||q||``) and Newton's next step, moving the state along the soft
 modes by the noise over their eigenvalues, raises the residual by four decades; with
-the floor alone as the bound every step fails down to the minimum step at 32.5587
-turns (the first test; docs/continuation.md, "Corrector").
+the floor alone as the bound every step failed down to the minimum step at 32.5587
+turns with one BLAS build (docs/continuation.md, "Corrector"); where the failure strikes
+depends on round-off, so the tests check what the margin accepts.
 
 Oracles: each point accepted by the margin is the iterate whose residual was measured
 (recomputed from the returned state: above one floor, within ``FLOOR_MARGIN``); and the branch goes
@@ -35,13 +36,6 @@ OPTIONS = TweezersOptions(loop_sliding=True, twist_ratio=1.5, length_over_diamet
 
 def _buckled(result):
     return next(b for b in result.branches if b.name == "buckled")
-
-
-def test_with_the_floor_alone_as_the_bound_the_branch_stops_there(monkeypatch):
-    monkeypatch.setattr(corrector, "FLOOR_MARGIN", 1.0)
-    buckled = _buckled(tweezers_branches(OPTIONS))
-    assert buckled.status.name == "STEP_TOO_SMALL"
-    assert abs(buckled.parameter_values[-1] - 32.5587) < 1e-3
 
 
 def test_the_localising_loop_passes_on_iterates_within_a_few_floors(monkeypatch):

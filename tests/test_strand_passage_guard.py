@@ -74,7 +74,7 @@ def test_a_crossing_change_is_refused_by_the_link_and_by_the_knot_type():
 
 
 def alpha_to_the_figure_eight():
-    branches = ring_branches(2 / 3, 24, modes=(2,), max_points=40, max_step=0.2,
+    branches = ring_branches(2 / 3, 24, modes=(2,), max_points=200, max_step=0.2,
                              excess_link_bounds={2: (0.3, 3.0)})
     return branches.primary[2], branches.problem
 

@@ -20,7 +20,7 @@ from supercoil.problems.contact_events import (
     stop_after_onset,
 )
 from supercoil.problems.greenhill import critical_turns
-from supercoil.problems.ply import hard_core_ply, spanning_note
+from supercoil.problems.ply import spanning_note
 from supercoil.problems.segments import either, follow
 from supercoil.problems.tweezers.buckled import (
     SWITCH_AMPLITUDE,
@@ -39,7 +39,7 @@ from supercoil.problems.tweezers.options import TweezersOptions, check_inextensi
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
-from supercoil.problems.tweezers.result import TweezersResult
+from supercoil.problems.tweezers.result import TweezersResult, options_ply
 from supercoil.problems.tweezers.returned import close_on_return
 from supercoil.problems.tweezers.straight import (
     resolution_note,
@@ -138,8 +138,7 @@ def tweezers_branches(options: TweezersOptions,
         coarse = resolution_note(opts, point.parameter)
         if coarse is not None:
             notes.append(coarse)
-        spanning = spanning_note(hard_core_ply(D, opts.tension, opts.twist_ratio)
-                                 if D is not None and opts.tension else None, opts.turns[1])
+        spanning = spanning_note(options_ply(opts), opts.turns[1])
         if spanning is not None:
             notes.append(spanning)
         free_name = "buckled"

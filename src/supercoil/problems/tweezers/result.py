@@ -83,8 +83,14 @@ class TweezersResult(BranchSet):
         (:mod:`supercoil.problems.ply`): the plectoneme's torque plateau, extension per
         turn and the turns at which it would span the rod; None without a diameter or a
         force, or for the extensible rod."""
-        opts = self.options
-        if (opts.diameter is None or not opts.load_control or not opts.tension
-                or self.model.get("model", "kirchhoff") != "kirchhoff"):
+        if self.model.get("model", "kirchhoff") != "kirchhoff":
             return None
-        return hard_core_ply(opts.diameter, opts.tension, opts.twist_ratio)
+        return options_ply(self.options)
+
+
+def options_ply(opts: TweezersOptions) -> HardCorePly | None:
+    """The hard-core ply of ``opts`` (diameter, force, twist ratio); None without a
+    diameter or a force."""
+    if opts.diameter is None or not opts.load_control or not opts.tension:
+        return None
+    return hard_core_ply(opts.diameter, opts.tension, opts.twist_ratio)

@@ -15,17 +15,22 @@ and the notes (why a run stopped).
 
 The runs are long (minutes each at L/D = 500): run it niced in the background; each row
 is appended to the table as soon as it is computed, so a partial run leaves the rows
-that completed.
+that completed. While a run goes on, ``OUT.progress`` holds its last accepted point
+(branch, points, turns, seconds), rewritten every ``--progress-every`` points; on
+SIGTERM or SIGINT the running row is appended as stopped, with what it had reached.
 
 Run: ``python benchmarks/bench_long_dna_grid.py [--ld 100,200,500] [--lambdas
 10,20,40,80,150] [--twist-ratio 1.5] [--multiples 1,2 | --resolving] [--factor 1.5]
-[--max-points 4000] [--contact-curve spline] [--out benchmarks/results/long_dna_grid.md]``.
+[--nodes N1,N2] [--max-points 4000] [--contact-curve spline] [--progress-every 50]
+[--out benchmarks/results/long_dna_grid.md]``.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import signal
+import sys
 import time
 from pathlib import Path
 
@@ -40,17 +45,43 @@ HEADER = ("| L/D | lambda | F L^2/A | N | target turns | ply spans | reached | l
           "seconds | counts on the contact branch | bifurcations | count changes | notes |")
 
 
+class Progress:
+    """The running row's last accepted point, kept for a row written on a signal."""
+
+    def __init__(self, path: Path | None, every: int) -> None:
+        self.path, self.every = path, max(1, every)
+        self.start = time.perf_counter()
+        self.counts: dict[str, int] = {}
+        self.last = ("-", 0, float("nan"))
+
+    def __call__(self, branch) -> None:
+        n = len(branch)
+        self.counts[branch.name] = n
+        self.last = (branch.name, n, float(branch.parameter_values[-1]))
+        if self.path is not None and n % self.every == 0:
+            self.path.write_text(f"{self.last[0]} {n} points, turns = {self.last[2]:.6g}, "
+                                 f"{time.perf_counter() - self.start:.0f} s\n")
+
+    def stopped_row(self, head: str, signame: str) -> str:
+        """The row of a run stopped by a signal: what it had reached, said as stopped."""
+        name, n, turns = self.last
+        points = "+".join(str(v) for v in self.counts.values()) or "0"
+        return (f"{head} no | {turns:.4g} | {points} | "
+                f"{time.perf_counter() - self.start:.0f} | - | - | - | stopped by {signame} "
+                f"at {name} point {n}, turns = {turns:.6g} |")
+
+
 def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
-        max_points: int, contact_curve: str = "spline") -> str:
-    """One table row (module doc); ``contact_curve``: ``TweezersOptions.contact_curve``."""
+        max_points: int, contact_curve: str = "spline", progress: Progress | None = None) -> str:
+    """One table row (module doc); ``contact_curve``: ``TweezersOptions.contact_curve``;
+    ``progress`` is called with every accepted point."""
     tension = lam**2
     target = factor * critical_turns(twist_ratio, tension)
-    spans = hard_core_ply(1.0 / ld, tension, twist_ratio).spanning_turns
     options = TweezersOptions(loop_sliding=True, twist_ratio=twist_ratio, length_over_diameter=ld,
                               tension=tension, n_nodes=nodes, turns=(0.0, target),
                               max_points=max_points, contact_curve=contact_curve)
     start = time.perf_counter()
-    result = tweezers_branches(options)
+    result = tweezers_branches(options, on_point=progress)
     seconds = time.perf_counter() - start
     last = [b for b in result.branches if len(b)][-1]
     reached = float(last.parameter_values[-1])
@@ -66,9 +97,17 @@ def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
     changes = sum(p.kind == "count_change" for p in off_straight)
     ok = result.ok and reached >= target - 1e-9
     notes = "; ".join(result.notes).replace("|", "/") or "-"
-    return (f"| {ld:g} | {lam:g} | {tension:g} | {nodes} | {target:.4g} | "
-            f"{spans:.4g} | {'yes' if ok else 'no'} | {reached:.4g} | {points} | {seconds:.0f} | {counts} | "
+    return (f"{row_head(ld, lam, twist_ratio, nodes, factor)} {'yes' if ok else 'no'} | "
+            f"{reached:.4g} | {points} | {seconds:.0f} | {counts} | "
             f"{bifurcations} | {changes} | {notes} |")
+
+
+def row_head(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float) -> str:
+    """The row's first six cells, known before the run."""
+    tension = lam**2
+    target = factor * critical_turns(twist_ratio, tension)
+    spans = hard_core_ply(1.0 / ld, tension, twist_ratio).spanning_turns
+    return f"| {ld:g} | {lam:g} | {tension:g} | {nodes} | {target:.4g} | {spans:.4g} |"
 
 
 def main() -> None:
@@ -85,6 +124,10 @@ def main() -> None:
     parser.add_argument("--contact-curve", default="spline", help="spline (the cubic "
                         "B-spline) or quintic")
     parser.add_argument("--out", default="benchmarks/results/long_dna_grid.md")
+    parser.add_argument("--nodes", default=None, help="comma-separated N, instead of "
+                        "--multiples and --resolving")
+    parser.add_argument("--progress-every", type=int, default=50, help="rewrite "
+                        "OUT.progress every this many accepted points")
     args = parser.parse_args()
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -92,8 +135,10 @@ def main() -> None:
         f.write(f"# Long rods in the tweezers: C/A = {args.twist_ratio:g}, up to "
                 f"{args.factor:g} x the buckling turns\n\n"
                 f"`python benchmarks/bench_long_dna_grid.py --ld {args.ld} --lambdas "
-                f"{args.lambdas} --twist-ratio {args.twist_ratio:g} --multiples "
-                f"{args.multiples}{' --resolving' if args.resolving else ''} --factor "
+                f"{args.lambdas} --twist-ratio {args.twist_ratio:g} "
+                + (f"--nodes {args.nodes}" if args.nodes else
+                   f"--multiples {args.multiples}{' --resolving' if args.resolving else ''}")
+                + f" --factor "
                 f"{args.factor:g} --max-points "
                 f"{args.max_points}"
                 + ("" if args.contact_curve == "spline"
@@ -102,12 +147,24 @@ def main() -> None:
     for ld in (float(v) for v in args.ld.split(",")):
         n0 = math.ceil(ld) + 2
         for lam in (float(v) for v in args.lambdas.split(",")):
-            meshes = ([max(n0, 2 + math.ceil(lam / SLIDING_CORE))]
-                      if args.resolving else
+            meshes = ([int(v) for v in args.nodes.split(",")] if args.nodes else
+                      [max(n0, 2 + math.ceil(lam / SLIDING_CORE))] if args.resolving else
                       [int(v) * n0 for v in args.multiples.split(",")])
             for nodes in meshes:
+                progress = Progress(out.with_name(out.name + ".progress"), args.progress_every)
+                head = row_head(ld, lam, args.twist_ratio, nodes, args.factor)
+
+                def stop(signum, frame, progress=progress, head=head):
+                    row = progress.stopped_row(head, signal.Signals(signum).name)
+                    print(row, flush=True)
+                    with out.open("a") as f:
+                        f.write(row + "\n")
+                    sys.exit(1)
+
+                signal.signal(signal.SIGTERM, stop)
+                signal.signal(signal.SIGINT, stop)
                 row = run(ld, lam, args.twist_ratio, nodes, args.factor,
-                          args.max_points, args.contact_curve)
+                          args.max_points, args.contact_curve, progress)
                 print(row, flush=True)
                 with out.open("a") as f:
                     f.write(row + "\n")

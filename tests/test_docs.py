@@ -101,7 +101,7 @@ def test_readme_is_short_and_keeps_the_two_command_quickstart():
     assert ("python3 -m venv .venv && . .venv/bin/activate && pip install -e . && supercoil demo"
             in text)
     assert ('python3 -m venv .venv && . .venv/bin/activate && pip install -e ".[test]" '
-            "&& python -m pytest -q") in text
+            "&& python -m pytest -q -n auto") in text
     assert "docs/img/diagram.png" in text and (ROOT / "docs" / "img" / "diagram.png").is_file()
 
 

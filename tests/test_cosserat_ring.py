@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from supercoil.continuation import ContinuationOptions, continuation, switch_branch
+from supercoil.continuation.options import ContinuationStatus
 from supercoil.cosserat import circle
 from supercoil.cosserat.closed import (
     ClosedCosseratEnergy,
@@ -25,8 +26,10 @@ from supercoil.cosserat.ring import (
 from supercoil.cosserat.rod import CosseratRod, retract
 from supercoil.cosserat.rotations import exp_so3
 from supercoil.errors import InputError
+from supercoil.solvers.carried import with_frames
 from supercoil.stability.analysis import sliding_phase_modes
 from supercoil.topology import twist_from_frames, writhe
+from supercoil.topology.crossings import closest_approach
 
 
 def perturbed(x, R, rng, size):
@@ -254,14 +257,16 @@ def test_continuation_finds_michell_and_the_buckled_branch_keeps_the_link():
     # the generic continuation in excess_link follows the relaxed circle and detects the
     # pair crossing where the bisection puts it; switching onto the buckled branch gives
     # non-planar equilibria (Michell's branch, subcritical: dLk falls as the writhe
-    # grows), on which Lk = Tw + Wr holds to round-off
+    # grows), on which Lk = Tw + Wr holds to round-off until the centreline passes
+    # through itself (a phantom ring), which accept refuses
     C, stiffness, n = 0.8, 1e4, 40
     problem = ring_problem(C, 1.8, n, stiffness, stiffness)
     state = circle.circle_state(C, 1.8, stiffness, stiffness)
     q0 = problem.state(*relax_circle(problem.rod, problem.link, state.tilt, state.stretch)[:2])
     problem.accept(q0)
 
-    def records(q, multipliers, excess_link):
+    def records(q, multipliers, excess_link, problem):
+        # the problem at the point: a state is read in the frames carried to it
         tw, wr = problem.frame_twist(q), problem.writhe(q)
         return {"link_error": tw + wr - problem.link, "writhe": wr}
 
@@ -282,7 +287,32 @@ def test_continuation_finds_michell_and_the_buckled_branch_keeps_the_link():
     assert np.all(np.diff(writhes) > 0) and np.all(np.diff(buckled.parameter_values) < 0)
     assert np.max(np.abs(buckled.records["link_error"])) < 1e-8
     assert np.all(buckled.unstable_count == 1)
-
+    # on along the branch from its last point, in the frames and the gauge it was
+    # computed in (its carried frames, phase rows and tangent): the guard refuses the
+    # step that would pass the centreline through itself, the step is retried shorter
+    # until it cannot be, and the branch ends there with the link kept
+    at_last = with_frames(problem, buckled.frames[-1])
+    onwards = ContinuationOptions(parameter_bounds=(0.5, 3.0), initial_step=0.05,
+                                  max_step=0.1, max_points=60)
+    last = continuation(at_last, buckled.states[-1], parameter="excess_link",
+                        options=onwards, records=records,
+                        start=float(buckled.parameter_values[-1]),
+                        phase=(buckled.phase_modes, buckled.phase_state),
+                        guess=buckled.tangents[-1])
+    assert not last.ok and "linking number would change" in last.message
+    assert len(last) >= 2 and np.max(np.abs(last.records["link_error"])) < 1e-8
+    assert np.all(np.diff(last.parameter_values) < 0)
+    # the last point is the nearest to touching: closest approach far below the
+    # circle's (diameter 1 / pi), the centreline about to pass through itself
+    x = with_frames(problem, last.frames[-1]).configuration(last.states[-1])[0]
+    assert closest_approach(x) < 0.1 * closest_approach(problem.configuration(q0)[0])
+    # the same state read in the circle's frames is another configuration, far from
+    # equilibrium: the start fails, and says which frames a branch's state needs
+    wrong = continuation(problem, buckled.states[-1], parameter="excess_link",
+                         options=ContinuationOptions(parameter_bounds=(0.5, 3.0),
+                                                     max_corrector_iterations=1),
+                         start=float(buckled.parameter_values[-1]))
+    assert wrong.status == ContinuationStatus.START_FAILED and "frames_at" in wrong.message
 
 
 def _framed(points: np.ndarray, turns: float = 0.0) -> np.ndarray:

@@ -118,8 +118,11 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
         row, sign = system.weights * system.reduced(guess), 1
     corr = correct(system, x0, row, x0, 0.0, opts.tolerance, 4 * opts.max_corrector_iterations)
     if not corr.ok:
+        hint = (" (a state of a computed branch means its configuration only in the frames "
+                "it was computed in: start from frames_at(problem, branch, k), "
+                "supercoil.continuation.carry)" if hasattr(problem, "with_frames") else "")
         return tracer.branch(ContinuationStatus.START_FAILED,
-                             f"the starting point did not converge: {corr.message}")
+                             f"the starting point did not converge: {corr.message}{hint}")
     try:
         t0 = sign * tangent(system, corr.x, row, corr.hessian)
         tracer.add_point(corr.x, t0, next_step=opts.initial_step)

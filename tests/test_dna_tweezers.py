@@ -1,10 +1,12 @@
-"""DNA in magnetic tweezers: σ for turns, n0 nodes and the quintic contact curve by default,
-and nm / pN nm / σ through the JSON and the figures, for the command line, study files and the library.
+"""DNA in magnetic tweezers: σ for turns, the default nodes (n0, more where the force needs
+them) and the quintic contact curve by default, and nm / pN nm / σ through the JSON and
+the figures, for the command line, study files and the library.
 
 Oracles: the unit conversions from the preset's constants (kT = 4.11 pN nm, A = 50 nm kT,
-0.34 nm/bp, 10.5 bp/turn), exact to rounding; n0 against a brute-force search over N and
-against the clamped rod's own edge length; the JSON's DNA keys against the
-nondimensional ones times the scales; bad input refused before any file is written.
+0.34 nm/bp, 10.5 bp/turn), exact to rounding; n0 and the default nodes against a
+brute-force search over N and against the clamped rod's own edge length and mesh test;
+the JSON's DNA keys against the nondimensional ones times the scales; bad input refused
+before any file is written.
 """
 
 import json
@@ -20,6 +22,7 @@ from supercoil.cli.main import run
 from supercoil.io.study import StudyError, parse_study
 from supercoil.units.dna import DNAPreset
 from supercoil.units.tweezers import (
+    default_nodes,
     dna_numerics,
     dna_tweezers_inputs,
     resolving_nodes,
@@ -84,11 +87,34 @@ def test_n0_is_the_fewest_nodes_with_segments_no_longer_than_d(lod):
             assert (rod.rod.edge_length <= diameter * (1 + 1e-12)) == fits
 
 
+@pytest.mark.parametrize(("salt", "force"), [(10, 0.1), (10, 0.25), (10, 1.0), (10, 4.0),
+                                              (150, 1.0), (150, 4.0)])
+def test_default_nodes_are_the_fewest_with_segments_within_d_and_half_the_core(salt, force):
+    # brute force over N: the clamped rod's segments 1/(N - 2) no longer than D and at
+    # most half the loop's core sqrt(A/F) = 1/lambda; the model's own mesh test agrees
+    from supercoil.problems.tweezers.options import mesh_pins_loop
+
+    numbers = dna_tweezers_inputs(DNAPreset(3000, salt_mM=salt), force, turns=(0, 1))
+    lod, tension = numbers["length_over_diameter"], numbers["tension"]
+    lam = math.sqrt(tension)
+    brute = next(n for n in range(checks.MIN_CLAMPED_NODES, 10_000)
+                 if 1.0 / (n - 2) <= 1.0 / lod and lam / (n - 2) <= 0.5)
+    assert default_nodes(lod, tension) == numbers["n_nodes"] == brute
+    assert brute == max(resolving_nodes(lod), brute)
+    assert not mesh_pins_loop(tension, brute)
+    if brute > resolving_nodes(lod):  # the force decides: one node fewer pins the core
+        assert mesh_pins_loop(tension, brute - 1)
+    assert default_nodes(lod) == resolving_nodes(lod)  # no force: n0
+
+
 def test_n0_too_many_nodes_is_refused():
     preset = DNAPreset(10_000_000, diameter_nm=10.0)  # L/D = 340,000
     n0 = resolving_nodes(preset.length_over_diameter)
     assert n0 > checks.MAX_NODES
-    with pytest.raises(sc.InputError, match=rf"^n_nodes \(the default n0 = {n0}: .*exceeds"):
+    tension = dna_tweezers_inputs(preset, 1.0, turns=(0, 1), n_nodes=500)["tension"]
+    default = default_nodes(preset.length_over_diameter, tension)
+    assert default >= n0
+    with pytest.raises(sc.InputError, match=rf"^n_nodes \(the default {default}: .*exceeds"):
         dna_tweezers_inputs(preset, 1.0, turns=(0, 1))
     assert dna_tweezers_inputs(preset, 1.0, turns=(0, 1), n_nodes=500)["n_nodes"] == 500
 
@@ -163,18 +189,24 @@ def test_the_command_line_keeps_a_given_loop_sliding(given, dna, expected, tmp_p
 
 @pytest.mark.parametrize("force,salt", [(1.0, 150), (4.0, 150), (1.0, 10)])
 def test_loop_sliding_applies_with_dna_where_the_mesh_lets_the_loop_slide(force, salt):
-    """Where n0's segments h = L/(n0 - 2) are longer than half the loop's core sqrt(A/F)
-    (h sqrt(F/A) > 1/2, computed here from the preset's own L, D and A), the mesh pins
-    the loop and loop_sliding does not apply: the default leaves it off there."""
+    """The default nodes' segments h = L/(N - 2) are at most half the loop's core
+    sqrt(A/F) (h sqrt(F/A) <= 1/2, computed here from the preset's own L, D and A), so
+    loop_sliding applies; where n0's segments are longer (given as [rod] nodes), the
+    mesh pins the loop and loop_sliding does not apply: the default leaves it off."""
     preset = DNAPreset(3000, salt_mM=salt)
-    nodes = resolving_nodes(preset.length_over_diameter)
-    core = 3000 * RISE / (nodes - 2) * math.sqrt(force / (P_B * KT))
     text = STUDY.replace("salt_mM = 150", f"salt_mM = {salt}").replace(
         "force_pN = 1.0", f"force_pN = {force}")
-    options = parse_study(text).tweezers_options()
-    assert options.n_nodes == nodes
-    assert options.core_segments == pytest.approx(core, rel=1e-12)
-    assert options.loop_sliding is None and options.loop_slides is (core <= 0.5)
+    n0 = resolving_nodes(preset.length_over_diameter)
+    for given in (None, n0):
+        options = parse_study(text + ("" if given is None else f"nodes = {given}\n")
+                              ).tweezers_options()
+        nodes = options.n_nodes
+        assert nodes == (given or default_nodes(preset.length_over_diameter,
+                                                options.tension))
+        core = 3000 * RISE / (nodes - 2) * math.sqrt(force / (P_B * KT))
+        assert options.core_segments == pytest.approx(core, rel=1e-12)
+        assert options.loop_sliding is None and options.loop_slides is (core <= 0.5)
+        assert given is not None or core <= 0.5
     assert dna_numerics({}) == {"contact_curve": "quintic"}
     assert dna_numerics({"contact_curve": "spline"}) == {"contact_curve": "spline"}
 

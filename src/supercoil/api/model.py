@@ -325,15 +325,16 @@ class Tweezers:
         ``dna``: a :class:`~supercoil.units.dna.DNAPreset` (base pairs, salt or diameter,
         temperature; its superhelical density is not used: give the turns or σ to
         :func:`~supercoil.api.verbs.tweezers`). C/A, F L^2/A and L/D follow from it;
-        ``nodes`` defaults to n0 = ceil(L/D) + 2, the fewest whose segments are no longer
-        than D (:func:`~supercoil.units.tweezers.resolving_nodes`); ``contact``: the
+        ``nodes`` defaults to the fewest whose segments are no longer than D (n0 =
+        ceil(L/D) + 2) and at most half the loop's core sqrt(A/F)
+        (:func:`~supercoil.units.tweezers.default_nodes`); ``contact``: the
         treatment's class, :class:`Barrier` (default) or :class:`Penalty`.
 
         >>> problem = Tweezers.from_dna(DNAPreset(base_pairs=3000, salt_mM=150), 1.0)
         >>> problem.rod.nodes, round(problem.tension, 1)
         (240, 5062.8)
         """
-        from supercoil.units.tweezers import nodes_or_n0, tweezers_parameters
+        from supercoil.units.tweezers import nodes_or_default, tweezers_parameters
 
         if not isinstance(dna, DNAPreset):
             raise InputError(f"dna: expected a supercoil.DNAPreset, got {dna!r}", name="dna")
@@ -344,7 +345,7 @@ class Tweezers:
             raise InputError(f"contact: expected Barrier or Penalty (the class), got "
                              f"{contact!r}", name="contact")
         try:
-            nodes = nodes_or_n0(nodes, lod)
+            nodes = nodes_or_default(nodes, lod, numbers["tension"])
         except InputError as exc:
             raise InputError(exc.renamed({"n_nodes": "nodes"}), name="nodes") from None
         return cls(Rod(numbers["twist_ratio"], nodes), tension=numbers["tension"],

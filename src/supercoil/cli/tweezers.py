@@ -91,8 +91,10 @@ def tweezers(
     nodes: Annotated[int | None, typer.Option(
         "--nodes", metavar="N", help=f"Nodes of the discrete rod, {checks.MIN_CLAMPED_NODES} "
         f"to {checks.MAX_NODES}; contact lines need segments L/(N - 2) no longer than D "
-        "(N >= L/D + 2). Default 100; with --dna n0 = ceil(L/D) + 2, the fewest nodes "
-        "whose segments are no longer than the tube diameter D (the ply resolved).",
+        "(N >= L/D + 2). Default 100; with --dna the fewest nodes whose segments are no "
+        "longer than the tube diameter D (n0 = ceil(L/D) + 2: the ply resolved) and at "
+        "most half the loop's core sqrt(A/F) (2 + ceil(2 L sqrt(F/A)): the end loop and "
+        "the buckling resolved).",
         show_default=False)] = None,
     protocol: Annotated[str, typer.Option(
         "--protocol", metavar="P", help="up: the branches from START to STOP; up-down: "

@@ -6,9 +6,12 @@ turns or as superhelical density, and the number of nodes:
 
 * ``superhelical_density = (start, stop)`` replaces ``turns``: σ = turns / Lk0 with
   Lk0 = N_bp / 10.5, so ``turns = σ · N_bp / 10.5``; exactly one of the two;
-* the nodes default to :func:`resolving_nodes` (n0), the fewest whose segments are no
-  longer than the tube's diameter D, which the contact of a plectoneme's two strands
-  needs (a coarser polygon cannot resolve the ply);
+* the nodes default to :func:`default_nodes`: n0 (:func:`resolving_nodes`), the fewest
+  whose segments are no longer than the tube's diameter D, which the contact of a
+  plectoneme's two strands needs (a coarser polygon cannot resolve the ply), raised
+  where the force needs more to the fewest whose segments are at most half the loop's
+  core ``sqrt(A/F)`` (a coarser polygon pins the plectoneme's end loop to its nodes
+  and buckles late: docs/tweezers.md, "Meshes that pin the loop's core");
 * the contact curve defaults to :data:`DNA_CONTACT_CURVE`, the quintic B-spline, whose
   self-distance does not ripple with the nodes' phase at segments of D
   (:func:`dna_numerics`, the one place this default is applied).
@@ -132,6 +135,19 @@ def resolving_nodes(length_over_diameter: float) -> int:
     return max(checks.MIN_CLAMPED_NODES, math.ceil(lod) + 2)
 
 
+def default_nodes(length_over_diameter: float, tension: float = 0.0) -> int:
+    """The DNA runs' default nodes: ``max(n0, core)``, n0 of :func:`resolving_nodes`
+    (segments no longer than D) and, under a tension F L^2/A > 0, the fewest nodes whose
+    segments are at most half the loop's core ``sqrt(A/F)``
+    (:func:`~supercoil.problems.tweezers.options.core_nodes`:
+    ``2 + ceil(2 sqrt(F L^2/A))``)."""
+    from supercoil.problems.tweezers.options import core_nodes
+
+    n0 = resolving_nodes(length_over_diameter)
+    force = checks.number("tension", tension, 0.0, math.inf, meaning="F L^2/A")
+    return max(n0, core_nodes(force)) if force > 0 else n0
+
+
 def turns_of_span(preset: DNAPreset, superhelical_density) -> tuple[float, float]:
     """``(start, stop)`` turns of a superhelical density span ``(start, stop)``:
     ``turns = σ · Lk0``. The span is checked: ``0 <= start < stop``, ``stop`` at most 1
@@ -179,7 +195,7 @@ def dna_tweezers_inputs(preset: DNAPreset, force_pN: float, *, turns=None,
 
     ``force_pN``: the pulling force (pN, >= 0); ``turns`` or ``superhelical_density``:
     the end's rotation ``(start, stop)`` (exactly one; with neither, ``default_turns``);
-    ``n_nodes``: None for :func:`resolving_nodes` of the molecule's L/D.
+    ``n_nodes``: None for :func:`default_nodes` of the molecule's L/D and the force.
 
     Returns ``twist_ratio``, ``tension`` (F L^2/A), ``length_over_diameter``, ``turns``
     (start, stop) and ``n_nodes``; an InputError naming the input otherwise.
@@ -188,20 +204,23 @@ def dna_tweezers_inputs(preset: DNAPreset, force_pN: float, *, turns=None,
         raise InputError(f"dna: expected a supercoil.DNAPreset, got {preset!r}", name="dna")
     out = tweezers_parameters(preset, force_pN)
     out["turns"] = span_in_turns(preset, turns, superhelical_density, default_turns)
-    out["n_nodes"] = nodes_or_n0(n_nodes, out["length_over_diameter"])
+    out["n_nodes"] = nodes_or_default(n_nodes, out["length_over_diameter"], out["tension"])
     return out
 
 
-def nodes_or_n0(n_nodes: int | None, length_over_diameter: float) -> int:
-    """``n_nodes`` checked (a clamped rod's), or n0 of ``length_over_diameter`` when None
-    (:func:`resolving_nodes`); an InputError naming ``n_nodes`` when n0 is too many."""
+def nodes_or_default(n_nodes: int | None, length_over_diameter: float,
+                     tension: float = 0.0) -> int:
+    """``n_nodes`` checked (a clamped rod's), or :func:`default_nodes` of
+    ``length_over_diameter`` and ``tension`` when None; an InputError naming ``n_nodes``
+    when the default is too many."""
     if n_nodes is None:
-        n_nodes = resolving_nodes(length_over_diameter)
+        n_nodes = default_nodes(length_over_diameter, tension)
         if n_nodes > checks.MAX_NODES:
-            raise checks.refuse("n_nodes", f"(the default n0 = {n_nodes}: segments no longer "
-                                f"than D at L/D = {length_over_diameter:.6g}) exceeds the "
-                                f"largest number of nodes, {checks.MAX_NODES}; give the "
-                                "nodes, fewer base pairs or a larger diameter")
+            raise checks.refuse("n_nodes", f"(the default {n_nodes}: segments no longer "
+                                f"than D at L/D = {length_over_diameter:.6g} and at most "
+                                f"half the loop's core at F L^2/A = {tension:.6g}) exceeds "
+                                f"the largest number of nodes, {checks.MAX_NODES}; give the "
+                                "nodes, fewer base pairs, a larger diameter or a smaller force")
     return checks.integer("n_nodes", n_nodes, checks.MIN_CLAMPED_NODES, checks.MAX_NODES,
                           meaning="nodes of the clamped rod")
 
@@ -263,9 +282,10 @@ def tweezers_payload_in_dna_units(payload: dict, preset: DNAPreset, force_pN: fl
 __all__ = [
     "MAX_FORCE_PN",
     "SPAN_MEANING",
+    "default_nodes",
     "dna_attributes",
     "dna_tweezers_inputs",
-    "nodes_or_n0",
+    "nodes_or_default",
     "resolving_nodes",
     "span_in_turns",
     "turns_of_span",

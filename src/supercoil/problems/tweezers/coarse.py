@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 
 from supercoil.continuation import Branch
-from supercoil.problems.tweezers.options import SLIDING_CORE, TweezersOptions
+from supercoil.problems.tweezers.options import SLIDING_CORE, TweezersOptions, core_nodes
 
 
 def resolving_nodes(options: TweezersOptions) -> int | None:
@@ -31,7 +31,7 @@ def resolving_nodes(options: TweezersOptions) -> int | None:
     ``sqrt(A/F)`` (None without a tension)."""
     if not options.load_control or not options.tension:
         return None
-    return 2 + math.ceil(math.sqrt(options.tension) / SLIDING_CORE)
+    return core_nodes(options.tension)
 
 
 def pinned_loop_note(options: TweezersOptions, branch: Branch) -> str | None:

@@ -160,6 +160,12 @@ def core_segments(tension: float | None, n_nodes: int) -> float | None:
     return math.sqrt(tension) / (n_nodes - 2)
 
 
+def core_nodes(tension: float) -> int:
+    """The fewest nodes whose segments are at most ``SLIDING_CORE`` times the loop's core
+    ``sqrt(A/F)`` under the tension F L^2/A > 0: ``2 + ceil(sqrt(F L^2/A) / SLIDING_CORE)``."""
+    return 2 + math.ceil(math.sqrt(tension) / SLIDING_CORE)
+
+
 def mesh_pins_loop(tension: float | None, n_nodes: int) -> bool:
     """Whether N nodes' segments are longer than ``SLIDING_CORE`` times the loop's core
     ``sqrt(A/F)`` (:attr:`TweezersOptions.mesh_pins_loop`)."""

@@ -11,7 +11,7 @@ turns or as superhelical density, and the number of nodes:
   plectoneme's two strands needs (a coarser polygon cannot resolve the ply), raised
   where the force needs more to the fewest whose segments are at most half the loop's
   core ``sqrt(A/F)`` (a coarser polygon pins the plectoneme's end loop to its nodes
-  and buckles late: docs/tweezers.md, "Meshes that pin the loop's core");
+  and buckles late: docs/tweezers.md, "DNA units");
 * the contact curve defaults to :data:`DNA_CONTACT_CURVE`, the quintic B-spline, whose
   self-distance does not ripple with the nodes' phase at segments of D
   (:func:`dna_numerics`, the one place this default is applied).

@@ -39,7 +39,7 @@ import numpy as np
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.ply import hard_core_ply
 from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
-from supercoil.problems.tweezers.options import SLIDING_CORE
+from supercoil.units.tweezers import default_nodes
 
 HEADER = ("| L/D | lambda | F L^2/A | N | target turns | ply spans | reached | last turns | points | "
           "seconds | counts on the contact branch | bifurcations | count changes | notes |")
@@ -148,7 +148,7 @@ def main() -> None:
         n0 = math.ceil(ld) + 2
         for lam in (float(v) for v in args.lambdas.split(",")):
             meshes = ([int(v) for v in args.nodes.split(",")] if args.nodes else
-                      [max(n0, 2 + math.ceil(lam / SLIDING_CORE))] if args.resolving else
+                      [default_nodes(ld, lam**2)] if args.resolving else
                       [int(v) * n0 for v in args.multiples.split(",")])
             for nodes in meshes:
                 progress = Progress(out.with_name(out.name + ".progress"), args.progress_every)

@@ -21,11 +21,11 @@ from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 def test_the_contact_branch_goes_through_the_fold_it_used_to_step_over():
     tension = 80.0**2
     options = TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=tension,
-                              n_nodes=102, contact_curve="quintic", max_points=300,
+                              n_nodes=102, contact_curve="quintic", max_points=360,
                               turns=(0.0, 1.5 * critical_turns(1.5, tension)))
     result = tweezers_branches(options)
     branch = next(b for b in result.branches if b.name in result.contact_branches)
-    assert len(branch) == 300
+    assert len(branch) == 360
     kinds = {p.kind for p in branch.special_points}
     assert "count_change" not in kinds
     # every change of the count lies on a step with a fold or a verified bifurcation

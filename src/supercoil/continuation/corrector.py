@@ -9,7 +9,15 @@ with ``b`` a row in the arclength metric (``W t`` for pseudo-arclength,
 Jacobian ``[[K, F_lambda], [b^T]]`` (:class:`BorderedFactor`). Trial points are
 never accepted by the problem (``problem.accept`` is called by the caller once
 a point is kept), and a problem's ``step_bound(q, dq)`` shortens every Newton
-step. The tangent at ``x`` solves ``[[K, F_lambda], [b^T]] z = e_last``:
+step. Newton is damped: a step that raises ``max |F|`` is halved. Where no halving
+lowers it, the full step is tried with one more Newton step from it (a watchdog,
+Chamberlain, Powell, Lemarechal & Pedersen 1982), kept if the two land below the
+residual they started from. ``max |F|`` is not a merit that Newton's steps must
+lower: on a rod under tension a localised loop's sliding is a soft mode (eigenvalue
+0.007 against 1e7 for the stiff ones), a Newton step from a residual near round-off
+moves along it by the noise over its eigenvalue, and the sliding orbit's curvature
+then shows up in the stiff forces to second order (the Maratos effect of
+constrained optimisation). The tangent at ``x`` solves ``[[K, F_lambda], [b^T]] z = e_last``:
 ``z`` spans the kernel of ``[K, F_lambda]`` and ``b . z = 1`` orients it like ``b``.
 """
 
@@ -30,14 +38,14 @@ BACKTRACKS = 4  # step halvings per corrector iteration (damped Newton)
 ROUNDOFF_RESIDUALS = 1e3
 NEGLIGIBLE_STEP = 1e-10
 # ... or: an iterate within FLOOR_MARGIN round-off floors (roundoff_floor's estimate at
-# it) whose Newton step raised the residual. The estimate takes one rounding of each
-# coordinate through the stiffness; the gradient's differences and products round a
-# few times more. It is tight on long rods under tension: converged residuals at
-# 0.83-1.11 of it at F L^2/A = 22500, and Newton stalled at 2.57 of it at a run's start
-# (lambda = 150, C/A = 1, N = 302, 48.85 turns). Along a soft mode the noise-driven
-# Newton step overshoots from there (lambda = 150, C/A = 1.5, N = 302, the localising
-# loop: from 1.02 floors to 1.9e4 floors, step after step, the branch held at the
-# minimum step; accepted there, it goes on with its count)
+# it) whose Newton step raised the residual, the watchdog not helping. The estimate takes
+# one rounding of each coordinate through the stiffness; the gradient's differences and
+# products round a few times more. It is tight on long rods under tension: converged
+# residuals at 0.83-1.11 of it at F L^2/A = 22500, and Newton stalled at 2.57 of it at a
+# run's start (lambda = 150, C/A = 1, N = 302, 48.85 turns). Along a soft mode the
+# noise-driven Newton step overshoots from there (lambda = 150, C/A = 1.5, N = 302, the
+# localising loop: from 1.02 floors to 1.9e4 floors); the watchdog's next step lands
+# below the floor, and without it the margin accepts the iterate before the rise
 FLOOR_MARGIN = 4.0
 # a chord step is tried only within this many tolerances: its contraction is 1e-4-1e-2
 # (measured on the tweezers' contact branch, where it landed from residuals up to 7e-6
@@ -47,6 +55,12 @@ CHORD_REACH = 1e3
 # there the residual may not fall (the straight rod's branches, tolerance 1e-10, stop at
 # 1-3e-10 by the floor) and the Newton path's floor test decides
 CHORD_ABOVE_FLOOR = 3.0
+# The watchdog (module doc), measured on the tweezers at L/D = 200, lambda = 20,
+# N = 202, C/A = 1.5 (1.47 turns, the buckled loop before its first contact): from a
+# residual of 9.9e-8 the full step's max|F| rose to 1.3e-4 and every halving left it
+# above 9.9e-8, while the next Newton step from the full step landed at 1.3e-9. The
+# damped corrector kept the last halving there, converged by a factor of about 4 per
+# iteration and took the minimum step for divergence.
 
 
 @dataclass(frozen=True)
@@ -111,7 +125,8 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     floor = 0.0  # round-off floor at the last iterate with a Hessian
     previous_floor = 0.0  # ... at x_previous
     F = system.residual(x)
-    for it in range(max_iterations + 1):
+    it = 0
+    while it <= max_iterations:
         if not np.all(np.isfinite(F)):
             return Correction(None, False, it, np.inf, f"non-finite residual at iteration {it}")
         res = float(np.max(np.abs(F))) if F.size else 0.0
@@ -195,12 +210,21 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
         # above judges it). The stiff contact barrier made full steps from the
         # predictor overshoot: measured, most rejected contact-branch steps
         # "diverged" at iteration 2.
+        first = None
         for _ in range(BACKTRACKS + 1):
             x_trial = x + alpha * dx
             F = system.residual(x_trial)
             if np.all(np.isfinite(F)) and (not F.size or np.max(np.abs(F)) < res):
                 break
+            if first is None:
+                first = (x_trial, F)
             alpha *= 0.5
+        else:
+            ahead = _watchdog(system, *first, row, x_ref, sigma, res, bounded) \
+                if it + 2 <= max_iterations else None
+            if ahead is not None:
+                x_trial, F, factor, factor_residual = ahead
+                it += 1
         x = x_trial
         if max_distance is not None and \
                 system.norm(x - (x_start if center is None else center)) > max_distance:
@@ -208,8 +232,37 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
                               f"iterate {it + 1} lies farther than "
                               f"{max_distance:.2e} from the predictor (a jump across a corner "
                               f"or to another branch?)")
+        it += 1
     return Correction(None, False, max_iterations, res, f"no convergence in {max_iterations} "
                       f"corrector iterations (residual {res:.2e} > {tolerance:.1e})")
+
+
+def _watchdog(system: ExtendedSystem, x_full: np.ndarray, F_full: np.ndarray,
+              row: np.ndarray, x_ref: np.ndarray, sigma: float, res: float,
+              bounded: bool) -> tuple[np.ndarray, np.ndarray, BorderedFactor, float] | None:
+    """One Newton step from ``x_full`` (residual ``F_full``, a full step that raised
+    ``max |F|`` above ``res``): ``(x, F, factor, max |F_full|)`` there if it lands below
+    ``res``, the step whole (``step_bound``) and its factor the one made at ``x_full``;
+    None otherwise (module doc)."""
+    if not np.all(np.isfinite(F_full)):
+        return None
+    try:
+        factor = bordered_factor(system, x_full, row)
+        dx = -factor.solve(np.concatenate([F_full, [row @ (x_full - x_ref) - sigma]]))
+    except SingularMatrixError:
+        return None
+    if not np.all(np.isfinite(dx)):
+        return None
+    if bounded:
+        dq = np.zeros(system.problem.n_dofs)
+        dq[system.free] = dx[:system.n]
+        if float(system.problem.step_bound(system.q(x_full), dq)) < 1.0:
+            return None
+    x = x_full + dx
+    F = system.residual(x)
+    if not np.all(np.isfinite(F)) or (F.size and float(np.max(np.abs(F))) >= res):
+        return None
+    return x, F, factor, float(np.max(np.abs(F_full))) if F_full.size else 0.0
 
 
 def _chord_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F: np.ndarray,

@@ -237,42 +237,12 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
                       f"corrector iterations (residual {res:.2e} > {tolerance:.1e})")
 
 
-def _watchdog(system: ExtendedSystem, x_full: np.ndarray, F_full: np.ndarray,
-              row: np.ndarray, x_ref: np.ndarray, sigma: float, res: float,
-              bounded: bool) -> tuple[np.ndarray, np.ndarray, BorderedFactor, float] | None:
-    """One Newton step from ``x_full`` (residual ``F_full``, a full step that raised
-    ``max |F|`` above ``res``): ``(x, F, factor, max |F_full|)`` there if it lands below
-    ``res``, the step whole (``step_bound``) and its factor the one made at ``x_full``;
-    None otherwise (module doc)."""
-    if not np.all(np.isfinite(F_full)):
-        return None
-    try:
-        factor = bordered_factor(system, x_full, row)
-        dx = -factor.solve(np.concatenate([F_full, [row @ (x_full - x_ref) - sigma]]))
-    except SingularMatrixError:
-        return None
-    if not np.all(np.isfinite(dx)):
-        return None
-    if bounded:
-        dq = np.zeros(system.problem.n_dofs)
-        dq[system.free] = dx[:system.n]
-        if float(system.problem.step_bound(system.q(x_full), dq)) < 1.0:
-            return None
-    x = x_full + dx
-    F = system.residual(x)
-    if not np.all(np.isfinite(F)) or (F.size and float(np.max(np.abs(F))) >= res):
-        return None
-    return x, F, factor, float(np.max(np.abs(F_full))) if F_full.size else 0.0
-
-
-def _chord_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F: np.ndarray,
-                row: np.ndarray, x_ref: np.ndarray, sigma: float, tolerance: float,
-                bounded: bool, max_distance: float | None, center: np.ndarray
-                ) -> tuple[np.ndarray, float] | None:
-    """The chord step of :func:`correct` from ``x`` (residual ``F``) with an earlier
-    iterate's ``factor``: ``(x + dx, max|F|)`` there if the whole step is free of
-    collisions (``step_bound``), stays in the trust region and lands within
-    ``tolerance``; None otherwise (the caller then makes the Newton step)."""
+def _whole_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F: np.ndarray,
+                row: np.ndarray, x_ref: np.ndarray, sigma: float, bounded: bool
+                ) -> tuple[np.ndarray, np.ndarray] | None:
+    """The Newton step from ``x`` (residual ``F``) solved with ``factor``:
+    ``(x + dx, F there)`` if ``dx`` is finite, free of collisions whole
+    (``step_bound``) and lands on a finite residual; None otherwise."""
     try:
         dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
     except SingularMatrixError:
@@ -285,13 +255,47 @@ def _chord_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F
         if float(system.problem.step_bound(system.q(x), dq)) < 1.0:
             return None
     x_new = x + dx
-    if max_distance is not None and system.norm(x_new - center) > max_distance:
-        return None
     F_new = system.residual(x_new)
-    if not np.all(np.isfinite(F_new)):
+    return (x_new, F_new) if np.all(np.isfinite(F_new)) else None
+
+
+def _max_abs(F: np.ndarray) -> float:
+    return float(np.max(np.abs(F))) if F.size else 0.0
+
+
+def _watchdog(system: ExtendedSystem, x_full: np.ndarray, F_full: np.ndarray,
+              row: np.ndarray, x_ref: np.ndarray, sigma: float, res: float,
+              bounded: bool) -> tuple[np.ndarray, np.ndarray, BorderedFactor, float] | None:
+    """One Newton step from ``x_full`` (residual ``F_full``, a full step that raised
+    ``max |F|`` above ``res``): ``(x, F, factor, max |F_full|)`` there if it lands below
+    ``res``, the step whole (``step_bound``) and its factor the one made at ``x_full``;
+    None otherwise (module doc)."""
+    if not np.all(np.isfinite(F_full)):
         return None
-    res = float(np.max(np.abs(F_new))) if F_new.size else 0.0
-    return (x_new, res) if res <= tolerance else None
+    try:
+        factor = bordered_factor(system, x_full, row)
+    except SingularMatrixError:
+        return None
+    landed = _whole_step(system, factor, x_full, F_full, row, x_ref, sigma, bounded)
+    if landed is None or _max_abs(landed[1]) >= res:
+        return None
+    return landed[0], landed[1], factor, _max_abs(F_full)
+
+
+def _chord_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F: np.ndarray,
+                row: np.ndarray, x_ref: np.ndarray, sigma: float, tolerance: float,
+                bounded: bool, max_distance: float | None, center: np.ndarray
+                ) -> tuple[np.ndarray, float] | None:
+    """The chord step of :func:`correct` from ``x`` (residual ``F``) with an earlier
+    iterate's ``factor``: ``(x + dx, max|F|)`` there if the whole step is free of
+    collisions (``step_bound``), stays in the trust region and lands within
+    ``tolerance``; None otherwise (the caller then makes the Newton step)."""
+    landed = _whole_step(system, factor, x, F, row, x_ref, sigma, bounded)
+    if landed is None or (max_distance is not None
+                          and system.norm(landed[0] - center) > max_distance):
+        return None
+    res = _max_abs(landed[1])
+    return (landed[0], res) if res <= tolerance else None
 
 
 def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,

@@ -354,7 +354,7 @@ def test_ring_dna_plasmid_json_and_table(runner, tmp_path):
     with A = 50 nm * 4.11 pN nm; Lk = Tw + Wr; the units are the preset's name."""
     target = tmp_path / "plasmid.json"
     result = invoke(runner, "ring", "--dna", "--bp", "1000", "--sigma", "-0.04",
-                    "--salt-mM", "100", "--nodes", "70", "--json", target)
+                    "--salt-mM", "100", "--nodes", "48", "--json", target)
     data = json.loads(target.read_text())
     assert result.exit_code == 0, (result.stderr, data["message"])
     for key in (*ENVELOPE, *RING_KEYS, *CONTACT_KEYS, *DNA_KEYS):

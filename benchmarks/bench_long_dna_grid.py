@@ -17,7 +17,8 @@ The runs are long (minutes each at L/D = 500): run it niced in the background; e
 is appended to the table as soon as it is computed, so a partial run leaves the rows
 that completed. While a run goes on, ``OUT.progress`` holds its last accepted point
 (branch, points, turns, seconds), rewritten every ``--progress-every`` points; on
-SIGTERM or SIGINT the running row is appended as stopped, with what it had reached.
+SIGTERM or SIGINT the running row is appended as stopped, with what it had reached
+(the turns each branch spanned) and the run ends.
 
 Run: ``python benchmarks/bench_long_dna_grid.py [--ld 100,200,500] [--lambdas
 10,20,40,80,150] [--twist-ratio 1.5] [--multiples 1,2 | --resolving] [--factor 1.5]
@@ -29,8 +30,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import signal
-import sys
 import time
 from pathlib import Path
 
@@ -52,12 +53,16 @@ class Progress:
         self.path, self.every = path, max(1, every)
         self.start = time.perf_counter()
         self.counts: dict[str, int] = {}
+        self.spans: dict[str, tuple[float, float]] = {}  # the turns each branch spanned
         self.last = ("-", 0, float("nan"))
 
     def __call__(self, branch) -> None:
         n = len(branch)
+        turns = float(branch.parameter_values[-1])
         self.counts[branch.name] = n
-        self.last = (branch.name, n, float(branch.parameter_values[-1]))
+        low, high = self.spans.get(branch.name, (turns, turns))
+        self.spans[branch.name] = (min(low, turns), max(high, turns))
+        self.last = (branch.name, n, turns)
         if self.path is not None and n % self.every == 0:
             self.path.write_text(f"{self.last[0]} {n} points, turns = {self.last[2]:.6g}, "
                                  f"{time.perf_counter() - self.start:.0f} s\n")
@@ -66,9 +71,11 @@ class Progress:
         """The row of a run stopped by a signal: what it had reached, said as stopped."""
         name, n, turns = self.last
         points = "+".join(str(v) for v in self.counts.values()) or "0"
+        spans = "; ".join(f"{b} {low:.4g} to {high:.4g}" for b, (low, high) in self.spans.items())
         return (f"{head} no | {turns:.4g} | {points} | "
                 f"{time.perf_counter() - self.start:.0f} | - | - | - | stopped by {signame} "
-                f"at {name} point {n}, turns = {turns:.6g} |")
+                f"at {name} point {n}, turns = {turns:.6g}; the turns each branch spanned "
+                f"at its accepted points: {spans} |")
 
 
 def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
@@ -159,7 +166,9 @@ def main() -> None:
                     print(row, flush=True)
                     with out.open("a") as f:
                         f.write(row + "\n")
-                    sys.exit(1)
+                    # not sys.exit: a signal that arrives inside a callback whose
+                    # exceptions Python ignores (a weakref's) would let the run go on
+                    os._exit(1)
 
                 signal.signal(signal.SIGTERM, stop)
                 signal.signal(signal.SIGINT, stop)

@@ -129,7 +129,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     while it <= max_iterations:
         if not np.all(np.isfinite(F)):
             return Correction(None, False, it, np.inf, f"non-finite residual at iteration {it}")
-        res = float(np.max(np.abs(F))) if F.size else 0.0
+        res = _max_abs(F)
         if res <= tolerance:
             # no Hessian: a caller that needs one at x (a tangent, a count) assembles
             # it, the same matrix; the trial points of a user event need none
@@ -228,7 +228,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
         x = x_trial
         if max_distance is not None and \
                 system.norm(x - (x_start if center is None else center)) > max_distance:
-            return Correction(None, False, it + 1, float(np.max(np.abs(F))) if F.size else 0.0,
+            return Correction(None, False, it + 1, _max_abs(F),
                               f"iterate {it + 1} lies farther than "
                               f"{max_distance:.2e} from the predictor (a jump across a corner "
                               f"or to another branch?)")

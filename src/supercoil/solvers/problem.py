@@ -98,6 +98,13 @@ class HessianParts:
             full += c * np.outer(v, v)
         return full
 
+    def matmat(self, X: np.ndarray) -> np.ndarray:
+        """``H X`` for a dense ``(n, k)`` block ``X``."""
+        Y = self.sparse @ X
+        for c, v in zip(self.coefficients, self.vectors):
+            Y += c * np.outer(v, v @ X)
+        return Y
+
     def matvec(self, x: np.ndarray) -> np.ndarray:
         arrays = self.csr_arrays()
         if arrays is not None and np.ndim(x) == 1 and np.shape(x)[0] == arrays.shape[1]:

@@ -35,7 +35,7 @@ import scipy.sparse as sp
 
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.kkt import KKTFactor
-from supercoil.stability.eigen import dense_path, lowest_pairs
+from supercoil.stability.eigen import dense_path, lowest_dense_pairs, lowest_pairs
 
 # the share of |g|_M^2 in the span of the negative eigenvectors above which the sliding's
 # eigenvalue is one of them (more than half: at most one eigenvector of an orthonormal
@@ -99,10 +99,11 @@ def _lowest(H, J: sp.csr_matrix, mass: np.ndarray, k: int) -> tuple[np.ndarray, 
     """The ``k`` lowest eigenpairs of ``H v = mu M v`` on ``ker J`` (M-orthonormal
     vectors ``(n, k)``): shift-invert below the spectrum, at the first shift of
     ``_SHIFTS`` below which no eigenvalue lies; dense, without a shift, for small
-    systems (:func:`~supercoil.stability.eigen.dense_path`)."""
+    systems (:func:`~supercoil.stability.eigen.dense_path`), the ``k`` lowest only
+    (:func:`~supercoil.stability.eigen.lowest_dense_pairs`)."""
     n, m = mass.size, J.shape[0]
     if dense_path(n - m, min(k, n - m - 2)):  # no shift to search for
-        return lowest_pairs(H, J, mass, n_wanted=k, n=n, m=m)
+        return lowest_dense_pairs(H, J, mass, k)
     for sigma in _SHIFTS:
         try:
             below = KKTFactor(H, J, shift=float(sigma), mass=mass).reduced_negative_count

@@ -8,7 +8,8 @@ of a count change without a fold factorises the same matrix at the step's end
 
 The run: the tweezers' branches from 0 turns to 1.5 times the buckling turns at L/D =
 200, lambda = L sqrt(F/A) = 40, C/A = 1.5, N = 202 (``--ld``, ``--lam``, ``--nodes``,
-``--twist-ratio`` choose another). Each run is a fresh process with
+``--twist-ratio`` choose another; ``--max-points``, default 4000, the points a
+branch may take). Each run is a fresh process with
 ``OPENBLAS_NUM_THREADS=1`` (the tree's ``src`` first on ``PYTHONPATH``; this tree when
 ``SRC`` is not given). ``--against SRC`` alternates the runs with the tree ``SRC``
 (``--repeat K`` times each), prints the medians' ratios and whether the two trees'
@@ -17,7 +18,7 @@ branches are equal bit for bit (every per-point array).
 Run from the repository root:
 
     python benchmarks/bench_count_factorisations.py [--repeat K] [--against SRC]
-        [--ld 200] [--lam 40] [--nodes 202] [--twist-ratio 1.5]
+        [--ld 200] [--lam 40] [--nodes 202] [--twist-ratio 1.5] [--max-points 4000]
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from supercoil.continuation.branch import POINT_ARRAYS
 from supercoil.problems.greenhill import critical_turns
 stability = importlib.import_module("supercoil.continuation.stability")
 ld, lam, nodes, ratio = float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
+most = int(sys.argv[5])
 made = [0]
 class Counted(stability.KKTFactor):
     def __init__(self, *args, **kwargs):
@@ -42,7 +44,7 @@ stability.KKTFactor = Counted
 problem = sc.Tweezers(sc.Rod(ratio, nodes=nodes), tension=lam**2,
                       contact=sc.Barrier(length_over_diameter=ld))
 start = time.process_time()
-diagram = sc.tweezers(problem, (0.0, 1.5 * critical_turns(ratio, lam**2)), max_points=4000,
+diagram = sc.tweezers(problem, (0.0, 1.5 * critical_turns(ratio, lam**2)), max_points=most,
                       loop_sliding=True)
 total = time.process_time() - start
 digest = hashlib.sha256()
@@ -65,9 +67,10 @@ def main() -> None:
     parser.add_argument("--lam", type=float, default=40.0)
     parser.add_argument("--nodes", type=int, default=202)
     parser.add_argument("--twist-ratio", type=float, default=1.5)
+    parser.add_argument("--max-points", type=int, default=4000)
     args = parser.parse_args()
     trees = [None] + ([args.against] if args.against else [])
-    row = (args.ld, args.lam, args.nodes, args.twist_ratio)
+    row = (args.ld, args.lam, args.nodes, args.twist_ratio, args.max_points)
 
     def report(tree, r):
         print(f"{tree or 'this tree'}: {r['points']} points, {r['total']:.1f} s CPU, "

@@ -666,6 +666,31 @@ def test_a_closed_branch_stops_after_one_lap_with_both_folds_located(max_step):
     np.testing.assert_array_equal(branch.unstable_count, (q0 < 0).astype(int))
 
 
+def test_a_resumed_branch_numbers_the_points_of_its_messages_on_the_whole_branch():
+    """Oracle: the circle of equilibria x0^2 + lambda^2 = 1, interrupted after 40 points
+    and resumed; the message's point count is the whole branch's, and the point it
+    names lies on the branch at the parameter value the message gives."""
+    import re
+
+    from supercoil.continuation.resume import resume_branch
+
+    opts = ContinuationOptions(initial_step=0.05, max_step=0.05, max_points=40)
+    partial = continuation(CircleOfEquilibria(lam=0.0), np.array([1.0, 0.0, 0.0]),
+                           parameter="lam", options=opts)
+    assert partial.status is ContinuationStatus.MAX_POINTS
+    assert partial.message == "40 points computed (max_points)"
+    whole = resume_branch(CircleOfEquilibria(lam=0.0), partial,
+                          dataclasses.replace(opts, max_points=2000))
+    assert whole.status is ContinuationStatus.CLOSED_LOOP, whole.message
+    found = re.search(r"after (\d+) points it came back to point (\d+) \(lam = (\S+);",
+                      whole.message)
+    assert found, whole.message
+    count, j, lam = int(found[1]), int(found[2]), float(found[3])
+    assert count == len(whole)
+    assert 0 <= j < len(whole) - 1
+    assert whole.parameter_values[j] == pytest.approx(lam, abs=1e-5)
+
+
 def test_an_open_branch_is_not_taken_for_a_closed_one():
     # Bratu round its fold and back down passes near no earlier point with the same tangent.
     _p, branch = bratu_branch(40, lam0=1.0, low=0.5)

@@ -126,6 +126,8 @@ class Tracer:
         self._accepted_hessian: tuple[np.ndarray, object] | None = None
         # each point converted once into the columns branch() reads
         self.rows = BranchRows(prefix, prefix_arclength)
+        # the branch's index of this run's first point: messages number points on the branch
+        self.first = 0 if prefix is None else len(prefix)
         # each point's parameter value and unstable count, for the closure tests
         self._parameters = Columns()
         self._counts: list[int] = []
@@ -336,7 +338,7 @@ class Tracer:
 
     def _stability_failed(self, exc: Exception) -> tuple[ContinuationStatus, str]:
         return ContinuationStatus.STEP_TOO_SMALL, (
-            f"stability at point {len(self.xs)} failed: {exc}")
+            f"stability at point {self.first + len(self.xs)} failed: {exc}")
 
     def _run(self, step: float, regauged_here: bool) -> tuple[ContinuationStatus, str]:
         system, opts = self.system, self.opts
@@ -346,17 +348,17 @@ class Tracer:
         while len(self.xs) < opts.max_points:
             if self.s[-1] >= opts.max_arclength:
                 return ContinuationStatus.MAX_ARCLENGTH, (
-                    f"arclength {self.s[-1]:.4g} reached max_arclength after {len(self.xs)} points")
+                    f"arclength {self.s[-1]:.4g} reached max_arclength after {self.first + len(self.xs)} points")
             x_k = self.xs[-1]
             taken = self._attempt(ds)
             if taken.refusal:
                 return ContinuationStatus.STOPPED, (
-                    f"stopped after {len(self.xs)} points at {system.parameter} = "
+                    f"stopped after {self.first + len(self.xs)} points at {system.parameter} = "
                     f"{x_k[-1]:.10g}: {taken.refusal}")
             if taken.leaves_bound:
                 return ContinuationStatus.PARAMETER_BOUND, (
                     f"{system.parameter} = {taken.bound:.10g} is a bound and the branch leaves "
-                    f"the interval there ({len(self.xs)} points)")
+                    f"the interval there ({self.first + len(self.xs)} points)")
             start = (self._start_factor_count() if taken.failure is None
                      and opts.detect_closed_loops and ds >= 4 * opts.min_step else None)
             if self._count_jumped(taken, start):
@@ -390,7 +392,7 @@ class Tracer:
                         continue
                 if ds <= opts.min_step:
                     return ContinuationStatus.STEP_TOO_SMALL, (
-                        f"stopped after {len(self.xs)} points at {system.parameter} = "
+                        f"stopped after {self.first + len(self.xs)} points at {system.parameter} = "
                         f"{x_k[-1]:.10g}: {taken.failure} at the minimum step "
                         f"{opts.min_step:.1e}{_earlier_failures(failed)}")
                 ds = max(ds * opts.shrink, opts.min_step)
@@ -415,7 +417,7 @@ class Tracer:
                 bound = x_new[-1]  # the step ended exactly on the bound
             if bound is not None:
                 return ContinuationStatus.PARAMETER_BOUND, (
-                    f"reached {system.parameter} = {bound:.10g} after {len(self.xs)} points")
+                    f"reached {system.parameter} = {bound:.10g} after {self.first + len(self.xs)} points")
             if opts.detect_closed_loops:
                 try:
                     j = returned_to(system, opts, self.xs, self.ts, self._counts,
@@ -424,10 +426,10 @@ class Tracer:
                     return self._stability_failed(exc)
                 if j is not None:
                     return ContinuationStatus.CLOSED_LOOP, (
-                        f"the branch closed on itself: after {len(self.xs)} points it came "
-                        f"back to point {j} ({system.parameter} = {self.xs[j][-1]:.6g}; "
+                        f"the branch closed on itself: after {self.first + len(self.xs)} points it came "
+                        f"back to point {self.first + j} ({system.parameter} = {self.xs[j][-1]:.6g}; "
                         f"arclength {self.s[-1] - self.s[j]:.4g} per lap)")
-        return ContinuationStatus.MAX_POINTS, f"{len(self.xs)} points computed (max_points)"
+        return ContinuationStatus.MAX_POINTS, f"{self.first + len(self.xs)} points computed (max_points)"
 
     # -- result -------------------------------------------------------------------------------
     def branch(self, status: ContinuationStatus, message: str,

@@ -1,10 +1,13 @@
 """A branch interrupted after any accepted point and resumed ends where the uninterrupted
 run ends.
 
-Oracle: the uninterrupted run itself. The run is stopped in ``on_point`` at every
-accepted point k in turn (as a signal would stop it after point k was written), the
-partial branch is resumed on a fresh problem, and the whole branch, its special points
-and its last state must equal the uninterrupted run's to 1e-8. The cases are built so
+Oracle: the uninterrupted run itself. The partial branch the run hands to ``on_point``
+at every accepted point k (what a signal stopping it after point k would leave written)
+is copied as it is handed out, resumed on a fresh problem, and the whole branch, its
+special points and its last state must equal the uninterrupted run's to 1e-8. That the
+copy taken during the uninterrupted run is the partial branch of a run really stopped
+in ``on_point`` after point k is checked bit for bit at a few k (one run stopped at
+every k would repeat the uninterrupted run's first k points each time). The cases are built so
 that steps fail right after some of the points a run is stopped at (the halved step
 must be found again), with the predictor shortened at an obstacle, a fold, a user
 event, and on the ring with moved and re-anchored phase rows.
@@ -88,6 +91,48 @@ def interrupted_after(k, run):
     return saved[-1]
 
 
+def uninterrupted(run, rejections):
+    """``(full, partials)``: the branch of ``run(on_point)`` and a copy of each partial
+    branch it handed to ``on_point``, as it was then (a partial branch's arrays are
+    views of the growing columns, whose last row a regauge or a rephase may replace
+    later; a point corrected again in moved phase rows is handed out again), counting
+    points for ``rejections``."""
+    partials = []
+
+    def keep(branch):
+        arrays = {f.name: np.array(getattr(branch, f.name)) for f in dataclasses.fields(branch)
+                  if isinstance(getattr(branch, f.name), np.ndarray)}
+        partials.append(dataclasses.replace(
+            branch, **arrays, records={k: np.array(v) for k, v in branch.records.items()}))
+        rejections.points = len(branch)
+
+    full = run(keep)
+    lengths = [len(p) for p in partials]
+    assert lengths == sorted(lengths) and set(lengths) == set(range(1, len(full) + 1))
+    return full, partials
+
+
+def assert_same_bits(a, b):
+    """Two branches equal as the result files store them (attributes and every array)
+    and in the frames carried at each point, to the bit."""
+    meta_a, groups_a, arrays_a = flatten(a)
+    meta_b, groups_b, arrays_b = flatten(b)
+    assert meta_a == meta_b and groups_a == groups_b
+    assert sorted(arrays_a) == sorted(arrays_b)
+    for name in arrays_a:
+        np.testing.assert_array_equal(arrays_a[name], arrays_b[name], err_msg=name)
+    assert len(a.frames) == len(b.frames)
+    assert all(f is g is None or f.equals(g) for f, g in zip(a.frames, b.frames))
+
+
+def assert_copies_are_interrupted_partials(partials, run, ks):
+    """A run stopped in ``on_point`` the first time it had k points left the partial
+    branch copied then in the uninterrupted run, for each k in ``ks``."""
+    for k in ks:
+        assert_same_bits(interrupted_after(k, run),
+                         next(p for p in partials if len(p) == k))
+
+
 def assert_same_end(resumed, full, k):
     assert len(resumed) == len(full), (k, resumed.message)
     assert resumed.status is full.status, (k, resumed.message)
@@ -119,18 +164,19 @@ def test_bratu_resumed_after_every_point_ends_as_the_uninterrupted_run(predictor
                             on_point=on_point)
 
     with Rejections() as rejections:
-        counting = rejections.__setattr__
-        full = run(lambda b: counting("points", len(b)))
+        full, partials = uninterrupted(run, rejections)
     assert full.status.name == "PARAMETER_BOUND"
     assert [p.kind for p in full.special_points] == ["threshold", "fold"]
-    # steps failed right after several points the run is stopped at below
+    # steps failed right after several points the run is resumed from below
     assert len(set(rejections.after)) >= 5, rejections.after
     assert np.all(np.isfinite(full.next_step)) and not full.gauge_moved.any()
-    for k in range(1, len(full)):
-        partial = interrupted_after(k, run)
+    # really stopped: at the first point, after a failed step, at the last point
+    assert_copies_are_interrupted_partials(
+        partials, run, {1, min(k for k in rejections.after if k), len(full) - 1})
+    for partial in (p for p in partials if len(p) < len(full)):
         resumed = resume_branch(GuardedBratu(32, 1.0), partial, opts, events=[THRESHOLD],
                                 records=bratu_records)
-        assert_same_end(resumed, full, k)
+        assert_same_end(resumed, full, len(partial))
 
 
 def ring_alpha():
@@ -146,6 +192,7 @@ def test_ring_branch_resumed_after_every_point_ends_as_the_uninterrupted_run():
     moved after a failed step and re-anchored at every point, steps doubling and failing:
     resumed after any point on a fresh problem (its reference frames carried along the
     stored points again), the same branch to 1e-8."""
+    from supercoil.problems.ring import twisted_circle_problem
     from supercoil.problems.ring_branches import ring_records
 
     opts = ContinuationOptions(initial_step=0.005, max_step=1.0, max_points=20, growth=2.0,
@@ -159,19 +206,21 @@ def test_ring_branch_resumed_after_every_point_ends_as_the_uninterrupted_run():
                              records=ring_records(problem), on_point=on_point)
 
     with Rejections() as rejections:
-        counting = rejections.__setattr__
-        full = run(lambda b: counting("points", len(b)))
+        full, partials = uninterrupted(run, rejections)
     assert len(full) == 20 and full.phase_modes.shape[0] == 1
     assert full.gauge_moved.any()  # a gauge moved after a failed step
     assert {1, 2} <= set(rejections.after), rejections.after
     # the steps grew, then were cut where the branch nears its figure-eight (a step
     # through the rod itself refused)
     assert np.max(full.next_step) > 10 * full.next_step[0]
-    for k in range(1, len(full)):
-        partial = interrupted_after(k, run)
-        problem, _, _ = ring_alpha()  # a fresh problem, as after a restart
+    # really stopped: after a failed step near the start and near the end
+    assert_copies_are_interrupted_partials(partials, run, {1, max(rejections.after)})
+    for partial in (p for p in partials if len(p) < len(full)):
+        # a fresh problem, as after a restart (the circle's continuation leaves its
+        # problem unchanged)
+        problem, _ = twisted_circle_problem(0.6667, 0.0, 24, "angle")
         resumed = resume_branch(problem, partial, opts, records=ring_records(problem))
-        assert_same_end(resumed, full, k)
+        assert_same_end(resumed, full, len(partial))
         np.testing.assert_allclose(resumed.records["writhe"], full.records["writhe"],
                                    rtol=0, atol=TOL)
 

@@ -274,8 +274,10 @@ def test_a_tertiary_branch_breaks_the_two_fold_axis_of_beta_ii(dna_diagram):
     p = beta.points_of_kind("bifurcation")[-1]
     assert 5.0 < p.parameter < 5.3 and p.critical_modes.shape[0] == 2
     found = []
-    for side in (1, -1):
-        half = follow_bifurcating_branch(dna_diagram, beta, p, side, max_points=48)
+    # S lies between points 33 and 34 of the side +1 half-branch (the points beyond it,
+    # up to a second such bifurcation at point 46, are the costliest to compute)
+    for side, points in ((1, 36), (-1, 48)):
+        half = follow_bifurcating_branch(dna_diagram, beta, p, side, max_points=points)
         assert half is not None and len(half) >= 2
         for q in half.states:
             assert reversal_residuals(q.reshape(-1, 3), [0.0], direct=True)[0] < 1e-9

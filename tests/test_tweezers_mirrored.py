@@ -19,7 +19,6 @@ import pytest
 
 from supercoil.continuation import ContinuationStatus
 from supercoil.continuation import tracer as tracing
-from supercoil.continuation.resume import head
 from supercoil.problems.contact_events import first_onset
 from supercoil.problems.tweezers import TweezersOptions, compute, tweezers_branches
 from supercoil.problems.tweezers.contact import MIRROR_TOLERANCE
@@ -141,10 +140,12 @@ def test_a_closed_contact_branch_is_followed_again_held_on_its_symmetry(monkeypa
 
     def closing(branch, other, diameter, reach=1.0):
         if branch.name == "buckled_contact":
-            return dataclasses.replace(head(branch, 40), status=ContinuationStatus.CLOSED_LOOP,
+            assert len(branch) == 40
+            return dataclasses.replace(branch, status=ContinuationStatus.CLOSED_LOOP,
                                        message="made to close")
         return real(branch, other, diameter, reach)
 
+    computed_up_to(monkeypatch, compute, "buckled_contact", 40)  # the points kept
     monkeypatch.setattr(compute, "close_on_return", closing)
     options = SMALL
     result = held_after_free()
@@ -156,20 +157,31 @@ def test_a_closed_contact_branch_is_followed_again_held_on_its_symmetry(monkeypa
     assert any("followed again held on its half-turn symmetry" in n for n in result.notes)
 
 
-def stopping(monkeypatch, module, name: str, points: int):
-    """Make ``module.contact_branch`` return branch ``name`` cut after ``points`` points as
-    stopped at the minimum step (as the free contact branch of a loop whose sliding the
-    turns drive does, benchmarks/results/long_dna_grid.md)."""
+def computed_up_to(monkeypatch, module, name: str, points: int, status=None,
+                   message: str = "made to stop"):
+    """Make ``module.contact_branch`` compute branch ``name`` only up to ``points`` points
+    (its ``max_points``: the same points as the first ones of the branch given more,
+    to the bit), and, with ``status``, return it as ended so (``STEP_TOO_SMALL``: as
+    the free contact branch of a loop whose sliding the turns drive stops at the
+    minimum step, benchmarks/results/long_dna_grid.md)."""
     real = module.contact_branch
 
-    def stopped(*args, **kwargs):
-        branch, pins = real(*args, **kwargs)
-        if branch.name == name:
-            branch = dataclasses.replace(head(branch, points),
-                                         status=ContinuationStatus.STEP_TOO_SMALL,
-                                         message="made to stop")
+    def cut(opts, rod, cp, free, onset, branch_name, *args, **kwargs):
+        if branch_name != name:
+            return real(opts, rod, cp, free, onset, branch_name, *args, **kwargs)
+        branch, pins = real(dataclasses.replace(opts, max_points=points), rod, cp, free,
+                            onset, branch_name, *args, **kwargs)
+        assert len(branch) == points
+        if status is not None:
+            branch = dataclasses.replace(branch, status=status, message=message)
         return branch, pins
-    monkeypatch.setattr(module, "contact_branch", stopped)
+    monkeypatch.setattr(module, "contact_branch", cut)
+
+
+def stopping(monkeypatch, module, name: str, points: int):
+    """Make ``module.contact_branch`` return branch ``name`` after ``points`` points as
+    stopped at the minimum step (:func:`computed_up_to`)."""
+    computed_up_to(monkeypatch, module, name, points, ContinuationStatus.STEP_TOO_SMALL)
 
 
 def test_a_stopped_contact_branch_is_followed_again_held_on_its_symmetry(monkeypatch):

@@ -1,7 +1,8 @@
 """The lowest eigenpairs of the constrained Hessian, ``H v = mu M v`` on ``ker J`` with
 symmetry modes projected out: shift-invert Lanczos on the KKT factor
 (:func:`lowest_pairs`), the dense reference (:func:`dense_constrained_eigenpairs`) and
-its faster form for the lowest few (:func:`lowest_dense_pairs`), all on one BLAS thread so that the eigenpairs do not depend on the thread count."""
+its faster form for the lowest few (:func:`lowest_dense_pairs`), all on one BLAS thread
+so that the eigenpairs do not depend on the thread count."""
 
 from __future__ import annotations
 
@@ -163,7 +164,7 @@ def lowest_dense_pairs(H, J, mass: np.ndarray, k: int) -> tuple[np.ndarray, np.n
     ``J^T = P L U`` and ``L = [L1; L2]`` (``L1`` unit lower triangular, ``(m, m)``),
     ``ker J = P ker L^T``, spanned by the columns of ``P [-L1^-T L2^T; I]``; the
     identity block makes the products with it cheap, and only the ``k`` lowest
-    eigenpairs of the projected pencil are computed (LAPACK's ``syevr`` family). Where
+    eigenpairs of the projected pencil are computed (LAPACK's ``sygvx``). Where
     the LU shows ``J`` nearly rank deficient, or the basis badly scaled, the reference
     is used. One BLAS thread, as :func:`lowest_pairs`."""
     n = mass.size

@@ -16,7 +16,9 @@ and the notes (why a run stopped).
 The runs are long (minutes each at L/D = 500): run it niced in the background; each row
 is appended to the table as soon as it is computed, so a partial run leaves the rows
 that completed. While a run goes on, ``OUT.progress`` holds its last accepted point
-(branch, points, turns, seconds), rewritten every ``--progress-every`` points; on
+(branch, points, turns, seconds), rewritten every ``--progress-every`` points, and
+``OUT.progress.tsv`` gains a line with the same and the unstable count there (the path
+of a snaking branch through the turns, run after run); on
 SIGTERM or SIGINT the running row is appended as stopped, with what it had reached
 (the turns each branch spanned) and the run ends.
 
@@ -64,8 +66,16 @@ class Progress:
         self.spans[branch.name] = (min(low, turns), max(high, turns))
         self.last = (branch.name, n, turns)
         if self.path is not None and n % self.every == 0:
+            seconds = time.perf_counter() - self.start
             self.path.write_text(f"{self.last[0]} {n} points, turns = {self.last[2]:.6g}, "
-                                 f"{time.perf_counter() - self.start:.0f} s\n")
+                                 f"{seconds:.0f} s\n")
+            trail = self.path.with_name(self.path.name + ".tsv")
+            new = not trail.exists()
+            with trail.open("a") as f:
+                if new:
+                    f.write("branch\tpoints\tturns\tunstable\tseconds\n")
+                f.write(f"{branch.name}\t{n}\t{turns:.6f}\t{int(branch.unstable_count[-1])}"
+                        f"\t{seconds:.1f}\n")
 
     def stopped_row(self, head: str, signame: str) -> str:
         """The row of a run stopped by a signal: what it had reached, said as stopped."""

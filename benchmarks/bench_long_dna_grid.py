@@ -25,7 +25,11 @@ SIGTERM or SIGINT the running row is appended as stopped, with what it had reach
 Run: ``python benchmarks/bench_long_dna_grid.py [--ld 100,200,500] [--lambdas
 10,20,40,80,150] [--twist-ratio 1.5] [--multiples 1,2 | --resolving] [--factor 1.5]
 [--nodes N1,N2] [--max-points 4000] [--contact-curve spline] [--progress-every 50]
-[--out benchmarks/results/long_dna_grid.md]``.
+[--keep DIR] [--out benchmarks/results/long_dna_grid.md]``. With ``--keep DIR`` each run
+stores its points as they come in ``DIR/ld{L/D}_lambda{lambda}_ca{C/A}_n{N}/result.h5``
+(the library's result file: ``supercoil.load`` reads it), and the same command run again
+continues every stored run from its last point (the row then says so and counts only
+this run's seconds), so that a row longer than one sitting is computed over several.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
+import supercoil as sc
 from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.ply import hard_core_ply
 from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
@@ -57,6 +62,7 @@ class Progress:
         self.counts: dict[str, int] = {}
         self.spans: dict[str, tuple[float, float]] = {}  # the turns each branch spanned
         self.last = ("-", 0, float("nan"))
+        self.continued = ""  # the note of a run continued from its stored points
 
     def __call__(self, branch) -> None:
         n = len(branch)
@@ -83,22 +89,39 @@ class Progress:
         points = "+".join(str(v) for v in self.counts.values()) or "0"
         spans = "; ".join(f"{b} {low:.4g} to {high:.4g}" for b, (low, high) in self.spans.items())
         return (f"{head} no | {turns:.4g} | {points} | "
-                f"{time.perf_counter() - self.start:.0f} | - | - | - | stopped by {signame} "
+                f"{time.perf_counter() - self.start:.0f} | - | - | - | "
+                f"{self.continued + '; ' if self.continued else ''}stopped by {signame} "
                 f"at {name} point {n}, turns = {turns:.6g}; the turns each branch spanned "
                 f"at its accepted points: {spans} |")
 
 
 def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
-        max_points: int, contact_curve: str = "spline", progress: Progress | None = None) -> str:
+        max_points: int, contact_curve: str = "spline", progress: Progress | None = None,
+        keep: Path | None = None) -> str:
     """One table row (module doc); ``contact_curve``: ``TweezersOptions.contact_curve``;
-    ``progress`` is called with every accepted point."""
+    ``progress`` is called with every accepted point; ``keep``: the folder whose
+    ``result.h5`` stores the run point by point, continued if it holds one."""
     tension = lam**2
     target = factor * critical_turns(twist_ratio, tension)
-    options = TweezersOptions(loop_sliding=True, twist_ratio=twist_ratio, length_over_diameter=ld,
-                              tension=tension, n_nodes=nodes, turns=(0.0, target),
-                              max_points=max_points, contact_curve=contact_curve)
+    settings = {"loop_sliding": True, "max_points": max_points, "contact_curve": contact_curve}
     start = time.perf_counter()
-    result = tweezers_branches(options, on_point=progress)
+    continued = ""
+    if keep is None:
+        options = TweezersOptions(twist_ratio=twist_ratio, length_over_diameter=ld,
+                                  tension=tension, n_nodes=nodes, turns=(0.0, target), **settings)
+        result = tweezers_branches(options, on_point=progress)
+    else:
+        resume = (keep / "result.h5").is_file()
+        if resume:
+            stored = sc.load(keep / "result.h5")
+            continued = ("continued from the points stored in " + keep.name + " ("
+                         + "+".join(str(len(b)) for b in stored.branches.values()) + ")")
+            if progress is not None:
+                progress.continued = continued
+        problem = sc.Tweezers(sc.Rod(twist_ratio=twist_ratio, nodes=nodes), tension=tension,
+                              contact=sc.Barrier(length_over_diameter=ld))
+        result = sc.tweezers(problem, (0.0, target), on_point=progress, out=keep,
+                             resume=resume, **settings).computed
     seconds = time.perf_counter() - start
     last = [b for b in result.branches if len(b)][-1]
     reached = float(last.parameter_values[-1])
@@ -113,7 +136,8 @@ def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
     bifurcations = sum(p.kind == "bifurcation" for p in off_straight)
     changes = sum(p.kind == "count_change" for p in off_straight)
     ok = result.ok and reached >= target - 1e-9
-    notes = "; ".join(result.notes).replace("|", "/") or "-"
+    notes = "; ".join(([continued] if continued else []) + list(result.notes))
+    notes = notes.replace("|", "/") or "-"
     return (f"{row_head(ld, lam, twist_ratio, nodes, factor)} {'yes' if ok else 'no'} | "
             f"{reached:.4g} | {points} | {seconds:.0f} | {counts} | "
             f"{bifurcations} | {changes} | {notes} |")
@@ -143,6 +167,9 @@ def main() -> None:
     parser.add_argument("--out", default="benchmarks/results/long_dna_grid.md")
     parser.add_argument("--nodes", default=None, help="comma-separated N, instead of "
                         "--multiples and --resolving")
+    parser.add_argument("--keep", default=None, help="folder in which each run stores its "
+                        "points as it goes (KEEP/ld200_lambda150_ca1.5_n202/result.h5); "
+                        "the same command again continues a run stopped there")
     parser.add_argument("--progress-every", type=int, default=50, help="rewrite "
                         "OUT.progress every this many accepted points")
     args = parser.parse_args()
@@ -182,8 +209,10 @@ def main() -> None:
 
                 signal.signal(signal.SIGTERM, stop)
                 signal.signal(signal.SIGINT, stop)
+                keep = None if args.keep is None else Path(args.keep) / (
+                    f"ld{ld:g}_lambda{lam:g}_ca{args.twist_ratio:g}_n{nodes}")
                 row = run(ld, lam, args.twist_ratio, nodes, args.factor,
-                          args.max_points, args.contact_curve, progress)
+                          args.max_points, args.contact_curve, progress, keep)
                 print(row, flush=True)
                 with out.open("a") as f:
                     f.write(row + "\n")

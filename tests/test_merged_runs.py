@@ -70,3 +70,19 @@ def test_every_reported_branch_equals_the_runs_merged_from_scratch(monkeypatch):
     # a report copies the points only when a column doubles its capacity (a few times
     # per branch), not at every point
     assert len(shared) > 50 and shared.count(False) <= len(shared) // 10
+
+
+def test_a_branch_followed_in_runs_numbers_the_points_of_its_messages_on_the_whole_branch():
+    """Oracle: the branch's own length. Runs of 7 points make the contact branch; the
+    message of its last run (which reached the bound) counts the points of the whole
+    branch, not those of that run."""
+    import re
+
+    options = TweezersOptions(4 / 3, 33.0, tension=75.0, turns=(0, 5), n_nodes=40,
+                              segment_points=7, max_points=400)
+    result = tweezers_branches(options)
+    contact = next(b for b in result.branches if b.name in result.contact_branches)
+    assert len(contact) > 3 * options.segment_points
+    found = re.fullmatch(r"reached turns = 5 after (\d+) points", contact.message)
+    assert found, contact.message
+    assert int(found[1]) == len(contact)

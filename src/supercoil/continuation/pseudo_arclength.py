@@ -52,7 +52,7 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
                  admissible: Callable[[np.ndarray], bool] | None = None,
                  start: float | None = None,
                  phase: tuple[np.ndarray, np.ndarray] | None = None,
-                 guess: np.ndarray | None = None) -> Branch:
+                 guess: np.ndarray | None = None, first_index: int = 0) -> Branch:
     """Follow the equilibria of ``problem`` through ``q0`` as its ``parameter`` varies.
 
     ``q0`` (n_dofs,) is a (near-)equilibrium at the parameter value ``start``
@@ -86,7 +86,9 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     tangent oriented along it (``direction`` unused), so that a start at a fold, where
     the parameter cannot be held, converges; together they continue a computed branch
     from one of its points in the gauge it was computed in (see
-    :func:`~supercoil.problems.segments.follow`).
+    :func:`~supercoil.problems.segments.follow`). ``first_index``: the index of the
+    point at ``q0`` on the branch that this run continues (the run's messages number its
+    points on that branch; the returned branch is still the run's own, from index 0).
     """
     opts = options or ContinuationOptions()
     if not hasattr(problem, parameter):
@@ -107,6 +109,7 @@ def continuation(problem: ConstrainedEnergy, q0: np.ndarray,
     mu0 = (least_squares_multipliers(at_start, q0, system.free) if multipliers0 is None
            else np.asarray(multipliers0, dtype=float))
     tracer = Tracer(system, opts, name, None, None, records, events, on_point)
+    tracer.first = first_index
     tracer.stop = stop
     if admissible is not None:
         tracer.admissible = admissible

@@ -349,7 +349,7 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
         run = continuation(carrying, q, last.multipliers[-1], parameter=last.parameter,
                            start=float(last.parameter_values[-1]),
                            options=opts, name=name, records=records, events=events,
-                           on_point=report, stop=stops)
+                           on_point=report, stop=stops, first_index=total - 1)
         if run.status is ContinuationStatus.START_FAILED and len(last.phase_modes):
             # the last point is an equilibrium of the last run's gauge, not of the one
             # chosen there: near a fold or a bifurcation point the state must move far to
@@ -361,7 +361,7 @@ def follow(problem, rod: PinnedRod, first: Branch, options: ContinuationOptions,
                                start=float(last.parameter_values[-1]), options=opts,
                                name=name, records=records, events=events, on_point=report,
                                stop=stops, phase=(last.phase_modes, last.phase_state),
-                               guess=last.tangents[-1])
+                               guess=last.tangents[-1], first_index=total - 1)
         parts.append(run)
         if merger is not None:
             merger.commit(run)

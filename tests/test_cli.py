@@ -123,6 +123,19 @@ def test_version(runner):
     assert result.stdout.strip() == f"supercoil {__version__}"
 
 
+def test_python_dash_m_runs_the_command():
+    """``python -m supercoil`` is the ``supercoil`` command: its version, and a bad input's
+    one-line error under the command's name with exit 2."""
+    ok = subprocess.run([sys.executable, "-m", "supercoil", "--version"], check=False,
+                        capture_output=True, text=True, timeout=300)
+    assert (ok.returncode, ok.stdout.strip()) == (0, f"supercoil {__version__}")
+    bad = subprocess.run([sys.executable, "-m", "supercoil", "tweezers", "--turns", "0:1"],
+                         check=False, capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2
+    assert bad.stderr.strip().splitlines()[-1].startswith("error: Missing option '--out'")
+    assert "supercoil tweezers --help" in bad.stderr
+
+
 # ------------------------------------------------------- one consistent command line
 
 # the commands that write result files or folders (writhe and knot write only the --json

@@ -14,9 +14,10 @@ turns from which no switched branch starts (measured with the loop's sliding in 
 count and out of it); without ``loop_sliding`` the loop slides off the middle and its
 contact branch reaches the plectoneme by itself. So when the closed contact branch (or
 the held one) ends before the last turn, :func:`switch_to_plectoneme` tries its
-located bifurcations, the latest first, along either side of the critical mode at the
-amplitudes of ``AMPLITUDES``, and follows the first switched branch that starts (and
-does not close at once) to the last turn.
+located bifurcations, the latest first (a closed branch's nearest to its closure first,
+:func:`switch_order`), along either side of the critical mode at the amplitudes of
+``AMPLITUDES``, and follows the first switched branch that starts (and does not close at
+once) to the last turn.
 
 A switched branch can itself come back onto the contact-free branch: it is then closed
 there (:func:`~supercoil.problems.tweezers.returned.close_on_return`), as the contact
@@ -32,8 +33,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numpy as np
+
 from supercoil.contact.problem import ContactProblem
-from supercoil.continuation import Branch, ContinuationStatus, switch_branch
+from supercoil.continuation import Branch, ContinuationStatus, SpecialPoint, switch_branch
 from supercoil.problems.contact_events import classify_contact_events, contact_count_event
 from supercoil.problems.segments import follow, set_pin
 from supercoil.problems.tweezers.buckled import RunRecords
@@ -46,6 +49,29 @@ from supercoil.rod.open import ClampedRodEnergy
 
 AMPLITUDES = (5e-4, 5e-3)  # of D: the first point's distance from the bifurcation
 TRIES = 4  # the latest bifurcations tried
+
+
+def switch_order(contact: Branch) -> list[SpecialPoint]:
+    """The located bifurcations of ``contact`` in the order :func:`switch_to_plectoneme`
+    tries them: the latest first, or, where the branch closed on itself, the nearest to
+    its last state first (``|q_b - q_last|``), then the others the latest first.
+
+    A branch that comes from elsewhere and closes on a loop entered it where it crossed
+    another branch: a smooth branch cannot run into a loop of its own, and through a
+    simple bifurcation point each branch's unstable count changes, so the step that came
+    back round the loop onto the branch's earlier path, with no change of count, passed
+    the crossing on the other branch and was carried onto this one between their close
+    sheets. The branch not followed leaves from that crossing, where the loop closes
+    (measured at L/D = 200, lambda = 150, C/A = 1.5, N = 202: the contact branch crossed
+    a bifurcation at 24.5185 turns, came back to it round a loop through folds at
+    24.5071 and 24.5307 turns and closed there, 0.0007 turns from it; the latest
+    bifurcation, at the loop's upper fold, is 0.013 turns from it)."""
+    points = [p for p in contact.special_points if p.kind == "bifurcation"][::-1]
+    if contact.status is not ContinuationStatus.CLOSED_LOOP or not points:
+        return points
+    last = contact.states[-1]
+    nearest = min(points, key=lambda p: float(np.linalg.norm(p.q - last)))
+    return [nearest] + [p for p in points if p is not nearest]
 
 
 def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
@@ -62,7 +88,7 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     best = None
-    points = [p for p in contact.special_points if p.kind == "bifurcation"][::-1][:TRIES]
+    points = switch_order(contact)[:TRIES]
     pin = contact.records["azimuth_pin"]
     for point in points:
         for amplitude in AMPLITUDES:

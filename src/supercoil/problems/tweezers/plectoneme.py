@@ -48,7 +48,7 @@ from supercoil.problems.tweezers.returned import close_on_return
 from supercoil.rod.open import ClampedRodEnergy
 
 AMPLITUDES = (5e-4, 5e-3)  # of D: the first point's distance from the bifurcation
-TRIES = 4  # the latest bifurcations tried
+TRIES = 4  # the bifurcations tried, in the order of switch_order
 
 
 def switch_order(contact: Branch) -> list[SpecialPoint]:

@@ -104,9 +104,12 @@ def test_the_package_has_no_import_cycle():
 
 
 def test_nothing_below_the_command_line_imports_it():
+    # supercoil.__main__ (python -m supercoil) is the command line's entry, as the
+    # console script is: it belongs to that layer
     modules = _modules(None)
     below = {name: path for name, path in modules.items()
-             if name != "supercoil.cli" and not name.startswith("supercoil.cli.")}
+             if name not in ("supercoil.cli", "supercoil.__main__")
+             and not name.startswith("supercoil.cli.")}
     assert len(below) > 150 and len(below) < len(modules)
     found = {name: sorted(i for i in _imports(path)
                           if i == "supercoil.cli" or i.startswith("supercoil.cli."))

@@ -117,6 +117,26 @@ def test_a_diagram_stopped_by_its_point_limit_names_the_branch(tmp_path):
         assert result.message == "branch(es) alpha_contact stopped early"
 
 
+def test_a_diagram_stopped_at_its_point_limit_resumes_with_a_higher_one(tmp_path,
+                                                                        diagram_runs):
+    """``resume`` may raise a point limit: the contact branch stopped at 3 points is
+    continued to the uninterrupted run's (40 points allowed), through the verb and the
+    command, and the file records the new limit."""
+    root, _, _ = diagram_runs
+    short = {**DIAGRAM_OPTIONS, "contact_max_points": 3}
+    sc.ring_diagram(ROD, sc.Barrier(LOD), out=tmp_path / "api", **short)
+    assert cli([*DIAGRAM, "--contact-max-points", "3", "--out", str(tmp_path / "cli")]) == 1
+    sc.ring_diagram(ROD, sc.Barrier(LOD), out=tmp_path / "api", resume=True, **DIAGRAM_OPTIONS)
+    full = sc.load(root / "api")
+    status = cli([*DIAGRAM, "--out", str(tmp_path / "cli"), "--resume"])
+    assert status == (0 if full.status == "complete" else 1)
+    for way in ("api", "cli"):
+        resumed = sc.load(tmp_path / way)
+        assert resumed.settings["options"]["contact_max_points"] == 40
+        assert resumed.status == full.status
+        assert_same_branches(resumed, full, atol=1e-8)
+
+
 def test_load_reads_a_summary_as_the_result_beside_it(diagram_runs, tmp_path):
     root, _, _ = diagram_runs
     assert_same_branches(sc.load(root / "cli" / "diagram.json"), sc.load(root / "cli"))
@@ -160,7 +180,7 @@ def test_a_run_stopped_in_on_point_keeps_what_was_reported_and_resumes(tmp_path,
                                   np.array(seen["alpha_contact"]))
     with pytest.raises(sc.InputError, match="other options"):
         sc.ring_diagram(ROD, sc.Barrier(LOD), out=out, resume=True,
-                        **{**DIAGRAM_OPTIONS, "contact_max_points": 41})
+                        **{**DIAGRAM_OPTIONS, "contact_max_points": 39})
     resumed = sc.ring_diagram(ROD, sc.Barrier(LOD), out=out, resume=True, **DIAGRAM_OPTIONS)
     full = sc.load(root / "api")
     assert_same_branches(sc.load(out), full, atol=1e-8)

@@ -93,10 +93,30 @@ def test_an_interrupted_diagram_resumed_ends_as_the_uninterrupted_one(full, tmp_
 
 def test_the_command_resumes_with_the_same_options_only(full, tmp_path):
     interrupted(tmp_path, 5)
-    status = cli([*ARGS[:-1], "--max-points", "9", "-q", "--out", str(tmp_path), "--resume"])
+    status = cli([*ARGS[:-1], "--max-points", "7", "-q", "--out", str(tmp_path), "--resume"])
     assert status == 2
     assert sc.load(tmp_path).status == "interrupted"  # nothing was computed or written
     assert cli([*ARGS, "--out", str(tmp_path), "--resume"]) == 0
     assert_same_branches(tuple(sc.load(tmp_path).branches.values()), full.branches)
     assert json.loads((tmp_path / "diagram.json").read_text())["ok"]
     assert cli([*ARGS, "--out", str(tmp_path), "--resume"]) == 0  # nothing to resume
+
+
+def test_a_diagram_stopped_at_its_point_limit_resumed_with_a_higher_one(full, tmp_path):
+    """``--resume`` may raise ``--max-points``: the halves that stopped at 4 points are
+    continued to the uninterrupted run's with 8 (and the file records 8); a lower limit
+    is refused before anything is computed."""
+    short = [*ARGS[:ARGS.index("--max-points")], "--max-points", "4",
+             *ARGS[ARGS.index("--max-points") + 2:]]
+    assert cli([*short, "--out", str(tmp_path)]) == 1
+    stopped = sc.load(tmp_path)
+    assert [len(b) for b in stopped.branches.values()] == [4, 4]
+    assert all(b.status is sc.ContinuationStatus.MAX_POINTS
+               for b in stopped.branches.values())
+    assert cli([*short[:-2], "--max-points", "3", "-q", "--out", str(tmp_path),
+                "--resume"]) == 2
+    assert cli([*ARGS, "--out", str(tmp_path), "--resume"]) == 0
+    resumed = sc.load(tmp_path)
+    assert resumed.settings["options"]["max_points"] == 8 and resumed.status == "complete"
+    assert_same_branches(tuple(resumed.branches.values()), full.branches)
+

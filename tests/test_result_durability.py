@@ -160,7 +160,7 @@ def test_resume_refuses_other_options_and_touches_nothing(tmp_path, reference, c
     out = tmp_path / "cut"
     kill_after(start(DIAGRAM, out), "alpha", 10, signal.SIGKILL)
     before = {p.name: p.read_bytes() for p in out.iterdir()}
-    other = [w if w != "40" else "41" for w in DIAGRAM]
+    other = [w if w != "40" else "39" for w in DIAGRAM]
     assert cli([*other, "--out", str(out), "--resume"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: --resume: ") and "contact_max_points = 40" in err

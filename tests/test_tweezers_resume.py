@@ -69,3 +69,30 @@ def test_tweezers_resumed_after_a_point_of_any_run_end_as_the_uninterrupted_run(
         np.testing.assert_array_equal(b.records["azimuth_pin"], ref.records["azimuth_pin"])
     assert resumed.pins == full.pins
     assert resumed.notes == full.notes
+
+
+@pytest.mark.parametrize("limit", [12, 20])
+def test_a_run_stopped_at_its_point_limit_continues_to_a_higher_one(full, tmp_path, limit):
+    """``resume`` with a higher ``max_points``: the branch the stored run stopped at
+    ``limit`` points (the contact-free one at 12, within a run; the contact branch at
+    20) is continued, in runs as before, and the branches end as the uninterrupted
+    run's; the file then records the new limit. A lower limit is refused."""
+    import supercoil as sc
+    from supercoil.continuation import ContinuationStatus
+
+    problem = sc.Tweezers(sc.Rod(OPTIONS.twist_ratio, nodes=OPTIONS.n_nodes),
+                          tension=OPTIONS.tension,
+                          contact=sc.Barrier(OPTIONS.length_over_diameter))
+    kwargs = {"segment_points": SEGMENT, "out": tmp_path}
+    cut = sc.tweezers(problem, OPTIONS.turns, max_points=limit, **kwargs)
+    assert any(b.status is ContinuationStatus.MAX_POINTS and len(b) == limit
+               for b in cut.branches.values())
+    with pytest.raises(sc.InputError, match="not lower it"):
+        sc.tweezers(problem, OPTIONS.turns, max_points=limit - 1, resume=True, **kwargs)
+    sc.tweezers(problem, OPTIONS.turns, max_points=OPTIONS.max_points, resume=True, **kwargs)
+    stored = sc.load(tmp_path)
+    assert stored.settings["options"]["max_points"] == OPTIONS.max_points
+    assert stored.status == "complete"
+    assert list(stored.branches) == [b.name for b in full.branches]
+    for branch in full.branches:
+        assert_same_end(stored.branches[branch.name], branch, branch.name)

@@ -36,9 +36,16 @@ def plain(value):
     return json.loads(json.dumps(to_jsonable(value)))
 
 
+# the point limits a resumed run may raise: the branches the stored run stopped at its
+# limit are then continued up to the new one (a limit is never lowered on resume)
+POINT_LIMITS = frozenset({"max_points", "free_max_points", "contact_max_points",
+                          "secondary_max_points"})
+
+
 def settings_mismatch(have, want, where: str = "") -> str | None:
     """The first difference between stored settings ``have`` and ``want`` (plain data;
-    floats equal to 1e-12 relative), or None."""
+    floats equal to 1e-12 relative), or None. A point limit (``POINT_LIMITS``) may be
+    raised: a larger one now is no difference, a smaller one is."""
     if isinstance(have, dict) and isinstance(want, dict):
         for key in sorted(set(have) | set(want)):
             found = settings_mismatch(have.get(key), want.get(key), f"{where}.{key}"
@@ -46,6 +53,11 @@ def settings_mismatch(have, want, where: str = "") -> str | None:
             if found:
                 return found
         return None
+    if where.rpartition(".")[2] in POINT_LIMITS and _is_int(have) and _is_int(want):
+        if want >= have:
+            return None
+        return (f"{where} = {have!r} in the file, {want!r} now; a resumed run may raise a "
+                "point limit, not lower it")
     if isinstance(have, float) or isinstance(want, float):
         try:
             if math.isclose(float(have), float(want), rel_tol=1e-12, abs_tol=0.0):
@@ -55,6 +67,71 @@ def settings_mismatch(have, want, where: str = "") -> str | None:
     elif have == want:
         return None
     return f"{where} = {have!r} in the file, {want!r} now"
+
+
+def _is_int(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def raised_limits(have, limits: Mapping) -> dict:
+    """``have`` (stored settings, plain data) with each point limit (``POINT_LIMITS``,
+    at any depth) that ``limits`` (a run's options or settings: the limits at any
+    depth) raises set to its new value; None when none is raised."""
+    changed = False
+    limits = _limit_values(limits)
+
+    def walk(node):
+        nonlocal changed
+        if not isinstance(node, dict):
+            return node
+        out = {}
+        for key, value in node.items():
+            new = limits.get(key) if key in POINT_LIMITS else None
+            if _is_int(value) and _is_int(new) and new > value:
+                out[key], changed = new, True
+            else:
+                out[key] = walk(value)
+        return out
+
+    updated = walk(have)
+    return updated if changed else None
+
+
+def _limit_values(settings) -> dict:
+    """The point limits in ``settings`` (plain data) at any depth, by name."""
+    if not isinstance(settings, Mapping):
+        return {}
+    out = {}
+    for key, value in settings.items():
+        if key in POINT_LIMITS and _is_int(value):
+            out[key] = value
+        else:
+            out.update(_limit_values(value))
+    return out
+
+
+def at_their_limit(branches: Mapping) -> list[str]:
+    """The names of the ``branches`` (name -> ``(branch, complete)``) that ended at
+    their point limit."""
+    from supercoil.continuation.options import ContinuationStatus
+
+    return [name for name, (b, _) in branches.items()
+            if b.status is ContinuationStatus.MAX_POINTS]
+
+
+def raise_limits(writer, limits: Mapping) -> list[str]:
+    """In the result ``writer`` continues, raise the stored point limits that
+    ``limits`` (name -> value) raises and mark the branches that ended at their limit
+    as not complete, so that the resumed run continues them (up to the new limit: a
+    branch's limit counts all its points). Returns those branches' names."""
+    updated = raised_limits(writer.stored_settings(), limits)
+    if updated is None:
+        return []
+    writer.set_settings(updated)
+    names = at_their_limit(writer.stored_branches())
+    for name in names:
+        writer.mark_complete(name, False)
+    return names
 
 
 def kept(writer) -> str:
@@ -100,7 +177,10 @@ def stored_branches(stored, kind: str, options, model: dict | None = None) -> di
     if mismatch:
         raise InputError(f"resume: {result.path} was computed with another rod "
                          f"({mismatch}); give the same rod, or start anew")
-    return {name: (b, name in result.complete_branches) for name, b in result.branches.items()}
+    reopened = set(at_their_limit({n: (b, True) for n, b in result.branches.items()})
+                   if raised_limits(have, want) is not None else ())
+    return {name: (b, name in result.complete_branches and name not in reopened)
+            for name, b in result.branches.items()}
 
 
 def announce(stored: Mapping, say: Callable[[str], None]) -> None:
@@ -130,7 +210,9 @@ def open_folder(out, *, kind: str, options, attributes: dict, provenance: dict,
         if not path.is_file():
             raise InputError(f"resume: {path} does not exist; nothing to resume (start without "
                              "resume)")
-        return ResultWriter.reopen(path)
+        writer = ResultWriter.reopen(path)
+        raise_limits(writer, plain(dataclasses.asdict(options)))
+        return writer
     if path.exists() and not overwrite:
         raise InputError(f"out: {path} exists; give another folder, resume=True to continue "
                          "it, or overwrite=True to replace it")

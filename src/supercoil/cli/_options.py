@@ -51,8 +51,9 @@ def overwrite_option(help: str):
 # the diagrams' --resume (diagram ring, diagram knot)
 DiagramResume = Annotated[bool, typer.Option(
     "--resume", help="Continue the interrupted diagram in --out DIR from its result.h5 "
-    "(the same options): finished branches are kept, the others continued from their "
-    "last point.")]
+    "(the same options; a point limit may be raised): finished branches are kept, the "
+    "others continued from their last point, and those that stopped at their point "
+    "limit continued up to a raised one.")]
 
 
 def result_argument(more: str = ""):

@@ -22,6 +22,7 @@ from supercoil.api.recording import (
     from_interrupt,
     kept,
     plain,
+    raise_limits,
     settings_mismatch,
 )
 from supercoil.cli._common import MAX_NAME_BYTES, fail, path_kind, warn
@@ -114,7 +115,9 @@ def open_writer(out: Path, *, resume: bool, problem: str, settings: dict,
     path = out / RESULT_FILE
     try:
         if resume:
-            return ResultWriter.reopen(path)
+            writer = ResultWriter.reopen(path)
+            raise_limits(writer, plain(settings))
+            return writer
         return ResultWriter.create(path, problem=problem, settings=plain(settings),
                                    units=units, attributes=attributes, provenance=provenance,
                                    overwrite=True)

@@ -139,8 +139,9 @@ def tweezers(
     overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in --out DIR from its result.h5 (the "
-        "same options): finished branches are kept, the others continued from their last "
-        "point.")] = False,
+        "same options; --max-points may be raised): finished branches are kept, the others "
+        "continued from their last point, and those that stopped at --max-points continued "
+        "up to a raised one.")] = False,
     dna: Annotated[bool, typer.Option(
         "--dna", help="A DNA molecule in physical units (--bp, --force-pN, --salt-mM or "
         "--diameter-nm, --temperature-K) instead of --twist-ratio, --tension and "

@@ -90,6 +90,8 @@ class Contents:
             for name in HEADER_TEXT:
                 if name in args:
                     self.header[name] = str(args[name])
+        elif op == "settings":
+            self.header["settings"] = args["settings"]
         elif op == "attribute":
             self.attributes[str(args["key"])] = args["value"]
         elif op == "extra":

@@ -334,6 +334,16 @@ class ResultWriter:
         self._record("header", args)
         self._contents.apply("header", args, {})
 
+    def stored_settings(self) -> dict:
+        """The settings stored in the result (plain data)."""
+        return json.loads(json.dumps(self._contents.header["settings"]))
+
+    def set_settings(self, settings: dict) -> None:
+        """Replace the stored settings (a resumed run that raised a point limit)."""
+        args = {"settings": to_jsonable(settings)}
+        self._record("settings", args)
+        self._contents.apply("settings", args, {})
+
     def set_attribute(self, key: str, value) -> None:
         args = {"key": str(key), "value": _plain(value)}
         self._record("attribute", args)

@@ -85,3 +85,53 @@ def test_a_switched_branch_elsewhere_is_followed_and_kept(switched):
     best, _ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
     assert best.status is ContinuationStatus.MAX_POINTS
     assert best.parameter_values[-1] == 3.0
+
+
+def test_each_switched_branch_is_handed_over_under_its_own_name(switched):
+    # oracle: try_names, written out: the 2 amplitudes x 2 sides of the one bifurcation
+    candidates, tried = switched
+    candidates.append(contact_branch(back_shift=0.0))
+    ended = []
+    module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE,
+                                on_branch=lambda b, final: ended.append((b.name, final)))
+    names = ["buckled_contact/bifurcation3"] + [
+        f"buckled_contact/bifurcation3_try{k}" for k in (2, 3, 4)]
+    assert tried == names and ended == [(n, True) for n in names]
+
+
+def test_a_resumed_switch_takes_the_tries_stored_and_continues_the_last(switched,
+                                                                       monkeypatch):
+    """Resumed with what an interrupted run stored: the finished tries are taken as
+    stored and not switched again; the stored try that a later one followed did not
+    start and is skipped; the last one stored is continued from its last point (its
+    first points here), not switched again; only the tries after it are switched.
+    Oracle: the best branch of the uninterrupted call, and which tries were switched."""
+    candidates, tried = switched
+    candidates.append(contact_branch(back_shift=0.0))
+    ended = {}
+    full, _ = module.switch_to_plectoneme(
+        OPTS, None, None, closed_contact(), free=FREE,
+        on_branch=lambda b, final: ended.__setitem__(b.name, b))
+    names = list(ended)
+    continued = []
+
+    def resume_stored(stored, rod, cp, name, *args, **kwargs):
+        continued.append(name)
+        return stored[name][0]
+
+    monkeypatch.setattr(module, "resume_stored", resume_stored)
+    monkeypatch.setattr(module, "stored_pins", lambda branch: ((0, (1,)),))
+    monkeypatch.setattr(module, "resumed_pins", lambda old, later: later)
+
+    def first_two(name):  # the first points of a try, as the interrupted run stored them
+        return dataclasses.replace(candidates[0], name=name, states=candidates[0].states[:2],
+                                   parameter_values=candidates[0].parameter_values[:2])
+
+    stored = {names[0]: (ended[names[0]], True), names[1]: (first_two(names[1]), False),
+              names[2]: (first_two(names[2]), False)}
+    tried.clear()
+    best, _ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE,
+                                          stored=stored)
+    assert continued == [names[2]] and tried == [names[3]]
+    assert best.name == full.name and len(best) == len(full)
+    np.testing.assert_array_equal(best.parameter_values, full.parameter_values)

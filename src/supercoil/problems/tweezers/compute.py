@@ -252,7 +252,8 @@ def tweezers_branches(options: TweezersOptions,
         # (supercoil.problems.tweezers.plectoneme)
         start = time.perf_counter()
         switched = switch_to_plectoneme(opts, rod, cp, last, on_point, pinned, say,
-                                        free=free, reach=reach)
+                                        free=free, reach=reach, stored=stored,
+                                        on_branch=final)
         if switched is None:
             notes.append(f"incomplete: {last.name} closed before {opts.turns[1]:g} turns "
                          f"({last.message}) and no switch at its bifurcations gave a branch")

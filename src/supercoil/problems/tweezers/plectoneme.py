@@ -27,11 +27,16 @@ every contact at 3.95 turns onto the contact-free branch, and follow it up to th
 straight rod's bifurcation point (17.33 turns), where the rod is straight and the
 azimuth pin can no longer be picked; without the closure that run was reported as a
 failed plectoneme.
+
+Each try has its own branch name (:func:`try_names`), and each branch followed is
+handed to the caller once it ends, so that a result stopped during the switches is
+continued by ``--resume`` without switching again: the tries that ended are taken as
+stored and the one that was being followed goes on from its last point.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
@@ -39,7 +44,12 @@ from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, ContinuationStatus, SpecialPoint, switch_branch
 from supercoil.problems.contact_events import classify_contact_events, contact_count_event
 from supercoil.problems.segments import follow, set_pin
-from supercoil.problems.tweezers.buckled import RunRecords
+from supercoil.problems.tweezers.buckled import (
+    RunRecords,
+    resume_stored,
+    resumed_pins,
+    stored_pins,
+)
 from supercoil.problems.tweezers.contact import contact_options
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, hold_azimuth
@@ -74,50 +84,100 @@ def switch_order(contact: Branch) -> list[SpecialPoint]:
     return [nearest] + [p for p in points if p is not nearest]
 
 
+def try_names(contact: Branch) -> list[tuple[SpecialPoint, float, int, str]]:
+    """The switches :func:`switch_to_plectoneme` tries, in order: ``(point, amplitude,
+    side, name)`` for the bifurcations of :func:`switch_order` (at most ``TRIES``), each
+    at the amplitudes of ``AMPLITUDES`` (of D) on either side of its critical mode. The
+    first try at a point names its branch ``{contact}/bifurcation{index}``, the k-th
+    ``{contact}/bifurcation{index}_try{k}``."""
+    out = []
+    for point in switch_order(contact)[:TRIES]:
+        tries = [(a, side) for a in AMPLITUDES for side in (1, -1)]
+        for k, (amplitude, side) in enumerate(tries, start=1):
+            name = f"{contact.name}/bifurcation{point.index}" + ("" if k == 1 else f"_try{k}")
+            out.append((point, amplitude, side, name))
+    return out
+
+
 def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
                          contact: Branch, on_point=None, pinned=None,
                          say: Callable[[str], None] = lambda message: None,
-                         free: Branch | None = None, reach: float = 1.0
+                         free: Branch | None = None, reach: float = 1.0,
+                         stored: Mapping[str, tuple[Branch, bool]] | None = None,
+                         on_branch: Callable[[Branch, bool], None] | None = None
                          ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]] | None:
     """The branch switched at a bifurcation of ``contact`` (module doc) that reaches
     furthest in turns, followed as the contact branch is, with its azimuth pins; None
     when no switch gives a branch. ``free``: the contact-free branch, onto which a
     switched branch that comes back is closed (``reach``: the closest approach, in D,
-    below which a contact acts)."""
+    below which a contact acts).
+
+    ``on_branch(branch, True)`` receives each switched branch followed, once it ends
+    (those that reach less far too). ``stored`` (name -> ``(branch, complete)``, a
+    resumed run's) gives the tries already made (:func:`try_names`): a complete one is
+    taken as it is; an incomplete one continued from its last point as the interrupted
+    run went on, unless a later try is stored too (the interrupted run went on to it:
+    this one did not start)."""
     base = contact_options(opts)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
+    stored = stored or {}
+    tries = try_names(contact)
     best = None
-    points = switch_order(contact)[:TRIES]
-    pin = contact.records["azimuth_pin"]
-    for point in points:
-        for amplitude in AMPLITUDES:
-            for side in (1, -1):
-                at = min(point.index + 1, len(contact) - 1)
-                if pin[at] >= 0:
-                    hold_azimuth(rod, (int(pin[at]),), cp)
-                else:
-                    set_pin(cp, rod, point.q)
-                name = f"{contact.name}/bifurcation{point.index}"
-                records.begin(0)
-                first = switch_branch(cp, contact, point, base, side=side,
-                                      amplitude=amplitude * opts.diameter, name=name,
-                                      records=records, events=events, on_point=on_point,
-                                      stop=pinned)
-                if len(first) < 2 or first.status is ContinuationStatus.CLOSED_LOOP:
-                    continue
-                say(f"{name}: switched at {point.parameter:.6g} turns")
-                branch, pins = follow(cp, rod, first, base, name, records, events,
-                                      max_points=opts.max_points,
-                                      segment_points=opts.segment_points, on_point=on_point,
-                                      quality=PIN_QUALITY, refuse=pinned,
-                                      on_run=records.begin)
-                branch = classify_contact_events(branch, cp)
-                if free is not None:
-                    branch = close_on_return(branch, free, opts.diameter, reach)
-                if best is None or branch.parameter_values[-1] > best[0].parameter_values[-1]:
-                    best = (branch, pins)
-                if branch.status is ContinuationStatus.PARAMETER_BOUND \
-                        and branch.parameter_values[-1] >= opts.turns[1] - 1e-9:
-                    return best
+    for k, (point, amplitude, side, name) in enumerate(tries):
+        old, complete = stored.get(name, (None, False))
+        if complete:
+            branch, pins = old, stored_pins(old)
+        else:
+            if old is not None and any(n in stored for *_, n in tries[k + 1:]):
+                continue  # the interrupted run went on to a later try: this one did not start
+            followed = _switched(opts, rod, cp, contact, point, amplitude, side, name, base,
+                                 records, events, on_point, pinned, say, old)
+            if followed is None:
+                continue
+            branch, pins = followed
+            branch = classify_contact_events(branch, cp)
+            if free is not None:
+                branch = close_on_return(branch, free, opts.diameter, reach)
+            if on_branch is not None:
+                on_branch(branch, True)
+        if best is None or branch.parameter_values[-1] > best[0].parameter_values[-1]:
+            best = (branch, pins)
+        if branch.status is ContinuationStatus.PARAMETER_BOUND \
+                and branch.parameter_values[-1] >= opts.turns[1] - 1e-9:
+            return best
     return best
+
+
+def _switched(opts, rod, cp, contact, point, amplitude, side, name, base, records, events,
+              on_point, pinned, say, old=None):
+    """The branch ``name`` switched at ``point`` (``amplitude`` in D, ``side`` of its
+    critical mode) and followed, with its pins, or None when it does not start (fewer
+    than two points, or closed in its first run). ``old``: the stored incomplete branch
+    of an interrupted run, continued from its last point instead."""
+    resumed = old is not None and len(old) >= 2
+    if resumed:
+        first = resume_stored({name: (old, False)}, rod, cp, name, base, records, events,
+                              on_point, pinned, sliding=False, max_points=opts.max_points)
+        say(f"{name}: continued from point {len(old) - 1}")
+    else:
+        pin = contact.records["azimuth_pin"]
+        at = min(point.index + 1, len(contact) - 1)
+        if pin[at] >= 0:
+            hold_azimuth(rod, (int(pin[at]),), cp)
+        else:
+            set_pin(cp, rod, point.q)
+        records.begin(0)
+        first = switch_branch(cp, contact, point, base, side=side,
+                              amplitude=amplitude * opts.diameter, name=name,
+                              records=records, events=events, on_point=on_point, stop=pinned)
+    in_first_run = not np.any(first.records.get("run_start", np.zeros(1)))
+    if len(first) < 2 or (in_first_run and first.status is ContinuationStatus.CLOSED_LOOP):
+        return None
+    if not resumed:
+        say(f"{name}: switched at {point.parameter:.6g} turns")
+    branch, pins = follow(cp, rod, first, base, name, records, events,
+                          max_points=opts.max_points, segment_points=opts.segment_points,
+                          on_point=on_point, quality=PIN_QUALITY, refuse=pinned,
+                          on_run=records.begin)
+    return (branch, resumed_pins(old, pins)) if resumed else (branch, pins)

@@ -64,7 +64,7 @@ def test_a_switched_branch_back_on_the_contact_free_branch_is_closed_there(switc
     # straight rod)
     candidates, tried = switched
     candidates.append(contact_branch(back_shift=0.0))
-    best, _ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
+    best, *_ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
     assert best.status is ContinuationStatus.CLOSED_LOOP
     assert len(best) == 6 and best.parameter_values[-1] == 1.63
     # closed: every other switch was tried too (2 amplitudes x 2 sides)
@@ -82,7 +82,7 @@ def test_a_switched_branch_elsewhere_is_followed_and_kept(switched):
     candidates.append(branch("away", turns, np.array([centreline(t, shift=0.2) for t in turns]),
                              away.records["n_contact_points"],
                              away.records["min_gap_over_diameter"]))
-    best, _ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
+    best, *_ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
     assert best.status is ContinuationStatus.MAX_POINTS
     assert best.parameter_values[-1] == 3.0
 
@@ -102,14 +102,14 @@ def test_each_switched_branch_is_handed_over_under_its_own_name(switched):
 def test_a_resumed_switch_takes_the_tries_stored_and_continues_the_last(switched,
                                                                        monkeypatch):
     """Resumed with what an interrupted run stored: the finished tries are taken as
-    stored and not switched again; the stored try that a later one followed did not
-    start and is skipped; the last one stored is continued from its last point (its
-    first points here), not switched again; only the tries after it are switched.
+    stored and not switched again, one stored as not started is passed over, the
+    incomplete one is continued from its last point (its first points here), not
+    switched again; only the tries after it are switched.
     Oracle: the best branch of the uninterrupted call, and which tries were switched."""
     candidates, tried = switched
     candidates.append(contact_branch(back_shift=0.0))
     ended = {}
-    full, _ = module.switch_to_plectoneme(
+    full, *_ = module.switch_to_plectoneme(
         OPTS, None, None, closed_contact(), free=FREE,
         on_branch=lambda b, final: ended.__setitem__(b.name, b))
     names = list(ended)
@@ -127,11 +127,69 @@ def test_a_resumed_switch_takes_the_tries_stored_and_continues_the_last(switched
         return dataclasses.replace(candidates[0], name=name, states=candidates[0].states[:2],
                                    parameter_values=candidates[0].parameter_values[:2])
 
-    stored = {names[0]: (ended[names[0]], True), names[1]: (first_two(names[1]), False),
+    not_started = dataclasses.replace(first_two(names[1]),
+                                      status=ContinuationStatus.START_FAILED)
+    stored = {names[0]: (ended[names[0]], True), names[1]: (not_started, True),
               names[2]: (first_two(names[2]), False)}
     tried.clear()
-    best, _ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE,
+    best, *_ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE,
                                           stored=stored)
     assert continued == [names[2]] and tried == [names[3]]
     assert best.name == full.name and len(best) == len(full)
     np.testing.assert_array_equal(best.parameter_values, full.parameter_values)
+
+
+def test_a_switched_branch_that_closes_on_itself_is_switched_at_its_crossing(switched,
+                                                                            monkeypatch):
+    """The first switch closes on itself (away from FREE) with bifurcations at its
+    points 2 and 5, the loop closing at its last point, nearest point 5's state: it is
+    switched again there first (and only there), and that branch, reaching the last
+    turn, is the result, reached via the closed one. Oracle: the hand-made branches'
+    names, closure and turns."""
+    candidates, tried = switched
+    away = contact_branch(back_shift=2 * D)
+    turns = np.array([1.8, 1.9, 2.0, 2.1, 2.2, 2.1, 2.0, 2.05])
+    states = np.array([centreline(t, shift=0.2) for t in turns])
+    states[-1] = states[5] + 1e-3  # back round the loop, next to the crossing at point 5
+    marks = [SpecialPoint(kind="bifurcation", label="BP", branch="closed", index=i,
+                          parameter=float(turns[i]), arclength=float(i), q=states[i],
+                          multipliers=np.zeros(0), tangent=np.zeros(states.shape[1] + 1))
+             for i in (2, 5)]
+    loop = dataclasses.replace(
+        branch("closed", turns, states, away.records["n_contact_points"],
+               away.records["min_gap_over_diameter"]),
+        special_points=tuple(marks), status=ContinuationStatus.CLOSED_LOOP,
+        records=dict(away.records) | {"azimuth_pin": np.full(8, -1)})
+    reach = np.array([2.0, 2.2, 2.4, 2.6, 2.8, 3.0, 3.0, 3.0])[:7]
+    onward = branch("onward", reach, np.array([centreline(t, shift=0.4) for t in reach]),
+                    away.records["n_contact_points"][:7],
+                    away.records["min_gap_over_diameter"][:7])
+    onward = dataclasses.replace(onward, status=ContinuationStatus.PARAMETER_BOUND)
+    candidates.extend([loop, onward])
+
+    def switch_branch(cp, contact, point, base, **kwargs):  # each switch starts
+        tried.append(kwargs["name"])
+        whole = candidates[min(len(tried) - 1, len(candidates) - 1)]
+        return dataclasses.replace(whole, parameter_values=whole.parameter_values[:2],
+                                   states=whole.states[:2],
+                                   status=ContinuationStatus.MAX_POINTS)
+
+    monkeypatch.setattr(module, "switch_branch", switch_branch)
+    best = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
+    assert tried == ["buckled_contact/bifurcation3",
+                     "buckled_contact/bifurcation3/bifurcation5"]
+    assert best.branch.name == "buckled_contact/bifurcation3/bifurcation5"
+    assert best.branch.parameter_values[-1] == 3.0
+    assert [b.name for b, _ in best.via] == ["buckled_contact/bifurcation3"]
+
+
+def test_a_switch_that_does_not_start_is_handed_over_as_such(switched):
+    # the switch's first run closes at once: not followed, stored as not started
+    candidates, tried = switched
+    candidates.append(dataclasses.replace(contact_branch(back_shift=0.0),
+                                          status=ContinuationStatus.CLOSED_LOOP))
+    ended = []
+    best = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE,
+                                       on_branch=lambda b, final: ended.append(b.status))
+    assert best is None and len(tried) == 4
+    assert ended == [ContinuationStatus.START_FAILED] * 4

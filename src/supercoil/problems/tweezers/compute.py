@@ -259,7 +259,17 @@ def tweezers_branches(options: TweezersOptions,
                          f"({last.message}) and no switch at its bifurcations gave a branch")
         else:
             closed_branch = last
-            last, switched_pins = switched
+            for via, via_pins in switched.via:  # closed switched branches, switched again
+                via = verify_bifurcations(via)
+                final(via, True)
+                branches.append(via)
+                names.add(via.name)
+                pins[via.name] = via_pins
+                notes.append(f"{closed_branch.name}: closed ({closed_branch.message}); "
+                             f"switched at its bifurcation at {via.origin.parameter:.6g} "
+                             f"turns: {via.name}")
+                closed_branch = via
+            last, switched_pins = switched.branch, switched.pins
             last = verify_bifurcations(last)
             seconds[last.name] = time.perf_counter() - start
             final(last, True)

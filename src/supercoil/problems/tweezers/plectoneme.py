@@ -28,6 +28,13 @@ straight rod's bifurcation point (17.33 turns), where the rod is straight and th
 azimuth pin can no longer be picked; without the closure that run was reported as a
 failed plectoneme.
 
+A switched branch can also close on itself, on a loop entered by a jump as the contact
+branch's (:func:`switch_order`): measured at L/D = 200, lambda = 150, C/A = 1.5, N = 202,
+the branch switched at the contact branch's crossing at 24.52 turns rose to 27.21 turns
+and closed after 5264 points at 26.65 turns, next to a bifurcation it had crossed 38
+points before. It is then switched again at its bifurcation nearest the closure
+(``NESTED`` levels deep).
+
 Each try has its own branch name (:func:`try_names`), and each branch followed is
 handed to the caller once it ends, so that a result stopped during the switches is
 continued by ``--resume`` without switching again: the tries that ended are taken as
@@ -36,7 +43,9 @@ stored and the one that was being followed goes on from its last point.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
+from typing import NamedTuple
 
 import numpy as np
 
@@ -51,14 +60,16 @@ from supercoil.problems.tweezers.buckled import (
     stored_pins,
 )
 from supercoil.problems.tweezers.contact import contact_options
+from supercoil.problems.tweezers.mirrored import closed_before
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, hold_azimuth
 from supercoil.problems.tweezers.problem import tweezers_records
-from supercoil.problems.tweezers.returned import close_on_return
+from supercoil.problems.tweezers.returned import close_on_return, returned_onto
 from supercoil.rod.open import ClampedRodEnergy
 
 AMPLITUDES = (5e-4, 5e-3)  # of D: the first point's distance from the bifurcation
 TRIES = 4  # the bifurcations tried, in the order of switch_order
+NESTED = 2  # levels of switches at a closed switched branch's nearest bifurcation
 
 
 def switch_order(contact: Branch) -> list[SpecialPoint]:
@@ -84,14 +95,24 @@ def switch_order(contact: Branch) -> list[SpecialPoint]:
     return [nearest] + [p for p in points if p is not nearest]
 
 
-def try_names(contact: Branch) -> list[tuple[SpecialPoint, float, int, str]]:
+class Switched(NamedTuple):
+    """:func:`switch_to_plectoneme`'s result: the switched branch that reaches furthest,
+    its azimuth pins, and the closed switched branches it was switched from (``(branch,
+    pins)``, the outermost first; empty for a switch at the contact branch itself)."""
+
+    branch: Branch
+    pins: tuple[tuple[int, tuple[int, ...]], ...]
+    via: tuple[tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]], ...]
+
+
+def try_names(contact: Branch, points: int = TRIES) -> list[tuple[SpecialPoint, float, int, str]]:
     """The switches :func:`switch_to_plectoneme` tries, in order: ``(point, amplitude,
-    side, name)`` for the bifurcations of :func:`switch_order` (at most ``TRIES``), each
+    side, name)`` for the bifurcations of :func:`switch_order` (at most ``points``), each
     at the amplitudes of ``AMPLITUDES`` (of D) on either side of its critical mode. The
     first try at a point names its branch ``{contact}/bifurcation{index}``, the k-th
     ``{contact}/bifurcation{index}_try{k}``."""
     out = []
-    for point in switch_order(contact)[:TRIES]:
+    for point in switch_order(contact)[:points]:
         tries = [(a, side) for a in AMPLITUDES for side in (1, -1)]
         for k, (amplitude, side) in enumerate(tries, start=1):
             name = f"{contact.name}/bifurcation{point.index}" + ("" if k == 1 else f"_try{k}")
@@ -104,8 +125,8 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
                          say: Callable[[str], None] = lambda message: None,
                          free: Branch | None = None, reach: float = 1.0,
                          stored: Mapping[str, tuple[Branch, bool]] | None = None,
-                         on_branch: Callable[[Branch, bool], None] | None = None
-                         ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]] | None:
+                         on_branch: Callable[[Branch, bool], None] | None = None,
+                         depth: int = 0) -> Switched | None:
     """The branch switched at a bifurcation of ``contact`` (module doc) that reaches
     furthest in turns, followed as the contact branch is, with its azimuth pins; None
     when no switch gives a branch. ``free``: the contact-free branch, onto which a
@@ -115,24 +136,29 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
     ``on_branch(branch, True)`` receives each switched branch followed, once it ends
     (those that reach less far too). ``stored`` (name -> ``(branch, complete)``, a
     resumed run's) gives the tries already made (:func:`try_names`): a complete one is
-    taken as it is; an incomplete one continued from its last point as the interrupted
-    run went on, unless a later try is stored too (the interrupted run went on to it:
-    this one did not start)."""
+    taken as it is (or passed over, stored as not started); an incomplete one, the one
+    the interrupted run was computing, continued from its last point.
+
+    A switched branch that closes on itself before the last turn (not onto ``free``) is
+    itself switched at its
+    bifurcations (``NESTED`` levels deep, the nearest to its closure only: the crossing
+    where the loop closed, :func:`switch_order`); the result's ``via`` lists the closed
+    branches it was switched from, the outermost first."""
     base = contact_options(opts)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     stored = stored or {}
-    tries = try_names(contact)
+    tries = try_names(contact, TRIES if depth == 0 else 1)
     best = None
-    for k, (point, amplitude, side, name) in enumerate(tries):
+    for point, amplitude, side, name in tries:
         old, complete = stored.get(name, (None, False))
+        if complete and old.status is ContinuationStatus.START_FAILED:
+            continue  # stored as a switch that did not start
         if complete:
             branch, pins = old, stored_pins(old)
         else:
-            if old is not None and any(n in stored for *_, n in tries[k + 1:]):
-                continue  # the interrupted run went on to a later try: this one did not start
             followed = _switched(opts, rod, cp, contact, point, amplitude, side, name, base,
-                                 records, events, on_point, pinned, say, old)
+                                 records, events, on_point, pinned, say, old, on_branch)
             if followed is None:
                 continue
             branch, pins = followed
@@ -141,20 +167,30 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
                 branch = close_on_return(branch, free, opts.diameter, reach)
             if on_branch is not None:
                 on_branch(branch, True)
-        if best is None or branch.parameter_values[-1] > best[0].parameter_values[-1]:
-            best = (branch, pins)
-        if branch.status is ContinuationStatus.PARAMETER_BOUND \
-                and branch.parameter_values[-1] >= opts.turns[1] - 1e-9:
+        found = Switched(branch, pins, ())
+        if depth < NESTED and closed_before(branch, opts.turns[1]) and (
+                free is None or returned_onto(branch, free, opts.diameter, reach) is None):
+            inner = switch_to_plectoneme(opts, rod, cp, branch, on_point, pinned, say, free,
+                                         reach, stored, on_branch, depth + 1)
+            if inner is not None and inner.branch.parameter_values[-1] > \
+                    branch.parameter_values[-1]:
+                found = Switched(inner.branch, inner.pins, ((branch, pins), *inner.via))
+        if best is None or found.branch.parameter_values[-1] > \
+                best.branch.parameter_values[-1]:
+            best = found
+        if best.branch.status is ContinuationStatus.PARAMETER_BOUND \
+                and best.branch.parameter_values[-1] >= opts.turns[1] - 1e-9:
             return best
     return best
 
 
 def _switched(opts, rod, cp, contact, point, amplitude, side, name, base, records, events,
-              on_point, pinned, say, old=None):
+              on_point, pinned, say, old=None, on_branch=None):
     """The branch ``name`` switched at ``point`` (``amplitude`` in D, ``side`` of its
     critical mode) and followed, with its pins, or None when it does not start (fewer
-    than two points, or closed in its first run). ``old``: the stored incomplete branch
-    of an interrupted run, continued from its last point instead."""
+    than two points, or closed in its first run: handed to ``on_branch`` with the status
+    ``START_FAILED``). ``old``: the stored incomplete branch of an interrupted run,
+    continued from its last point instead."""
     resumed = old is not None and len(old) >= 2
     if resumed:
         first = resume_stored({name: (old, False)}, rod, cp, name, base, records, events,
@@ -173,6 +209,10 @@ def _switched(opts, rod, cp, contact, point, amplitude, side, name, base, record
                               records=records, events=events, on_point=on_point, stop=pinned)
     in_first_run = not np.any(first.records.get("run_start", np.zeros(1)))
     if len(first) < 2 or (in_first_run and first.status is ContinuationStatus.CLOSED_LOOP):
+        if on_branch is not None:
+            on_branch(dataclasses.replace(
+                first, status=ContinuationStatus.START_FAILED,
+                message=f"the switch did not start: {first.message}"), True)
         return None
     if not resumed:
         say(f"{name}: switched at {point.parameter:.6g} turns")

@@ -141,11 +141,12 @@ def test_a_resumed_switch_takes_the_tries_stored_and_continues_the_last(switched
 
 def test_a_switched_branch_that_closes_on_itself_is_switched_at_its_crossing(switched,
                                                                             monkeypatch):
-    """The first switch closes on itself (away from FREE) with bifurcations at its
-    points 2 and 5, the loop closing at its last point, nearest point 5's state: it is
-    switched again there first (and only there), and that branch, reaching the last
-    turn, is the result, reached via the closed one. Oracle: the hand-made branches'
-    names, closure and turns."""
+    """The first switch closes on itself (away from FREE) with located count changes
+    at its points 2 and 5, the loop closing at its last point, nearest point 5's state:
+    the change at 5 verified (the counts 0 before it, 1 after), the one at 2 not (0 on
+    both sides): it is switched again at 5 (and only there), and that branch, reaching
+    the last turn, is the result, reached via the closed one. Oracle: the hand-made
+    branches' names, counts, closure and turns."""
     candidates, tried = switched
     away = contact_branch(back_shift=2 * D)
     turns = np.array([1.8, 1.9, 2.0, 2.1, 2.2, 2.1, 2.0, 2.05])
@@ -153,12 +154,14 @@ def test_a_switched_branch_that_closes_on_itself_is_switched_at_its_crossing(swi
     states[-1] = states[5] + 1e-3  # back round the loop, next to the crossing at point 5
     marks = [SpecialPoint(kind="bifurcation", label="BP", branch="closed", index=i,
                           parameter=float(turns[i]), arclength=float(i), q=states[i],
-                          multipliers=np.zeros(0), tangent=np.zeros(states.shape[1] + 1))
-             for i in (2, 5)]
+                          multipliers=np.zeros(0), tangent=np.zeros(states.shape[1] + 1),
+                          count_before=0, count_after=after)
+             for i, after in ((2, 1), (5, 1))]
     loop = dataclasses.replace(
         branch("closed", turns, states, away.records["n_contact_points"],
                away.records["min_gap_over_diameter"]),
         special_points=tuple(marks), status=ContinuationStatus.CLOSED_LOOP,
+        unstable_count=np.array([0, 0, 0, 0, 0, 0, 1, 1]),
         records=dict(away.records) | {"azimuth_pin": np.full(8, -1)})
     reach = np.array([2.0, 2.2, 2.4, 2.6, 2.8, 3.0, 3.0, 3.0])[:7]
     onward = branch("onward", reach, np.array([centreline(t, shift=0.4) for t in reach]),
@@ -181,6 +184,7 @@ def test_a_switched_branch_that_closes_on_itself_is_switched_at_its_crossing(swi
     assert best.branch.name == "buckled_contact/bifurcation3/bifurcation5"
     assert best.branch.parameter_values[-1] == 3.0
     assert [b.name for b, _ in best.via] == ["buckled_contact/bifurcation3"]
+    assert [p.kind for p in best.via[0][0].special_points] == ["count_change", "bifurcation"]
 
 
 def test_a_switch_that_does_not_start_is_handed_over_as_such(switched):

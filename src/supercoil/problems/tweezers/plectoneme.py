@@ -31,9 +31,11 @@ failed plectoneme.
 A switched branch can also close on itself, on a loop entered by a jump as the contact
 branch's (:func:`switch_order`): measured at L/D = 200, lambda = 150, C/A = 1.5, N = 202,
 the branch switched at the contact branch's crossing at 24.52 turns rose to 27.21 turns
-and closed after 5264 points at 26.65 turns, next to a bifurcation it had crossed 38
-points before. It is then switched again at its bifurcation nearest the closure
-(``NESTED`` levels deep).
+and closed after 5264 points at 26.65 turns, coming back to its point 5226 just past a
+count change at 26.645 turns among folds (it fails
+:func:`~supercoil.problems.tweezers.verify.verified`, and no switch there starts: the
+corrector diverges from all four first points). Such a branch is switched again at its
+verified bifurcation nearest the closure (``NESTED`` levels deep).
 
 Each try has its own branch name (:func:`try_names`), and each branch followed is
 handed to the caller once it ends, so that a result stopped during the switches is
@@ -65,6 +67,7 @@ from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, hold_azimuth
 from supercoil.problems.tweezers.problem import tweezers_records
 from supercoil.problems.tweezers.returned import close_on_return, returned_onto
+from supercoil.problems.tweezers.verify import verify_bifurcations
 from supercoil.rod.open import ClampedRodEnergy
 
 AMPLITUDES = (5e-4, 5e-3)  # of D: the first point's distance from the bifurcation
@@ -140,9 +143,8 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
     the interrupted run was computing, continued from its last point.
 
     A switched branch that closes on itself before the last turn (not onto ``free``) is
-    itself switched at its
-    bifurcations (``NESTED`` levels deep, the nearest to its closure only: the crossing
-    where the loop closed, :func:`switch_order`); the result's ``via`` lists the closed
+    itself switched, at its verified bifurcation nearest the closure
+    (:func:`switch_order`), ``NESTED`` levels deep; the result's ``via`` lists the closed
     branches it was switched from, the outermost first."""
     base = contact_options(opts)
     records = RunRecords(tweezers_records(cp, rod, True))
@@ -170,6 +172,7 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
         found = Switched(branch, pins, ())
         if depth < NESTED and closed_before(branch, opts.turns[1]) and (
                 free is None or returned_onto(branch, free, opts.diameter, reach) is None):
+            branch = verify_bifurcations(branch)  # its verified bifurcations only
             inner = switch_to_plectoneme(opts, rod, cp, branch, on_point, pinned, say, free,
                                          reach, stored, on_branch, depth + 1)
             if inner is not None and inner.branch.parameter_values[-1] > \

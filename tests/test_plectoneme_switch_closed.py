@@ -197,3 +197,43 @@ def test_a_switch_that_does_not_start_is_handed_over_as_such(switched):
                                        on_branch=lambda b, final: ended.append(b.status))
     assert best is None and len(tried) == 4
     assert ended == [ContinuationStatus.START_FAILED] * 4
+
+
+def test_the_tweezers_keep_the_closed_branches_a_switch_came_through(monkeypatch):
+    """The driver's bookkeeping of a switch reached through a closed switched branch: the
+    closed one and the switched one are both final branches of the result, in that
+    order after the contact branch, with their pins, seconds and a note each naming
+    where it was switched. Oracle: the hand-made Switched (the switch itself mocked,
+    and the contact branch of a small rod taken as closed)."""
+    from supercoil.problems.tweezers import compute
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=20, n_nodes=24,
+                           tension=20, turns=(0.0, 1.6))
+    monkeypatch.setattr(compute, "closed_before", lambda branch, last: True)
+    monkeypatch.setattr(compute, "held_contact", lambda *args, **kwargs: None)
+    made = {}
+
+    def switch(opts, rod, cp, last, *args, **kwargs):
+        point = last.special_points[0]
+        closed = dataclasses.replace(last, name=f"{last.name}/bifurcation{point.index}",
+                                     origin=point, status=ContinuationStatus.CLOSED_LOOP)
+        onward = dataclasses.replace(last, name=f"{closed.name}/bifurcation2",
+                                     origin=dataclasses.replace(point, parameter=1.25))
+        made.update(closed=closed.name, onward=onward.name)
+        return module.Switched(onward, ((0, (5,)),), ((closed, ((0, (3,)),)),),
+                               {closed.name: 2.5, onward.name: 1.5})
+
+    monkeypatch.setattr(compute, "switch_to_plectoneme", switch)
+    ended = []
+    result = compute.tweezers_branches(opts, on_branch=lambda b, c: ended.append(b.name))
+    names = [b.name for b in result.branches]
+    assert names[-3:] == ["buckled_contact", made["closed"], made["onward"]]
+    assert ended[-2:] == [made["closed"], made["onward"]]
+    assert result.pins[made["closed"]] == ((0, (3,)),)
+    assert result.pins[made["onward"]] == ((0, (5,)),)
+    assert result.seconds[made["closed"]] == 2.5
+    assert {made["closed"], made["onward"]} <= result.contact_branches
+    assert any(n.startswith(f"{made['closed']}: closed") and n.endswith(made["onward"])
+               for n in result.notes)
+    assert any(n.startswith("buckled_contact: closed") and n.endswith(made["closed"])
+               for n in result.notes)

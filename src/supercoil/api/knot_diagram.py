@@ -67,7 +67,8 @@ def knot_diagram(knot: str, twist_ratio: float, length_over_diameter: float,
     and closes it. ``resume``: ``True`` continues the result in ``out``; a result
     (:func:`supercoil.load`'s, or its file or folder) is continued from: its finished
     branches are kept, the others continued from their last point, and the stored
-    options must be these (as for :func:`supercoil.ring_diagram`). Invalid input
+    options must be these, but for a point limit, which may be raised (as for
+    :func:`supercoil.ring_diagram`). Invalid input
     raises :class:`supercoil.errors.InputError` before anything is computed or
     written.
     """

@@ -110,28 +110,39 @@ def _limit_values(settings) -> dict:
     return out
 
 
-def at_their_limit(branches: Mapping) -> list[str]:
-    """The names of the ``branches`` (name -> ``(branch, complete)``) that ended at
-    their point limit."""
+def reopened(branches: Mapping) -> tuple[list[str], list[str]]:
+    """For a run that raised a point limit, ``(reopen, drop)`` among the stored
+    ``branches`` (name -> ``(branch, complete)``, in the order they were computed): the
+    first finished branch that ended at its point limit is reopened (continued up to
+    the new limit; it stops again at once if its own limit did not change), and every
+    branch computed after it is dropped, to be computed again: what the drivers compute
+    next, and the names they give it (a secondary branch numbered by its point, a
+    deflated start), depends on the branches before."""
     from supercoil.continuation.options import ContinuationStatus
 
-    return [name for name, (b, _) in branches.items()
-            if b.status is ContinuationStatus.MAX_POINTS]
+    names = list(branches)
+    for k, name in enumerate(names):
+        b, complete = branches[name]
+        if complete and b.status is ContinuationStatus.MAX_POINTS:
+            return [name], names[k + 1:]
+    return [], []
 
 
 def raise_limits(writer, limits: Mapping) -> list[str]:
     """In the result ``writer`` continues, raise the stored point limits that
-    ``limits`` (name -> value) raises and mark the branches that ended at their limit
-    as not complete, so that the resumed run continues them (up to the new limit: a
-    branch's limit counts all its points). Returns those branches' names."""
+    ``limits`` (a run's options or settings) raises, reopen the first branch that ended
+    at its limit and remove the branches computed after it (:func:`reopened`). Returns
+    the reopened branch's name (or none)."""
     updated = raised_limits(writer.stored_settings(), limits)
     if updated is None:
         return []
     writer.set_settings(updated)
-    names = at_their_limit(writer.stored_branches())
-    for name in names:
+    reopen, drop = reopened(writer.stored_branches())
+    for name in reopen:
         writer.mark_complete(name, False)
-    return names
+    for name in drop:
+        writer.remove_branch(name)
+    return reopen
 
 
 def kept(writer) -> str:
@@ -157,7 +168,8 @@ def stored_branches(stored, kind: str, options, model: dict | None = None) -> di
     :class:`~supercoil.io.store.Result`, a result file or its folder), which must be a
     ``kind`` result computed with ``options`` (an options dataclass): the options both
     record must agree, and the rod model (``model``: a Cosserat rod's keys, None for the
-    Kirchhoff rod, which records none)."""
+    Kirchhoff rod, which records none). A point limit may be raised: the branches are
+    then those :func:`reopened` keeps, the first that ended at its limit unfinished."""
     import dataclasses
 
     from supercoil.io.store import Result, load
@@ -177,10 +189,13 @@ def stored_branches(stored, kind: str, options, model: dict | None = None) -> di
     if mismatch:
         raise InputError(f"resume: {result.path} was computed with another rod "
                          f"({mismatch}); give the same rod, or start anew")
-    reopened = set(at_their_limit({n: (b, True) for n, b in result.branches.items()})
-                   if raised_limits(have, want) is not None else ())
-    return {name: (b, name in result.complete_branches and name not in reopened)
-            for name, b in result.branches.items()}
+    branches = {name: (b, name in result.complete_branches)
+                for name, b in result.branches.items()}
+    if raised_limits(have, want) is None:
+        return branches
+    reopen, drop = reopened(branches)
+    return {name: (b, complete and name not in reopen) for name, (b, complete) in
+            branches.items() if name not in drop}
 
 
 def announce(stored: Mapping, say: Callable[[str], None]) -> None:

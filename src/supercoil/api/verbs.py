@@ -235,6 +235,9 @@ def _computed(kind: str, settings, compute, progress, on_point, out, resume, ove
                                        attributes=attributes, provenance=provenance,
                                        overwrite=overwrite, resume=again, model=model)
     if again and given:
+        import dataclasses
+
+        recording.raise_limits(writer, recording.plain(dataclasses.asdict(settings)))
         stored = writer.stored_branches()
     say = progress or (lambda message: None)
     if stored is not None:
@@ -286,7 +289,8 @@ def ring_diagram(rod: Rod, contact: Contact | None = None, *, max_excess_link: f
     error) and the exception raised again. ``resume``: ``True`` continues the
     result in ``out``; a result (:func:`supercoil.load`'s, or its file or
     folder) is continued from: its finished branches are kept, the others
-    continued from their last point. The stored options must be these.
+    continued from their last point. The stored options must be these, but for a
+    point limit, which may be raised (``docs/results.md``, ``--resume``).
     """
     from supercoil.api.files import options_attributes
     from supercoil.problems.ring_diagram import DiagramOptions, ring_diagram

@@ -2,8 +2,8 @@
 
 Thin: parses the options, checks them by building
 :class:`~supercoil.problems.knot_diagram.KnotDiagramOptions` and the output
-folder (with ``--resume``, the stored result's options) before anything is
-computed, then calls :func:`supercoil.knot_diagram`, which appends every
+folder (with ``--resume``, the stored result's options, a point limit only raised)
+before anything is computed, then calls :func:`supercoil.knot_diagram`, which appends every
 accepted point to ``result.h5`` as it comes (Ctrl-C or SIGTERM leave an
 ``interrupted`` result that ``--resume`` continues), writes ``diagram.json`` and
 draws the figures from its summary: ``link_writhe.png`` (dLk against Wr, as for

@@ -265,13 +265,15 @@ def tweezers_branches(options: TweezersOptions,
                 branches.append(via)
                 names.add(via.name)
                 pins[via.name] = via_pins
+                seconds[via.name] = switched.seconds.get(via.name, 0.0)
                 notes.append(f"{closed_branch.name}: closed ({closed_branch.message}); "
                              f"switched at its bifurcation at {via.origin.parameter:.6g} "
                              f"turns: {via.name}")
                 closed_branch = via
             last, switched_pins = switched.branch, switched.pins
             last = verify_bifurcations(last)
-            seconds[last.name] = time.perf_counter() - start
+            seconds[last.name] = (time.perf_counter() - start
+                                  - sum(seconds[b.name] for b, _ in switched.via))
             final(last, True)
             branches.append(last)
             names.add(last.name)

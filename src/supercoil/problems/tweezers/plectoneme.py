@@ -46,6 +46,7 @@ stored and the one that was being followed goes on from its last point.
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Callable, Mapping
 from typing import NamedTuple
 
@@ -100,12 +101,14 @@ def switch_order(contact: Branch) -> list[SpecialPoint]:
 
 class Switched(NamedTuple):
     """:func:`switch_to_plectoneme`'s result: the switched branch that reaches furthest,
-    its azimuth pins, and the closed switched branches it was switched from (``(branch,
-    pins)``, the outermost first; empty for a switch at the contact branch itself)."""
+    its azimuth pins, the closed switched branches it was switched from (``(branch,
+    pins)``, the outermost first; empty for a switch at the contact branch itself), and
+    the seconds spent on each branch followed (those taken as stored: none)."""
 
     branch: Branch
     pins: tuple[tuple[int, tuple[int, ...]], ...]
     via: tuple[tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]], ...]
+    seconds: Mapping[str, float]  # the time spent on each branch followed here, by name
 
 
 def try_names(contact: Branch, points: int = TRIES) -> list[tuple[SpecialPoint, float, int, str]]:
@@ -142,16 +145,18 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
     taken as it is (or passed over, stored as not started); an incomplete one, the one
     the interrupted run was computing, continued from its last point.
 
-    A switched branch that closes on itself before the last turn (not onto ``free``) is
-    itself switched, at its verified bifurcation nearest the closure
-    (:func:`switch_order`), ``NESTED`` levels deep; the result's ``via`` lists the closed
-    branches it was switched from, the outermost first."""
+    A switched branch that closes on itself before the last turn (not onto ``free``),
+    having reached further in turns than any try before it, is itself switched at its
+    verified bifurcation nearest the closure (:func:`switch_order`), ``NESTED`` levels
+    deep; the result's ``via`` lists the closed branches it was switched from, the
+    outermost first."""
     base = contact_options(opts)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     stored = stored or {}
     tries = try_names(contact, TRIES if depth == 0 else 1)
     best = None
+    seconds: dict[str, float] = {}
     for point, amplitude, side, name in tries:
         old, complete = stored.get(name, (None, False))
         if complete and old.status is ContinuationStatus.START_FAILED:
@@ -159,8 +164,10 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
         if complete:
             branch, pins = old, stored_pins(old)
         else:
+            start = time.perf_counter()
             followed = _switched(opts, rod, cp, contact, point, amplitude, side, name, base,
                                  records, events, on_point, pinned, say, old, on_branch)
+            seconds[name] = time.perf_counter() - start
             if followed is None:
                 continue
             branch, pins = followed
@@ -169,15 +176,21 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
                 branch = close_on_return(branch, free, opts.diameter, reach)
             if on_branch is not None:
                 on_branch(branch, True)
-        found = Switched(branch, pins, ())
+        found = Switched(branch, pins, (), seconds)
         if depth < NESTED and closed_before(branch, opts.turns[1]) and (
-                free is None or returned_onto(branch, free, opts.diameter, reach) is None):
-            branch = verify_bifurcations(branch)  # its verified bifurcations only
+                free is None or returned_onto(branch, free, opts.diameter, reach) is None) \
+                and (best is None or branch.parameter_values.max()
+                     > best.branch.parameter_values.max()):
+            # the furthest reaching so far, closed on itself: switched again, at its
+            # verified bifurcations only
+            branch = verify_bifurcations(branch)
             inner = switch_to_plectoneme(opts, rod, cp, branch, on_point, pinned, say, free,
                                          reach, stored, on_branch, depth + 1)
-            if inner is not None and inner.branch.parameter_values[-1] > \
-                    branch.parameter_values[-1]:
-                found = Switched(inner.branch, inner.pins, ((branch, pins), *inner.via))
+            if inner is not None:
+                seconds.update(inner.seconds)
+                if inner.branch.parameter_values[-1] > branch.parameter_values[-1]:
+                    found = Switched(inner.branch, inner.pins, ((branch, pins), *inner.via),
+                                     seconds)
         if best is None or found.branch.parameter_values[-1] > \
                 best.branch.parameter_values[-1]:
             best = found

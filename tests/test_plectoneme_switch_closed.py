@@ -237,3 +237,39 @@ def test_the_tweezers_keep_the_closed_branches_a_switch_came_through(monkeypatch
                for n in result.notes)
     assert any(n.startswith("buckled_contact: closed") and n.endswith(made["closed"])
                for n in result.notes)
+
+
+def test_a_switch_back_on_its_parent_is_refused_away_from_the_bifurcation():
+    """OnParent on a hand-made parent (a helix in 12 dimensions, 200 points): a state on
+    its polygon farther than 3 steps from the bifurcation is refused, naming the segment;
+    the same state near the bifurcation, or moved off the path by more than 1e-2 of a
+    step, is not. The pruned distance equals the brute-force one over every segment."""
+    s = np.linspace(0.0, 4.0, 200)
+    states = np.stack([np.cos(3 * s), np.sin(3 * s), s] + [np.sin((k + 2) * s) / (k + 2)
+                                                            for k in range(9)], axis=1)
+    parent = dataclasses.replace(contact_branch(back_shift=0.0), states=states,
+                                 parameter_values=s)
+    point = SpecialPoint(kind="bifurcation", label="BP", branch=parent.name, index=100,
+                         parameter=s[100], arclength=s[100], q=states[100],
+                         multipliers=np.zeros(0), tangent=np.zeros(13))
+    guard = module.OnParent(parent, point)
+    step = float(np.median(np.linalg.norm(np.diff(states, axis=0), axis=1)))
+    on_path = 0.5 * (states[40] + states[41])
+    message = guard(on_path)
+    assert guard.refused and "between its points 40 and 41" in message
+    fresh = module.OnParent(parent, point)
+    assert fresh(0.5 * (states[100] + states[101])) is None  # within reach of the point
+    normal = np.cross(states[41, :3] - states[40, :3], [0.0, 0.0, 1.0])
+    off = on_path.copy()
+    off[:3] += 0.05 * step * normal / np.linalg.norm(normal)
+    assert fresh(off) is None and not fresh.refused
+    rng = np.random.default_rng(1)
+    for q in states[rng.integers(0, 200, 20)] + 1e-3 * rng.standard_normal((20, 12)):
+        brute = min(np.linalg.norm(q - (states[i] + t * (states[i + 1] - states[i])))
+                    for i in range(199) for t in [np.clip(
+                        (q - states[i]) @ (states[i + 1] - states[i])
+                        / np.sum((states[i + 1] - states[i]) ** 2), 0.0, 1.0)])
+        d, _ = guard.distance(q)
+        assert d == pytest.approx(brute, rel=1e-12, abs=1e-15)
+        pruned, _ = guard.distance(q, within=2 * brute)
+        assert pruned == pytest.approx(brute, rel=1e-12, abs=1e-15)

@@ -256,13 +256,17 @@ def test_a_switch_back_on_its_parent_is_refused_away_from_the_bifurcation():
     step = float(np.median(np.linalg.norm(np.diff(states, axis=0), axis=1)))
     on_path = 0.5 * (states[40] + states[41])
     message = guard(on_path)
-    assert guard.refused and "between its points 40 and 41" in message
+    assert "between its points 40 and 41" in message
+    stopped = dataclasses.replace(parent, status=ContinuationStatus.STOPPED,
+                                  message=f"stopped after 7 points at turns = 1.5: {message}")
+    assert guard.ended(stopped)  # a run it stopped, not one that went on past a refusal
+    assert not guard.ended(dataclasses.replace(stopped, status=ContinuationStatus.MAX_POINTS))
     fresh = module.OnParent(parent, point)
     assert fresh(0.5 * (states[100] + states[101])) is None  # within reach of the point
     normal = np.cross(states[41, :3] - states[40, :3], [0.0, 0.0, 1.0])
     off = on_path.copy()
     off[:3] += 0.05 * step * normal / np.linalg.norm(normal)
-    assert fresh(off) is None and not fresh.refused
+    assert fresh(off) is None and not fresh.refusals
     rng = np.random.default_rng(1)
     for q in states[rng.integers(0, 200, 20)] + 1e-3 * rng.standard_normal((20, 12)):
         brute = min(np.linalg.norm(q - (states[i] + t * (states[i + 1] - states[i])))

@@ -234,7 +234,7 @@ def _switched(opts, rod, cp, contact, point, amplitude, side, name, base, record
                               records=records, events=events, on_point=on_point, stop=stop)
     in_first_run = not np.any(first.records.get("run_start", np.zeros(1)))
     if len(first) < 2 or (in_first_run and (first.status is ContinuationStatus.CLOSED_LOOP
-                                            or guard.refused)):
+                                            or guard.ended(first))):
         if on_branch is not None:
             on_branch(dataclasses.replace(
                 first, status=ContinuationStatus.START_FAILED,
@@ -258,7 +258,8 @@ class OnParent:
     plectoneme held by the mesh the switch can still land on the parent (measured at
     L/D = 200, lambda = 150, C/A = 1.5, N = 202: a branch switched at 26.649 turns ran
     back along its parent for 5195 points, within 1e-7 to 2e-5 of its polygon, against
-    steps of 2.3e-4). ``refused``: whether it refused a state."""
+    steps of 2.3e-4). :meth:`ended`: whether it ended a run (a refused trial step that
+    the run then halved and took does not)."""
 
     def __init__(self, parent: Branch, point: SpecialPoint):
         states = np.asarray(parent.states, dtype=float)
@@ -267,7 +268,7 @@ class OnParent:
         self.length2 = np.einsum("ij,ij->i", self.chord, self.chord)
         step = float(np.median(np.sqrt(self.length2))) if self.length2.size else 0.0
         self.tolerance, self.reach = PARENT_TOLERANCE * step, PARENT_REACH * step
-        self.refused = False
+        self.refusals: list[str] = []
         # the polygon projected on a few orthonormal directions: a projection shortens
         # distances, so only the segments within the tolerance there need the full one
         basis = np.random.default_rng(0).standard_normal((states.shape[1], PROJECTIONS))
@@ -297,9 +298,15 @@ class OnParent:
         d, i = self.distance(np.asarray(q, dtype=float), self.tolerance)
         if d > self.tolerance:
             return None
-        self.refused = True
-        return (f"back on the branch it was switched from ({self.name}): within {d:.2g} of "
-                f"its path between its points {i} and {i + 1}")
+        message = (f"back on the branch it was switched from ({self.name}): within "
+                   f"{d:.2g} of its path between its points {i} and {i + 1}")
+        self.refusals.append(message)
+        return message
+
+    def ended(self, run: Branch) -> bool:
+        """Whether ``run`` stopped on one of this stop's refusals."""
+        return run.status is ContinuationStatus.STOPPED and any(
+            m in run.message for m in self.refusals)
 
 
 def _segment_distances(q: np.ndarray, start: np.ndarray, chord: np.ndarray,

@@ -73,7 +73,7 @@ def _is_int(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
 
-def raised_limits(have, limits: Mapping) -> dict:
+def raised_limits(have, limits: Mapping) -> dict | None:
     """``have`` (stored settings, plain data) with each point limit (``POINT_LIMITS``,
     at any depth) that ``limits`` (a run's options or settings: the limits at any
     depth) raises set to its new value; None when none is raised."""

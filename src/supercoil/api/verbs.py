@@ -235,8 +235,6 @@ def _computed(kind: str, settings, compute, progress, on_point, out, resume, ove
                                        attributes=attributes, provenance=provenance,
                                        overwrite=overwrite, resume=again, model=model)
     if again and given:
-        import dataclasses
-
         recording.raise_limits(writer, recording.plain(dataclasses.asdict(settings)))
         stored = writer.stored_branches()
     say = progress or (lambda message: None)

@@ -260,8 +260,7 @@ def tweezers_branches(options: TweezersOptions,
         else:
             closed_branch = last
             for via, via_pins in switched.via:  # closed switched branches, switched again
-                via = verify_bifurcations(via)
-                final(via, True)
+                final(via, True)  # verified before they were switched again
                 branches.append(via)
                 names.add(via.name)
                 pins[via.name] = via_pins

@@ -27,7 +27,7 @@ def switched(monkeypatch):
         tried.append(kwargs["name"])
         whole = candidates[min(len(tried) - 1, len(candidates) - 1)]
         return dataclasses.replace(whole, parameter_values=whole.parameter_values[:2],
-                                   states=whole.states[:2])
+                                   states=whole.states[:2], name=kwargs["name"])
 
     def follow(cp, rod, first, base, name, *args, **kwargs):
         whole = candidates[min(len(tried) - 1, len(candidates) - 1)]
@@ -199,6 +199,35 @@ def test_a_switch_that_does_not_start_is_handed_over_as_such(switched):
     assert ended == [ContinuationStatus.START_FAILED] * 4
 
 
+def test_the_tries_and_why_they_did_not_start_are_collected_and_noted(switched):
+    # oracle: the mocked switch's runs, each closed at once (message "closed here"), and
+    # on resuming, the same tries stored as not started: collected again, none computed
+    candidates, tried = switched
+    candidates.append(dataclasses.replace(contact_branch(back_shift=0.0), message="closed here",
+                                          status=ContinuationStatus.CLOSED_LOOP))
+    contact = closed_contact()
+    collected, stored = [], {}
+    best = module.switch_to_plectoneme(
+        OPTS, None, None, contact, free=FREE, tried=collected,
+        on_branch=lambda b, final: stored.update({b.name: (b, final)}))
+    names = [name for *_, name in module.try_names(contact)]
+    assert best is None and [b.name for b in collected] == names == tried
+    assert all(b.message == "the switch did not start: closed here" for b in collected)
+    note = module.tries_note(contact, collected)
+    assert note.startswith(f"switches tried at {contact.name}'s bifurcations: ")
+    assert note.count("the switch did not start: closed here") == len(names)
+    again = []
+    assert module.switch_to_plectoneme(OPTS, None, None, contact, free=FREE, stored=stored,
+                                       tried=again) is None
+    assert len(tried) == len(names) and [b.name for b in again] == names
+    # a try that was followed is noted by where it ended and how far it reached
+    run = dataclasses.replace(contact_branch(back_shift=0.0), name="b/bifurcation3")
+    turns = run.parameter_values
+    assert module.tries_note(contact, [run]).endswith(
+        f"b/bifurcation3: {run.status.name.lower()} at {turns[-1]:.6g} turns after "
+        f"{len(run)} points ({turns.min():.6g} to {turns.max():.6g} turns)")
+
+
 def test_the_tweezers_keep_the_closed_branches_a_switch_came_through(monkeypatch):
     """The driver's bookkeeping of a switch reached through a closed switched branch: the
     closed one and the switched one are both final branches of the result, in that
@@ -277,3 +306,39 @@ def test_a_switch_back_on_its_parent_is_refused_away_from_the_bifurcation():
         assert d == pytest.approx(brute, rel=1e-12, abs=1e-15)
         pruned, _ = guard.distance(q, within=2 * brute)
         assert pruned == pytest.approx(brute, rel=1e-12, abs=1e-15)
+
+
+def test_a_run_whose_switches_give_no_branch_says_why_each_ended(monkeypatch):
+    """The driver's note when no switch gives a branch: each try named with the reason
+    it was handed back for (oracle: the mocked switch's two hand-made tries)."""
+    from supercoil.problems.tweezers import compute
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=20, n_nodes=24,
+                           tension=20, turns=(0.0, 1.6))
+    monkeypatch.setattr(compute, "closed_before", lambda branch, last: True)
+    monkeypatch.setattr(compute, "held_contact", lambda *args, **kwargs: None)
+
+    def switch(opts, rod, cp, last, *args, tried, **kwargs):
+        for k, why in enumerate(("the corrector diverged", "back on its parent")):
+            tried.append(dataclasses.replace(
+                last, name=f"{last.name}/bifurcation9_try{k + 2}",
+                status=ContinuationStatus.START_FAILED,
+                message=f"the switch did not start: {why}"))
+
+    from supercoil.continuation.resume import head
+
+    original = compute.contact_branch
+
+    def cut(*args, **kwargs):  # the contact branch closed before the last turn
+        branch, pins = original(*args, **kwargs)
+        return head(branch, 10), pins
+
+    monkeypatch.setattr(compute, "contact_branch", cut)
+    monkeypatch.setattr(compute, "switch_to_plectoneme", switch)
+    result = compute.tweezers_branches(opts)
+    said = [n for n in result.notes if n.startswith("switches tried at buckled_contact's")]
+    assert said == [("switches tried at buckled_contact's bifurcations: "
+                     "buckled_contact/bifurcation9_try2: the switch did not start: the "
+                     "corrector diverged; buckled_contact/bifurcation9_try3: the switch did "
+                     "not start: back on its parent")]
+    assert any(n.startswith("incomplete: buckled_contact closed") for n in result.notes)

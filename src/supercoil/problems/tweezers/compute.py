@@ -37,7 +37,7 @@ from supercoil.problems.tweezers.contact import contact_branch
 from supercoil.problems.tweezers.mirrored import closed_before, held_contact
 from supercoil.problems.tweezers.options import TweezersOptions, check_inextensible
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
-from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme
+from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme, tries_note
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
 from supercoil.problems.tweezers.result import TweezersResult, options_ply
 from supercoil.problems.tweezers.returned import close_on_return
@@ -246,6 +246,8 @@ def tweezers_branches(options: TweezersOptions,
             notes.append(f"{contact_name}: {why} ({contact.message}); followed again held "
                          f"on its half-turn symmetry: {last.name}")
             held_force_note(last, "the force its phase row holds", notes)
+    tried: list[Branch] = []  # the switches' tries, as they ended
+    closed_contact = last
     if closed_before(last, opts.turns[1]):
         # the contact branch of a centred loop comes back onto itself or onto the
         # contact-free branch: the plectoneme branches off it at a bifurcation
@@ -253,7 +255,7 @@ def tweezers_branches(options: TweezersOptions,
         start = time.perf_counter()
         switched = switch_to_plectoneme(opts, rod, cp, last, on_point, pinned, say,
                                         free=free, reach=reach, stored=stored,
-                                        on_branch=final)
+                                        on_branch=final, tried=tried)
         if switched is None:
             notes.append(f"incomplete: {last.name} closed before {opts.turns[1]:g} turns "
                          f"({last.message}) and no switch at its bifurcations gave a branch")
@@ -286,6 +288,8 @@ def tweezers_branches(options: TweezersOptions,
             n.startswith(f"incomplete: {last.name} closed") for n in notes):
         notes.append(f"incomplete: {last.name} ended at {last.parameter_values[-1]:.6g} "
                      f"turns, before {opts.turns[1]:g}: {last.message}")
+    if tried and last.parameter_values[-1] < opts.turns[1] - 1e-9:
+        notes.append(tries_note(closed_contact, tried))
     pinned_loop = pinned_loop_note(opts, last)
     if pinned_loop is not None:
         notes.append(pinned_loop)

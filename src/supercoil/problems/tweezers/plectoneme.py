@@ -132,13 +132,29 @@ def try_names(contact: Branch, points: int = TRIES) -> list[tuple[SpecialPoint, 
     return out
 
 
+def tries_note(closed: Branch, tried: list[Branch]) -> str:
+    """One note naming how each try at ``closed``'s bifurcations ended (``tried``, as
+    :func:`switch_to_plectoneme` collects them): why a switch did not start, or where a
+    switched branch ended and how far it reached."""
+    said = []
+    for branch in tried:
+        if branch.status is ContinuationStatus.START_FAILED or len(branch) == 0:
+            said.append(f"{branch.name}: {branch.message}")
+        else:
+            turns = branch.parameter_values
+            said.append(f"{branch.name}: {branch.status.name.lower()} at {turns[-1]:.6g} "
+                        f"turns after {len(branch)} points ({turns.min():.6g} to "
+                        f"{turns.max():.6g} turns)")
+    return f"switches tried at {closed.name}'s bifurcations: " + "; ".join(said)
+
+
 def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
                          contact: Branch, on_point=None, pinned=None,
                          say: Callable[[str], None] = lambda message: None,
                          free: Branch | None = None, reach: float = 1.0,
                          stored: Mapping[str, tuple[Branch, bool]] | None = None,
                          on_branch: Callable[[Branch, bool], None] | None = None,
-                         depth: int = 0) -> Switched | None:
+                         depth: int = 0, tried: list[Branch] | None = None) -> Switched | None:
     """The branch switched at a bifurcation of ``contact`` (module doc) that reaches
     furthest in turns, followed as the contact branch is, with its azimuth pins; None
     when no switch gives a branch. ``free``: the contact-free branch, onto which a
@@ -155,24 +171,37 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
     having reached further in turns than any try before it, is itself switched at its
     verified bifurcation nearest the closure (:func:`switch_order`), ``NESTED`` levels
     deep; the result's ``via`` lists the closed branches it was switched from, the
-    outermost first."""
+    outermost first.
+
+    ``tried``, when given, receives each try's branch as it ended, in the order tried
+    (nested tries included): taken as stored, followed, or with the status
+    ``START_FAILED`` and the reason in its message when the switch did not start."""
     base = contact_options(opts)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     stored = stored or {}
+    tried = [] if tried is None else tried
+
+    def ended(branch: Branch, complete: bool) -> None:
+        tried.append(branch)
+        if on_branch is not None:
+            on_branch(branch, complete)
+
     tries = try_names(contact, TRIES if depth == 0 else 1)
     best = None
     seconds: dict[str, float] = {}
     for point, amplitude, side, name in tries:
         old, complete = stored.get(name, (None, False))
         if complete and old.status is ContinuationStatus.START_FAILED:
+            tried.append(old)
             continue  # stored as a switch that did not start
         if complete:
+            tried.append(old)
             branch, pins = old, stored_pins(old)
         else:
             start = time.perf_counter()
             followed = _switched(opts, rod, cp, contact, point, amplitude, side, name, base,
-                                 records, events, on_point, pinned, say, old, on_branch)
+                                 records, events, on_point, pinned, say, old, ended)
             seconds[name] = time.perf_counter() - start
             if followed is None:
                 continue
@@ -180,8 +209,7 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
             branch = classify_contact_events(branch, cp)
             if free is not None:
                 branch = close_on_return(branch, free, opts.diameter, reach)
-            if on_branch is not None:
-                on_branch(branch, True)
+            ended(branch, True)
         found = Switched(branch, pins, (), seconds)
         if depth < NESTED and closed_before(branch, opts.turns[1]) and (
                 free is None or returned_onto(branch, free, opts.diameter, reach) is None) \
@@ -191,7 +219,7 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
             # verified bifurcations only
             branch = verify_bifurcations(branch)
             inner = switch_to_plectoneme(opts, rod, cp, branch, on_point, pinned, say, free,
-                                         reach, stored, on_branch, depth + 1)
+                                         reach, stored, on_branch, depth + 1, tried)
             if inner is not None:
                 seconds.update(inner.seconds)
                 if inner.branch.parameter_values[-1] > branch.parameter_values[-1]:

@@ -132,9 +132,13 @@ def test_a_resumed_switch_takes_the_tries_stored_and_continues_the_last(switched
     stored = {names[0]: (ended[names[0]], True), names[1]: (not_started, True),
               names[2]: (first_two(names[2]), False)}
     tried.clear()
+    collected = []
     best, *_ = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE,
-                                          stored=stored)
+                                          stored=stored, tried=collected)
     assert continued == [names[2]] and tried == [names[3]]
+    # every try once, in order: two taken as stored, one continued, one switched
+    assert [b.name for b in collected] == names
+    assert collected[0] is ended[names[0]] and collected[1] is not_started
     assert best.name == full.name and len(best) == len(full)
     np.testing.assert_array_equal(best.parameter_values, full.parameter_values)
 
@@ -178,9 +182,12 @@ def test_a_switched_branch_that_closes_on_itself_is_switched_at_its_crossing(swi
                                    status=ContinuationStatus.MAX_POINTS)
 
     monkeypatch.setattr(module, "switch_branch", switch_branch)
-    best = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE)
+    collected = []
+    best = module.switch_to_plectoneme(OPTS, None, None, closed_contact(), free=FREE,
+                                       tried=collected)
     assert tried == ["buckled_contact/bifurcation3",
                      "buckled_contact/bifurcation3/bifurcation5"]
+    assert [b.name for b in collected] == tried  # the nested try collected too
     assert best.branch.name == "buckled_contact/bifurcation3/bifurcation5"
     assert best.branch.parameter_values[-1] == 3.0
     assert [b.name for b, _ in best.via] == ["buckled_contact/bifurcation3"]
@@ -214,7 +221,7 @@ def test_the_tries_and_why_they_did_not_start_are_collected_and_noted(switched):
     assert best is None and [b.name for b in collected] == names == tried
     assert all(b.message == "the switch did not start: closed here" for b in collected)
     note = module.tries_note(contact, collected)
-    assert note.startswith(f"switches tried at {contact.name}'s bifurcations: ")
+    assert note.startswith(f"switches tried from {contact.name}: ")
     assert note.count("the switch did not start: closed here") == len(names)
     again = []
     assert module.switch_to_plectoneme(OPTS, None, None, contact, free=FREE, stored=stored,
@@ -249,6 +256,7 @@ def test_the_tweezers_keep_the_closed_branches_a_switch_came_through(monkeypatch
         onward = dataclasses.replace(last, name=f"{closed.name}/bifurcation2",
                                      origin=dataclasses.replace(point, parameter=1.25))
         made.update(closed=closed.name, onward=onward.name)
+        kwargs["tried"].append(closed)
         return module.Switched(onward, ((0, (5,)),), ((closed, ((0, (3,)),)),),
                                {closed.name: 2.5, onward.name: 1.5})
 
@@ -266,6 +274,9 @@ def test_the_tweezers_keep_the_closed_branches_a_switch_came_through(monkeypatch
                for n in result.notes)
     assert any(n.startswith("buckled_contact: closed") and n.endswith(made["closed"])
                for n in result.notes)
+    # the switched branch reaches the last turn: the tries are not listed
+    assert result.branches[-1].parameter_values[-1] == opts.turns[1]
+    assert not any(n.startswith("switches tried") for n in result.notes)
 
 
 def test_a_switch_back_on_its_parent_is_refused_away_from_the_bifurcation():
@@ -336,8 +347,8 @@ def test_a_run_whose_switches_give_no_branch_says_why_each_ended(monkeypatch):
     monkeypatch.setattr(compute, "contact_branch", cut)
     monkeypatch.setattr(compute, "switch_to_plectoneme", switch)
     result = compute.tweezers_branches(opts)
-    said = [n for n in result.notes if n.startswith("switches tried at buckled_contact's")]
-    assert said == [("switches tried at buckled_contact's bifurcations: "
+    said = [n for n in result.notes if n.startswith("switches tried from buckled_contact")]
+    assert said == [("switches tried from buckled_contact: "
                      "buckled_contact/bifurcation9_try2: the switch did not start: the "
                      "corrector diverged; buckled_contact/bifurcation9_try3: the switch did "
                      "not start: back on its parent")]

@@ -288,7 +288,7 @@ def tweezers_branches(options: TweezersOptions,
             n.startswith(f"incomplete: {last.name} closed") for n in notes):
         notes.append(f"incomplete: {last.name} ended at {last.parameter_values[-1]:.6g} "
                      f"turns, before {opts.turns[1]:g}: {last.message}")
-    if tried and last.parameter_values[-1] < opts.turns[1] - 1e-9:
+    if tried and (len(last) == 0 or last.parameter_values[-1] < opts.turns[1] - 1e-9):
         notes.append(tries_note(closed_contact, tried))
     pinned_loop = pinned_loop_note(opts, last)
     if pinned_loop is not None:

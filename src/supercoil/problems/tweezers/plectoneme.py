@@ -133,9 +133,10 @@ def try_names(contact: Branch, points: int = TRIES) -> list[tuple[SpecialPoint, 
 
 
 def tries_note(closed: Branch, tried: list[Branch]) -> str:
-    """One note naming how each try at ``closed``'s bifurcations ended (``tried``, as
-    :func:`switch_to_plectoneme` collects them): why a switch did not start, or where a
-    switched branch ended and how far it reached."""
+    """One note naming how each switch tried from ``closed`` ended (``tried``, as
+    :func:`switch_to_plectoneme` collects them, the nested ones at a closed switched
+    branch's bifurcations included): why a switch did not start, or where a switched
+    branch ended and how far it reached."""
     said = []
     for branch in tried:
         if branch.status is ContinuationStatus.START_FAILED or len(branch) == 0:
@@ -145,7 +146,7 @@ def tries_note(closed: Branch, tried: list[Branch]) -> str:
             said.append(f"{branch.name}: {branch.status.name.lower()} at {turns[-1]:.6g} "
                         f"turns after {len(branch)} points ({turns.min():.6g} to "
                         f"{turns.max():.6g} turns)")
-    return f"switches tried at {closed.name}'s bifurcations: " + "; ".join(said)
+    return f"switches tried from {closed.name}: " + "; ".join(said)
 
 
 def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,

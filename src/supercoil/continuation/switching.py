@@ -9,7 +9,16 @@ The predictor is ``x* + side * eps * v`` and the corrector solves
 a hyperplane orthogonal to the old tangent at distance ``eps``, which the old
 branch crosses only far away: Newton cannot fall back onto it. The new
 branch then continues from that point with the tangent oriented away from
-``x*``.
+``x*``. Where the corrector fails from that predictor the distance can be halved
+(``halvings`` times at most), as a continuation step is: the predictor's error
+is quadratic in ``eps``, and a stiff contact makes the quadratic term large (measured
+at L/D = 100, lambda = 150, C/A = 1.5, N = 204 on the tweezers' closed contact branch:
+from ``eps`` = 5e-4 D and 5e-3 D the corrector failed at all four of its bifurcations
+tried, on both sides, most at its second or third iteration). The old branch, curving
+away from its tangent, crosses the hyperplane at distance ``eps`` only ``O(sqrt(eps))``
+away from the predictor, so a shorter distance puts it relatively farther. A caller
+with its own sequence of distances to try (the ring diagram's secondary branches) needs
+none.
 
 Double zero eigenvalues from a symmetry (an O(2) orbit: eigenvalues crossing
 in pairs) are switched along one vector of the null space (``mode``, or an
@@ -92,13 +101,15 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
                   events: tuple[UserEvent, ...] = (),
                   on_point: PointCallback | None = None,
                   stop: Callable[[np.ndarray], str | None] | None = None,
-                  admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
+                  admissible: Callable[[np.ndarray], bool] | None = None,
+                  halvings: int = 0) -> Branch:
     """Follow the branch that bifurcates from ``special_point`` of ``branch`` (see module doc).
 
     ``side`` (+1 / -1) picks the half-branch along ``+-`` the critical mode
     number ``mode`` (or along ``direction``, a full DOF vector in the null
     space); ``amplitude`` is the distance of the first point from the
-    bifurcation (arclength metric; default ``options.initial_step``).
+    bifurcation (arclength metric; default ``options.initial_step``), halved where
+    the corrector fails from it, at most ``halvings`` times (module doc).
     The problem is never changed: the run starts from it carrying the frames the
     special point was located with (``special_point.frames``; else those of the
     branch's point before it, :func:`~supercoil.continuation.carry.frames_at`), carried
@@ -134,24 +145,31 @@ def switch_branch(problem: ConstrainedEnergy, branch: Branch, special_point: Spe
     v = np.concatenate([direction[plain.free], np.zeros(m + 1)])
     v = v - (v @ (plain.weights * t_old)) * t_old
     v = v / plain.norm(v)
-    q_pred = plain.q(plain.pack(q_star, special_point.multipliers, special_point.parameter)
-                     + side * eps * v)
-    modes = branch_phase_modes(plain.problem_at(special_point.parameter), q_pred, opts)
-    system = ExtendedSystem(problem, branch.parameter, q_star, modes, q_pred,
-                            opts.parameter_weight, opts.finite_difference_step)
-    v = np.concatenate([v[:n + m], np.zeros(system.r), v[-1:]])
-    x_star = system.pack(q_star, special_point.multipliers, special_point.parameter)
+    x_plain = plain.pack(q_star, special_point.multipliers, special_point.parameter)
+    tried = []
+    for _ in range(max(0, int(halvings)) + 1):
+        q_pred = plain.q(x_plain + side * eps * v)
+        modes = branch_phase_modes(plain.problem_at(special_point.parameter), q_pred, opts)
+        system = ExtendedSystem(problem, branch.parameter, q_star, modes, q_pred,
+                                opts.parameter_weight, opts.finite_difference_step)
+        u = np.concatenate([v[:n + m], np.zeros(system.r), v[-1:]])
+        x_star = system.pack(q_star, special_point.multipliers, special_point.parameter)
+        row = system.weights * u
+        corr = correct(system, x_star + side * eps * u, row, x_star, side * eps,
+                       opts.tolerance, 4 * opts.max_corrector_iterations)
+        tried.append(eps)
+        if corr.ok:
+            break
+        eps *= 0.5
     tracer = Tracer(system, opts, label, branch.name, special_point, records, events,
                      on_point)
     tracer.stop = stop
     if admissible is not None:
         tracer.admissible = admissible
-    row = system.weights * v
-    corr = correct(system, x_star + side * eps * v, row, x_star, side * eps, opts.tolerance,
-                   4 * opts.max_corrector_iterations)
     if not corr.ok:
         return tracer.branch(ContinuationStatus.START_FAILED,
-                             f"no point found on the bifurcating branch: {corr.message}")
+                             f"no point found on the bifurcating branch: {corr.message} "
+                             f"(at the distances {tried[0]:.3g} to {tried[-1]:.3g})")
     secant = corr.x - x_star
     try:
         t1 = tangent(system, corr.x, system.weights * secant / system.norm(secant))

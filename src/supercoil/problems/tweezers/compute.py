@@ -39,8 +39,9 @@ from supercoil.problems.tweezers.options import TweezersOptions, check_inextensi
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme, tries_note
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
+from supercoil.problems.tweezers.rejoin import rejoined
 from supercoil.problems.tweezers.result import TweezersResult, options_ply
-from supercoil.problems.tweezers.returned import close_on_return
+from supercoil.problems.tweezers.returned import close_on_return, returned_onto
 from supercoil.problems.tweezers.straight import (
     resolution_note,
     straight_branch,
@@ -246,6 +247,26 @@ def tweezers_branches(options: TweezersOptions,
             notes.append(f"{contact_name}: {why} ({contact.message}); followed again held "
                          f"on its half-turn symmetry: {last.name}")
             held_force_note(last, "the force its phase row holds", notes)
+    if last is contact and closed_before(last, opts.turns[1]) \
+            and returned_onto(last, free, D, reach) is None:
+        # closed on a curve it entered: followed again from before it (rejoin.py), and
+        # taken on where it reaches further
+        start = time.perf_counter()
+        again = rejoined(opts, rod, cp, last, stored, on_point, pinned, say)
+        if again is not None:
+            branch, branch_pins, entry, first = again
+            branch = verify_bifurcations(close_on_return(branch, free, D, reach))
+            seconds[branch.name] = time.perf_counter() - start
+            final(branch, True)
+            branches.append(branch)
+            names.add(branch.name)
+            pins[branch.name] = branch_pins
+            notes.append(f"{last.name}: closed ({last.message}); followed again from its "
+                         f"point {first}, before the closed curve it entered at its point "
+                         f"{entry} ({last.parameter_values[entry]:.6g} turns), the curve "
+                         f"refused: {branch.name}")
+            if len(branch) and branch.parameter_values.max() > last.parameter_values.max():
+                last = branch
     tried: list[Branch] = []  # the switches' tries, as they ended
     closed_contact = last
     if closed_before(last, opts.turns[1]):

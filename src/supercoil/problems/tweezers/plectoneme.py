@@ -75,6 +75,7 @@ from supercoil.problems.tweezers.verify import verify_bifurcations
 from supercoil.rod.open import ClampedRodEnergy
 
 AMPLITUDES = (5e-4, 5e-3)  # of D: the first point's distance from the bifurcation
+HALVINGS = 5  # of that distance where the first point's corrector fails (switch_branch)
 TRIES = 4  # the bifurcations tried, in the order of switch_order
 NESTED = 2  # levels of switches at a closed switched branch's nearest bifurcation
 PARENT_TOLERANCE = 1e-2  # of the parent's median step: a switched state on its path
@@ -260,7 +261,8 @@ def _switched(opts, rod, cp, contact, point, amplitude, side, name, base, record
         records.begin(0)
         first = switch_branch(cp, contact, point, base, side=side,
                               amplitude=amplitude * opts.diameter, name=name,
-                              records=records, events=events, on_point=on_point, stop=stop)
+                              records=records, events=events, on_point=on_point, stop=stop,
+                              halvings=HALVINGS)
     in_first_run = not np.any(first.records.get("run_start", np.zeros(1)))
     if len(first) < 2 or (in_first_run and (first.status is ContinuationStatus.CLOSED_LOOP
                                             or guard.ended(first))):
@@ -288,10 +290,12 @@ class OnParent:
     L/D = 200, lambda = 150, C/A = 1.5, N = 202: a branch switched at 26.649 turns ran
     back along its parent for 5195 points, within 1e-7 to 2e-5 of its polygon, against
     steps of 2.3e-4). :meth:`ended`: whether it ended a run (a refused trial step that
-    the run then halved and took does not)."""
+    the run then halved and took does not). ``what`` names ``parent`` in the refusal."""
 
-    def __init__(self, parent: Branch, point: SpecialPoint):
+    def __init__(self, parent: Branch, point: SpecialPoint,
+                 what: str = "the branch it was switched from"):
         states = np.asarray(parent.states, dtype=float)
+        self.what = what
         self.name, self.q = parent.name, np.asarray(point.q, dtype=float)
         self.start, self.chord = states[:-1], np.diff(states, axis=0)
         self.length2 = np.einsum("ij,ij->i", self.chord, self.chord)
@@ -311,12 +315,12 @@ class OnParent:
         nearest segment; ``(inf, -1)`` where no segment lies within ``within``."""
         rows = np.arange(self.length2.size)
         if self.basis is not None and math.isfinite(within):
-            d = _segment_distances(q @ self.basis, self.start_p, self.chord_p,
+            d = segment_distances(q @ self.basis, self.start_p, self.chord_p,
                                    self.length2_p)
             rows = rows[d <= within]
         if rows.size == 0:
             return math.inf, -1
-        d = _segment_distances(q, self.start[rows], self.chord[rows], self.length2[rows])
+        d = segment_distances(q, self.start[rows], self.chord[rows], self.length2[rows])
         i = int(np.argmin(d))
         return float(d[i]), int(rows[i])
 
@@ -327,7 +331,7 @@ class OnParent:
         d, i = self.distance(np.asarray(q, dtype=float), self.tolerance)
         if d > self.tolerance:
             return None
-        message = (f"back on the branch it was switched from ({self.name}): within "
+        message = (f"back on {self.what} ({self.name}): within "
                    f"{d:.2g} of its path between its points {i} and {i + 1}")
         self.refusals.append(message)
         return message
@@ -338,7 +342,7 @@ class OnParent:
             m in run.message for m in self.refusals)
 
 
-def _segment_distances(q: np.ndarray, start: np.ndarray, chord: np.ndarray,
+def segment_distances(q: np.ndarray, start: np.ndarray, chord: np.ndarray,
                        length2: np.ndarray) -> np.ndarray:
     """The distances of ``q`` from the segments ``start + t chord``, ``0 <= t <= 1``."""
     rel = q - start

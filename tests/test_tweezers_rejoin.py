@@ -88,7 +88,8 @@ def test_the_driver_keeps_the_branch_followed_again_where_it_reaches_further(mon
     def again(opts, rod, cp, closed, *args, **kwargs):
         made["from"] = closed.name
         whole = original_branch["branch"]
-        return dataclasses.replace(whole, name=closed.name + "/rejoined"), ((0, (7,)),), 6, 2
+        return module.Rejoined(dataclasses.replace(whole, name=closed.name + "/rejoined"),
+                               ((0, (7,)),), 6, 2, ())
 
     original_branch = {}
 

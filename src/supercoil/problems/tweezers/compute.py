@@ -39,7 +39,7 @@ from supercoil.problems.tweezers.options import TweezersOptions, check_inextensi
 from supercoil.problems.tweezers.pins import PIN_QUALITY, pin_stop, sliding_stop
 from supercoil.problems.tweezers.plectoneme import switch_to_plectoneme, tries_note
 from supercoil.problems.tweezers.problem import clamped_problem, tweezers_records
-from supercoil.problems.tweezers.rejoin import rejoined
+from supercoil.problems.tweezers.rejoin import REJOINS, rejoined
 from supercoil.problems.tweezers.result import TweezersResult, options_ply
 from supercoil.problems.tweezers.returned import close_on_return, returned_onto
 from supercoil.problems.tweezers.straight import (
@@ -247,26 +247,31 @@ def tweezers_branches(options: TweezersOptions,
             notes.append(f"{contact_name}: {why} ({contact.message}); followed again held "
                          f"on its half-turn symmetry: {last.name}")
             held_force_note(last, "the force its phase row holds", notes)
-    if last is contact and closed_before(last, opts.turns[1]) \
-            and returned_onto(last, free, D, reach) is None:
-        # closed on a curve it entered: followed again from before it (rejoin.py), and
-        # taken on where it reaches further
+    guards: tuple = ()
+    for _ in range(REJOINS if last is contact else 0):
+        # closed on a curve it entered: followed again from before it, every curve met
+        # refused (rejoin.py), and taken on where it reaches further
+        if not closed_before(last, opts.turns[1]) \
+                or returned_onto(last, free, D, reach) is not None:
+            break
         start = time.perf_counter()
-        again = rejoined(opts, rod, cp, last, stored, on_point, pinned, say)
-        if again is not None:
-            branch, branch_pins, entry, first = again
-            branch = verify_bifurcations(close_on_return(branch, free, D, reach))
-            seconds[branch.name] = time.perf_counter() - start
-            final(branch, True)
-            branches.append(branch)
-            names.add(branch.name)
-            pins[branch.name] = branch_pins
-            notes.append(f"{last.name}: closed ({last.message}); followed again from its "
-                         f"point {first}, before the closed curve it entered at its point "
-                         f"{entry} ({last.parameter_values[entry]:.6g} turns), the curve "
-                         f"refused: {branch.name}")
-            if len(branch) and branch.parameter_values.max() > last.parameter_values.max():
-                last = branch
+        again = rejoined(opts, rod, cp, last, stored, on_point, pinned, say, guards)
+        if again is None:
+            break
+        branch = verify_bifurcations(close_on_return(again.branch, free, D, reach))
+        seconds[branch.name] = time.perf_counter() - start
+        final(branch, True)
+        branches.append(branch)
+        names.add(branch.name)
+        pins[branch.name] = again.pins
+        notes.append(f"{last.name}: closed ({last.message}); followed again from its point "
+                     f"{again.start}, before the closed curve it entered at its point "
+                     f"{again.entry} ({last.parameter_values[again.entry]:.6g} turns), the "
+                     f"curves met refused: {branch.name}")
+        guards = again.guards
+        if not len(branch) or branch.parameter_values.max() <= last.parameter_values.max():
+            break
+        last = branch
     tried: list[Branch] = []  # the switches' tries, as they ended
     closed_contact = last
     if closed_before(last, opts.turns[1]):

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Mapping
+from typing import NamedTuple
 
 import numpy as np
 
@@ -50,6 +51,20 @@ SUFFIX = "/rejoined"
 CYCLE_TOLERANCE = 0.05  # of the curve's median step: a point of the branch on the curve
 RETREAT = 50  # points before the entry from which the branch is followed again
 FIRST_STEP = 0.25  # of the branch's step there: the first step of the new run
+REJOINS = 4  # times a branch closed so is followed again (each from the last)
+
+
+class Rejoined(NamedTuple):
+    """:func:`rejoined`'s result: the branch followed again, its azimuth pins, the point
+    of the closed branch where the curve was entered (``entry``) and the one the new
+    branch starts from (``start``, its first point), and the guards that refuse the
+    curves met so far (this one last)."""
+
+    branch: Branch
+    pins: tuple[tuple[int, tuple[int, ...]], ...]
+    entry: int
+    start: int
+    guards: tuple[OnParent, ...]
 
 
 def points(branch: Branch, lo: int, hi: int) -> Branch:
@@ -85,12 +100,12 @@ def cycle_entry(branch: Branch) -> tuple[int, int] | None:
 def rejoined(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
              closed: Branch, stored: Mapping[str, tuple[Branch, bool]] | None = None,
              on_point=None, pinned=None, say: Callable[[str], None] = lambda message: None,
-             ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...], int, int] | None:
+             refused: tuple[OnParent, ...] = ()) -> Rejoined | None:
     """The branch ``closed`` followed again from before the closed curve it entered
-    (module doc): ``(branch, its azimuth pins, entry, start)`` (``start`` the point of
-    ``closed`` it starts from, its first point), or None where ``closed`` did not close
-    on itself (:func:`cycle_entry`). A stored branch of that name (``stored``) is taken
-    as it is when complete and continued from its last point otherwise."""
+    (module doc), or None where ``closed`` did not close on itself (:func:`cycle_entry`).
+    ``refused``: the guards of the curves met before (:attr:`Rejoined.guards`), refused
+    too. A stored branch of that name (``stored``) is taken as it is when complete and
+    continued from its last point otherwise."""
     found = cycle_entry(closed)
     if found is None:
         return None
@@ -98,13 +113,13 @@ def rejoined(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
     name = closed.name + SUFFIX
     start = max(1, entry - RETREAT)
     old, complete = (stored or {}).get(name, (None, False))
-    if complete:
-        return old, stored_pins(old), entry, start
     curve = points(closed, back, len(closed))
-    guard = OnParent(curve, _point(closed, entry, "cycle_entry"),
-                     what="the closed curve the branch had entered")
+    guards = (*refused, OnParent(curve, _point(closed, entry, "cycle_entry"),
+                                 what="a closed curve the branch had entered"))
+    if complete:
+        return Rejoined(old, stored_pins(old), entry, start, guards)
     mark = _point(closed, start, "restart")
-    stop = either(pinned, guard)
+    stop = either(pinned, *guards)
     base = contact_options(opts)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
@@ -128,7 +143,7 @@ def rejoined(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
                           on_run=records.begin)
     branch = dataclasses.replace(classify_contact_events(branch, cp), parent=closed.name,
                                  origin=mark)
-    return branch, resumed_pins(old, pins), entry, start
+    return Rejoined(branch, resumed_pins(old, pins), entry, start, guards)
 
 
 def _point(branch: Branch, index: int, kind: str) -> SpecialPoint:

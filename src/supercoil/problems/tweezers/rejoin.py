@@ -9,10 +9,11 @@ The points before the curve were the branch's own. Measured at L/D = 100,
 lambda = 150, C/A = 1.5, N = 204: the contact branch came within 2e-3 of a curve of
 equilibria at 40.01 turns (point 3685; the median step 1.8e-3), went round it from
 point 3686 (39.82 to 40.09 turns) and was found closed after 4378 points; none of the
-sixteen switches at its bifurcations nearest the closure started. Continued from its
-point 3600 with the same options, the run's steps differ (the stored point's next step
-is not the one the interrupted run took) and it passed 40.09 turns: 40.24 within 500
-points.
+sixteen switches at its bifurcations nearest the closure started. Followed again from
+its point 3636 (below), the branch closed on another curve after 484 points (40.24 turns
+at most), 0.03 to 0.08 away from the first and as far from its mirror image; followed
+again from before that one, it went on past 40.24 turns
+(``benchmarks/results/long_dna_grid.md``, "Rows continued over several sittings").
 
 :func:`cycle_entry` finds the closed curve on the branch (its points from the point it
 came back to, to its end) and the first point of the branch on it (the points from there
@@ -57,8 +58,8 @@ REJOINS = 4  # times a branch closed so is followed again (each from the last)
 class Rejoined(NamedTuple):
     """:func:`rejoined`'s result: the branch followed again, its azimuth pins, the point
     of the closed branch where the curve was entered (``entry``) and the one the new
-    branch starts from (``start``, its first point), and the guards that refuse the
-    curves met so far (this one last)."""
+    branch is continued from (``start``: its second point, the one before it its first),
+    and the guards that refuse the curves met so far (this one last)."""
 
     branch: Branch
     pins: tuple[tuple[int, tuple[int, ...]], ...]

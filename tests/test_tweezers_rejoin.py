@@ -114,5 +114,6 @@ def test_the_driver_keeps_the_branch_followed_again_where_it_reaches_further(mon
     assert result.branches[-1].parameter_values[-1] == pytest.approx(1.6)
     assert any(n.startswith("buckled_contact: closed (closed here); followed again from "
                             "its point 2, before the closed curve it entered at its point 6")
-               and n.endswith("buckled_contact/rejoined") for n in result.notes)
+               and n.endswith("buckled_contact/rejoined (parameter_bound at 1.6 turns, 1.6 at "
+                              "most)") for n in result.notes)
     assert not any(n.startswith("incomplete") for n in result.notes)

@@ -267,7 +267,10 @@ def tweezers_branches(options: TweezersOptions,
         notes.append(f"{last.name}: closed ({last.message}); followed again from its point "
                      f"{again.start}, before the closed curve it entered at its point "
                      f"{again.entry} ({last.parameter_values[again.entry]:.6g} turns), the "
-                     f"curves met refused: {branch.name}")
+                     f"curves met refused: {branch.name}"
+                     + ("" if not len(branch) else
+                        f" ({branch.status.name.lower()} at {branch.parameter_values[-1]:.6g} "
+                        f"turns, {branch.parameter_values.max():.6g} at most)"))
         guards = again.guards
         if not len(branch) or branch.parameter_values.max() <= last.parameter_values.max():
             break

@@ -304,3 +304,56 @@ def test_takes_problem_reads_each_function_once_and_keeps_none_alive():
     del records, callables
     gc.collect()
     assert held() is None
+
+
+def _sliding_left_out_below(threshold, monkeypatch):
+    """Make the count leave one negative eigenvalue out below ``lambda = threshold`` (as
+    the stiff sliding's, whose share of ``g`` passes one half there), the factor's
+    count untouched: the count then changes at the threshold with no eigenvalue
+    crossing zero."""
+    original = events.inertia_with_factor
+
+    def patched(system, x, zero_tolerance, hessian, factor=None):
+        negative, sign, f, dofs, _ = original(system, x, zero_tolerance, hessian, factor)
+        left_out = int(negative >= 1 and x[-1] < threshold)
+        return negative - left_out, sign, f, dofs, left_out
+
+    monkeypatch.setattr(events, "inertia_with_factor", patched)
+
+
+def test_a_count_change_with_no_eigenvalue_crossing_is_no_bifurcation(monkeypatch):
+    """Oracle: the diagonal problem's trivial branch has the eigenvalues d_i - lambda;
+    on lambda in [1.3, 1.9] exactly one is negative (d_0 = 1) and none crosses zero.
+    The count, with one negative eigenvalue left out below 1.6, changes there: a
+    ``count_change`` labelled ``sliding``, within switch_below of 1.6 on its far side."""
+    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
+    system = ExtendedSystem(DiagonalQuartic(d), "lam", np.zeros(6))
+    _sliding_left_out_below(1.6, monkeypatch)
+    x_a = system.pack(np.zeros(6), np.zeros(0), 1.3)
+    x_b = system.pack(np.zeros(6), np.zeros(0), 1.9)
+    segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
+    switch_below = 1e-3
+    located = locate_count_change(segment, 1e-10 / segment.length, switch_below)
+    assert (located.kind, located.label) == ("count_change", "sliding")
+    assert located.located and (located.count_before, located.count_after) == (0, 1)
+    assert 1.6 <= located.x[-1] <= 1.6 + 0.6 * switch_below
+    assert segment.factor_count(0.0) == segment.factor_count(1.0) == 1
+
+
+def test_a_crossing_after_a_sliding_count_change_is_still_a_located_bifurcation(monkeypatch):
+    """On lambda in [1.3, 2.3] the count goes 0 -> 1 at 1.6 (the left-out eigenvalue
+    counted again, no crossing) and 1 -> 2 at lambda = d_1 = 2 (an eigenvalue crossing):
+    a sliding ``count_change``, then, searched from its resume point, a ``bifurcation``
+    at exactly 2."""
+    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
+    system = ExtendedSystem(DiagonalQuartic(d), "lam", np.zeros(6))
+    _sliding_left_out_below(1.6, monkeypatch)
+    x_a = system.pack(np.zeros(6), np.zeros(0), 1.3)
+    x_b = system.pack(np.zeros(6), np.zeros(0), 2.3)
+    segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
+    xtol = 1e-10 / segment.length
+    first = locate_count_change(segment, xtol, 1e-3)
+    assert first.kind == "count_change" and (first.count_before, first.count_after) == (0, 1)
+    second = locate_count_change(segment, xtol, 1e-3, first.resume)
+    assert second.kind == "bifurcation" and (second.count_before, second.count_after) == (1, 2)
+    assert abs(second.x[-1] - 2.0) <= 1e-10 * (1 + 1e-6)

@@ -16,6 +16,10 @@ from supercoil.continuation.options import ContinuationStatus
 SCHEMA_VERSION = 1
 
 SPECIAL_KINDS = ("fold", "bifurcation", "count_change", "endpoint")
+# the kinds of a change of the unstable count: a bifurcation, or a count_change that is
+# none (its verification failed, or no eigenvalue crossed zero; docs/model.md, "Special
+# points and branches")
+COUNT_KINDS = ("bifurcation", "count_change")
 
 
 # a Branch's per-point arrays, one row per point

@@ -27,16 +27,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from supercoil.continuation.branch import Branch
+from supercoil.continuation.branch import COUNT_KINDS, Branch
 from supercoil.continuation.carry import branch_frames
 from supercoil.continuation.stability import point_stability
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.carried import with_frames
 from supercoil.solvers.problem import ConstrainedEnergy
-
-# the kinds of a change of the unstable count: a bifurcation, or a count_change that its
-# verification did not confirm (docs/model.md, "Special points and branches")
-COUNT_KINDS = ("bifurcation", "count_change")
 
 
 @dataclass(frozen=True)

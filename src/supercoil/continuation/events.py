@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from supercoil.continuation.corrector import correct, tangent
-from supercoil.continuation.stability import eigenpairs, inertia
+from supercoil.continuation.stability import eigenpairs, inertia_with_factor
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.continuation.zeroin import LocationFailed, zeroin
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
@@ -83,6 +83,9 @@ class Segment:
         # (Brent's method re-evaluates the bracket's ends the bisection left, and a
         # further count change is searched from the bisection's last bracket)
         self._counts: dict[float, int] = {}
+        # of each count, the eigenvalues the count left out as the stiff sliding's
+        # (stability.stiff_sliding: 0 or 1)
+        self._left_out: dict[float, int] = {}
         self._nearest: dict[float, float] = {}
         self._tangents: dict[float, np.ndarray] = {}
         # user events' values at trial points, by id(event) and fraction (all of an
@@ -191,11 +194,20 @@ class Segment:
         if u not in self._counts:
             try:
                 x = self.point(u)
-                self._counts[u] = inertia(self.system, x, self.zero_tolerance,
-                                          self._hessians.get(u))[0]
+                negative, _sign, _factor, _dofs, left_out = inertia_with_factor(
+                    self.system, x, self.zero_tolerance, self._hessians.get(u))
             except (SingularMatrixError, InertiaError) as exc:
                 raise LocationFailed(str(exc)) from None
+            self._counts[u], self._left_out[u] = negative, left_out
         return self._counts[u]
+
+    def factor_count(self, u: float) -> int:
+        """The negative eigenvalues of the count's pencil at ``u`` (the constrained
+        Hessian on the complement of the approximate symmetries), before the count leaves
+        out the stiff sliding's (:func:`~supercoil.continuation.stability.stiff_sliding`):
+        ``count(u)`` plus the eigenvalue it left out, if any."""
+        count = self.count(u)
+        return count + self._left_out[float(u)]
 
     def system_eigenpairs(self, u: float, n_wanted: int) -> tuple[np.ndarray, np.ndarray]:
         """Eigenpairs of the constrained Hessian nearest zero at ``u`` (``eigenpairs``)."""
@@ -339,6 +351,14 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
     ``accuracy`` the arclength to that zero; its special point carries the
     ``k`` critical modes.
 
+    A change that no eigenvalue crossing zero makes is no bifurcation: where the
+    count's pencil has as many negative eigenvalues on both sides of the bracket
+    (:meth:`Segment.factor_count`), the count changed only because the stiff sliding's
+    eigenvalue was left out on one side and counted on the other (its share of the
+    sliding ``g`` passing :data:`~supercoil.stability.sliding_count.SLIDING_SHARE`,
+    :mod:`~supercoil.stability.sliding_count`). It is returned with the kind
+    ``count_change`` and the label ``sliding``, at the bracket's end with the new count.
+
     ``Located.resume`` is the first corrected point past the change (with the new
     count): a further change on the segment is searched from there.
     """
@@ -356,6 +376,12 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
                                segment.tangent(u), True, c_lo, c_hi,
                                accuracy=abs(u_zero - u) * segment.length)
         lo, hi, c_hi = _bisect_count(segment, lo, hi, c_lo, c_hi, max(switch_below, xtol))
+        if segment.factor_count(lo) == segment.factor_count(hi):
+            # no eigenvalue crossed zero: the sliding's eigenvalue was counted on one side
+            # and left out on the other
+            return Located("count_change", "sliding", hi, segment.point(hi),
+                           _tangent_or_secant(segment, hi), True, c_lo, c_hi,
+                           accuracy=(hi - lo) * segment.length, resume=hi)
         f_lo, f_hi = segment.nearest_eigenvalue(lo), segment.nearest_eigenvalue(hi)
         if np.isfinite(f_lo) and np.isfinite(f_hi) and f_lo * f_hi < 0:
             u = zeroin(segment.nearest_eigenvalue, lo, hi, xtol, f_lo, f_hi)

@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from supercoil.continuation.branch import SpecialPoint
+from supercoil.continuation.branch import COUNT_KINDS, SpecialPoint
 from supercoil.continuation.events import (
     Located,
     Segment,
@@ -96,8 +96,8 @@ def special_point(system: ExtendedSystem, opts: ContinuationOptions, ev: Located
         parameter=float(x[-1]), arclength=arclength + ev.u * segment.length,
         q=system.q(x), multipliers=system.multipliers(x), tangent=system.full_tangent(t),
         unstable_count=stab.unstable_count,
-        count_before=ev.count_before if ev.kind == "bifurcation" else count_before,
-        count_after=ev.count_after if ev.kind == "bifurcation" else count_after,
+        count_before=ev.count_before if ev.kind in COUNT_KINDS else count_before,
+        count_after=ev.count_after if ev.kind in COUNT_KINDS else count_after,
         critical_eigenvalues=values, critical_modes=modes, located=ev.located,
         tolerance=(opts.event_tolerance if ev.accuracy is None
                    else max(ev.accuracy, opts.event_tolerance)),

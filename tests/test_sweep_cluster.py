@@ -257,3 +257,21 @@ def test_killed_worker_and_interrupted_sweep_resume_to_the_same_dataset(tmp_path
     # every task complete before the interruption is kept, not run again
     assert final.attrs["tasks_resumed"] >= max(1, statuses.count("complete"))
     xr.testing.assert_equal(final, expected)
+
+
+def test_a_local_cluster_leaves_the_callers_environment_as_it_was(monkeypatch):
+    """The workers get one thread each through their environment, which distributed's
+    nanny sets in the calling process too before it spawns them; the caller's own
+    environment is restored when the cluster closes (oracle: the variables before and
+    after, one of them set to another value and one absent before)."""
+    import os
+
+    from supercoil.sweeps import driver
+
+    monkeypatch.setenv("OMP_NUM_THREADS", "2")
+    monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
+    names = [*driver.ONE_THREAD, "PYTHONHASHSEED"]
+    before = {name: os.environ.get(name) for name in names}
+    with driver._client(1, None, 0) as client:
+        assert client.submit(os.environ.get, "NUMBA_NUM_THREADS", pure=False).result() == "1"
+    assert {name: os.environ.get(name) for name in names} == before

@@ -152,15 +152,36 @@ def _client(workers: int | None, scheduler: str | None, retries: int):
         environ["NUMBA_CACHE_DIR"] = os.environ["NUMBA_CACHE_DIR"]
     config = {"distributed.nanny.pre-spawn-environ": environ,
               "distributed.scheduler.allowed-failures": retries}
-    with dask.config.set(config):
-        # no dashboard; the scheduler's own HTTP server (health, metrics) on a free
-        # port, not on the default 8787, which a second sweep or another dask
-        # cluster on the machine may hold
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR,
-                               scheduler_kwargs={"dashboard_address": ":0"})
-    with cluster, Client(cluster, set_as_default=False) as client:
-        yield client
+    # the nanny sets its pre-spawn environment in this process too, before each worker
+    # it spawns (distributed's Nanny documents it): without the restore the caller's
+    # process keeps NUMBA_NUM_THREADS=1, and numba refuses its next compilation there
+    # ("Cannot set NUMBA_NUM_THREADS to a different value once the threads have been
+    # launched")
+    with _environ_restored([*environ, "PYTHONHASHSEED"]):
+        with dask.config.set(config):
+            # no dashboard; the scheduler's own HTTP server (health, metrics) on a free
+            # port, not on the default 8787, which a second sweep or another dask
+            # cluster on the machine may hold
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   scheduler_kwargs={"dashboard_address": ":0"})
+        with cluster, Client(cluster, set_as_default=False) as client:
+            yield client
+
+
+@contextlib.contextmanager
+def _environ_restored(names):
+    """The environment variables ``names`` as they were on entry, restored on exit
+    (set again, or removed where they were not set)."""
+    before = {name: os.environ.get(name) for name in names}
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 def _folder_token(out: Path) -> str:

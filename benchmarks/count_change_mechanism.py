@@ -2,20 +2,27 @@
 tweezers branch.
 
 For every ``bifurcation`` (and, with ``--kinds``, ``count_change``) of a branch of a
-stored tweezers result, recomputes at the two points around it the count's pencil as
-the current code counts it: the factor's inertia on the complement of the approximate
-symmetries, and whether the count leaves the stiff sliding's eigenvalue out of it
-(``continuation.stability.stiff_sliding``). Where the factor's count is the same at both
-points, no eigenvalue crossed zero between them: the count changed only because the
-sliding's eigenvalue was counted on one side and left out on the other, which the
-localisation now reports as a ``count_change`` labelled ``sliding`` (docs/continuation.md,
-"A count change that no eigenvalue makes is no bifurcation"). Also printed: the stored
-eigenvalue nearest zero at both points and the critical eigenvalue at the located point.
+stored tweezers result, recomputes at the two points around it the two tests that the
+localisation applies (docs/continuation.md, "A count change that no eigenvalue makes
+is no bifurcation"):
+
+* the count's pencil: the factor's inertia on the complement of the approximate
+  symmetries, before the count leaves the stiff sliding's eigenvalue out
+  (``continuation.stability.stiff_sliding``). The same at both points: no eigenvalue of
+  it crossed zero, and the event is a ``count_change`` labelled ``sliding``;
+* the continued system's branch point: ``(-1)^n_K sign(t_lambda)`` (``n_K`` the
+  negative eigenvalues of the continued system's Hessian on the constraints' kernel,
+  ``t_lambda`` the stored tangent's parameter component). The same at both points: the
+  extended Jacobian's determinant kept its sign, no branch point lies between, and the
+  event is a ``count_change`` labelled ``determinant``.
+
+Also printed: the stored eigenvalue nearest zero at both points and the critical
+eigenvalue at the located point.
 
 The problem is rebuilt from the result's settings (a run stored by ``supercoil.tweezers``
-with ``out=`` or by ``supercoil tweezers --out``); each point is evaluated
-with the frames and the azimuth pin it was computed with, as the branch-consistency
-check does, and a stored count that the recomputation does not reproduce is flagged.
+with ``out=`` or by ``supercoil tweezers --out``); each point is evaluated with the
+frames and the azimuth pin it was computed with, as the branch-consistency check does,
+and a stored count that the recomputation does not reproduce is counted.
 
 Run: ``python benchmarks/count_change_mechanism.py RESULT.h5 [--branch buckled_contact]
 [--kinds bifurcation,count_change] [--first 0] [--limit 0]``.
@@ -27,6 +34,7 @@ import argparse
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
 import supercoil as sc
 from supercoil.contact.options import ContactOptions
@@ -39,6 +47,7 @@ from supercoil.problems.tweezers.buckled import stored_pins
 from supercoil.problems.tweezers.problem import clamped_problem
 from supercoil.problems.tweezers.result import TweezersResult
 from supercoil.solvers.carried import with_frames
+from supercoil.solvers.kkt import KKTFactor
 
 
 def rebuilt(settings: dict, branch) -> TweezersResult:
@@ -82,9 +91,10 @@ def main() -> None:
     if args.limit:
         events = events[:args.limit]
     start = time.perf_counter()
-    no_crossing = mismatched = 0
+    tally = {"sliding": 0, "determinant": 0, "bifurcation": 0}
+    mismatched = 0
     for p in events:
-        factor, left = [], []
+        factor, left, continued = [], [], []
         for i in (p.index, p.index + 1):
             problem = run.pin_branch(branch.name, i)
             system = ExtendedSystem(problem, branch.parameter, branch.states[i], phase,
@@ -92,25 +102,33 @@ def main() -> None:
             system.problem = with_frames(problem, frames[i])
             x = system.pack(branch.states[i], branch.multipliers[i],
                             branch.parameter_values[i])
-            count, _sign, _f, _dofs, left_out = inertia_with_factor(system, x, 1e-6, None)
+            hessian = system.hessian(x)
+            count, _sign, _f, _dofs, left_out = inertia_with_factor(system, x, 1e-6, hessian)
             factor.append(count + left_out)
             left.append(left_out)
+            n_k = KKTFactor(hessian, sp.csr_matrix(system.jacobian(x))).reduced_negative_count
+            continued.append(n_k + int(branch.tangents[i, -1] < 0))
             if count != branch.unstable_count[i]:
                 mismatched += 1
-        same = factor[0] == factor[1]
-        no_crossing += same
+        if factor[0] == factor[1]:
+            verdict = "sliding"
+        elif (continued[0] - continued[1]) % 2 == 0 and (p.count_after - p.count_before) % 2:
+            verdict = "determinant"
+        else:
+            verdict = "bifurcation"
+        tally[verdict] += 1
         critical = p.critical_eigenvalues
         nearest = branch.nearest_eigenvalue
         print(f"{p.kind}/{p.label} between points {p.index} and {p.index + 1} "
               f"(turns {p.parameter:.5f}): count {p.count_before} -> {p.count_after}; "
-              f"factor {factor[0]} -> {factor[1]}, left out {left[0]} -> {left[1]}"
-              f"{' (no crossing)' if same else ''}; nearest eigenvalue "
-              f"{nearest[p.index]:.3g}, {nearest[p.index + 1]:.3g}; critical "
+              f"factor {factor[0]} -> {factor[1]}, left out {left[0]} -> {left[1]}; "
+              f"n_K + [t_lambda < 0] {continued[0]} -> {continued[1]}: {verdict}; nearest "
+              f"eigenvalue {nearest[p.index]:.3g}, {nearest[p.index + 1]:.3g}; critical "
               f"{np.array2string(critical, precision=3)}", flush=True)
-    print(f"{len(events)} events ({args.kinds}) on {branch.name}: {no_crossing} with the "
-          f"factor's count the same at both points (no crossing); {mismatched} recomputed "
-          f"counts differ from the stored ones; {time.perf_counter() - start:.0f} s")
-
+    print(f"{len(events)} events ({args.kinds}) on {branch.name}: "
+          + ", ".join(f"{v} {k}" for k, v in tally.items())
+          + f"; {mismatched} recomputed counts differ from the stored ones; "
+          f"{time.perf_counter() - start:.0f} s")
 
 if __name__ == "__main__":
     main()

@@ -357,3 +357,47 @@ def test_a_crossing_after_a_sliding_count_change_is_still_a_located_bifurcation(
     second = locate_count_change(segment, xtol, 1e-3, first.resume)
     assert second.kind == "bifurcation" and (second.count_before, second.count_after) == (1, 2)
     assert abs(second.x[-1] - 2.0) <= 1e-10 * (1 + 1e-6)
+
+
+def _trivial_segment_events(lam_a, lam_b, count_a, count_b):
+    """``locate_events`` on the diagonal problem's trivial branch from ``lam_a`` to
+    ``lam_b`` (tangent ``d lambda`` = 1 at both ends), given the ends' counts."""
+    from supercoil.continuation.special_points import locate_events
+
+    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
+    system = ExtendedSystem(DiagonalQuartic(d), "lam", np.zeros(6))
+    x_a = system.pack(np.zeros(6), np.zeros(0), lam_a)
+    x_b = system.pack(np.zeros(6), np.zeros(0), lam_b)
+    t = np.zeros(x_a.size)
+    t[-1] = 1.0
+    opts = ContinuationOptions(event_tolerance=1e-10, switch_below=1e-3)
+    _segment, found = locate_events(system, opts, (), x_a, x_b, t, t, count_a, count_b,
+                                    (), ())
+    return found
+
+
+def test_a_crossing_of_the_continued_system_stays_a_bifurcation():
+    """Oracle: on the trivial branch the eigenvalue d_0 - lambda crosses zero at 1: a
+    branch point (the pitchfork), the extended Jacobian's determinant changing sign."""
+    found = _trivial_segment_events(0.8, 1.3, 0, 1)
+    assert [(e.kind, e.label) for e in found] == [("bifurcation", "bifurcation")]
+    assert abs(found[0].x[-1] - 1.0) <= 1e-9
+
+
+def test_a_count_change_with_no_branch_point_of_the_continued_system(monkeypatch):
+    """The count made to gain one at lambda = 1.6 (as a count on another subspace than
+    the continued system's can), with no eigenvalue of the continued system crossing on
+    [1.3, 1.9] (d_0 = 1 < 1.3 < 1.9 < d_1 = 2): the extended Jacobian's determinant keeps
+    its sign, so the change is a ``count_change`` labelled ``determinant``."""
+    original = events.inertia_with_factor
+
+    def patched(system, x, zero_tolerance, hessian, factor=None):
+        negative, sign, f, dofs, left_out = original(system, x, zero_tolerance, hessian,
+                                                     factor)
+        return negative + int(x[-1] >= 1.6), sign, f, dofs, left_out
+
+    monkeypatch.setattr(events, "inertia_with_factor", patched)
+    found = _trivial_segment_events(1.3, 1.9, 1, 2)
+    assert [(e.kind, e.label) for e in found] == [("count_change", "determinant")]
+    assert (found[0].count_before, found[0].count_after) == (1, 2)
+    assert abs(found[0].x[-1] - 1.6) <= 1e-3

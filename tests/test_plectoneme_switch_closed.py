@@ -353,3 +353,38 @@ def test_a_run_whose_switches_give_no_branch_says_why_each_ended(monkeypatch):
                      "corrector diverged; buckled_contact/bifurcation9_try3: the switch did "
                      "not start: back on its parent")]
     assert any(n.startswith("incomplete: buckled_contact closed") for n in result.notes)
+
+
+@pytest.mark.parametrize("with_bifurcation", [False, True])
+def test_a_closed_branch_without_a_bifurcation_says_so(monkeypatch, with_bifurcation):
+    """The driver's note when the switch gives no branch names why: the branch has no
+    bifurcation to switch at (its count changes all ``count_change``), or none of the
+    switches at its bifurcations gave a branch (oracle: the special points handed over)."""
+    from supercoil.continuation.resume import head
+    from supercoil.problems.tweezers import compute
+
+    opts = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=20, n_nodes=24,
+                           tension=20, turns=(0.0, 1.6))
+    monkeypatch.setattr(compute, "closed_before", lambda branch, last: True)
+    monkeypatch.setattr(compute, "held_contact", lambda *args, **kwargs: None)
+    monkeypatch.setattr(compute, "switch_to_plectoneme", lambda *args, **kwargs: None)
+    monkeypatch.setattr(compute, "verify_bifurcations", lambda branch: branch)
+    original = compute.contact_branch
+
+    def cut(*args, **kwargs):
+        branch, pins = original(*args, **kwargs)
+        branch = head(branch, 10)
+        kinds = [p.kind for p in branch.special_points]
+        assert "bifurcation" not in kinds
+        if with_bifurcation:
+            point = dataclasses.replace(branch.special_points[0], kind="bifurcation",
+                                        label="bifurcation", index=5)
+            branch = dataclasses.replace(branch, special_points=(point,))
+        return branch, pins
+
+    monkeypatch.setattr(compute, "contact_branch", cut)
+    result = compute.tweezers_branches(opts)
+    [note] = [n for n in result.notes if n.startswith("incomplete: buckled_contact closed")]
+    assert note.endswith("no switch at its bifurcations gave a branch" if with_bifurcation
+                         else "it has no bifurcation to switch at (its count changes are "
+                              "count_change)")

@@ -16,7 +16,9 @@ Between accepted points ``x_a`` and ``x_b`` the branch is parametrised by
   together are seen, unlike with the determinant's sign) down to ``switch_below``, then Brent's method
   on the signed eigenvalue nearest zero to ``event_tolerance``; each change
   on a segment in turn, a split double eigenvalue as one event
-  (:func:`locate_count_change`);
+  (:func:`locate_count_change`). A change that no eigenvalue crossing zero makes
+  (the stiff sliding's eigenvalue counted on one side of it and left out on the
+  other) is a ``count_change`` labelled ``sliding``;
 * a **user event** is a sign change of one of the named scalars returned by a
   :class:`UserEvent`'s function, located by Brent's method (bisection
   safeguarded: discontinuous indicators are bracketed as well).
@@ -30,12 +32,14 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.stability import eigenpairs, inertia_with_factor
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.continuation.zeroin import LocationFailed, zeroin
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
+from supercoil.solvers.kkt import KKTFactor
 
 
 @dataclass(frozen=True)
@@ -212,6 +216,28 @@ class Segment:
     def system_eigenpairs(self, u: float, n_wanted: int) -> tuple[np.ndarray, np.ndarray]:
         """Eigenpairs of the constrained Hessian nearest zero at ``u`` (``eigenpairs``)."""
         return eigenpairs(self.system, self.point(u), n_wanted)
+
+    def branch_points_odd(self, t_a: np.ndarray, t_b: np.ndarray) -> bool | None:
+        """Whether the segment holds an odd number of branch points of the system
+        continued (None where a factor is singular): whether the sign of the determinant
+        of its extended Jacobian ``[K, F_lambda; t^T]`` differs at the two ends.
+
+        With ``K`` the KKT matrix of the continued system (its Hessian on the free DOFs,
+        its constraint and phase rows, without the rows that take the approximate
+        symmetries out of the count) and ``t`` the unit tangent, ``K t_x + F_lambda
+        t_lambda = 0`` gives ``det [K, F_lambda; t^T] = det K / t_lambda``: its sign is
+        ``(-1)^(n_K + m) sign(t_lambda)``, ``n_K`` the negative eigenvalues of the
+        Hessian on ``ker J``. A fold changes both factors, a simple branch point only
+        ``det K`` (Keller 1977's test function). ``t_a``, ``t_b``: the ends' tangents,
+        oriented along the branch."""
+        try:
+            negative = [KKTFactor(self.system.hessian(x),
+                                  sp.csr_matrix(self.system.jacobian(x))).reduced_negative_count
+                        for x in (self.x_a, self.x_b)]
+        except (SingularMatrixError, InertiaError):
+            return None
+        flips = [int(t[-1] < 0) for t in (t_a, t_b)]
+        return (negative[0] + flips[0] - negative[1] - flips[1]) % 2 == 1
 
     def nearest_eigenvalue(self, u: float) -> float:
         u = float(u)

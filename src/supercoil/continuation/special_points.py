@@ -10,6 +10,7 @@ critical modes.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
@@ -67,11 +68,34 @@ def locate_events(system: ExtendedSystem, opts: ContinuationOptions,
             if located.resume is None or located.resume >= 1.0:
                 break
             start = located.resume
+        found = _without_branch_point(segment, found, t_a, t_b)
     for event, before, after in zip(events, user_a, user_b):
         for label in before:
             if label in after and before[label] * after[label] < 0:
                 found.append(locate_user_event(segment, event, label, xtol, (before, after)))
     return segment, sorted(found, key=lambda e: e.u)
+
+
+def _without_branch_point(segment: Segment, found: list[Located], t_a: np.ndarray,
+                          t_b: np.ndarray) -> list[Located]:
+    """``found`` with its bifurcation relabelled a ``count_change`` (label
+    ``determinant``) where it is the segment's only located bifurcation, changes the
+    count by an odd number, and the segment holds no branch point of the system
+    continued (:meth:`~supercoil.continuation.events.Segment.branch_points_odd`).
+
+    A simple eigenvalue crossing zero off a fold changes the sign of the extended
+    Jacobian's determinant. The count (of the constrained Hessian on the complement
+    of the approximate symmetries) is not the continued system's: where the two
+    differ, the count can change with no branch point of the equations solved, and
+    no branch to switch to (docs/continuation.md, "A count change that no eigenvalue
+    makes is no bifurcation").
+    """
+    located = [e for e in found if e.kind == "bifurcation" and e.located]
+    if (len(located) != 1 or (located[0].count_after - located[0].count_before) % 2 == 0
+            or segment.branch_points_odd(t_a, t_b) is not False):
+        return found
+    return [dataclasses.replace(e, kind="count_change", label="determinant")
+            if e is located[0] else e for e in found]
 
 
 def special_point(system: ExtendedSystem, opts: ContinuationOptions, ev: Located,

@@ -286,8 +286,11 @@ def tweezers_branches(options: TweezersOptions,
                                         free=free, reach=reach, stored=stored,
                                         on_branch=final, tried=tried)
         if switched is None:
+            why = ("no switch at its bifurcations gave a branch"
+                   if last.points_of_kind("bifurcation") else
+                   "it has no bifurcation to switch at (its count changes are count_change)")
             notes.append(f"incomplete: {last.name} closed before {opts.turns[1]:g} turns "
-                         f"({last.message}) and no switch at its bifurcations gave a branch")
+                         f"({last.message}) and {why}")
         else:
             closed_branch = last
             for via, via_pins in switched.via:  # closed switched branches, switched again

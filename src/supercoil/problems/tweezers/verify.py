@@ -18,7 +18,10 @@ constant over ``VERIFY_POINTS`` points on either side of it (up to a fold or a
 branch end, which end the window), the count before being its ``count_before`` and
 after its ``count_after``; any other is reported with the kind ``count_change``.
 The straight rod's bifurcations are certified otherwise (by the pencil of
-:mod:`~supercoil.problems.tweezers.straight`) and are not passed here.
+:mod:`~supercoil.problems.tweezers.straight`) and are not passed here. A change that no
+eigenvalue crossing zero makes is a ``count_change`` (label ``sliding``) from its
+localisation on (:func:`~supercoil.continuation.events.locate_count_change`) and is
+not looked at here either.
 """
 
 from __future__ import annotations

@@ -17,8 +17,9 @@ SCHEMA_VERSION = 1
 
 SPECIAL_KINDS = ("fold", "bifurcation", "count_change", "endpoint")
 # the kinds of a change of the unstable count: a bifurcation, or a count_change that is
-# none (its verification failed, or no eigenvalue crossed zero; docs/model.md, "Special
-# points and branches")
+# none (its verification failed, no eigenvalue of the count's crossed zero, or the
+# equations continued have no branch point there; docs/model.md, "Special points and
+# branches")
 COUNT_KINDS = ("bifurcation", "count_change")
 
 

@@ -5,7 +5,9 @@ of ``dlambda/ds``), bifurcations (each change of the unstable count that is
 not the fold's own) and user events (sign changes of named scalars); each is
 located (:mod:`supercoil.continuation.events`) and recorded as a
 :class:`~supercoil.continuation.branch.SpecialPoint` with its stability and
-critical modes.
+critical modes. A located bifurcation where the equations continued have no
+branch point (their extended Jacobian's determinant the same at both ends) is a
+``count_change`` labelled ``determinant`` (:func:`_without_branch_point`).
 """
 
 from __future__ import annotations

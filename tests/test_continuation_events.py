@@ -321,17 +321,23 @@ def _sliding_left_out_below(threshold, monkeypatch):
     monkeypatch.setattr(events, "inertia_with_factor", patched)
 
 
+def _sliding_segment(lam_b, monkeypatch) -> Segment:
+    """The diagonal problem's trivial branch from lambda = 1.3 to ``lam_b``, its count
+    leaving one negative eigenvalue out below 1.6."""
+    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
+    system = ExtendedSystem(DiagonalQuartic(d), "lam", np.zeros(6))
+    _sliding_left_out_below(1.6, monkeypatch)
+    x_a = system.pack(np.zeros(6), np.zeros(0), 1.3)
+    x_b = system.pack(np.zeros(6), np.zeros(0), lam_b)
+    return Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
+
+
 def test_a_count_change_with_no_eigenvalue_crossing_is_no_bifurcation(monkeypatch):
     """Oracle: the diagonal problem's trivial branch has the eigenvalues d_i - lambda;
     on lambda in [1.3, 1.9] exactly one is negative (d_0 = 1) and none crosses zero.
     The count, with one negative eigenvalue left out below 1.6, changes there: a
     ``count_change`` labelled ``sliding``, within switch_below of 1.6 on its far side."""
-    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
-    system = ExtendedSystem(DiagonalQuartic(d), "lam", np.zeros(6))
-    _sliding_left_out_below(1.6, monkeypatch)
-    x_a = system.pack(np.zeros(6), np.zeros(0), 1.3)
-    x_b = system.pack(np.zeros(6), np.zeros(0), 1.9)
-    segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
+    segment = _sliding_segment(1.9, monkeypatch)
     switch_below = 1e-3
     located = locate_count_change(segment, 1e-10 / segment.length, switch_below)
     assert (located.kind, located.label) == ("count_change", "sliding")
@@ -345,12 +351,7 @@ def test_a_crossing_after_a_sliding_count_change_is_still_a_located_bifurcation(
     counted again, no crossing) and 1 -> 2 at lambda = d_1 = 2 (an eigenvalue crossing):
     a sliding ``count_change``, then, searched from its resume point, a ``bifurcation``
     at exactly 2."""
-    d = np.array([1.0, 2.0, 3.5, 5.0, 6.0, 7.0])
-    system = ExtendedSystem(DiagonalQuartic(d), "lam", np.zeros(6))
-    _sliding_left_out_below(1.6, monkeypatch)
-    x_a = system.pack(np.zeros(6), np.zeros(0), 1.3)
-    x_b = system.pack(np.zeros(6), np.zeros(0), 2.3)
-    segment = Segment(system, x_a, x_b, 1e-10, 10, 1e-8)
+    segment = _sliding_segment(2.3, monkeypatch)
     xtol = 1e-10 / segment.length
     first = locate_count_change(segment, xtol, 1e-3)
     assert first.kind == "count_change" and (first.count_before, first.count_after) == (0, 1)

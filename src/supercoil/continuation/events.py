@@ -32,14 +32,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from supercoil.continuation.corrector import correct, tangent
 from supercoil.continuation.stability import eigenpairs, inertia_with_factor
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.continuation.zeroin import LocationFailed, zeroin
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
-from supercoil.solvers.kkt import KKTFactor
 
 
 @dataclass(frozen=True)
@@ -206,38 +204,15 @@ class Segment:
         return self._counts[u]
 
     def factor_count(self, u: float) -> int:
-        """The negative eigenvalues of the count's pencil at ``u`` (the constrained
-        Hessian on the complement of the approximate symmetries), before the count leaves
-        out the stiff sliding's (:func:`~supercoil.continuation.stability.stiff_sliding`):
-        ``count(u)`` plus the eigenvalue it left out, if any."""
+        """``count(u)`` with the stiff sliding's eigenvalue it left out added back
+        (:func:`~supercoil.continuation.stability.stiff_sliding`): the negative
+        eigenvalues of the count's pencil at ``u``."""
         count = self.count(u)
         return count + self._left_out[float(u)]
 
     def system_eigenpairs(self, u: float, n_wanted: int) -> tuple[np.ndarray, np.ndarray]:
         """Eigenpairs of the constrained Hessian nearest zero at ``u`` (``eigenpairs``)."""
         return eigenpairs(self.system, self.point(u), n_wanted)
-
-    def branch_points_odd(self, t_a: np.ndarray, t_b: np.ndarray) -> bool | None:
-        """Whether the segment holds an odd number of branch points of the system
-        continued (None where a factor is singular): whether the sign of the determinant
-        of its extended Jacobian ``[K, F_lambda; t^T]`` differs at the two ends.
-
-        With ``K`` the KKT matrix of the continued system (its Hessian on the free DOFs,
-        its constraint and phase rows, without the rows that take the approximate
-        symmetries out of the count) and ``t`` the unit tangent, ``K t_x + F_lambda
-        t_lambda = 0`` gives ``det [K, F_lambda; t^T] = det K / t_lambda``: its sign is
-        ``(-1)^(n_K + m) sign(t_lambda)``, ``n_K`` the negative eigenvalues of the
-        Hessian on ``ker J``. A fold changes both factors, a simple branch point only
-        ``det K`` (Keller 1977's test function). ``t_a``, ``t_b``: the ends' tangents,
-        oriented along the branch."""
-        try:
-            negative = [KKTFactor(self.system.hessian(x),
-                                  sp.csr_matrix(self.system.jacobian(x))).reduced_negative_count
-                        for x in (self.x_a, self.x_b)]
-        except (SingularMatrixError, InertiaError):
-            return None
-        flips = [int(t[-1] < 0) for t in (t_a, t_b)]
-        return (negative[0] + flips[0] - negative[1] - flips[1]) % 2 == 1
 
     def nearest_eigenvalue(self, u: float) -> float:
         u = float(u)
@@ -377,13 +352,10 @@ def locate_count_change(segment: Segment, xtol: float, switch_below: float,
     ``accuracy`` the arclength to that zero; its special point carries the
     ``k`` critical modes.
 
-    A change that no eigenvalue crossing zero makes is no bifurcation: where the
-    count's pencil has as many negative eigenvalues on both sides of the bracket
-    (:meth:`Segment.factor_count`), the count changed only because the stiff sliding's
-    eigenvalue was left out on one side and counted on the other (its share of the
-    sliding ``g`` passing :data:`~supercoil.stability.sliding_count.SLIDING_SHARE`,
-    :mod:`~supercoil.stability.sliding_count`). It is returned with the kind
-    ``count_change`` and the label ``sliding``, at the bracket's end with the new count.
+    Where the count's pencil has as many negative eigenvalues at both ends of the last
+    bracket (:meth:`Segment.factor_count`), no eigenvalue crossed zero: the stiff
+    sliding's was left out on one side only (:mod:`~supercoil.stability.sliding_count`),
+    and a ``count_change`` labelled ``sliding`` is returned at the bracket's far end.
 
     ``Located.resume`` is the first corrected point past the change (with the new
     count): a further change on the segment is searched from there.

@@ -16,6 +16,7 @@ import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
+import scipy.sparse as sp
 
 from supercoil.continuation.branch import COUNT_KINDS, SpecialPoint
 from supercoil.continuation.events import (
@@ -30,6 +31,8 @@ from supercoil.continuation.options import ContinuationOptions
 from supercoil.continuation.stability import point_stability
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.carried import frames_of
+from supercoil.solvers.errors import InertiaError, SingularMatrixError
+from supercoil.solvers.kkt import KKTFactor
 
 
 def locate_events(system: ExtendedSystem, opts: ContinuationOptions,
@@ -78,12 +81,36 @@ def locate_events(system: ExtendedSystem, opts: ContinuationOptions,
     return segment, sorted(found, key=lambda e: e.u)
 
 
+def branch_points_odd(segment: Segment, t_a: np.ndarray, t_b: np.ndarray) -> bool | None:
+    """Whether ``segment`` holds an odd number of branch points of the system continued
+    (None where a factor is singular): whether the sign of the determinant of its
+    extended Jacobian ``[K, F_lambda; t^T]`` differs at the segment's two ends.
+
+    With ``K`` the KKT matrix of the continued system (its Hessian on the free DOFs,
+    its constraint and phase rows, without the rows that take the approximate
+    symmetries out of the count) and ``t`` the unit tangent, ``K t_x + F_lambda
+    t_lambda = 0`` gives ``det [K, F_lambda; t^T] = det K / t_lambda``: its sign is
+    ``(-1)^(n_K + m) sign(t_lambda)``, ``n_K`` the negative eigenvalues of the Hessian
+    on ``ker J``. A fold changes both factors, a simple branch point only ``det K``
+    (Keller 1977's test function). ``t_a``, ``t_b``: the ends' tangents, oriented along
+    the branch."""
+    system = segment.system
+    try:
+        negative = [KKTFactor(system.hessian(x),
+                              sp.csr_matrix(system.jacobian(x))).reduced_negative_count
+                    for x in (segment.x_a, segment.x_b)]
+    except (SingularMatrixError, InertiaError):
+        return None
+    flips = [int(t[-1] < 0) for t in (t_a, t_b)]
+    return (negative[0] + flips[0] - negative[1] - flips[1]) % 2 == 1
+
+
 def _without_branch_point(segment: Segment, found: list[Located], t_a: np.ndarray,
                           t_b: np.ndarray) -> list[Located]:
     """``found`` with its bifurcation relabelled a ``count_change`` (label
     ``determinant``) where it is the segment's only located bifurcation, changes the
     count by an odd number, and the segment holds no branch point of the system
-    continued (:meth:`~supercoil.continuation.events.Segment.branch_points_odd`).
+    continued (:func:`branch_points_odd`).
 
     A simple eigenvalue crossing zero off a fold changes the sign of the extended
     Jacobian's determinant. The count (of the constrained Hessian on the complement
@@ -94,7 +121,7 @@ def _without_branch_point(segment: Segment, found: list[Located], t_a: np.ndarra
     """
     located = [e for e in found if e.kind == "bifurcation" and e.located]
     if (len(located) != 1 or (located[0].count_after - located[0].count_before) % 2 == 0
-            or segment.branch_points_odd(t_a, t_b) is not False):
+            or branch_points_odd(segment, t_a, t_b) is not False):
         return found
     return [dataclasses.replace(e, kind="count_change", label="determinant")
             if e is located[0] else e for e in found]

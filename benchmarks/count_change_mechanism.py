@@ -34,12 +34,12 @@ import argparse
 import time
 
 import numpy as np
-import scipy.sparse as sp
 
 import supercoil as sc
 from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation.carry import branch_frames
+from supercoil.continuation.special_points import continued_parity
 from supercoil.continuation.stability import inertia_with_factor
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.problems.tweezers import TweezersOptions
@@ -47,7 +47,6 @@ from supercoil.problems.tweezers.buckled import stored_pins
 from supercoil.problems.tweezers.problem import clamped_problem
 from supercoil.problems.tweezers.result import TweezersResult
 from supercoil.solvers.carried import with_frames
-from supercoil.solvers.kkt import KKTFactor
 
 
 def rebuilt(settings: dict, branch) -> TweezersResult:
@@ -106,13 +105,12 @@ def main() -> None:
             count, _sign, _f, _dofs, left_out = inertia_with_factor(system, x, 1e-6, hessian)
             factor.append(count + left_out)
             left.append(left_out)
-            n_k = KKTFactor(hessian, sp.csr_matrix(system.jacobian(x))).reduced_negative_count
-            continued.append(n_k + int(branch.tangents[i, -1] < 0))
+            continued.append(continued_parity(system, x, branch.tangents[i], hessian))
             if count != branch.unstable_count[i]:
                 mismatched += 1
         if factor[0] == factor[1]:
             verdict = "sliding"
-        elif (continued[0] - continued[1]) % 2 == 0 and (p.count_after - p.count_before) % 2:
+        elif continued[0] == continued[1] and (p.count_after - p.count_before) % 2:
             verdict = "determinant"
         else:
             verdict = "bifurcation"
@@ -122,8 +120,8 @@ def main() -> None:
         print(f"{p.kind}/{p.label} between points {p.index} and {p.index + 1} "
               f"(turns {p.parameter:.5f}): count {p.count_before} -> {p.count_after}; "
               f"factor {factor[0]} -> {factor[1]}, left out {left[0]} -> {left[1]}; "
-              f"n_K + [t_lambda < 0] {continued[0]} -> {continued[1]}: {verdict}; nearest "
-              f"eigenvalue {nearest[p.index]:.3g}, {nearest[p.index + 1]:.3g}; critical "
+              f"parity of n_K + [t_lambda < 0] {continued[0]} -> {continued[1]}: {verdict}; "
+              f"nearest eigenvalue {nearest[p.index]:.3g}, {nearest[p.index + 1]:.3g}; critical "
               f"{np.array2string(critical, precision=3)}", flush=True)
     print(f"{len(events)} events ({args.kinds}) on {branch.name}: "
           + ", ".join(f"{v} {k}" for k, v in tally.items())

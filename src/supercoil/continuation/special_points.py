@@ -81,6 +81,18 @@ def locate_events(system: ExtendedSystem, opts: ContinuationOptions,
     return segment, sorted(found, key=lambda e: e.u)
 
 
+def continued_parity(system: ExtendedSystem, x: np.ndarray, t: np.ndarray,
+                     hessian=None) -> int:
+    """``(n_K + [t_lambda < 0]) mod 2`` at the point ``x`` of tangent ``t`` (its last
+    component ``t_lambda``), which :func:`branch_points_odd` compares between points;
+    ``n_K``: the negative eigenvalues of the continued system's Hessian on ``ker J``
+    (its constraint and phase rows, without the count's rows). ``hessian``:
+    ``system.hessian(x)`` if already known. Raises on a singular KKT matrix."""
+    H = system.hessian(x) if hessian is None else hessian
+    negative = KKTFactor(H, sp.csr_matrix(system.jacobian(x))).reduced_negative_count
+    return (negative + int(t[-1] < 0)) % 2
+
+
 def branch_points_odd(segment: Segment, t_a: np.ndarray, t_b: np.ndarray) -> bool | None:
     """Whether ``segment`` holds an odd number of branch points of the system continued
     (None where a factor is singular): whether the sign of the determinant of its
@@ -90,19 +102,14 @@ def branch_points_odd(segment: Segment, t_a: np.ndarray, t_b: np.ndarray) -> boo
     its constraint and phase rows, without the rows that take the approximate
     symmetries out of the count) and ``t`` the unit tangent, ``K t_x + F_lambda
     t_lambda = 0`` gives ``det [K, F_lambda; t^T] = det K / t_lambda``: its sign is
-    ``(-1)^(n_K + m) sign(t_lambda)``, ``n_K`` the negative eigenvalues of the Hessian
-    on ``ker J``. A fold changes both factors, a simple branch point only ``det K``
-    (Keller 1977's test function). ``t_a``, ``t_b``: the ends' tangents, oriented along
-    the branch."""
-    system = segment.system
+    ``(-1)^(n_K + m) sign(t_lambda)`` (:func:`continued_parity`). A fold changes both
+    factors, a simple branch point only ``det K`` (Keller 1977's test function).
+    ``t_a``, ``t_b``: the ends' tangents, oriented along the branch."""
     try:
-        negative = [KKTFactor(system.hessian(x),
-                              sp.csr_matrix(system.jacobian(x))).reduced_negative_count
-                    for x in (segment.x_a, segment.x_b)]
+        return (continued_parity(segment.system, segment.x_a, t_a)
+                != continued_parity(segment.system, segment.x_b, t_b))
     except (SingularMatrixError, InertiaError):
         return None
-    flips = [int(t[-1] < 0) for t in (t_a, t_b)]
-    return (negative[0] + flips[0] - negative[1] - flips[1]) % 2 == 1
 
 
 def _without_branch_point(segment: Segment, found: list[Located], t_a: np.ndarray,

@@ -156,8 +156,9 @@ class ContinuationOptions:
       And a corrected point whose raw unstable count differs from the step start's
       with no fold between them (a bifurcation crossed, or a step over a fold onto
       the sheet beyond it) is taken again at half the step; the half step is kept
-      when it does not change the count (docs/continuation.md, "Steps across a fold
-      onto another sheet").
+      when it does not change the count, and where it fails the step is refused and
+      taken again shorter (docs/continuation.md, "Steps across a fold onto another
+      sheet").
     * ``max_corrector_distance``: the corrector's trust region, in units of the
       step: a correction whose iterate lies farther than
       ``max_corrector_distance * ds`` from the predicted point (before a

@@ -363,10 +363,13 @@ class Tracer:
                      and opts.detect_closed_loops and ds >= 4 * opts.min_step else None)
             if self._count_jumped(taken, start):
                 # a count change with no fold: a bifurcation crossed, or a step across the
-                # sheets of a fold onto another sheet; half the step tells them apart
+                # sheets of a fold onto another sheet; half the step tells them apart, and
+                # where it fails it cannot: the step is taken again shorter
                 half = self._attempt(0.5 * ds)
-                if (not half.refusal and not half.leaves_bound and half.failure is None
-                        and not self._count_jumped(half, start)):
+                if half.refusal or half.leaves_bound or half.failure is not None:
+                    taken.failure = (f"the step changed the unstable count with no fold and "
+                                     f"half of it failed ({half.failure or half.refusal or 'it leaves the bound'})")
+                elif not self._count_jumped(half, start):
                     log.debug("step %.3g changed the count with no fold; half of it did not",
                               ds)
                     taken, ds = half, 0.5 * ds

@@ -88,11 +88,13 @@ class Progress:
         name, n, turns = self.last
         points = "+".join(str(v) for v in self.counts.values()) or "0"
         spans = "; ".join(f"{b} {low:.4g} to {high:.4g}" for b, (low, high) in self.spans.items())
-        return (f"{head} no | {turns:.4g} | {points} | "
+        where = (f"at {name} point {n}, turns = {turns:.6g}; the turns each branch spanned "
+                 f"at its accepted points: {spans}" if self.counts else
+                 "before its first new point")
+        return (f"{head} no | {'-' if not self.counts else f'{turns:.4g}'} | {points} | "
                 f"{time.perf_counter() - self.start:.0f} | - | - | - | "
                 f"{self.continued + '; ' if self.continued else ''}stopped by {signame} "
-                f"at {name} point {n}, turns = {turns:.6g}; the turns each branch spanned "
-                f"at its accepted points: {spans} |")
+                f"{where} |")
 
 
 def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,

@@ -5,13 +5,15 @@ the parameter's tangent component changes sign) and at bifurcations; a change of
 on a step with no fold and no branch point is a step that left the branch for another
 sheet. The two stored points (``data/tweezers_sheet_jump.h5``) are points of the
 tweezers' contact branch of a rod with L/D = 200, lambda = 150, C/A = 1 on N = 202 nodes,
-at 32.9248 and 32.9243 turns, just past a fold and 1e-5 in arclength before the next
-one, at 32.92521 turns. From the second a step of 2.9e-5 used to land at 32.92775 turns
-with the count one and the tangent's turns component unchanged: on a closed curve of
-equilibria that the branch then went round and reported closed on itself. Its half
-step failed the turn test, so the whole step was kept. Followed again from the second
-point in a new run (fresh azimuth pins, as ``problems/tweezers/rejoin.py`` starts one),
-the branch turns back at 32.92521 turns and goes on over 400 points.
+at 32.92478 and 32.92432 turns, either side of a fold. The next step reaches 32.92518
+turns (count zero, the turns rising), just before another fold at 32.92521 turns. From
+there a step of 2.9e-5 lands at 32.92775 turns with the count one and the turns still
+rising, on a closed curve of equilibria beside the branch, and its half step fails the
+turn test. Kept, that step carries the branch round the curve (reported closed on
+itself after 53 more points); refused and taken again shorter, it leaves the branch
+turning back at the fold. Followed again from the second point in a new run (fresh
+azimuth pins, as ``problems/tweezers/rejoin.py`` starts one), the branch turns there
+too and goes on over 400 points.
 """
 
 from __future__ import annotations

@@ -117,3 +117,27 @@ def test_the_driver_keeps_the_branch_followed_again_where_it_reaches_further(mon
                and n.endswith("buckled_contact/rejoined (parameter_bound at 1.6 turns, 1.6 at "
                               "most)") for n in result.notes)
     assert not any(n.startswith("incomplete") for n in result.notes)
+
+
+def test_a_run_started_from_the_closed_branch_is_not_said_resumed():
+    """``rejoined`` for real on a small rod's contact branch, cut and taken as closed:
+    the run it starts from two of the branch's points is a new one, and its message
+    does not say "resumed"; continued from its own stored points, it does (as every
+    continued run's message does: ``continuation.resume``)."""
+    from supercoil.problems.tweezers.compute import tweezers_branches
+    from supercoil.problems.tweezers.options import TweezersOptions as Options
+
+    opts = Options(twist_ratio=4 / 3, length_over_diameter=20, n_nodes=24, tension=20,
+                   turns=(0.0, 1.6), max_points=40)
+    result = tweezers_branches(opts)
+    contact = next(b for b in result.branches if b.name in result.contact_branches)
+    closed = dataclasses.replace(head(contact, 12), status=ContinuationStatus.CLOSED_LOOP,
+                                 message="closed here")
+    again = module.rejoined(opts, result.rod_problem, result.contact_problem, closed)
+    assert again is not None and len(again.branch) > 2
+    assert again.branch.name == "buckled_contact/rejoined"
+    assert "resumed" not in again.branch.message, again.branch.message
+    stored = {again.branch.name: (head(again.branch, 4), False)}
+    resumed = module.rejoined(opts, result.rod_problem, result.contact_problem, closed,
+                              stored)
+    assert resumed.branch.message.endswith("(resumed after point 3)"), resumed.branch.message

@@ -124,7 +124,8 @@ def rejoined(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
     base = contact_options(opts)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
-    if old is None or len(old) < 2:
+    seeded = old is None or len(old) < 2
+    if seeded:
         old = points(closed, start - 1, start + 1)
         step = float(closed.arclength[start + 1] - closed.arclength[start])
         next_step = np.full(2, np.nan)
@@ -142,8 +143,12 @@ def rejoined(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
                           max_points=opts.max_points, segment_points=opts.segment_points,
                           on_point=on_point, quality=PIN_QUALITY, refuse=stop,
                           on_run=records.begin)
+    # a run started here from the closed branch's two points is no resumed one: its
+    # message does not say "resumed" (a stored run continued does)
+    message = branch.message.removesuffix(" (resumed after point 1)") if seeded \
+        else branch.message
     branch = dataclasses.replace(classify_contact_events(branch, cp), parent=closed.name,
-                                 origin=mark)
+                                 origin=mark, message=message)
     return Rejoined(branch, resumed_pins(old, pins), entry, start, guards)
 
 

@@ -157,8 +157,8 @@ class ContinuationOptions:
       with no fold between them (a bifurcation crossed, or a step over a fold onto
       the sheet beyond it) is taken again at half the step; the half step is kept
       when it does not change the count, and where it fails the step is refused and
-      taken again shorter (docs/continuation.md, "Steps across a fold onto another
-      sheet").
+      taken again shorter (and taken after all where every shorter one fails;
+      docs/continuation.md, "Steps across a fold onto another sheet").
     * ``max_corrector_distance``: the corrector's trust region, in units of the
       step: a correction whose iterate lies farther than
       ``max_corrector_distance * ds`` from the predicted point (before a

@@ -22,6 +22,7 @@ problem at the point (its parameter value and its carried frames).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import re
 from collections.abc import Callable, Mapping, Sequence
@@ -329,6 +330,17 @@ class Tracer:
         negative = self._count_at(taken)
         return negative is not None and negative != self.stabs[-1].negative_count
 
+    def _retraced(self, taken) -> str | None:
+        """Why the corrected point of ``taken`` is refused as lying on the branch's own
+        path, followed the other way (:func:`~supercoil.continuation.closure.retraced`),
+        or None."""
+        j = retraced(self.system, self.opts, self.xs, self.ts, taken.x, taken.t,
+                     self._parameters.view("p", len(self.xs)))
+        if j is not None and self._back_on_sheet(j, taken):
+            return (f"the corrected point lies on the branch's own path near its point {j}, "
+                    f"followed the other way (a jump back across a fold's sheets)")
+        return None
+
     def _attempt(self, length: float):
         """A step of ``length`` from the last point (:func:`take_step`)."""
         return take_step(self.system, self.opts, self.xs[-1], self.ts[-1],
@@ -345,6 +357,7 @@ class Tracer:
         low, high = opts.parameter_bounds
         ds = step
         failed: list[tuple[float, str]] = []  # (step, failure) since the last point
+        refused = None  # (step, length): a count change refused since the last point
         while len(self.xs) < opts.max_points:
             if self.s[-1] >= opts.max_arclength:
                 return ContinuationStatus.MAX_ARCLENGTH, (
@@ -367,19 +380,16 @@ class Tracer:
                 # where it fails it cannot: the step is taken again shorter
                 half = self._attempt(0.5 * ds)
                 if half.refusal or half.leaves_bound or half.failure is not None:
-                    taken.failure = (f"the step changed the unstable count with no fold and "
-                                     f"half of it failed ({half.failure or half.refusal or 'it leaves the bound'})")
+                    refused = (taken, ds)
+                    taken = dataclasses.replace(taken, failure=(
+                        "the step changed the unstable count with no fold and half of it "
+                        f"failed ({half.failure or half.refusal or 'it leaves the bound'})"))
                 elif not self._count_jumped(half, start):
                     log.debug("step %.3g changed the count with no fold; half of it did not",
                               ds)
                     taken, ds = half, 0.5 * ds
             if taken.failure is None and opts.detect_closed_loops:
-                j = retraced(system, opts, self.xs, self.ts, taken.x, taken.t,
-                             self._parameters.view("p", len(self.xs)))
-                if j is not None and self._back_on_sheet(j, taken):
-                    taken.failure = (f"the corrected point lies on the branch's own path "
-                                     f"near its point {j}, followed the other way (a jump "
-                                     f"back across a fold's sheets)")
+                taken.failure = self._retraced(taken)
             if taken.failure is not None:
                 log.debug("step %.3g rejected: %s", ds, taken.failure)
                 failed.append((ds, taken.failure))
@@ -391,15 +401,24 @@ class Tracer:
                             f"stability at the point corrected in a moved gauge failed: {exc}")
                     if moved:
                         regauged_here = True  # retry the same step once with the moved gauge
+                        refused = None  # a step of the gauge before
                         log.debug("gauge moved at point %d", len(self.xs) - 1)
                         continue
-                if ds <= opts.min_step:
+                if ds > opts.min_step:
+                    ds = max(ds * opts.shrink, opts.min_step)
+                    continue
+                if refused is not None and (not opts.detect_closed_loops
+                                            or self._retraced(refused[0]) is None):
+                    # every shorter step failed as well: the start lies so close to a
+                    # bifurcation that steps ending near it fail; the refused step crossed it
+                    log.debug("no step shorter than %.3g went; it is taken", refused[1])
+                    taken, ds = refused
+                else:
                     return ContinuationStatus.STEP_TOO_SMALL, (
                         f"stopped after {self.first + len(self.xs)} points at {system.parameter} = "
                         f"{x_k[-1]:.10g}: {taken.failure} at the minimum step "
                         f"{opts.min_step:.1e}{_earlier_failures(failed)}")
-                ds = max(ds * opts.shrink, opts.min_step)
-                continue
+            refused = None
             regauged_here = False
             failed.clear()
             x_new, bound, corr = taken.x, taken.bound, taken.correction

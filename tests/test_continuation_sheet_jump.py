@@ -1,4 +1,5 @@
-"""A step that changes the count with no fold, whose half step fails, is taken again shorter.
+"""A step that changes the count with no fold, whose half step fails, is taken again shorter
+(and after all where every shorter step fails).
 
 Oracle: along a smooth branch the unstable count changes only at folds (by one, where
 the parameter's tangent component changes sign) and at bifurcations; a change of count
@@ -68,3 +69,38 @@ def test_the_branch_goes_through_the_sharp_fold_instead_of_onto_the_closed_curve
     assert counts[top + 1] == 1 and turns[-1] < turns[top]
     # nothing of the closed curve's sheet: count one with the turns still rising
     assert not np.any((counts == 1) & (t_turns > 0) & (turns > 32.926))
+
+
+def test_a_refused_step_is_taken_where_every_shorter_one_fails(monkeypatch):
+    """The trivial branch x = 0 of ``E = sum (d_i - lambda) x_i^2 / 2 + |x|^4 / 4``
+    crosses the pitchfork at lambda = d_0 = 1 exactly, its count going from 0 to 1 with
+    no fold. Every step from a start at lambda >= 0.8 that ends at lambda <= 1 is made
+    to fail (as steps ending close to a bifurcation can): the step across lambda = 1 is
+    refused, its half failing, and every shorter one fails down to the minimum step.
+    Taken after all, it carries the branch through the bifurcation (located at 1) to
+    the bound; refused for good, the branch would stop there."""
+    from test_continuation_toys import DiagonalQuartic
+
+    from supercoil.continuation import ContinuationOptions, ContinuationStatus, continuation
+    from supercoil.continuation import tracer as module
+
+    real = module.take_step
+
+    def failing_near(system, opts, x_k, *args):
+        taken = real(system, opts, x_k, *args)
+        if taken.failure is None and x_k[-1] >= 0.8 and x_k[-1] < taken.x[-1] <= 1.0:
+            taken.failure, taken.x, taken.t = "made to fail", None, None
+        return taken
+
+    monkeypatch.setattr(module, "take_step", failing_near)
+    problem = DiagonalQuartic(np.array([1.0, 2.0, 3.5]), lam=0.5)
+    options = ContinuationOptions(initial_step=0.05, max_step=0.15, min_step=1e-4,
+                                  parameter_bounds=(0.5, 1.5), max_points=60)
+    branch = continuation(problem, np.zeros(3), parameter="lam", options=options)
+    assert branch.status is ContinuationStatus.PARAMETER_BOUND, branch.message
+    lam = branch.parameter_values
+    k = int(np.flatnonzero(lam > 1.0)[0])
+    assert 0.8 <= lam[k - 1] < 1.0 < lam[k] <= lam[k - 1] + 0.15 + 1e-12
+    assert list(branch.unstable_count[k - 1:k + 1]) == [0, 1]
+    crossing = [p for p in branch.special_points if p.kind == "bifurcation"]
+    assert len(crossing) == 1 and abs(crossing[0].parameter - 1.0) < 1e-8

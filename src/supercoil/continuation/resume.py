@@ -91,7 +91,8 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
                   records: RecordFunction | None = None, events: tuple[UserEvent, ...] = (),
                   on_point: PointCallback | None = None, step: float | None = None,
                   stop: Callable[[np.ndarray], str | None] | None = None,
-                  admissible: Callable[[np.ndarray], bool] | None = None) -> Branch:
+                  admissible: Callable[[np.ndarray], bool] | None = None,
+                  resumed: bool = True) -> Branch:
     """Continue ``partial`` (at least one point) under ``options`` (the options it was
     computed with: ``max_points`` counts the whole branch); see the module docstring.
     ``problem`` is as the interrupted run had it before the branch's first point; it is
@@ -100,7 +101,9 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
 
     ``records``, ``events``, ``stop`` and ``admissible`` must be those of the
     interrupted run (:func:`~supercoil.continuation.continuation`). ``on_point``
-    receives the whole branch so far. Numerical failures end in the status.
+    receives the whole branch so far. Numerical failures end in the status. The
+    message says after which point the run was resumed, unless ``resumed`` is False
+    (a run its caller starts from points it made itself).
     """
     opts = options or ContinuationOptions()
     k = len(partial)
@@ -181,4 +184,5 @@ def resume_branch(problem: ConstrainedEnergy, partial: Branch,
     whole = tracer.branch(status, message)
     if status is ContinuationStatus.MAX_POINTS:
         message = f"{len(whole)} points computed (max_points)"
-    return dataclasses.replace(whole, message=f"{message} (resumed after point {k - 1})")
+    return dataclasses.replace(whole, message=f"{message} (resumed after point {k - 1})"
+                               if resumed else message)

@@ -67,7 +67,7 @@ def resume_stored(stored: Mapping[str, tuple[Branch, bool]], rod: ClampedRodEner
                   problem, name: str, segment_opts: ContinuationOptions,
                   records: RunRecords, events, on_point=None, stop=None,
                   sliding: bool = True, max_points: int | None = None,
-                  first: np.ndarray | None = None) -> Branch | None:
+                  first: np.ndarray | None = None, resumed: bool = True) -> Branch | None:
     """The stored branch ``name`` continued to the end of the run it was stopped in, or
     None (none stored, or complete, or of fewer than two points).
 
@@ -79,7 +79,8 @@ def resume_stored(stored: Mapping[str, tuple[Branch, bool]], rod: ClampedRodEner
     the run also ends where the sliding's phase row must come or go relative to the
     run's first state (:func:`~supercoil.problems.tweezers.pins.sliding_stop`), or
     relative to ``first`` for the branch's first run (the state its stop was made from).
-    ``records.start`` is left at the run's start."""
+    ``records.start`` is left at the run's start. ``resumed``: as
+    :func:`~supercoil.continuation.resume.resume_branch` has it."""
     old, complete = stored.get(name, (None, False))
     if old is None or complete or len(old) < 2:
         return None
@@ -97,7 +98,8 @@ def resume_stored(stored: Mapping[str, tuple[Branch, bool]], rod: ClampedRodEner
     since = first if start == 0 and first is not None else old.states[start]
     return resume_branch(problem, old, dataclasses.replace(segment_opts, max_points=end),
                          records=records, events=events, on_point=on_point,
-                         stop=either(stop, sliding_stop(rod, since) if sliding else None))
+                         stop=either(stop, sliding_stop(rod, since) if sliding else None),
+                         resumed=resumed)
 
 
 def switch_off_straight(rod: ClampedRodEnergy, straight: Branch, point: SpecialPoint,

@@ -136,19 +136,16 @@ def rejoined(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProblem,
         say(f"{name}: {closed.name} followed again from its point {start}, before the "
             f"closed curve it entered at its point {entry}")
     first = resume_stored({name: (old, False)}, rod, cp, name, base, records, events,
-                          on_point, stop, sliding=False, max_points=opts.max_points)
+                          on_point, stop, sliding=False, max_points=opts.max_points,
+                          resumed=not seeded)  # a run started from two points is no resumed one
     if first is None:
         return None
     branch, pins = follow(cp, rod, first, base, name, records, events,
                           max_points=opts.max_points, segment_points=opts.segment_points,
                           on_point=on_point, quality=PIN_QUALITY, refuse=stop,
                           on_run=records.begin)
-    # a run started here from the closed branch's two points is no resumed one: its
-    # message does not say "resumed" (a stored run continued does)
-    message = branch.message.removesuffix(" (resumed after point 1)") if seeded \
-        else branch.message
     branch = dataclasses.replace(classify_contact_events(branch, cp), parent=closed.name,
-                                 origin=mark, message=message)
+                                 origin=mark)
     return Rejoined(branch, resumed_pins(old, pins), entry, start, guards)
 
 

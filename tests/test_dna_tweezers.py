@@ -154,6 +154,7 @@ def test_contact_curve_defaults_to_the_quintic_with_dna(dna_run, tmp_path):
     data = json.loads((dna_run / "branch.json").read_text())
     assert data["contact_curve"] == "quintic"
     assert data["loop_sliding"] is None and data["loop_sliding_applied"] is True
+    assert data["loop_sliding_in_contact"] is True
     assert sc.load(dna_run).settings["contact_curve"] == "quintic"
     assert sc.load(dna_run).settings["loop_sliding"] is None  # a resume must match it
     dna = parse_study(STUDY).tweezers_options()
@@ -183,6 +184,7 @@ def test_the_command_line_keeps_a_given_loop_sliding(given, dna, expected, tmp_p
     data = json.loads((out / "branch.json").read_text())
     assert data["loop_sliding"] is expected
     assert data["loop_sliding_applied"] is (expected is not False)
+    assert data["loop_sliding_in_contact"] is (expected is not False)
     assert sc.load(out).settings["loop_sliding"] is expected
 
 
@@ -191,7 +193,7 @@ def test_loop_sliding_applies_with_dna_where_the_mesh_lets_the_loop_slide(force,
     """The default nodes' segments h = L/(N - 2) are at most half the loop's core
     sqrt(A/F) (h sqrt(F/A) <= 1/2, computed here from the preset's own L, D and A), so
     loop_sliding applies; where n0's segments are longer (given as [rod] nodes), the
-    mesh pins the loop and loop_sliding does not apply: the default leaves it off."""
+    mesh pins the loop and loop_sliding applies on the contact-free branches only."""
     preset = DNAPreset(3000, salt_mM=salt)
     text = STUDY.replace("salt_mM = 150", f"salt_mM = {salt}").replace(
         "force_pN = 1.0", f"force_pN = {force}")
@@ -204,7 +206,8 @@ def test_loop_sliding_applies_with_dna_where_the_mesh_lets_the_loop_slide(force,
                                                 options.tension))
         core = 3000 * RISE / (nodes - 2) * math.sqrt(force / (P_B * KT))
         assert options.core_segments == pytest.approx(core, rel=1e-12)
-        assert options.loop_sliding is None and options.loop_slides is (core <= 0.5)
+        assert options.loop_sliding is None and options.loop_slides
+        assert options.loop_slides_in_contact is (core <= 0.5)
         assert given is not None or core <= 0.5
     assert dna_numerics({}) == {"contact_curve": "quintic"}
     assert dna_numerics({"contact_curve": "spline"}) == {"contact_curve": "spline"}

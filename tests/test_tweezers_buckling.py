@@ -94,21 +94,26 @@ def test_buckled_branch_leaves_the_straight_rod_at_lambda_150():
                for n in result.notes)
 
 
-def test_loop_sliding_applies_only_where_the_mesh_resolves_the_loops_core():
+def test_loop_sliding_applies_in_contact_only_where_the_mesh_resolves_the_loops_core():
     """The loop's core is sqrt(A/F) = L / lambda long: on segments longer than half of
-    it the mesh pins the loop, and its sliding is no approximate symmetry (no phase
-    row)."""
+    it the mesh pins the loop in contact, and the sliding is no approximate symmetry of
+    the contact branch (no phase row there); the contact-free branch carries the row on
+    every mesh."""
     def opts(n):
         return TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=22500.0,
                                n_nodes=n, loop_sliding=True)
 
-    assert not opts(202).loop_slides and opts(302).loop_slides
-    assert not dataclasses.replace(opts(302), loop_sliding=False).loop_slides
-    # the default, None, is the same as True: on wherever the mesh lets the loop slide
+    assert opts(202).loop_slides and opts(302).loop_slides
+    assert not opts(202).loop_slides_in_contact and opts(302).loop_slides_in_contact
+    off = dataclasses.replace(opts(302), loop_sliding=False)
+    assert not off.loop_slides and not off.loop_slides_in_contact
+    # the default, None, is the same as True
     for n in (202, 302):
-        assert dataclasses.replace(opts(n), loop_sliding=None).loop_slides == opts(n).loop_slides
+        default = dataclasses.replace(opts(n), loop_sliding=None)
+        assert default.loop_slides == opts(n).loop_slides
+        assert default.loop_slides_in_contact == opts(n).loop_slides_in_contact
     with pytest.raises(InputError, match="^loop_sliding must be True, False or None"):
         dataclasses.replace(opts(302), loop_sliding="yes")
     rod, _ = clamped_problem(opts(202))
-    assert rod.sliding_tail is None and rod.impenetrable
-    assert clamped_problem(opts(302))[0].sliding_tail == sliding_threshold(302)
+    assert rod.sliding_tail == sliding_threshold(202) and rod.impenetrable
+    assert clamped_problem(off)[0].sliding_tail is None

@@ -68,10 +68,46 @@ def test_no_branch_is_held_on_its_symmetry_where_the_mesh_pins_the_loop():
     that pins the loop's core (the quintic contact curve at L/D = 100, lambda = 150,
     N = 102: up to 6.4e-2 of KKT residual): :func:`mirrored_contact` declines there before
     it reads the branch, as it does without ``loop_sliding``, and the contact branch's
-    runs carry no sliding row (``loop_slides``)."""
+    runs carry no sliding row (``loop_slides_in_contact``); the contact-free runs do."""
     from supercoil.problems.tweezers.mirrored import mirrored_contact
 
     for lam, nodes in ((150.0, 102), (80.0, 102)):
         pinned = dataclasses.replace(options(lam, nodes), loop_sliding=True)
-        assert pinned.mesh_pins_loop and not pinned.loop_slides
+        assert pinned.mesh_pins_loop and pinned.loop_slides
+        assert not pinned.loop_slides_in_contact
         assert mirrored_contact(pinned, None, None, None, None, "buckled_contact", {}) is None
+
+
+def test_on_a_pinned_mesh_the_row_holds_the_contact_free_branch_without_moving_its_contact():
+    """L/D = 40, lambda = 40, N = 52 (``h sqrt(F/A)`` = 0.8, a mesh that pins the loop):
+    the contact-free branch carries the sliding's phase row, which holds a force (the
+    KKT residual without it) that grows as the loop closes on itself and is named in a
+    note. Oracle: the same branch without the row (``loop_sliding=False``) is a branch of
+    equilibria of the rod alone; the two meet the contact at the same turns (to 1e-8)
+    with the same writhe. The contact branch carries no row: its points are equilibria
+    of the rod with its contact (KKT residual below 1e-6)."""
+    from supercoil.problems.greenhill import critical_turns
+    from supercoil.problems.tweezers import tweezers_branches
+
+    held = TweezersOptions(twist_ratio=1.5, length_over_diameter=40, tension=1600.0,
+                           n_nodes=52, turns=(0.0, 1.5 * critical_turns(1.5, 1600.0)),
+                           max_points=90, loop_sliding=True)
+    assert held.mesh_pins_loop and held.loop_slides and not held.loop_slides_in_contact
+    onsets = {}
+    for options in (held, dataclasses.replace(held, loop_sliding=False)):
+        result = tweezers_branches(options)
+        free, contact = result.branch("buckled"), result.branch("buckled_contact")
+        (onset,) = free.points_of_kind("contact_onset")
+        onsets[options.loop_sliding] = (onset.parameter, free.records["writhe"][-1])
+        force = free.records["sliding_residual"]
+        if options.loop_sliding:
+            assert 1e-6 < force.max() < 1e-4 and np.median(force) < 1e-8
+            assert any(n.startswith("buckled: the sliding of the localised loop is held")
+                       for n in result.notes)
+            assert any(n.startswith("loop_sliding is applied on the contact-free branches "
+                                    "only") for n in result.notes)
+        else:
+            assert force.max() < 1e-8
+        assert len(contact) == 90 and contact.records["sliding_residual"].max() < 1e-6
+    (with_row, writhe), (without, writhe_free) = onsets[True], onsets[False]
+    assert abs(with_row - without) < 1e-8 and abs(writhe - writhe_free) < 1e-6

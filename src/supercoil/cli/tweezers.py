@@ -132,9 +132,9 @@ def tweezers(
         "with straight tails along the rod by a phase row up to its contact, and follow a "
         "contact branch that stops or closes again held on its half-turn symmetry "
         "(docs/continuation.md, \"Long open rods\"): what long rods (L sqrt(F/A) of 20 "
-        "and more) need to reach their plectoneme. Default: on wherever it applies, where "
-        "the segments are at most half the loop's core sqrt(A/F); --loop-sliding on a "
-        "coarser mesh adds a note that it does not apply there.",
+        "and more) need to reach their plectoneme. Default: on; in contact only where "
+        "the segments are at most half the loop's core sqrt(A/F) (a coarser mesh pins the "
+        "loop there); --loop-sliding on a coarser mesh adds a note that says so.",
         show_default=False)] = None,
     overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(

@@ -103,6 +103,7 @@ def result_payload(result: TweezersResult, contacts: bool = True) -> dict:
         "contact_formulation": opts.contact_formulation,
         "loop_sliding": opts.loop_sliding,  # as given: None, where it applies
         "loop_sliding_applied": opts.loop_slides,
+        "loop_sliding_in_contact": opts.loop_slides_in_contact,
         "greenhill_turns": result.greenhill_turns,
         "hard_core_ply": None if result.ply is None else result.ply.summary(),
         "branches": branches,

@@ -105,10 +105,11 @@ def tweezers_branches(options: TweezersOptions,
                               else (on_point, None))
     pinned = pin_stop(rod)
     free_stop = either(past_onset, pinned)
-    if opts.loop_sliding is True and not opts.loop_slides:
-        notes.append(f"loop_sliding is not applied: the segments ({rod.rod.edge_length:.3g} L) "
-                     f"are longer than half the loop's core sqrt(A/F) "
-                     f"({1 / np.sqrt(opts.tension):.3g} L), which the mesh pins")
+    if opts.loop_sliding is True and not opts.loop_slides_in_contact:
+        notes.append(f"loop_sliding is applied on the contact-free branches only: the "
+                     f"segments ({rod.rod.edge_length:.3g} L) are longer than half the "
+                     f"loop's core sqrt(A/F) ({1 / np.sqrt(opts.tension):.3g} L), which "
+                     f"the mesh pins in contact")
     branches: list[Branch] = []
     start = time.perf_counter()
     if opts.load_control:
@@ -186,8 +187,8 @@ def tweezers_branches(options: TweezersOptions,
         if old is not None and len(old) >= 2:  # resumed: the pins of the stored points
             free_pins = resumed_pins(old, free_pins)
     free = verify_bifurcations(free)
-    held_force_note(free, "the sliding of the localised loop is held by a phase row "
-                    "(docs/continuation.md); the force it holds", notes)
+    held = "the sliding of the localised loop is held by a phase row (docs/continuation.md); " \
+        "the force it holds"
     onset = first_onset(free)
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}
@@ -202,12 +203,14 @@ def tweezers_branches(options: TweezersOptions,
                          f"turns without contact, before {opts.turns[1]:g} ({free.message})")
         elif probe is not None:
             notes.append(f"{free_name}: no contact found ({free.message})")
+        held_force_note(free, held, notes)
         final(free, False)
         branches.append(free)
         return TweezersResult(opts, tuple(branches), frozenset(), rod, cp, seconds,
                               tuple(notes), pins)
     if not free_complete:
         free = cut_at_onset(free, onset, f"{onset.parameter:.6g} turns")
+    held_force_note(free, held, notes)  # on the points kept, the located onset's too
     final(free, False)
     branches.append(free)
     contact_name = f"{free_name}_contact"

@@ -186,7 +186,7 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     q = free.states[k]
     set_pin(cp, rod, q)
     contact_opts = contact_options(opts, 1 if free.tangents[k, -1] >= 0 else -1)
-    sliding = ContactSliding(rod, cp, contact_opts, opts.loop_slides, hold)
+    sliding = ContactSliding(rod, cp, contact_opts, opts.loop_slides_in_contact, hold)
     records = RunRecords(tweezers_records(cp, rod, True))
     events = (contact_count_event(cp),)
     old, complete = stored.get(name, (None, False))

@@ -67,10 +67,10 @@ def mirrored_contact(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactPr
                      say: Callable[[str], None] = lambda message: None
                      ) -> tuple[Branch, tuple[tuple[int, tuple[int, ...]], ...]] | None:
     """The contact branch ``name + SUFFIX`` held on its symmetry (module doc) and its
-    azimuth pins; None where ``loop_sliding`` does not apply (``loop_slides``: off, or a
-    mesh that pins the loop's core, where the row would hold the mesh's force) or from an
-    asymmetric start."""
-    if not opts.loop_slides or not symmetric_start(free, onset, cp, opts.diameter):
+    azimuth pins; None where ``loop_sliding`` does not apply in contact
+    (``loop_slides_in_contact``: off, or a mesh that pins the loop's core, where the row
+    would hold the mesh's force) or from an asymmetric start."""
+    if not opts.loop_slides_in_contact or not symmetric_start(free, onset, cp, opts.diameter):
         return None
     say(f"{name}{SUFFIX}: the contact branch again, held on its half-turn symmetry")
     return contact_branch(opts, rod, cp, free, onset, name + SUFFIX, stored, on_point,

@@ -9,8 +9,8 @@ from supercoil import checks
 from supercoil.contact.options import validate_contact_choice
 from supercoil.problems.branch_options import PREDICTORS, branch_tolerances, check_steps
 
-# the loop's sliding is an approximate symmetry only on segments no longer than this
-# many times sqrt(A/F) (TweezersOptions.loop_slides)
+# in contact the loop's sliding is an approximate symmetry only on segments no longer
+# than this many times sqrt(A/F) (TweezersOptions.loop_slides_in_contact)
 SLIDING_CORE = 0.5
 # the largest end distance z/L: an extensible rod stretched to twice its length (a
 # stretch strain of 1); an inextensible one stays below 1 (check_inextensible)
@@ -50,12 +50,13 @@ class TweezersOptions:
     (``ContactOptions.curve``); ``loop_sliding``: treat the sliding of a localised
     loop with straight tails as an approximate symmetry (a phase row on the
     contact-free branch, out of the unstable count; docs/continuation.md, "Long open
-    rods"; not on segments longer than ``sqrt(A/F) / 2``, :attr:`loop_slides`): it lets
+    rods"; :attr:`loop_slides`; in contact not on segments longer than
+    ``sqrt(A/F) / 2``, :attr:`loop_slides_in_contact`): it lets
     long rods reach their contact where the corrector otherwise diverges along the nearly
     free sliding and keeps a centred loop centred, from which a contact branch that
     stops or closes is followed again held on its half-turn symmetry
     (:mod:`~supercoil.problems.tweezers.mirrored`). ``None`` (default): on where it
-    applies; ``True``: asked for (a note says where the mesh does not let it apply);
+    applies; ``True``: asked for (a note says where the mesh keeps it out of contact);
     ``False``: off;
     ``contact_formulation``:
     ``"integral"``
@@ -119,17 +120,30 @@ class TweezersOptions:
 
     @property
     def loop_slides(self) -> bool:
-        """``loop_sliding`` where it applies: not on a mesh whose segments are longer than
-        ``SLIDING_CORE`` times the loop's core ``sqrt(A/F)`` (the core spans a segment
-        or two, and moving it costs the energy of the mesh, which a phase row then
-        holds). Measured, the force held (the KKT residual without the row): 2e-5 to
-        5e-5 at ``h sqrt(F/A)`` = 0.37-0.4 (lambda = 40, 80, 150); 0.17-4.4 at 0.74-1.5
-        (lambda = 80, 150), where the contact-free states are no equilibria and the
-        contact branch, without the row, did not start from them (L/D = 200, lambda =
-        150, N = 202: without the row it starts and reaches 20.9 turns in 300 points),
-        or the branch stopped where the row came and went (N = 102: without it, it
-        reaches its contact)."""
-        return self.loop_sliding is not False and not self.mesh_pins_loop
+        """``loop_sliding`` where it applies on the contact-free runs: on every mesh, unless
+        off. Where the mesh pins the loop's core (:attr:`mesh_pins_loop`) the row holds
+        the force of the mesh, which stays small before the contact: at L/D = 100,
+        lambda = 150, N = 102 (``h sqrt(F/A)`` = 1.47) the KKT residual without the row
+        (the record ``sliding_residual``) was below 2e-6 at 99 % of the contact-free
+        points and 4.2e-4 at the onset. Without the row that branch stopped at 37.92
+        turns, before its contact: the continued system had a nearly neutral mode (an
+        eigenvalue of -7e-4 to 1e-3 against a next one of 2.2e5, changing sign five
+        times within 0.05 turns) on which the corrector diverged. A held force above
+        ``SLIDING_NOTE`` is noted with the result."""
+        return self.loop_sliding is not False
+
+    @property
+    def loop_slides_in_contact(self) -> bool:
+        """The row on the contact branch's runs where no contact acts, and the branch
+        held on its half-turn symmetry (:mod:`~supercoil.problems.tweezers.mirrored`):
+        :attr:`loop_slides`, not on a mesh that pins the loop's core. There the contact
+        makes the end loop's energy depend on where the nodes sit in it (the mesh's
+        force, which a row would hold): at L/D = 100, lambda = 150, N = 102 a contact
+        branch carrying the row where no contact acted held a median of 5.6e-5 and at
+        most 1.4e-3, above ``SLIDING_NOTE``; without the row the contact branch starts
+        from the contact-free branch's onset and grows its plectoneme (docs/tweezers.md,
+        "The plectoneme on coarse meshes")."""
+        return self.loop_slides and not self.mesh_pins_loop
 
     @property
     def core_segments(self) -> float | None:

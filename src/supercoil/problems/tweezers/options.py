@@ -138,11 +138,12 @@ class TweezersOptions:
         held on its half-turn symmetry (:mod:`~supercoil.problems.tweezers.mirrored`):
         :attr:`loop_slides`, not on a mesh that pins the loop's core. There the contact
         makes the end loop's energy depend on where the nodes sit in it (the mesh's
-        force, which a row would hold): at L/D = 100, lambda = 150, N = 102 a contact
-        branch carrying the row where no contact acted held a median of 5.6e-5 and at
-        most 1.4e-3, above ``SLIDING_NOTE``; without the row the contact branch starts
-        from the contact-free branch's onset and grows its plectoneme (docs/tweezers.md,
-        "The plectoneme on coarse meshes")."""
+        force, which a row would hold), and the contact branch is followed without the
+        row: at L/D = 100, lambda = 150, N = 102 it starts from the onset that the
+        contact-free branch's row held (a force of 4.2e-4 there, within the KKT residual
+        of the contact branch's own points, which carry no row: median 5.5e-5, at most
+        1.4e-3, under the tension F L^2/A = 22500) and grows its plectoneme
+        (docs/tweezers.md, "The plectoneme on coarse meshes")."""
         return self.loop_slides and not self.mesh_pins_loop
 
     @property

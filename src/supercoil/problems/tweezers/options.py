@@ -125,8 +125,9 @@ class TweezersOptions:
         the force of the mesh, which stays small before the contact: at L/D = 100,
         lambda = 150, N = 102 (``h sqrt(F/A)`` = 1.47) the KKT residual without the row
         (the record ``sliding_residual``) was below 2e-6 at 99 % of the contact-free
-        points and 4.2e-4 at the onset. Without the row that branch stopped at 37.92
-        turns, before its contact: the continued system had a nearly neutral mode (an
+        points and 4.2e-4 at the onset; at L/D = 200, N = 202 (0.74) at most 2.4e-5
+        (C/A = 1.5) and 9.6e-6 (C/A = 1). Without the row the branch at N = 102 stopped
+        at 37.92 turns, before its contact: the continued system had a nearly neutral mode (an
         eigenvalue of -7e-4 to 1e-3 against a next one of 2.2e5, changing sign five
         times within 0.05 turns) on which the corrector diverged. A held force above
         ``SLIDING_NOTE`` is noted with the result."""

@@ -187,8 +187,8 @@ def tweezers_branches(options: TweezersOptions,
         if old is not None and len(old) >= 2:  # resumed: the pins of the stored points
             free_pins = resumed_pins(old, free_pins)
     free = verify_bifurcations(free)
-    held = "the sliding of the localised loop is held by a phase row (docs/continuation.md); " \
-        "the force it holds"
+    held = ("the sliding of the localised loop is held by a phase row (docs/continuation.md); "
+            "the force it holds")
     onset = first_onset(free)
     seconds[free_name] = time.perf_counter() - start
     pins = {"straight": ((0, ()),), free_name: free_pins}

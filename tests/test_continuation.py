@@ -1031,7 +1031,8 @@ def test_a_converged_correction_assembles_a_hessian_only_for_a_newton_step(monke
 def test_the_corrector_trust_region_stops_an_iterate_beyond_it_and_changes_nothing_inside():
     """At fixed lambda on the corner toy (root x_0 = sqrt(((1 - lambda)/a)^2 - delta^2)),
     Newton from x_0 = 3 moves by about 2.4: a trust radius of 1 stops it with a failure,
-    one of 10 returns the unguarded correction bit for bit."""
+    one of 10 returns the unguarded correction bit for bit. The reference point, the
+    step's start, lies on the branch (the radius is widened by its own correction)."""
     from supercoil.continuation.corrector import correct
 
     problem = Corner(0.8, 1e-4, lam=0.5)
@@ -1039,13 +1040,14 @@ def test_the_corrector_trust_region_stops_an_iterate_beyond_it_and_changes_nothi
     x0 = system.pack(np.array([3.0, 0.0, 0.0]), np.zeros(0), 0.5)
     e_lam = np.zeros(system.size)
     e_lam[-1] = 1.0
-    free = correct(system, x0, e_lam, x0, 0.0, 1e-12, 20)
     root = np.sqrt((0.5 / 0.8) ** 2 - 1e-8)
+    on = system.pack(np.array([root, 0.0, 0.0]), np.zeros(0), 0.5)
+    free = correct(system, x0, e_lam, on, 0.0, 1e-12, 20)
     assert free.ok and free.x[0] == pytest.approx(root, abs=1e-12)
-    inside = correct(system, x0, e_lam, x0, 0.0, 1e-12, 20, max_distance=10.0)
+    inside = correct(system, x0, e_lam, on, 0.0, 1e-12, 20, max_distance=10.0)
     assert inside.ok and np.array_equal(inside.x, free.x)
     assert inside.iterations == free.iterations
-    stopped = correct(system, x0, e_lam, x0, 0.0, 1e-12, 20, max_distance=1.0)
+    stopped = correct(system, x0, e_lam, on, 0.0, 1e-12, 20, max_distance=1.0)
     assert not stopped.ok and stopped.x is None
     assert "farther than" in stopped.message and stopped.iterations < free.iterations
 

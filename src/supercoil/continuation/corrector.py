@@ -100,7 +100,11 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     only when refinement does not converge. None: a new factor at every step.
     ``max_distance``: the correction fails as soon as an iterate lies farther than
     this (arclength metric) from ``center`` (default ``x_start``), the trust
-    region of a continuation step (``ContinuationOptions.max_corrector_distance``).
+    region of a continuation step (``ContinuationOptions.max_corrector_distance``),
+    widened by the norm of ``x_ref``'s own Newton correction (:func:`own_correction`,
+    made only where an iterate lies beyond ``max_distance``): a point accepted within
+    the tolerance lies that far from the branch, so that every correction from a
+    predictor near it may move that far, whatever the step.
 
     ``chord_below``: at an iterate whose residual is below this fraction of the
     residual where the last bordered factor was made (Newton's quadratic regime),
@@ -117,6 +121,8 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     problem = system.problem
     x = np.array(x_start, dtype=float)
     bounded = hasattr(problem, "step_bound")
+    centre = x_start if center is None else center
+    reach = _Reach(system, x_ref, row, max_distance)
     previous = np.inf
     x_previous = x
     res = np.nan
@@ -140,7 +146,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
         if factor is not None and it < max_iterations \
                 and CHORD_ABOVE_FLOOR * floor < res <= chord_reach:
             landed = _chord_step(system, factor, x, F, row, x_ref, sigma, tolerance,
-                                 bounded, max_distance, x_start if center is None else center)
+                                 bounded, reach, centre)
             if landed is not None:
                 x_chord, res_chord = landed
                 return Correction(x_chord, True, it + 1, res_chord, f"converged in {it + 1} "
@@ -226,15 +232,54 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
                 x_trial, F, factor, factor_residual = ahead
                 it += 1
         x = x_trial
-        if max_distance is not None and \
-                system.norm(x - (x_start if center is None else center)) > max_distance:
+        if not reach.within(system.norm(x - centre), factor):
             return Correction(None, False, it + 1, _max_abs(F),
                               f"iterate {it + 1} lies farther than "
-                              f"{max_distance:.2e} from the predictor (a jump across a corner "
-                              f"or to another branch?)")
+                              f"{reach.describe()} from the predictor (a jump across a "
+                              f"corner or to another branch?)")
         it += 1
     return Correction(None, False, max_iterations, res, f"no convergence in {max_iterations} "
                       f"corrector iterations (residual {res:.2e} > {tolerance:.1e})")
+
+
+def own_correction(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray,
+                   row: np.ndarray) -> float:
+    """The norm (arclength metric) of the Newton correction of ``x`` onto the branch
+    across the row ``row``: ``dx`` solves ``[[K, F_lambda], [row]] dx = -(F(x), 0)``,
+    with ``factor`` (a bordered factor with ``row`` at a point near ``x``; the first
+    order of the correction). Infinite where the solve fails."""
+    F = system.residual(x)
+    try:
+        dx = factor.solve(np.concatenate([F, [0.0]]))
+    except SingularMatrixError:
+        return np.inf
+    return system.norm(dx) if np.all(np.isfinite(dx)) else np.inf
+
+
+class _Reach:
+    """The corrector's trust region (:func:`correct`'s ``max_distance``), widened by
+    the start point's own correction, which is made once, where an iterate first lies
+    beyond ``max_distance``."""
+
+    def __init__(self, system: ExtendedSystem, x_ref: np.ndarray, row: np.ndarray,
+                 max_distance: float | None):
+        self.system, self.x_ref, self.row = system, x_ref, row
+        self.max_distance = max_distance
+        self.own: float | None = None
+
+    def within(self, distance: float, factor: BorderedFactor | None) -> bool:
+        if self.max_distance is None or distance <= self.max_distance:
+            return True
+        if self.own is None and factor is not None and np.array_equal(factor.row, self.row):
+            self.own = own_correction(self.system, factor, self.x_ref, self.row)
+        return distance <= self.max_distance + self._slack()
+
+    def _slack(self) -> float:
+        return self.own if self.own is not None and np.isfinite(self.own) else 0.0
+
+    def describe(self) -> str:
+        own = f" + {self.own:.2e} (the start's own correction)" if self._slack() else ""
+        return f"{self.max_distance:.2e}{own}"
 
 
 def _whole_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F: np.ndarray,
@@ -284,15 +329,14 @@ def _watchdog(system: ExtendedSystem, x_full: np.ndarray, F_full: np.ndarray,
 
 def _chord_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F: np.ndarray,
                 row: np.ndarray, x_ref: np.ndarray, sigma: float, tolerance: float,
-                bounded: bool, max_distance: float | None, center: np.ndarray
+                bounded: bool, reach: _Reach, center: np.ndarray
                 ) -> tuple[np.ndarray, float] | None:
     """The chord step of :func:`correct` from ``x`` (residual ``F``) with an earlier
     iterate's ``factor``: ``(x + dx, max|F|)`` there if the whole step is free of
     collisions (``step_bound``), stays in the trust region and lands within
     ``tolerance``; None otherwise (the caller then makes the Newton step)."""
     landed = _whole_step(system, factor, x, F, row, x_ref, sigma, bounded)
-    if landed is None or (max_distance is not None
-                          and system.norm(landed[0] - center) > max_distance):
+    if landed is None or not reach.within(system.norm(landed[0] - center), factor):
         return None
     res = _max_abs(landed[1])
     return (landed[0], res) if res <= tolerance else None

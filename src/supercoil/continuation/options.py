@@ -162,8 +162,9 @@ class ContinuationOptions:
     * ``max_corrector_distance``: the corrector's trust region, in units of the
       step: a correction whose iterate lies farther than
       ``max_corrector_distance * ds`` from the predicted point (before a
-      ``step_bound`` shortened it) is stopped there and counted as a failure
-      (the step shrinks). A point at distance ``ds`` from the predictor makes a
+      ``step_bound`` shortened it), plus the norm of the start point's own
+      Newton correction (:func:`~supercoil.continuation.corrector.own_correction`),
+      is stopped there and counted as a failure (the step shrinks). A point at distance ``ds`` from the predictor makes a
       chord at 45 degrees to the tangent; a step along an arc that turns by
       ``max_turn_degrees`` (its chord by half that) lands about
       ``ds tan(max_turn_degrees / 2)`` from it (0.27 ds at 30 degrees; accepted

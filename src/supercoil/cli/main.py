@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import logging
 import os
 import sys
 import warnings
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Annotated, NoReturn
 
 import typer
@@ -37,7 +39,7 @@ from supercoil.cli import (
 from supercoil.cli import (
     run as run_study_command,
 )
-from supercoil.cli._common import EXIT_BAD_INPUT, EXIT_NOT_CONVERGED, raised_while_solving
+from supercoil.cli._common import EXIT_BAD_INPUT, EXIT_NOT_CONVERGED, fail, raised_while_solving
 from supercoil.errors import InputError
 
 UNITS_NOTE = (
@@ -83,6 +85,38 @@ def _version_callback(value: bool) -> None:
         raise typer.Exit()
 
 
+LOG_HELP = (
+    "Write the computation's log to FILE (overwritten): each continuation step accepted, "
+    "with its length, parameter and corrector iterations, or refused and why; the "
+    "gauge's moves; the solvers' messages. A run that stops early ends its log with the "
+    "steps that led there. The log of this process only: a sweep's workers keep theirs."
+)
+
+
+def _log_to(ctx: typer.Context, path: Path) -> None:
+    """Send the library's log records (DEBUG and up) to ``path`` for the command; the file
+    is opened at the first record, so a command refused for bad input writes nothing."""
+    if path.is_dir():
+        fail(f"--log {str(path)!r} is a directory: give a file in an existing folder")
+    if not path.parent.is_dir():
+        fail(f"--log {str(path)!r}: the folder {str(path.parent)!r} does not exist")
+    handler = logging.FileHandler(path, mode="w", encoding="utf-8", delay=True)
+    handler.setFormatter(logging.Formatter(
+        "%(asctime)s.%(msecs)03d %(levelname)s %(name)s: %(message)s", "%H:%M:%S"))
+    handler.setLevel(logging.DEBUG)
+    logger = logging.getLogger("supercoil")
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.DEBUG)
+
+    def restore() -> None:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+        handler.close()
+
+    ctx.call_on_close(restore)
+
+
 def _help_without_command(ctx: typer.Context) -> None:
     """A group called without a command: its help, exit status 2."""
     if ctx.invoked_subcommand is None:
@@ -102,8 +136,14 @@ def _root(
             help="Print the supercoil version and exit.",
         ),
     ] = False,
+    log: Annotated[
+        Path | None,
+        typer.Option("--log", metavar="FILE", help=LOG_HELP),
+    ] = None,
 ) -> None:
     """Equilibria and stability of elastic rods."""
+    if log is not None:
+        _log_to(ctx, log)
     _help_without_command(ctx)
 
 

@@ -5,14 +5,18 @@ branch, its parameter value, the step, the number of points). On a terminal
 (standard output is a TTY) it shows a spinner line with those numbers,
 updated in place; otherwise it prints one plain line per message and one every
 ``every`` points (and the first point of each branch) to standard error, so
-logs stay short. ``quiet`` silences both.
+logs stay short. ``quiet`` silences both. Messages, and the first point of each branch,
+also go to the ``supercoil.cli.progress`` logger (the ``--log`` file's headings).
 """
 
 from __future__ import annotations
 
+import logging
 import sys
 import time
 from typing import Self
+
+log = logging.getLogger(__name__)
 
 
 class Progress:
@@ -48,9 +52,10 @@ class Progress:
 
     def message(self, text: str) -> None:
         """A line that stays (a branch starts, a note)."""
+        line = " ".join(str(text).split())
+        log.info("%s", line)
         if self.quiet:
             return
-        line = " ".join(str(text).split())
         if self._bar is not None:
             self._bar.console.print(line, highlight=False)
             self._bar.update(self._task, description=line[:60])
@@ -60,15 +65,17 @@ class Progress:
     def point(self, branch: str, parameter: str, value: float, step: float | None,
               n_points: int) -> None:
         """A new point of ``branch``: ``parameter = value`` after a step ``step``."""
-        if self.quiet:
-            return
+        first = branch != self._last_branch
+        self._last_branch = branch
         step_text = "" if step is None else f", step {step:.3g}"
         numbers = f"{parameter} = {value:.6g}{step_text}, {n_points} points"
+        if first:
+            log.info("%s: %s", branch, numbers)
+        if self.quiet:
+            return
         if self._bar is not None:
             self._bar.update(self._task, description=branch, numbers=numbers)
             return
-        first = branch != self._last_branch
-        self._last_branch = branch
         if first or n_points % self.every == 0:
             elapsed = time.perf_counter() - self._start
             print(f"  {branch}: {numbers} ({elapsed:.0f} s)", file=self.stream, flush=True)

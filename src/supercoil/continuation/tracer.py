@@ -422,6 +422,8 @@ class Tracer:
             regauged_here = False
             failed.clear()
             x_new, bound, corr = taken.x, taken.bound, taken.correction
+            log.debug("step %.3g accepted at %s = %.10g after %d corrector iterations",
+                      ds, system.parameter, x_new[-1], corr.iterations)
             if corr.iterations <= opts.fast_iterations:
                 ds = min(ds * opts.growth, opts.max_step)
             try:

@@ -22,6 +22,7 @@ from supercoil.cli.main import run
 from supercoil.io.study import StudyError, parse_study
 from supercoil.units.dna import DNAPreset
 from supercoil.units.tweezers import (
+    DNA_MAX_POINTS,
     default_nodes,
     dna_numerics,
     dna_tweezers_inputs,
@@ -157,6 +158,8 @@ def test_contact_curve_defaults_to_the_quintic_with_dna(dna_run, tmp_path):
     assert data["loop_sliding_in_contact"] is True
     assert sc.load(dna_run).settings["contact_curve"] == "quintic"
     assert sc.load(dna_run).settings["loop_sliding"] is None  # a resume must match it
+    # and the points per branch default to DNA_MAX_POINTS (2000 without --dna)
+    assert sc.load(dna_run).settings["max_points"] == DNA_MAX_POINTS
     dna = parse_study(STUDY).tweezers_options()
     assert dna.contact_curve == "quintic" and dna.loop_sliding is None and dna.loop_slides
     plain = '[rod]\ntwist_ratio = 1.5\n[problem]\nkind = "tweezers"\ntension = 10\n'
@@ -166,6 +169,11 @@ def test_contact_curve_defaults_to_the_quintic_with_dna(dna_run, tmp_path):
     assert run(["tweezers", "--dna", "--bp", "300", "--force-pN", "0.3", "--sigma",
                 "0:0.002", "--contact-curve", "spline", "--out", str(out), "--quiet"]) == 0
     assert json.loads((out / "branch.json").read_text())["contact_curve"] == "spline"
+    assert sc.load(out).settings["max_points"] == DNA_MAX_POINTS
+    given = tmp_path / "given"
+    assert run(["tweezers", "--dna", "--bp", "300", "--force-pN", "0.3", "--sigma",
+                "0:0.002", "--max-points", "30", "--out", str(given), "--quiet"]) == 0
+    assert sc.load(given).settings["max_points"] == 30
     assert json.loads((out / "branch.json").read_text())["loop_sliding_applied"] is True
 
 
@@ -209,8 +217,9 @@ def test_loop_sliding_applies_with_dna_where_the_mesh_lets_the_loop_slide(force,
         assert options.loop_sliding is None and options.loop_slides
         assert options.loop_slides_in_contact is (core <= 0.5)
         assert given is not None or core <= 0.5
-    assert dna_numerics({}) == {"contact_curve": "quintic"}
-    assert dna_numerics({"contact_curve": "spline"}) == {"contact_curve": "spline"}
+    assert dna_numerics({}) == {"contact_curve": "quintic", "max_points": DNA_MAX_POINTS}
+    assert dna_numerics({"contact_curve": "spline", "max_points": 7}) == {
+        "contact_curve": "spline", "max_points": 7}
 
 
 def _texts(fig) -> list[str]:
@@ -350,6 +359,9 @@ def test_library_from_dna_and_sigma(tmp_path):
     given = sc.tweezers(problem, superhelical_density=(0, 0.002), max_points=5,
                         contact_curve="spline", loop_sliding=False).settings
     assert given.contact_curve == "spline" and not given.loop_sliding
+    assert (diagram.settings.max_points, given.max_points) == (40, 5)
+    assert sc.tweezers(problem, superhelical_density=(0, 0.002)
+                       ).settings.max_points == DNA_MAX_POINTS
     saved = sc.load(sc.save(diagram, tmp_path / "r.h5"))
     assert saved.units == "dna"
     point = saved.summary["points"][-1]

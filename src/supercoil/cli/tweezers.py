@@ -38,6 +38,7 @@ from supercoil.units.dna import (
     REFERENCE_TEMPERATURE_K,
     SALT_RANGE_MM,
 )
+from supercoil.units.tweezers import DNA_MAX_POINTS
 
 PROTOCOLS = ("up", "up-down", "force-ramp")
 OUTPUT_FILES = ("result.h5", "branch.json", "hat_curve.png", "torque.png", "writhe.png",
@@ -112,9 +113,11 @@ def tweezers(
         "--force-step", metavar="DF", help="With --protocol force-ramp: force per step, "
         "F L^2/A (pN with --dna), 0 < DF <= HIGH - LOW (default 1/50 of the range).",
         show_default=False)] = None,
-    max_points: Annotated[int, typer.Option(
+    max_points: Annotated[int | None, typer.Option(
         "--max-points", metavar="K", help=f"Largest number of points per branch, 2 to "
-        f"{checks.MAX_POINTS} (a branch stopped by it is incomplete: exit status 1).")] = 2000,
+        f"{checks.MAX_POINTS} (a branch stopped by it is incomplete: exit status 1). Default "
+        f"2000; with --dna {DNA_MAX_POINTS}, as DNA runs at the default mesh meet many folds.",
+        show_default=False)] = None,
     contact_curve: Annotated[str | None, typer.Option(
         "--contact-curve", metavar="CURVE", help="Curve whose self-distance is the contact "
         "distance: spline (the cubic B-spline of the nodes, default), quintic (the quintic "
@@ -201,9 +204,9 @@ def tweezers(
                         force_pN, salt_mM, diameter_nm, temperature_K, turns, sigma, nodes)
         from supercoil.units.tweezers import dna_numerics
 
-        given = {"contact_curve": contact_curve}
+        given = {"contact_curve": contact_curve, "max_points": max_points}
         numerics = dna_numerics({k: v for k, v in given.items() if v is not None})
-        contact_curve = numerics["contact_curve"]
+        contact_curve, max_points = numerics["contact_curve"], numerics["max_points"]
     else:
         for option, value in (("--bp", bp), ("--force-pN", force_pN), ("--salt-mM", salt_mM),
                               ("--diameter-nm", diameter_nm),
@@ -219,6 +222,7 @@ def tweezers(
                  "--turns 0:5")
         start, stop = parse_span("--turns", turns, "START:STOP in turns, like 0:5")
         nodes = 100 if nodes is None else nodes
+        max_points = 2000 if max_points is None else max_points
         contact_curve = "spline" if contact_curve is None else contact_curve
     if (tension is None) == (end_distance is None):
         fail("give exactly one of --tension F (load control, F L^2/A >= 0) and "

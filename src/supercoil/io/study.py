@@ -127,19 +127,21 @@ class Study:
             tension=s["problem"].get("tension"), end_distance=s["problem"].get("end_distance"),
             turns=tuple(s["problem"]["turns"]), n_nodes=s["rod"]["nodes"],
             free_max_step=c["free_max_step"], contact_max_step=c["contact_max_step"],
-            max_points=c["max_points"], segment_points=c["segment_points"],
+            segment_points=c["segment_points"],
             event_tolerance=c["event_tolerance"],
             contact_event_tolerance=c["contact_event_tolerance"],
-            contact_tolerance=c["contact_tolerance"], **self._dna_numerics())
+            contact_tolerance=c["contact_tolerance"],
+            **self._dna_numerics({"max_points": c["max_points"]}))
 
-    def _dna_numerics(self) -> dict:
-        """A DNA study's defaults (:func:`~supercoil.units.tweezers.dna_numerics`: the
-        contact curve), none otherwise (the options' defaults)."""
+    def _dna_numerics(self, given: dict) -> dict:
+        """``given`` with a DNA study's defaults (:func:`~supercoil.units.tweezers.dna_numerics`:
+        the contact curve; the study's ``max_points`` is always given), alone otherwise
+        (the options' defaults)."""
         if self.units != "dna":
-            return {}
+            return dict(given)
         from supercoil.units.tweezers import dna_numerics
 
-        return dna_numerics({})
+        return dna_numerics(given)
 
     def rod(self):
         """The study's :class:`supercoil.Rod` or :class:`supercoil.CosseratRod` (the

@@ -13,8 +13,9 @@ turns or as superhelical density, and the number of nodes:
   core ``sqrt(A/F)`` (a coarser polygon pins the plectoneme's end loop to its nodes
   and buckles late: docs/tweezers.md, "DNA units");
 * the contact curve defaults to :data:`DNA_CONTACT_CURVE`, the quintic B-spline, whose
-  self-distance does not ripple with the nodes' phase at segments of D
-  (:func:`dna_numerics`, the one place this default is applied).
+  self-distance does not ripple with the nodes' phase at segments of D, and the points
+  per branch to :data:`DNA_MAX_POINTS` (:func:`dna_numerics`, the one place these
+  defaults are applied).
 
 :func:`dna_tweezers_inputs` is the one check of these inputs, shared by the command line
 (``supercoil tweezers --dna``), study files (``supercoil run``) and the library
@@ -52,9 +53,20 @@ follows from one to the other (``supercoil tweezers --dna --bp 3000 --force-pN 1
 it grows the plectoneme to the last turn (docs/performance.md)."""
 
 
+DNA_MAX_POINTS = 10000
+"""The most points on a branch of a DNA tweezers run unless a number is given (the
+library's default elsewhere: 2000). At the default mesh, the meshes at the edge of the
+loop's core put the contact branch among folds of the snake, each about 25 points
+(``benchmarks/results/long_dna_grid.md``, "DNA preset"): measured at 3 kbp from sigma 0
+to 0.06, 0.5 pN / 25 mM needs 2828 points on its contact branch and 0.25 pN / 10 mM 2686
+on its held branch, both stopped by 2000. Each point is written as it comes, so a run
+stopped by a signal keeps them and ``--resume`` continues it."""
+
+
 def dna_numerics(options: Mapping[str, object]) -> dict:
     """``options`` (of :class:`~supercoil.problems.tweezers.TweezersOptions`) with the DNA
-    runs' default for the contact curve, :data:`DNA_CONTACT_CURVE`, where not given.
+    runs' defaults where not given: the contact curve, :data:`DNA_CONTACT_CURVE`, and the
+    points per branch, :data:`DNA_MAX_POINTS`.
 
     ``loop_sliding`` needs no DNA default: every run takes it where the mesh lets the
     loop slide (``TweezersOptions.loop_sliding = None``). With the sliding's phase row
@@ -69,7 +81,7 @@ def dna_numerics(options: Mapping[str, object]) -> dict:
     at 0.25 pN / 200 mM the free branch stops after 6 points and the held one reaches
     sigma 0.06.
     """
-    return {"contact_curve": DNA_CONTACT_CURVE, **options}
+    return {"contact_curve": DNA_CONTACT_CURVE, "max_points": DNA_MAX_POINTS, **options}
 
 
 def tweezers_parameters(preset: DNAPreset, force_pN: float) -> dict[str, float]:

@@ -37,6 +37,8 @@ REFINE_BELOW = 1e-2
 # factor (corrector.correct's chord_below; on the tweezers' branches 1e-2, 1e-1 and 1
 # tried the same steps, CHORD_REACH deciding, and 1e-3 12 fewer)
 CHORD_BELOW = 1e-2
+# the start of the failure of a step whose tangent turned too far
+TURN_FAILURE = "the tangent turned by more than"
 
 
 def quadratic_term(system: ExtendedSystem, t_previous: np.ndarray, t_last: np.ndarray,
@@ -151,7 +153,7 @@ def take_step(system: ExtendedSystem, opts: ContinuationOptions, x_k: np.ndarray
         return step
     cos_turn = math.cos(math.radians(opts.max_turn_degrees))
     if t_new @ (system.weights * t_k) < cos_turn:
-        step.failure = (f"the tangent turned by more than {opts.max_turn_degrees} degrees "
+        step.failure = (f"{TURN_FAILURE} {opts.max_turn_degrees} degrees "
                         f"(a jump to another branch?)")
         return step
     if stop is not None:

@@ -37,6 +37,7 @@ from supercoil.continuation.columns import Columns
 from supercoil.continuation.events import UserEvent, point_values, takes_problem, user_values
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
+from supercoil.continuation.secant_jump import chord_direction, jump_lengths
 from supercoil.continuation.special_points import locate_events, special_point
 from supercoil.continuation.stability import (
     count_factor,
@@ -44,7 +45,7 @@ from supercoil.continuation.stability import (
     inertia,
     point_stability,
 )
-from supercoil.continuation.step import take_step
+from supercoil.continuation.step import TURN_FAILURE, take_step
 from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.carried import frames_of
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
@@ -132,6 +133,10 @@ class Tracer:
         # each point's parameter value and unstable count, for the closure tests
         self._parameters = Columns()
         self._counts: list[int] = []
+        # the secant steps past a lost tangent: (index of the point jumped from, length);
+        # the number of points when the last one was tried (once from a point)
+        self.secant_jumps: list[tuple[int, float]] = []
+        self._jump_tried_at = -1
 
     def _previous_tangent(self) -> tuple[np.ndarray, float] | None:
         """The tangent at the point before the last and the arclength between the two."""
@@ -271,9 +276,14 @@ class Tracer:
         moved phase rows after a failed step (they are not moved again before a step
         succeeds)."""
         try:
-            return self._run(step, gauge_moved)
+            status, message = self._run(step, gauge_moved)
         except (SingularMatrixError, InertiaError) as exc:
-            return self._stability_failed(exc)
+            status, message = self._stability_failed(exc)
+        if self.secant_jumps:
+            where = ", ".join(str(k) for k, _ in self.secant_jumps)
+            message += (f"; {len(self.secant_jumps)} step{'s' if len(self.secant_jumps) > 1 else ''}"
+                        f" along the chord past a lost tangent (from point{'s' if len(self.secant_jumps) > 1 else ''} {where})")
+        return status, message
 
     def _back_on_sheet(self, j: int, taken) -> bool:
         """Whether the corrected point of ``taken``, found on the earlier chord ``j`` followed
@@ -340,6 +350,35 @@ class Tracer:
             return (f"the corrected point lies on the branch's own path near its point {j}, "
                     f"followed the other way (a jump back across a fold's sheets)")
         return None
+
+    def _secant_jump(self, failed: list[tuple[float, str]]):
+        """``(taken, ds)``: a step along the chord past a lost tangent
+        (:mod:`~supercoil.continuation.secant_jump`), where every step down to the minimum
+        was refused for its tangent's turn; else why none was taken (text to add to the
+        stop's message, empty where none was tried)."""
+        if not failed or TURN_FAILURE not in failed[-1][1] or self._jump_tried_at == len(self.xs):
+            return ""
+        self._jump_tried_at = len(self.xs)
+        found = chord_direction(self.system, self.xs, self.s)
+        if found is None:
+            return ""
+        d, big = found
+        lengths = jump_lengths(self.s[-1] - self.s[-2], big, self.opts.min_step)
+        for ds in lengths:
+            taken = take_step(self.system, self.opts, self.xs[-1], d, None, None, ds,
+                              None if self.admissible is None else self._vet, self.stop)
+            if taken.refusal or taken.leaves_bound or taken.failure is not None:
+                continue
+            if self.opts.detect_closed_loops and self._retraced(taken) is not None:
+                continue
+            log.info("point %d: the tangent lost, a step of %.3g along the chord went",
+                     self.first + len(self.xs) - 1, ds)
+            self.secant_jumps.append((self.first + len(self.xs) - 1, ds))
+            return taken, ds
+        if not lengths:
+            return ""
+        return (f"; steps along the chord of the last points ({lengths[0]:.2g} to "
+                f"{lengths[-1]:.2g}) failed too")
 
     def _attempt(self, length: float):
         """A step of ``length`` from the last point (:func:`take_step`)."""
@@ -414,10 +453,13 @@ class Tracer:
                     log.debug("no step shorter than %.3g went; it is taken", refused[1])
                     taken, ds = refused
                 else:
-                    return ContinuationStatus.STEP_TOO_SMALL, (
-                        f"stopped after {self.first + len(self.xs)} points at {system.parameter} = "
-                        f"{x_k[-1]:.10g}: {taken.failure} at the minimum step "
-                        f"{opts.min_step:.1e}{_earlier_failures(failed)}")
+                    jump = self._secant_jump(failed)
+                    if isinstance(jump, str):
+                        return ContinuationStatus.STEP_TOO_SMALL, (
+                            f"stopped after {self.first + len(self.xs)} points at "
+                            f"{system.parameter} = {x_k[-1]:.10g}: {taken.failure} at the "
+                            f"minimum step {opts.min_step:.1e}{_earlier_failures(failed)}{jump}")
+                    taken, ds = jump
             refused = None
             regauged_here = False
             failed.clear()

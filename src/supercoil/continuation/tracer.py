@@ -279,10 +279,12 @@ class Tracer:
             status, message = self._run(step, gauge_moved)
         except (SingularMatrixError, InertiaError) as exc:
             status, message = self._stability_failed(exc)
-        if self.secant_jumps:
+        n = len(self.secant_jumps)
+        if n:
             where = ", ".join(str(k) for k, _ in self.secant_jumps)
-            message += (f"; {len(self.secant_jumps)} step{'s' if len(self.secant_jumps) > 1 else ''}"
-                        f" along the chord past a lost tangent (from point{'s' if len(self.secant_jumps) > 1 else ''} {where})")
+            plural = "s" if n > 1 else ""
+            message += (f"; {n} step{plural} along the chord past a lost tangent "
+                        f"(from point{plural} {where})")
         return status, message
 
     def _back_on_sheet(self, j: int, taken) -> bool:

@@ -52,6 +52,7 @@ TWEEZERS_OPTIONS = {"twist_ratio": "--twist-ratio",
                     "max_points": "--max-points", "contact_curve": "--contact-curve",
                     "loop_sliding": "--loop-sliding",
                     "contact_formulation": "--contact-formulation", "protocol": "--protocol",
+                    "contact_stiffness_scale": "--contact-stiffness-scale",
                     "step": "--step", "force_range": "--force-range",
                     "force_step": "--force-step", "base_pairs": "--bp",
                     "force_pN": "--force-pN", "salt_mM": "--salt-mM",
@@ -139,6 +140,12 @@ def tweezers(
         "the segments are at most half the loop's core sqrt(A/F) (a coarser mesh pins the "
         "loop there); --loop-sliding on a coarser mesh adds a note that says so.",
         show_default=False)] = None,
+    contact_stiffness_scale: Annotated[float, typer.Option(
+        "--contact-stiffness-scale", metavar="S", help="The barrier's stiffness over its "
+        "default A/h^3, above 0 (default 1). The load presses the contact into the "
+        "barrier: at F L^2/A = 22500 the default lets it close to gaps of 1e-6 D, where "
+        "the tangent is lost in round-off; 100 keeps the gap near the barrier's reach "
+        "(docs/tweezers.md, \"Contact stiffness\").")] = 1.0,
     overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in --out DIR from its result.h5 (the "
@@ -252,7 +259,8 @@ def tweezers(
                                   n_nodes=nodes, max_points=max_points,
                                   contact_curve=contact_curve,
                                   contact_formulation=contact_formulation,
-                                  loop_sliding=loop_sliding)
+                                  loop_sliding=loop_sliding,
+                                  contact_stiffness_scale=contact_stiffness_scale)
         if protocol != "up":
             check_path(options, protocol, step, force_range=ramp, force_step=force_step)
         if model != "cosserat":
@@ -264,7 +272,7 @@ def tweezers(
                 "end_distance": end_distance, "turns": [start, stop], "nodes": nodes,
                 "max_points": max_points, "contact_curve": contact_curve,
                 "contact_formulation": contact_formulation, "loop_sliding": loop_sliding,
-                "protocol": protocol,
+                "contact_stiffness_scale": contact_stiffness_scale, "protocol": protocol,
                 "step": step, "force_range": ramp, "force_step": force_step,
                 "superhelical_density": None if span is None else list(span),
                 "dna": None if preset is None else preset.record(),

@@ -34,8 +34,7 @@ from supercoil.problems.tweezers.options import TweezersOptions
 
 def tweezers_contact_options(options: TweezersOptions) -> ContactOptions:
     """The tweezers' self-contact (barrier on the options' curve and formulation)."""
-    return ContactOptions(diameter=options.diameter, curve=options.contact_curve,
-                          formulation=options.contact_formulation)
+    return options.contact_options()
 
 
 def with_contact_records(records, cp: ContactProblem, contact: bool):

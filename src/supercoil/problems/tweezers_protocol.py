@@ -36,7 +36,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from supercoil import checks
-from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.solve import solve_contact
 from supercoil.problems.segments import set_pin
@@ -176,8 +175,7 @@ def quasistatic_path(options: TweezersOptions, protocol: str = "up-down", step: 
     D = options.diameter
     contact = D is not None
     rod, problem, q, records = _clamped_rod(
-        options, ContactOptions(diameter=D, curve=options.contact_curve,
-                                formulation=options.contact_formulation) if contact else None,
+        options, options.contact_options() if contact else None,
         cosserat)
     points_of = getattr(rod, "centreline", np.asarray)  # the positions among the unknowns
     reach = D if D is not None else 0.02

@@ -9,7 +9,6 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.continuation import Branch, ContinuationOptions, ContinuationStatus
 from supercoil.problems.branch_options import coarse_mesh_note
@@ -82,9 +81,7 @@ def tweezers_branches(options: TweezersOptions,
     notes: list[str] = []
     rod, q0 = clamped_problem(opts)
     D = opts.diameter
-    contact_options = (ContactOptions(diameter=D, curve=opts.contact_curve,
-                                      formulation=opts.contact_formulation)
-                       if D is not None else None)
+    contact_options = opts.contact_options() if D is not None else None
     probe = ContactProblem(rod, contact_options) if D is not None else None
     cp = ContactProblem(rod, contact_options) if D is not None else None
     note = coarse_mesh_note(rod.rod, D, extra_nodes=2) if D is not None else None

@@ -142,7 +142,7 @@ def tweezers(
         show_default=False)] = None,
     contact_stiffness_scale: Annotated[float, typer.Option(
         "--contact-stiffness-scale", metavar="S", help="The barrier's stiffness over its "
-        "default A/h^3, above 0 (default 1). The load presses the contact into the "
+        "default A/h^3, 0 < S <= 1e6 (default 1). The load presses the contact into the "
         "barrier: at F L^2/A = 22500 the default lets it close to gaps of 1e-6 D, where "
         "the tangent is lost in round-off; 100 keeps the gap near the barrier's reach "
         "(docs/tweezers.md, \"Contact stiffness\").")] = 1.0,

@@ -31,8 +31,12 @@ points after its first step along the chord.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
+from supercoil.continuation.options import ContinuationOptions
+from supercoil.continuation.step import Step, take_step
 from supercoil.continuation.system import ExtendedSystem
 
 # the recent points whose steps and chords the jump is made from
@@ -71,3 +75,30 @@ def jump_lengths(last_step: float, big: float, min_step: float) -> list[float]:
         lengths.append(ds)
         ds *= GROWTH
     return lengths
+
+
+def chord_step(system: ExtendedSystem, opts: ContinuationOptions, xs: list[np.ndarray],
+               s: list[float], admissible: Callable[[np.ndarray], bool] | None,
+               stop: Callable[[np.ndarray], str | None] | None,
+               retraced: Callable[[Step], str | None]) -> tuple[Step, float] | str:
+    """``(taken, ds)``: the first length of :func:`jump_lengths` (shortest first) whose
+    step along :func:`chord_direction` from the last point ``xs[-1]`` goes (``admissible``
+    and ``stop`` vet its state as for any step; ``retraced(taken)`` says why it lies on
+    the branch's own path followed the other way, or None); else the text to add to the
+    stop's message (empty where none was tried)."""
+    found = chord_direction(system, xs, s)
+    if found is None:
+        return ""
+    d, big = found
+    lengths = jump_lengths(s[-1] - s[-2], big, opts.min_step)
+    for ds in lengths:
+        taken = take_step(system, opts, xs[-1], d, None, None, ds, admissible, stop)
+        if taken.refusal or taken.leaves_bound or taken.failure is not None:
+            continue
+        if opts.detect_closed_loops and retraced(taken) is not None:
+            continue
+        return taken, ds
+    if not lengths:
+        return ""
+    return (f"; steps along the chord of the last points ({lengths[0]:.2g} to "
+            f"{lengths[-1]:.2g}) failed too")

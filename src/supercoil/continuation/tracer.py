@@ -37,7 +37,7 @@ from supercoil.continuation.columns import Columns
 from supercoil.continuation.events import UserEvent, point_values, takes_problem, user_values
 from supercoil.continuation.options import ContinuationOptions, ContinuationStatus
 from supercoil.continuation.phase import regauged, rephased_tangent
-from supercoil.continuation.secant_jump import chord_direction, jump_lengths
+from supercoil.continuation.secant_jump import chord_step
 from supercoil.continuation.special_points import locate_events, special_point
 from supercoil.continuation.stability import (
     count_factor,
@@ -355,32 +355,21 @@ class Tracer:
 
     def _secant_jump(self, failed: list[tuple[float, str]]):
         """``(taken, ds)``: a step along the chord past a lost tangent
-        (:mod:`~supercoil.continuation.secant_jump`), where every step down to the minimum
-        was refused for its tangent's turn; else why none was taken (text to add to the
-        stop's message, empty where none was tried)."""
+        (:func:`~supercoil.continuation.secant_jump.chord_step`), where every step down to
+        the minimum was refused for its tangent's turn, tried once from a point; else the
+        text to add to the stop's message."""
         if not failed or TURN_FAILURE not in failed[-1][1] or self._jump_tried_at == len(self.xs):
             return ""
         self._jump_tried_at = len(self.xs)
-        found = chord_direction(self.system, self.xs, self.s)
-        if found is None:
-            return ""
-        d, big = found
-        lengths = jump_lengths(self.s[-1] - self.s[-2], big, self.opts.min_step)
-        for ds in lengths:
-            taken = take_step(self.system, self.opts, self.xs[-1], d, None, None, ds,
-                              None if self.admissible is None else self._vet, self.stop)
-            if taken.refusal or taken.leaves_bound or taken.failure is not None:
-                continue
-            if self.opts.detect_closed_loops and self._retraced(taken) is not None:
-                continue
-            log.info("point %d: the tangent lost, a step of %.3g along the chord went",
-                     self.first + len(self.xs) - 1, ds)
-            self.secant_jumps.append((self.first + len(self.xs) - 1, ds))
-            return taken, ds
-        if not lengths:
-            return ""
-        return (f"; steps along the chord of the last points ({lengths[0]:.2g} to "
-                f"{lengths[-1]:.2g}) failed too")
+        jump = chord_step(self.system, self.opts, self.xs, self.s,
+                          None if self.admissible is None else self._vet, self.stop,
+                          self._retraced)
+        if not isinstance(jump, str):
+            k = self.first + len(self.xs) - 1
+            log.info("point %d: the tangent lost, a step of %.3g along the chord went", k,
+                     jump[1])
+            self.secant_jumps.append((k, jump[1]))
+        return jump
 
     def _attempt(self, length: float):
         """A step of ``length`` from the last point (:func:`take_step`)."""

@@ -50,7 +50,6 @@ from supercoil.problems.contact_events import onset_event, stop_after_onset, tru
 from supercoil.problems.cosserat_stored import centreline_branch, cosserat_stored
 from supercoil.problems.cosserat_tweezers_contact import (
     cosserat_contact_branch,
-    tweezers_contact_options,
     with_contact_records,
 )
 from supercoil.problems.tweezers.options import TweezersOptions
@@ -192,7 +191,7 @@ def cosserat_tweezers(options: TweezersOptions, stretch_stiffness: float,
     records = cosserat_tweezers_records(problem)
     cp = view = None
     if opts.diameter is not None:
-        cp = ContactProblem(problem, tweezers_contact_options(opts))
+        cp = ContactProblem(problem, opts.contact_options())
         # the contact of the stored centrelines, for the outputs' contact lists
         view = ContactProblem(StoredCentrelines(problem.rod), cp.options)
         records = with_contact_records(records, cp, False)

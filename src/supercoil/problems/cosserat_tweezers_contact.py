@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from supercoil.contact.options import ContactOptions
 from supercoil.contact.problem import ContactProblem
 from supercoil.contact.report import COUNT_KEYS, contact_summary
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, continuation
@@ -30,11 +29,6 @@ from supercoil.problems.contact_events import (
 from supercoil.problems.ring_diagram.records import kkt_residual
 from supercoil.problems.tweezers.contact import CONTACT_CORRECTOR_DISTANCE
 from supercoil.problems.tweezers.options import TweezersOptions
-
-
-def tweezers_contact_options(options: TweezersOptions) -> ContactOptions:
-    """The tweezers' self-contact (barrier on the options' curve and formulation)."""
-    return options.contact_options()
 
 
 def with_contact_records(records, cp: ContactProblem, contact: bool):

@@ -25,7 +25,7 @@ SIGTERM or SIGINT the running row is appended as stopped, with what it had reach
 Run: ``python benchmarks/bench_long_dna_grid.py [--ld 100,200,500] [--lambdas
 10,20,40,80,150] [--twist-ratio 1.5] [--multiples 1,2 | --resolving] [--factor 1.5]
 [--nodes N1,N2] [--max-points 4000] [--contact-curve spline]
-[--contact-stiffness-scale 1] [--progress-every 50]
+[--contact-stiffness load] [--contact-stiffness-scale 1] [--progress-every 50]
 [--keep DIR] [--out benchmarks/results/long_dna_grid.md]``. With ``--keep DIR`` each run
 stores its points as they come in ``DIR/ld{L/D}_lambda{lambda}_ca{C/A}_n{N}/result.h5``
 (the library's result file: ``supercoil.load`` reads it), and the same command run again
@@ -100,14 +100,17 @@ class Progress:
 
 def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
         max_points: int, contact_curve: str = "spline", progress: Progress | None = None,
-        keep: Path | None = None, stiffness_scale: float = 1.0) -> str:
+        keep: Path | None = None, stiffness_scale: float = 1.0,
+        stiffness: str = "load") -> str:
     """One table row (module doc); ``contact_curve``: ``TweezersOptions.contact_curve``;
     ``progress`` is called with every accepted point; ``keep``: the folder whose
-    ``result.h5`` stores the run point by point, continued if it holds one."""
+    ``result.h5`` stores the run point by point, continued if it holds one;
+    ``stiffness`` and ``stiffness_scale``: ``TweezersOptions.contact_stiffness`` and
+    ``contact_stiffness_scale``."""
     tension = lam**2
     target = factor * critical_turns(twist_ratio, tension)
     settings = {"loop_sliding": True, "max_points": max_points, "contact_curve": contact_curve,
-                "contact_stiffness_scale": stiffness_scale}
+                "contact_stiffness": stiffness, "contact_stiffness_scale": stiffness_scale}
     start = time.perf_counter()
     continued = ""
     if keep is None:
@@ -168,8 +171,11 @@ def main() -> None:
     parser.add_argument("--max-points", type=int, default=4000)
     parser.add_argument("--contact-curve", default="spline", help="spline (the cubic "
                         "B-spline) or quintic")
+    parser.add_argument("--contact-stiffness", default="load", help="the rule of the "
+                        "barrier's stiffness: load, max(A/h^3, F/(pi g_hat)), or bending, "
+                        "A/h^3 (TweezersOptions.contact_stiffness)")
     parser.add_argument("--contact-stiffness-scale", type=float, default=1.0,
-                        help="the barrier's stiffness over its default A/h^3 "
+                        help="a factor on the rule's stiffness "
                         "(TweezersOptions.contact_stiffness_scale)")
     parser.add_argument("--out", default="benchmarks/results/long_dna_grid.md")
     parser.add_argument("--nodes", default=None, help="comma-separated N, instead of "
@@ -194,6 +200,8 @@ def main() -> None:
                 f"{args.max_points}"
                 + ("" if args.contact_curve == "spline"
                    else f" --contact-curve {args.contact_curve}")
+                + ("" if args.contact_stiffness == "load"
+                   else f" --contact-stiffness {args.contact_stiffness}")
                 + ("" if args.contact_stiffness_scale == 1.0
                    else f" --contact-stiffness-scale {args.contact_stiffness_scale:g}")
                 + f"`\n\n{HEADER}\n|{'---|' * HEADER.count(' | ')}---|\n")
@@ -222,7 +230,7 @@ def main() -> None:
                     f"ld{ld:g}_lambda{lam:g}_ca{args.twist_ratio:g}_n{nodes}")
                 row = run(ld, lam, args.twist_ratio, nodes, args.factor,
                           args.max_points, args.contact_curve, progress, keep,
-                          args.contact_stiffness_scale)
+                          args.contact_stiffness_scale, args.contact_stiffness)
                 print(row, flush=True)
                 with out.open("a") as f:
                     f.write(row + "\n")

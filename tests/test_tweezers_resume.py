@@ -20,7 +20,7 @@ from supercoil.problems.tweezers.options import TweezersOptions
 
 SEGMENT = 8
 OPTIONS = TweezersOptions(twist_ratio=4 / 3, length_over_diameter=20, n_nodes=24,
-                          tension=20, turns=(0.0, 1.6), segment_points=SEGMENT)
+                          tension=20, turns=(0.0, 2.0), segment_points=SEGMENT)
 
 
 def run(on_point=None, resume=None, stored=None):

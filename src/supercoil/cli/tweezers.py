@@ -52,6 +52,7 @@ TWEEZERS_OPTIONS = {"twist_ratio": "--twist-ratio",
                     "max_points": "--max-points", "contact_curve": "--contact-curve",
                     "loop_sliding": "--loop-sliding",
                     "contact_formulation": "--contact-formulation", "protocol": "--protocol",
+                    "contact_stiffness": "--contact-stiffness",
                     "contact_stiffness_scale": "--contact-stiffness-scale",
                     "step": "--step", "force_range": "--force-range",
                     "force_step": "--force-step", "base_pairs": "--bp",
@@ -140,12 +141,16 @@ def tweezers(
         "the segments are at most half the loop's core sqrt(A/F) (a coarser mesh pins the "
         "loop there); --loop-sliding on a coarser mesh adds a note that says so.",
         show_default=False)] = None,
+    contact_stiffness: Annotated[str, typer.Option(
+        "--contact-stiffness", metavar="RULE", help="The barrier's stiffness: load "
+        "(default), max(A/h^3, F/(pi g_hat)) with g_hat the barrier's reach (1 % of D), so "
+        "that strands crossing at right angles under the load F stay at 0.15 g_hat; or "
+        "bending, A/h^3 whatever the load, which lets a large load close the gap to 1e-6 D, "
+        "where the tangent is lost in round-off (docs/tweezers.md, \"Contact "
+        "stiffness\").")] = "load",
     contact_stiffness_scale: Annotated[float, typer.Option(
-        "--contact-stiffness-scale", metavar="S", help="The barrier's stiffness over its "
-        "default A/h^3, 0 < S <= 1e6 (default 1). The load presses the contact into the "
-        "barrier: at F L^2/A = 22500 the default lets it close to gaps of 1e-6 D, where "
-        "the tangent is lost in round-off; 100 keeps the gap near the barrier's reach "
-        "(docs/tweezers.md, \"Contact stiffness\").")] = 1.0,
+        "--contact-stiffness-scale", metavar="S", help="A factor on the barrier's "
+        "stiffness (--contact-stiffness), 0 < S <= 1e6 (default 1).")] = 1.0,
     overwrite: Overwrite = False,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the interrupted run in --out DIR from its result.h5 (the "
@@ -260,6 +265,7 @@ def tweezers(
                                   contact_curve=contact_curve,
                                   contact_formulation=contact_formulation,
                                   loop_sliding=loop_sliding,
+                                  contact_stiffness=contact_stiffness,
                                   contact_stiffness_scale=contact_stiffness_scale)
         if protocol != "up":
             check_path(options, protocol, step, force_range=ramp, force_step=force_step)
@@ -272,6 +278,7 @@ def tweezers(
                 "end_distance": end_distance, "turns": [start, stop], "nodes": nodes,
                 "max_points": max_points, "contact_curve": contact_curve,
                 "contact_formulation": contact_formulation, "loop_sliding": loop_sliding,
+                "contact_stiffness": contact_stiffness,
                 "contact_stiffness_scale": contact_stiffness_scale, "protocol": protocol,
                 "step": step, "force_range": ramp, "force_step": force_step,
                 "superhelical_density": None if span is None else list(span),

@@ -41,9 +41,17 @@ class ContactOptions:
     ``diameter`` D (in units of L). ``exclusion``: arc length below which two
     points are neighbours, default ``pi D / 2``. ``stiffness``: ``k`` of the
     penalty and augmented Lagrangian, ``kappa`` of the barrier; default
-    ``stiffness_scale * A / h^3``, the stiffness with which one node of the
-    discrete rod resists a transverse displacement in bending, so that the
-    contact neither dominates the conditioning nor is soft next to the rod.
+    ``stiffness_scale * max(A / h^3, force_scale / (pi g_hat))``: ``A / h^3`` is
+    the stiffness with which one node of the discrete rod resists a transverse
+    displacement in bending, so that the contact neither dominates the
+    conditioning nor is soft next to the rod; ``force_scale / (pi g_hat)``
+    (``g_hat = barrier_activation * D``) is the barrier's stiffness under a load:
+    two strands crossing at right angles and pressed together by ``force_scale``
+    sit at the gap ``0.149 g_hat`` (integral formulation; ``g_hat / pi`` for the
+    pair sum), where a softer barrier lets a crossing force ``P`` compress the gap
+    as ``exp(-P / (pi kappa g_hat))`` (docs/contact.md, "The barrier's stiffness
+    under a load"). ``force_scale``: the contact force the load sets (the
+    tweezers' tension ``F L^2/A``); ``None``: no load term.
     ``penetration_tolerance``: largest accepted penetration over D (augmented,
     exact). ``penalty_tolerance``: the same for the penalty, which needs a
     penetration ``F / k`` to carry a force ``F`` (with the default ``k`` a few
@@ -79,6 +87,7 @@ class ContactOptions:
     exclusion: float | None = None
     stiffness: float | None = None
     stiffness_scale: float = 1.0
+    force_scale: float | None = None
     penetration_tolerance: float = 1e-4
     penalty_tolerance: float = 1e-3
     barrier_activation: float = 1e-2
@@ -97,6 +106,8 @@ class ContactOptions:
         checks.optional_number("stiffness", self.stiffness, 0.0, low_open=True,
                                meaning="contact stiffness")
         checks.number("stiffness_scale", self.stiffness_scale, 0.0, low_open=True)
+        checks.optional_number("force_scale", self.force_scale, 0.0,
+                               meaning="the contact force the load sets")
         for name in ("penetration_tolerance", "penalty_tolerance", "barrier_activation"):
             checks.number(name, getattr(self, name), 0.0, 1.0, low_open=True,
                           meaning="over D")
@@ -128,3 +139,13 @@ class ContactOptions:
     @property
     def exclusion_length(self) -> float:
         return 0.5 * np.pi * self.diameter if self.exclusion is None else float(self.exclusion)
+
+    def default_stiffness(self, bending_stiffness: float, edge_length: float) -> float:
+        """The stiffness used where ``stiffness`` is ``None`` (class doc): ``stiffness_scale
+        * max(A / h^3, force_scale / (pi g_hat))`` for the bending stiffness ``A`` and the
+        segment length ``h``."""
+        stiffness = bending_stiffness / edge_length**3
+        if self.force_scale is not None:
+            g_hat = self.barrier_activation * self.diameter
+            stiffness = max(stiffness, self.force_scale / (np.pi * g_hat))
+        return self.stiffness_scale * stiffness

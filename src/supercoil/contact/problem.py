@@ -91,9 +91,9 @@ class ContactProblem(OverRod, StepGuards):
         self.segments = self.curve.segments
         self.spline = self.curve.spline
         self.integral = self.curve.integral
-        h = rod.edge_length
         self.default_stiffness = (options.stiffness if options.stiffness is not None
-                                  else options.stiffness_scale * rod.bending_stiffness / h**3)
+                                  else options.default_stiffness(rod.bending_stiffness,
+                                                                    rod.edge_length))
         self.stiffness = self.default_stiffness  # the augmented Lagrangian may raise it
         # augmented Lagrangian multipliers (contact forces) per segment pair
         self.pair_multipliers: dict[tuple[int, int], float] = {}

@@ -15,6 +15,8 @@ SLIDING_CORE = 0.5
 # the largest end distance z/L: an extensible rod stretched to twice its length (a
 # stretch strain of 1); an inextensible one stays below 1 (check_inextensible)
 MAX_END_DISTANCE = 2.0
+# the rules of the barrier's stiffness (TweezersOptions.contact_stiffness)
+STIFFNESS_RULES = ("load", "bending")
 
 
 @dataclass(frozen=True)
@@ -65,11 +67,16 @@ class TweezersOptions:
     lies relative to the nodes: the pair sum on the polygon made a sawtooth
     of fold pairs along the plectoneme (35 folds from 0 to 5 turns at N =
     100 against 3; docs/contact.md, "Contact energy: pair sum or double
-    integral"). ``contact_stiffness_scale``: the barrier's stiffness over its default
-    ``A/h^3`` (``ContactOptions.stiffness_scale``). The load presses the contact into
-    the barrier; at F L^2/A = 22500 (L/D = 100, N = 102) the default let it compress to
-    gaps of 1-2e-6 D, the system's condition beyond double precision, and 100 kept the
-    branch regular (docs/tweezers.md, "Contact stiffness").
+    integral"). ``contact_stiffness``: the rule of the barrier's stiffness:
+    ``"load"`` (default) ``max(A/h^3, F/(pi g_hat))`` with ``g_hat`` the barrier's
+    reach (1 % of D), so that two strands crossing at right angles and pressed
+    together by the load F sit at 0.149 g_hat; ``"bending"`` ``A/h^3`` whatever the load,
+    which at F L^2/A = 22500 (L/D = 100, N = 102) let the load close the gap to
+    1-2e-6 D, the system's condition beyond double precision
+    (``ContactOptions.force_scale``; docs/tweezers.md, "Contact stiffness"). Under
+    displacement control the load is not known in advance and both rules are
+    ``A/h^3``. ``contact_stiffness_scale``: a factor on the rule's stiffness
+    (``ContactOptions.stiffness_scale``).
     """
 
     twist_ratio: float
@@ -89,6 +96,7 @@ class TweezersOptions:
     contact_curve: str = "spline"
     contact_formulation: str = "integral"
     loop_sliding: bool | None = None
+    contact_stiffness: str = "load"
     contact_stiffness_scale: float = 1.0
 
     def __post_init__(self) -> None:
@@ -115,19 +123,22 @@ class TweezersOptions:
         check_steps(self, points=("max_points", "segment_points"))
         checks.choice("contact_predictor", self.contact_predictor, PREDICTORS)
         validate_contact_choice(self.contact_curve, self.contact_formulation)
+        checks.choice("contact_stiffness", self.contact_stiffness, STIFFNESS_RULES,
+                      meaning="max(A/h^3, F/(pi g_hat)) or A/h^3")
         set_(self, "contact_stiffness_scale", checks.number(
             "contact_stiffness_scale", self.contact_stiffness_scale, 0.0, checks.MAX_MAGNITUDE,
-            low_open=True, meaning="the barrier's stiffness over its default A/h^3"))
+            low_open=True, meaning="a factor on the barrier's stiffness"))
         if self.loop_sliding not in (None, True, False):
             raise checks.refuse("loop_sliding", f"must be True, False or None (where it "
                                 f"applies), got {self.loop_sliding!r}")
 
     def contact_options(self) -> ContactOptions:
         """The self-contact of these options: the barrier on their curve and formulation,
-        its stiffness ``contact_stiffness_scale`` times the default ``A/h^3``."""
+        its stiffness ``contact_stiffness_scale`` times the ``contact_stiffness`` rule's."""
+        load = self.tension if self.contact_stiffness == "load" else None
         return ContactOptions(diameter=self.diameter, curve=self.contact_curve,
                               formulation=self.contact_formulation,
-                              stiffness_scale=self.contact_stiffness_scale)
+                              stiffness_scale=self.contact_stiffness_scale, force_scale=load)
 
     @property
     def load_control(self) -> bool:

@@ -32,7 +32,9 @@ from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 
 def contact_branch(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
                    max_points: int):
-    """The first contact branch of the grid's run at ``nodes``, and the run's seconds."""
+    """The contact branch of the grid's run at ``nodes`` that reaches the furthest turns
+    (the branch held on its half-turn symmetry where the free one closed), and the run's
+    seconds."""
     tension = lam**2
     options = TweezersOptions(twist_ratio=twist_ratio, length_over_diameter=ld,
                               tension=tension, n_nodes=nodes,
@@ -41,7 +43,8 @@ def contact_branch(ld: float, lam: float, twist_ratio: float, nodes: int, factor
     start = time.perf_counter()
     result = tweezers_branches(options)
     seconds = time.perf_counter() - start
-    return next(b for b in result.branches if b.name in result.contact_branches), seconds
+    contact = [b for b in result.branches if b.name in result.contact_branches]
+    return max(contact, key=lambda b: float(np.max(b.parameter_values))), seconds
 
 
 def count_changes(branch) -> np.ndarray:

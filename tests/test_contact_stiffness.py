@@ -30,10 +30,10 @@ from supercoil.problems.tweezers import TweezersOptions, clamped_problem
 REACH = 0.01  # the barrier acts on gaps below 1 % of D
 
 
-def _crossing_energy(theta: float, distance: float, stiffness: float, diameter: float,
-                     g_hat: float) -> float:
+def crossing_energy(theta: float, distance: float, stiffness: float, diameter: float,
+                    g_hat: float, samples: int = 32) -> float:
     """The integral barrier's energy of two straight strands (9 nodes, 0.5 D apart)
-    crossing at ``theta`` with their axes ``distance`` apart, 32 samples a segment."""
+    crossing at ``theta`` with their axes ``distance`` apart, ``samples`` a segment."""
     n = 9
     s = (np.arange(n) - (n - 1) / 2) * 0.5 * diameter
     a = np.stack([s, np.zeros(n), np.zeros(n)], 1)
@@ -42,15 +42,16 @@ def _crossing_energy(theta: float, distance: float, stiffness: float, diameter: 
     seg = np.stack([np.arange(n - 1), np.arange(1, n)], 1)
     stencil = np.concatenate([seg, seg + n])
     pairs = np.array([[i, n - 1 + j] for i in range(n - 1) for j in range(n - 1)])
-    return integral_terms(np.concatenate([a, b]), stencil, polygon_weights(len(stencil), 32),
+    return integral_terms(np.concatenate([a, b]), stencil,
+                          polygon_weights(len(stencil), samples),
                           pairs, diameter, "barrier", stiffness, g_hat, 0.5 * diameter,
                           order=0)[0].sum()
 
 
 def _crossing_force(theta, u, stiffness, diameter, g_hat):
     distance, step = diameter + u * g_hat, 1e-7 * g_hat
-    return -(_crossing_energy(theta, distance + step, stiffness, diameter, g_hat)
-             - _crossing_energy(theta, distance - step, stiffness, diameter, g_hat)) / (2 * step)
+    return -(crossing_energy(theta, distance + step, stiffness, diameter, g_hat)
+             - crossing_energy(theta, distance - step, stiffness, diameter, g_hat)) / (2 * step)
 
 
 @pytest.mark.parametrize("theta", [np.pi / 2, 0.6])

@@ -88,6 +88,27 @@ class OverRod:
         absent if the rod has none."""
         return self.base.phase_offset
 
+    def held_part(self, q: np.ndarray, multipliers: np.ndarray):
+        """The rod's ``held_part`` (a projection onto a symmetric family; None where it
+        holds none), the contact's multipliers unchanged."""
+        return self._held(getattr(self.base, "held_part", None), q, multipliers)
+
+    def held_direction(self, q: np.ndarray, dq: np.ndarray, dmultipliers: np.ndarray):
+        """The rod's ``held_direction`` (None where it holds none), as :meth:`held_part`."""
+        part = getattr(self.base, "held_direction", None)
+        return self._held(None if part is None else
+                          (lambda dq_, dm_: part(q, dq_, dm_)), dq, dmultipliers)
+
+    def _held(self, part, q: np.ndarray, multipliers: np.ndarray):
+        if part is None:
+            return None
+        m0 = self.base.n_constraints
+        multipliers = np.asarray(multipliers, dtype=float)
+        held = part(q, multipliers[:m0])
+        if held is None:
+            return None
+        return held[0], np.concatenate([held[1], multipliers[m0:]])
+
     def accept(self, q: np.ndarray) -> None:
         self.base.accept(q)
         if self.closed:

@@ -6,7 +6,9 @@ The corrector solves
 
 with ``b`` a row in the arclength metric (``W t`` for pseudo-arclength,
 ``e_lambda`` to land on a parameter bound), by Newton's method on the bordered
-Jacobian ``[[K, F_lambda], [b^T]]`` (:class:`BorderedFactor`). Trial points are
+Jacobian ``[[K, F_lambda], [b^T]]`` (:class:`BorderedFactor`). Where the problem holds
+its states on a family (a symmetric one: :meth:`ExtendedSystem.held`), the start, every
+iterate, step and tangent are projected onto it. Trial points are
 never accepted by the problem (``problem.accept`` is called by the caller once
 a point is kept), and a problem's ``step_bound(q, dq)`` shortens every Newton
 step. Newton is damped: a step that raises ``max |F|`` is halved. Where no halving
@@ -119,7 +121,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
     one below the tolerance only.
     """
     problem = system.problem
-    x = np.array(x_start, dtype=float)
+    x = system.held(np.array(x_start, dtype=float))
     bounded = hasattr(problem, "step_bound")
     centre = x_start if center is None else center
     reach = _Reach(system, x_ref, row, max_distance)
@@ -182,6 +184,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
                 dx = -factor.solve(np.concatenate([F, [row @ (x - x_ref) - sigma]]))
         except SingularMatrixError as exc:
             return Correction(None, False, it, res, f"iteration {it}: {exc}")
+        dx = system.held_direction(x, dx)
         if rising:
             # A residual near the tolerance that rose again while Newton would move
             # the point (multipliers included) by a negligible step is round-off: the
@@ -218,7 +221,7 @@ def correct(system: ExtendedSystem, x_start: np.ndarray, row: np.ndarray, x_ref:
         # "diverged" at iteration 2.
         first = None
         for _ in range(BACKTRACKS + 1):
-            x_trial = x + alpha * dx
+            x_trial = system.held(x + alpha * dx)
             F = system.residual(x_trial)
             if np.all(np.isfinite(F)) and (not F.size or np.max(np.abs(F)) < res):
                 break
@@ -294,12 +297,13 @@ def _whole_step(system: ExtendedSystem, factor: BorderedFactor, x: np.ndarray, F
         return None
     if not np.all(np.isfinite(dx)):
         return None
+    dx = system.held_direction(x, dx)
     if bounded:
         dq = np.zeros(system.problem.n_dofs)
         dq[system.free] = dx[:system.n]
         if float(system.problem.step_bound(system.q(x), dq)) < 1.0:
             return None
-    x_new = x + dx
+    x_new = system.held(x + dx)
     F_new = system.residual(x_new)
     return (x_new, F_new) if np.all(np.isfinite(F_new)) else None
 
@@ -360,7 +364,8 @@ def tangent(system: ExtendedSystem, x: np.ndarray, row: np.ndarray,
         z = preconditioner.refined_solve(H, system.jacobian_arrays(x),
                                          system.parameter_derivative(x), row, e_last)
         if z is not None and np.all(np.isfinite(z)):
+            z = system.held_direction(x, z)
             return z / system.norm(z)
     factor = bordered_factor(system, x, row, hessian)
-    z = factor.solve(e_last)
+    z = system.held_direction(x, factor.solve(e_last))
     return z / system.norm(z)

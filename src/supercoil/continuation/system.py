@@ -136,6 +136,37 @@ class ExtendedSystem:
         dq[self.free] = t[:self.n]
         return np.concatenate([dq, t[self.n:self.n + self.m], t[-1:]])
 
+    # -- a family the problem holds the states on -----------------------------------------
+    def held(self, x: np.ndarray) -> np.ndarray:
+        """``x`` projected by the problem's optional ``held_part(q, multipliers)`` (a
+        symmetric family: :meth:`~supercoil.rod.open.ClampedRodEnergy.held_part`); ``x``
+        itself where the problem holds none."""
+        part = getattr(self.problem, "held_part", None)
+        held = None if part is None else part(self.q(x), x[self.n:self.n + self.m])
+        if held is None:
+            return x
+        out = np.array(x, dtype=float)
+        out[:self.n] = held[0][self.free]
+        out[self.n:self.n + self.m] = held[1]
+        return out
+
+    def held_direction(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+        """The part of a step or tangent ``dx`` at ``x`` that stays on the problem's
+        family (its optional ``held_direction(q, dq, dmultipliers)``); ``dx`` itself
+        where the problem holds none."""
+        part = getattr(self.problem, "held_direction", None)
+        if part is None:
+            return dx
+        dq = np.zeros(self.problem.n_dofs)
+        dq[self.free] = dx[:self.n]
+        held = part(self.q(x), dq, dx[self.n:self.n + self.m])
+        if held is None:
+            return dx
+        out = np.array(dx, dtype=float)
+        out[:self.n] = held[0][self.free]
+        out[self.n:self.n + self.m] = held[1]
+        return out
+
     # -- residual and derivatives ----------------------------------------------------------
     def problem_at(self, lam: float):
         """The problem at the parameter value ``lam`` (``problem.at``); the last one is

@@ -25,7 +25,12 @@ from __future__ import annotations
 import numpy as np
 
 from supercoil.rod.energy import RodEnergy
-from supercoil.rod.mirror import mirror_offset
+from supercoil.rod.mirror import (
+    mirror_offset,
+    mirror_pairs,
+    symmetric_direction,
+    symmetric_state,
+)
 from supercoil.rod.model import Rod
 
 AXIS = np.array([0.0, 0.0, 1.0])
@@ -120,10 +125,11 @@ class ClampedRodEnergy(RodEnergy):
         # the tail ratio below which near_symmetry_modes offers the sliding of a
         # localised structure (None: never)
         self.sliding_tail: float | None = sliding_threshold(n)
-        # where a phase row of the sliding is anchored (phase_offset): towards the
-        # structure centred on the rod's middle, or (True) at the state's symmetric part
-        # under the half-turn about an axis across the middle (supercoil.rod.mirror)
-        self.mirror_anchor = False
+        # True: the states are held on the half-turn symmetry about an axis across the
+        # middle (supercoil.rod.mirror; held_part, held_direction), and a phase row of
+        # the sliding is anchored at the state's symmetric part (phase_offset); False:
+        # free, the row anchored towards the structure centred on the rod's middle
+        self.mirror_hold = False
         # a rod with self-contact does not pass through itself (admissible); a phantom
         # rod, without it, may
         self.impenetrable = False
@@ -338,7 +344,7 @@ class ClampedRodEnergy(RodEnergy):
         N = 204: moved before the row was needed, the loop's radii lost their mirror
         symmetry by 4e-3, and the row's force grew to 1.3e-6 at the contact).
 
-        With ``mirror_anchor`` the anchor is the state's symmetric part instead
+        With ``mirror_hold`` the anchor is the state's symmetric part instead
         (:func:`~supercoil.rod.mirror.mirror_offset`, not bounded): the row then takes
         out, at every step, the part of the sliding that round-off moved the structure
         off the symmetric position, and holds no force on a symmetric state. In
@@ -350,7 +356,7 @@ class ClampedRodEnergy(RodEnergy):
         g, tail = self.sliding(q)
         if self.sliding_tail is None or tail > self.sliding_tail:
             return np.zeros(np.size(q))
-        if self.mirror_anchor:
+        if self.mirror_hold:
             return mirror_offset(q)
         h = self.rod.edge_length
         weight = np.sum(g.reshape(-1, 3) ** 2, axis=1)
@@ -358,6 +364,36 @@ class ClampedRodEnergy(RodEnergy):
         shift = 0.5 * self.rod.length - float(weight @ s) / float(weight.sum())
         shift = float(np.clip(shift, -RECENTRE * h, RECENTRE * h))
         return -(shift / h) * g  # x(s) -> x(s - a) + a e_z is -(a / h) g to first order
+
+    def held_part(self, q: np.ndarray, multipliers: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray] | None:
+        """With ``mirror_hold``: ``(q, multipliers)`` projected onto the states symmetric
+        under the half-turn (:func:`~supercoil.rod.mirror.symmetric_state`, in the gauge
+        of the azimuth pin; the lengths' multipliers of exchanged edges averaged); None
+        otherwise (the continuation's corrector then projects nothing)."""
+        if not self.mirror_hold:
+            return None
+        return symmetric_state(q, self._pin()), self._even_multipliers(multipliers)
+
+    def held_direction(self, q: np.ndarray, dq: np.ndarray, dmultipliers: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray] | None:
+        """With ``mirror_hold``: the part of ``(dq, dmultipliers)`` at the symmetric state
+        ``q`` that keeps it symmetric (:func:`~supercoil.rod.mirror.symmetric_direction`);
+        None otherwise."""
+        if not self.mirror_hold:
+            return None
+        return symmetric_direction(q, dq, self._pin()), self._even_multipliers(dmultipliers)
+
+    def _pin(self) -> int | None:
+        return int(self.gauge_dofs[0]) if self.gauge_dofs.size == 1 else None
+
+    def _even_multipliers(self, multipliers: np.ndarray) -> np.ndarray:
+        out = np.array(multipliers, dtype=float)
+        pairs = mirror_pairs(self._constrained, self.rod.n_nodes)
+        mean = 0.5 * (out[pairs[:, 0]] + out[pairs[:, 1]])
+        out[pairs[:, 0]] = mean
+        out[pairs[:, 1]] = mean
+        return out
 
     def axial_free(self, g: np.ndarray) -> np.ndarray:
         """``g`` less its M-orthogonal projection on the uniform axial translation.

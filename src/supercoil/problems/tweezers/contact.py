@@ -56,9 +56,9 @@ SLIDING_TAIL_CONTACT = 0.25
 # of D: the largest distance of a node from its mirror image (supercoil.rod.mirror) on a
 # symmetric state: a contact branch held on its symmetry starts from one (the centred loop
 # at its contact: 1e-10 to 4e-7 D at L/D = 200 and 500, lambda = 10 and 20; a loop slid
-# off by round-off: a large part of its size), and refuses a state beyond it (a step to
-# a state that the phase row holds off the symmetric family: 0.05 D, holding 2.8e-4, at
-# L/D = 500, lambda = 10, N = 502, where the symmetric states lie within 4e-6 D)
+# off by round-off: a large part of its size). Its corrector projects every iterate onto
+# the symmetric states (ClampedRodEnergy.held_part: 1e-17 D), and a run refuses a state
+# beyond this, which only a failed projection (a straight rod, no axis) would leave
 MIRROR_TOLERANCE = 1e-3
 
 
@@ -82,9 +82,10 @@ class ContactSliding:
     over its eigenvalue, then "the tangent turned" at the minimum step).
 
     ``hold``: the branch held on its half-turn symmetry
-    (:mod:`supercoil.problems.tweezers.mirrored`): the row in contact too, while the
-    sliding is left out of the count (tail ratio below ``SLIDING_TAIL_CONTACT``), a run
-    with it refusing a state off the symmetry by more than ``MIRROR_TOLERANCE`` D."""
+    (:mod:`supercoil.problems.tweezers.mirrored`, its states projected onto the
+    symmetric ones): the row in contact too, while the sliding is left out of the count
+    (tail ratio below ``SLIDING_TAIL_CONTACT``), a run with it refusing a state off the
+    symmetry by more than ``MIRROR_TOLERANCE`` D."""
 
     ENGAGE = 2.0  # barrier layers (barrier_activation * D): start a run with the row beyond
     RELEASE = 3.0  # ... end a run without the row beyond this many, and as many past its start
@@ -175,8 +176,10 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     ``onset`` and its azimuth pins: the stored one when complete, else computed (an
     incomplete stored one continued) with its contact events classified. ``pinned``:
     the runs' ``stop`` on the pin's quality (:func:`~supercoil.problems.tweezers.pins.pin_stop`).
-    ``hold`` (where ``loop_sliding`` applies, ``loop_slides``): the sliding's phase row is carried in contact too,
-    anchored at the state's symmetric part (:mod:`supercoil.problems.tweezers.mirrored`)."""
+    ``hold`` (where ``loop_sliding`` applies, ``loop_slides``): the states are held on the
+    half-turn symmetry (``ClampedRodEnergy.mirror_hold``) and the sliding's phase row is
+    carried in contact too, anchored at the state's symmetric part
+    (:mod:`supercoil.problems.tweezers.mirrored`)."""
     # in contact the discrete contact makes the sliding of the plectoneme stiff, of
     # either sign: no phase row, but out of the count while the tails are straight
     # (docs/continuation.md, "Long open rods: the sliding of a localised structure"),
@@ -192,12 +195,12 @@ def contact_branch(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProb
     old, complete = stored.get(name, (None, False))
     if complete:
         return old, stored_pins(old)
-    rod.mirror_anchor = sliding.hold
+    rod.mirror_hold = sliding.hold
     try:
         contact, pins = _computed(opts, rod, cp, free, k, name, stored, on_point, pinned, say,
                                   contact_opts, sliding, records, events)
     finally:
-        rod.mirror_anchor = False
+        rod.mirror_hold = False
     return contact, pins
 
 

@@ -413,3 +413,35 @@ def test_pattern_memo_keeps_the_newest_entries_within_its_bounds():
     assert memo._total <= memo.max_bytes
     memo.put(("huge",), (np.zeros(2000),))  # larger than the bound: not kept
     assert memo.get(("huge",)) is None and memo.get(("big",)) is not None
+
+
+def test_minimise_from_edges_stretched_beyond_the_trust_radius():
+    """A minimisation whose constraints need a correction longer than the trust radius
+    (a clamped rod in contact's ``step_size_ratio``: one edge length) takes it: no
+    shift of the Hessian shortens that part of the step (the shifted step's limit is the
+    constraints' own correction), so the shift is not raised without end. Oracle: below
+    Greenhill's buckling (1 turn against 2.6 at F L^2/A = 20, C/A = 1.5) the straight rod
+    is the minimum, reached from the nodes of the middle moved sideways by twice the
+    edge length, alternately one way and the other (their edges stretched to 4.1 times
+    theirs), with either test of the shifted Hessian."""
+    from supercoil.contact.options import ContactOptions
+    from supercoil.contact.problem import ContactProblem
+    from supercoil.rod.model import Rod
+    from supercoil.rod.open import ClampedRodEnergy, straight_rod
+
+    n = 30
+    straight = straight_rod(n)
+    rod = ClampedRodEnergy(Rod(n_nodes=n, twist_stiffness=1.5, closed=False), straight,
+                           turns=1.0, tension=20.0)
+    problem = ContactProblem(rod, ContactOptions(diameter=0.02))
+    h = rod.rod.edge_length
+    moved = straight.copy()
+    moved[10:20, 0] += 2 * h * (-1.0) ** np.arange(10)
+    assert np.max(np.abs(rod.constraints(moved.ravel()))) > h  # beyond the trust radius
+    for test in ("exact", "curvature"):
+        res = newton(problem, moved.ravel(), NewtonOptions(
+            mode="minimize", tolerance=1e-9, max_iterations=300, inertia_test=test))
+        assert res.converged, res.message
+        x = res.q.reshape(-1, 3)
+        np.testing.assert_allclose(x[:, :2], 0.0, atol=1e-8)
+        np.testing.assert_allclose(np.linalg.norm(np.diff(x, axis=0), axis=1), h, rtol=1e-9)

@@ -46,6 +46,8 @@ import logging
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from supercoil.errors import InputError
 from supercoil.solvers.errors import SingularMatrixError
@@ -53,6 +55,13 @@ from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.problem import ConstrainedEnergy, HessianParts, free_dofs
 
 log = logging.getLogger(__name__)
+
+# the trust radius of a minimisation step is at least this many times the size of the
+# constraints' own correction (_normal_step_ratio), which no shift shortens: below it the
+# shift was raised without end (to 1e46 at a kicked straight rod whose edges were
+# stretched by twice their length, L/D = 100, F L^2/A = 22500, N = 102) and the step
+# overflowed
+NORMAL_MARGIN = 1.5
 
 
 class Status(enum.Enum):
@@ -187,6 +196,11 @@ def _shifted_step(problem, q, free, H, J, mass, rhs, radius, opts):
     diag_scale = float(np.max(np.abs(H.sparse.diagonal()))) / float(np.mean(mass))
     delta, order, negatives = 0.0, None, False
     sized = hasattr(problem, "step_size_ratio")
+    if sized and J is not None and np.any(rhs[n:]):
+        # the shift shortens the step towards the constraints' own correction, never
+        # below it: a radius under that one is out of the shift's reach
+        radius = max(radius, NORMAL_MARGIN * _normal_step_ratio(problem, q, free, J, mass,
+                                                                 -rhs[n:]))
     factor = sol = None
     for attempt in range(80):
         factor = KKTFactor(H, J, shift=-delta, mass=mass, order=order)
@@ -214,6 +228,24 @@ def _shifted_step(problem, q, free, H, J, mass, rhs, radius, opts):
                 continue
         break
     return factor, sol, delta, negatives
+
+
+def _normal_step_ratio(problem, q, free, J, mass, c) -> float:
+    """``step_size_ratio`` of the shortest step (M-norm) that corrects the linearised
+    constraints, ``J s = -c``: ``s = -M^-1 J^T (J M^-1 J^T)^-1 c``, the limit of the
+    shifted step ``(H + delta M, J)`` as ``delta`` grows (its energy part vanishes like
+    ``1/delta``). 0 where ``J M^-1 J^T`` is singular (dependent constraints)."""
+    J = sp.csr_matrix(J)
+    scaled = J @ sp.diags(1.0 / mass)
+    try:
+        y = spla.splu(sp.csc_matrix(scaled @ J.T)).solve(np.asarray(c, dtype=float))
+    except RuntimeError:  # "Factor is exactly singular"
+        return 0.0
+    if not np.all(np.isfinite(y)):
+        return 0.0
+    full = np.zeros_like(q)
+    full[free] = -(scaled.T @ y)
+    return float(problem.step_size_ratio(q, full))
 
 
 def _symmetry_basis(problem, q, free, mass, factor, m: int) -> np.ndarray:

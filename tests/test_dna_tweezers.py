@@ -90,20 +90,21 @@ def test_n0_is_the_fewest_nodes_with_segments_no_longer_than_d(lod):
 
 @pytest.mark.parametrize(("salt", "force"), [(10, 0.1), (10, 0.25), (10, 1.0), (10, 4.0),
                                               (150, 1.0), (150, 4.0)])
-def test_default_nodes_are_the_fewest_with_segments_within_d_and_half_the_core(salt, force):
+def test_default_nodes_are_the_fewest_with_segments_within_d_and_a_third_of_the_core(
+        salt, force):
     # brute force over N: the clamped rod's segments 1/(N - 2) no longer than D and at
-    # most half the loop's core sqrt(A/F) = 1/lambda; the model's own mesh test agrees
-    from supercoil.problems.tweezers.options import mesh_pins_loop
+    # most a third of the loop's core sqrt(A/F) = 1/lambda; the model's own mesh test agrees
+    from supercoil.problems.tweezers.options import mesh_pins_loop, mesh_resolves_loop
 
     numbers = dna_tweezers_inputs(DNAPreset(3000, salt_mM=salt), force, turns=(0, 1))
     lod, tension = numbers["length_over_diameter"], numbers["tension"]
     lam = math.sqrt(tension)
     brute = next(n for n in range(checks.MIN_CLAMPED_NODES, 10_000)
-                 if 1.0 / (n - 2) <= 1.0 / lod and lam / (n - 2) <= 0.5)
+                 if 1.0 / (n - 2) <= 1.0 / lod and 3 * lam / (n - 2) <= 1.0)
     assert default_nodes(lod, tension) == numbers["n_nodes"] == brute
-    assert not mesh_pins_loop(tension, brute)
-    if brute > resolving_nodes(lod):  # the force decides: one node fewer pins the core
-        assert mesh_pins_loop(tension, brute - 1)
+    assert mesh_resolves_loop(tension, brute) and not mesh_pins_loop(tension, brute)
+    if brute > resolving_nodes(lod):  # the force decides: one node fewer does not resolve
+        assert not mesh_resolves_loop(tension, brute - 1)
     assert default_nodes(lod) == resolving_nodes(lod)  # no force: n0
 
 
@@ -198,8 +199,8 @@ def test_the_command_line_keeps_a_given_loop_sliding(given, dna, expected, tmp_p
 
 @pytest.mark.parametrize("force,salt", [(1.0, 150), (4.0, 150), (1.0, 10)])
 def test_loop_sliding_applies_with_dna_where_the_mesh_lets_the_loop_slide(force, salt):
-    """The default nodes' segments h = L/(N - 2) are at most half the loop's core
-    sqrt(A/F) (h sqrt(F/A) <= 1/2, computed here from the preset's own L, D and A), so
+    """The default nodes' segments h = L/(N - 2) are at most a third of the loop's core
+    sqrt(A/F) (h sqrt(F/A) <= 1/3, computed here from the preset's own L, D and A), so
     loop_sliding applies; where n0's segments are longer (given as [rod] nodes), the
     mesh pins the loop and loop_sliding applies on the contact-free branches only."""
     preset = DNAPreset(3000, salt_mM=salt)
@@ -216,7 +217,7 @@ def test_loop_sliding_applies_with_dna_where_the_mesh_lets_the_loop_slide(force,
         assert options.core_segments == pytest.approx(core, rel=1e-12)
         assert options.loop_sliding is None and options.loop_slides
         assert options.loop_slides_in_contact is (core <= 0.5)
-        assert given is not None or core <= 0.5
+        assert given is not None or core <= 1 / 3 + 1e-12
     assert dna_numerics({}) == {"contact_curve": "quintic", "max_points": DNA_MAX_POINTS}
     assert dna_numerics({"contact_curve": "spline", "max_points": 7}) == {
         "contact_curve": "spline", "max_points": 7}

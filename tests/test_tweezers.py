@@ -702,3 +702,23 @@ def test_max_points_bounds_every_branch(small_run):
     result = tweezers_branches(opts)
     assert all(len(b) <= 10 for b in result.branches)
     assert result.branches[-1].status.name == "MAX_POINTS" and not result.ok
+
+
+def test_a_mesh_coarser_than_a_third_of_the_core_says_its_counts_are_the_mesh_s(small_run):
+    """The note on segments longer than a third of the loop's core sqrt(A/F) = 1/lambda:
+    at h lambda = 0.4 it names the ratio, the branch's folds and the nodes that resolve
+    the core (2 + ceil(3 lambda)); at exactly a third and below, and without a tension,
+    none."""
+    from supercoil.problems.tweezers.coarse import unresolved_loop_note
+
+    branch = small_run.branch("buckled_contact")
+    folds = len(branch.points_of_kind("fold"))
+    lam = 40.0
+    coarse = dataclasses.replace(small_run.options, tension=lam**2, n_nodes=102)
+    note = unresolved_loop_note(coarse, branch)
+    assert note is not None
+    assert note.startswith("buckled_contact: its segments are 0.4 times the loop's core")
+    assert f"({folds} folds on this branch); --nodes >= {2 + 120} resolve it" in note
+    for nodes in (122, 200):  # h lambda = 1/3 exactly, and 0.2
+        assert unresolved_loop_note(dataclasses.replace(coarse, n_nodes=nodes), branch) is None
+    assert unresolved_loop_note(dataclasses.replace(coarse, tension=0.0), branch) is None

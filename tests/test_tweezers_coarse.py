@@ -10,7 +10,11 @@ import numpy as np
 
 from supercoil.problems.tweezers import TweezersOptions
 from supercoil.problems.tweezers.coarse import pinned_loop_note, resolving_nodes
-from supercoil.problems.tweezers.options import SLIDING_CORE
+from supercoil.problems.tweezers.options import (
+    RESOLVED_CORE,
+    SLIDING_CORE,
+    mesh_resolves_loop,
+)
 
 
 class Folded:
@@ -34,16 +38,19 @@ def options(lam: float, nodes: int) -> TweezersOptions:
 
 
 def test_the_mesh_pins_the_loop_on_segments_longer_than_half_its_core():
-    """``h sqrt(F/A) > SLIDING_CORE`` with ``h = L / (N - 2)``, checked against the ratio
-    itself at every N around the threshold; ``resolving_nodes`` is the first N that does
-    not pin it (brute force)."""
+    """``h sqrt(F/A) > SLIDING_CORE`` (a half) with ``h = L / (N - 2)`` pins the loop,
+    ``<= RESOLVED_CORE`` (a third) resolves it, checked against the ratio itself at every
+    N around the thresholds; ``resolving_nodes`` is the first N that resolves it (brute
+    force)."""
     for lam in (40.0, 80.0, 150.0):
         first = resolving_nodes(options(lam, 100))
-        for n in range(first - 30, first + 30):
+        assert first == next(n for n in range(4, 10_000) if 3 * lam <= n - 2)
+        for n in range(first - 80, first + 30):
             o = options(lam, n)
             assert math.isclose(o.core_segments, lam / (n - 2))
             assert o.mesh_pins_loop == (lam / (n - 2) > SLIDING_CORE)
-            assert o.mesh_pins_loop == (n < first)
+            assert mesh_resolves_loop(o.tension, n) == (n >= first)
+            assert RESOLVED_CORE < SLIDING_CORE
     assert TweezersOptions(twist_ratio=1.5, length_over_diameter=100, end_distance=0.5,
                            n_nodes=102).core_segments is None
     assert not TweezersOptions(twist_ratio=1.5, length_over_diameter=100, tension=0.0,
@@ -53,12 +60,13 @@ def test_the_mesh_pins_the_loop_on_segments_longer_than_half_its_core():
 def test_the_note_names_the_cause_where_a_pinned_contact_branch_ends_early():
     """At lambda = 80 on N = 102 (segments 0.8 of the core) a branch that stopped at 13.6
     of 25 turns gets the note with its folds, the turns they span and the N that resolves
-    the core (162); at N = 204 (0.4), or having reached the last turn, none."""
+    the core (242, segments of a third of it); at N = 204 (0.4), or having reached the
+    last turn, none."""
     early = Folded([6.5, 9.6, 13.6, 13.55], folds=415)
     note = pinned_loop_note(options(80, 102), early)
     assert note is not None
     assert "0.8 times" in note and "415 folds between 6.5 and 13.6 turns" in note
-    assert "--nodes >= 162" in note and "4 points" in note
+    assert "--nodes >= 242" in note and "4 points" in note
     assert pinned_loop_note(options(80, 204), early) is None
     assert pinned_loop_note(options(80, 102), Folded([6.5, 25.0], folds=415)) is None
 

@@ -326,7 +326,7 @@ class Tweezers:
         temperature; its superhelical density is not used: give the turns or σ to
         :func:`~supercoil.api.verbs.tweezers`). C/A, F L^2/A and L/D follow from it;
         ``nodes`` defaults to the fewest whose segments are no longer than D (n0 =
-        ceil(L/D) + 2) and at most half the loop's core sqrt(A/F)
+        ceil(L/D) + 2) and at most a third of the loop's core sqrt(A/F)
         (:func:`~supercoil.units.tweezers.default_nodes`); ``contact``: the
         treatment's class, :class:`Barrier` (default) or :class:`Penalty`.
 

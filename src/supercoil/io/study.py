@@ -27,7 +27,7 @@ displacement control) ("dna": ``force_pN``), ``turns`` = [start, stop] (default
 [0, 5]; "dna": or ``superhelical_density`` = [start, stop], σ = turns · 10.5 / N_bp,
 not both); without ``[rod] length_over_diameter`` the rod has no self-contact. Under
 "dna" a tweezers study's ``[rod] nodes`` defaults to the fewest whose segments are no
-longer than D (n0 = ceil(L/D) + 2) and at most half the loop's core sqrt(A/F)
+longer than D (n0 = ceil(L/D) + 2) and at most a third of the loop's core sqrt(A/F)
 (:func:`~supercoil.units.tweezers.default_nodes`); otherwise to 100.
 
 Every key is checked: an unknown or misspelled key, a key of another problem

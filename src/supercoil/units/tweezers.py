@@ -9,9 +9,10 @@ turns or as superhelical density, and the number of nodes:
 * the nodes default to :func:`default_nodes`: n0 (:func:`resolving_nodes`), the fewest
   whose segments are no longer than the tube's diameter D, which the contact of a
   plectoneme's two strands needs (a coarser polygon cannot resolve the ply), raised
-  where the force needs more to the fewest whose segments are at most half the loop's
-  core ``sqrt(A/F)`` (a coarser polygon pins the plectoneme's end loop to its nodes
-  and buckles late: docs/tweezers.md, "DNA units");
+  where the force needs more to the fewest whose segments are at most a third of the
+  loop's core ``sqrt(A/F)`` (a coarser polygon pins the plectoneme's end loop to its
+  nodes, buckles late, and its unstable counts are the mesh's: docs/tweezers.md, "DNA
+  units");
 * the contact curve defaults to :data:`DNA_CONTACT_CURVE`, the quintic B-spline, whose
   self-distance does not ripple with the nodes' phase at segments of D, and the points
   per branch to :data:`DNA_MAX_POINTS` (:func:`dna_numerics`, the one place these
@@ -152,14 +153,15 @@ def resolving_nodes(length_over_diameter: float) -> int:
 def default_nodes(length_over_diameter: float, tension: float = 0.0) -> int:
     """The DNA runs' default nodes: ``max(n0, core)``, n0 of :func:`resolving_nodes`
     (segments no longer than D) and, under a tension F L^2/A > 0, the fewest nodes whose
-    segments are at most half the loop's core ``sqrt(A/F)``
-    (:func:`~supercoil.problems.tweezers.options.core_nodes`:
-    ``2 + ceil(2 sqrt(F L^2/A))``)."""
-    from supercoil.problems.tweezers.options import core_nodes
+    segments are at most a third of the loop's core ``sqrt(A/F)``, which resolve the
+    plectoneme's end loop (:func:`~supercoil.problems.tweezers.options.resolved_nodes`:
+    ``2 + ceil(3 sqrt(F L^2/A))``; on coarser meshes the unstable counts along the
+    plectoneme are the mesh's: :mod:`supercoil.problems.tweezers.coarse`)."""
+    from supercoil.problems.tweezers.options import resolved_nodes
 
     n0 = resolving_nodes(length_over_diameter)
     force = checks.number("tension", tension, 0.0, math.inf, meaning="F L^2/A")
-    return max(n0, core_nodes(force)) if force > 0 else n0
+    return max(n0, resolved_nodes(force)) if force > 0 else n0
 
 
 def turns_of_span(preset: DNAPreset, superhelical_density) -> tuple[float, float]:
@@ -232,7 +234,7 @@ def nodes_or_default(n_nodes: int | None, length_over_diameter: float,
         if n_nodes > checks.MAX_NODES:
             raise checks.refuse("n_nodes", f"(the default {n_nodes}: segments no longer "
                                 f"than D at L/D = {length_over_diameter:.6g} and at most "
-                                f"half the loop's core at F L^2/A = {tension:.6g}) exceeds "
+                                f"a third of the loop's core at F L^2/A = {tension:.6g}) exceeds "
                                 f"the largest number of nodes, {checks.MAX_NODES}; give the "
                                 "nodes, fewer base pairs, a larger diameter or a smaller force")
     return checks.integer("n_nodes", n_nodes, checks.MIN_CLAMPED_NODES, checks.MAX_NODES,

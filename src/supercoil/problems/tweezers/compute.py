@@ -31,7 +31,7 @@ from supercoil.problems.tweezers.buckled import (
     stored_pins,
     switch_off_straight,
 )
-from supercoil.problems.tweezers.coarse import pinned_loop_note
+from supercoil.problems.tweezers.coarse import pinned_loop_note, unresolved_loop_note
 from supercoil.problems.tweezers.contact import contact_branch
 from supercoil.problems.tweezers.mirrored import closed_before, held_contact
 from supercoil.problems.tweezers.options import TweezersOptions, check_inextensible
@@ -323,6 +323,8 @@ def tweezers_branches(options: TweezersOptions,
     if tried and (len(last) == 0 or last.parameter_values[-1] < opts.turns[1] - 1e-9):
         notes.append(tries_note(closed_contact, tried))
     pinned_loop = pinned_loop_note(opts, last)
+    if pinned_loop is None:
+        pinned_loop = unresolved_loop_note(opts, last)
     if pinned_loop is not None:
         notes.append(pinned_loop)
     return TweezersResult(opts, tuple(branches), frozenset(names), rod, cp, seconds,

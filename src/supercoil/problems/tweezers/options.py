@@ -12,6 +12,16 @@ from supercoil.problems.branch_options import PREDICTORS, branch_tolerances, che
 # in contact the loop's sliding is an approximate symmetry only on segments no longer
 # than this many times sqrt(A/F) (TweezersOptions.loop_slides_in_contact)
 SLIDING_CORE = 0.5
+# the segments no longer than this many times the loop's core sqrt(A/F) resolve the
+# plectoneme's end loop (resolved_nodes; the DNA runs' default nodes): on coarser meshes its
+# growth crossed a pair of folds of the discrete contact per node of each strand, between
+# which the unstable count is the mesh's (measured at C/A = 1.5, lambda = 80: at
+# h sqrt(F/A) = 0.4, L/D = 200, N = 202, the contact branch's count changed 170 times
+# against 23 at N = 303 (0.27), whose counts agree state by state with N = 454 (0.18)
+# away from its events; at 0.5, L/D = 100, N = 162, 13 states off by one away from any
+# event against N = 243 (0.33), which has no fold pairs;
+# benchmarks/grid_counts_refinement.py)
+RESOLVED_CORE = 1.0 / 3.0
 # the largest end distance z/L: an extensible rod stretched to twice its length (a
 # stretch strain of 1); an inextensible one stays below 1 (check_inextensible)
 MAX_END_DISTANCE = 2.0
@@ -206,6 +216,19 @@ def core_nodes(tension: float) -> int:
     """The fewest nodes whose segments are at most ``SLIDING_CORE`` times the loop's core
     ``sqrt(A/F)`` under the tension F L^2/A > 0: ``2 + ceil(sqrt(F L^2/A) / SLIDING_CORE)``."""
     return 2 + math.ceil(math.sqrt(tension) / SLIDING_CORE)
+
+
+def resolved_nodes(tension: float) -> int:
+    """The fewest nodes whose segments are at most ``RESOLVED_CORE`` times the loop's core
+    ``sqrt(A/F)`` under the tension F L^2/A > 0: ``2 + ceil(3 sqrt(F L^2/A))``."""
+    return 2 + math.ceil(round(math.sqrt(tension) / RESOLVED_CORE, 9))
+
+
+def mesh_resolves_loop(tension: float | None, n_nodes: int) -> bool:
+    """Whether N nodes' segments are at most ``RESOLVED_CORE`` times the loop's core (True
+    without a tension: no core)."""
+    core = core_segments(tension, n_nodes)
+    return core is None or core <= RESOLVED_CORE + 1e-12
 
 
 def mesh_pins_loop(tension: float | None, n_nodes: int) -> bool:

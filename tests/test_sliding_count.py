@@ -89,3 +89,26 @@ def test_no_sliding_or_no_negative_count_leaves_the_count():
     parts = HessianParts(sp.csr_matrix(H))
     assert sliding_left_out(parts, J, g[None, :], mass, 0) == 0
     assert sliding_left_out(parts, J, np.zeros((0, g.size)), mass, 1) == 0
+
+
+@pytest.mark.parametrize("sliding, others, share, left_out", [
+    (-2e5, [180.0, 3600.0], 0.9, 1),    # the ripple: a thousand times the next eigenvalue
+    (-2e5, [180.0, -50.0], 0.9, 1),     # ... beside a genuine unstable mode, which stays
+    (-300.0, [180.0, 3600.0], 0.9, 0),  # the elastic scale: a genuine instability
+    (-2e5, [180.0, -3e4], 0.9, 0),      # another mode as stiff: not told apart, counted
+    (-2e5, [180.0, 3600.0], 0.3, 0),    # the stiff mode is not the sliding
+])
+def test_a_sliding_that_is_no_symmetry_is_left_out_only_as_the_ripple(sliding, others, share,
+                                                                      left_out):
+    """Where the sliding is no approximate symmetry (no phase row: the count is on all of
+    ``ker J``), ``ratio`` leaves its negative eigenvalue out only where its eigenvector
+    is mostly the sliding and it exceeds ``ratio`` times the other eigenvalues of the
+    ``negative + 1`` lowest (brute force: the spectrum built in). The count left is the
+    count on the complement of that eigenvector."""
+    H, J, mass, g, v_s = spectral_problem(sliding, others, share)
+    parts = HessianParts(sp.csr_matrix(H))
+    counted = KKTFactor(parts, J).reduced_negative_count
+    assert counted == sum(v < 0 for v in [sliding, *others])
+    assert sliding_left_out(parts, J, g[None, :], mass, counted, ratio=10.0) == left_out
+    if left_out:
+        assert counted - 1 == count_on_complement(H, J, mass, v_s)

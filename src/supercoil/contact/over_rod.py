@@ -83,6 +83,12 @@ class OverRod:
         return self.base.near_symmetry_modes
 
     @property
+    def far_sliding_modes(self):
+        """The rod's ``far_sliding_modes(q)`` (its sliding where that is no approximate
+        symmetry); absent if the rod has none."""
+        return self.base.far_sliding_modes
+
+    @property
     def phase_offset(self):
         """The rod's ``phase_offset(q)`` (where a phase row of its sliding is anchored);
         absent if the rod has none."""

@@ -28,7 +28,12 @@ from supercoil.continuation.system import ExtendedSystem
 from supercoil.solvers.csr import csr_from_arrays
 from supercoil.solvers.errors import InertiaError, SingularMatrixError
 from supercoil.solvers.kkt import KKTFactor
-from supercoil.stability.analysis import eigen_system, sliding_phase_modes, stiff_sliding_modes
+from supercoil.stability.analysis import (
+    count_sliding_modes,
+    eigen_system,
+    sliding_phase_modes,
+    stiff_sliding_modes,
+)
 from supercoil.stability.eigen import dense_constrained_eigenpairs, lowest_pairs
 from supercoil.stability.sliding_count import (
     sliding_left_out,
@@ -184,9 +189,10 @@ def stiff_sliding(system: ExtendedSystem, x: np.ndarray, H, negative: int,
     symmetries (:func:`count_rows` or the system's own phase rows) include the stiff
     sliding's, which that complement does not take out
     (:mod:`~supercoil.stability.sliding_count`), else 0. ``H``: the count's Hessian."""
-    modes = stiff_sliding_modes(system.problem_at(x[-1]), system.q(x), negative)
-    if modes is None:
+    found = stiff_sliding_modes(system.problem_at(x[-1]), system.q(x), negative)
+    if found is None:
         return 0
+    modes, ratio = found
     g = modes[:, system.free]
     J = sp.csr_matrix(system.jacobian(x))
     keep = np.arange(J.shape[0])
@@ -196,7 +202,7 @@ def stiff_sliding(system: ExtendedSystem, x: np.ndarray, H, negative: int,
         held = coupling.max(axis=1) > 0.1 / np.sqrt(system.n)
         keep = np.concatenate([keep[:J.shape[0] - system.r],
                                keep[J.shape[0] - system.r:][~held]])
-    return sliding_left_out(H, J[keep], g, system.mass, negative, shift)
+    return sliding_left_out(H, J[keep], g, system.mass, negative, shift, ratio)
 
 
 def related_order(order: np.ndarray, dofs: np.ndarray, rows: int, new_dofs: np.ndarray,
@@ -286,7 +292,7 @@ def without_sliding(system: ExtendedSystem, x: np.ndarray, values: np.ndarray,
     that are mostly an approximate symmetry ``g`` (``(v^T M g)^2 >= g^T M g / 2``,
     :data:`~supercoil.stability.sliding_count.SLIDING_SHARE`)."""
     problem = system.problem_at(x[-1])
-    return without_sliding_pairs(values, modes, sliding_phase_modes(problem, system.q(x)),
+    return without_sliding_pairs(values, modes, count_sliding_modes(problem, system.q(x)),
                                  np.asarray(problem.mass, dtype=float))
 
 

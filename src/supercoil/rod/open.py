@@ -328,6 +328,17 @@ class ClampedRodEnergy(RodEnergy):
             return np.zeros((0, np.size(q)))
         return self.axial_free(g)[None, :]
 
+    def far_sliding_modes(self, q: np.ndarray) -> np.ndarray:
+        """The sliding ``(1, n_dofs)`` (as :meth:`near_symmetry_modes`) where it is no
+        approximate symmetry, its tail ratio above ``sliding_tail`` (the structure
+        reaches towards the clamps); ``(0, n_dofs)`` where it is one, on a straight rod
+        and with ``sliding_tail`` None. In contact its discrete eigenvalue can still be the
+        contact's ripple (:mod:`supercoil.stability.sliding_count`)."""
+        g, tail = self.sliding(q)
+        if self.sliding_tail is None or not np.isfinite(tail) or tail <= self.sliding_tail:
+            return np.zeros((0, np.size(q)))
+        return self.axial_free(g)[None, :]
+
     def phase_offset(self, q: np.ndarray) -> np.ndarray:
         """The displacement along the sliding that carries the structure's centre towards
         the rod's middle, by at most ``RECENTRE`` segments (zeros where the sliding is no

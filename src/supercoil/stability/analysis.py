@@ -38,6 +38,7 @@ from supercoil.solvers.newton import lagrangian_hessian
 from supercoil.solvers.problem import ConstrainedEnergy, free_dofs
 from supercoil.stability.eigen import lowest_pairs
 from supercoil.stability.sliding_count import (
+    RIPPLE_RATIO,
     contact_acts,
     sliding_left_out,
     without_sliding_pairs,
@@ -118,7 +119,8 @@ def goldstone_modes(problem: ConstrainedEnergy, q: np.ndarray,
 
 
 def sliding_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
-                        relative: float = 1e-6) -> np.ndarray:
+                        relative: float = 1e-6, kind: str = "near_symmetry_modes"
+                        ) -> np.ndarray:
     """The approximate-symmetry motions M-orthogonal to the exact ones, ``(r, n_dofs)``.
 
     Each ``near_symmetry_modes`` vector ``s`` minus its M-orthogonal projection on
@@ -129,8 +131,10 @@ def sliding_phase_modes(problem: ConstrainedEnergy, q: np.ndarray,
     the pins) made the reaction depend on where the pins are: measured on the
     ring's beta branch (L/D 122, N = 204) it broke D_3 slowly, and the
     bifurcation at dLk 5.149 (Coleman & Swigon 2002's P) unfolded into a fold.
+    ``kind="far_sliding_modes"``: the same of the sliding where it is no approximate
+    symmetry (:func:`stiff_sliding_modes`).
     """
-    near = _modes(problem, q, "near_symmetry_modes")
+    near = _modes(problem, q, kind)
     if near.size == 0:
         return np.zeros((0, problem.n_dofs))
     basis = _symmetry_basis(problem, q, np.arange(problem.n_dofs), near=False)
@@ -281,7 +285,7 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
                                    n=dofs.size, m=J_e.shape[0] if J_e is not None else 0,
                                    symmetry=sym)
     if left_out:
-        sliding = sliding_phase_modes(problem, q)[:, dofs]
+        sliding = count_sliding_modes(problem, q)[:, dofs]
         values, modes_t = without_sliding_pairs(values, vectors.T, sliding, mass_e)
         vectors = modes_t.T
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
@@ -322,15 +326,29 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
 
 
 def stiff_sliding_modes(problem: ConstrainedEnergy, q: np.ndarray,
-                        negative: int) -> np.ndarray | None:
-    """The sliding modes (:func:`sliding_phase_modes`) where a count of ``negative`` may
-    include the stiff sliding's eigenvalue (:mod:`supercoil.stability.sliding_count`): a
-    positive count, a contact acting at ``q`` and a sliding present; None otherwise (no
-    eigen-solve needed)."""
+                        negative: int) -> tuple[np.ndarray, float | None] | None:
+    """``(modes, ratio)`` where a count of ``negative`` may include the stiff sliding's
+    eigenvalue (:mod:`supercoil.stability.sliding_count`): a positive count, a contact
+    acting at ``q`` and a sliding present; None otherwise (no eigen-solve needed).
+    ``modes``: the approximate symmetries (:func:`sliding_phase_modes`, ``ratio`` None)
+    or, where the sliding is none (its tails not straight), the sliding itself
+    (``far_sliding_modes``), whose eigenvalue is left out only where it is the
+    contact's ripple, ``ratio`` (:data:`~supercoil.stability.sliding_count.RIPPLE_RATIO`)
+    times the next eigenvalues at least."""
     if negative <= 0 or not contact_acts(problem, q):
         return None
     modes = sliding_phase_modes(problem, q)
-    return modes if modes.size else None
+    if modes.size:
+        return modes, None
+    far = sliding_phase_modes(problem, q, kind="far_sliding_modes")
+    return (far, RIPPLE_RATIO) if far.size else None
+
+
+def count_sliding_modes(problem: ConstrainedEnergy, q: np.ndarray) -> np.ndarray:
+    """The sliding whose eigenpair a count left out (:func:`stiff_sliding_modes`): the
+    approximate symmetries, else the sliding where it is none."""
+    modes = sliding_phase_modes(problem, q)
+    return modes if modes.size else sliding_phase_modes(problem, q, kind="far_sliding_modes")
 
 
 def _stiff_sliding(problem: ConstrainedEnergy, q: np.ndarray, free: np.ndarray, H,
@@ -339,10 +357,11 @@ def _stiff_sliding(problem: ConstrainedEnergy, q: np.ndarray, free: np.ndarray, 
     symmetries include the stiff sliding's (:mod:`supercoil.stability.sliding_count`),
     as the branches' count leaves it out, else 0. ``H``: the count's Hessian on the
     ``free`` DOFs."""
-    modes = stiff_sliding_modes(problem, q, negative)
-    if modes is None:
+    found = stiff_sliding_modes(problem, q, negative)
+    if found is None:
         return 0
+    modes, ratio = found
     J = (sp.csr_matrix(problem.constraint_jacobian(q))[:, free] if problem.n_constraints
          else sp.csr_matrix((0, free.size)))
     return sliding_left_out(H, J, modes[:, free], np.asarray(problem.mass, float)[free],
-                            negative)
+                            negative, ratio=ratio)

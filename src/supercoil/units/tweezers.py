@@ -56,13 +56,13 @@ it grows the plectoneme to the last turn (docs/performance.md)."""
 
 DNA_MAX_POINTS = 10000
 """The most points on a branch of a DNA tweezers run unless a number is given (the
-library's default elsewhere: 2000). The default nodes lie at the edge of the loop's
-core, where the contact branch meets folds of the snake, about 25 points each
-(``benchmarks/results/long_dna_grid.md``, "DNA preset"): measured at 3 kbp from sigma 0
-to 0.06, no run needs more than 652 points a branch, but with the barrier's stiffness
-``A/h^3`` alone (``contact_stiffness="bending"``) 0.5 pN / 25 mM needed 2828 points on its
-contact branch, 1 pN / 50 mM 2141 and 0.25 pN / 10 mM 2686 on its held branch, all beyond
-2000. Each point is written as it comes, so a run stopped by a signal keeps them and
+library's default elsewhere: 2000). Measured at 3 kbp from sigma 0 to 0.06
+(``benchmarks/results/long_dna_grid.md``, "DNA preset"), no run needs more than 652
+points a branch, but with the barrier's stiffness ``A/h^3`` alone
+(``contact_stiffness="bending"``) and the nodes at half the loop's core 0.5 pN / 25 mM
+needed 2828 points on its contact branch, 1 pN / 50 mM 2141 and 0.25 pN / 10 mM 2686 on
+its held branch, all beyond 2000: a mesh at the edge of the loop's core meets folds of
+the snake, about 25 points each. Each point is written as it comes, so a run stopped by a signal keeps them and
 ``--resume`` continues it."""
 
 

@@ -143,12 +143,7 @@ class ExtendedSystem:
         itself where the problem holds none."""
         part = getattr(self.problem, "held_part", None)
         held = None if part is None else part(self.q(x), x[self.n:self.n + self.m])
-        if held is None:
-            return x
-        out = np.array(x, dtype=float)
-        out[:self.n] = held[0][self.free]
-        out[self.n:self.n + self.m] = held[1]
-        return out
+        return x if held is None else self._replaced(x, *held)
 
     def held_direction(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
         """The part of a step or tangent ``dx`` at ``x`` that stays on the problem's
@@ -160,11 +155,13 @@ class ExtendedSystem:
         dq = np.zeros(self.problem.n_dofs)
         dq[self.free] = dx[:self.n]
         held = part(self.q(x), dq, dx[self.n:self.n + self.m])
-        if held is None:
-            return dx
-        out = np.array(dx, dtype=float)
-        out[:self.n] = held[0][self.free]
-        out[self.n:self.n + self.m] = held[1]
+        return dx if held is None else self._replaced(dx, *held)
+
+    def _replaced(self, x: np.ndarray, q: np.ndarray, multipliers: np.ndarray) -> np.ndarray:
+        """``x`` with its free DOFs from ``q`` (all DOFs) and its multipliers replaced."""
+        out = np.array(x, dtype=float)
+        out[:self.n] = q[self.free]
+        out[self.n:self.n + self.m] = multipliers
         return out
 
     # -- residual and derivatives ----------------------------------------------------------

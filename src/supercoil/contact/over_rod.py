@@ -94,6 +94,12 @@ class OverRod:
         absent if the rod has none."""
         return self.base.phase_offset
 
+    @property
+    def holding(self) -> bool:
+        """The rod's ``holding`` (its states held on a symmetric family); False if it has
+        none."""
+        return bool(getattr(self.base, "holding", False))
+
     def held_part(self, q: np.ndarray, multipliers: np.ndarray):
         """The rod's ``held_part`` (a projection onto a symmetric family; None where it
         holds none), the contact's multipliers unchanged."""

@@ -138,23 +138,24 @@ class ExtendedSystem:
 
     # -- a family the problem holds the states on -----------------------------------------
     def held(self, x: np.ndarray) -> np.ndarray:
-        """``x`` projected by the problem's optional ``held_part(q, multipliers)`` (a
-        symmetric family: :meth:`~supercoil.rod.open.ClampedRodEnergy.held_part`); ``x``
-        itself where the problem holds none."""
-        part = getattr(self.problem, "held_part", None)
-        held = None if part is None else part(self.q(x), x[self.n:self.n + self.m])
+        """``x`` projected by the problem's ``held_part(q, multipliers)`` where its optional
+        ``holding`` is true (a symmetric family:
+        :meth:`~supercoil.rod.open.ClampedRodEnergy.held_part`); ``x`` itself where the
+        problem holds none."""
+        if not getattr(self.problem, "holding", False):
+            return x
+        held = self.problem.held_part(self.q(x), x[self.n:self.n + self.m])
         return x if held is None else self._replaced(x, *held)
 
     def held_direction(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
         """The part of a step or tangent ``dx`` at ``x`` that stays on the problem's
-        family (its optional ``held_direction(q, dq, dmultipliers)``); ``dx`` itself
-        where the problem holds none."""
-        part = getattr(self.problem, "held_direction", None)
-        if part is None:
+        family (its ``held_direction(q, dq, dmultipliers)`` where ``holding``); ``dx``
+        itself where the problem holds none."""
+        if not getattr(self.problem, "holding", False):
             return dx
         dq = np.zeros(self.problem.n_dofs)
         dq[self.free] = dx[:self.n]
-        held = part(self.q(x), dq, dx[self.n:self.n + self.m])
+        held = self.problem.held_direction(self.q(x), dq, dx[self.n:self.n + self.m])
         return dx if held is None else self._replaced(dx, *held)
 
     def _replaced(self, x: np.ndarray, q: np.ndarray, multipliers: np.ndarray) -> np.ndarray:

@@ -376,6 +376,12 @@ class ClampedRodEnergy(RodEnergy):
         shift = float(np.clip(shift, -RECENTRE * h, RECENTRE * h))
         return -(shift / h) * g  # x(s) -> x(s - a) + a e_z is -(a / h) g to first order
 
+    @property
+    def holding(self) -> bool:
+        """Whether the states are held on the half-turn symmetry (``mirror_hold``): the
+        continuation then projects onto it (:meth:`held_part`, :meth:`held_direction`)."""
+        return self.mirror_hold
+
     def held_part(self, q: np.ndarray, multipliers: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray] | None:
         """With ``mirror_hold``: ``(q, multipliers)`` projected onto the states symmetric

@@ -111,14 +111,35 @@ def test_contact_branch_held_on_its_symmetry_is_the_symmetric_one_and_holds_no_f
     # contact forces reach 1e2)
     assert np.max(held.records["sliding_residual"]) < 1e-5
     assert np.all(held.records["min_gap_over_diameter"] > 1.0)
-    # the free branch where it is symmetric: its states on the held branch's chords (to
-    # their interpolation error, below 0.01 D; the branches that left the symmetry
-    # were slid by 0.04 to 0.7 D), the first ones exactly (the same steps)
+    # the free branch where it is symmetric: its states on the held branch, read by
+    # quadratic interpolation in arclength through three of its points (the branches
+    # that left the symmetry were slid by 0.04 to 0.7 D; measured 1.6e-3 to 2.5e-3 D
+    # with one or two BLAS threads, whose round-off gives the runs different steps, where
+    # the chords alone are off by up to 0.012 D), the first ones exactly (the same steps)
     symmetric = np.flatnonzero(radii_asymmetry(contact.states) < 1e-6)
     assert symmetric.size >= 10
-    distances = [chord_distance(contact.states[k], held.states) for k in symmetric]
-    assert np.max(distances) < 0.01 * options.diameter
+    distances = [curve_distance(contact.states[k], held) for k in symmetric]
+    assert np.max(distances) < 5e-3 * options.diameter
     assert np.count_nonzero(np.array(distances) < 1e-6 * options.diameter) >= 10
+
+
+def curve_distance(q: np.ndarray, branch) -> float:
+    """The smallest largest-node distance (after the best turn about the axis) from ``q``
+    to ``branch`` read between its points by the quadratic in arclength through three
+    consecutive points, on either side of the chord nearest ``q`` (201 samples each)."""
+    states, s = branch.states, branch.arclength
+    k = int(np.argmin([chord_distance(q, states[[i, i + 1]]) for i in range(len(s) - 1)]))
+    best = chord_distance(q, states[[k, k + 1]])
+    for first in (k - 1, k):
+        if first < 0 or first + 2 >= len(s):
+            continue
+        nodes = s[first:first + 3]
+        for t in np.linspace(s[k], s[k + 1], 201):
+            weights = [np.prod([(t - nodes[j]) / (nodes[i] - nodes[j]) for j in range(3)
+                                if j != i]) for i in range(3)]
+            best = min(best, axis_distance(q, np.tensordot(weights, states[first:first + 3],
+                                                           axes=1)))
+    return best
 
 
 def chord_distance(q: np.ndarray, states: np.ndarray) -> float:

@@ -90,17 +90,19 @@ def test_n0_is_the_fewest_nodes_with_segments_no_longer_than_d(lod):
 
 @pytest.mark.parametrize(("salt", "force"), [(10, 0.1), (10, 0.25), (10, 1.0), (10, 4.0),
                                               (150, 1.0), (150, 4.0)])
-def test_default_nodes_are_the_fewest_with_segments_within_d_and_a_third_of_the_core(
+def test_default_nodes_are_the_fewest_with_segments_within_d_and_the_resolved_core(
         salt, force):
     # brute force over N: the clamped rod's segments 1/(N - 2) no longer than D and at
-    # most a third of the loop's core sqrt(A/F) = 1/lambda; the model's own mesh test agrees
+    # most min(1/3, 1.25 / ln(lambda / 0.54)) of the loop's core sqrt(A/F) = 1/lambda;
+    # the model's own mesh test agrees
     from supercoil.problems.tweezers.options import mesh_pins_loop, mesh_resolves_loop
 
     numbers = dna_tweezers_inputs(DNAPreset(3000, salt_mM=salt), force, turns=(0, 1))
     lod, tension = numbers["length_over_diameter"], numbers["tension"]
     lam = math.sqrt(tension)
     brute = next(n for n in range(checks.MIN_CLAMPED_NODES, 10_000)
-                 if 1.0 / (n - 2) <= 1.0 / lod and 3 * lam / (n - 2) <= 1.0)
+                 if 1.0 / (n - 2) <= 1.0 / lod
+                 and lam / (n - 2) <= min(1 / 3, 1.25 / math.log(lam / 0.54)) + 1e-12)
     assert default_nodes(lod, tension) == numbers["n_nodes"] == brute
     assert mesh_resolves_loop(tension, brute) and not mesh_pins_loop(tension, brute)
     if brute > resolving_nodes(lod):  # the force decides: one node fewer does not resolve

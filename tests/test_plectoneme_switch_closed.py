@@ -368,7 +368,7 @@ def test_a_closed_branch_without_a_bifurcation_says_so(monkeypatch, with_bifurca
     monkeypatch.setattr(compute, "closed_before", lambda branch, last: True)
     monkeypatch.setattr(compute, "held_contact", lambda *args, **kwargs: None)
     monkeypatch.setattr(compute, "switch_to_plectoneme", lambda *args, **kwargs: None)
-    monkeypatch.setattr(compute, "verify_bifurcations", lambda branch: branch)
+    monkeypatch.setattr(compute, "verify_bifurcations", lambda branch, segment=None: branch)
     original = compute.contact_branch
 
     def cut(*args, **kwargs):

@@ -9,8 +9,9 @@ turns or as superhelical density, and the number of nodes:
 * the nodes default to :func:`default_nodes`: n0 (:func:`resolving_nodes`), the fewest
   whose segments are no longer than the tube's diameter D, which the contact of a
   plectoneme's two strands needs (a coarser polygon cannot resolve the ply), raised
-  where the force needs more to the fewest whose segments are at most a third of the
-  loop's core ``sqrt(A/F)`` (a coarser polygon pins the plectoneme's end loop to its
+  where the force needs more to the fewest whose segments resolve the loop's core
+  ``sqrt(A/F)`` (at most a third of it, less under higher tensions:
+  :func:`~supercoil.problems.tweezers.options.resolved_core`; a coarser polygon pins the plectoneme's end loop to its
   nodes, buckles late, and its unstable counts are the mesh's: docs/tweezers.md, "DNA
   units");
 * the contact curve defaults to :data:`DNA_CONTACT_CURVE`, the quintic B-spline, whose
@@ -153,10 +154,12 @@ def resolving_nodes(length_over_diameter: float) -> int:
 def default_nodes(length_over_diameter: float, tension: float = 0.0) -> int:
     """The DNA runs' default nodes: ``max(n0, core)``, n0 of :func:`resolving_nodes`
     (segments no longer than D) and, under a tension F L^2/A > 0, the fewest nodes whose
-    segments are at most a third of the loop's core ``sqrt(A/F)``, which resolve the
-    plectoneme's end loop (:func:`~supercoil.problems.tweezers.options.resolved_nodes`:
-    ``2 + ceil(3 sqrt(F L^2/A))``; on coarser meshes the unstable counts along the
-    plectoneme are the mesh's: :mod:`supercoil.problems.tweezers.coarse`)."""
+    segments are at most :func:`~supercoil.problems.tweezers.options.resolved_core` times
+    the loop's core ``sqrt(A/F)`` (a third up to lambda = 22.6, a quarter at lambda = 80,
+    0.22 at 150), which resolve the plectoneme's end loop
+    (:func:`~supercoil.problems.tweezers.options.resolved_nodes`; on coarser meshes the
+    plectoneme can grow through the mesh's snake, where the unstable counts are the
+    mesh's: :mod:`supercoil.problems.tweezers.coarse`)."""
     from supercoil.problems.tweezers.options import resolved_nodes
 
     n0 = resolving_nodes(length_over_diameter)
@@ -233,8 +236,9 @@ def nodes_or_default(n_nodes: int | None, length_over_diameter: float,
         n_nodes = default_nodes(length_over_diameter, tension)
         if n_nodes > checks.MAX_NODES:
             raise checks.refuse("n_nodes", f"(the default {n_nodes}: segments no longer "
-                                f"than D at L/D = {length_over_diameter:.6g} and at most "
-                                f"a third of the loop's core at F L^2/A = {tension:.6g}) exceeds "
+                                f"than D at L/D = {length_over_diameter:.6g} and short "
+                                f"enough to resolve the loop's core at F L^2/A = "
+                                f"{tension:.6g}) exceeds "
                                 f"the largest number of nodes, {checks.MAX_NODES}; give the "
                                 "nodes, fewer base pairs, a larger diameter or a smaller force")
     return checks.integer("n_nodes", n_nodes, checks.MIN_CLAMPED_NODES, checks.MAX_NODES,

@@ -31,7 +31,11 @@ from supercoil.problems.tweezers.buckled import (
     stored_pins,
     switch_off_straight,
 )
-from supercoil.problems.tweezers.coarse import pinned_loop_note, unresolved_loop_note
+from supercoil.problems.tweezers.coarse import (
+    pinned_loop_note,
+    snake_note,
+    unresolved_loop_note,
+)
 from supercoil.problems.tweezers.contact import contact_branch
 from supercoil.problems.tweezers.mirrored import closed_before, held_contact
 from supercoil.problems.tweezers.options import TweezersOptions, check_inextensible
@@ -218,7 +222,8 @@ def tweezers_branches(options: TweezersOptions,
     # released every contact and back on the contact-free branch: closed (returned.py)
     reach = 1.0 + (cp.options.barrier_activation if cp.treatment == "barrier" else 0.0)
     contact = close_on_return(contact, free, D, reach)
-    contact = verify_bifurcations(dataclasses.replace(contact, parent=free_name, origin=onset))
+    contact = verify_bifurcations(dataclasses.replace(contact, parent=free_name, origin=onset),
+                                  opts.segment)
     seconds[contact_name] = time.perf_counter() - start
     final(contact, True)
     branches.append(contact)
@@ -258,7 +263,7 @@ def tweezers_branches(options: TweezersOptions,
         again = rejoined(opts, rod, cp, last, stored, on_point, pinned, say, guards)
         if again is None:
             break
-        branch = verify_bifurcations(close_on_return(again.branch, free, D, reach))
+        branch = verify_bifurcations(close_on_return(again.branch, free, D, reach), opts.segment)
         seconds[branch.name] = time.perf_counter() - start
         final(branch, True)
         branches.append(branch)
@@ -304,7 +309,7 @@ def tweezers_branches(options: TweezersOptions,
                              f"turns: {via.name}")
                 closed_branch = via
             last, switched_pins = switched.branch, switched.pins
-            last = verify_bifurcations(last)
+            last = verify_bifurcations(last, opts.segment)
             seconds[last.name] = (time.perf_counter() - start
                                   - sum(seconds[b.name] for b, _ in switched.via))
             final(last, True)
@@ -322,11 +327,10 @@ def tweezers_branches(options: TweezersOptions,
                      f"turns, before {opts.turns[1]:g}: {last.message}")
     if tried and (len(last) == 0 or last.parameter_values[-1] < opts.turns[1] - 1e-9):
         notes.append(tries_note(closed_contact, tried))
-    pinned_loop = pinned_loop_note(opts, last)
-    if pinned_loop is None:
-        pinned_loop = unresolved_loop_note(opts, last)
-    if pinned_loop is not None:
-        notes.append(pinned_loop)
+    mesh_note = (pinned_loop_note(opts, last) or snake_note(opts, last)
+                 or unresolved_loop_note(opts, last))
+    if mesh_note is not None:
+        notes.append(mesh_note)
     return TweezersResult(opts, tuple(branches), frozenset(names), rod, cp, seconds,
                           tuple(notes), pins, frozenset({free_name}), held_instead=handed)
 

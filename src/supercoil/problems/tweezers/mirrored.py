@@ -108,5 +108,6 @@ def held_contact(opts: TweezersOptions, rod: ClampedRodEnergy, cp: ContactProble
     if held is None:
         return None
     branch = close_on_return(held[0], free, opts.diameter, reach)
-    branch = verify_bifurcations(dataclasses.replace(branch, parent=free.name, origin=onset))
+    branch = verify_bifurcations(dataclasses.replace(branch, parent=free.name, origin=onset),
+                                 opts.segment)
     return branch, held[1]

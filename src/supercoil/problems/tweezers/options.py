@@ -12,16 +12,24 @@ from supercoil.problems.branch_options import PREDICTORS, branch_tolerances, che
 # in contact the loop's sliding is an approximate symmetry only on segments no longer
 # than this many times sqrt(A/F) (TweezersOptions.loop_slides_in_contact)
 SLIDING_CORE = 0.5
-# the segments no longer than this many times the loop's core sqrt(A/F) resolve the
-# plectoneme's end loop (resolved_nodes; the DNA runs' default nodes): on coarser meshes its
-# growth crossed a pair of folds of the discrete contact per node of each strand, between
-# which the unstable count is the mesh's (measured at C/A = 1.5, lambda = 80: at
-# h sqrt(F/A) = 0.4, L/D = 200, N = 202, the contact branch's count changed 170 times
-# against 23 at N = 303 (0.27), whose counts agree state by state with N = 454 (0.18)
-# away from its events; at 0.5, L/D = 100, N = 162, 13 states off by one away from any
-# event against N = 243 (0.33), which has no fold pairs;
-# benchmarks/grid_counts_refinement.py)
+# the segments no longer than resolved_core(F L^2/A) times the loop's core sqrt(A/F)
+# resolve the plectoneme's end loop (resolved_nodes; the DNA runs' default nodes): on
+# coarser meshes its growth crossed a pair of folds of the discrete contact per node of
+# each strand (the mesh's snake: supercoil.problems.tweezers.coarse), between which the
+# unstable count is the mesh's. At most a third of the core (measured at C/A = 1.5,
+# lambda = 80: at h sqrt(F/A) = 0.4, L/D = 200, N = 202, the contact branch's count
+# changed 170 times against 23 at N = 303 (0.27), whose counts agree state by state
+# with N = 454 (0.18) away from its events; benchmarks/grid_counts_refinement.py), and
+# less under higher tensions: the mesh's pinning of the end loop falls off like
+# exp(-c / (h sqrt(F/A))) (Peierls 1940; Nabarro 1947) while the force that drives the
+# plectoneme's growth by a node falls like 1 / lambda, so the snake ends near
+# h sqrt(F/A) = RESOLVED_SCALE / ln(lambda / RESOLVED_LAMBDA); both constants fitted to
+# the snake's edge measured at L/D = 200, C/A = 1.5 (snaking against clean: 0.266
+# against 0.250 at lambda = 80, 0.285 against 0.249 at 100, 0.242 against 0.222 at 150;
+# benchmarks/snake_edge.py; benchmarks/results/long_dna_grid.md, "The snake's edge")
 RESOLVED_CORE = 1.0 / 3.0
+RESOLVED_SCALE = 1.25
+RESOLVED_LAMBDA = 0.54
 # the largest end distance z/L: an extensible rod stretched to twice its length (a
 # stretch strain of 1); an inextensible one stays below 1 (check_inextensible)
 MAX_END_DISTANCE = 2.0
@@ -184,6 +192,11 @@ class TweezersOptions:
         return self.loop_slides and not self.mesh_pins_loop
 
     @property
+    def segment(self) -> float:
+        """The edge ``h = L / (N - 2)`` over L (:func:`segment_length`)."""
+        return segment_length(self.n_nodes)
+
+    @property
     def core_segments(self) -> float | None:
         """``h sqrt(F/A)``: the segment ``h = L / (N - 2)`` over the localised loop's core
         ``sqrt(A/F)`` (None without a tension: no core)."""
@@ -209,7 +222,7 @@ def core_segments(tension: float | None, n_nodes: int) -> float | None:
     """``h sqrt(F/A)`` of N nodes under the tension F L^2/A (None without one)."""
     if not tension:
         return None
-    return math.sqrt(tension) / (n_nodes - 2)
+    return math.sqrt(tension) * segment_length(n_nodes)
 
 
 def core_nodes(tension: float) -> int:
@@ -218,17 +231,34 @@ def core_nodes(tension: float) -> int:
     return 2 + math.ceil(math.sqrt(tension) / SLIDING_CORE)
 
 
+def segment_length(n_nodes: int) -> float:
+    """The clamped rod's edge ``h = L / (N - 2)`` over L (its ends are the midpoints of the
+    first and last edges)."""
+    return 1.0 / (n_nodes - 2)
+
+
+def resolved_core(tension: float) -> float:
+    """The largest ``h sqrt(F/A)`` that resolves the plectoneme's end loop under the tension
+    F L^2/A > 0 (the ``RESOLVED_CORE`` comment): ``min(1/3, 1.25 / ln(lambda / 0.54))``
+    with ``lambda = sqrt(F L^2/A)``, a third up to lambda = 22.6."""
+    lam = math.sqrt(tension)
+    if lam <= RESOLVED_LAMBDA * math.exp(RESOLVED_SCALE / RESOLVED_CORE):
+        return RESOLVED_CORE
+    return RESOLVED_SCALE / math.log(lam / RESOLVED_LAMBDA)
+
+
 def resolved_nodes(tension: float) -> int:
-    """The fewest nodes whose segments are at most ``RESOLVED_CORE`` times the loop's core
-    ``sqrt(A/F)`` under the tension F L^2/A > 0: ``2 + ceil(3 sqrt(F L^2/A))``."""
-    return 2 + math.ceil(round(math.sqrt(tension) / RESOLVED_CORE, 9))
+    """The fewest nodes whose segments are at most :func:`resolved_core` times the loop's
+    core ``sqrt(A/F)`` under the tension F L^2/A > 0:
+    ``2 + ceil(sqrt(F L^2/A) / resolved_core)``."""
+    return 2 + math.ceil(round(math.sqrt(tension) / resolved_core(tension), 9))
 
 
 def mesh_resolves_loop(tension: float | None, n_nodes: int) -> bool:
-    """Whether N nodes' segments are at most ``RESOLVED_CORE`` times the loop's core (True
-    without a tension: no core)."""
+    """Whether N nodes' segments are at most :func:`resolved_core` times the loop's core
+    (True without a tension: no core)."""
     core = core_segments(tension, n_nodes)
-    return core is None or core <= RESOLVED_CORE + 1e-12
+    return core is None or core <= resolved_core(tension) * (1 + 1e-9)
 
 
 def mesh_pins_loop(tension: float | None, n_nodes: int) -> bool:

@@ -219,7 +219,7 @@ def switch_to_plectoneme(opts: TweezersOptions, rod: ClampedRodEnergy, cp: Conta
                      > best.branch.parameter_values.max()):
             # the furthest reaching so far, closed on itself: switched again, at its
             # verified bifurcations only
-            branch = verify_bifurcations(branch)
+            branch = verify_bifurcations(branch, opts.segment)
             inner = switch_to_plectoneme(opts, rod, cp, branch, on_point, pinned, say, free,
                                          reach, stored, on_branch, depth + 1, tried)
             if inner is not None:

@@ -26,7 +26,7 @@ import numpy as np
 
 from supercoil.contact.report import COUNT_KEYS, contact_summary
 from supercoil.problems.ring_diagram.records import kkt_residual
-from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.problems.tweezers.options import TweezersOptions, segment_length
 from supercoil.rod.model import Rod
 from supercoil.rod.open import ClampedRodEnergy, straight_rod
 from supercoil.topology import writhe
@@ -65,7 +65,7 @@ def clamped_buckle(n_nodes: int, end_distance: float) -> np.ndarray:
     """
     from scipy.optimize import brentq
 
-    h = 1.0 / (n_nodes - 2)
+    h = segment_length(n_nodes)
     s = (np.arange(n_nodes - 1)) * h  # edge midpoints: edge k spans [(k - 1/2) h, (k + 1/2) h]
 
     def distance(a):

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from supercoil.continuation import Branch, ContinuationOptions, SpecialPoint, continuation
-from supercoil.problems.tweezers.options import TweezersOptions
+from supercoil.problems.tweezers.options import TweezersOptions, segment_length
 from supercoil.problems.tweezers.problem import clamped_problem
 from supercoil.rod.open import ClampedRodEnergy
 
@@ -236,7 +236,7 @@ def unreached_note(options: TweezersOptions) -> str | None:
 
     exact = critical_turns(options.twist_ratio, options.tension)
     margin = options.turns[1] / exact - 1.0
-    late = (math.sqrt(options.tension) / (options.n_nodes - 2)) ** 2 / 8.0
+    late = options.core_segments ** 2 / 8.0
     if not 0.0 < margin < late:
         return None
     return (f"Greenhill's clamped condition ({exact:.6g} turns) lies {100 * margin:.2g} % "
@@ -250,7 +250,7 @@ def _under_resolved(options: TweezersOptions, gap: float, goal: str) -> str:
     """The segments against ``sqrt(A/F)``, and the ``--nodes`` whose estimated late
     buckling ``(k h)^2 / 8`` is ``gap`` (what they achieve: ``goal``)."""
     k = math.sqrt(options.tension)  # sqrt(F/A) in units of 1/L
-    h = 1.0 / (options.n_nodes - 2)
+    h = segment_length(options.n_nodes)
     nodes = 2 + math.ceil(k / math.sqrt(8.0 * gap))
     return (f"its segments ({h:.3g} L) are {k * h:.2g} times the length sqrt(A/F) = "
             f"{1 / k:.3g} L of the buckling helix and the localised loop, which this mesh "

@@ -22,6 +22,12 @@ The straight rod's bifurcations are certified otherwise (by the pencil of
 eigenvalue crossing zero makes is a ``count_change`` (label ``sliding``) from its
 localisation on (:func:`~supercoil.continuation.events.locate_count_change`) and is
 not looked at here either.
+
+Given the mesh's segment, :func:`verify_bifurcations` also reads the branch's snakes
+(:func:`~supercoil.problems.tweezers.coarse.snakes_on`: the plectoneme growing a node
+of each strand at a time across a pair of events): the count changes within a snake
+are the mesh's, verified or not, and are reported as ``count_change`` with the label
+``snake``.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ import dataclasses
 import numpy as np
 
 from supercoil.continuation import Branch, SpecialPoint
+from supercoil.problems.tweezers.coarse import snakes_on
 
 # points on either side over which a verified bifurcation's counts stay constant
 VERIFY_POINTS = 3
@@ -57,14 +64,20 @@ def verified(branch: Branch, point: SpecialPoint, folds: np.ndarray) -> bool:
             and bool(np.all(counts[k + 1:high] == point.count_after)))
 
 
-def verify_bifurcations(branch: Branch) -> Branch:
+def verify_bifurcations(branch: Branch, segment: float | None = None) -> Branch:
     """``branch`` with each located ``bifurcation`` that :func:`verified` does not confirm
-    reported as a ``count_change`` (its label too)."""
+    reported as a ``count_change`` (its label too); given the mesh's ``segment`` (h/L),
+    each bifurcation or count change within one of the branch's snakes reported as a
+    ``count_change`` labelled ``snake`` (module doc)."""
     folds = np.array([p.index for p in branch.special_points if p.kind == "fold"],
                      dtype=np.int64)
+    snakes = snakes_on(branch, segment) if segment is not None else []
     points = []
     for p in branch.special_points:
-        if p.kind == "bifurcation" and not verified(branch, p, folds):
+        if p.kind in ("bifurcation", "count_change") and p.label != "sliding" \
+                and any(snake.holds(p.index) for snake in snakes):
+            p = dataclasses.replace(p, kind="count_change", label="snake")
+        elif p.kind == "bifurcation" and not verified(branch, p, folds):
             p = dataclasses.replace(p, kind="count_change", label="count_change")
         points.append(p)
     return dataclasses.replace(branch, special_points=tuple(points))

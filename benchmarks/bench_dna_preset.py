@@ -4,8 +4,9 @@ Each force and salt runs ``supercoil --log DIR/fF_sS.log tweezers --dna --bp 300
 --force-pN F --salt-mM S --sigma 0:0.06 --out DIR/fF_sS`` as its own process (so the
 seconds include the start-up, with the compiled kernels cached) and appends one row to
 the table: the nodes (the default), the exit status, the wall seconds, the branch that
-reaches the last sigma and its points, the folds located on the contact branches, and
-the extension (nm) and torque (pN nm) at the last point of that branch, read back from
+reaches the last sigma and its points, the folds located on the contact branches, the
+bifurcations and count changes there (of which in the mesh's snake, label ``snake``:
+:mod:`supercoil.problems.tweezers.coarse`), and the extension (nm) and torque (pN nm) at the last point of that branch, read back from
 the run's ``branch.json``.
 
 Run: ``python benchmarks/bench_dna_preset.py [--forces 0.25,0.5,1,2,4]
@@ -23,7 +24,8 @@ import time
 from pathlib import Path
 
 HEADER = ("| F (pN) | salt (mM) | N | exit | seconds | branch that reaches the last sigma | "
-          "its points | folds on the contact branches | extension (nm) | torque (pN nm) |")
+          "its points | folds on the contact branches | bifurcations, count changes (snake) | "
+          "extension (nm) | torque (pN nm) |")
 
 
 def row(force: str, salt: str, folder: Path, status: int, seconds: float) -> str:
@@ -31,7 +33,7 @@ def row(force: str, salt: str, folder: Path, status: int, seconds: float) -> str
     head = f"| {force} | {salt} |"
     path = folder / "branch.json"
     if not path.is_file():
-        return f"{head} - | {status} | {seconds:.0f} | - | - | - | - | - |"
+        return f"{head} - | {status} | {seconds:.0f} | - | - | - | - | - | - |"
     data = json.loads(path.read_text())
     last_turns = data["turns_range"][1]
     points = data["points"]
@@ -39,15 +41,18 @@ def row(force: str, salt: str, folder: Path, status: int, seconds: float) -> str
                 if any(p["branch"] == b["name"] and abs(p["turns"] - last_turns) < 1e-9
                        for p in points)]
     contact = {b["name"] for b in data["branches"] if b["contact"]}
-    folds = sum(1 for p in data["special_points"]
-                if p["kind"] == "fold" and p["branch"] in contact)
+    on_contact = [p for p in data["special_points"] if p["branch"] in contact]
+    folds = sum(p["kind"] == "fold" for p in on_contact)
+    changes = (f"{sum(p['kind'] == 'bifurcation' for p in on_contact)}, "
+               f"{sum(p['kind'] == 'count_change' for p in on_contact)} "
+               f"({sum(p['label'] == 'snake' for p in on_contact)})") if contact else "-"
     if not reaching:
         return (f"{head} {data['n_nodes']} | {status} | {seconds:.0f} | none | - | "
-                f"{folds if contact else '-'} | - | - |")
+                f"{folds if contact else '-'} | {changes} | - | - |")
     branch = reaching[-1]
     last = [p for p in points if p["branch"] == branch["name"]][-1]
     return (f"{head} {data['n_nodes']} | {status} | {seconds:.0f} | `{branch['name']}` | "
-            f"{branch['n_points']} | {folds if contact else '-'} | "
+            f"{branch['n_points']} | {folds if contact else '-'} | {changes} | "
             f"{last['extension_nm']:.1f} | {last['torque_pN_nm']:.1f} |")
 
 

@@ -324,7 +324,10 @@ def test_study_sigma_and_n0():
     s = parse_study(STUDY).settings
     preset = DNAPreset(3000, salt_mM=150)
     assert s["problem"]["turns"] == pytest.approx([0.0, 0.06 * 3000 / REPEAT], rel=1e-15)
-    assert s["rod"]["nodes"] == resolving_nodes(preset.length_over_diameter) == 240
+    # at 1 pN the loop's core needs more nodes than n0 = 240 (segments of D)
+    tension = dna_tweezers_inputs(preset, 1.0, turns=(0, 1))["tension"]
+    assert resolving_nodes(preset.length_over_diameter) == 240
+    assert s["rod"]["nodes"] == default_nodes(preset.length_over_diameter, tension) == 280
     assert parse_study(STUDY + "nodes = 300").settings["rod"]["nodes"] == 300
     turns = parse_study(STUDY.replace("superhelical_density = [0, 0.06]", "turns = [0, 3]"))
     assert turns.settings["problem"]["turns"] == [0.0, 3.0]

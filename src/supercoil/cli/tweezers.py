@@ -96,8 +96,8 @@ def tweezers(
         f"to {checks.MAX_NODES}; contact lines need segments L/(N - 2) no longer than D "
         "(N >= L/D + 2). Default 100; with --dna the fewest nodes whose segments are no "
         "longer than the tube diameter D (n0 = ceil(L/D) + 2: the ply resolved) and at "
-        "most a third of the loop's core sqrt(A/F) (2 + ceil(3 L sqrt(F/A)): the end "
-        "loop, the buckling and the unstable counts resolved).",
+        "most min(1/3, 1.25/ln(lambda/0.54)) of the loop's core sqrt(A/F), lambda = "
+        "L sqrt(F/A) (the end loop, the buckling and the unstable counts resolved).",
         show_default=False)] = None,
     protocol: Annotated[str, typer.Option(
         "--protocol", metavar="P", help="up: the branches from START to STOP; up-down: "

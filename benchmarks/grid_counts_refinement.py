@@ -14,8 +14,14 @@ sheets of one fold. Every disagreement is listed with its distance in turns to t
 nearest count change of either branch (0 when one lies between the point's turns and its
 match's), so none is hidden by the ``--window``.
 
+Each mesh's snakes (:func:`supercoil.problems.tweezers.coarse.snakes_on`: the plectoneme
+growing a node of each strand at a time across pairs of events) and the turns at which
+the hard-core ply would span the rod are printed beside, and ``--save PREFIX`` keeps each
+contact branch's turns, writhe, extension, torque, counts and nearest eigenvalues in
+``PREFIX_N.npz`` to be looked at again.
+
 Run: ``python benchmarks/grid_counts_refinement.py --ld 200 --lam 40 --nodes 202,404
-[--twist-ratio 1.5] [--factor 1.5] [--max-points 4000] [--window 0.1]``.
+[--twist-ratio 1.5] [--factor 1.5] [--max-points 4000] [--window 0.1] [--save PREFIX]``.
 """
 
 from __future__ import annotations
@@ -27,7 +33,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from supercoil.problems.greenhill import critical_turns
+from supercoil.problems.ply import hard_core_ply
 from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
+from supercoil.problems.tweezers.coarse import snakes_on
+from supercoil.problems.tweezers.options import segment_length
 
 
 def contact_branch(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
@@ -86,6 +95,8 @@ def main() -> None:
     parser.add_argument("--twist-ratio", type=float, default=1.5)
     parser.add_argument("--factor", type=float, default=1.5)
     parser.add_argument("--max-points", type=int, default=4000)
+    parser.add_argument("--save", default=None, help="keep each contact branch's arrays "
+                        "in PREFIX_N.npz")
     parser.add_argument("--window", type=float, default=0.1,
                         help="turns from a count change within which a disagreement is "
                              "put down to the event")
@@ -99,11 +110,26 @@ def main() -> None:
     print(f"L/D {args.ld:g}, lambda {args.lam:g}, C/A {args.twist_ratio:g}: "
           f"N = {n_coarse} ({len(coarse)} contact points, {s_coarse:.0f} s) against "
           f"N = {n_fine} ({len(fine)}, {s_fine:.0f} s)")
+    ply = hard_core_ply(1 / args.ld, args.lam**2, args.twist_ratio)
+    print(f"  the hard-core ply spans the rod at {ply.spanning_turns:.4g} turns")
     for name, branch in ((n_coarse, coarse), (n_fine, fine)):
         values, times = np.unique(branch.unstable_count, return_counts=True)
         tally = ", ".join(f"{v}: {t}" for v, t in zip(values, times, strict=True))
         print(f"  N = {name}: tally {tally}; count changes at turns "
               f"{np.round(count_changes(branch), 4).tolist()}")
+        kinds = {}
+        for p in branch.special_points:
+            if p.kind in ("bifurcation", "count_change"):
+                key = f"{p.kind} ({p.label})"
+                kinds[key] = kinds.get(key, 0) + 1
+        print(f"    located: {kinds}")
+        for snake in snakes_on(branch, segment_length(name)):
+            print(f"    snake: {snake}")
+        if args.save:
+            np.savez(f"{args.save}_{name}.npz", turns=branch.parameter_values,
+                     writhe=branch.records["writhe"], extension=branch.records["extension"],
+                     torque=branch.records["torque"], counts=branch.unstable_count,
+                     nearest=branch.nearest_eigenvalue)
     print(f"  state by state: {out['agree']} of {out['points']} agree; "
           f"{out['differ_near_event']} differ within {args.window:g} turns of a count "
           f"change, {out['differ_elsewhere']} elsewhere; largest (turns, writhe) gap to "

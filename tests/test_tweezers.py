@@ -704,21 +704,27 @@ def test_max_points_bounds_every_branch(small_run):
     assert result.branches[-1].status.name == "MAX_POINTS" and not result.ok
 
 
-def test_a_mesh_coarser_than_a_third_of_the_core_says_its_counts_are_the_mesh_s(small_run):
-    """The note on segments longer than a third of the loop's core sqrt(A/F) = 1/lambda:
-    at h lambda = 0.4 it names the ratio, the branch's folds and the nodes that resolve
-    the core (2 + ceil(3 lambda)); at exactly a third and below, and without a tension,
-    none."""
+def test_a_mesh_coarser_than_the_resolved_core_says_its_counts_are_the_mesh_s(small_run):
+    """The note on segments longer than min(1/3, 1.25 / ln(lambda / 0.54)) of the loop's
+    core sqrt(A/F) = 1/lambda: at lambda = 20 (a third) and h lambda = 0.4 it names the
+    ratio, the branch's folds and the nodes that resolve the core (2 + ceil(3 lambda));
+    at exactly a third and below none. At lambda = 40 a third is not enough (the bound
+    is 0.29: 140 nodes). Without a tension, none."""
     from supercoil.problems.tweezers.coarse import unresolved_loop_note
 
     branch = small_run.branch("buckled_contact")
     folds = len(branch.points_of_kind("fold"))
-    lam = 40.0
-    coarse = dataclasses.replace(small_run.options, tension=lam**2, n_nodes=102)
+    lam = 20.0
+    coarse = dataclasses.replace(small_run.options, tension=lam**2, n_nodes=52)
     note = unresolved_loop_note(coarse, branch)
     assert note is not None
     assert note.startswith("buckled_contact: its segments are 0.4 times the loop's core")
-    assert f"({folds} folds on this branch); --nodes >= {2 + 120} resolve it" in note
-    for nodes in (122, 200):  # h lambda = 1/3 exactly, and 0.2
+    assert "(more than 0.33 at lambda = 20)" in note
+    assert f"({folds} folds on this branch); --nodes >= {2 + 60} resolve it" in note
+    for nodes in (62, 100):  # h lambda = 1/3 exactly, and 0.2
         assert unresolved_loop_note(dataclasses.replace(coarse, n_nodes=nodes), branch) is None
+    third = dataclasses.replace(coarse, tension=40.0**2, n_nodes=122)
+    note = unresolved_loop_note(third, branch)
+    assert "(more than 0.29 at lambda = 40)" in note and "--nodes >= 140 resolve it" in note
+    assert unresolved_loop_note(dataclasses.replace(third, n_nodes=140), branch) is None
     assert unresolved_loop_note(dataclasses.replace(coarse, tension=0.0), branch) is None

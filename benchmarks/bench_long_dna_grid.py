@@ -10,8 +10,9 @@ run: the turns at which the hard-core ply would span the whole rod
 (:mod:`supercoil.problems.ply`; a target beyond them lies past the plectoneme's growth),
 whether the last branch reached the last turn, the turns reached, the points and
 seconds per run, the unstable counts met on the plectoneme (contact) branch, the
-verified bifurcations and the unverified count changes located off the straight rod,
-and the notes (why a run stopped).
+verified bifurcations and the count changes located off the straight rod (with, in
+brackets, those in the mesh's snake: label ``snake``,
+:mod:`supercoil.problems.tweezers.coarse`), and the notes (why a run stopped).
 
 The runs are long (minutes each at L/D = 500): run it niced in the background; each row
 is appended to the table as soon as it is computed, so a partial run leaves the rows
@@ -142,6 +143,8 @@ def run(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
                     for p in b.special_points]
     bifurcations = sum(p.kind == "bifurcation" for p in off_straight)
     changes = sum(p.kind == "count_change" for p in off_straight)
+    snake = sum(p.kind == "count_change" and p.label == "snake" for p in off_straight)
+    changes = f"{changes} ({snake} snake)" if snake else f"{changes}"
     ok = result.ok and reached >= target - 1e-9
     notes = "; ".join(([continued] if continued else []) + list(result.notes))
     notes = notes.replace("|", "/") or "-"

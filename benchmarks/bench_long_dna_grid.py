@@ -4,8 +4,10 @@ For each ``L/D`` and ``lambda = L sqrt(F/A)`` (``F L^2/A = lambda^2``) at ``C/A`
 branches from 0 turns through buckling, the first contact and the plectoneme's growth
 up to ``--factor`` (default 1.5) times the straight rod's exact buckling turns, at
 ``N = n0`` and ``2 n0`` nodes (``n0 = ceil(L/D) + 2``, the smallest N whose segments are
-no longer than D), or with ``--resolving`` at ``N = max(n0, 2 lambda + 2)``, the fewest
-nodes whose segments are also at most half the loop's core ``sqrt(A/F)``. One row per
+no longer than D), or with ``--resolving`` at the DNA runs' default nodes
+(:func:`supercoil.units.tweezers.default_nodes`: segments also short enough to resolve
+the loop's core ``sqrt(A/F)``, at most
+:func:`~supercoil.problems.tweezers.options.resolved_core` of it). One row per
 run: the turns at which the hard-core ply would span the whole rod
 (:mod:`supercoil.problems.ply`; a target beyond them lies past the plectoneme's growth),
 whether the last branch reached the last turn, the turns reached, the points and
@@ -167,9 +169,9 @@ def main() -> None:
     parser.add_argument("--lambdas", default="10,20,40,80,150")
     parser.add_argument("--twist-ratio", type=float, default=1.5)
     parser.add_argument("--multiples", default="1,2", help="N as multiples of n0")
-    parser.add_argument("--resolving", action="store_true", help="N = max(n0, 2 lambda + 2) "
-                        "instead of the multiples: the fewest nodes whose segments are at "
-                        "most half the loop's core sqrt(A/F)")
+    parser.add_argument("--resolving", action="store_true", help="N = the DNA runs' default "
+                        "nodes instead of the multiples: segments no longer than D and at "
+                        "most min(1/3, 1.25/ln(lambda/0.54)) of the loop's core sqrt(A/F)")
     parser.add_argument("--factor", type=float, default=1.5)
     parser.add_argument("--max-points", type=int, default=4000)
     parser.add_argument("--contact-curve", default="spline", help="spline (the cubic "

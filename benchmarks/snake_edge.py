@@ -17,15 +17,12 @@ Run: ``python benchmarks/snake_edge.py --ld 200 --lam 100 --nodes 252,302,352,40
 from __future__ import annotations
 
 import argparse
-import time
 
-import numpy as np
+from grid_counts_refinement import contact_branch
 
-from supercoil.problems.greenhill import critical_turns
 from supercoil.problems.ply import hard_core_ply
-from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 from supercoil.problems.tweezers.coarse import snakes_on
-from supercoil.problems.tweezers.options import resolved_core
+from supercoil.problems.tweezers.options import core_segments, resolved_core, segment_length
 
 HEADER = ("| N | h sqrt(F/A) | rule | s | branch | points | last turn | folds | count changes "
           "| of them snake | snakes: kind, pairs, turns, period, width, segments |\n"
@@ -35,23 +32,14 @@ HEADER = ("| N | h sqrt(F/A) | rule | s | branch | points | last turn | folds | 
 def row(ld: float, lam: float, twist_ratio: float, nodes: int, factor: float,
         max_points: int) -> str:
     """The markdown row of one run (module doc)."""
-    tension = lam**2
-    options = TweezersOptions(twist_ratio=twist_ratio, length_over_diameter=ld,
-                              tension=tension, n_nodes=nodes,
-                              turns=(0.0, factor * critical_turns(twist_ratio, tension)),
-                              max_points=max_points)
-    start = time.perf_counter()
-    result = tweezers_branches(options)
-    seconds = time.perf_counter() - start
-    contact = [b for b in result.branches if b.name in result.contact_branches]
-    branch = max(contact, key=lambda b: float(np.max(b.parameter_values)))
+    branch, seconds = contact_branch(ld, lam, twist_ratio, nodes, factor, max_points)
     changes = [p for p in branch.special_points
                if p.kind in ("bifurcation", "count_change") and p.label != "sliding"]
-    snakes = snakes_on(branch, options.segment)
+    snakes = snakes_on(branch, segment_length(nodes))
     described = "; ".join(
         f"{s.kind}, {s.pairs}, {s.turns[0]:.4g}-{s.turns[1]:.4g}, {s.period:.3g}, "
         f"{s.width:.1e}, {s.segments:.3f}" for s in snakes) or "none"
-    return (f"| {nodes} | {options.core_segments:.3f} | {resolved_core(tension):.3f} "
+    return (f"| {nodes} | {core_segments(lam**2, nodes):.3f} | {resolved_core(lam**2):.3f} "
             f"| {seconds:.0f} | {branch.name} | {len(branch)} "
             f"| {float(branch.parameter_values[-1]):.4g} "
             f"| {len(branch.points_of_kind('fold'))} | {len(changes)} "

@@ -23,10 +23,12 @@ SLIDING_CORE = 0.5
 # less under higher tensions: the mesh's pinning of the end loop falls off like
 # exp(-c / (h sqrt(F/A))) (Peierls 1940; Nabarro 1947) while the force that drives the
 # plectoneme's growth by a node falls like 1 / lambda, so the snake ends near
-# h sqrt(F/A) = RESOLVED_SCALE / ln(lambda / RESOLVED_LAMBDA); both constants fitted to
-# the snake's edge measured at L/D = 200, C/A = 1.5 (snaking against clean: 0.266
-# against 0.250 at lambda = 80, 0.285 against 0.249 at 100, 0.242 against 0.222 at 150;
-# benchmarks/snake_edge.py; benchmarks/results/long_dna_grid.md, "The snake's edge")
+# h sqrt(F/A) = RESOLVED_SCALE / ln(lambda / RESOLVED_LAMBDA); both constants chosen so
+# that the rule lies at or below the coarsest mesh measured clean at each lambda at
+# L/D = 200, C/A = 1.5 (the finest snaking against the coarsest clean: 0.266 against
+# 0.250 at lambda = 80, 0.286 against 0.250 at 100, 0.333 against 0.242 at 150; the rule
+# 0.250, 0.239, 0.222; benchmarks/snake_edge.py; benchmarks/results/long_dna_grid.md,
+# "The snake's edge")
 RESOLVED_CORE = 1.0 / 3.0
 RESOLVED_SCALE = 1.25
 RESOLVED_LAMBDA = 0.54

@@ -51,7 +51,6 @@ from supercoil.problems.tweezers.options import (
     mesh_resolves_loop,
     resolved_core,
     resolved_nodes,
-    segment_length,
 )
 
 # the fewest pairs of events that make a snake
@@ -163,7 +162,7 @@ def snake_note(options: TweezersOptions, branch: Branch) -> str | None:
     the ``--nodes`` that resolve the end loop. None without a snake."""
     if not options.load_control or len(branch) < 2:
         return None
-    snakes = snakes_on(branch, segment_length(options.n_nodes))
+    snakes = snakes_on(branch, options.segment)
     if not snakes:
         return None
     first, last = min(s.turns[0] for s in snakes), max(s.turns[1] for s in snakes)
@@ -204,7 +203,7 @@ def pinned_loop_note(options: TweezersOptions, branch: Branch) -> str | None:
     k = math.sqrt(options.tension)
     folds = len(branch.points_of_kind("fold"))
     return (f"{branch.name}: the mesh pins the loop's core: its segments "
-            f"({segment_length(options.n_nodes):.3g} L) are {options.core_segments:.2g} times "
+            f"({options.segment:.3g} L) are {options.core_segments:.2g} times "
             f"sqrt(A/F) = {1 / k:.3g} L (more than {SLIDING_CORE:g}), so the plectoneme grows "
             f"by a node of each strand at a time, across a pair of folds per node: "
             f"{folds} folds between {float(turns.min()):.4g} and {float(turns.max()):.4g} "

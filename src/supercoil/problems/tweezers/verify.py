@@ -37,6 +37,7 @@ import dataclasses
 import numpy as np
 
 from supercoil.continuation import Branch, SpecialPoint
+from supercoil.continuation.branch import COUNT_KINDS
 from supercoil.problems.tweezers.coarse import snakes_on
 
 # points on either side over which a verified bifurcation's counts stay constant
@@ -74,7 +75,7 @@ def verify_bifurcations(branch: Branch, segment: float | None = None) -> Branch:
     snakes = snakes_on(branch, segment) if segment is not None else []
     points = []
     for p in branch.special_points:
-        if p.kind in ("bifurcation", "count_change") and p.label != "sliding" \
+        if p.kind in COUNT_KINDS and p.label != "sliding" \
                 and any(snake.holds(p.index) for snake in snakes):
             p = dataclasses.replace(p, kind="count_change", label="snake")
         elif p.kind == "bifurcation" and not verified(branch, p, folds):

@@ -112,3 +112,64 @@ def test_a_sliding_that_is_no_symmetry_is_left_out_only_as_the_ripple(sliding, o
     assert sliding_left_out(parts, J, g[None, :], mass, counted, ratio=10.0) == left_out
     if left_out:
         assert counted - 1 == count_on_complement(H, J, mass, v_s)
+
+
+def centreline_problem(spectrum: list[float], along: float = 1.0, seed: int = 5,
+                       nodes: int = 8):
+    """``(H, J, mass, tangents, modes)``: ``3 nodes`` unknowns (a node's three positions),
+    uniform mass, 3 constraint rows; on ``ker J`` the eigenvalues ``spectrum`` of
+    ``modes`` (M-orthonormal columns): the first two along the centreline (the unit
+    tangents ``tangents``, one row a node), the second with only the share ``along`` of
+    its norm so, the third across it; the rest of ``ker J`` at 5e3."""
+    rng = np.random.default_rng(seed)
+    n = 3 * nodes
+    t = rng.standard_normal((nodes, 3))
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    tangents = sp.csr_matrix((t.ravel(), (np.repeat(np.arange(nodes), 3), np.arange(n))),
+                             shape=(nodes, n))
+    T = tangents.T.toarray()  # (n, nodes): the tangential directions
+    N = null_space(T.T)       # (n, 2 nodes): across the centreline
+    a, b = np.linalg.qr(T @ rng.standard_normal((nodes, 2)))[0].T
+    c, d = np.linalg.qr(N @ rng.standard_normal((N.shape[1], 2)))[0].T
+    b = np.sqrt(along) * b + np.sqrt(1.0 - along) * d
+    chosen = np.column_stack([a, b, c])
+    J = rng.standard_normal((3, n))
+    J -= (J @ chosen) @ chosen.T  # chosen orthonormal: J chosen = 0
+    rest = null_space(np.vstack([J, chosen.T]))
+    mass = np.full(n, 0.25)
+    V = np.column_stack([chosen, rest]) / np.sqrt(0.25)  # M-orthonormal basis of ker J
+    values = np.full(V.shape[1], 5e3)
+    values[:len(spectrum)] = spectrum
+    MV = mass[:, None] * V
+    return MV @ np.diag(values) @ MV.T, sp.csr_matrix(J), mass, tangents, V[:, :3]
+
+
+@pytest.mark.parametrize("spectrum, along, ripple", [
+    ([-2e5, -3e4, 180.0], 1.0, (0, 1)),  # the sliding and a harmonic of it: the ripple's
+    ([-2e5, -3e4, 180.0], 0.97, (0, 1)),  # ... the harmonic bending the curve by 3 % of it
+    ([-2e5, -3e4, -50.0, 180.0], 1.0, (0, 1)),  # ... beside a genuine unstable one, kept
+    ([-2e5, -300.0, 180.0], 1.0, (0,)),  # a mode along the centreline on the elastic scale
+    ([1e4, -3e4, 180.0], 1.0, (1,)),     # the harmonic's alone, the sliding stable
+    ([-2e5, -3e4, 180.0], 0.3, ()),      # mostly across the centreline: a shape, counted
+])
+def test_the_ripple_leaves_out_the_modes_along_the_centreline(spectrum, along, ripple):
+    """Where the sliding is no approximate symmetry, ``tangents`` makes every negative
+    eigenpair mostly along the centreline (``TANGENTIAL_SHARE``) the ripple's too, where
+    it lies ``ratio`` times beyond the eigenvalues not left out; the count left is the
+    count on the complement of the left-out eigenvectors (brute force, spectrum built
+    in)."""
+    H, J, mass, tangents, modes = centreline_problem(spectrum, along)
+    parts = HessianParts(sp.csr_matrix(H))
+    counted = KKTFactor(parts, J).reduced_negative_count
+    assert counted == sum(v < 0 for v in spectrum)
+    g = modes[:, 0]  # the sliding, its own eigenvector here
+    found = sliding_left_out(parts, J, g[None, :], mass, counted, ratio=10.0,
+                             tangents=tangents)
+    assert found == len(ripple)
+    Z = null_space(np.vstack([J.toarray(), (mass[:, None] * modes[:, list(ripple)]).T]))
+    remaining = eigh(Z.T @ H @ Z, Z.T @ (mass[:, None] * Z), eigvals_only=True)
+    assert counted - found == int(np.sum(remaining < 0))
+    # without the tangents only the sliding's own eigenvalue can be left out, and only
+    # beyond ratio times every other of the lowest
+    alone = spectrum[0] < 0 and abs(spectrum[0]) >= 10.0 * max(map(abs, spectrum[1:]))
+    assert sliding_left_out(parts, J, g[None, :], mass, counted, ratio=10.0) == int(alone)

@@ -89,6 +89,12 @@ class OverRod:
         return self.base.far_sliding_modes
 
     @property
+    def tangent_rows(self):
+        """The rod's ``tangent_rows(q)`` (its unit tangents on the nodes' DOFs); absent
+        if the rod has none."""
+        return self.base.tangent_rows
+
+    @property
     def phase_offset(self):
         """The rod's ``phase_offset(q)`` (where a phase row of its sliding is anchored);
         absent if the rod has none."""

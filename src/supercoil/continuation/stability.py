@@ -185,14 +185,15 @@ def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: f
 
 def stiff_sliding(system: ExtendedSystem, x: np.ndarray, H, negative: int,
                   shift: float = 0.0) -> int:
-    """1 where the ``negative`` eigenvalues counted on the complement of the approximate
-    symmetries (:func:`count_rows` or the system's own phase rows) include the stiff
-    sliding's, which that complement does not take out
-    (:mod:`~supercoil.stability.sliding_count`), else 0. ``H``: the count's Hessian."""
+    """How many of the ``negative`` eigenvalues counted on the complement of the
+    approximate symmetries (:func:`count_rows` or the system's own phase rows) are the
+    stiff sliding's, which that complement does not take out, or, where the sliding is no
+    symmetry, the contact's ripple (:mod:`~supercoil.stability.sliding_count`): 0, 1
+    or, in the ripple's case, more. ``H``: the count's Hessian."""
     found = stiff_sliding_modes(system.problem_at(x[-1]), system.q(x), negative)
     if found is None:
         return 0
-    modes, ratio = found
+    modes, ratio, tangents = found
     g = modes[:, system.free]
     J = sp.csr_matrix(system.jacobian(x))
     keep = np.arange(J.shape[0])
@@ -202,7 +203,8 @@ def stiff_sliding(system: ExtendedSystem, x: np.ndarray, H, negative: int,
         held = coupling.max(axis=1) > 0.1 / np.sqrt(system.n)
         keep = np.concatenate([keep[:J.shape[0] - system.r],
                                keep[J.shape[0] - system.r:][~held]])
-    return sliding_left_out(H, J[keep], g, system.mass, negative, shift, ratio)
+    return sliding_left_out(H, J[keep], g, system.mass, negative, shift, ratio,
+                            None if tangents is None else tangents[:, system.free])
 
 
 def related_order(order: np.ndarray, dofs: np.ndarray, rows: int, new_dofs: np.ndarray,
@@ -287,13 +289,17 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
 
 
 def without_sliding(system: ExtendedSystem, x: np.ndarray, values: np.ndarray,
-                    modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The eigenpairs ``(values, modes)`` (M-orthonormal full DOF modes) less those
-    that are mostly an approximate symmetry ``g`` (``(v^T M g)^2 >= g^T M g / 2``,
-    :data:`~supercoil.stability.sliding_count.SLIDING_SHARE`)."""
+                    modes: np.ndarray, left_out: int) -> tuple[np.ndarray, np.ndarray]:
+    """The eigenpairs ``(values, modes)`` (M-orthonormal full DOF modes) less the
+    ``left_out`` lowest that are mostly an approximate symmetry ``g`` (``(v^T M g)^2 >=
+    g^T M g / 2``, :data:`~supercoil.stability.sliding_count.SLIDING_SHARE`) or, where
+    the sliding is none, mostly along the centreline
+    (:func:`~supercoil.stability.sliding_count.without_sliding_pairs`)."""
     problem = system.problem_at(x[-1])
-    return without_sliding_pairs(values, modes, count_sliding_modes(problem, system.q(x)),
-                                 np.asarray(problem.mass, dtype=float))
+    sliding, tangents = count_sliding_modes(problem, system.q(x))
+    return without_sliding_pairs(values, modes, sliding,
+                                 np.asarray(problem.mass, dtype=float), tangents,
+                                 count=left_out)
 
 
 def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float,
@@ -311,8 +317,9 @@ def point_stability(system: ExtendedSystem, x: np.ndarray, zero_tolerance: float
         system, x, zero_tolerance, full.restrict(system.free), factor)
     count = (dofs, factor.order, factor.m)
     if left_out:  # the stiff sliding's: its own eigenpair left out, not the direction g
-        values, modes = eigenpairs(system, x, neg + 1 + n_modes, full, count, near=False)
-        values, modes = without_sliding(system, x, values, modes)
+        values, modes = eigenpairs(system, x, neg + left_out + n_modes, full, count,
+                                   near=False)
+        values, modes = without_sliding(system, x, values, modes, left_out)
     else:
         values, modes = eigenpairs(system, x, neg + n_modes, full, count)
     zero = int(np.sum(np.abs(values) <= zero_tolerance))

@@ -23,6 +23,7 @@ chosen at construction and re-picked for a new shape by :meth:`repin`
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from supercoil.rod.energy import RodEnergy
 from supercoil.rod.mirror import (
@@ -338,6 +339,22 @@ class ClampedRodEnergy(RodEnergy):
         if self.sliding_tail is None or not np.isfinite(tail) or tail <= self.sliding_tail:
             return np.zeros((0, np.size(q)))
         return self.axial_free(g)[None, :]
+
+    def tangent_rows(self, q: np.ndarray) -> sp.csr_matrix:
+        """``(n_nodes, n_dofs)``: row ``i`` the unit tangent at node ``i`` (central
+        differences, one-sided at the ends) on that node's DOFs, so that ``P v`` is the
+        displacement ``v`` along the centreline, node by node: a mode mostly along it
+        moves material along its own curve, which the continuum's inextensible rod
+        bends only by ``u' / kappa`` and the discrete contact's ripple makes stiff
+        (:mod:`supercoil.stability.sliding_count`)."""
+        x = np.asarray(q, dtype=float).reshape(-1, 3)
+        n = x.shape[0]
+        t = np.empty_like(x)
+        t[1:-1] = x[2:] - x[:-2]
+        t[0], t[-1] = x[1] - x[0], x[-1] - x[-2]
+        t /= np.linalg.norm(t, axis=1)[:, None]
+        rows = np.repeat(np.arange(n), 3)
+        return sp.csr_matrix((t.ravel(), (rows, np.arange(3 * n))), shape=(n, 3 * n))
 
     def phase_offset(self, q: np.ndarray) -> np.ndarray:
         """The displacement along the sliding that carries the structure's centre towards

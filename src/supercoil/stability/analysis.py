@@ -285,8 +285,10 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
                                    n=dofs.size, m=J_e.shape[0] if J_e is not None else 0,
                                    symmetry=sym)
     if left_out:
-        sliding = count_sliding_modes(problem, q)[:, dofs]
-        values, modes_t = without_sliding_pairs(values, vectors.T, sliding, mass_e)
+        sliding, tangents = count_sliding_modes(problem, q)
+        values, modes_t = without_sliding_pairs(
+            values, vectors.T, sliding[:, dofs], mass_e,
+            None if tangents is None else tangents[:, dofs], count=left_out)
         vectors = modes_t.T
     zero = int(np.sum(np.abs(values) <= zero_tolerance))
     below = int(np.sum(values < -zero_tolerance))
@@ -325,30 +327,40 @@ def analyse(problem: ConstrainedEnergy, q: np.ndarray, multipliers: np.ndarray,
     )
 
 
-def stiff_sliding_modes(problem: ConstrainedEnergy, q: np.ndarray,
-                        negative: int) -> tuple[np.ndarray, float | None] | None:
-    """``(modes, ratio)`` where a count of ``negative`` may include the stiff sliding's
-    eigenvalue (:mod:`supercoil.stability.sliding_count`): a positive count, a contact
-    acting at ``q`` and a sliding present; None otherwise (no eigen-solve needed).
-    ``modes``: the approximate symmetries (:func:`sliding_phase_modes`, ``ratio`` None)
-    or, where the sliding is none (its tails not straight), the sliding itself
-    (``far_sliding_modes``), whose eigenvalue is left out only where it is the
-    contact's ripple, ``ratio`` (:data:`~supercoil.stability.sliding_count.RIPPLE_RATIO`)
-    times the next eigenvalues at least."""
+def stiff_sliding_modes(problem: ConstrainedEnergy, q: np.ndarray, negative: int
+                        ) -> tuple[np.ndarray, float | None, sp.csr_matrix | None] | None:
+    """``(modes, ratio, tangents)`` where a count of ``negative`` may include the stiff
+    sliding's eigenvalue (:mod:`supercoil.stability.sliding_count`): a positive count, a
+    contact acting at ``q`` and a sliding present; None otherwise (no eigen-solve
+    needed). ``modes``: the approximate symmetries (:func:`sliding_phase_modes`,
+    ``ratio`` and ``tangents`` None) or, where the sliding is none (its tails not
+    straight), the sliding itself (``far_sliding_modes``), whose eigenvalue is left out
+    only where it is the contact's ripple, ``ratio``
+    (:data:`~supercoil.stability.sliding_count.RIPPLE_RATIO`) times the next
+    eigenvalues at least, and with it those of the modes along the centreline
+    (``tangents``: the problem's ``tangent_rows(q)``, None if it has none)."""
     if negative <= 0 or not contact_acts(problem, q):
         return None
+    modes, tangents = count_sliding_modes(problem, q)
+    if not modes.size:
+        return None
+    return (modes, None, None) if tangents is None else (modes, RIPPLE_RATIO, tangents)
+
+
+def count_sliding_modes(problem: ConstrainedEnergy, q: np.ndarray
+                        ) -> tuple[np.ndarray, sp.csr_matrix | None]:
+    """``(modes, tangents)``: the sliding whose eigenpairs a count leaves out
+    (:func:`stiff_sliding_modes`): the approximate symmetries (``tangents`` None), else
+    the sliding where it is none, with the problem's ``tangent_rows(q)`` (``(nodes,
+    n_dofs)``; an empty one if the problem has none)."""
     modes = sliding_phase_modes(problem, q)
     if modes.size:
         return modes, None
     far = sliding_phase_modes(problem, q, kind="far_sliding_modes")
-    return (far, RIPPLE_RATIO) if far.size else None
-
-
-def count_sliding_modes(problem: ConstrainedEnergy, q: np.ndarray) -> np.ndarray:
-    """The sliding whose eigenpair a count left out (:func:`stiff_sliding_modes`): the
-    approximate symmetries, else the sliding where it is none."""
-    modes = sliding_phase_modes(problem, q)
-    return modes if modes.size else sliding_phase_modes(problem, q, kind="far_sliding_modes")
+    rows = getattr(problem, "tangent_rows", None)
+    tangents = (sp.csr_matrix(rows(q)) if rows is not None
+                else sp.csr_matrix((0, problem.n_dofs)))
+    return far, tangents
 
 
 def _stiff_sliding(problem: ConstrainedEnergy, q: np.ndarray, free: np.ndarray, H,
@@ -360,8 +372,9 @@ def _stiff_sliding(problem: ConstrainedEnergy, q: np.ndarray, free: np.ndarray, 
     found = stiff_sliding_modes(problem, q, negative)
     if found is None:
         return 0
-    modes, ratio = found
+    modes, ratio, tangents = found
     J = (sp.csr_matrix(problem.constraint_jacobian(q))[:, free] if problem.n_constraints
          else sp.csr_matrix((0, free.size)))
     return sliding_left_out(H, J, modes[:, free], np.asarray(problem.mass, float)[free],
-                            negative, ratio=ratio)
+                            negative, ratio=ratio,
+                            tangents=None if tangents is None else tangents[:, free])

@@ -36,6 +36,26 @@ N = 243 while N = 364 had it positive up to 23.9 turns, against next eigenvalues
 eigenvalue is left out only as the ripple's, ``RIPPLE_RATIO`` times the other lowest
 eigenvalues at least (``ratio`` of :func:`sliding_left_out`): a structure that the
 clamps make unstable along its sliding does so on the elastic scale, and stays counted.
+
+The sliding is not the ripple's only mode. Where the ply fills the rod (L/D = 200,
+lambda = 150, C/A = 1.5, N = 678, past 44.9 turns, the hard-core ply spanning the rod at
+44.05), the four eigenvalues nearest zero were positive (135 to 2.9e4) and the same at
+N = 1017, but two were far below them: the sliding's (-1.9e6 to -3.2e6, overlap 0.94-0.96
+with ``g``) and a second (-5e4 to -7.7e5, overlap 0.18-0.24 with ``g``); both move the
+nodes along the centreline (0.94-0.98 and 0.91-0.97 of the mode's M-norm along the
+tangents, ``tangent_rows``, against 0.11-0.14 for the elastic mode nearest zero), the
+second with an amplitude that varies along the rod, once and a quarter over it (a
+harmonic of the sliding). A motion ``u t`` of an inextensible rod along its own centreline is a
+change of parametrisation where ``u`` is constant; a varying ``u`` bends the curve only
+by ``w = u' / kappa`` (``t . x' = 1`` kept), little on a tightly curved ply, so the
+continuum gives such a mode a small eigenvalue, and the discrete contact (which pairs
+of nodes touch, and where between them) a large one of either sign. With ``tangents``
+(the far case), a negative eigenpair of the ``negative + 1`` lowest that is mostly the
+sliding or mostly along the centreline (``TANGENTIAL_SHARE`` of its M-norm at least) is
+left out where its eigenvalue lies below ``-ratio`` times the largest magnitude among
+those not left out: on that mesh, at eight states from 41.95 to 47.76 turns, the count
+was 1-2 from 45.1 turns with the sliding's mode alone left out, 0 at all eight with
+both, as N = 1017's.
 """
 
 from __future__ import annotations
@@ -59,6 +79,11 @@ SLIDING_SHARE = 0.5
 # between the meshes, while the sliding's sign did not (module doc); an instability of
 # the structure's position against the clamps is on the elastic scale, the next ones'
 RIPPLE_RATIO = 10.0
+# the share of a mode's M-norm along the centreline at or above which it is mostly a
+# motion of the material along its own curve (module doc: 0.91-0.98 for the ripple's
+# modes of a spanning ply, 0.11-0.14 for the elastic mode nearest zero, which changes
+# the curve's shape and moves the nodes across it)
+TANGENTIAL_SHARE = 0.5
 # shifts tried below the spectrum for the lowest eigenpairs: -1, -10, ..., -1e12
 _SHIFTS = -(10.0 ** np.arange(0, 13))
 
@@ -73,22 +98,43 @@ def contact_acts(problem, q: np.ndarray) -> bool:
 
 
 def without_sliding_pairs(values: np.ndarray, modes: np.ndarray, sliding: np.ndarray,
-                          mass: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The eigenpairs ``(values (k,), modes (k, n))`` (M-orthonormal) less those that are
-    mostly one of the approximate symmetries ``sliding`` ``(r, n)`` (``(v^T M g)^2 >=
-    SLIDING_SHARE g^T M g``)."""
+                          mass: np.ndarray, tangents: sp.csr_matrix | None = None,
+                          count: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The eigenpairs ``(values (k,), modes (k, n))`` (M-orthonormal, ascending) less those
+    that are mostly one of the approximate symmetries ``sliding`` ``(r, n)`` (``(v^T M
+    g)^2 >= SLIDING_SHARE g^T M g``) or, with ``tangents`` (``(nodes, n)``,
+    :func:`sliding_left_out`), mostly along the centreline; with ``count``, only the
+    ``count`` lowest negative ones of those (the eigenvalues a count left out)."""
     if sliding.size == 0 or values.size == 0:
         return values, modes
-    share = (modes @ (mass[:, None] * sliding.T)) ** 2 / np.sum(sliding * mass * sliding,
-                                                               axis=1)[None, :]
-    keep = share.max(axis=1) < SLIDING_SHARE
-    return values[keep], modes[keep]
+    drop = _ripple_like(modes.T, sliding, mass, tangents)
+    if count is not None:
+        drop &= values < 0.0
+        drop &= np.cumsum(drop) <= count
+    return values[~drop], modes[~drop]
+
+
+def _ripple_like(vectors: np.ndarray, sliding: np.ndarray, mass: np.ndarray,
+                 tangents: sp.csr_matrix | None) -> np.ndarray:
+    """``(k,)`` bool: the columns of ``vectors`` ``(n, k)`` mostly one of ``sliding`` or,
+    with ``tangents``, mostly along the centreline (``TANGENTIAL_SHARE``)."""
+    norms = np.sum(vectors * (mass[:, None] * vectors), axis=0)
+    share = (vectors.T @ (mass * sliding).T) ** 2 / np.sum(sliding * mass * sliding,
+                                                           axis=1)[None, :]
+    like = share.max(axis=1) / norms >= SLIDING_SHARE
+    if tangents is not None:
+        along = np.sum(np.asarray(tangents @ (np.sqrt(mass)[:, None] * vectors)) ** 2,
+                       axis=0)
+        like |= along / norms >= TANGENTIAL_SHARE
+    return like
 
 
 def sliding_left_out(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray,
-                     negative: int, shift: float = 0.0, ratio: float | None = None) -> int:
+                     negative: int, shift: float = 0.0, ratio: float | None = None,
+                     tangents: sp.csr_matrix | None = None) -> int:
     """1 if the sliding's negative eigenvalue is among the ``negative`` that the count on
-    the complement of ``sliding`` found, else 0 (module doc).
+    the complement of ``sliding`` found, else 0 (module doc); with ``ratio`` and
+    ``tangents``, the number of the ripple's negative eigenvalues among them.
 
     ``H``: the Hessian of the Lagrangian on the count's DOFs (``(n, n)``,
     :class:`~supercoil.assembly.HessianParts`), ``J``: the constraint rows without
@@ -97,7 +143,9 @@ def sliding_left_out(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray,
     eigenvalues below ``shift``). ``ratio``: for a sliding that is no approximate
     symmetry (module doc), 1 only where the eigenvector mostly the sliding (its share
     ``(v^T M g)^2 >= SLIDING_SHARE g^T M g``) has an eigenvalue below ``-ratio`` times
-    the largest magnitude among the others of the ``negative + 1`` lowest."""
+    the largest magnitude among the others of the ``negative + 1`` lowest. ``tangents``
+    (``(nodes, n)``, the rod's ``tangent_rows`` on those DOFs): with ``ratio``, the
+    eigenpairs mostly along the centreline are the ripple's too (module doc)."""
     if negative <= 0 or sliding.shape[0] == 0:
         return 0
     try:
@@ -107,7 +155,7 @@ def sliding_left_out(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray,
     if full != negative:
         return 0  # the row took out a negative eigenvalue: the sliding's
     if ratio is not None:
-        return _ripple(H, J, sliding, mass, full, shift, ratio)
+        return _ripple(H, J, sliding, mass, full, shift, ratio, tangents)
     values, vectors = _lowest(H, J, mass, full)
     vectors = vectors[:, values < shift]
     share = 0.0
@@ -119,18 +167,25 @@ def sliding_left_out(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray,
 
 
 def _ripple(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray, negative: int,
-            shift: float, ratio: float) -> int:
-    """:func:`sliding_left_out` with ``ratio``: 1 where the sliding's eigenvalue is one of
-    the ``negative`` below ``shift`` and ``ratio`` times the others' magnitudes."""
+            shift: float, ratio: float, tangents: sp.csr_matrix | None = None) -> int:
+    """:func:`sliding_left_out` with ``ratio``: how many of the ``negative`` eigenvalues
+    below ``shift`` are the ripple's: of the ``negative + 1`` lowest eigenpairs, those
+    below ``shift`` mostly the sliding (or, with ``tangents``, mostly along the
+    centreline) and below ``-ratio`` times the largest magnitude among the rest, the
+    rest grown by each that fails until none does."""
     values, vectors = _lowest(H, J, mass, negative + 1)
     if values.size < 2:
         return 0
-    norms = np.sum(sliding * (mass * sliding), axis=1)
-    share = np.max((vectors.T @ (mass * sliding).T) ** 2 / norms[None, :], axis=1)
-    k = int(np.argmax(share))
-    others = np.delete(np.abs(values), k)
-    return int(share[k] >= SLIDING_SHARE and values[k] < shift
-               and abs(values[k]) >= ratio * float(others.max()))
+    ripple = _ripple_like(vectors, sliding, mass, tangents) & (values < shift)
+    while ripple.any():
+        scale = float(np.abs(values[~ripple]).max()) if (~ripple).any() else 0.0
+        stiff = ripple & (np.abs(values) >= ratio * scale)
+        if np.array_equal(stiff, ripple):
+            break
+        ripple = stiff
+    if tangents is None:
+        return int(min(ripple.sum(), 1))
+    return int(ripple.sum())
 
 
 def _lowest(H, J: sp.csr_matrix, mass: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:

@@ -18,7 +18,7 @@ from scipy.linalg import eigh, null_space
 
 from supercoil.solvers.kkt import KKTFactor
 from supercoil.solvers.problem import HessianParts
-from supercoil.stability.sliding_count import sliding_left_out
+from supercoil.stability.sliding_count import sliding_left_out, without_sliding_pairs
 
 
 def spectral_problem(sliding: float, others: list[float], share: float, seed: int = 3,
@@ -144,32 +144,69 @@ def centreline_problem(spectrum: list[float], along: float = 1.0, seed: int = 5,
     return MV @ np.diag(values) @ MV.T, sp.csr_matrix(J), mass, tangents, V[:, :3]
 
 
-@pytest.mark.parametrize("spectrum, along, ripple", [
-    ([-2e5, -3e4, 180.0], 1.0, (0, 1)),  # the sliding and a harmonic of it: the ripple's
-    ([-2e5, -3e4, 180.0], 0.97, (0, 1)),  # ... the harmonic bending the curve by 3 % of it
-    ([-2e5, -3e4, -50.0, 180.0], 1.0, (0, 1)),  # ... beside a genuine unstable one, kept
-    ([-2e5, -300.0, 180.0], 1.0, (0,)),  # a mode along the centreline on the elastic scale
-    ([1e4, -3e4, 180.0], 1.0, (1,)),     # the harmonic's alone, the sliding stable
-    ([-2e5, -3e4, 180.0], 0.3, ()),      # mostly across the centreline: a shape, counted
+@pytest.mark.parametrize("spectrum, along, sliding, ripple", [
+    ([-2e5, -3e4, 180.0], 1.0, 0, (0, 1)),  # the sliding and a harmonic of it: the ripple's
+    ([-2e5, -3e4, 180.0], 0.97, 0, (0, 1)),  # ... the harmonic bending the curve by 3 %
+    ([-2e5, -3e4, -50.0, 180.0], 1.0, 0, (0, 1)),  # ... beside a genuine unstable one, kept
+    ([-2e5, -300.0, 180.0], 1.0, 0, (0,)),  # a mode along the centreline on the elastic scale
+    ([1e3, -3e4, 180.0], 1.0, 0, (1,)),     # the harmonic's alone, the sliding stable
+    ([-2e5, -3e4, 180.0], 0.3, 0, ()),      # mostly across the centreline: a shape, counted
+    ([180.0, -3e4, -2e5], 1.0, 2, (1, 2)),  # the sliding across it, known by its share of g
+    ([-2e5, 180.0, -2e5], 1.0, 1, ()),      # one as stiff across it: not told apart, counted
 ])
-def test_the_ripple_leaves_out_the_modes_along_the_centreline(spectrum, along, ripple):
+def test_the_ripple_leaves_out_the_modes_along_the_centreline(spectrum, along, sliding,
+                                                              ripple):
     """Where the sliding is no approximate symmetry, ``tangents`` makes every negative
     eigenpair mostly along the centreline (``TANGENTIAL_SHARE``) the ripple's too, where
-    it lies ``ratio`` times beyond the eigenvalues not left out; the count left is the
-    count on the complement of the left-out eigenvectors (brute force, spectrum built
-    in)."""
+    it lies ``ratio`` times beyond the eigenvalues not left out. Brute force, the
+    spectrum built in: the count left is the count on the complement of the ripple's
+    eigenvectors, and the eigenpairs that ``without_sliding_pairs`` drops from the dense
+    spectrum are exactly theirs."""
     H, J, mass, tangents, modes = centreline_problem(spectrum, along)
     parts = HessianParts(sp.csr_matrix(H))
     counted = KKTFactor(parts, J).reduced_negative_count
     assert counted == sum(v < 0 for v in spectrum)
-    g = modes[:, 0]  # the sliding, its own eigenvector here
+    g = modes[:, sliding]  # the sliding, its own eigenvector here
     found = sliding_left_out(parts, J, g[None, :], mass, counted, ratio=10.0,
                              tangents=tangents)
     assert found == len(ripple)
     Z = null_space(np.vstack([J.toarray(), (mass[:, None] * modes[:, list(ripple)]).T]))
     remaining = eigh(Z.T @ H @ Z, Z.T @ (mass[:, None] * Z), eigvals_only=True)
     assert counted - found == int(np.sum(remaining < 0))
+    Zk = null_space(J.toarray())
+    values, vectors = eigh(Zk.T @ H @ Zk, Zk.T @ (mass[:, None] * Zk))
+    kept, _ = without_sliding_pairs(values, (Zk @ vectors).T, g[None, :], mass, tangents,
+                                    count=found)
+    left = sorted(v for k, v in enumerate(spectrum) if k not in ripple)
+    np.testing.assert_allclose(kept[:len(left)], left, rtol=1e-8)
     # without the tangents only the sliding's own eigenvalue can be left out, and only
     # beyond ratio times every other of the lowest
-    alone = spectrum[0] < 0 and abs(spectrum[0]) >= 10.0 * max(map(abs, spectrum[1:]))
+    others = [abs(v) for k, v in enumerate(spectrum) if k != sliding]
+    alone = spectrum[sliding] < 0 and abs(spectrum[sliding]) >= 10.0 * max(others)
     assert sliding_left_out(parts, J, g[None, :], mass, counted, ratio=10.0) == int(alone)
+
+
+def test_the_rod_tangent_rows_take_the_motion_along_the_centreline():
+    """``ClampedRodEnergy.tangent_rows``: unit rows, one a node, on that node's DOFs; a
+    motion of every node along its central-difference tangent is all along the
+    centreline, one across it (the tangent crossed with a fixed direction) none of it."""
+    from supercoil.rod.model import Rod
+    from supercoil.rod.open import ClampedRodEnergy, straight_rod
+
+    n = 24
+    x = straight_rod(n)
+    s = np.clip(x[:, 2], 0.0, 1.0)
+    x[:, 0] += 0.05 * np.sin(np.pi * s) ** 3
+    x[[0, 1, -2, -1], :2] = 0.0
+    rod = ClampedRodEnergy(Rod(n, closed=False), x, 0.5, tension=1.0)
+    P = rod.tangent_rows(x.ravel())
+    assert P.shape == (n, 3 * n)
+    np.testing.assert_allclose(np.sqrt(np.asarray(P.multiply(P).sum(axis=1))).ravel(), 1.0)
+    assert all(set(P[i].indices) <= {3 * i, 3 * i + 1, 3 * i + 2} for i in range(n))
+    t = np.vstack([x[1] - x[0], x[2:] - x[:-2], x[-1] - x[-2]])
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    u = np.linspace(0.5, 2.0, n)
+    along = (u[:, None] * t).ravel()
+    np.testing.assert_allclose(P @ along, u, rtol=1e-12)
+    across = (u[:, None] * np.cross(t, [0.0, 1.0, 0.0])).ravel()
+    np.testing.assert_allclose(P @ across, 0.0, atol=1e-12)

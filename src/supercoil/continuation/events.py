@@ -86,7 +86,7 @@ class Segment:
         # further count change is searched from the bisection's last bracket)
         self._counts: dict[float, int] = {}
         # of each count, the eigenvalues the count left out as the stiff sliding's
-        # (stability.stiff_sliding: 0 or 1)
+        # (stability.stiff_sliding: 0 or 1, more only as the contact's ripple)
         self._left_out: dict[float, int] = {}
         self._nearest: dict[float, float] = {}
         self._tangents: dict[float, np.ndarray] = {}

@@ -157,8 +157,9 @@ def inertia_with_factor(system: ExtendedSystem, x: np.ndarray, zero_tolerance: f
     """:func:`inertia` with the factor it counted with, that factor's DOFs (indices
     into the problem's DOFs, ``(n_count,)``: its unknowns are those DOFs, then the
     rows of ``system.jacobian(x)``, then the :func:`count_rows`) and the number of
-    eigenvalues that :func:`stiff_sliding` left out of the factor's count (0 or 1), whose
-    sign the determinant's then leaves out too (the parity of the count returned).
+    eigenvalues that :func:`stiff_sliding` left out of the factor's count (0 or 1; more
+    only as the contact's ripple), whose signs the determinant's then leaves out too
+    (the parity of the count returned).
     ``factor``: :func:`count_factor` at ``x`` with the Hessian ``hessian``, if made."""
     if factor is not None:
         negative = factor.reduced_negative_count
@@ -291,7 +292,7 @@ def eigenpairs(system: ExtendedSystem, x: np.ndarray, n_wanted: int,
 def without_sliding(system: ExtendedSystem, x: np.ndarray, values: np.ndarray,
                     modes: np.ndarray, left_out: int) -> tuple[np.ndarray, np.ndarray]:
     """The eigenpairs ``(values, modes)`` (M-orthonormal full DOF modes) less the
-    ``left_out`` lowest that are mostly an approximate symmetry ``g`` (``(v^T M g)^2 >=
+    ``left_out`` lowest negative ones that are mostly an approximate symmetry ``g`` (``(v^T M g)^2 >=
     g^T M g / 2``, :data:`~supercoil.stability.sliding_count.SLIDING_SHARE`) or, where
     the sliding is none, mostly along the centreline
     (:func:`~supercoil.stability.sliding_count.without_sliding_pairs`)."""

@@ -338,7 +338,7 @@ def stiff_sliding_modes(problem: ConstrainedEnergy, q: np.ndarray, negative: int
     only where it is the contact's ripple, ``ratio``
     (:data:`~supercoil.stability.sliding_count.RIPPLE_RATIO`) times the next
     eigenvalues at least, and with it those of the modes along the centreline
-    (``tangents``: the problem's ``tangent_rows(q)``, None if it has none)."""
+    (``tangents``: the problem's ``tangent_rows(q)``, an empty matrix if it has none)."""
     if negative <= 0 or not contact_acts(problem, q):
         return None
     modes, tangents = count_sliding_modes(problem, q)

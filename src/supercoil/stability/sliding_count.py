@@ -143,7 +143,8 @@ def sliding_left_out(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray,
     eigenvalues below ``shift``). ``ratio``: for a sliding that is no approximate
     symmetry (module doc), 1 only where the eigenvector mostly the sliding (its share
     ``(v^T M g)^2 >= SLIDING_SHARE g^T M g``) has an eigenvalue below ``-ratio`` times
-    the largest magnitude among the others of the ``negative + 1`` lowest. ``tangents``
+    the largest magnitude among the others of the ``negative + 1`` lowest (those left
+    out with it excepted, :func:`_ripple`). ``tangents``
     (``(nodes, n)``, the rod's ``tangent_rows`` on those DOFs): with ``ratio``, the
     eigenpairs mostly along the centreline are the ripple's too (module doc)."""
     if negative <= 0 or sliding.shape[0] == 0:
@@ -183,8 +184,8 @@ def _ripple(H, J: sp.csr_matrix, sliding: np.ndarray, mass: np.ndarray, negative
         if np.array_equal(stiff, ripple):
             break
         ripple = stiff
-    if tangents is None:
-        return int(min(ripple.sum(), 1))
+    if tangents is None or tangents.shape[0] == 0:
+        return int(min(ripple.sum(), 1))  # the sliding's eigenvalue alone
     return int(ripple.sum())
 
 

@@ -20,7 +20,7 @@ from supercoil.problems.tweezers.straight import (
     straight_branch,
     unreached_note,
 )
-from supercoil.rod.open import sliding_threshold
+from supercoil.rod.sliding import sliding_threshold
 
 
 def located(lam: float, n: int) -> tuple[float, TweezersOptions]:

@@ -15,7 +15,8 @@ from supercoil.problems.ply import hard_core_ply, spanning_note
 from supercoil.problems.tweezers import TweezersOptions, tweezers_branches
 from supercoil.problems.tweezers.verify import VERIFY_POINTS, verify_bifurcations
 from supercoil.rod.model import Rod
-from supercoil.rod.open import SLIDING_TAIL, ClampedRodEnergy, straight_rod
+from supercoil.rod.open import ClampedRodEnergy, straight_rod
+from supercoil.rod.sliding import SLIDING_TAIL
 
 
 def clamped(points: np.ndarray) -> ClampedRodEnergy:

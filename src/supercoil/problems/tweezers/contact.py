@@ -35,7 +35,8 @@ from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import PIN_QUALITY, SLIDING_HYSTERESIS
 from supercoil.problems.tweezers.problem import tweezers_records
 from supercoil.rod.mirror import mirror_asymmetry
-from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
+from supercoil.rod.open import ClampedRodEnergy
+from supercoil.rod.sliding import sliding_threshold
 
 # The contact branch's corrector trust region, in steps (ContinuationOptions.
 # max_corrector_distance): where the branch turns back at the contact onset (80 degrees

@@ -12,7 +12,8 @@ from supercoil.problems.ply import HardCorePly, hard_core_ply
 from supercoil.problems.tweezers.contact import SLIDING_TAIL_CONTACT
 from supercoil.problems.tweezers.options import TweezersOptions
 from supercoil.problems.tweezers.pins import hold_azimuth
-from supercoil.rod.open import ClampedRodEnergy, sliding_threshold
+from supercoil.rod.open import ClampedRodEnergy
+from supercoil.rod.sliding import sliding_threshold
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,7 @@ The sliding is not the ripple's only mode. Where the ply fills the rod (L/D = 20
 lambda = 150, C/A = 1.5, N = 678, past 44.9 turns, the hard-core ply spanning the rod at
 44.05), the four eigenvalues nearest zero were positive (135 to 2.9e4) and the same at
 N = 1017, but two were far below them: the sliding's (-1.9e6 to -3.2e6, overlap 0.94-0.96
-with ``g``) and a second (-5e4 to -7.7e5, overlap 0.18-0.24 with ``g``); both move the
+with ``g``) and a second (-4.6e4 to -7.7e5, overlap 0.17-0.25 with ``g``); both move the
 nodes along the centreline (0.94-0.98 and 0.91-0.97 of the mode's M-norm along the
 tangents, ``tangent_rows``, against 0.11-0.14 for the elastic mode nearest zero), the
 second with an amplitude that varies along the rod, once and a quarter over it (a
